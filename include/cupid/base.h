@@ -1,0 +1,62 @@
+/**
+ * @file base.h
+ * @brief Basic types and services shared by every subsystem: 64-bit index type,
+ *        checked allocation, wall clock, peak memory, version.
+ */
+#ifndef CUPID_BASE_H
+#define CUPID_BASE_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "cupid/error.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/** Index type for everything that scales with the model (nodes, DOFs, bonds, non-zeros). */
+typedef int64_t cupid_int;
+
+/** Version string, e.g. "0.1.0". */
+const char *cupid_version(void);
+
+/**
+ * Allocate @p count items of @p size bytes, zero-filled, into `*(void **)out`.
+ * Fails with CUPID_ERR_MEMORY (and a message naming @p what and the byte count) on
+ * overflow or exhaustion. count == 0 stores NULL and succeeds.
+ * Usage: `double *x; CUPID_CALL(cupid_calloc(n, sizeof *x, "displacements", &x));`
+ */
+cupid_status cupid_calloc(size_t count, size_t size, const char *what, void *out);
+
+/** Like cupid_calloc() without zero-filling (for arrays that are written in full). */
+cupid_status cupid_malloc(size_t count, size_t size, const char *what, void *out);
+
+/** Resize `*(void **)inout` to @p count items of @p size bytes (realloc semantics). */
+cupid_status cupid_realloc(size_t count, size_t size, const char *what, void *inout);
+
+/** Free `*(void **)ptr` and set it to NULL (NULL-safe). */
+void cupid_free(void *ptr);
+
+/** Duplicate a string with a checked allocation. */
+cupid_status cupid_strdup(const char *s, char **out);
+
+/** Monotonic wall-clock time in seconds. */
+double cupid_wtime(void);
+
+/** Peak resident memory of this process so far, in bytes (0 if unknown). */
+int64_t cupid_peak_memory(void);
+
+/** Current resident memory of this process, in bytes (0 if unknown). */
+int64_t cupid_current_memory(void);
+
+/** Number of OpenMP threads in use (1 without OpenMP). */
+int cupid_num_threads(void);
+
+/** Set the number of OpenMP threads (n <= 0 leaves the default). */
+void cupid_set_num_threads(int n);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

@@ -1,0 +1,249 @@
+/**
+ * @file model.h
+ * @brief The model file (shared/reference/model-format.md) as read and validated.
+ *
+ * cupid_model_read() parses the YAML file with libyaml, checks every key, type and range
+ * and returns a ::cupid_model_t whose fields are plain data. Every item keeps a
+ * ::cupid_mark (line, column, key path) so that later stages can report semantic errors
+ * against the file with cupid_model_error(). Unknown keys are errors with a
+ * "did you mean" hint. All lengths are in the user's consistent units.
+ */
+#ifndef CUPID_MODEL_H
+#define CUPID_MODEL_H
+
+#include "cupid/base.h"
+#include "cupid/expr.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/** Where an item stands in the model file. line/column are 1-based (0 = unknown). */
+typedef struct {
+  int line, column;
+  char key[128]; /**< key path, e.g. "peridynamics.regions[1]" */
+} cupid_mark;
+
+/** A scalar that is absent (null), a constant, or an expression in x y z t density. */
+typedef enum { CUPID_VALUE_NONE = 0, CUPID_VALUE_CONSTANT, CUPID_VALUE_EXPR } cupid_value_kind;
+typedef struct {
+  cupid_value_kind kind;
+  double constant;
+  cupid_expr expr; /**< owned; variables cupid_expr_model_vars */
+} cupid_value;
+
+/** Evaluate a value at (x, y, z, t) with @p density; NONE evaluates to 0. */
+double cupid_value_eval(const cupid_value *v, double x, double y, double z, double t,
+                        double density);
+
+/** Axis-aligned box; an axis with has[a] == 0 is unbounded (lo = -inf, hi = +inf). */
+typedef struct {
+  double lo[3], hi[3];
+  int has[3];
+} cupid_box;
+
+/** 1 if point p lies in the box, with tolerance @p tol on every bound. */
+int cupid_box_contains(const cupid_box *box, const double p[3], double tol);
+
+typedef struct {
+  char *name;
+  int orthotropic;  /**< 0: isotropic (E, nu); 1: orthotropic (Ex.., nu_xy.., Gxy..) */
+  double E, nu;     /**< isotropic constants */
+  double Ex, Ey, Ez, nu_xy, nu_xz, nu_yz, Gxy, Gxz, Gyz; /**< orthotropic, material axes x y z */
+  double density;   /**< 0 when not given */
+  int has_density;
+  cupid_mark mark;
+} cupid_material;
+
+typedef enum { CUPID_EXPANSION_TE = 0, CUPID_EXPANSION_LE = 1 } cupid_expansion;
+
+/** A rectangular component of a beam section given by breakpoints (model-format beam.section). */
+typedef struct {
+  double *x, *z; /**< breakpoints, increasing */
+  int nx, nz;
+  int material; /**< index into materials, -1 = the beam's material */
+  cupid_mark mark;
+} cupid_section_component;
+
+typedef struct {
+  int material;                  /**< index into materials */
+  double *axis_y;                /**< breakpoints along y, increasing, n_axis of them */
+  int *axis_elements;            /**< elements per span, n_axis - 1 of them */
+  int n_axis;
+  int element_nodes;             /**< 2, 3 or 4 (B2, B3, B4) */
+  int integration;               /**< 0 full (default), 1 reduced, 2 mitc; see cuf.h */
+  cupid_expansion expansion;
+  int te_order;                  /**< TE order N (0 allowed: a rod) */
+  int le_nodes;                  /**< 4, 9 or 16 (L4, L9, L16) */
+  cupid_section_component *components;
+  int n_components;
+  double *section_nodes;         /**< explicit LE section: [x0, z0, x1, z1, ...] */
+  int n_section_nodes;
+  int *section_elements;         /**< explicit LE elements: le_nodes node indices each */
+  int *section_element_material; /**< per explicit element, -1 = beam material */
+  int n_section_elements;
+  cupid_mark mark;
+} cupid_beam;
+
+typedef enum { CUPID_PD_LPS = 0, CUPID_PD_BOND = 1 } cupid_pd_model_kind;
+typedef enum {
+  CUPID_INFLUENCE_GAUSSIAN = 0, /**< exp(-|xi|^2/delta^2), paper 000 Eq. 9 */
+  CUPID_INFLUENCE_INVERSE = 1,  /**< 1/|xi| */
+  CUPID_INFLUENCE_CONSTANT = 2  /**< 1 */
+} cupid_influence;
+typedef enum {
+  CUPID_PARTIAL_NONE = 0,     /**< beta = 1 for |xi| <= delta */
+  CUPID_PARTIAL_PDLAMMPS = 1, /**< Parks et al. linear rule */
+  CUPID_PARTIAL_EXACT = 2     /**< volume of cell inside the sphere */
+} cupid_partial_volume;
+
+typedef struct {
+  cupid_box box; /**< for dimension 1 only y is set */
+  int material;  /**< index into materials */
+  cupid_mark mark;
+} cupid_pd_region;
+
+typedef struct {
+  double spacing, horizon;
+  cupid_pd_model_kind model;
+  cupid_influence influence;
+  cupid_partial_volume partial_volume;
+  int dimension;   /**< 3 or 1 */
+  double area;     /**< cross-section area, dimension 1 only */
+  int material;    /**< default region material, -1 if not given */
+  cupid_pd_region *regions;
+  int n_regions;
+  cupid_mark mark;
+} cupid_peridynamics;
+
+typedef enum {
+  CUPID_COUPLING_FICTITIOUS = 0,
+  CUPID_COUPLING_LAGRANGE = 1,
+  CUPID_COUPLING_ARLEQUIN = 2
+} cupid_coupling_method;
+typedef enum { CUPID_WEIGHT_LINEAR = 0, CUPID_WEIGHT_CONSTANT = 1, CUPID_WEIGHT_SMOOTH = 2 } cupid_weight;
+
+typedef struct {
+  cupid_coupling_method method;
+  double penalty;        /**< arlequin */
+  cupid_box overlap;     /**< arlequin */
+  cupid_weight weight;   /**< arlequin */
+  int has_arlequin;
+  cupid_mark mark;
+} cupid_coupling;
+
+typedef enum {
+  CUPID_CONSTRAINT_CLAMP = 0,        /**< all components zero on a section plane y = value */
+  CUPID_CONSTRAINT_FIX = 1,          /**< listed components zero in a box */
+  CUPID_CONSTRAINT_DISPLACEMENT = 2  /**< prescribed values (expressions) in a box */
+} cupid_constraint_kind;
+
+typedef struct {
+  cupid_constraint_kind kind;
+  double plane_y;         /**< clamp */
+  double layer;           /**< clamp on PD nodes: thickness of the fixed layer (0 = default) */
+  cupid_box box;          /**< fix, displacement */
+  int components[3];      /**< fix: 1 for each constrained component (default all) */
+  cupid_value value[3];   /**< displacement: NONE = free component */
+  cupid_mark mark;
+} cupid_constraint;
+
+typedef enum { CUPID_LOAD_TRACTION = 0, CUPID_LOAD_POINT = 1, CUPID_LOAD_BODY = 2 } cupid_load_kind;
+
+typedef struct {
+  cupid_load_kind kind;
+  double plane_y;         /**< traction: the end-section plane */
+  cupid_box patch;        /**< traction: x/z patch (has[] = 0: whole section) */
+  double at[3];           /**< point */
+  cupid_box box;          /**< body */
+  cupid_value value[3];   /**< force per area (traction), force (point), per volume (body) */
+  cupid_mark mark;
+} cupid_load;
+
+typedef enum { CUPID_ANALYSIS_STATIC = 0, CUPID_ANALYSIS_DYNAMIC = 1, CUPID_ANALYSIS_EVALUATE = 2 } cupid_analysis_type;
+typedef enum { CUPID_SOLVER_AUTO = 0, CUPID_SOLVER_DIRECT = 1, CUPID_SOLVER_PETSC = 2 } cupid_solver_kind;
+typedef enum { CUPID_INTEGRATOR_NEWMARK = 0, CUPID_INTEGRATOR_CENTRAL = 1 } cupid_integrator;
+
+typedef struct {
+  cupid_integrator integrator;
+  double dt, duration;
+  int every;
+  double rayleigh_mass, rayleigh_stiffness;
+  double newmark_beta, newmark_gamma;
+  int lumped_mass;
+  cupid_value initial_displacement[3];
+  cupid_value initial_velocity[3];
+  int has_dynamic;
+  cupid_mark mark;
+} cupid_dynamic;
+
+typedef struct {
+  cupid_analysis_type type;
+  cupid_solver_kind solver;
+  cupid_value field[3]; /**< evaluate */
+  cupid_dynamic dynamic;
+  cupid_mark mark;
+} cupid_analysis;
+
+typedef struct {
+  char *name;
+  double from[3], to[3];
+  int points;
+  cupid_mark mark;
+} cupid_output_line;
+
+typedef struct {
+  char *name;
+  double at[3];
+  int stress;
+  cupid_mark mark;
+} cupid_output_point;
+
+typedef struct {
+  char *directory;        /**< default "out/<model file stem>" */
+  int vtu, pd_nodes, plots;
+  cupid_output_line *lines;
+  int n_lines;
+  cupid_output_point *points;
+  int n_points;
+  cupid_mark mark;
+} cupid_output;
+
+/** A whole model. Sections absent from the file have has_* == 0. */
+typedef struct cupid_model {
+  char *file;  /**< path as given */
+  char *title; /**< "" if absent */
+  cupid_material *materials;
+  int n_materials;
+  int has_beam, has_peridynamics, has_coupling;
+  cupid_beam beam;
+  cupid_peridynamics pd;
+  cupid_coupling coupling;
+  cupid_constraint *constraints;
+  int n_constraints;
+  cupid_load *loads;
+  int n_loads;
+  cupid_analysis analysis;
+  cupid_output output;
+} cupid_model_t;
+typedef cupid_model_t *cupid_model;
+
+/** Read and validate a model file. Errors are CUPID_ERR_MODEL ("file:line:col: key: ...")
+ *  or CUPID_ERR_IO (file cannot be read). */
+cupid_status cupid_model_read(const char *path, cupid_model *model);
+
+/** Same, from a string in memory; @p name stands for the file name in messages. */
+cupid_status cupid_model_read_string(const char *text, size_t length, const char *name,
+                                     cupid_model *model);
+
+/** Destroy and set *model to NULL (NULL-safe). */
+void cupid_model_destroy(cupid_model *model);
+
+/** Record a model error at @p mark: "file:line:col: key: <message>"; returns CUPID_ERR_MODEL. */
+cupid_status cupid_model_error(const cupid_model_t *model, const cupid_mark *mark, const char *fmt,
+                               ...) __attribute__((format(printf, 3, 4)));
+
+#ifdef __cplusplus
+}
+#endif
+#endif

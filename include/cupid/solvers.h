@@ -1,0 +1,98 @@
+/**
+ * @file solvers.h
+ * @brief Sparse matrices (scalar or 3x3-block CSR, 64-bit indices), Dirichlet
+ *        conditions, and the embedded direct solvers (CHOLMOD for SPD, UMFPACK otherwise).
+ *
+ * Matrices are plain data (like cholmod_sparse): block CSR with block size bs (1 or 3),
+ * rows/cols counted in blocks, column indices sorted within each row, values stored
+ * block after block, each block row-major (bs*bs doubles).
+ */
+#ifndef CUPID_SOLVERS_H
+#define CUPID_SOLVERS_H
+
+#include "cupid/base.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef struct cupid_csr_s {
+  cupid_int nrows, ncols; /**< in blocks */
+  int bs;                 /**< block size: 1 or 3 */
+  cupid_int *rowptr;      /**< nrows + 1 */
+  cupid_int *col;         /**< rowptr[nrows] block column indices, sorted per row */
+  double *val;            /**< rowptr[nrows] * bs * bs values */
+} cupid_csr_t;
+typedef cupid_csr_t *cupid_csr;
+
+/** A matrix with the given pattern (copied; columns must be sorted per row), values zero. */
+cupid_status cupid_csr_create(cupid_int nrows, cupid_int ncols, int bs, const cupid_int *rowptr,
+                              const cupid_int *col, cupid_csr *A);
+
+/** A scalar (bs = 1) matrix from triplets (i, j, v); duplicates are summed. */
+cupid_status cupid_csr_from_triplets(cupid_int nrows, cupid_int ncols, cupid_int n,
+                                     const cupid_int *i, const cupid_int *j, const double *v,
+                                     cupid_csr *A);
+
+void cupid_csr_destroy(cupid_csr *A);
+
+/** Pointer to block (row, col) values, or NULL if not in the pattern (binary search). */
+double *cupid_csr_find(const cupid_csr_t *A, cupid_int row, cupid_int col);
+
+/** y = A x (OpenMP over rows). x has ncols*bs entries, y nrows*bs. */
+void cupid_csr_matvec(const cupid_csr_t *A, const double *x, double *y);
+
+/** The same matrix with bs = 1. */
+cupid_status cupid_csr_to_scalar(const cupid_csr_t *A, cupid_csr *S);
+
+/** max |A_ij - A_ji| / max |A_ij| over the scalar entries (square matrices). */
+double cupid_csr_asymmetry(const cupid_csr_t *A);
+
+/** Number of stored scalar entries (nnz blocks * bs^2). */
+cupid_int cupid_csr_nnz(const cupid_csr_t *A);
+
+/** Bytes used by the matrix arrays. */
+int64_t cupid_csr_bytes(const cupid_csr_t *A);
+
+/** Dirichlet conditions on scalar DOFs. Fill fixed[]/value[], then cupid_dirichlet_finalize(). */
+typedef struct cupid_dirichlet_s {
+  cupid_int n;            /**< total scalar DOFs */
+  unsigned char *fixed;   /**< n flags */
+  double *value;          /**< n prescribed values (used where fixed) */
+  cupid_int n_free;       /**< set by finalize */
+  cupid_int *free_index;  /**< n: index among free DOFs, or -1 (set by finalize) */
+} cupid_dirichlet_t;
+typedef cupid_dirichlet_t *cupid_dirichlet;
+
+cupid_status cupid_dirichlet_create(cupid_int n, cupid_dirichlet *bc);
+cupid_status cupid_dirichlet_finalize(cupid_dirichlet bc);
+void cupid_dirichlet_destroy(cupid_dirichlet *bc);
+
+typedef enum { CUPID_MATRIX_SPD = 0, CUPID_MATRIX_GENERAL = 1 } cupid_matrix_kind;
+
+/** What a direct solve did, for summary.json. */
+typedef struct {
+  const char *method;      /**< "cholmod" or "umfpack" */
+  cupid_int n;             /**< equations solved (free DOFs) */
+  cupid_int nnz_matrix;    /**< scalar non-zeros of the reduced matrix */
+  double nnz_factor;       /**< non-zeros of the factor(s) */
+  double time_factor, time_solve; /**< seconds (analysis counted in factor) */
+  int64_t memory_factor;   /**< peak bytes reported by the library (0 = unknown) */
+  double residual;         /**< ||K_ff u_f - b_f|| / ||b_f|| (0 when b_f = 0) */
+  cupid_int failed_dof;    /**< global scalar DOF where factorisation broke down, or -1 */
+} cupid_solve_info;
+
+/**
+ * Solve K u = f with Dirichlet conditions: unknowns are the free DOFs, fixed DOFs take
+ * bc->value; the system K_ff u_f = f_f - K_fc u_c is factored with CHOLMOD (SPD) or
+ * UMFPACK (GENERAL) and the residual is checked (CUPID_ERR_NUMERIC above 1e-8).
+ * A singular or indefinite K_ff gives CUPID_ERR_NUMERIC with info->failed_dof set.
+ * u (K->nrows*bs entries) receives the full solution.
+ */
+cupid_status cupid_direct_solve(const cupid_csr_t *K, cupid_matrix_kind kind, const double *f,
+                                const cupid_dirichlet_t *bc, double *u, cupid_solve_info *info);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

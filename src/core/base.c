@@ -1,0 +1,108 @@
+/* Checked allocation, clocks, memory statistics, threads (see include/cupid/base.h). */
+#include "cupid/base.h"
+
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/resource.h>
+#include <time.h>
+#include <unistd.h>
+#ifdef _OPENMP
+#include <omp.h>
+#endif
+
+#include "cupid_config.h"
+
+const char *cupid_version(void) { return CUPID_VERSION; }
+
+static cupid_status alloc_impl(size_t count, size_t size, const char *what, int zero, void *out) {
+  void **p = (void **)out;
+  *p = NULL;
+  if (count == 0 || size == 0) return CUPID_SUCCESS;
+  if (count > SIZE_MAX / size)
+    return CUPID_ERROR(CUPID_ERR_MEMORY, "allocation of %zu x %zu bytes for %s overflows", count,
+                       size, what ? what : "an array");
+  *p = zero ? calloc(count, size) : malloc(count * size);
+  if (!*p)
+    return CUPID_ERROR(CUPID_ERR_MEMORY, "out of memory allocating %.3g MB for %s",
+                       (double)count * (double)size / 1e6, what ? what : "an array");
+  return CUPID_SUCCESS;
+}
+
+cupid_status cupid_calloc(size_t count, size_t size, const char *what, void *out) {
+  return alloc_impl(count, size, what, 1, out);
+}
+
+cupid_status cupid_malloc(size_t count, size_t size, const char *what, void *out) {
+  return alloc_impl(count, size, what, 0, out);
+}
+
+cupid_status cupid_realloc(size_t count, size_t size, const char *what, void *inout) {
+  void **p = (void **)inout;
+  if (count == 0 || size == 0) {
+    free(*p);
+    *p = NULL;
+    return CUPID_SUCCESS;
+  }
+  if (count > SIZE_MAX / size)
+    return CUPID_ERROR(CUPID_ERR_MEMORY, "allocation of %zu x %zu bytes for %s overflows", count,
+                       size, what ? what : "an array");
+  void *q = realloc(*p, count * size);
+  if (!q)
+    return CUPID_ERROR(CUPID_ERR_MEMORY, "out of memory growing %s to %.3g MB",
+                       what ? what : "an array", (double)count * (double)size / 1e6);
+  *p = q;
+  return CUPID_SUCCESS;
+}
+
+void cupid_free(void *ptr) {
+  void **p = (void **)ptr;
+  if (!p) return;
+  free(*p);
+  *p = NULL;
+}
+
+cupid_status cupid_strdup(const char *s, char **out) {
+  size_t n = strlen(s) + 1;
+  CUPID_CALL(cupid_malloc(n, 1, "a string", out));
+  memcpy(*out, s, n);
+  return CUPID_SUCCESS;
+}
+
+double cupid_wtime(void) {
+  struct timespec ts;
+  clock_gettime(CLOCK_MONOTONIC, &ts);
+  return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+int64_t cupid_peak_memory(void) {
+  struct rusage ru;
+  if (getrusage(RUSAGE_SELF, &ru) != 0) return 0;
+  return (int64_t)ru.ru_maxrss * 1024; /* Linux reports kilobytes */
+}
+
+int64_t cupid_current_memory(void) {
+  FILE *f = fopen("/proc/self/statm", "r");
+  if (!f) return 0;
+  long pages = 0, resident = 0;
+  int n = fscanf(f, "%ld %ld", &pages, &resident);
+  fclose(f);
+  if (n != 2) return 0;
+  return (int64_t)resident * (int64_t)sysconf(_SC_PAGESIZE);
+}
+
+int cupid_num_threads(void) {
+#ifdef _OPENMP
+  return omp_get_max_threads();
+#else
+  return 1;
+#endif
+}
+
+void cupid_set_num_threads(int n) {
+#ifdef _OPENMP
+  if (n > 0) omp_set_num_threads(n);
+#else
+  (void)n;
+#endif
+}

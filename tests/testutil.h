@@ -1,0 +1,36 @@
+/* Helpers shared by cupid's C tests (cmocka is the runner). */
+#ifndef CUPID_TESTUTIL_H
+#define CUPID_TESTUTIL_H
+
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <cmocka.h>
+
+#include "cupid.h"
+
+/** Fail the test with the recorded cupid error message unless the call succeeded. */
+#define CUPID_ASSERT_OK(expr)                                                                  \
+  do {                                                                                         \
+    cupid_status s_ = (expr);                                                                  \
+    if (s_ != CUPID_SUCCESS)                                                                   \
+      fail_msg("%s failed: %s: %s [%s]", #expr, cupid_status_name(s_), cupid_error_message(), \
+               cupid_error_origin());                                                          \
+  } while (0)
+
+/** Assert |a - b| <= tol, printing both values. */
+#define ASSERT_NEAR(a, b, tol)                                                                 \
+  do {                                                                                         \
+    double a_ = (a), b_ = (b), t_ = (tol);                                                     \
+    if (!(fabs(a_ - b_) <= t_))                                                                \
+      fail_msg("%s = %.15g, %s = %.15g, |diff| = %.3g > %.3g", #a, a_, #b, b_, fabs(a_ - b_), t_); \
+  } while (0)
+
+/** Deterministic uniform random numbers in [-1, 1) (splitmix64), for reproducible tests. */
+double cupid_test_random(uint64_t *state);
+
+/** Absolute path of a file in the source tree (tests run from the build tree). */
+const char *cupid_test_source_path(const char *relative);
+
+#endif
