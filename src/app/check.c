@@ -1,0 +1,92 @@
+/* Size, memory and time estimates: printed by `cupid check`, and the guard that makes
+ * `cupid run` refuse a model that cannot fit before it allocates the big arrays.
+ *
+ * Stored matrix: one 3x3 block (72 B of values + 8 B of column index) per coupled node pair.
+ * The bond-based model couples the nodes of a bond (bonds + diagonal); LPS couples nodes up
+ * to 2 delta apart, bounded here by the 2-delta lattice stencil (exact in the interior).
+ * Direct factor: nested dissection on a 3D grid gives nnz(L) ~ c n^(4/3) and flops ~ n^2;
+ * c and the time scale are fitted to the CHOLMOD measurements on this class of machine in
+ * shared/reference/dependencies.md (bond-based, delta = 3h: 20^3 -> 5.3e7 nnz(L), 3.7 s;
+ * 40^3 -> 1.23e9, 232 s). LPS's wider coupling is taken as 3x the fill and time: an estimate
+ * to decide what fits, not a promise. */
+#include <math.h>
+#include <stdio.h>
+#include <unistd.h>
+
+#include "app_internal.h"
+
+typedef struct {
+  double matrix_blocks, matrix_bytes;
+  double factor_nnz, factor_bytes, factor_seconds;
+  double total_bytes;
+} cupid_estimate;
+
+static double stencil_count(double radius_cells) {
+  double count = 0;
+  int r = (int)ceil(radius_cells);
+  for (int i = -r; i <= r; i++)
+    for (int j = -r; j <= r; j++)
+      for (int k = -r; k <= r; k++)
+        if (i * i + j * j + k * k <= radius_cells * radius_cells) count += 1;
+  return count;
+}
+
+static void estimate(const cupid_job *job, cupid_estimate *e) {
+  const cupid_model_t *m = job->model;
+  double n = (double)job->n_pd, ndof = 3.0 * n;
+  double ratio = m->pd.horizon / m->pd.spacing;
+  if (m->pd.model == CUPID_PD_LPS) {
+    double s2 = m->pd.dimension == 1 ? 2 * floor(2 * ratio + 0.5) + 1 : stencil_count(2 * ratio + 0.5);
+    e->matrix_blocks = n * (s2 < n ? s2 : n);
+  } else {
+    e->matrix_blocks = (double)job->n_bonds + n;
+  }
+  e->matrix_bytes = e->matrix_blocks * 80.0 + 8.0 * n;
+  double fill = m->pd.model == CUPID_PD_LPS ? 3.0 : 1.0;
+  if (m->pd.dimension == 1) {
+    e->factor_nnz = ndof * 3.0 * (2 * ratio + 1); /* banded */
+    e->factor_seconds = 1e-7 * e->factor_nnz;
+  } else {
+    e->factor_nnz = fill * 77.0 * pow(ndof, 4.0 / 3.0);
+    e->factor_seconds = fill * 3.7 * (ndof / 24000.0) * (ndof / 24000.0);
+  }
+  double dense = 0.5 * ndof * ndof;
+  if (e->factor_nnz > dense) e->factor_nnz = dense;
+  e->factor_bytes = 12.0 * e->factor_nnz;
+  /* K, its reduced one-triangle copy for CHOLMOD (about half of K at 12 B/entry), factor. */
+  e->total_bytes = e->matrix_bytes + 0.5 * 9.0 * e->matrix_blocks * 12.0 + e->factor_bytes +
+                   10.0 * ndof * 8.0;
+}
+
+static double physical_memory(void) {
+  long pages = sysconf(_SC_PHYS_PAGES), size = sysconf(_SC_PAGESIZE);
+  return pages > 0 && size > 0 ? (double)pages * (double)size : 0.0;
+}
+
+cupid_status cupid_app_estimate(const cupid_job *job, int print) {
+  cupid_estimate e;
+  estimate(job, &e);
+  double limit = job->opts->max_memory_gb > 0 ? job->opts->max_memory_gb * 1e9 : 0.9 * physical_memory();
+  if (print) {
+    const cupid_model_t *m = job->model;
+    printf("model: %s%s%s\n", m->file, m->title[0] ? " - " : "", m->title);
+    printf("PD nodes: %lld\nbonds: %lld\nDOFs: %lld\n", (long long)job->n_pd,
+           (long long)job->n_bonds, (long long)(3 * job->n_pd));
+    printf("stiffness matrix: about %.3g stored 3x3 blocks, %.3g GB\n", e.matrix_blocks,
+           e.matrix_bytes / 1e9);
+    printf("direct solver (CHOLMOD): about %.3g factor entries, %.3g GB, %.3g s\n", e.factor_nnz,
+           e.factor_bytes / 1e9, e.factor_seconds);
+    printf("estimated peak memory: %.3g GB (limit %.3g GB)\n", e.total_bytes / 1e9, limit / 1e9);
+    printf("the model is valid%s\n", limit > 0 && e.total_bytes > limit
+                                          ? ", but too large for the direct solver on this machine"
+                                          : "");
+  }
+  if (!print && limit > 0 && e.total_bytes > limit)
+    return CUPID_ERROR(CUPID_ERR_MODEL,
+                       "%s: the model needs about %.3g GB (%lld PD nodes; stiffness %.3g GB, "
+                       "factor %.3g GB), more than the limit of %.3g GB; use --max-memory GB to "
+                       "raise the limit, or a coarser grid",
+                       job->model->file, e.total_bytes / 1e9, (long long)job->n_pd,
+                       e.matrix_bytes / 1e9, e.factor_bytes / 1e9, limit / 1e9);
+  return CUPID_SUCCESS;
+}

@@ -1,0 +1,194 @@
+/* Constraints and loads on peridynamic nodes.
+ *
+ * PD has no boundary surface to put a condition on, so conditions act on volume layers:
+ *  - clamp {y: Y, layer: L}: every component of the nodes with |y - Y| < L is zero
+ *    (L defaults to the horizon: the usual fictitious-layer thickness in PD);
+ *  - fix / displacement: nodes whose centre lies in the box;
+ *  - traction on the plane y = Y: the nodes whose cell has a face on the plane that is a
+ *    free surface of the grid, each loaded with t * (face area inside the patch);
+ *  - point: the node whose cell contains the point;
+ *  - body: force per unit volume times the cell volume, for the nodes in the box. */
+#include <math.h>
+#include <string.h>
+
+#include "app_internal.h"
+
+/* Relative tolerance on lattice positions (box bounds on cell faces must include the nodes
+ * that sit exactly on them after round-off). */
+#define CUPID_LATTICE_TOL 1e-9
+
+static void node_lattice(const cupid_job *job, cupid_int node, cupid_int ijk[3]) {
+  const double *x = cupid_pd_grid_coords(job->grid) + 3 * node;
+  double o[3], h = cupid_pd_grid_spacing(job->grid);
+  cupid_pd_grid_origin(job->grid, o);
+  for (int a = 0; a < 3; a++) ijk[a] = (cupid_int)floor((x[a] - o[a]) / h);
+  if (cupid_pd_grid_dimension(job->grid) == 1) ijk[0] = ijk[2] = 0;
+}
+
+static cupid_status constraint_on_nodes(cupid_job *job, const cupid_constraint *c,
+                                        cupid_int *count) {
+  const cupid_model_t *m = job->model;
+  const double *x = cupid_pd_grid_coords(job->grid);
+  const int *mat = cupid_pd_grid_materials(job->grid);
+  double h = cupid_pd_grid_spacing(job->grid);
+  double layer = c->layer > 0 ? c->layer : m->pd.horizon;
+  *count = 0;
+  for (cupid_int i = 0; i < job->n_pd; i++) {
+    const double *p = x + 3 * i;
+    int in = c->kind == CUPID_CONSTRAINT_CLAMP ? fabs(p[1] - c->plane_y) < layer
+                                               : cupid_box_contains(&c->box, p, CUPID_LATTICE_TOL * h);
+    if (!in) continue;
+    (*count)++;
+    for (int a = 0; a < 3; a++) {
+      cupid_int d = 3 * i + a;
+      if (c->kind == CUPID_CONSTRAINT_DISPLACEMENT) {
+        if (c->value[a].kind == CUPID_VALUE_NONE) continue;
+        job->bc->fixed[d] = 1;
+        job->bc->value[d] =
+            cupid_value_eval(&c->value[a], p[0], p[1], p[2], 0.0, m->materials[mat[i]].density);
+      } else if (c->kind == CUPID_CONSTRAINT_CLAMP || c->components[a]) {
+        job->bc->fixed[d] = 1;
+        job->bc->value[d] = 0.0;
+      }
+    }
+  }
+  return CUPID_SUCCESS;
+}
+
+cupid_status cupid_app_pd_constraints(cupid_job *job) {
+  const cupid_model_t *m = job->model;
+  for (int k = 0; k < m->n_constraints; k++) {
+    const cupid_constraint *c = &m->constraints[k];
+    cupid_int count;
+    CUPID_CALL(constraint_on_nodes(job, c, &count));
+    if (count == 0) {
+      if (c->kind == CUPID_CONSTRAINT_CLAMP)
+        return cupid_model_error(m, &c->mark,
+                                 "no PD node lies within %g of the plane y = %g (the clamp fixes "
+                                 "a layer of PD nodes; set `layer:` or move the plane)",
+                                 c->layer > 0 ? c->layer : m->pd.horizon, c->plane_y);
+      return cupid_model_error(m, &c->mark,
+                               "the box contains no PD node (PD nodes sit at cell centres, half "
+                               "a spacing inside the region faces)");
+    }
+  }
+  /* A clamp layer of zero nodes is caught above; report what was fixed for the log. */
+  cupid_int nfixed = 0;
+  for (cupid_int d = 0; d < job->ndof; d++) nfixed += job->bc->fixed[d];
+  cupid_job_progress(job, "constraints: %lld DOFs prescribed", (long long)nfixed);
+  return CUPID_SUCCESS;
+}
+
+/* Area of the cell face of node p (sides h) inside the traction patch (x/z ranges). */
+static double face_area(const cupid_load *l, const double *p, double h, int dim, double area) {
+  if (dim == 1) return area;
+  double a = 1.0;
+  const int axes[2] = {0, 2};
+  for (int k = 0; k < 2; k++) {
+    int ax = axes[k];
+    double lo = p[ax] - 0.5 * h, hi = p[ax] + 0.5 * h;
+    if (l->patch.has[ax]) {
+      lo = fmax(lo, l->patch.lo[ax]);
+      hi = fmin(hi, l->patch.hi[ax]);
+    }
+    a *= hi > lo ? hi - lo : 0.0;
+  }
+  return a;
+}
+
+/* A node lies on the traction plane if its cell has a face there that is a free surface. */
+static int on_free_face(const cupid_job *job, cupid_int node, double plane_y) {
+  const double *p = cupid_pd_grid_coords(job->grid) + 3 * node;
+  double h = cupid_pd_grid_spacing(job->grid);
+  double d = plane_y - p[1];
+  if (fabs(fabs(d) - 0.5 * h) > CUPID_LATTICE_TOL * h * 10) return 0;
+  cupid_int ijk[3];
+  node_lattice(job, node, ijk);
+  cupid_int across = ijk[1] + (d > 0 ? 1 : -1);
+  return cupid_pd_grid_node_at(job->grid, ijk[0], across, ijk[2]) < 0;
+}
+
+static cupid_status traction_load(cupid_job *job, const cupid_load *l) {
+  const cupid_model_t *m = job->model;
+  const double *x = cupid_pd_grid_coords(job->grid);
+  const int *mat = cupid_pd_grid_materials(job->grid);
+  double h = cupid_pd_grid_spacing(job->grid);
+  int dim = cupid_pd_grid_dimension(job->grid);
+  cupid_int count = 0;
+  for (cupid_int i = 0; i < job->n_pd; i++) {
+    if (!on_free_face(job, i, l->plane_y)) continue;
+    const double *p = x + 3 * i;
+    double a = face_area(l, p, h, dim, m->pd.area);
+    if (a <= 0) continue;
+    count++;
+    for (int c = 0; c < 3; c++)
+      job->f_ext[3 * i + c] +=
+          a * cupid_value_eval(&l->value[c], p[0], l->plane_y, p[2], 0.0, m->materials[mat[i]].density);
+  }
+  if (count == 0)
+    return cupid_model_error(m, &l->mark,
+                             "no free PD surface lies on the plane y = %g%s (a traction acts on "
+                             "an end face of a PD region)",
+                             l->plane_y, l->patch.has[0] || l->patch.has[2] ? " inside the patch" : "");
+  return CUPID_SUCCESS;
+}
+
+static cupid_status point_load(cupid_job *job, const cupid_load *l) {
+  const cupid_model_t *m = job->model;
+  double o[3], h = cupid_pd_grid_spacing(job->grid);
+  cupid_pd_grid_origin(job->grid, o);
+  int dim = cupid_pd_grid_dimension(job->grid);
+  cupid_int ijk[3];
+  for (int a = 0; a < 3; a++) ijk[a] = (cupid_int)floor((l->at[a] - o[a]) / h);
+  if (dim == 1) ijk[0] = ijk[2] = 0;
+  cupid_int node = cupid_pd_grid_node_at(job->grid, ijk[0], ijk[1], ijk[2]);
+  /* A point on a cell face belongs to the cell below it when the one above is absent. */
+  for (int a = 0; a < 3 && node < 0; a++) {
+    if (dim == 1 && a != 1) continue;
+    double f = (l->at[a] - o[a]) / h;
+    if (fabs(f - round(f)) < 1e-9) {
+      cupid_int q[3] = {ijk[0], ijk[1], ijk[2]};
+      q[a] -= 1;
+      node = cupid_pd_grid_node_at(job->grid, q[0], q[1], q[2]);
+    }
+  }
+  if (node < 0)
+    return cupid_model_error(m, &l->mark, "the point (%g, %g, %g) lies outside every PD region",
+                             l->at[0], l->at[1], l->at[2]);
+  const int *mat = cupid_pd_grid_materials(job->grid);
+  for (int c = 0; c < 3; c++)
+    job->f_ext[3 * node + c] += cupid_value_eval(&l->value[c], l->at[0], l->at[1], l->at[2], 0.0,
+                                                 m->materials[mat[node]].density);
+  return CUPID_SUCCESS;
+}
+
+static cupid_status body_load(cupid_job *job, const cupid_load *l) {
+  const cupid_model_t *m = job->model;
+  const double *x = cupid_pd_grid_coords(job->grid);
+  const int *mat = cupid_pd_grid_materials(job->grid);
+  double h = cupid_pd_grid_spacing(job->grid), vol = cupid_pd_grid_cell_volume(job->grid);
+  cupid_int count = 0;
+  for (cupid_int i = 0; i < job->n_pd; i++) {
+    const double *p = x + 3 * i;
+    if (!cupid_box_contains(&l->box, p, CUPID_LATTICE_TOL * h)) continue;
+    count++;
+    double rho = m->materials[mat[i]].density;
+    for (int c = 0; c < 3; c++)
+      job->f_ext[3 * i + c] += vol * cupid_value_eval(&l->value[c], p[0], p[1], p[2], 0.0, rho);
+  }
+  if (count == 0) return cupid_model_error(m, &l->mark, "the box contains no PD node");
+  return CUPID_SUCCESS;
+}
+
+cupid_status cupid_app_pd_loads(cupid_job *job) {
+  const cupid_model_t *m = job->model;
+  for (int k = 0; k < m->n_loads; k++) {
+    const cupid_load *l = &m->loads[k];
+    switch (l->kind) {
+    case CUPID_LOAD_TRACTION: CUPID_CALL(traction_load(job, l)); break;
+    case CUPID_LOAD_POINT: CUPID_CALL(point_load(job, l)); break;
+    case CUPID_LOAD_BODY: CUPID_CALL(body_load(job, l)); break;
+    }
+  }
+  return CUPID_SUCCESS;
+}

@@ -1,0 +1,277 @@
+/* Every output file of a run (model-format.md, `output:`): lines, pd_nodes.csv, pd.vtu +
+ * model.pvd, plots and summary.json. Each file is written atomically (temp + rename). */
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+
+#include "app_internal.h"
+#include "cupid/io.h"
+
+static const char *phase_names[CUPID_PHASE_COUNT] = {"grid",          "assembly", "coupling",
+                                                     "factorisation", "solve",    "output"};
+
+static const char *region_name(cupid_region_kind r) {
+  return r == CUPID_REGION_PD ? "PD" : r == CUPID_REGION_FE ? "FE" : "none";
+}
+
+static cupid_status join_path(const char *dir, const char *name, char *out, size_t len) {
+  int n = snprintf(out, len, "%s/%s", dir, name);
+  CUPID_CHECK(n > 0 && (size_t)n < len, CUPID_ERR_IO, "output path too long: %s/%s", dir, name);
+  return CUPID_SUCCESS;
+}
+
+/* Write `line_<name>.csv`: s,x,y,z,ux,uy,uz,region, and its plot. */
+static cupid_status write_line(cupid_job *job, const cupid_output_line *line) {
+  char name[512], path[4096];
+  snprintf(name, sizeof name, "line_%s.csv", line->name);
+  CUPID_CALL(join_path(job->outdir, name, path, sizeof path));
+  cupid_atomic_file file = NULL;
+  CUPID_CALL(cupid_atomic_open(path, &file));
+  FILE *out = cupid_atomic_stream(file);
+  double len = 0.0;
+  for (int a = 0; a < 3; a++) len += (line->to[a] - line->from[a]) * (line->to[a] - line->from[a]);
+  len = sqrt(len);
+  fprintf(out, "s,x,y,z,ux,uy,uz,region\n");
+  for (int k = 0; k < line->points; k++) {
+    double t = line->points > 1 ? (double)k / (line->points - 1) : 0.0, p[3], u[3];
+    for (int a = 0; a < 3; a++) p[a] = line->from[a] + t * (line->to[a] - line->from[a]);
+    cupid_region_kind region;
+    cupid_status st = cupid_app_sample(job, p, u, NULL, &region);
+    if (st != CUPID_SUCCESS) {
+      cupid_atomic_abort(&file);
+      return st;
+    }
+    fprintf(out, "%.10g,%.10g,%.10g,%.10g,%.10e,%.10e,%.10e,%s\n", t * len, p[0], p[1], p[2], u[0],
+            u[1], u[2], region_name(region));
+  }
+  CUPID_CALL(cupid_atomic_commit(&file));
+  if (!job->model->output.plots) return CUPID_SUCCESS;
+  char stem[512], title[600];
+  snprintf(stem, sizeof stem, "line_%s", line->name);
+  snprintf(title, sizeof title, "%s: displacement along line '%s'",
+           job->model->title[0] ? job->model->title : "cupid", line->name);
+  cupid_plot_curve curves[3] = {{name, 1, 5, "u_x", "linespoints pt 7 ps 0.4"},
+                                {name, 1, 6, "u_y", "linespoints pt 7 ps 0.4"},
+                                {name, 1, 7, "u_z", "linespoints pt 7 ps 0.4"}};
+  int made = 0;
+  return cupid_plot(job->outdir, stem, title, "s (distance along the line)", "displacement", 3,
+                    curves, &made);
+}
+
+/* `pd_nodes.csv`: x,y,z,ux,uy,uz,fx,fy,fz per real PD node; f = K u, the internal force,
+ * which equals the applied load plus the reaction at every node. */
+static cupid_status write_pd_nodes(cupid_job *job) {
+  char path[4096];
+  CUPID_CALL(join_path(job->outdir, "pd_nodes.csv", path, sizeof path));
+  cupid_atomic_file file = NULL;
+  CUPID_CALL(cupid_atomic_open(path, &file));
+  FILE *out = cupid_atomic_stream(file);
+  const double *x = cupid_pd_grid_coords(job->grid);
+  fprintf(out, "x,y,z,ux,uy,uz,fx,fy,fz\n");
+  for (cupid_int i = 0; i < job->n_pd; i++) {
+    const double *p = x + 3 * i, *u = job->u + 3 * i, *f = job->f_int + 3 * i;
+    fprintf(out, "%.10g,%.10g,%.10g,%.12e,%.12e,%.12e,%.12e,%.12e,%.12e\n", p[0], p[1], p[2], u[0],
+            u[1], u[2], f[0], f[1], f[2]);
+  }
+  return cupid_atomic_commit(&file);
+}
+
+/* `pd.vtu` (PD nodes as VTK vertices) and `model.pvd` (the collection ParaView opens). */
+static cupid_status write_vtu(cupid_job *job) {
+  cupid_status st = CUPID_SUCCESS;
+  cupid_int n = job->n_pd, *conn = NULL, *offs = NULL;
+  unsigned char *types = NULL;
+  double *mat = NULL, *fixed = NULL;
+  char path[4096];
+  CUPID_TRY(cupid_malloc((size_t)n, sizeof *conn, "VTU connectivity", &conn));
+  CUPID_TRY(cupid_malloc((size_t)n, sizeof *offs, "VTU offsets", &offs));
+  CUPID_TRY(cupid_malloc((size_t)n, sizeof *types, "VTU cell types", &types));
+  CUPID_TRY(cupid_malloc((size_t)n, sizeof *mat, "VTU materials", &mat));
+  CUPID_TRY(cupid_malloc((size_t)n, sizeof *fixed, "VTU constraint flags", &fixed));
+  const int *m = cupid_pd_grid_materials(job->grid);
+  for (cupid_int i = 0; i < n; i++) {
+    conn[i] = i;
+    offs[i] = i + 1;
+    types[i] = CUPID_VTK_VERTEX;
+    mat[i] = m[i];
+    fixed[i] = job->bc ? (double)(job->bc->fixed[3 * i] + job->bc->fixed[3 * i + 1] +
+                                  job->bc->fixed[3 * i + 2])
+                       : 0.0;
+  }
+  cupid_vtu_array pdata[5] = {{"displacement", 3, job->u},
+                              {"force", 3, job->f_int},
+                              {"material", 1, mat},
+                              {"constrained_components", 1, fixed},
+                              {"stress", 6, job->pd_stress}};
+  cupid_vtu_mesh mesh = {.n_points = n,
+                         .points = cupid_pd_grid_coords(job->grid),
+                         .n_cells = n,
+                         .connectivity = conn,
+                         .offsets = offs,
+                         .types = types,
+                         .point_data = pdata,
+                         .n_point_data = job->pd_stress ? 5 : 4};
+  CUPID_TRY(join_path(job->outdir, "pd.vtu", path, sizeof path));
+  CUPID_TRY(cupid_vtu_write(path, &mesh));
+  CUPID_TRY(join_path(job->outdir, "model.pvd", path, sizeof path));
+  const char *files[1] = {"pd.vtu"};
+  const double times[1] = {0.0};
+  const int parts[1] = {0};
+  CUPID_TRY(cupid_pvd_write(path, 1, files, times, parts));
+cleanup:
+  cupid_free(&conn);
+  cupid_free(&offs);
+  cupid_free(&types);
+  cupid_free(&mat);
+  cupid_free(&fixed);
+  return st;
+}
+
+static void json_vec3(cupid_json js, const char *key, const double v[3]) {
+  cupid_json_begin_array(js, key);
+  for (int c = 0; c < 3; c++) cupid_json_number(js, NULL, v[c]);
+  cupid_json_end_array(js);
+}
+
+static void json_counts(cupid_json js, const cupid_job *job) {
+  cupid_int nfixed = 0;
+  for (cupid_int d = 0; d < job->ndof && job->bc; d++) nfixed += job->bc->fixed[d];
+  cupid_json_begin_object(js, "counts");
+  cupid_json_integer(js, "fe_nodes", 0);
+  cupid_json_integer(js, "fe_dofs", 0);
+  cupid_json_integer(js, "pd_nodes", job->n_pd);
+  cupid_json_integer(js, "bonds", job->n_bonds);
+  cupid_json_integer(js, "pd_dofs", 3 * job->n_pd);
+  cupid_json_integer(js, "fictitious_nodes", 0);
+  cupid_json_integer(js, "dofs", job->ndof);
+  cupid_json_integer(js, "constrained_dofs", nfixed);
+  cupid_json_integer(js, "matrix_nonzeros", job->K ? cupid_csr_nnz(job->K) : 0);
+  cupid_json_end_object(js);
+}
+
+static void json_phases(cupid_json js, const cupid_job *job) {
+  cupid_json_begin_object(js, "phases");
+  for (int p = 0; p < CUPID_PHASE_COUNT; p++) {
+    cupid_json_begin_object(js, phase_names[p]);
+    cupid_json_number(js, "time_s", job->phases[p].used ? job->phases[p].seconds : 0.0);
+    cupid_json_integer(js, "peak_memory_bytes", job->phases[p].used ? job->phases[p].peak_memory : 0);
+    cupid_json_end_object(js);
+  }
+  cupid_json_end_object(js);
+}
+
+static void json_solver(cupid_json js, const cupid_job *job) {
+  cupid_json_begin_object(js, "solver");
+  if (job->solved) {
+    cupid_json_string(js, "method", job->solve.method);
+    cupid_json_integer(js, "equations", job->solve.n);
+    cupid_json_integer(js, "matrix_nonzeros", job->solve.nnz_matrix);
+    cupid_json_number(js, "factor_nonzeros", job->solve.nnz_factor);
+    cupid_json_number(js, "residual", job->solve.residual);
+  } else {
+    cupid_json_string(js, "method", "none");
+    cupid_json_null(js, "residual");
+  }
+  cupid_json_end_object(js);
+}
+
+static cupid_status json_points(cupid_json js, const cupid_job *job) {
+  const cupid_output *o = &job->model->output;
+  cupid_json_begin_array(js, "points");
+  for (int k = 0; k < o->n_points; k++) {
+    const cupid_output_point *pt = &o->points[k];
+    double u[3], s[6];
+    cupid_region_kind region;
+    CUPID_CALL(cupid_app_sample(job, pt->at, u, s, &region));
+    cupid_json_begin_object(js, NULL);
+    cupid_json_string(js, "name", pt->name);
+    cupid_json_number(js, "x", pt->at[0]);
+    cupid_json_number(js, "y", pt->at[1]);
+    cupid_json_number(js, "z", pt->at[2]);
+    cupid_json_number(js, "ux", u[0]);
+    cupid_json_number(js, "uy", u[1]);
+    cupid_json_number(js, "uz", u[2]);
+    cupid_json_string(js, "region", region_name(region));
+    if (pt->stress) {
+      static const char *names[6] = {"sxx", "syy", "szz", "syz", "sxz", "sxy"};
+      for (int c = 0; c < 6; c++) cupid_json_number(js, names[c], s[c]);
+    }
+    cupid_json_end_object(js);
+  }
+  cupid_json_end_array(js);
+  return CUPID_SUCCESS;
+}
+
+static cupid_status write_summary(cupid_job *job) {
+  const cupid_model_t *m = job->model;
+  char path[4096];
+  CUPID_CALL(join_path(job->outdir, "summary.json", path, sizeof path));
+  cupid_atomic_file file = NULL;
+  cupid_json js = NULL;
+  cupid_status st = CUPID_SUCCESS;
+  CUPID_TRY(cupid_atomic_open(path, &file));
+  CUPID_TRY(cupid_json_create(cupid_atomic_stream(file), &js));
+  static const char *types[3] = {"static", "dynamic", "evaluate"};
+  cupid_json_begin_object(js, NULL);
+  cupid_json_string(js, "cupid_version", cupid_version());
+  cupid_json_string(js, "title", m->title);
+  cupid_json_string(js, "model_file", m->file);
+  cupid_json_string(js, "analysis", types[m->analysis.type]);
+  cupid_json_integer(js, "threads", cupid_num_threads());
+  json_counts(js, job);
+  json_phases(js, job);
+  json_solver(js, job);
+  double imbalance[3];
+  for (int c = 0; c < 3; c++) imbalance[c] = job->load_sum[c] + job->reaction_sum[c];
+  json_vec3(js, "applied_load_sum", job->load_sum);
+  json_vec3(js, "reaction_sum", job->reaction_sum);
+  json_vec3(js, "equilibrium_imbalance", imbalance);
+  cupid_json_number(js, "total_time_s", cupid_wtime() - job->t_start);
+  cupid_json_integer(js, "peak_memory_bytes", cupid_peak_memory());
+  CUPID_TRY(json_points(js, job));
+  cupid_json_end_object(js);
+  cupid_json_destroy(&js);
+  CUPID_TRY(cupid_atomic_commit(&file));
+cleanup:
+  cupid_json_destroy(&js);
+  cupid_atomic_abort(&file);
+  return st;
+}
+
+static int needs_stress(const cupid_job *job) {
+  const cupid_output *o = &job->model->output;
+  if (o->vtu) return 1;
+  for (int k = 0; k < o->n_points; k++)
+    if (o->points[k].stress) return 1;
+  return 0;
+}
+
+cupid_status cupid_app_write_outputs(cupid_job *job) {
+  const cupid_output *o = &job->model->output;
+  double t0 = cupid_wtime();
+  CUPID_CALL(cupid_mkdir_p(job->outdir));
+  if (needs_stress(job)) {
+    CUPID_CALL(cupid_calloc((size_t)(6 * job->n_pd), sizeof(double), "PD stresses", &job->pd_stress));
+    CUPID_CALL(cupid_pd_operator_stress(job->op, job->u, job->pd_stress));
+  }
+  for (int k = 0; k < o->n_lines; k++) CUPID_CALL(write_line(job, &o->lines[k]));
+  if (o->pd_nodes) CUPID_CALL(write_pd_nodes(job));
+  if (o->vtu) CUPID_CALL(write_vtu(job));
+  /* The output phase is recorded before summary.json so that the file reports it. */
+  cupid_job_phase_end(job, CUPID_PHASE_OUTPUT, t0);
+  return write_summary(job);
+}
+
+cupid_status cupid_app_check_points(const cupid_job *job) {
+  const cupid_output *o = &job->model->output;
+  for (int k = 0; k < o->n_points; k++) {
+    double u[3];
+    cupid_region_kind region;
+    CUPID_CALL(cupid_app_sample(job, o->points[k].at, u, NULL, &region));
+    if (region == CUPID_REGION_NONE)
+      return cupid_model_error(job->model, &o->points[k].mark,
+                               "the point (%g, %g, %g) lies outside the model",
+                               o->points[k].at[0], o->points[k].at[1], o->points[k].at[2]);
+  }
+  return CUPID_SUCCESS;
+}

@@ -1,0 +1,73 @@
+/* Values at arbitrary points (output lines and points): inside a PD region, trilinear
+ * interpolation of the grid nodes (model-format.md, output.lines). Corners missing from the
+ * grid (near region faces, where the point is less than h/2 from the surface) are dropped and
+ * the weights renormalised, which extrapolates constantly over that last half cell. */
+#include <math.h>
+
+#include "app_internal.h"
+
+static int inside_pd(const cupid_job *job, const double p[3]) {
+  const cupid_model_t *m = job->model;
+  double tol = 1e-9 * m->pd.spacing;
+  for (int r = 0; r < m->pd.n_regions; r++) {
+    cupid_box b = m->pd.regions[r].box;
+    if (m->pd.dimension == 1) b.has[0] = b.has[2] = 0;
+    if (cupid_box_contains(&b, p, tol)) return 1;
+  }
+  return 0;
+}
+
+cupid_status cupid_app_sample(const cupid_job *job, const double p[3], double u[3],
+                              double sigma[6], cupid_region_kind *region) {
+  for (int c = 0; c < 3; c++) u[c] = NAN;
+  if (sigma)
+    for (int c = 0; c < 6; c++) sigma[c] = NAN;
+  *region = CUPID_REGION_NONE;
+  if (!job->grid || !inside_pd(job, p)) return CUPID_SUCCESS;
+  if (!job->u) { /* before the solve: only say where the point lies */
+    *region = CUPID_REGION_PD;
+    return CUPID_SUCCESS;
+  }
+
+  double o[3], h = cupid_pd_grid_spacing(job->grid);
+  cupid_pd_grid_origin(job->grid, o);
+  int dim = cupid_pd_grid_dimension(job->grid);
+  cupid_int base[3] = {0, 0, 0};
+  double w[3] = {0, 0, 0};
+  for (int a = 0; a < 3; a++) {
+    if (dim == 1 && a != 1) continue;
+    double q = (p[a] - o[a]) / h - 0.5;
+    base[a] = (cupid_int)floor(q);
+    w[a] = q - (double)base[a];
+  }
+  double acc_u[3] = {0, 0, 0}, acc_s[6] = {0, 0, 0, 0, 0, 0}, wsum = 0.0;
+  for (int corner = 0; corner < 8; corner++) {
+    int d[3] = {corner & 1, (corner >> 1) & 1, (corner >> 2) & 1};
+    if (dim == 1 && (d[0] || d[2])) continue;
+    double wt = 1.0;
+    for (int a = 0; a < 3; a++)
+      if (dim == 3 || a == 1) wt *= d[a] ? w[a] : 1.0 - w[a];
+    cupid_int node = cupid_pd_grid_node_at(job->grid, base[0] + d[0], base[1] + d[1], base[2] + d[2]);
+    if (node < 0 || wt == 0.0) continue;
+    wsum += wt;
+    for (int c = 0; c < 3; c++) acc_u[c] += wt * job->u[3 * node + c];
+    if (sigma && job->pd_stress)
+      for (int c = 0; c < 6; c++) acc_s[c] += wt * job->pd_stress[6 * node + c];
+  }
+  if (wsum <= 0.0) {
+    /* Exactly on a node-free corner: take the node whose cell contains the point. */
+    cupid_int ijk[3];
+    for (int a = 0; a < 3; a++) ijk[a] = (dim == 1 && a != 1) ? 0 : (cupid_int)floor((p[a] - o[a]) / h);
+    cupid_int node = cupid_pd_grid_node_at(job->grid, ijk[0], ijk[1], ijk[2]);
+    if (node < 0) return CUPID_SUCCESS;
+    wsum = 1.0;
+    for (int c = 0; c < 3; c++) acc_u[c] = job->u[3 * node + c];
+    if (sigma && job->pd_stress)
+      for (int c = 0; c < 6; c++) acc_s[c] = job->pd_stress[6 * node + c];
+  }
+  for (int c = 0; c < 3; c++) u[c] = acc_u[c] / wsum;
+  if (sigma && job->pd_stress)
+    for (int c = 0; c < 6; c++) sigma[c] = acc_s[c] / wsum;
+  *region = CUPID_REGION_PD;
+  return CUPID_SUCCESS;
+}

@@ -1,0 +1,82 @@
+#!/usr/bin/env bash
+# The command line: options, exit codes and error messages (model-format.md, "Command line"),
+# and the promise that a failed run never leaves a file behind.
+set -u
+CUPID=${CUPID:-build/cupid}
+SRC=${CUPID_SOURCE_DIR:-.}
+M=$SRC/tests/models/run_errors
+work=$(mktemp -d)
+trap 'rm -rf "$work"' EXIT
+cd "$work"
+pass=0; fail=0
+
+# expect CODE PATTERN -- command...: exit status CODE and stderr+stdout matching PATTERN.
+expect() {
+  local code=$1 pattern=$2; shift 3
+  local out rc
+  out=$("$@" 2>&1); rc=$?
+  if [ "$rc" -ne "$code" ]; then
+    echo "FAIL: $* -> exit $rc, expected $code"; echo "$out" | head -5; fail=$((fail+1)); return
+  fi
+  if ! grep -qE -- "$pattern" <<<"$out"; then
+    echo "FAIL: $* -> output does not match '$pattern':"; echo "$out" | head -5; fail=$((fail+1)); return
+  fi
+  pass=$((pass+1))
+}
+
+expect 0 '^cupid [0-9]+\.[0-9]+\.[0-9]+$' -- "$CUPID" --version
+expect 0 'cupid run MODEL.yaml' -- "$CUPID" --help
+expect 1 'usage: cupid run' -- "$CUPID"
+expect 1 "unknown command 'frobnicate'" -- "$CUPID" frobnicate
+expect 1 'missing the model file' -- "$CUPID" run
+expect 1 "unknown option '--bogus'" -- "$CUPID" run "$M/good_small.yaml" --bogus
+expect 1 "unknown solver 'magic'" -- "$CUPID" run "$M/good_small.yaml" --solver magic
+expect 1 'expected a positive integer' -- "$CUPID" run "$M/good_small.yaml" --threads -2
+expect 1 'expected a positive number of GB' -- "$CUPID" run "$M/good_small.yaml" --max-memory zero
+expect 3 'no_such_model.yaml' -- "$CUPID" run no_such_model.yaml
+expect 1 'no PETSc engine' -- "$CUPID" run "$M/good_small.yaml" --solver petsc -o out_petsc
+
+# Semantic errors found after reading: the file, line and key of the culprit.
+expect 2 'unconstrained' -- "$CUPID" run "$M/unconstrained.yaml" -o o1
+expect 2 'unconstrained: no constraint fixes the y z' -- "$CUPID" run "$M/fixed_only_x.yaml" -o o2
+expect 2 'singular|not positive definite' -- "$CUPID" run "$M/two_blocks_apart.yaml" -o o3
+expect 1 'constraint_empty.yaml:[0-9]+:[0-9]+: constraints\[0\].*no PD node' -- "$CUPID" run "$M/constraint_empty.yaml" -o o4
+expect 1 'point_outside.yaml:[0-9]+:[0-9]+: output.points\[0\].*outside' -- "$CUPID" run "$M/point_outside.yaml" -o o5
+expect 1 'traction_no_face.yaml:[0-9]+:[0-9]+: loads\[0\].*no free PD surface' -- "$CUPID" run "$M/traction_no_face.yaml" -o o6
+expect 1 'point_load_outside.yaml:[0-9]+:[0-9]+: loads\[0\].*outside every PD region' -- "$CUPID" run "$M/point_load_outside.yaml" -o o7
+expect 1 'off_lattice.yaml:[0-9]+:[0-9]+: peridynamics.regions\[1\]' -- "$CUPID" run "$M/off_lattice.yaml" -o o8
+for d in out_petsc o1 o2 o3 o4 o5 o6 o7 o8; do
+  if [ -e "$d" ]; then echo "FAIL: failed run left $d behind"; fail=$((fail+1)); else pass=$((pass+1)); fi
+done
+
+# A good run, `check`, and quiet output.
+expect 0 '' -- "$CUPID" run "$M/good_small.yaml" -o good --quiet
+for f in summary.json line_axis.csv pd_nodes.csv pd.vtu model.pvd; do
+  if [ -s "good/$f" ]; then pass=$((pass+1)); else echo "FAIL: good/$f missing"; fail=$((fail+1)); fi
+done
+expect 0 'PD nodes: 128' -- "$CUPID" check "$M/good_small.yaml"
+[ -e out/good_small ] && { echo "FAIL: check wrote outputs"; fail=$((fail+1)); } || pass=$((pass+1))
+expect 1 'more than the limit' -- "$CUPID" run "$M/good_small.yaml" -o o9 --max-memory 0.000001
+
+# An output directory that cannot be created: I/O error, exit 3, nothing half-written.
+touch blocker
+expect 3 'blocker' -- "$CUPID" run "$M/good_small.yaml" -o blocker/out
+# A file that cannot be replaced: summary.json is a directory, so its rename fails.
+mkdir -p busy/summary.json
+expect 3 'summary.json' -- "$CUPID" run "$M/good_small.yaml" -o busy
+leftovers=$(find . -name '*.tmp*' | wc -l)
+if [ "$leftovers" -eq 0 ]; then pass=$((pass+1)); else echo "FAIL: $leftovers temporary files left"; find . -name '*.tmp*'; fail=$((fail+1)); fi
+
+# Every malformed model of the catalogue: exit 1 with file:line:col, never a crash, no output.
+for f in "$SRC"/tests/models/bad/*.yaml; do
+  [ -e "$f" ] || continue
+  out=$("$CUPID" run "$f" -o bad_out 2>&1); rc=$?
+  name=$(basename "$f")
+  if [ "$rc" -ne 1 ]; then echo "FAIL: $name -> exit $rc, expected 1: $out"; fail=$((fail+1)); continue; fi
+  if ! grep -qE "$name:[0-9]+:[0-9]+: " <<<"$out"; then echo "FAIL: $name: no file:line:col in '$out'"; fail=$((fail+1)); continue; fi
+  if [ -e bad_out ]; then echo "FAIL: $name left output"; rm -rf bad_out; fail=$((fail+1)); continue; fi
+  pass=$((pass+1))
+done
+
+echo "cli: $pass passed, $fail failed"
+[ "$fail" -eq 0 ]
