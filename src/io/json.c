@@ -26,6 +26,10 @@ struct cupid_json_private {
 
 void cupid_io_format_double(double v, char *buf, size_t size) {
   /* %.15g reads nicer (0.1 not 0.10000000000000001); %.17g always round-trips. */
+  if (v == 0.0 && signbit(v)) { /* "-0" would read back as the integer 0 in many parsers */
+    snprintf(buf, size, "-0.0");
+    return;
+  }
   snprintf(buf, size, "%.15g", v);
   if (strtod(buf, NULL) != v) snprintf(buf, size, "%.17g", v);
   /* Under a decimal-comma LC_NUMERIC (set by some host program) printf writes "0,5". */
