@@ -270,6 +270,7 @@ static cupid_status run_gnuplot(const char *gnuplot, const char *dir, const char
   CUPID_CHECK(unlink(png) == 0 || errno == ENOENT, CUPID_ERR_IO, "cannot replace '%s': %s", png,
               strerror(errno));
   CUPID_CALL(spawn_gnuplot(gnuplot, dir, script, &status, log, sizeof log));
+  for (size_t n = strlen(log); n > 0 && strchr(" \t\r\n", log[n - 1]); n--) log[n - 1] = '\0';
   if (WIFSIGNALED(status))
     return CUPID_ERROR(CUPID_ERR_IO, "gnuplot was killed by signal %d making '%s': %s",
                        WTERMSIG(status), png, log);
