@@ -120,10 +120,23 @@ static const char *checker =
     "with open(sys.argv[2], 'w') as out:\n"
     "    for v in d['random']: out.write(float.hex(float(v)) + '\\n')\n";
 
+static char dir[64]; /* a fresh directory for test_python_parses */
+
+static int setup(void **state) {
+  (void)state;
+  snprintf(dir, sizeof dir, "/tmp/cupid_test_json_XXXXXX");
+  return mkdtemp(dir) ? 0 : -1;
+}
+
+static int teardown(void **state) { /* runs after a failure too */
+  (void)state;
+  char cmd[128];
+  snprintf(cmd, sizeof cmd, "rm -rf '%s'", dir);
+  return system(cmd);
+}
+
 static void test_python_parses(void **state) {
   (void)state;
-  char dir[] = "/tmp/cupid_test_json_XXXXXX";
-  assert_non_null(mkdtemp(dir));
   char json_path[512], py_path[512], hex_path[512], cmd[2048];
   snprintf(json_path, sizeof json_path, "%s/doc.json", dir);
   snprintf(py_path, sizeof py_path, "%s/check.py", dir);
@@ -193,8 +206,6 @@ static void test_python_parses(void **state) {
   }
   fclose(in);
   assert_int_equal(n, N);
-  snprintf(cmd, sizeof cmd, "rm -rf '%s'", dir);
-  assert_int_equal(system(cmd), 0);
 }
 
 static void expect_misuse(memdoc *d, const char *fragment) {
@@ -259,7 +270,7 @@ static void test_misuse_does_not_crash(void **state) {
 
 int main(void) {
   const struct CMUnitTest tests[] = {cmocka_unit_test(test_exact_text), cmocka_unit_test(test_escapes),
-                                     cmocka_unit_test(test_python_parses),
+                                     cmocka_unit_test_setup_teardown(test_python_parses, setup, teardown),
                                      cmocka_unit_test(test_misuse_does_not_crash)};
   return cmocka_run_group_tests(tests, NULL, NULL);
 }
