@@ -15,33 +15,70 @@
 extern "C" {
 #endif
 
-/** Create a directory and its parents (like mkdir -p). CUPID_ERR_IO on failure. */
+/**
+ * Create a directory and its parents (like `mkdir -p`); existing directories are fine.
+ * CUPID_ERR_IO (naming the path and the system's reason) if a component cannot be made or
+ * is an existing non-directory; CUPID_ERR_ARGUMENT for an empty path.
+ */
 cupid_status cupid_mkdir_p(const char *path);
 
-/** A file being written: data goes to a temporary sibling that replaces @p path on commit. */
+/**
+ * A file being written: data goes to a temporary sibling `.NAME.tmp.PID.COUNTER` (same
+ * directory, created exclusively, mode 0666 & ~umask) that replaces @p path on commit, so
+ * readers never see a half-written file and a failure leaves the old file (if any) intact.
+ */
 typedef struct cupid_atomic_file_private *cupid_atomic_file;
 
+/** Create the temporary file for @p path. CUPID_ERR_IO if it cannot be created. */
 cupid_status cupid_atomic_open(const char *path, cupid_atomic_file *file);
-/** The stream to write to. */
+/** The stream to write to (fully buffered with a large buffer; do not fclose it). */
 FILE *cupid_atomic_stream(cupid_atomic_file file);
-/** Flush, check every write succeeded, fsync-free close, rename over the target. */
+/**
+ * Flush, check every write succeeded (ferror, fflush, fclose), fsync-free, then rename()
+ * over the target (atomic on POSIX). Always consumes the handle (*file becomes NULL); on any
+ * failure the temporary file is removed and CUPID_ERR_IO names the final path.
+ */
 cupid_status cupid_atomic_commit(cupid_atomic_file *file);
-/** Remove the temporary file (NULL-safe; harmless after commit). */
+/** Close and remove the temporary file, target untouched (NULL-safe; harmless after commit). */
 void cupid_atomic_abort(cupid_atomic_file *file);
+/**
+ * Unlink the temporary file of every atomic file still open in this process. It is
+ * async-signal-safe (it only calls unlink() on paths stored at open time), so a SIGINT/SIGTERM
+ * handler can call it before re-raising the signal with the default action:
+ * `static void on_signal(int s) { cupid_atomic_cleanup_all(); signal(s, SIG_DFL); raise(s); }`.
+ * The handles stay valid: abort them as usual; committing one fails with CUPID_ERR_IO.
+ * Up to 64 simultaneously open files are tracked (more still work, but are not cleaned here).
+ */
+void cupid_atomic_cleanup_all(void);
 
-/** Streaming JSON writer with indentation and correct escaping; NaN/Inf become null. */
+/**
+ * Streaming JSON writer: pretty printed (2-space indent), keys and strings escaped per
+ * RFC 8259 (invalid UTF-8 becomes U+FFFD), numbers round-trip exactly ("%.15g", else "%.17g"),
+ * NaN/Inf become null, integers exact. Inside objects every value needs a key; inside arrays
+ * and at the top level pass key = NULL. The writer functions never fail or crash: misuse
+ * (unbalanced end, missing key, a second top-level value) is recorded and reported by
+ * cupid_json_status(); write errors stay in the stream's error flag (cupid_atomic_commit()
+ * checks it). A newline follows the top-level value.
+ */
 typedef struct cupid_json_private *cupid_json;
+/** Start a writer on @p stream (not owned). */
 cupid_status cupid_json_create(FILE *stream, cupid_json *json);
+/** Free the writer (NULL-safe; does not close the stream). */
 void cupid_json_destroy(cupid_json *json);
 void cupid_json_begin_object(cupid_json json, const char *key); /* key NULL inside arrays */
 void cupid_json_end_object(cupid_json json);
 void cupid_json_begin_array(cupid_json json, const char *key);
 void cupid_json_end_array(cupid_json json);
-void cupid_json_string(cupid_json json, const char *key, const char *value);
+void cupid_json_string(cupid_json json, const char *key, const char *value); /**< NULL -> null */
 void cupid_json_number(cupid_json json, const char *key, double value);
 void cupid_json_integer(cupid_json json, const char *key, int64_t value);
 void cupid_json_bool(cupid_json json, const char *key, int value);
 void cupid_json_null(cupid_json json, const char *key);
+/**
+ * CUPID_SUCCESS if one complete, well-formed document was written: CUPID_ERR_INTERNAL
+ * describing the first misuse or unclosed containers, CUPID_ERR_IO if the stream had an error.
+ */
+cupid_status cupid_json_status(cupid_json json);
 
 /** VTK cell types used by cupid. */
 enum { CUPID_VTK_VERTEX = 1, CUPID_VTK_LINE = 3, CUPID_VTK_QUAD = 9, CUPID_VTK_HEXAHEDRON = 12 };
@@ -67,29 +104,63 @@ typedef struct {
   int n_cell_data;
 } cupid_vtu_mesh;
 
-/** Write a .vtu file (VTK XML UnstructuredGrid, appended raw binary, UInt64 headers). */
+/**
+ * Write a .vtu file (VTK XML UnstructuredGrid version 1.0, appended raw binary, UInt64 block
+ * headers, host byte order declared in byte_order): Points Float64, connectivity and offsets
+ * Int64, types UInt8, data arrays Float64 with their NumberOfComponents, values as given
+ * (6-component symmetric tensors in the caller's order). Written atomically. The mesh is
+ * checked first (CUPID_ERR_ARGUMENT): offsets increasing and ending at the connectivity
+ * length, connectivity within [0, n_points), arrays present. Zero points/cells are allowed.
+ */
 cupid_status cupid_vtu_write(const char *path, const cupid_vtu_mesh *mesh);
 
-/** Write a .pvd collection: n datasets (file names relative to the .pvd), times, parts. */
+/**
+ * Write a .pvd collection (atomically): n datasets (file names relative to the .pvd), their
+ * times (NULL: all 0; must be finite) and parts (NULL: all 0).
+ */
 cupid_status cupid_pvd_write(const char *path, int n, const char *const *files,
                              const double *times, const int *parts);
 
-/** A curve for a plot: columns of a CSV file. */
+/** A curve for a plot: columns of a CSV file (comma separated). */
 typedef struct {
   const char *csv;    /**< file name relative to the plot's directory */
   int xcol, ycol;     /**< 1-based columns */
   const char *title;  /**< legend */
-  const char *style;  /**< gnuplot style, e.g. "lines", "points pt 7 ps 0.5" */
+  const char *style;  /**< gnuplot style, e.g. "lines", "points pt 7 ps 0.5" (NULL: lines) */
+  const char *xname;  /**< optional: x column by its header name (overrides xcol) */
+  const char *yname;  /**< optional: y column by its header name (overrides ycol) */
 } cupid_plot_curve;
 
+/** Plot settings; start from cupid_plot_defaults(). */
+typedef struct {
+  int header_lines;  /**< lines skipped at the top of each CSV; default 1 (cupid's header) */
+  int width, height; /**< PNG size in pixels; default 1000 x 650 */
+  int logx, logy;    /**< logarithmic axes; default 0 */
+  const char *key;   /**< gnuplot key placement ("top left", "off", ...); default "top right" */
+} cupid_plot_options;
+
+/** The default plot settings (one header line per CSV, 1000 x 650 px, linear axes). */
+cupid_plot_options cupid_plot_defaults(void);
+
 /**
- * Write `<stem>.gp` (a gnuplot script, kept so users can edit it) into @p dir and, if
- * gnuplot is installed, run it to produce `<stem>.png`. *made is 1 if the PNG was made.
- * A missing gnuplot is not an error (the script is still there).
+ * Write `<stem>.gp` (a gnuplot script, kept so users can edit it; written atomically) into
+ * @p dir and, if gnuplot is installed (found on PATH), run it in @p dir to produce
+ * `<stem>.png`. *made is 1 if the PNG was made. A missing gnuplot is not an error (the script
+ * is still there, *made = 0). Each CSV is assumed to start with one header line, which is
+ * skipped. gnuplot's own output is captured and only shown (in the error message) if it fails:
+ * CUPID_ERR_IO with its exit status. Titles and labels are printed literally (noenhanced).
+ * A curve's xname/yname are looked up in the header line of its CSV (CUPID_ERR_IO if the
+ * file cannot be read, CUPID_ERR_ARGUMENT if the column is missing).
  */
 cupid_status cupid_plot(const char *dir, const char *stem, const char *title, const char *xlabel,
                         const char *ylabel, int n_curves, const cupid_plot_curve *curves,
                         int *made);
+
+/** cupid_plot() with settings (@p options NULL: cupid_plot_defaults()). */
+cupid_status cupid_plot_ex(const char *dir, const char *stem, const char *title,
+                           const char *xlabel, const char *ylabel, int n_curves,
+                           const cupid_plot_curve *curves, const cupid_plot_options *options,
+                           int *made);
 
 #ifdef __cplusplus
 }

@@ -1,0 +1,218 @@
+/*
+ * Directories and atomic files (see include/cupid/io.h).
+ *
+ * An atomic file is written to a temporary sibling and renamed over the target on commit:
+ * rename() within one directory is atomic on POSIX, so a reader (ParaView, a script, the
+ * next run) sees either the old file or the complete new one, never a truncated one.
+ * Temporary files still open are listed in a lock-free registry so a signal handler can
+ * unlink them (cupid_atomic_cleanup_all) and an interrupted run leaves no debris behind.
+ */
+#define _POSIX_C_SOURCE 200809L
+#include "cupid/io.h"
+
+#include <errno.h>
+#include <fcntl.h>
+#include <stdatomic.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <sys/types.h>
+#include <unistd.h>
+
+/* ---------------------------------------------------------------- directories */
+
+/* Make one directory of a mkdir -p chain; an existing directory is fine. */
+static cupid_status make_one_dir(const char *dir, const char *full) {
+  if (mkdir(dir, 0777) == 0) return CUPID_SUCCESS;
+  int err = errno;
+  struct stat sb;
+  /* stat after the failure (not before the mkdir) also copes with a concurrent mkdir. */
+  if (stat(dir, &sb) == 0) {
+    if (S_ISDIR(sb.st_mode)) return CUPID_SUCCESS;
+    return CUPID_ERROR(CUPID_ERR_IO, "cannot create directory '%s': '%s' exists and is not a directory",
+                       full, dir);
+  }
+  return CUPID_ERROR(CUPID_ERR_IO, "cannot create directory '%s': '%s': %s", full, dir,
+                     strerror(err));
+}
+
+cupid_status cupid_mkdir_p(const char *path) {
+  CUPID_CHECK(path && path[0], CUPID_ERR_ARGUMENT, "cupid_mkdir_p: empty directory name");
+  char *buf = NULL;
+  CUPID_CALL(cupid_strdup(path, &buf));
+  cupid_status st = CUPID_SUCCESS;
+  size_t len = strlen(buf);
+  for (size_t i = 1; i <= len && st == CUPID_SUCCESS; i++) {
+    if (buf[i] != '/' && buf[i] != '\0') continue;
+    if (buf[i - 1] == '/') continue; /* "a//b" or the root "/" */
+    char saved = buf[i];
+    buf[i] = '\0';
+    st = make_one_dir(buf, path);
+    buf[i] = saved;
+  }
+  cupid_free(&buf);
+  return st;
+}
+
+/* ---------------------------------------------------------------- temp-file registry */
+
+/*
+ * Fixed slots so the signal handler needs no allocation or locks. A slot is FREE, CLAIMED
+ * (path being written, not to be touched by the handler) or ACTIVE (path complete, file exists).
+ * After a commit renamed the file, an ACTIVE path no longer exists: unlinking it is harmless.
+ */
+#define REGISTRY_SLOTS 64
+#define REGISTRY_PATH 4096
+enum { SLOT_FREE = 0, SLOT_CLAIMED = 1, SLOT_ACTIVE = 2 };
+_Static_assert(ATOMIC_INT_LOCK_FREE == 2, "the signal-safe registry needs lock-free atomic int");
+
+static struct {
+  atomic_int state;
+  char path[REGISTRY_PATH];
+} registry[REGISTRY_SLOTS];
+
+/* Register @p path; returns the slot or -1 if the registry is full or the path too long. */
+static int registry_add(const char *path) {
+  size_t len = strlen(path);
+  if (len >= REGISTRY_PATH) return -1;
+  for (int i = 0; i < REGISTRY_SLOTS; i++) {
+    int expected = SLOT_FREE;
+    if (atomic_compare_exchange_strong(&registry[i].state, &expected, SLOT_CLAIMED)) {
+      memcpy(registry[i].path, path, len + 1);
+      atomic_store(&registry[i].state, SLOT_ACTIVE);
+      return i;
+    }
+  }
+  return -1;
+}
+
+static void registry_remove(int slot) {
+  if (slot >= 0) atomic_store(&registry[slot].state, SLOT_FREE);
+}
+
+void cupid_atomic_cleanup_all(void) {
+  int saved = errno; /* a signal handler must not change errno under the interrupted code */
+  for (int i = 0; i < REGISTRY_SLOTS; i++)
+    if (atomic_load(&registry[i].state) == SLOT_ACTIVE) unlink(registry[i].path);
+  errno = saved;
+}
+
+/* ---------------------------------------------------------------- atomic files */
+
+#define ATOMIC_BUFFER_SIZE (1u << 20) /* 1 MiB: few write() calls for text-heavy files */
+
+struct cupid_atomic_file_private {
+  FILE *stream;
+  char *path;   /* the target */
+  char *temp;   /* the temporary sibling */
+  char *buffer; /* stdio buffer of stream */
+  int slot;     /* registry slot or -1 */
+};
+
+static atomic_ulong temp_counter;
+
+static void atomic_free(struct cupid_atomic_file_private *f) {
+  cupid_free(&f->path);
+  cupid_free(&f->temp);
+  cupid_free(&f->buffer);
+  cupid_free(&f);
+}
+
+/* Create the temporary sibling exclusively (retrying on a name clash) and return its fd. */
+static cupid_status create_temp(struct cupid_atomic_file_private *f, int *fd_out) {
+  const char *slash = strrchr(f->path, '/');
+  const char *base = slash ? slash + 1 : f->path;
+  int dirlen = slash ? (int)(slash - f->path + 1) : 0;
+  size_t size = strlen(f->path) + 64;
+  CUPID_CALL(cupid_malloc(size, 1, "temporary file name", &f->temp));
+  for (int attempt = 0; attempt < 1000; attempt++) {
+    unsigned long counter = atomic_fetch_add(&temp_counter, 1);
+    snprintf(f->temp, size, "%.*s.%s.tmp.%ld.%lu", dirlen, f->path, base, (long)getpid(),
+             counter);
+    int fd = open(f->temp, O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
+    if (fd >= 0) {
+      *fd_out = fd;
+      return CUPID_SUCCESS;
+    }
+    if (errno != EEXIST)
+      return CUPID_ERROR(CUPID_ERR_IO, "cannot write '%s': cannot create temporary file '%s': %s",
+                         f->path, f->temp, strerror(errno));
+  }
+  return CUPID_ERROR(CUPID_ERR_IO, "cannot write '%s': no free temporary file name", f->path);
+}
+
+cupid_status cupid_atomic_open(const char *path, cupid_atomic_file *file) {
+  CUPID_CHECK(file, CUPID_ERR_ARGUMENT, "cupid_atomic_open: NULL handle");
+  *file = NULL;
+  CUPID_CHECK(path && path[0], CUPID_ERR_ARGUMENT, "cupid_atomic_open: empty file name");
+  size_t len = strlen(path);
+  CUPID_CHECK(path[len - 1] != '/', CUPID_ERR_IO, "cannot write '%s': it names a directory",
+              path);
+  cupid_status st = CUPID_SUCCESS;
+  struct cupid_atomic_file_private *f = NULL;
+  int fd = -1;
+  CUPID_CALL(cupid_calloc(1, sizeof *f, "atomic file", &f));
+  f->slot = -1;
+  CUPID_TRY(cupid_strdup(path, &f->path));
+  CUPID_TRY(cupid_malloc(ATOMIC_BUFFER_SIZE, 1, "file buffer", &f->buffer));
+  CUPID_TRY(create_temp(f, &fd));
+  f->slot = registry_add(f->temp);
+  f->stream = fdopen(fd, "wb");
+  CUPID_TRY_CHECK(f->stream, CUPID_ERR_IO, "cannot write '%s': fdopen: %s", path, strerror(errno));
+  fd = -1; /* owned by the stream now */
+  CUPID_TRY_CHECK(setvbuf(f->stream, f->buffer, _IOFBF, ATOMIC_BUFFER_SIZE) == 0, CUPID_ERR_IO,
+                  "cannot write '%s': setvbuf failed", path);
+  *file = f;
+  return CUPID_SUCCESS;
+cleanup:
+  if (f->stream) fclose(f->stream);
+  if (fd >= 0) close(fd);
+  if (f->temp && (f->stream || fd >= 0 || f->slot >= 0)) unlink(f->temp);
+  registry_remove(f->slot);
+  atomic_free(f);
+  return st;
+}
+
+FILE *cupid_atomic_stream(cupid_atomic_file file) { return file ? file->stream : NULL; }
+
+cupid_status cupid_atomic_commit(cupid_atomic_file *file) {
+  CUPID_CHECK(file && *file, CUPID_ERR_ARGUMENT, "cupid_atomic_commit: NULL handle");
+  struct cupid_atomic_file_private *f = *file;
+  *file = NULL;
+  const char *what = NULL; /* the first step that failed */
+  int err = 0;
+  /* fflush first: if an earlier write failed (e.g. ENOSPC) it usually fails again with errno. */
+  if (fflush(f->stream) != 0) {
+    what = "write failed";
+    err = errno;
+  }
+  if (!what && ferror(f->stream)) what = "write failed";
+  if (fclose(f->stream) != 0 && !what) {
+    what = "close failed";
+    err = errno;
+  }
+  f->stream = NULL;
+  if (!what && rename(f->temp, f->path) != 0) {
+    what = "cannot rename the temporary file over it";
+    err = errno;
+  }
+  cupid_status st = CUPID_SUCCESS;
+  if (what) {
+    unlink(f->temp);
+    st = CUPID_ERROR(CUPID_ERR_IO, "cannot write '%s': %s%s%s", f->path, what, err ? ": " : "",
+                     err ? strerror(err) : "");
+  }
+  registry_remove(f->slot);
+  atomic_free(f);
+  return st;
+}
+
+void cupid_atomic_abort(cupid_atomic_file *file) {
+  if (!file || !*file) return;
+  struct cupid_atomic_file_private *f = *file;
+  *file = NULL;
+  if (f->stream) fclose(f->stream); /* its result is irrelevant: the file is discarded */
+  unlink(f->temp);
+  registry_remove(f->slot);
+  atomic_free(f);
+}
