@@ -50,9 +50,11 @@ static cupid_status write_line(cupid_job *job, const cupid_output_line *line) {
   snprintf(stem, sizeof stem, "line_%s", line->name);
   snprintf(title, sizeof title, "%s: displacement along line '%s'",
            job->model->title[0] ? job->model->title : "cupid", line->name);
-  cupid_plot_curve curves[3] = {{name, 1, 5, "u_x", "linespoints pt 7 ps 0.4"},
-                                {name, 1, 6, "u_y", "linespoints pt 7 ps 0.4"},
-                                {name, 1, 7, "u_z", "linespoints pt 7 ps 0.4"}};
+  cupid_plot_curve curves[3];
+  for (int c = 0; c < 3; c++)
+    curves[c] = (cupid_plot_curve){.csv = name, .xcol = 1, .ycol = 5 + c,
+                                   .title = c == 0 ? "u_x" : c == 1 ? "u_y" : "u_z",
+                                   .style = "linespoints pt 7 ps 0.4"};
   int made = 0;
   return cupid_plot(job->outdir, stem, title, "s (distance along the line)", "displacement", 3,
                     curves, &made);
@@ -230,6 +232,7 @@ static cupid_status write_summary(cupid_job *job) {
   cupid_json_integer(js, "peak_memory_bytes", cupid_peak_memory());
   CUPID_TRY(json_points(js, job));
   cupid_json_end_object(js);
+  CUPID_TRY(cupid_json_status(js));
   cupid_json_destroy(&js);
   CUPID_TRY(cupid_atomic_commit(&file));
 cleanup:
