@@ -356,6 +356,10 @@ static void test_io_errors(void **state) {
   /* A directory opens on Linux but cannot be read. */
   assert_int_equal(cupid_model_read(cupid_test_source_path("tests/models/bad"), &m), CUPID_ERR_IO);
   assert_null(m);
+  /* An endless input stops at the size limit (16 MiB) instead of filling memory. */
+  assert_int_equal(cupid_model_read("/dev/zero", &m), CUPID_ERR_MODEL);
+  assert_string_equal(cupid_error_message(),
+                      "/dev/zero:1:1: the model file is too large (more than 16 MiB)");
   assert_int_equal(cupid_model_read(NULL, &m), CUPID_ERR_ARGUMENT);
   assert_int_equal(cupid_model_read_string("", 0, "x.yaml", NULL), CUPID_ERR_ARGUMENT);
 }
