@@ -66,20 +66,21 @@ typedef struct {
 } cupid_section_component;
 
 typedef struct {
-  int material;                  /**< index into materials */
+  int material;                  /**< index into materials (the only one when not given) */
   double *axis_y;                /**< breakpoints along y, increasing, n_axis of them */
   int *axis_elements;            /**< elements per span, n_axis - 1 of them */
   int n_axis;
   int element_nodes;             /**< 2, 3 or 4 (B2, B3, B4) */
   int integration;               /**< 0 full (default), 1 reduced, 2 mitc; see cuf.h */
   cupid_expansion expansion;
-  int te_order;                  /**< TE order N (0 allowed: a rod) */
-  int le_nodes;                  /**< 4, 9 or 16 (L4, L9, L16) */
+  int te_order;                  /**< TE order N (0 allowed: a rod; at most 20) */
+  int le_nodes;                  /**< 4, 9 or 16 (L4, L9, L16); 0 when `element:` is absent (TE) */
   cupid_section_component *components;
   int n_components;
   double *section_nodes;         /**< explicit LE section: [x0, z0, x1, z1, ...] */
   int n_section_nodes;
-  int *section_elements;         /**< explicit LE elements: le_nodes node indices each */
+  int *section_elements;         /**< explicit LE elements: le_nodes node indices each, 0-based
+                                      (as in the file), all in [0, n_section_nodes) */
   int *section_element_material; /**< per explicit element, -1 = beam material */
   int n_section_elements;
   cupid_mark mark;
@@ -98,8 +99,9 @@ typedef enum {
 } cupid_partial_volume;
 
 typedef struct {
-  cupid_box box; /**< for dimension 1 only y is set */
-  int material;  /**< index into materials */
+  cupid_box box; /**< lo < hi on every axis given; for dimension 1 only y is set */
+  int material;  /**< index into materials: the region's, else peridynamics.material, else the
+                      only material */
   cupid_mark mark;
 } cupid_pd_region;
 
@@ -153,9 +155,9 @@ typedef enum { CUPID_LOAD_TRACTION = 0, CUPID_LOAD_POINT = 1, CUPID_LOAD_BODY = 
 typedef struct {
   cupid_load_kind kind;
   double plane_y;         /**< traction: the end-section plane */
-  cupid_box patch;        /**< traction: x/z patch (has[] = 0: whole section) */
+  cupid_box patch;        /**< traction: x/z patch (has[] = 0: whole section; has[1] is 0) */
   double at[3];           /**< point */
-  cupid_box box;          /**< body */
+  cupid_box box;          /**< body (has[] all 0: the whole body) */
   cupid_value value[3];   /**< force per area (traction), force (point), per volume (body) */
   cupid_mark mark;
 } cupid_load;
@@ -229,7 +231,9 @@ typedef struct cupid_model {
 typedef cupid_model_t *cupid_model;
 
 /** Read and validate a model file. Errors are CUPID_ERR_MODEL ("file:line:col: key: ...")
- *  or CUPID_ERR_IO (file cannot be read). */
+ *  or CUPID_ERR_IO (file cannot be read). Files over 16 MiB, nesting deeper than 64 levels,
+ *  more than 10^6 values or alias expansions, or more than 1000 anchors are refused, so that
+ *  no input can make the reader run away in time or memory. */
 cupid_status cupid_model_read(const char *path, cupid_model *model);
 
 /** Same, from a string in memory; @p name stands for the file name in messages. */

@@ -1,0 +1,153 @@
+/* Model reader, public entry points: read from a file or a string, destroy, report errors
+ * against the file, evaluate values, test boxes (include/cupid/model.h). */
+#include <errno.h>
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "io/model_internal.h"
+
+cupid_status cupid_model_read(const char *path, cupid_model *model) {
+  CUPID_CHECK(model != NULL, CUPID_ERR_ARGUMENT, "cupid_model_read: model is NULL");
+  *model = NULL;
+  CUPID_CHECK(path != NULL, CUPID_ERR_ARGUMENT, "cupid_model_read: path is NULL");
+  FILE *f = fopen(path, "rb");
+  if (!f) return CUPID_ERROR(CUPID_ERR_IO, "cannot open model file '%s': %s", path, strerror(errno));
+  cupid_status st = CUPID_SUCCESS;
+  char *text = NULL;
+  size_t length = 0, capacity = 0;
+  /* Read in chunks (works for pipes too), refusing anything beyond the size limit. */
+  for (;;) {
+    if (length == capacity) {
+      if (capacity > MODEL_MAX_FILE_BYTES) break;
+      capacity = capacity ? 2 * capacity : 65536;
+      CUPID_TRY(cupid_realloc(capacity + 1, 1, "the model file", &text));
+    }
+    size_t got = fread(text + length, 1, capacity - length, f);
+    length += got;
+    if (got == 0) break;
+  }
+  if (ferror(f)) {
+    st = CUPID_ERROR(CUPID_ERR_IO, "cannot read model file '%s': %s", path, strerror(errno));
+    goto cleanup;
+  }
+  if (length > MODEL_MAX_FILE_BYTES) {
+    st = CUPID_ERROR(CUPID_ERR_MODEL, "%s:1:1: the model file is too large (more than %zu MiB)",
+                     path, MODEL_MAX_FILE_BYTES >> 20);
+    goto cleanup;
+  }
+  CUPID_TRY(cupid_model_read_string(text ? text : "", length, path, model));
+cleanup:
+  fclose(f);
+  cupid_free(&text);
+  return st;
+}
+
+cupid_status cupid_model_read_string(const char *text, size_t length, const char *name,
+                                     cupid_model *model) {
+  CUPID_CHECK(model != NULL, CUPID_ERR_ARGUMENT, "cupid_model_read_string: model is NULL");
+  *model = NULL;
+  CUPID_CHECK(text != NULL || length == 0, CUPID_ERR_ARGUMENT,
+              "cupid_model_read_string: text is NULL");
+  if (!name) name = "<model>";
+  if (length > MODEL_MAX_FILE_BYTES)
+    return CUPID_ERROR(CUPID_ERR_MODEL, "%s:1:1: the model file is too large (more than %zu MiB)",
+                       name, MODEL_MAX_FILE_BYTES >> 20);
+  yaml_document_t doc;
+  CUPID_CALL(mr_load(text ? text : "", length, name, &doc));
+  cupid_status st = CUPID_SUCCESS;
+  cupid_model_t *m = NULL;
+  CUPID_TRY(cupid_calloc(1, sizeof *m, "the model", &m));
+  CUPID_TRY(cupid_strdup(name, &m->file));
+  model_reader rd = {&doc, m->file, m};
+  CUPID_TRY(mr_read_model(&rd, yaml_document_get_root_node(&doc)));
+  *model = m;
+  m = NULL;
+cleanup:
+  yaml_document_delete(&doc);
+  cupid_model_destroy(&m);
+  return st;
+}
+
+static void value_clear(cupid_value *v) {
+  cupid_expr_destroy(&v->expr);
+  v->kind = CUPID_VALUE_NONE;
+}
+
+static void values_clear(cupid_value *v, int n) {
+  for (int i = 0; i < n; i++) value_clear(&v[i]);
+}
+
+void cupid_model_destroy(cupid_model *model) {
+  if (!model || !*model) return;
+  cupid_model_t *m = *model;
+  for (int i = 0; i < m->n_materials; i++) cupid_free(&m->materials[i].name);
+  cupid_free(&m->materials);
+  cupid_beam *b = &m->beam;
+  cupid_free(&b->axis_y);
+  cupid_free(&b->axis_elements);
+  for (int i = 0; i < b->n_components; i++) {
+    cupid_free(&b->components[i].x);
+    cupid_free(&b->components[i].z);
+  }
+  cupid_free(&b->components);
+  cupid_free(&b->section_nodes);
+  cupid_free(&b->section_elements);
+  cupid_free(&b->section_element_material);
+  cupid_free(&m->pd.regions);
+  for (int i = 0; i < m->n_constraints; i++) values_clear(m->constraints[i].value, 3);
+  cupid_free(&m->constraints);
+  for (int i = 0; i < m->n_loads; i++) values_clear(m->loads[i].value, 3);
+  cupid_free(&m->loads);
+  values_clear(m->analysis.field, 3);
+  values_clear(m->analysis.dynamic.initial_displacement, 3);
+  values_clear(m->analysis.dynamic.initial_velocity, 3);
+  for (int i = 0; i < m->output.n_lines; i++) cupid_free(&m->output.lines[i].name);
+  cupid_free(&m->output.lines);
+  for (int i = 0; i < m->output.n_points; i++) cupid_free(&m->output.points[i].name);
+  cupid_free(&m->output.points);
+  cupid_free(&m->output.directory);
+  cupid_free(&m->title);
+  cupid_free(&m->file);
+  cupid_free(model);
+}
+
+cupid_status cupid_model_error(const cupid_model_t *model, const cupid_mark *mark, const char *fmt,
+                               ...) {
+  char message[1536];
+  va_list ap;
+  va_start(ap, fmt);
+  vsnprintf(message, sizeof message, fmt, ap);
+  va_end(ap);
+  const char *file = model && model->file ? model->file : "<model>";
+  if (!mark || mark->line <= 0) {
+    if (mark && mark->key[0])
+      return CUPID_ERROR(CUPID_ERR_MODEL, "%s: %s: %s", file, mark->key, message);
+    return CUPID_ERROR(CUPID_ERR_MODEL, "%s: %s", file, message);
+  }
+  if (mark->key[0])
+    return CUPID_ERROR(CUPID_ERR_MODEL, "%s:%d:%d: %s: %s", file, mark->line, mark->column,
+                       mark->key, message);
+  return CUPID_ERROR(CUPID_ERR_MODEL, "%s:%d:%d: %s", file, mark->line, mark->column, message);
+}
+
+double cupid_value_eval(const cupid_value *v, double x, double y, double z, double t,
+                        double density) {
+  if (!v) return 0.0;
+  switch (v->kind) {
+  case CUPID_VALUE_CONSTANT: return v->constant;
+  case CUPID_VALUE_EXPR: {
+    const double values[CUPID_EXPR_NVARS] = {x, y, z, t, density};
+    return cupid_expr_eval(v->expr, values);
+  }
+  default: return 0.0;
+  }
+}
+
+int cupid_box_contains(const cupid_box *box, const double p[3], double tol) {
+  for (int a = 0; a < 3; a++)
+    if (box->has[a] && (p[a] < box->lo[a] - tol || p[a] > box->hi[a] + tol)) return 0;
+  return 1;
+}

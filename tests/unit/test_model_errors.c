@@ -1,0 +1,496 @@
+/* Unit tests of the model reader on malformed models (tests/models/bad/): every file must fail
+ * with CUPID_ERR_MODEL and the exact "FILE:LINE:COL: KEY: message"; random mutations of the
+ * valid models must never crash. */
+#include <dirent.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "testutil.h"
+
+typedef struct {
+  const char *file;     /* under tests/models/bad/ */
+  const char *expected; /* "LINE:COL: KEY: message" (a prefix of the message after the file) */
+  const char *also;     /* another fragment the message must hold, or NULL */
+} bad_case;
+
+static const bad_case cases[] = {
+    {"area_in_3d.yaml",
+     "6:9: peridynamics.area: is only used with dimension: 1",
+     NULL},
+    {"area_missing_1d.yaml",
+     "4:3: peridynamics: missing required key 'area' (dimension 1 needs the bar's",
+     NULL},
+    {"arlequin_missing.yaml",
+     "16:3: coupling: missing required key 'arlequin' (method arlequin needs {penalty: ...,",
+     NULL},
+    {"arlequin_wrong_method.yaml",
+     "17:13: coupling.arlequin: is only used with method: arlequin",
+     NULL},
+    {"axis_not_increasing.yaml",
+     "5:21: beam.axis.y[2]: breakpoints must increase, got 30 after 30",
+     NULL},
+    {"axis_one_point.yaml",
+     "5:13: beam.axis.y: must be a list of at least 2 increasing numbers, got 1 item",
+     NULL},
+    {"bad_te.yaml",
+     "7:16: beam.section.expansion: TE needs its order as a whole number N >= 0, e.g. TE2;",
+     NULL},
+    {"beam_type_bad.yaml",
+     "5:58: beam.axis.type: must be one of B2 | B3 | B4, got 'B5'; did you mean 'B2'?",
+     NULL},
+    {"billion_laughs.yaml",
+     "8:45: model too large or alias expansion too deep (more than 1000000 nodes visited)",
+     "alias expansion too deep"},
+    {"bool_bad.yaml",
+     "9:8: output.vtu: must be true or false, got 'yes'",
+     NULL},
+    {"box_empty.yaml",
+     "9:16: constraints[0].fix.box: a box needs at least one of x, y, z, each [min, max]",
+     NULL},
+    {"box_inverted.yaml",
+     "9:20: constraints[0].fix.box.y: must be [min, max] with min <= max, got [5, 1]",
+     NULL},
+    {"case_key.yaml",
+     "5:3: peridynamics.Horizon: unknown key; did you mean 'horizon'?",
+     NULL},
+    {"comments_only.yaml",
+     "1:1: the model file is empty",
+     NULL},
+    {"component_missing_z.yaml",
+     "9:9: beam.section.components[0]: missing required key 'z'",
+     NULL},
+    {"components_and_nodes.yaml",
+     "10:12: beam.section.nodes: give either components or nodes + elements, not both",
+     NULL},
+    {"constraint_no_kind.yaml",
+     "9:5: constraints[0]: must be one of clamp, fix, displacement",
+     NULL},
+    {"constraint_not_list.yaml",
+     "9:3: constraints: must be a list of constraints (clamp, fix, displacement), got a",
+     NULL},
+    {"constraint_two_kinds.yaml",
+     "10:5: constraints[1]: has both 'clamp' and 'fix'; give one of clamp, fix, displacement",
+     NULL},
+    {"control_char.yaml",
+     "1:9: invalid character: control characters are not allowed (byte 0x01)",
+     NULL},
+    {"coupling_method_typo.yaml",
+     "16:11: coupling.method: must be one of fictitious | lagrange | arlequin, got",
+     NULL},
+    {"coupling_missing.yaml",
+     "11:3: coupling: required when the model has both beam and peridynamics; add coupling:",
+     NULL},
+    {"coupling_without_pd.yaml",
+     "11:3: coupling: only meaningful when the model has both beam and peridynamics",
+     NULL},
+    {"density_negative.yaml",
+     "2:39: materials.resin.density: must be >= 0, got -1",
+     NULL},
+    {"dimension_2.yaml",
+     "6:14: peridynamics.dimension: must be 3 or 1 (dimension 2 is not supported), got 2",
+     NULL},
+    {"displacement_all_null.yaml",
+     "9:45: constraints[0].displacement.value: all three components are null (free): nothing",
+     NULL},
+    {"duplicate_key.yaml",
+     "6:3: peridynamics.horizon: duplicate key (first given at line 5)",
+     NULL},
+    {"duplicate_material.yaml",
+     "4:3: materials.resin: duplicate material name (first defined at line 2)",
+     NULL},
+    {"dynamic_dt_zero.yaml",
+     "10:17: analysis.dynamic.dt: must be > 0, got 0",
+     NULL},
+    {"dynamic_every_zero.yaml",
+     "10:46: analysis.dynamic.every: must be an integer >= 1, got 0",
+     NULL},
+    {"dynamic_in_static.yaml",
+     "9:12: analysis.dynamic: is only used with type: dynamic",
+     NULL},
+    {"dynamic_missing.yaml",
+     "9:3: analysis: missing required key 'dynamic' (type dynamic needs dynamic: {dt: ...,",
+     NULL},
+    {"dynamic_newmark_central.yaml",
+     "14:14: analysis.dynamic.newmark: is only used with integrator: newmark",
+     NULL},
+    {"dynamic_no_density.yaml",
+     "2:3: materials.resin: needs a density for a dynamic analysis (it is used by",
+     NULL},
+    {"element_bad.yaml",
+     "8:14: beam.section.element: must be one of L4 | L9 | L16, got 'L8'; did you mean 'L4'?",
+     NULL},
+    {"elements_count.yaml",
+     "5:41: beam.axis.elements: needs one element count per span: 4 breakpoints in y give 3",
+     NULL},
+    {"elements_fraction.yaml",
+     "5:45: beam.axis.elements[1]: must be an integer, got '2.5'",
+     NULL},
+    {"elements_zero.yaml",
+     "5:45: beam.axis.elements[1]: must be an integer from 1 to 100000, got 0",
+     NULL},
+    {"empty.yaml",
+     "1:1: the model file is empty",
+     NULL},
+    {"expr_plain_garbage.yaml",
+     "9:48: constraints[0].displacement.value[0]: bad expression \"2 x\": unexpected 'x' at",
+     NULL},
+    {"expr_too_deep.yaml",
+     "9:155: loads[0].body.value[2]: bad expression",
+     "nested too deeply (more than 256 levels)"},
+    {"expr_unbalanced.yaml",
+     "9:29: loads[0].body.value[2]: bad expression \"sin(x\": unbalanced parentheses: '(' at",
+     NULL},
+    {"expr_unknown_name.yaml",
+     "9:29: loads[0].body.value[1]: bad expression \"1e-3*q\": unknown name 'q' at column 6",
+     "(allowed: x, y, z, t, density, pi; functions sin"},
+    {"field_missing.yaml",
+     "9:3: analysis: missing required key 'field' (type evaluate imposes field: [ux, uy, uz])",
+     NULL},
+    {"field_not_evaluate.yaml",
+     "10:10: analysis.field: is only used with type: evaluate",
+     NULL},
+    {"fix_component_bad.yaml",
+     "9:45: constraints[0].fix.components[1]: must be one of x | y | z, got 'w'",
+     NULL},
+    {"fix_component_twice.yaml",
+     "9:45: constraints[0].fix.components[1]: component 'x' is listed twice",
+     NULL},
+    {"horizon_small.yaml",
+     "5:12: peridynamics.horizon: must be larger than spacing (1), got 0.5",
+     NULL},
+    {"integration_bad.yaml",
+     "10:16: beam.integration: must be one of full | reduced | mitc, got 'MITC'; did you mean",
+     NULL},
+    {"isotropic_with_G.yaml",
+     "2:33: materials.resin.G: G is only used by orthotropic materials (E: [Ex, Ey, Ez]); an",
+     NULL},
+    {"key_not_scalar.yaml",
+     "8:3: keys must be plain names, got a list",
+     NULL},
+    {"le_no_element.yaml",
+     "7:5: beam.section: missing required key 'element': expansion LE needs element: L4 | L9",
+     NULL},
+    {"line_name_bad.yaml",
+     "10:14: output.lines[0].name: must be a name of letters, digits, _ and - (it is used in",
+     NULL},
+    {"line_name_dup.yaml",
+     "12:7: output.lines[2].name: duplicate line name 'a' (also output.lines[0])",
+     NULL},
+    {"line_points_one.yaml",
+     "10:57: output.lines[0].points: must be an integer from 2 to 10000000, got 1",
+     NULL},
+    {"line_zero_length.yaml",
+     "10:38: output.lines[0].to: must differ from 'from' (a line needs two distinct ends)",
+     NULL},
+    {"load_null.yaml",
+     "9:36: loads[0].point.value[0]: must be a number or an expression, got null (null, a",
+     NULL},
+    {"load_two_values.yaml",
+     "9:30: loads[0].traction.value: must be a list of 3 values [vx, vy, vz] (numbers or",
+     NULL},
+    {"lps_1d.yaml",
+     "7:10: peridynamics.model: LPS needs dimension 3; use model: bond with dimension: 1",
+     NULL},
+    {"materials_list.yaml",
+     "2:3: materials: must be a mapping of material names to {E: ..., nu: ...}, got a list",
+     NULL},
+    {"missing_horizon.yaml",
+     "4:3: peridynamics: missing required key 'horizon'",
+     NULL},
+    {"missing_materials.yaml",
+     "1:1: missing required key 'materials'",
+     NULL},
+    {"model_typo.yaml",
+     "6:10: peridynamics.model: must be one of lps | bond, got 'lsp'; did you mean 'lps'?",
+     NULL},
+    {"multi_doc.yaml",
+     "8:1: the file holds more than one YAML document ('---'); a model file holds exactly one",
+     NULL},
+    {"negative_E.yaml",
+     "2:14: materials.resin.E: must be > 0, got -5",
+     NULL},
+    {"nested_unknown_key.yaml",
+     "5:3: peridynamics.horizn: unknown key; did you mean 'horizon'?",
+     NULL},
+    {"no_beam_no_pd.yaml",
+     "1:1: a model needs a beam: section, a peridynamics: section, or both",
+     NULL},
+    {"not_utf8.yaml",
+     "1:11: not valid UTF-8 text: invalid trailing UTF-8 octet",
+     NULL},
+    {"nu_half.yaml",
+     "2:25: materials.resin.nu: must satisfy -1 < nu < 0.5, got 0.5",
+     NULL},
+    {"orthotropic_bad_nu.yaml",
+     "2:36: materials.ply.nu: these Poisson ratios with E = [1000, 1000, 1000] give a",
+     NULL},
+    {"orthotropic_no_G.yaml",
+     "2:8: materials.ply: missing required key 'G' (an orthotropic material needs G: [Gxy,",
+     NULL},
+    {"peridynamics_list.yaml",
+     "3:15: peridynamics: must be a mapping (key: value), got a list",
+     NULL},
+    {"point_at_short.yaml",
+     "9:17: loads[0].point.at: must be a list of 3 numbers [x, y, z], got 2 items",
+     NULL},
+    {"point_name_dup.yaml",
+     "11:7: output.points[1].name: duplicate point name 'tip' (also output.points[0])",
+     NULL},
+    {"recursive_alias.yaml",
+     "8:9: nested more than 64 levels deep (or an alias refers to itself)",
+     NULL},
+    {"region_1d_with_x.yaml",
+     "9:23: peridynamics.regions[0].x: dimension 1 regions take only y: [y0, y1] (a bar along",
+     NULL},
+    {"region_inverted.yaml",
+     "7:11: peridynamics.regions[0].x: must be [min, max] with min < max, got [10, 0]",
+     NULL},
+    {"region_missing_z.yaml",
+     "7:7: peridynamics.regions[0]: missing required key 'z' (a region needs x, y and z, each",
+     "a region needs x, y and z"},
+    {"region_three_numbers.yaml",
+     "7:11: peridynamics.regions[0].x: must be a list of 2 numbers [min, max], got 3 items",
+     NULL},
+    {"section_element_count.yaml",
+     "10:9: beam.section.elements[0]: an L9 element needs 9 node indices, got 4",
+     NULL},
+    {"section_index_range.yaml",
+     "10:19: beam.section.elements[0][3]: node index must be from 0 to 3 (indices into",
+     NULL},
+    {"solver_typo.yaml",
+     "9:11: analysis.solver: must be one of auto | direct | petsc, got 'Direct'; did you mean",
+     NULL},
+    {"spacing_string.yaml",
+     "4:12: peridynamics.spacing: must be a number, got 'abc'",
+     NULL},
+    {"syntax_indent.yaml",
+     "5:11: YAML syntax error: mapping values are not allowed in this context",
+     NULL},
+    {"syntax_unclosed.yaml",
+     "4:1: YAML syntax error: did not find expected ',' or '}' (while parsing a flow mapping)",
+     NULL},
+    {"tab_indent.yaml",
+     "4:1: YAML syntax error: found character that cannot start any token (while scanning for",
+     "YAML does not allow tabs for indentation, use spaces"},
+    {"te_too_high.yaml",
+     "7:16: beam.section.expansion: TE order must be at most 20, got 99",
+     NULL},
+    {"title_list.yaml",
+     "1:8: title: must be a string, got a list",
+     NULL},
+    {"top_list.yaml",
+     "1:1: the top level of a model must be a mapping of sections (title:, materials:, beam:,",
+     NULL},
+    {"top_scalar.yaml",
+     "1:1: the top level of a model must be a mapping of sections (title:, materials:, beam:,",
+     NULL},
+    {"top_unknown_close.yaml",
+     "1:1: materails: unknown key; did you mean 'materials'?",
+     NULL},
+    {"top_unknown_far.yaml",
+     "8:1: solver_settings: unknown key; allowed keys here: title, materials, beam,",
+     "allowed keys here: title, materials, beam, peridynamics"},
+    {"traction_patch_inverted.yaml",
+     "9:26: loads[0].traction.x: must be [min, max] with min < max, got [5, 5]",
+     NULL},
+    {"undefined_alias.yaml",
+     "9:5: YAML syntax error: found undefined alias",
+     NULL},
+    {"unknown_material_close.yaml",
+     "6:13: peridynamics.material: unknown material 'resn'; did you mean 'resin'?",
+     NULL},
+    {"unknown_material_far.yaml",
+     "7:13: peridynamics.material: unknown material 'aluminium'; known materials: resin, steel",
+     "known materials: resin, steel"},
+};
+static const int n_cases = (int)(sizeof cases / sizeof *cases);
+
+static void test_catalogue(void **state) {
+  (void)state;
+  for (int i = 0; i < n_cases; i++) {
+    char rel[256], want[512];
+    snprintf(rel, sizeof rel, "tests/models/bad/%s", cases[i].file);
+    cupid_model m = (cupid_model)1;
+    cupid_status st = cupid_model_read(cupid_test_source_path(rel), &m);
+    if (st != CUPID_ERR_MODEL)
+      fail_msg("%s: status %d (%s), expected a model error", cases[i].file, st,
+               cupid_error_message());
+    assert_null(m);
+    /* The file name as given, then exactly the expected position, key and message. */
+    snprintf(want, sizeof want, "/%s:%s", cases[i].file, cases[i].expected);
+    if (!strstr(cupid_error_message(), want))
+      fail_msg("%s:\n  got      '%s'\n  expected '...%s...'", cases[i].file, cupid_error_message(),
+               want);
+    if (cases[i].also && !strstr(cupid_error_message(), cases[i].also))
+      fail_msg("%s: '%s' lacks '%s'", cases[i].file, cupid_error_message(), cases[i].also);
+  }
+  print_message("%d malformed models rejected at the expected position\n", n_cases);
+}
+
+/* Every file in tests/models/bad/ has its row in the table (no case goes unchecked). */
+static void test_catalogue_complete(void **state) {
+  (void)state;
+  DIR *dir = opendir(cupid_test_source_path("tests/models/bad"));
+  assert_non_null(dir);
+  int files = 0;
+  for (struct dirent *e; (e = readdir(dir));) {
+    if (e->d_name[0] == '.') continue;
+    files++;
+    int found = 0;
+    for (int i = 0; i < n_cases && !found; i++) found = !strcmp(cases[i].file, e->d_name);
+    if (!found) fail_msg("tests/models/bad/%s has no entry in the table", e->d_name);
+  }
+  closedir(dir);
+  assert_int_equal(files, n_cases);
+  assert_true(n_cases >= 40);
+}
+
+static void test_io_errors(void **state) {
+  (void)state;
+  cupid_model m = (cupid_model)1;
+  assert_int_equal(cupid_model_read("no/such/model.yaml", &m), CUPID_ERR_IO);
+  assert_null(m);
+  assert_non_null(strstr(cupid_error_message(), "no/such/model.yaml"));
+  assert_non_null(strstr(cupid_error_message(), "No such file or directory"));
+  /* A directory opens on Linux but cannot be read. */
+  assert_int_equal(cupid_model_read(cupid_test_source_path("tests/models/bad"), &m), CUPID_ERR_IO);
+  assert_null(m);
+  /* An endless input stops at the size limit (16 MiB) instead of filling memory. */
+  assert_int_equal(cupid_model_read("/dev/zero", &m), CUPID_ERR_MODEL);
+  assert_string_equal(cupid_error_message(),
+                      "/dev/zero:1:1: the model file is too large (more than 16 MiB)");
+  assert_int_equal(cupid_model_read(NULL, &m), CUPID_ERR_ARGUMENT);
+  assert_int_equal(cupid_model_read_string("", 0, "x.yaml", NULL), CUPID_ERR_ARGUMENT);
+}
+
+static cupid_status read_text(const char *text, size_t length) {
+  cupid_model m = NULL;
+  cupid_status st = cupid_model_read_string(text, length, "mem.yaml", &m);
+  if (st == CUPID_SUCCESS) assert_non_null(m);
+  else assert_null(m);
+  cupid_model_destroy(&m);
+  return st;
+}
+
+static void expect(const char *text, const char *fragment) {
+  cupid_status st = read_text(text, strlen(text));
+  if (st != CUPID_ERR_MODEL || !strstr(cupid_error_message(), fragment))
+    fail_msg("status %d, message '%s', expected '%s'", st, cupid_error_message(), fragment);
+}
+
+#define PD "peridynamics: {spacing: 1, horizon: 3, regions: [{x: [0, 1], y: [0, 1], z: [0, 1]}]}\n"
+#define MAT "materials: {m: {E: 1, nu: 0.2}}\n"
+
+static void test_limits(void **state) {
+  (void)state;
+  assert_int_equal(read_text(NULL, 0), CUPID_ERR_MODEL);
+  assert_non_null(strstr(cupid_error_message(), "mem.yaml:1:1: the model file is empty"));
+  expect("---\n", "mem.yaml:1:1: the model file is empty");
+  /* Deep nesting and self-reference fail fast instead of exhausting the stack. */
+  char *deep = malloc(2400000);
+  assert_non_null(deep);
+  int n = sprintf(deep, "title: ");
+  for (int i = 0; i < 100000; i++) deep[n++] = '[';
+  for (int i = 0; i < 100000; i++) deep[n++] = ']';
+  deep[n] = '\0';
+  expect(deep, "mem.yaml:1:72: nested more than 64 levels deep");
+  /* A flat list of 1.1 million items exceeds the node bound before any section is read. */
+  n = sprintf(deep, MAT PD "loads: [");
+  for (int i = 0; i < 1100000; i++) n += sprintf(deep + n, "1,");
+  strcpy(deep + n, "1]\n");
+  expect(deep, "model too large (more than 1000000 values)");
+  /* Billion laughs, deeper than the file's: 10^12 nodes if expanded. */
+  n = sprintf(deep, MAT PD "a0: &a0 [x, x, x, x, x, x, x, x, x, x]\n");
+  for (int i = 1; i < 12; i++) {
+    n += sprintf(deep + n, "a%d: &a%d [", i, i);
+    for (int j = 0; j < 10; j++) n += sprintf(deep + n, "*a%d%s", i - 1, j < 9 ? ", " : "]\n");
+  }
+  double t0 = cupid_wtime();
+  expect(deep, "model too large or alias expansion too deep");
+  /* The bound is 10^6 node visits: well under a second even on a slow machine. */
+  assert_true(cupid_wtime() - t0 < 1.0);
+  /* Over-long strings. */
+  n = sprintf(deep, MAT PD "title: ");
+  for (int i = 0; i < 5000; i++) deep[n++] = 'a';
+  deep[n] = '\0';
+  expect(deep, "mem.yaml:3:8: title: is too long (5000 bytes, at most 4096)");
+  free(deep);
+  expect(MAT PD "title: \"a\\0b\"\n", "mem.yaml:3:8: title: must not contain NUL characters");
+  expect(MAT PD "loads: [{point: {at: [0, 0, 0], value: [0, 0, \"1/0\"]}}]\n",
+         "mem.yaml:3:47: loads[0].point.value[2]: expression '1/0' evaluates to inf");
+  expect(MAT PD "loads: [{point: {at: [0, 0, .inf], value: [0, 0, 1]}}]\n",
+         "loads[0].point.at[2]: must be a number, got '.inf'");
+}
+
+/* Random mutations of the valid models: the reader must return success or a model error with
+ * a position, never crash, hang or leak (run under valgrind or ASan to check the last two). */
+static void test_mutations(void **state) {
+  (void)state;
+  static const char *const good[] = {"bar.yaml", "pd_only.yaml", "truss_1d.yaml",
+                                     "le_explicit.yaml", "components.yaml"};
+  static const char *const snippets[] = {"[", "]", "{", "}", ":", ",", "- ", "&a ", "*a", "\t",
+                                         "\n", "\"", "'", "null", "-1", "1e999", "x", "#", "? ",
+                                         "\xff", "\xc3", "---\n", "!!str ", "  "};
+  uint64_t seed = 2024;
+  int accepted = 0, rejected = 0;
+  for (int g = 0; g < 5; g++) {
+    char rel[256];
+    snprintf(rel, sizeof rel, "tests/models/good/%s", good[g]);
+    FILE *f = fopen(cupid_test_source_path(rel), "rb");
+    assert_non_null(f);
+    char original[8192];
+    size_t length = fread(original, 1, sizeof original, f);
+    fclose(f);
+    char text[8192 + 64];
+    for (int iter = 0; iter < 600; iter++) {
+      memcpy(text, original, length);
+      size_t n = length;
+      int edits = 1 + (int)((cupid_test_random(&seed) + 1) * 2);
+      for (int e = 0; e < edits; e++) {
+        size_t at = (size_t)((cupid_test_random(&seed) + 1) / 2 * (double)n);
+        if (at >= n) at = n - 1;
+        double kind = cupid_test_random(&seed);
+        if (kind < -0.5) { /* overwrite a byte */
+          text[at] = (char)(int)((cupid_test_random(&seed) + 1) * 128);
+        } else if (kind < 0) { /* delete a byte */
+          memmove(text + at, text + at + 1, n - at - 1);
+          n--;
+        } else if (kind < 0.8) { /* insert a snippet */
+          int s = (int)((cupid_test_random(&seed) + 1) / 2 * 24);
+          size_t k = strlen(snippets[s < 24 ? s : 23]);
+          if (n + k >= sizeof text) continue;
+          memmove(text + at + k, text + at, n - at);
+          memcpy(text + at, snippets[s < 24 ? s : 23], k);
+          n += k;
+        } else { /* truncate */
+          n = at + 1;
+        }
+      }
+      cupid_status st = read_text(text, n);
+      if (st == CUPID_SUCCESS) {
+        accepted++;
+      } else {
+        rejected++;
+        if (st != CUPID_ERR_MODEL)
+          fail_msg("mutation gave status %d: %s", st, cupid_error_message());
+        /* Every model error names the file and a position. */
+        if (strncmp(cupid_error_message(), "mem.yaml:", 9))
+          fail_msg("message without position: %s", cupid_error_message());
+      }
+    }
+  }
+  print_message("mutations: %d accepted, %d rejected\n", accepted, rejected);
+  assert_true(rejected > 0 && accepted > 0);
+}
+
+int main(void) {
+  const struct CMUnitTest tests[] = {
+      cmocka_unit_test(test_catalogue),
+      cmocka_unit_test(test_catalogue_complete),
+      cmocka_unit_test(test_io_errors),
+      cmocka_unit_test(test_limits),
+      cmocka_unit_test(test_mutations),
+  };
+  return cmocka_run_group_tests(tests, NULL, NULL);
+}
