@@ -54,6 +54,24 @@ cupid_int cupid_csr_nnz(const cupid_csr_t *A);
 /** Bytes used by the matrix arrays. */
 int64_t cupid_csr_bytes(const cupid_csr_t *A);
 
+/** y = A^T x (serial scatter). x has nrows*bs entries, y ncols*bs. */
+void cupid_csr_matvec_transpose(const cupid_csr_t *A, const double *x, double *y);
+
+/** A deep copy of A. */
+cupid_status cupid_csr_duplicate(const cupid_csr_t *A, cupid_csr *B);
+
+/** Set every stored value to zero (keeps the pattern, e.g. before re-assembly). */
+void cupid_csr_zero(cupid_csr_t *A);
+
+/** A *= alpha. */
+void cupid_csr_scale(cupid_csr_t *A, double alpha);
+
+/** Y += alpha X for matrices with the same pattern (else CUPID_ERR_ARGUMENT), e.g. C = a M + b K. */
+cupid_status cupid_csr_axpy(double alpha, const cupid_csr_t *X, cupid_csr_t *Y);
+
+/** The scalar diagonal d (nrows*bs entries; 0 where not stored) of a square matrix. */
+cupid_status cupid_csr_diagonal(const cupid_csr_t *A, double *d);
+
 /** Dirichlet conditions on scalar DOFs. Fill fixed[]/value[], then cupid_dirichlet_finalize(). */
 typedef struct cupid_dirichlet_s {
   cupid_int n;            /**< total scalar DOFs */
@@ -64,11 +82,29 @@ typedef struct cupid_dirichlet_s {
 } cupid_dirichlet_t;
 typedef cupid_dirichlet_t *cupid_dirichlet;
 
+/** Conditions on n DOFs, none fixed yet (free_index is the identity until finalize). */
 cupid_status cupid_dirichlet_create(cupid_int n, cupid_dirichlet *bc);
+/** Fix DOF @p dof to @p value (same as setting fixed[dof] and value[dof]); finalize afterwards. */
+cupid_status cupid_dirichlet_fix(cupid_dirichlet bc, cupid_int dof, double value);
+/** Number the free DOFs in increasing global order; rejects non-finite prescribed values. */
 cupid_status cupid_dirichlet_finalize(cupid_dirichlet bc);
 void cupid_dirichlet_destroy(cupid_dirichlet *bc);
 
+/**
+ * Reactions r = K u - f on the fixed DOFs of @p bc, 0 on the free ones (f may be NULL = 0).
+ * Summing r over the x (y, z) components gives the total support force.
+ */
+cupid_status cupid_csr_reactions(const cupid_csr_t *K, const double *u, const double *f,
+                                 const cupid_dirichlet_t *bc, double *r);
+
 typedef enum { CUPID_MATRIX_SPD = 0, CUPID_MATRIX_GENERAL = 1 } cupid_matrix_kind;
+
+/**
+ * Smallest accepted ratio of the smallest to the largest pivot of the factorisation
+ * (CHOLMOD: L_kk^2; UMFPACK: |U_kk| of the scaled matrix). A singular matrix whose last
+ * pivot is round-off rather than an exact zero lands below it.
+ */
+#define CUPID_DIRECT_PIVOT_RATIO_MIN 1e-13
 
 /** What a direct solve did, for summary.json. */
 typedef struct {
@@ -80,14 +116,20 @@ typedef struct {
   int64_t memory_factor;   /**< peak bytes reported by the library (0 = unknown) */
   double residual;         /**< ||K_ff u_f - b_f|| / ||b_f|| (0 when b_f = 0) */
   cupid_int failed_dof;    /**< global scalar DOF where factorisation broke down, or -1 */
+  double flops_factor;     /**< floating-point operations of the factorisation (0 = unknown) */
+  double pivot_ratio;      /**< min/max pivot magnitude (CHOLMOD: L_kk^2; UMFPACK: |U_kk|) */
+  int refinements;         /**< iterative refinement steps done by cupid (0 or 1) */
 } cupid_solve_info;
 
 /**
  * Solve K u = f with Dirichlet conditions: unknowns are the free DOFs, fixed DOFs take
  * bc->value; the system K_ff u_f = f_f - K_fc u_c is factored with CHOLMOD (SPD) or
  * UMFPACK (GENERAL) and the residual is checked (CUPID_ERR_NUMERIC above 1e-8).
- * A singular or indefinite K_ff gives CUPID_ERR_NUMERIC with info->failed_dof set.
- * u (K->nrows*bs entries) receives the full solution.
+ * A singular or indefinite K_ff gives CUPID_ERR_NUMERIC with info->failed_dof set; so does a
+ * pivot ratio below CUPID_DIRECT_PIVOT_RATIO_MIN (a matrix singular up to round-off).
+ * u (K->nrows*bs entries) receives the full solution. bc may be NULL (no fixed DOFs) and
+ * info may be NULL. CHOLMOD uses one triangle of K_ff (K must be symmetric; an asymmetric
+ * K shows up as a residual failure).
  */
 cupid_status cupid_direct_solve(const cupid_csr_t *K, cupid_matrix_kind kind, const double *f,
                                 const cupid_dirichlet_t *bc, double *u, cupid_solve_info *info);
