@@ -107,7 +107,7 @@ cupid_status cupid_pd_operator_assemble(const cupid_pd_operator op, cupid_csr *K
   CUPID_CHECK(op && Kout, CUPID_ERR_ARGUMENT, "assemble needs an operator and an output");
   *Kout = NULL;
   const cupid_int nn = op->nnodes;
-  const int nt = num_threads();
+  const int nt = nn > PD_OMP_MIN_NODES ? num_threads() : 1;
   CUPID_TRY(pd_stencil_sum(&op->st, op->model == CUPID_PD_BOND, &nd, &doff));
   CUPID_TRY(cupid_malloc((size_t)nt * (size_t)nn, sizeof *mark, "assembly markers", &mark));
   CUPID_TRY(cupid_malloc((size_t)nt * (size_t)nn, sizeof *slot, "assembly slots", &slot));
@@ -163,7 +163,7 @@ cleanup:
 cupid_status cupid_pd_operator_diagonal(const cupid_pd_operator op, double *blocks) {
   CUPID_CHECK(op && blocks, CUPID_ERR_ARGUMENT, "diagonal needs an operator and an output");
   const pd_stencil *S = &op->st;
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (op->nnodes > PD_OMP_MIN_NODES)
   for (cupid_int r = 0; r < op->nnodes; r++) {
     double *blk = blocks + 9 * (size_t)r;
     memset(blk, 0, 9 * sizeof *blk);

@@ -5,7 +5,7 @@
 /* (K u)_i = -sum_j c_ij omega beta V^2 (e_ij / x_ij) n_ij. */
 void pd_bond_apply(const struct cupid_pd_operator_private *op, const double *u, double *f) {
   const pd_stencil *S = &op->st;
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (op->nnodes > PD_OMP_MIN_NODES)
   for (cupid_int i = 0; i < op->nnodes; i++) {
     double fi[3] = {0, 0, 0};
     for (cupid_int b = op->bptr[i]; b < op->bptr[i + 1]; b++) {
@@ -23,7 +23,7 @@ void pd_bond_apply(const struct cupid_pd_operator_private *op, const double *u, 
 double pd_bond_energy(const struct cupid_pd_operator_private *op, const double *u) {
   const pd_stencil *S = &op->st;
   double E = 0.0;
-#pragma omp parallel for schedule(static) reduction(+ : E)
+#pragma omp parallel for schedule(static) if (op->nnodes > PD_OMP_MIN_NODES) reduction(+ : E)
   for (cupid_int i = 0; i < op->nnodes; i++)
     for (cupid_int b = op->bptr[i]; b < op->bptr[i + 1]; b++) {
       const cupid_int j = op->bnbr[b];
@@ -38,7 +38,7 @@ double pd_bond_energy(const struct cupid_pd_operator_private *op, const double *
  * density: 1/2 V sum_j c_ij omega beta e n (x) n. */
 void pd_bond_stress(const struct cupid_pd_operator_private *op, const double *u, double *sigma) {
   const pd_stencil *S = &op->st;
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (op->nnodes > PD_OMP_MIN_NODES)
   for (cupid_int i = 0; i < op->nnodes; i++) {
     double sg[6] = {0, 0, 0, 0, 0, 0};
     for (cupid_int b = op->bptr[i]; b < op->bptr[i + 1]; b++) {

@@ -18,8 +18,8 @@ static int bound_index(double value, double origin, double h, int axis, const ch
   /* Tolerance 1e-9 h: bounds written with a few digits must still land on the lattice. */
   if (fabs(t - r) > 1e-9 || !isfinite(t)) {
     snprintf(msg, len,
-             "%c %s bound %.17g is not on the lattice (origin %.17g, spacing %.17g): nearest "
-             "lattice planes %.17g and %.17g",
+             "%c %s bound %.15g is not on the lattice (origin %.15g, spacing %.15g): nearest "
+             "lattice planes %.15g and %.15g",
              axis_name[axis], which, value, origin, h, origin + floor(t) * h,
              origin + ceil(t) * h);
     return 0;
@@ -102,7 +102,7 @@ cupid_status pd_grid_build(const cupid_pd_grid_options *opts, int n_boxes, const
       }
       if (hi <= lo) {
         *bad_box = b;
-        snprintf(msg, len, "the box holds no node: %c range [%.17g, %.17g] spans %lld cells",
+        snprintf(msg, len, "the box holds no node: %c range [%.15g, %.15g] spans %lld cells",
                  axis_name[a], boxes[b].lo[a], boxes[b].hi[a], (long long)(hi - lo));
         st = CUPID_ERR_MODEL;
         goto cleanup;
@@ -129,7 +129,7 @@ cupid_status pd_grid_build(const cupid_pd_grid_options *opts, int n_boxes, const
    * that earlier boxes overwrite later ones). dense holds the box index for now. */
   for (int b = n_boxes - 1; b >= 0; b--) {
     const cupid_int *r = range + 6 * b;
-#pragma omp parallel for collapse(2) schedule(static)
+#pragma omp parallel for collapse(2) schedule(static) if ((r[5] - r[4]) * (r[3] - r[2]) * (r[1] - r[0]) > PD_OMP_MIN_NODES)
     for (cupid_int k = r[4]; k < r[5]; k++)
       for (cupid_int j = r[2]; j < r[3]; j++)
         for (cupid_int i = r[0]; i < r[1]; i++) g->dense[i + g->n[0] * (j + g->n[1] * k)] = b;
@@ -220,7 +220,7 @@ cupid_status cupid_pd_grid_interior(const cupid_pd_grid grid, double radius, uns
           off[3 * n + 2] = dk;
           n++;
         }
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (g->nnodes > PD_OMP_MIN_NODES)
   for (cupid_int p = 0; p < g->nnodes; p++) {
     const int32_t *q = g->ijk + 3 * p;
     unsigned char in = 1;

@@ -5,7 +5,7 @@
 /* theta_i = 3/m_i sum_j omega x e beta V (Eq. 19, e from Eq. 17). */
 void pd_lps_dilatation(const struct cupid_pd_operator_private *op, const double *u, double *theta) {
   const pd_stencil *S = &op->st;
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (op->nnodes > PD_OMP_MIN_NODES)
   for (cupid_int i = 0; i < op->nnodes; i++) {
     double t = 0.0;
     for (cupid_int b = op->bptr[i]; b < op->bptr[i + 1]; b++) {
@@ -24,7 +24,7 @@ void pd_lps_apply(const struct cupid_pd_operator_private *op, const double *u, c
                   double *f) {
   const pd_stencil *S = &op->st;
   const double V2 = op->V * op->V;
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (op->nnodes > PD_OMP_MIN_NODES)
   for (cupid_int i = 0; i < op->nnodes; i++) {
     const double ai = op->kappa[i] * theta[i] / op->m[i], bi = op->mu[i] / op->m[i];
     double fi[3] = {0, 0, 0};
@@ -45,7 +45,7 @@ double pd_lps_energy(const struct cupid_pd_operator_private *op, const double *u
                      const double *theta) {
   const pd_stencil *S = &op->st;
   double E = 0.0;
-#pragma omp parallel for schedule(static) reduction(+ : E)
+#pragma omp parallel for schedule(static) reduction(+ : E) if (op->nnodes > PD_OMP_MIN_NODES)
   for (cupid_int i = 0; i < op->nnodes; i++) {
     double q = 0.0;
     for (cupid_int b = op->bptr[i]; b < op->bptr[i + 1]; b++) {
@@ -63,7 +63,7 @@ double pd_lps_energy(const struct cupid_pd_operator_private *op, const double *u
 void pd_lps_stress(const struct cupid_pd_operator_private *op, const double *u, const double *theta,
                    double *sigma) {
   const pd_stencil *S = &op->st;
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (op->nnodes > PD_OMP_MIN_NODES)
   for (cupid_int i = 0; i < op->nnodes; i++) {
     double sg[6] = {0, 0, 0, 0, 0, 0};
     for (cupid_int b = op->bptr[i]; b < op->bptr[i + 1]; b++) {

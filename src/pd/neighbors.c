@@ -139,7 +139,7 @@ cupid_status pd_neighbors_build(const struct cupid_pd_grid_private *g, const pd_
   CUPID_TRY(cupid_malloc((size_t)nn + 1, sizeof **ptr, "PD bond offsets", ptr));
   cupid_int *p = *ptr;
   p[0] = 0;
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (nn > PD_OMP_MIN_NODES)
   for (cupid_int i = 0; i < nn; i++) {
     const int32_t *q = g->ijk + 3 * i;
     cupid_int c = 0;
@@ -153,7 +153,7 @@ cupid_status pd_neighbors_build(const struct cupid_pd_grid_private *g, const pd_
   CUPID_TRY(cupid_malloc((size_t)p[nn], sizeof **sidx, "PD bond stencil entries", sidx));
   cupid_int *nb = *nbr;
   int32_t *sx = *sidx;
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (nn > PD_OMP_MIN_NODES)
   for (cupid_int i = 0; i < nn; i++) {
     const int32_t *q = g->ijk + 3 * i;
     cupid_int b = p[i];
@@ -178,7 +178,7 @@ cleanup:
 /* Nodes reachable from every node through a list of offsets, summed. */
 static cupid_int count_present(const struct cupid_pd_grid_private *g, int n, const int32_t *off) {
   cupid_int total = 0;
-#pragma omp parallel for schedule(static) reduction(+ : total)
+#pragma omp parallel for schedule(static) reduction(+ : total) if (g->nnodes > PD_OMP_MIN_NODES)
   for (cupid_int i = 0; i < g->nnodes; i++) {
     const int32_t *q = g->ijk + 3 * i;
     for (int s = 0; s < n; s++)

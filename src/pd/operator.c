@@ -55,7 +55,7 @@ static cupid_status node_data(struct cupid_pd_operator_private *op,
   double Sfull = 0.0;
   for (int s = 0; s < S->n; s++) Sfull += S->wb[s] * S->x[s] * op->V;
   cupid_int empty = -1;
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (nn > PD_OMP_MIN_NODES)
   for (cupid_int i = 0; i < nn; i++) {
     double m = 0.0, gs[3] = {0, 0, 0};
     for (cupid_int b = op->bptr[i]; b < op->bptr[i + 1]; b++) {

@@ -24,6 +24,9 @@ struct cupid_pd_grid_private {
   cupid_int *dense;  /* n[0]*n[1]*n[2]: node index of a cell or -1 */
 };
 
+/* Loops over fewer nodes run on one thread (thread start-up and barriers cost more). */
+#define PD_OMP_MIN_NODES 1024
+
 /* Build the grid; on a problem with box b, *bad_box = b and msg holds the reason (no
  * "box b" prefix) so that the caller can report it against the model file. */
 cupid_status pd_grid_build(const cupid_pd_grid_options *opts, int n_boxes, const cupid_box *boxes,
