@@ -35,6 +35,9 @@ typedef struct {
  * some box (first box wins for the material). Box bounds must lie on the lattice (error
  * names the box and bound otherwise). @p materials gives one material index per box.
  * Boxes with no node are an error. For dimension 1 only the y bounds are used.
+ * Bound check tolerance 1e-9 h. Nodes are numbered lexicographically by cell (i, j, k)
+ * with x fastest and z slowest. The bounding box may hold at most 2^31 cells (a dense
+ * cell -> node index of 8 bytes per cell is kept for O(1) lookups).
  */
 cupid_status cupid_pd_grid_create(const cupid_pd_grid_options *opts, int n_boxes,
                                   const cupid_box *boxes, const int *materials,
@@ -60,6 +63,15 @@ cupid_int cupid_pd_grid_node_at(const cupid_pd_grid grid, cupid_int i, cupid_int
 void cupid_pd_grid_origin(const cupid_pd_grid grid, double origin[3]);
 /** Bounding box of the union: lowest corner and number of cells per axis. */
 void cupid_pd_grid_extent(const cupid_pd_grid grid, cupid_int ncells[3]);
+/** Lattice position (i, j, k) of a node (in 1D i = k = 0). */
+void cupid_pd_grid_node_lattice(const cupid_pd_grid grid, cupid_int node, cupid_int ijk[3]);
+/**
+ * Interior flags: flags[i] = 1 when every lattice point within @p radius of node i
+ * (|offset| h <= radius) is a node of the grid, i.e. node i is farther than @p radius
+ * from the surface of the union; else 0. Useful to pick nodes with complete families
+ * (radius delta for bond-based, 2 delta for LPS forces).
+ */
+cupid_status cupid_pd_grid_interior(const cupid_pd_grid grid, double radius, unsigned char *flags);
 
 /** Constitutive data per material, given by index. */
 typedef struct {
@@ -80,6 +92,25 @@ typedef struct {
  * beta, influence omega, weighted volumes m_i (Eq. 18) and material constants.
  * LPS requires dimension 3; the 1D grid supports the bond-based model
  * (micromodulus 2E/(A delta^2) for constant influence).
+ *
+ * The grid is borrowed and must outlive the operator. Constants per node from its
+ * material: K = E/(3(1-2nu)), mu = E/(2(1+nu)).
+ *
+ * LPS (paper 000 Eqs. 16-21, generalised to per-node constants, V the cell volume):
+ *   m_i = sum_j omega x^2 beta V,  theta_i = 3/m_i sum_j omega x e_ij beta V,
+ *   e_ij = n_ij.(u_j - u_i),
+ *   (K u)_i = -sum_j beta V^2 omega [ (3K_i-5mu_i) x theta_i/m_i + (3K_j-5mu_j) x theta_j/m_j
+ *                                     + 15 (mu_i/m_i + mu_j/m_j) e_ij ] n_ij,
+ * the gradient of E = sum_i V [ (3K_i-5mu_i)/6 theta_i^2 + 15mu_i/(2m_i) sum_j omega e^2 beta V ].
+ *
+ * Bond-based micro-elastic (paper 004 section 2.2, linearised):
+ *   (K u)_i = -sum_j c_ij omega beta V^2 (e_ij/x_ij) n_ij,  c_ij = (c_i + c_j)/2,
+ * with the micromodulus calibrated on the discrete full family so that a uniform
+ * dilatation (3D) or a uniform strain (1D) gives exactly the continuum energy in the
+ * bulk: 3D c = 18 K / S, 1D c = 2 E / S, S = sum over the full stencil of omega x beta V
+ * (continuum limit, constant omega: 18K/(pi delta^4) and 2E/(A delta^2), paper 004).
+ * Bond-based PD has nu = 1/4 in 3D; other nu are accepted, K is taken from E and nu as
+ * given (the shear response is then 3K/5, not mu).
  */
 cupid_status cupid_pd_operator_create(const cupid_pd_grid grid,
                                       const cupid_pd_operator_options *opts,
@@ -92,19 +123,66 @@ cupid_int cupid_pd_operator_num_bonds(const cupid_pd_operator op);
 /** Matrix-free f = K u (3 entries per node; in 1D too, with x and z decoupled and zero). */
 cupid_status cupid_pd_operator_apply(const cupid_pd_operator op, const double *u, double *f);
 
-/** Assemble K analytically in 3x3-block CSR (LPS couples nodes up to 2 delta apart). */
+/**
+ * Assemble K analytically in 3x3-block CSR (LPS couples nodes up to 2 delta apart):
+ * K = K_pair + sum_p c_p g_p g_p^T, c_p = V (3K_p - 5mu_p)/3, g_p = d theta_p/dU.
+ * OpenMP row-wise gather, O(nodes). *K is a new matrix (struct and arrays from
+ * cupid_calloc/cupid_malloc, freed by cupid_csr_destroy).
+ */
 cupid_status cupid_pd_operator_assemble(const cupid_pd_operator op, cupid_csr *K);
 
 /** Dilatation theta_i (Eq. 19) of a displacement field (LPS; 0 for bond-based). */
 cupid_status cupid_pd_operator_dilatation(const cupid_pd_operator op, const double *u,
                                           double *theta);
 
-/** Nodal stress (6 per node: xx yy zz yz xz xy) = sum_j T_ij (x) xi_ij beta V_j. */
+/**
+ * Nodal stress (6 per node: xx yy zz yz xz xy): LPS sum_j T_ij (x) xi_ij beta V_j (T from
+ * Eq. 20); bond-based 1/2 sum_j f_ij (x) xi_ij beta V_j (f_ij the pair force density).
+ * Exact (the continuum stress) for an affine field at nodes with a full family when the
+ * stencil quadrature is isotropic (always for a dilatation).
+ */
 cupid_status cupid_pd_operator_stress(const cupid_pd_operator op, const double *u, double *sigma);
 
-/** Quadrature coefficient beta of the cell centred at offset (dx,dy,dz) from a node. */
+/** Weighted volume m_i of each node (Eq. 18; also for bond-based). */
+const double *cupid_pd_operator_weighted_volume(const cupid_pd_operator op);
+
+/** Strain energy E(u) = u.K u / 2, evaluated from its own formula (see create). */
+cupid_status cupid_pd_operator_energy(const cupid_pd_operator op, const double *u, double *energy);
+
+/** The 3x3 diagonal blocks of K (9 per node, row-major), e.g. for block Jacobi. */
+cupid_status cupid_pd_operator_diagonal(const cupid_pd_operator op, double *blocks);
+
+/** Predicted sizes of an operator and its assembled matrix (for `cupid check`). */
+typedef struct {
+  cupid_int nodes;
+  cupid_int bonds;        /**< exact: stored bonds (both directions) */
+  cupid_int blocks;       /**< 3x3 blocks of the assembled K: exact for bond-based, an
+                               upper bound for LPS (lattice points within two stencil hops) */
+  int64_t bytes_operator; /**< bonds + per-node data of the operator */
+  int64_t bytes_matrix;   /**< rowptr + col + val of the assembled K */
+} cupid_pd_estimate;
+
+/** Count bonds and matrix blocks without building the operator (O(nodes x stencil)). */
+cupid_status cupid_pd_operator_estimate(const cupid_pd_grid grid,
+                                        const cupid_pd_operator_options *opts,
+                                        cupid_pd_estimate *est);
+
+/**
+ * Quadrature coefficient beta of the cell (cube of side h) centred at offset (dx,dy,dz)
+ * from a node, with r = |offset|:
+ *  - NONE: 1 if r <= delta (+1e-12 h), else 0;
+ *  - PDLAMMPS (Parks et al.): 1 for r <= delta - h/2, (delta + h/2 - r)/h up to delta,
+ *    0 beyond delta (bonds beyond delta are dropped);
+ *  - EXACT: the fraction of the cell inside the ball of radius delta about the node
+ *    (analytic over the disk-rectangle section, tanh-sinh quadrature along the third
+ *    axis, ~1e-13 absolute); includes cells whose centre lies beyond delta.
+ * The result is exactly invariant under sign changes and permutations of the offset.
+ */
 double cupid_pd_partial_volume(cupid_partial_volume rule, double dx, double dy, double dz,
                                double h, double delta);
+
+/** The same in 1D: for EXACT the fraction of [d - h/2, d + h/2] inside [-delta, delta]. */
+double cupid_pd_partial_volume_1d(cupid_partial_volume rule, double d, double h, double delta);
 
 /** Influence omega(|xi|). */
 double cupid_pd_influence(cupid_influence kind, double r, double delta);

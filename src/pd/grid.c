@@ -1,0 +1,235 @@
+/* The uniform PD grid of a union of boxes (paper 000 section 2.2: nodes at cell centres). */
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+
+#include "pd/pd_internal.h"
+
+/* The largest bounding box we index densely (8 bytes per cell). */
+#define PD_MAX_CELLS ((cupid_int)1 << 31)
+
+static const char axis_name[3] = {'x', 'y', 'z'};
+
+/* Lattice index of a box bound into *idx; 0 with a reason in msg when it is off the lattice. */
+static int bound_index(double value, double origin, double h, int axis, const char *which,
+                       char *msg, size_t len, cupid_int *idx) {
+  double t = (value - origin) / h;
+  double r = nearbyint(t);
+  /* Tolerance 1e-9 h: bounds written with a few digits must still land on the lattice. */
+  if (fabs(t - r) > 1e-9 || !isfinite(t)) {
+    snprintf(msg, len,
+             "%c %s bound %.15g is not on the lattice (origin %.15g, spacing %.15g): nearest "
+             "lattice planes %.15g and %.15g",
+             axis_name[axis], which, value, origin, h, origin + floor(t) * h,
+             origin + ceil(t) * h);
+    return 0;
+  }
+  *idx = (cupid_int)r;
+  return 1;
+}
+
+void cupid_pd_grid_destroy(cupid_pd_grid *grid) {
+  if (!grid || !*grid) return;
+  struct cupid_pd_grid_private *g = *grid;
+  cupid_free(&g->coords);
+  cupid_free(&g->material);
+  cupid_free(&g->ijk);
+  cupid_free(&g->dense);
+  cupid_free(grid);
+}
+
+cupid_status pd_grid_build(const cupid_pd_grid_options *opts, int n_boxes, const cupid_box *boxes,
+                           const int *materials, int *bad_box, char *msg, size_t len,
+                           cupid_pd_grid *grid) {
+  cupid_status st = CUPID_SUCCESS;
+  struct cupid_pd_grid_private *g = NULL;
+  cupid_int *range = NULL; /* 6 per box: lo/hi cell index per axis */
+  *bad_box = -1;
+  msg[0] = '\0';
+  *grid = NULL;
+  CUPID_CHECK(opts && boxes && materials && n_boxes > 0, CUPID_ERR_ARGUMENT,
+              "the grid needs options and at least one box");
+  const int dim = opts->dimension;
+  const double h = opts->spacing;
+  CUPID_CHECK(dim == 1 || dim == 3, CUPID_ERR_MODEL, "dimension must be 1 or 3, got %d", dim);
+  CUPID_CHECK(isfinite(h) && h > 0, CUPID_ERR_MODEL, "spacing must be positive, got %g", h);
+  CUPID_CHECK(dim == 3 || (isfinite(opts->area) && opts->area > 0), CUPID_ERR_MODEL,
+              "a 1D grid needs a positive cross-section area, got %g", opts->area);
+
+  CUPID_TRY(cupid_calloc(1, sizeof *g, "the PD grid", &g));
+  g->dim = dim;
+  g->h = h;
+  g->area = dim == 1 ? opts->area : h * h;
+  g->volume = dim == 1 ? opts->area * h : h * h * h;
+
+  /* Lattice origin: the lowest corner of all boxes per axis. */
+  for (int a = 0; a < 3; a++) {
+    int used = dim == 3 || a == 1;
+    if (!used) {
+      g->origin[a] = -0.5 * h; /* cell centre at 0 */
+      continue;
+    }
+    double lo = INFINITY;
+    for (int b = 0; b < n_boxes; b++) {
+      if (!boxes[b].has[a] || !isfinite(boxes[b].lo[a]) || !isfinite(boxes[b].hi[a])) {
+        *bad_box = b;
+        snprintf(msg, len, "the %c range must be given (PD regions are bounded boxes)",
+                 axis_name[a]);
+        st = CUPID_ERR_MODEL;
+        goto cleanup;
+      }
+      if (boxes[b].lo[a] < lo) lo = boxes[b].lo[a];
+    }
+    g->origin[a] = lo;
+  }
+
+  /* Cell ranges of every box, and the bounding box. */
+  CUPID_TRY(cupid_calloc(6 * (size_t)n_boxes, sizeof *range, "box ranges", &range));
+  for (int a = 0; a < 3; a++) g->n[a] = 1;
+  for (int b = 0; b < n_boxes; b++) {
+    for (int a = 0; a < 3; a++) {
+      if (!(dim == 3 || a == 1)) {
+        range[6 * b + 2 * a] = 0;
+        range[6 * b + 2 * a + 1] = 1;
+        continue;
+      }
+      cupid_int lo = 0, hi = 0;
+      if (!bound_index(boxes[b].lo[a], g->origin[a], h, a, "lower", msg, len, &lo) ||
+          !bound_index(boxes[b].hi[a], g->origin[a], h, a, "upper", msg, len, &hi)) {
+        *bad_box = b;
+        st = CUPID_ERR_MODEL;
+        goto cleanup;
+      }
+      if (hi <= lo) {
+        *bad_box = b;
+        snprintf(msg, len, "the box holds no node: %c range [%.15g, %.15g] spans %lld cells",
+                 axis_name[a], boxes[b].lo[a], boxes[b].hi[a], (long long)(hi - lo));
+        st = CUPID_ERR_MODEL;
+        goto cleanup;
+      }
+      range[6 * b + 2 * a] = lo;
+      range[6 * b + 2 * a + 1] = hi;
+      if (hi > g->n[a]) g->n[a] = hi;
+    }
+  }
+  double cells = (double)g->n[0] * (double)g->n[1] * (double)g->n[2];
+  if (cells > (double)PD_MAX_CELLS) {
+    st = CUPID_ERROR(CUPID_ERR_MODEL,
+                     "the bounding box of the PD regions has %.0f cells (%lld x %lld x %lld), "
+                     "more than the limit of %lld: check spacing and regions",
+                     cells, (long long)g->n[0], (long long)g->n[1], (long long)g->n[2],
+                     (long long)PD_MAX_CELLS);
+    goto cleanup;
+  }
+  const cupid_int ncell = g->n[0] * g->n[1] * g->n[2];
+  CUPID_TRY(cupid_malloc((size_t)ncell, sizeof *g->dense, "the PD cell index", &g->dense));
+  for (cupid_int c = 0; c < ncell; c++) g->dense[c] = -1;
+
+  /* Mark owners: the first box containing a cell gives its material (boxes in reverse so
+   * that earlier boxes overwrite later ones). dense holds the box index for now. */
+  for (int b = n_boxes - 1; b >= 0; b--) {
+    const cupid_int *r = range + 6 * b;
+#pragma omp parallel for collapse(2) schedule(static) if ((r[5] - r[4]) * (r[3] - r[2]) * (r[1] - r[0]) > PD_OMP_MIN_NODES)
+    for (cupid_int k = r[4]; k < r[5]; k++)
+      for (cupid_int j = r[2]; j < r[3]; j++)
+        for (cupid_int i = r[0]; i < r[1]; i++) g->dense[i + g->n[0] * (j + g->n[1] * k)] = b;
+  }
+  cupid_int nn = 0;
+  for (cupid_int c = 0; c < ncell; c++)
+    if (g->dense[c] >= 0) nn++;
+  g->nnodes = nn;
+  CUPID_TRY(cupid_malloc(3 * (size_t)nn, sizeof *g->coords, "PD node coordinates", &g->coords));
+  CUPID_TRY(cupid_malloc((size_t)nn, sizeof *g->material, "PD node materials", &g->material));
+  CUPID_TRY(cupid_malloc(3 * (size_t)nn, sizeof *g->ijk, "PD lattice positions", &g->ijk));
+  nn = 0;
+  for (cupid_int k = 0; k < g->n[2]; k++)
+    for (cupid_int j = 0; j < g->n[1]; j++)
+      for (cupid_int i = 0; i < g->n[0]; i++) {
+        cupid_int c = i + g->n[0] * (j + g->n[1] * k);
+        if (g->dense[c] < 0) continue;
+        int b = (int)g->dense[c];
+        g->material[nn] = materials[b];
+        g->ijk[3 * nn] = (int32_t)i;
+        g->ijk[3 * nn + 1] = (int32_t)j;
+        g->ijk[3 * nn + 2] = (int32_t)k;
+        const cupid_int ijk[3] = {i, j, k};
+        for (int a = 0; a < 3; a++)
+          g->coords[3 * nn + a] =
+              (dim == 3 || a == 1) ? g->origin[a] + ((double)ijk[a] + 0.5) * h : 0.0;
+        g->dense[c] = nn++;
+      }
+  *grid = g;
+  g = NULL;
+cleanup:
+  cupid_free(&range);
+  cupid_pd_grid_destroy(&g);
+  return st;
+}
+
+cupid_status cupid_pd_grid_create(const cupid_pd_grid_options *opts, int n_boxes,
+                                  const cupid_box *boxes, const int *materials,
+                                  cupid_pd_grid *grid) {
+  char msg[512];
+  int bad = -1;
+  cupid_status st = pd_grid_build(opts, n_boxes, boxes, materials, &bad, msg, sizeof msg, grid);
+  if (st != CUPID_SUCCESS && bad >= 0) return CUPID_ERROR(st, "PD box %d: %s", bad, msg);
+  return st;
+}
+
+cupid_int cupid_pd_grid_num_nodes(const cupid_pd_grid grid) { return grid->nnodes; }
+const double *cupid_pd_grid_coords(const cupid_pd_grid grid) { return grid->coords; }
+const int *cupid_pd_grid_materials(const cupid_pd_grid grid) { return grid->material; }
+double cupid_pd_grid_cell_volume(const cupid_pd_grid grid) { return grid->volume; }
+double cupid_pd_grid_spacing(const cupid_pd_grid grid) { return grid->h; }
+int cupid_pd_grid_dimension(const cupid_pd_grid grid) { return grid->dim; }
+
+cupid_int cupid_pd_grid_node_at(const cupid_pd_grid grid, cupid_int i, cupid_int j, cupid_int k) {
+  return pd_grid_lookup(grid, i, j, k);
+}
+
+void cupid_pd_grid_origin(const cupid_pd_grid grid, double origin[3]) {
+  for (int a = 0; a < 3; a++) origin[a] = grid->origin[a];
+}
+
+void cupid_pd_grid_extent(const cupid_pd_grid grid, cupid_int ncells[3]) {
+  for (int a = 0; a < 3; a++) ncells[a] = grid->n[a];
+}
+
+void cupid_pd_grid_node_lattice(const cupid_pd_grid grid, cupid_int node, cupid_int ijk[3]) {
+  for (int a = 0; a < 3; a++) ijk[a] = grid->ijk[3 * node + a];
+}
+
+cupid_status cupid_pd_grid_interior(const cupid_pd_grid grid, double radius, unsigned char *flags) {
+  const struct cupid_pd_grid_private *g = grid;
+  int32_t *off = NULL;
+  CUPID_CHECK(radius >= 0 && isfinite(radius), CUPID_ERR_ARGUMENT, "radius must be >= 0, got %g",
+              radius);
+  const double rr = radius / g->h * (1.0 + 1e-12);
+  const int R = (int)floor(rr);
+  const int Rx = g->dim == 3 ? R : 0;
+  const size_t side = 2 * (size_t)R + 1, sidex = 2 * (size_t)Rx + 1;
+  cupid_status st = CUPID_SUCCESS;
+  CUPID_TRY(cupid_malloc(3 * sidex * side * sidex, sizeof *off, "stencil offsets", &off));
+  int n = 0;
+  for (int dk = -Rx; dk <= Rx; dk++)
+    for (int dj = -R; dj <= R; dj++)
+      for (int di = -Rx; di <= Rx; di++)
+        if ((double)(di * di + dj * dj + dk * dk) <= rr * rr) {
+          off[3 * n] = di;
+          off[3 * n + 1] = dj;
+          off[3 * n + 2] = dk;
+          n++;
+        }
+#pragma omp parallel for schedule(static) if (g->nnodes > PD_OMP_MIN_NODES)
+  for (cupid_int p = 0; p < g->nnodes; p++) {
+    const int32_t *q = g->ijk + 3 * p;
+    unsigned char in = 1;
+    for (int s = 0; s < n && in; s++)
+      if (pd_grid_lookup(g, q[0] + off[3 * s], q[1] + off[3 * s + 1], q[2] + off[3 * s + 2]) < 0)
+        in = 0;
+    flags[p] = in;
+  }
+cleanup:
+  cupid_free(&off);
+  return st;
+}

@@ -1,0 +1,43 @@
+/* The PD grid of a model file: errors are reported against the file (cupid_model_error).
+ * Kept in its own file so that programs using only cupid_pd_grid_create() do not pull in
+ * the model reader. */
+#include <stdio.h>
+
+#include "pd/pd_internal.h"
+
+cupid_status cupid_pd_grid_create_from_model(const cupid_model_t *model, cupid_pd_grid *grid) {
+  cupid_status st = CUPID_SUCCESS;
+  cupid_box *boxes = NULL;
+  int *mats = NULL;
+  *grid = NULL;
+  CUPID_CHECK(model, CUPID_ERR_ARGUMENT, "no model");
+  const cupid_peridynamics *pd = &model->pd;
+  if (!model->has_peridynamics || pd->n_regions <= 0)
+    return cupid_model_error(model, &pd->mark, "the peridynamics section needs at least one region");
+  CUPID_TRY(cupid_calloc((size_t)pd->n_regions, sizeof *boxes, "PD regions", &boxes));
+  CUPID_TRY(cupid_calloc((size_t)pd->n_regions, sizeof *mats, "PD region materials", &mats));
+  for (int r = 0; r < pd->n_regions; r++) {
+    boxes[r] = pd->regions[r].box;
+    mats[r] = pd->regions[r].material >= 0 ? pd->regions[r].material : pd->material;
+    if (mats[r] < 0 || mats[r] >= model->n_materials) {
+      st = cupid_model_error(model, &pd->regions[r].mark,
+                             "the region has no material (give material: here or in "
+                             "peridynamics)");
+      goto cleanup;
+    }
+  }
+  cupid_pd_grid_options opts = {.spacing = pd->spacing, .dimension = pd->dimension,
+                                .area = pd->area};
+  char msg[512];
+  int bad = -1;
+  st = pd_grid_build(&opts, pd->n_regions, boxes, mats, &bad, msg, sizeof msg, grid);
+  if (st != CUPID_SUCCESS && bad >= 0) st = cupid_model_error(model, &pd->regions[bad].mark, "%s", msg);
+  else if (st == CUPID_ERR_MODEL) { /* about the whole section: keep the text, add the place */
+    snprintf(msg, sizeof msg, "%s", cupid_error_message());
+    st = cupid_model_error(model, &pd->mark, "%s", msg);
+  }
+cleanup:
+  cupid_free(&boxes);
+  cupid_free(&mats);
+  return st;
+}

@@ -1,0 +1,84 @@
+/* Linearised LPS (paper 000 Eqs. 16-21) with per-node constants: dilatation, matrix-free
+ * force (a gather over each node's bonds, so no atomics), energy and nodal stress. */
+#include "pd/pd_internal.h"
+
+/* theta_i = 3/m_i sum_j omega x e beta V (Eq. 19, e from Eq. 17). */
+void pd_lps_dilatation(const struct cupid_pd_operator_private *op, const double *u, double *theta) {
+  const pd_stencil *S = &op->st;
+#pragma omp parallel for schedule(static) if (op->nnodes > PD_OMP_MIN_NODES)
+  for (cupid_int i = 0; i < op->nnodes; i++) {
+    double t = 0.0;
+    for (cupid_int b = op->bptr[i]; b < op->bptr[i + 1]; b++) {
+      const cupid_int j = op->bnbr[b];
+      const int s = op->bst[b];
+      t += S->wb[s] * S->x[s] * pd_extension(S->nrm + 3 * s, u, i, j);
+    }
+    theta[i] = 3.0 * op->V * t / op->m[i];
+  }
+}
+
+/* (K u)_i = -sum_j beta V^2 omega [ kappa_i x theta_i/m_i + kappa_j x theta_j/m_j
+ *                                   + 15 (mu_i/m_i + mu_j/m_j) e_ij ] n_ij,
+ * i.e. -(T_ij - T_ji) beta V^2 of Eq. 21 with T of Eq. 20, kappa = 3K - 5mu. */
+void pd_lps_apply(const struct cupid_pd_operator_private *op, const double *u, const double *theta,
+                  double *f) {
+  const pd_stencil *S = &op->st;
+  const double V2 = op->V * op->V;
+#pragma omp parallel for schedule(static) if (op->nnodes > PD_OMP_MIN_NODES)
+  for (cupid_int i = 0; i < op->nnodes; i++) {
+    const double ai = op->kappa[i] * theta[i] / op->m[i], bi = op->mu[i] / op->m[i];
+    double fi[3] = {0, 0, 0};
+    for (cupid_int b = op->bptr[i]; b < op->bptr[i + 1]; b++) {
+      const cupid_int j = op->bnbr[b];
+      const int s = op->bst[b];
+      const double *n = S->nrm + 3 * s;
+      const double aj = op->kappa[j] * theta[j] / op->m[j], bj = op->mu[j] / op->m[j];
+      const double t = S->wb[s] * ((ai + aj) * S->x[s] + 15.0 * (bi + bj) * pd_extension(n, u, i, j));
+      for (int c = 0; c < 3; c++) fi[c] += t * n[c];
+    }
+    for (int c = 0; c < 3; c++) f[3 * i + c] = -V2 * fi[c];
+  }
+}
+
+/* E = sum_i V [ kappa_i/6 theta_i^2 + 15 mu_i/(2 m_i) sum_j omega e^2 beta V ]. */
+double pd_lps_energy(const struct cupid_pd_operator_private *op, const double *u,
+                     const double *theta) {
+  const pd_stencil *S = &op->st;
+  double E = 0.0;
+#pragma omp parallel for schedule(static) reduction(+ : E) if (op->nnodes > PD_OMP_MIN_NODES)
+  for (cupid_int i = 0; i < op->nnodes; i++) {
+    double q = 0.0;
+    for (cupid_int b = op->bptr[i]; b < op->bptr[i + 1]; b++) {
+      const int s = op->bst[b];
+      const double e = pd_extension(S->nrm + 3 * s, u, i, op->bnbr[b]);
+      q += S->wb[s] * e * e;
+    }
+    E += op->V * (op->kappa[i] / 6.0 * theta[i] * theta[i] + 7.5 * op->mu[i] / op->m[i] * q * op->V);
+  }
+  return E;
+}
+
+/* sigma_i = sum_j T_ij (x) xi_ij beta V with T_ij = omega/m_i (kappa_i theta_i x + 15 mu_i e) n
+ * (Eq. 20); T is along n and xi = x n, so sigma is symmetric. Order xx yy zz yz xz xy. */
+void pd_lps_stress(const struct cupid_pd_operator_private *op, const double *u, const double *theta,
+                   double *sigma) {
+  const pd_stencil *S = &op->st;
+#pragma omp parallel for schedule(static) if (op->nnodes > PD_OMP_MIN_NODES)
+  for (cupid_int i = 0; i < op->nnodes; i++) {
+    double sg[6] = {0, 0, 0, 0, 0, 0};
+    for (cupid_int b = op->bptr[i]; b < op->bptr[i + 1]; b++) {
+      const int s = op->bst[b];
+      const double *n = S->nrm + 3 * s;
+      const double x = S->x[s];
+      const double e = pd_extension(n, u, i, op->bnbr[b]);
+      const double t = S->wb[s] * x * (op->kappa[i] * theta[i] * x + 15.0 * op->mu[i] * e);
+      sg[0] += t * n[0] * n[0];
+      sg[1] += t * n[1] * n[1];
+      sg[2] += t * n[2] * n[2];
+      sg[3] += t * n[1] * n[2];
+      sg[4] += t * n[0] * n[2];
+      sg[5] += t * n[0] * n[1];
+    }
+    for (int c = 0; c < 6; c++) sigma[6 * i + c] = sg[c] * op->V / op->m[i];
+  }
+}

@@ -1,0 +1,178 @@
+/* The PD operator: bonds, weighted volumes, material constants, and the dispatch of the
+ * matrix-free operations to the LPS (lps.c) and bond-based (bond.c) kernels. */
+#include <math.h>
+#include <string.h>
+
+#include "pd/pd_internal.h"
+
+void cupid_pd_operator_destroy(cupid_pd_operator *op) {
+  if (!op || !*op) return;
+  struct cupid_pd_operator_private *o = *op;
+  pd_stencil_free(&o->st);
+  cupid_free(&o->bptr);
+  cupid_free(&o->bnbr);
+  cupid_free(&o->bst);
+  cupid_free(&o->m);
+  cupid_free(&o->kappa);
+  cupid_free(&o->mu);
+  cupid_free(&o->c);
+  cupid_free(&o->gself);
+  cupid_free(op);
+}
+
+static cupid_status check_materials(const struct cupid_pd_grid_private *g,
+                                    const cupid_pd_operator_options *opts) {
+  CUPID_CHECK(opts->materials && opts->n_materials > 0, CUPID_ERR_ARGUMENT,
+              "the PD operator needs materials");
+  for (int k = 0; k < opts->n_materials; k++) {
+    const cupid_pd_material *mat = &opts->materials[k];
+    CUPID_CHECK(isfinite(mat->E) && mat->E > 0, CUPID_ERR_MODEL,
+                "PD material %d: Young's modulus must be positive, got %g", k, mat->E);
+    CUPID_CHECK(isfinite(mat->nu) && mat->nu > -1 && mat->nu < 0.5, CUPID_ERR_MODEL,
+                "PD material %d: Poisson's ratio must lie in (-1, 0.5), got %g", k, mat->nu);
+  }
+  for (cupid_int i = 0; i < g->nnodes; i++)
+    CUPID_CHECK(g->material[i] >= 0 && g->material[i] < opts->n_materials, CUPID_ERR_ARGUMENT,
+                "PD node %lld has material %d, but only %d materials were given", (long long)i,
+                g->material[i], opts->n_materials);
+  return CUPID_SUCCESS;
+}
+
+/* m_i (Eq. 18), per-node constants, micromoduli and dilatation self-weights. */
+static cupid_status node_data(struct cupid_pd_operator_private *op,
+                              const cupid_pd_operator_options *opts) {
+  const struct cupid_pd_grid_private *g = op->grid;
+  const pd_stencil *S = &op->st;
+  const cupid_int nn = op->nnodes;
+  CUPID_CALL(cupid_malloc((size_t)nn, sizeof *op->m, "PD weighted volumes", &op->m));
+  CUPID_CALL(cupid_malloc((size_t)nn, sizeof *op->kappa, "PD constants", &op->kappa));
+  CUPID_CALL(cupid_malloc((size_t)nn, sizeof *op->mu, "PD constants", &op->mu));
+  if (op->model == CUPID_PD_BOND)
+    CUPID_CALL(cupid_malloc((size_t)nn, sizeof *op->c, "PD micromoduli", &op->c));
+  else
+    CUPID_CALL(cupid_malloc(3 * (size_t)nn, sizeof *op->gself, "PD dilatation weights", &op->gself));
+  /* Bond-based calibration on the full stencil: S = sum omega x beta V. */
+  double Sfull = 0.0;
+  for (int s = 0; s < S->n; s++) Sfull += S->wb[s] * S->x[s] * op->V;
+  cupid_int empty = -1;
+#pragma omp parallel for schedule(static) if (nn > PD_OMP_MIN_NODES)
+  for (cupid_int i = 0; i < nn; i++) {
+    double m = 0.0, gs[3] = {0, 0, 0};
+    for (cupid_int b = op->bptr[i]; b < op->bptr[i + 1]; b++) {
+      int s = op->bst[b];
+      m += S->wb[s] * S->x[s] * S->x[s] * op->V;
+      for (int c = 0; c < 3; c++) gs[c] += S->wxn[3 * s + c];
+    }
+    op->m[i] = m;
+    if (!(m > 0)) {
+#pragma omp critical(pd_empty)
+      empty = i;
+    }
+    const cupid_pd_material *mat = &opts->materials[g->material[i]];
+    const double K = mat->E / (3.0 * (1.0 - 2.0 * mat->nu)), mu = mat->E / (2.0 * (1.0 + mat->nu));
+    op->kappa[i] = 3.0 * K - 5.0 * mu;
+    op->mu[i] = mu;
+    if (op->c) op->c[i] = (op->dim == 3 ? 18.0 * K : 2.0 * mat->E) / Sfull;
+    if (op->gself)
+      for (int c = 0; c < 3; c++) op->gself[3 * i + c] = gs[c];
+  }
+  if (empty >= 0) {
+    const double *x = g->coords + 3 * empty;
+    return CUPID_ERROR(CUPID_ERR_MODEL,
+                       "PD node %lld at (%g, %g, %g) has no neighbour within the horizon %g",
+                       (long long)empty, x[0], x[1], x[2], op->delta);
+  }
+  return CUPID_SUCCESS;
+}
+
+cupid_status cupid_pd_operator_create(const cupid_pd_grid grid,
+                                      const cupid_pd_operator_options *opts,
+                                      cupid_pd_operator *op) {
+  cupid_status st = CUPID_SUCCESS;
+  struct cupid_pd_operator_private *o = NULL;
+  CUPID_CHECK(grid && opts && op, CUPID_ERR_ARGUMENT, "operator needs grid, options and output");
+  *op = NULL;
+  CUPID_CHECK(opts->model == CUPID_PD_LPS || opts->model == CUPID_PD_BOND, CUPID_ERR_ARGUMENT,
+              "unknown PD model %d", (int)opts->model);
+  CUPID_CHECK(opts->model == CUPID_PD_BOND || grid->dim == 3, CUPID_ERR_UNSUPPORTED,
+              "the LPS model needs a 3D grid; use model: bond for a 1D bar");
+  CUPID_CHECK(opts->influence >= CUPID_INFLUENCE_GAUSSIAN && opts->influence <= CUPID_INFLUENCE_CONSTANT,
+              CUPID_ERR_ARGUMENT, "unknown influence function %d", (int)opts->influence);
+  CUPID_CHECK(opts->partial_volume >= CUPID_PARTIAL_NONE && opts->partial_volume <= CUPID_PARTIAL_EXACT,
+              CUPID_ERR_ARGUMENT, "unknown partial-volume rule %d", (int)opts->partial_volume);
+  CUPID_CALL(check_materials(grid, opts));
+  CUPID_TRY(cupid_calloc(1, sizeof *o, "the PD operator", &o));
+  o->grid = grid;
+  o->model = opts->model;
+  o->influence = opts->influence;
+  o->rule = opts->partial_volume;
+  o->delta = opts->horizon;
+  o->h = grid->h;
+  o->V = grid->volume;
+  o->dim = grid->dim;
+  o->nnodes = grid->nnodes;
+  CUPID_TRY(pd_stencil_build(o->dim, o->h, o->delta, o->rule, o->influence, &o->st));
+  CUPID_TRY(pd_neighbors_build(grid, &o->st, &o->bptr, &o->bnbr, &o->bst));
+  CUPID_TRY(node_data(o, opts));
+  *op = o;
+  o = NULL;
+cleanup:
+  cupid_pd_operator_destroy(&o);
+  return st;
+}
+
+cupid_int cupid_pd_operator_num_bonds(const cupid_pd_operator op) { return op->bptr[op->nnodes]; }
+
+const double *cupid_pd_operator_weighted_volume(const cupid_pd_operator op) { return op->m; }
+
+cupid_status cupid_pd_operator_dilatation(const cupid_pd_operator op, const double *u,
+                                          double *theta) {
+  CUPID_CHECK(op && u && theta, CUPID_ERR_ARGUMENT, "dilatation needs operator, u and theta");
+  if (op->model == CUPID_PD_LPS)
+    pd_lps_dilatation(op, u, theta);
+  else
+    memset(theta, 0, (size_t)op->nnodes * sizeof *theta);
+  return CUPID_SUCCESS;
+}
+
+cupid_status cupid_pd_operator_apply(const cupid_pd_operator op, const double *u, double *f) {
+  CUPID_CHECK(op && u && f, CUPID_ERR_ARGUMENT, "apply needs operator, u and f");
+  if (op->model == CUPID_PD_BOND) {
+    pd_bond_apply(op, u, f);
+    return CUPID_SUCCESS;
+  }
+  double *theta = NULL;
+  CUPID_CALL(cupid_malloc((size_t)op->nnodes, sizeof *theta, "PD dilatations", &theta));
+  pd_lps_dilatation(op, u, theta);
+  pd_lps_apply(op, u, theta, f);
+  cupid_free(&theta);
+  return CUPID_SUCCESS;
+}
+
+cupid_status cupid_pd_operator_energy(const cupid_pd_operator op, const double *u, double *energy) {
+  CUPID_CHECK(op && u && energy, CUPID_ERR_ARGUMENT, "energy needs operator, u and output");
+  if (op->model == CUPID_PD_BOND) {
+    *energy = pd_bond_energy(op, u);
+    return CUPID_SUCCESS;
+  }
+  double *theta = NULL;
+  CUPID_CALL(cupid_malloc((size_t)op->nnodes, sizeof *theta, "PD dilatations", &theta));
+  pd_lps_dilatation(op, u, theta);
+  *energy = pd_lps_energy(op, u, theta);
+  cupid_free(&theta);
+  return CUPID_SUCCESS;
+}
+
+cupid_status cupid_pd_operator_stress(const cupid_pd_operator op, const double *u, double *sigma) {
+  CUPID_CHECK(op && u && sigma, CUPID_ERR_ARGUMENT, "stress needs operator, u and sigma");
+  if (op->model == CUPID_PD_BOND) {
+    pd_bond_stress(op, u, sigma);
+    return CUPID_SUCCESS;
+  }
+  double *theta = NULL;
+  CUPID_CALL(cupid_malloc((size_t)op->nnodes, sizeof *theta, "PD dilatations", &theta));
+  pd_lps_dilatation(op, u, theta);
+  pd_lps_stress(op, u, theta, sigma);
+  cupid_free(&theta);
+  return CUPID_SUCCESS;
+}
