@@ -55,8 +55,19 @@ static cupid_status constraint_on_nodes(cupid_job *job, const cupid_constraint *
   return CUPID_SUCCESS;
 }
 
+/* A 1D grid is a bar along y: its x and z components carry no stiffness, so they are
+ * eliminated (held at zero) rather than left singular. */
+static void eliminate_transverse_1d(cupid_job *job) {
+  if (cupid_pd_grid_dimension(job->grid) != 1) return;
+  for (cupid_int i = 0; i < job->n_pd; i++) {
+    job->bc->fixed[3 * i] = job->bc->fixed[3 * i + 2] = 1;
+    job->bc->value[3 * i] = job->bc->value[3 * i + 2] = 0.0;
+  }
+}
+
 cupid_status cupid_app_pd_constraints(cupid_job *job) {
   const cupid_model_t *m = job->model;
+  eliminate_transverse_1d(job);
   for (int k = 0; k < m->n_constraints; k++) {
     const cupid_constraint *c = &m->constraints[k];
     cupid_int count;
