@@ -2,8 +2,8 @@
 # The command line: options, exit codes and error messages (model-format.md, "Command line"),
 # and the promise that a failed run never leaves a file behind.
 set -u
-CUPID=${CUPID:-build/cupid}
-SRC=${CUPID_SOURCE_DIR:-.}
+CUPID=$(realpath "${CUPID:-build/cupid}")
+SRC=$(realpath "${CUPID_SOURCE_DIR:-.}")
 M=$SRC/tests/models/run_errors
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
