@@ -37,6 +37,8 @@ typedef struct {
   /* Peridynamics */
   cupid_pd_grid grid;
   cupid_pd_operator op;
+  cupid_pd_operator_options pd_options; /**< kept for size estimates */
+  cupid_pd_material *pd_materials;      /**< owned; pd_options.materials points here */
   cupid_int n_pd;          /**< PD nodes */
   cupid_int n_bonds;
 

@@ -1,9 +1,9 @@
 /* Size, memory and time estimates: printed by `cupid check`, and the guard that makes
  * `cupid run` refuse a model that cannot fit before it allocates the big arrays.
  *
- * Stored matrix: one 3x3 block (72 B of values + 8 B of column index) per coupled node pair.
- * The bond-based model couples the nodes of a bond (bonds + diagonal); LPS couples nodes up
- * to 2 delta apart, bounded here by the 2-delta lattice stencil (exact in the interior).
+ * Stored matrix: one 3x3 block (72 B of values + 8 B of column index) per coupled node pair,
+ * counted by cupid_pd_operator_estimate (exact for bond-based; for LPS, which couples nodes up
+ * to 2 delta apart, the grid nodes within two stencil hops: an upper bound).
  * Direct factor: nested dissection on a 3D grid gives nnz(L) ~ c n^(4/3) and flops ~ n^2;
  * c and the time scale are fitted to the CHOLMOD measurements on this class of machine in
  * shared/reference/dependencies.md (bond-based, delta = 3h: 20^3 -> 5.3e7 nnz(L), 3.7 s;
@@ -21,26 +21,13 @@ typedef struct {
   double total_bytes;
 } cupid_estimate;
 
-static double stencil_count(double radius_cells) {
-  double count = 0;
-  int r = (int)ceil(radius_cells);
-  for (int i = -r; i <= r; i++)
-    for (int j = -r; j <= r; j++)
-      for (int k = -r; k <= r; k++)
-        if (i * i + j * j + k * k <= radius_cells * radius_cells) count += 1;
-  return count;
-}
-
-static void estimate(const cupid_job *job, cupid_estimate *e) {
+static cupid_status estimate(const cupid_job *job, cupid_estimate *e) {
   const cupid_model_t *m = job->model;
   double n = (double)job->n_pd, ndof = 3.0 * n;
   double ratio = m->pd.horizon / m->pd.spacing;
-  if (m->pd.model == CUPID_PD_LPS) {
-    double s2 = m->pd.dimension == 1 ? 2 * floor(2 * ratio + 0.5) + 1 : stencil_count(2 * ratio + 0.5);
-    e->matrix_blocks = n * (s2 < n ? s2 : n);
-  } else {
-    e->matrix_blocks = (double)job->n_bonds + n;
-  }
+  cupid_pd_estimate pe;
+  CUPID_CALL(cupid_pd_operator_estimate(job->grid, &job->pd_options, &pe));
+  e->matrix_blocks = (double)pe.blocks;
   e->matrix_bytes = e->matrix_blocks * 80.0 + 8.0 * n;
   double fill = m->pd.model == CUPID_PD_LPS ? 3.0 : 1.0;
   if (m->pd.dimension == 1) {
@@ -56,6 +43,7 @@ static void estimate(const cupid_job *job, cupid_estimate *e) {
   /* K, its reduced one-triangle copy for CHOLMOD (about half of K at 12 B/entry), factor. */
   e->total_bytes = e->matrix_bytes + 0.5 * 9.0 * e->matrix_blocks * 12.0 + e->factor_bytes +
                    10.0 * ndof * 8.0;
+  return CUPID_SUCCESS;
 }
 
 static double physical_memory(void) {
@@ -65,7 +53,7 @@ static double physical_memory(void) {
 
 cupid_status cupid_app_estimate(const cupid_job *job, int print) {
   cupid_estimate e;
-  estimate(job, &e);
+  CUPID_CALL(estimate(job, &e));
   double limit = job->opts->max_memory_gb > 0 ? job->opts->max_memory_gb * 1e9 : 0.9 * physical_memory();
   if (print) {
     const cupid_model_t *m = job->model;

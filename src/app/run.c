@@ -69,33 +69,28 @@ static cupid_status check_isotropic(const cupid_model_t *m) {
 
 static cupid_status build_pd(cupid_job *job) {
   const cupid_model_t *m = job->model;
-  cupid_pd_material *mats = NULL;
-  cupid_status st = CUPID_SUCCESS;
   double t0 = cupid_wtime();
 
-  CUPID_TRY(cupid_pd_grid_create_from_model(m, &job->grid));
+  CUPID_CALL(cupid_pd_grid_create_from_model(m, &job->grid));
   job->n_pd = cupid_pd_grid_num_nodes(job->grid);
-  CUPID_TRY(cupid_calloc((size_t)m->n_materials, sizeof *mats, "PD materials", &mats));
-  CUPID_TRY(check_isotropic(m));
-  for (int i = 0; i < m->n_materials; i++) {
-    mats[i].E = m->materials[i].E;
-    mats[i].nu = m->materials[i].nu;
-  }
-  cupid_pd_operator_options po = {.horizon = m->pd.horizon,
-                                  .model = m->pd.model,
-                                  .influence = m->pd.influence,
-                                  .partial_volume = m->pd.partial_volume,
-                                  .materials = mats,
-                                  .n_materials = m->n_materials};
-  CUPID_TRY(cupid_pd_operator_create(job->grid, &po, &job->op));
+  CUPID_CALL(check_isotropic(m));
+  CUPID_CALL(cupid_calloc((size_t)m->n_materials, sizeof *job->pd_materials, "PD materials",
+                          &job->pd_materials));
+  for (int i = 0; i < m->n_materials; i++)
+    job->pd_materials[i] = (cupid_pd_material){.E = m->materials[i].E, .nu = m->materials[i].nu};
+  job->pd_options = (cupid_pd_operator_options){.horizon = m->pd.horizon,
+                                                .model = m->pd.model,
+                                                .influence = m->pd.influence,
+                                                .partial_volume = m->pd.partial_volume,
+                                                .materials = job->pd_materials,
+                                                .n_materials = m->n_materials};
+  CUPID_CALL(cupid_pd_operator_create(job->grid, &job->pd_options, &job->op));
   job->n_bonds = cupid_pd_operator_num_bonds(job->op);
   job->ndof = 3 * job->n_pd;
   cupid_job_phase_end(job, CUPID_PHASE_GRID, t0);
   cupid_job_progress(job, "grid: %lld PD nodes, %lld bonds", (long long)job->n_pd,
                      (long long)job->n_bonds);
-cleanup:
-  cupid_free(&mats);
-  return st;
+  return CUPID_SUCCESS;
 }
 
 static cupid_status allocate_fields(cupid_job *job) {
@@ -191,6 +186,7 @@ static void job_destroy(cupid_job *job) {
   cupid_free(&job->f_ext);
   cupid_free(&job->f_int);
   cupid_free(&job->pd_stress);
+  cupid_free(&job->pd_materials);
 }
 
 cupid_status cupid_run_model(const cupid_model_t *model, const cupid_run_options *opts) {
