@@ -83,13 +83,20 @@ static cupid_status write_vtu(cupid_job *job) {
   cupid_status st = CUPID_SUCCESS;
   cupid_int n = job->n_pd, *conn = NULL, *offs = NULL;
   unsigned char *types = NULL;
-  double *mat = NULL, *fixed = NULL;
+  double *mat = NULL, *fixed = NULL, *stress = NULL;
   char path[4096];
   CUPID_TRY(cupid_malloc((size_t)n, sizeof *conn, "VTU connectivity", &conn));
   CUPID_TRY(cupid_malloc((size_t)n, sizeof *offs, "VTU offsets", &offs));
   CUPID_TRY(cupid_malloc((size_t)n, sizeof *types, "VTU cell types", &types));
   CUPID_TRY(cupid_malloc((size_t)n, sizeof *mat, "VTU materials", &mat));
   CUPID_TRY(cupid_malloc((size_t)n, sizeof *fixed, "VTU constraint flags", &fixed));
+  if (job->pd_stress) {
+    /* VTK's symmetric-tensor order is xx yy zz xy yz xz; cupid's is xx yy zz yz xz xy. */
+    static const int vtk_order[6] = {0, 1, 2, 5, 3, 4};
+    CUPID_TRY(cupid_malloc((size_t)(6 * n), sizeof *stress, "VTU stresses", &stress));
+    for (cupid_int i = 0; i < n; i++)
+      for (int c = 0; c < 6; c++) stress[6 * i + c] = job->pd_stress[6 * i + vtk_order[c]];
+  }
   const int *m = cupid_pd_grid_materials(job->grid);
   for (cupid_int i = 0; i < n; i++) {
     conn[i] = i;
@@ -104,7 +111,7 @@ static cupid_status write_vtu(cupid_job *job) {
                               {"force", 3, job->f_int},
                               {"material", 1, mat},
                               {"constrained_components", 1, fixed},
-                              {"stress", 6, job->pd_stress}};
+                              {"stress", 6, stress}};
   cupid_vtu_mesh mesh = {.n_points = n,
                          .points = cupid_pd_grid_coords(job->grid),
                          .n_cells = n,
@@ -126,6 +133,7 @@ cleanup:
   cupid_free(&types);
   cupid_free(&mat);
   cupid_free(&fixed);
+  cupid_free(&stress);
   return st;
 }
 
