@@ -275,8 +275,9 @@ static cupid_status check_mesh(beam_t *b, const cupid_model_t *model, const cupi
         }
     }
   }
-  /* hanging nodes: a node strictly inside an edge of an element it does not belong to */
-  for (cupid_int e = 0; e < b->n_selem; e++) {
+  /* hanging nodes: a node strictly inside an edge of an element it does not belong to (LE
+   * only: TE cells are just the integration domain, they need not match) */
+  for (cupid_int e = 0; e < b->n_selem && b->expansion == CUPID_EXPANSION_LE; e++) {
     const cupid_int *c = b->sconn + e * q->npe;
     int corner[4] = {0, 0, 0, 0};
     for (int a = 0; a < q->npe; a++) {
