@@ -18,36 +18,45 @@ static void node_elements(const beam_t *b, cupid_int i, cupid_int *lo, cupid_int
   *hi = e < b->n_belem ? e : b->n_belem - 1;
 }
 
-/* Unsorted columns of block row r; marker[] holds the last row that marked each column. */
-static cupid_int row_columns(const beam_t *b, const unsigned char *be_any, cupid_int r,
-                             cupid_int *marker, cupid_int *out) {
+/* Sorted columns of block row r = (beam node i, function tau): beam neighbours j in increasing
+ * order, and for each j the section neighbours of tau (sorted adjacency, LE) that share an
+ * active section element with tau in a beam element holding i and j. mark[] (size M) holds
+ * the stamp of the last (row, j) that marked a function. */
+static cupid_int row_columns(const beam_t *b, const unsigned char *be_any, const cupid_int *adj_ptr,
+                             const cupid_int *adj, cupid_int r, cupid_int *mark, cupid_int *stamp,
+                             cupid_int *out) {
   cupid_int M = b->M, i = r / M, n = 0;
-  int tau = (int)(r % M);
+  int tau = (int)(r % M), p = b->p;
   cupid_int lo, hi;
   node_elements(b, i, &lo, &hi);
-  marker[r] = r;
-  out[n++] = r; /* the diagonal block is always there */
-  for (cupid_int e = lo; e <= hi; e++) {
-    cupid_int j0 = e * (b->p - 1);
-    if (b->expansion == CUPID_EXPANSION_TE) {
-      if (!be_any[e]) continue;
-      for (int a = 0; a < b->p; a++)
-        for (cupid_int s = 0; s < M; s++) {
-          cupid_int c = (j0 + a) * M + s;
-          if (marker[c] != r) marker[c] = r, out[n++] = c;
-        }
-    } else {
+  for (cupid_int j = lo * (p - 1); j <= hi * (p - 1) + p - 1; j++) {
+    cupid_int st = ++*stamp;
+    int any = 0;
+    if (j == i) mark[tau] = st, any = 1; /* the diagonal block is always there */
+    for (cupid_int e = lo; e <= hi; e++) {
+      if (j < e * (p - 1) || j > e * (p - 1) + p - 1) continue;
+      if (b->expansion == CUPID_EXPANSION_TE) {
+        any |= be_any[e];
+        continue;
+      }
       for (cupid_int k = b->n2e_ptr[tau]; k < b->n2e_ptr[tau + 1]; k++) {
         cupid_int se = b->n2e[k];
         if (!b->active[e * b->n_selem + se]) continue;
         const cupid_int *conn = b->sconn + se * b->quad.npe;
-        for (int a = 0; a < b->p; a++)
-          for (int q = 0; q < b->quad.npe; q++) {
-            cupid_int c = (j0 + a) * M + conn[q];
-            if (marker[c] != r) marker[c] = r, out[n++] = c;
-          }
+        for (int q = 0; q < b->quad.npe; q++) mark[conn[q]] = st;
+        any = 1;
       }
     }
+    if (!any) continue;
+    if (b->expansion == CUPID_EXPANSION_TE) {
+      if (j != i || be_any[lo] || be_any[hi])
+        for (cupid_int s2 = 0; s2 < M; s2++) out[n++] = j * M + s2;
+      else
+        out[n++] = r;
+      continue;
+    }
+    for (cupid_int k = adj_ptr[tau]; k < adj_ptr[tau + 1]; k++)
+      if (mark[adj[k]] == st) out[n++] = j * M + adj[k];
   }
   return n;
 }
@@ -57,9 +66,46 @@ static int cmp_int(const void *a, const void *b) {
   return (x > y) - (x < y);
 }
 
+/* LE: sorted section-node adjacency (nodes sharing an element, the node itself included). */
+static cupid_status section_adjacency(const beam_t *b, cupid_int **adj_ptr, cupid_int **adj) {
+  cupid_status st = CUPID_SUCCESS;
+  cupid_int nn = b->n_snodes, *mark = NULL, *ptr = NULL, *a = NULL;
+  int npe = b->quad.npe;
+  CUPID_TRY(cupid_calloc((size_t)nn + 1, sizeof *ptr, "section adjacency", &ptr));
+  CUPID_TRY(cupid_malloc((size_t)nn, sizeof *mark, "section adjacency marks", &mark));
+  for (cupid_int v = 0; v < nn; v++) mark[v] = -1;
+  for (int pass = 0; pass < 2; pass++) {
+    for (cupid_int v = 0; v < nn; v++) {
+      cupid_int c = 0;
+      for (cupid_int k = b->n2e_ptr[v]; k < b->n2e_ptr[v + 1]; k++)
+        for (int q = 0; q < npe; q++) {
+          cupid_int w = b->sconn[b->n2e[k] * npe + q];
+          if (mark[w] == v + pass * nn) continue;
+          mark[w] = v + pass * nn;
+          if (pass) a[ptr[v] + c] = w;
+          c++;
+        }
+      if (pass == 0) ptr[v + 1] = c;
+      else qsort(a + ptr[v], (size_t)c, sizeof *a, cmp_int);
+    }
+    if (pass == 0) {
+      for (cupid_int v = 0; v < nn; v++) ptr[v + 1] += ptr[v];
+      CUPID_TRY(cupid_malloc((size_t)ptr[nn], sizeof *a, "section adjacency", &a));
+    }
+  }
+  *adj_ptr = ptr;
+  *adj = a;
+  ptr = a = NULL;
+cleanup:
+  cupid_free(&mark);
+  cupid_free(&ptr);
+  cupid_free(&a);
+  return st;
+}
+
 cupid_status cupid_cuf_pattern(const cupid_cuf_beam b, cupid_int **rowptr_out, cupid_int **col_out) {
   cupid_status st = CUPID_SUCCESS;
-  cupid_int n = b->n_bnodes * b->M, *rowptr = NULL, *col = NULL;
+  cupid_int n = b->n_bnodes * b->M, *rowptr = NULL, *col = NULL, *adj_ptr = NULL, *adj = NULL;
   unsigned char *be_any = NULL;
   int fail = 0;
   /* widest possible row: 2 beam elements x p nodes x (M or the LE neighbourhood) */
@@ -71,6 +117,7 @@ cupid_status cupid_cuf_pattern(const cupid_cuf_beam b, cupid_int **rowptr_out, c
     if (deg * b->quad.npe < b->M) width = 2 * b->p * deg * b->quad.npe;
   }
   width += 1;
+  if (b->expansion == CUPID_EXPANSION_LE) CUPID_TRY(section_adjacency(b, &adj_ptr, &adj));
   CUPID_TRY(cupid_calloc((size_t)n + 1, sizeof *rowptr, "CUF pattern rows", &rowptr));
   CUPID_TRY(cupid_calloc((size_t)b->n_belem, 1, "CUF element flags", &be_any));
   for (cupid_int e = 0; e < b->n_belem; e++)
@@ -78,21 +125,17 @@ cupid_status cupid_cuf_pattern(const cupid_cuf_beam b, cupid_int **rowptr_out, c
   for (int pass = 0; pass < 2; pass++) {
 #pragma omp parallel reduction(| : fail)
     {
-      cupid_int *marker = NULL, *buf = NULL;
-      if (cupid_malloc((size_t)n, sizeof *marker, "CUF pattern marker", &marker) != CUPID_SUCCESS ||
+      cupid_int *marker = NULL, *buf = NULL, stamp = 0;
+      if (cupid_malloc((size_t)b->M, sizeof *marker, "CUF pattern marker", &marker) != CUPID_SUCCESS ||
           cupid_malloc((size_t)width, sizeof *buf, "CUF pattern row", &buf) != CUPID_SUCCESS) {
         fail = 1;
       } else {
-        for (cupid_int k = 0; k < n; k++) marker[k] = -1;
+        for (cupid_int k = 0; k < b->M; k++) marker[k] = -1;
 #pragma omp for schedule(dynamic, 64)
         for (cupid_int r = 0; r < n; r++) {
-          cupid_int c = row_columns(b, be_any, r, marker, buf);
-          if (pass == 0) {
-            rowptr[r + 1] = c;
-          } else {
-            qsort(buf, (size_t)c, sizeof *buf, cmp_int);
-            memcpy(col + rowptr[r], buf, sizeof *buf * (size_t)c);
-          }
+          cupid_int *dst = pass == 0 ? buf : col + rowptr[r];
+          cupid_int c = row_columns(b, be_any, adj_ptr, adj, r, marker, &stamp, dst);
+          if (pass == 0) rowptr[r + 1] = c;
         }
       }
       cupid_free(&marker);
@@ -111,37 +154,54 @@ cleanup:
   cupid_free(&rowptr);
   cupid_free(&col);
   cupid_free(&be_any);
+  cupid_free(&adj_ptr);
+  cupid_free(&adj);
   return st;
 }
 
-static double *find_block(const cupid_csr_t *K, cupid_int row, cupid_int col) {
-  cupid_int lo = K->rowptr[row], hi = K->rowptr[row + 1] - 1;
-  while (lo <= hi) {
+/* First position in block row `row` of K with column >= col (K->rowptr[row + 1] if none). */
+static cupid_int lower_bound(const cupid_csr_t *K, cupid_int row, cupid_int col) {
+  cupid_int lo = K->rowptr[row], hi = K->rowptr[row + 1];
+  while (lo < hi) {
     cupid_int mid = (lo + hi) / 2;
-    if (K->col[mid] == col) return K->val + 9 * mid;
     if (K->col[mid] < col) lo = mid + 1;
-    else hi = mid - 1;
+    else hi = mid;
   }
-  return NULL;
+  return lo;
 }
 
-/* Add a dense pair matrix (layout of cuf_pair_matrix) into K at block offset boff. */
+/* Add a dense pair matrix (layout of cuf_pair_matrix) into K at block offset boff. The local
+ * functions are visited in increasing global index (order[]), so each block row is walked
+ * forward once per beam node instead of one binary search per block. */
 static int scatter(const beam_t *b, cupid_csr K, cupid_int boff, cupid_int be, cupid_int se,
-                   int m, const double *Ke) {
+                   int m, const double *Ke, int *order) {
   int p = b->p, n = 3 * m * p;
   cupid_int j0 = be * (p - 1), M = b->M;
+  for (int a = 0; a < m; a++) order[a] = a;
+  if (se >= 0) /* insertion sort of the (few) local LE nodes by global index */
+    for (int a = 1; a < m; a++)
+      for (int c = a; c > 0 && cuf_tau(b, se, order[c - 1]) > cuf_tau(b, se, order[c]); c--) {
+        int tmp = order[c];
+        order[c] = order[c - 1];
+        order[c - 1] = tmp;
+      }
   for (int s = 0; s < m; s++)
     for (int j = 0; j < p; j++) {
-      cupid_int row = boff + (j0 + j) * M + (se >= 0 ? cuf_tau(b, se, s) : s);
-      for (int t = 0; t < m; t++)
-        for (int i = 0; i < p; i++) {
-          cupid_int col = boff + (j0 + i) * M + (se >= 0 ? cuf_tau(b, se, t) : t);
-          double *blk = find_block(K, row, col);
-          if (!blk) return 1;
+      cupid_int row = boff + (j0 + j) * M + cuf_tau(b, se, s), end = K->rowptr[row + 1];
+      for (int i = 0; i < p; i++) {
+        cupid_int base = boff + (j0 + i) * M;
+        cupid_int pos = lower_bound(K, row, base + cuf_tau(b, se, order[0]));
+        for (int q = 0; q < m; q++) {
+          int t = order[q];
+          cupid_int col = base + cuf_tau(b, se, t);
+          while (pos < end && K->col[pos] < col) pos++;
+          if (pos == end || K->col[pos] != col) return 1;
+          double *blk = K->val + 9 * pos;
           const double *src = Ke + (size_t)((s * p + j) * 3) * n + (t * p + i) * 3;
           for (int k = 0; k < 3; k++)
             for (int h = 0; h < 3; h++) blk[3 * k + h] += src[(size_t)k * n + h];
         }
+      }
     }
   return 0;
 }
@@ -149,7 +209,7 @@ static int scatter(const beam_t *b, cupid_csr K, cupid_int boff, cupid_int be, c
 /* One beam element: every active section element (LE) or the active cells of each
  * material summed into one group (TE), times the axis integrals. */
 static int add_beam_element(const beam_t *b, cupid_csr K, cupid_int boff, cupid_int be, double *I,
-                            double *E, double *Ke, unsigned char *used) {
+                            double *E, double *Ke, unsigned char *used, int *order) {
   cuf_axis_integrals(b, be, I);
   int m = cuf_local_m(b);
   size_t per = 9 * (size_t)m * m;
@@ -158,7 +218,7 @@ static int add_beam_element(const beam_t *b, cupid_csr K, cupid_int boff, cupid_
       if (!b->active[be * b->n_selem + se]) continue;
       cuf_section_integrals(b, se, b->sec_ng, E);
       cuf_pair_matrix(b, m, E, b->smat[se], I, Ke);
-      if (scatter(b, K, boff, be, se, m, Ke)) return 1;
+      if (scatter(b, K, boff, be, se, m, Ke, order)) return 1;
     }
     return 0;
   }
@@ -175,7 +235,7 @@ static int add_beam_element(const beam_t *b, cupid_csr K, cupid_int boff, cupid_
   for (int mat = 0; mat < b->n_mat; mat++) {
     if (!used[mat]) continue;
     cuf_pair_matrix(b, m, E + per * mat, mat, I, Ke);
-    if (scatter(b, K, boff, be, -1, m, Ke)) return 1;
+    if (scatter(b, K, boff, be, -1, m, Ke, order)) return 1;
   }
   return 0;
 }
@@ -191,19 +251,22 @@ static cupid_status add_impl(const beam_t *b, cupid_csr K, cupid_int boff) {
     {
       double *I = NULL, *E = NULL, *Ke = NULL;
       unsigned char *used = NULL;
+      int *order = NULL;
       if (cupid_malloc(nI, sizeof *I, "axis integrals", &I) || cupid_malloc(nE, sizeof *E, "section integrals", &E) ||
           cupid_malloc(nK, sizeof *Ke, "element matrix", &Ke) ||
-          cupid_malloc((size_t)b->n_mat, 1, "material flags", &used)) {
+          cupid_malloc((size_t)b->n_mat, 1, "material flags", &used) ||
+          cupid_malloc((size_t)m, sizeof *order, "local order", &order)) {
         nomem = 1;
       } else {
 #pragma omp for schedule(dynamic)
         for (cupid_int k = 0; k < count; k++)
-          fail |= add_beam_element(b, K, boff, 2 * k + colour, I, E, Ke, used);
+          fail |= add_beam_element(b, K, boff, 2 * k + colour, I, E, Ke, used, order);
       }
       cupid_free(&I);
       cupid_free(&E);
       cupid_free(&Ke);
       cupid_free(&used);
+      cupid_free(&order);
     }
     CUPID_CHECK(!nomem, CUPID_ERR_MEMORY, "out of memory in CUF assembly");
     CUPID_CHECK(!fail, CUPID_ERR_ARGUMENT, "the matrix pattern lacks blocks of the CUF beam");
