@@ -201,7 +201,8 @@ static cupid_status collect(const cupid_beam *def, const cupid_model_t *model, i
   c->nc = nc;
   c->ne = ne;
   /* explicit nodes and elements first, so their numbering survives for simple meshes */
-  memcpy(c->xz, def->section_nodes, sizeof *c->xz * 2 * (size_t)def->n_section_nodes);
+  if (def->n_section_nodes > 0)
+    memcpy(c->xz, def->section_nodes, sizeof *c->xz * 2 * (size_t)def->n_section_nodes);
   cupid_int e = 0, nxt = def->n_section_nodes;
   for (int k = 0; k < def->n_section_elements; k++, e++) {
     for (int a = 0; a < npe; a++) {
