@@ -25,14 +25,16 @@
  *   Explicit section elements (beam.section_elements) use the same order.
  * - Components: each cell between consecutive breakpoints is one section element (LE) or one
  *   integration cell (TE). Coincident nodes of different components are merged (tolerance
- *   1e-9 of the section size); a node of one component lying inside an edge of another
- *   (a non-matching interface) and overlapping components are model errors.
+ *   1e-9 of the section size); for LE a node of one component lying inside an edge of another
+ *   (a non-matching interface) is a model error, and overlapping components always are.
  * - Beam elements: Lagrange B2/B3/B4 with equally spaced nodes; axis Gauss rule 2/3/4 points.
  * - Integration (beam.integration): 0 full (default), 1 selective reduced integration of the
  *   transverse-shear strains gamma_yz, gamma_xy (rule with one point fewer), 2 MITC (those two
  *   strains interpolated from the tying points {0} / {+-1/sqrt3} / {0, +-sqrt(3/5)}, cuf.md 4).
  *   Full is the default because it reproduces the published B4 results (cuf.md 1.4) and
- *   B4 locks only weakly; use MITC with B2/B3 (see bench/README_cuf.md for the study).
+ *   B4 locks only weakly; use MITC with B2/B3 (see bench/README_cuf.md for the study). With
+ *   these tying points MITC equals selective reduced integration unless C couples the shear
+ *   rows to the others.
  * - Materials: isotropic or orthotropic with material axes = x y z; nu_ij is the Poisson ratio
  *   for a stress along i (S_ij = -nu_ij / E_i).
  * - Stresses are returned in the order xx yy zz yz xz xy, computed as C eps(x,y,z) from the
