@@ -123,7 +123,7 @@ cupid_status cupid_cuf_pattern(const cupid_cuf_beam b, cupid_int **rowptr_out, c
   for (cupid_int e = 0; e < b->n_belem; e++)
     for (cupid_int s = 0; s < b->n_selem && !be_any[e]; s++) be_any[e] = b->active[e * b->n_selem + s];
   for (int pass = 0; pass < 2; pass++) {
-#pragma omp parallel reduction(| : fail)
+#pragma omp parallel reduction(| : fail) if (3 * n > CUF_PARALLEL_DOFS)
     {
       cupid_int *marker = NULL, *buf = NULL, stamp = 0;
       if (cupid_malloc((size_t)b->M, sizeof *marker, "CUF pattern marker", &marker) != CUPID_SUCCESS ||
@@ -247,7 +247,7 @@ static cupid_status add_impl(const beam_t *b, cupid_csr K, cupid_int boff) {
   /* two colours: beam elements of one parity share no node, so their rows are disjoint */
   for (int colour = 0; colour < 2; colour++) {
     cupid_int count = (b->n_belem - colour + 1) / 2;
-#pragma omp parallel reduction(| : fail, nomem)
+#pragma omp parallel reduction(| : fail, nomem) if (3 * b->n_bnodes * b->M > CUF_PARALLEL_DOFS)
     {
       double *I = NULL, *E = NULL, *Ke = NULL;
       unsigned char *used = NULL;

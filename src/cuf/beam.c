@@ -56,7 +56,7 @@ static cupid_status te_setup(beam_t *b) {
   b->sec_ng = (N + 1 > b->quad.n ? N + 1 : b->quad.n) + (any_curved ? 2 : 0);
   size_t per = 9 * (size_t)b->M * b->M;
   CUPID_CALL(cupid_malloc(per * (size_t)b->n_selem, sizeof *b->te_E, "TE section integrals", &b->te_E));
-#pragma omp parallel for schedule(dynamic)
+#pragma omp parallel for schedule(dynamic) if (b->n_selem * per > 1000000)
   for (cupid_int e = 0; e < b->n_selem; e++) cuf_section_integrals(b, e, b->sec_ng, b->te_E + per * e);
   return CUPID_SUCCESS;
 }

@@ -7,6 +7,9 @@
 #define CUF_MAX_N 4  /* nodes per direction of a section element (L16) */
 #define CUF_MAX_P 4  /* nodes per beam element (B4) */
 #define CUF_MAX_GAUSS 32
+/* Below this many scalar DOFs the loops run serially: a parallel region costs more than the
+ * work (and much more on oversubscribed cores). */
+#define CUF_PARALLEL_DOFS 30000
 #ifndef M_PI
 #define M_PI 3.14159265358979323846
 #endif

@@ -185,7 +185,7 @@ cupid_status cupid_cuf_vtu_build(const cupid_cuf_beam b, const double *u, int su
   CUPID_TRY(cupid_malloc((size_t)v->n_cells, sizeof *v->offsets, "VTU offsets", &v->offsets));
   CUPID_TRY(cupid_malloc((size_t)v->n_cells, 1, "VTU types", &v->types));
   int m = cuf_local_m(b), nomem = 0;
-#pragma omp parallel reduction(| : nomem)
+#pragma omp parallel reduction(| : nomem) if (v->n_points > 20000)
   {
     double *F = NULL;
     if (cupid_malloc(3 * (size_t)m, sizeof *F, "expansion values", &F)) {
