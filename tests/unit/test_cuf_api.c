@@ -295,10 +295,62 @@ static void test_vtu(void **state) {
   }
 }
 
+/* The model path (cupid_cuf_load_vector) gives the same forces as the direct calls for a
+ * traction patch, a point load and a body force (constants; 1e-14 relative). */
+static void test_model_loads(void **state) {
+  (void)state;
+  tb_beam t;
+  c_section(&t, 1, 2);
+  t.mat[0].density = 7.8e-9;
+  t.mat[0].has_density = 1;
+  cupid_model_t model = {0};
+  model.materials = t.mat;
+  model.n_materials = 1;
+  model.has_beam = 1;
+  model.beam = t.def;
+  cupid_load loads[3] = {{0}};
+  loads[0].kind = CUPID_LOAD_TRACTION;
+  loads[0].plane_y = 1000;
+  loads[0].patch = (cupid_box){{40, 0, 45}, {50, 0, 50}, {1, 0, 1}};
+  loads[0].value[2] = (cupid_value){CUPID_VALUE_CONSTANT, -20.0, NULL};
+  loads[1].kind = CUPID_LOAD_POINT;
+  loads[1].at[0] = 2.5, loads[1].at[1] = 700, loads[1].at[2] = 10;
+  loads[1].value[0] = (cupid_value){CUPID_VALUE_CONSTANT, 100.0, NULL};
+  loads[2].kind = CUPID_LOAD_BODY;
+  loads[2].box = (cupid_box){{0, 100, 0}, {0, 300, 0}, {0, 1, 0}};
+  loads[2].value[1] = (cupid_value){CUPID_VALUE_CONSTANT, -9.81e3 * 7.8e-9, NULL};
+  model.loads = loads;
+  model.n_loads = 3;
+  cupid_cuf_beam b = NULL;
+  CUPID_ASSERT_OK(cupid_cuf_beam_create(&model, &b));
+  cupid_int n = cupid_cuf_num_dofs(b);
+  double *f1 = NULL, *f2 = NULL, vol;
+  CUPID_ASSERT_OK(cupid_calloc((size_t)n, sizeof *f1, "f1", &f1));
+  CUPID_ASSERT_OK(cupid_calloc((size_t)n, sizeof *f2, "f2", &f2));
+  CUPID_ASSERT_OK(cupid_cuf_load_vector(b, &model, f1));
+  double t0[3] = {0, 0, -20}, P[3] = {100, 0, 0}, g[3] = {0, -9.81e3 * 7.8e-9, 0};
+  CUPID_ASSERT_OK(cupid_cuf_traction_add(b, 1000, &loads[0].patch, tb_const, t0, f2, NULL));
+  CUPID_ASSERT_OK(cupid_cuf_point_load_add(b, loads[1].at, P, f2));
+  CUPID_ASSERT_OK(cupid_cuf_body_force_add(b, &loads[2].box, tb_const, g, f2, &vol));
+  ASSERT_NEAR(vol, 200.0 * 950.0, 1e-9 * 1.9e5); /* section area 950 (5 x 100 + 2 x 45 x 5) */
+  double fmax = 0;
+  for (cupid_int q = 0; q < n; q++) fmax = fmax > fabs(f2[q]) ? fmax : fabs(f2[q]);
+  for (cupid_int q = 0; q < n; q++) ASSERT_NEAR(f1[q], f2[q], 1e-14 * fmax);
+  /* a point load outside the beam is reported against the load's mark */
+  strcpy(loads[1].mark.key, "loads[1]");
+  loads[1].at[0] = 30;
+  assert_int_equal(cupid_cuf_load_add(b, &model, &loads[1], f1), CUPID_ERR_MODEL);
+  assert_non_null(strstr(cupid_error_message(), "loads[1]"));
+  cupid_free(&f1);
+  cupid_free(&f2);
+  cupid_cuf_beam_destroy(&b);
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_traction_patches), cmocka_unit_test(test_point_load),
       cmocka_unit_test(test_offset_and_mask),  cmocka_unit_test(test_orthotropic_tension),
-      cmocka_unit_test(test_prescribe_projection), cmocka_unit_test(test_vtu)};
+      cmocka_unit_test(test_prescribe_projection), cmocka_unit_test(test_vtu),
+      cmocka_unit_test(test_model_loads)};
   return cmocka_run_group_tests(tests, NULL, NULL);
 }
