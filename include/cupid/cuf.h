@@ -38,7 +38,8 @@
  * - Materials: isotropic or orthotropic with material axes = x y z; nu_ij is the Poisson ratio
  *   for a stress along i (S_ij = -nu_ij / E_i).
  * - Stresses are returned in the order xx yy zz yz xz xy, computed as C eps(x,y,z) from the
- *   3D strain of the expansion (for reduced/MITC the untied strain is used).
+ *   3D strain of the expansion (for reduced/MITC the untied strain is used). The VTU array
+ *   uses VTK's symmetric-tensor order xx yy zz xy yz xz instead, so ParaView names them right.
  *
  * Coupling hooks: a mask per (beam element, section element) pair marks parts of the beam as
  * inactive (removed: no stiffness, no loads, not found by point queries); FE nodes that touch
@@ -220,7 +221,7 @@ typedef struct {
   cupid_int n_points;
   double *points;        /**< 3 per point */
   double *displacement;  /**< 3 per point */
-  double *stress;        /**< 6 per point: xx yy zz yz xz xy */
+  double *stress;        /**< 6 per point in VTK's tensor order: xx yy zz xy yz xz */
   cupid_int n_cells;
   cupid_int *connectivity, *offsets;
   unsigned char *types;

@@ -278,14 +278,16 @@ static void test_vtu(void **state) {
       assert_int_equal(v->types[c], CUPID_VTK_HEXAHEDRON);
     }
     /* the field is linear (in every space): point data equal to it (1e-12) and the stress of
-     * its constant strain gamma_xy = 2e-3, gamma_xz = 1e-3 - 3e-3, eps_xx = 0 */
+     * its constant strain gamma_xy = 2e-3, gamma_yz = -1e-3, gamma_xz = 1e-3 - 3e-3, eps_xx = 0 */
     double G = 200000.0 / 2.4;
     for (cupid_int q = 0; q < v->n_points; q++) {
       double ex[3];
       linear_field(NULL, v->points + 3 * q, 0, ex);
       for (int k = 0; k < 3; k++) ASSERT_NEAR(v->displacement[3 * q + k], ex[k], 1e-12);
-      ASSERT_NEAR(v->stress[6 * q + 5], G * 2e-3, 1e-9);
-      ASSERT_NEAR(v->stress[6 * q + 4], G * (1e-3 - 3e-3), 1e-9);
+      /* VTK order xx yy zz xy yz xz */
+      ASSERT_NEAR(v->stress[6 * q + 3], G * 2e-3, 1e-9);
+      ASSERT_NEAR(v->stress[6 * q + 4], G * -1e-3, 1e-9);
+      ASSERT_NEAR(v->stress[6 * q + 5], G * (1e-3 - 3e-3), 1e-9);
       ASSERT_NEAR(v->stress[6 * q + 0], 0.0, 1e-9);
     }
     cupid_cuf_vtu_destroy(&v);
