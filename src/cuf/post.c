@@ -207,11 +207,11 @@ cupid_status cupid_cuf_vtu_build(const cupid_cuf_beam b, const double *u, int su
               X[1] = b->by[be * (p - 1) + a];
               X[2] = z;
               evaluate(b, u, be, se, xi[a], sg[i], sg[j], F, F + m, F + 2 * m, v->displacement + 3 * pt, g);
-              double sig[6], *out = v->stress + 6 * pt;
+              double sig[6], *so = v->stress + 6 * pt;
               stress_from_gradient(b, b->smat[se], g, sig);
               /* VTK's symmetric-tensor order XX YY ZZ XY YZ XZ (ParaView labels) */
-              out[0] = sig[CUF_XX], out[1] = sig[CUF_YY], out[2] = sig[CUF_ZZ];
-              out[3] = sig[CUF_XY], out[4] = sig[CUF_YZ], out[5] = sig[CUF_XZ];
+              so[0] = sig[CUF_XX], so[1] = sig[CUF_YY], so[2] = sig[CUF_ZZ];
+              so[3] = sig[CUF_XY], so[4] = sig[CUF_YZ], so[5] = sig[CUF_XZ];
             }
         cupid_int c0 = q * cps;
         for (int a = 0; a + 1 < p; a++)
