@@ -12,7 +12,7 @@ typedef struct cupid_cuf_beam_private beam_t;
 
 /* ---------------------------------------------------------------- node merging */
 
-static const double *sort_xz; /* qsort has no context argument; used only under build */
+static _Thread_local const double *sort_xz; /* qsort has no context argument */
 static int cmp_x(const void *pa, const void *pb) {
   cupid_int a = *(const cupid_int *)pa, b = *(const cupid_int *)pb;
   double xa = sort_xz[2 * a], xb = sort_xz[2 * b];
@@ -277,42 +277,62 @@ static cupid_status check_mesh(beam_t *b, const cupid_model_t *model, const cupi
     }
   }
   /* hanging nodes: a node strictly inside an edge of an element it does not belong to (LE
-   * only: TE cells are just the integration domain, they need not match) */
-  for (cupid_int e = 0; e < b->n_selem && b->expansion == CUPID_EXPANSION_LE; e++) {
-    const cupid_int *c = b->sconn + e * q->npe;
-    int corner[4] = {0, 0, 0, 0};
-    for (int a = 0; a < q->npe; a++) {
-      int ia = q->ia[a], ib = q->ib[a], last = q->n - 1;
-      if (ia == 0 && ib == 0) corner[0] = a;
-      if (ia == last && ib == 0) corner[1] = a;
-      if (ia == last && ib == last) corner[2] = a;
-      if (ia == 0 && ib == last) corner[3] = a;
-    }
-    const double *bx = b->sbox + 4 * e;
-    for (cupid_int v = 0; v < b->n_snodes; v++) {
-      const double *p = b->sxz + 2 * v;
+   * only: TE cells are just the integration domain, they need not match). Nodes sorted by x,
+   * so each element scans only the nodes in its x strip. */
+  if (b->expansion == CUPID_EXPANSION_LE) {
+    cupid_int *order = NULL;
+    CUPID_CALL(cupid_malloc((size_t)b->n_snodes, sizeof *order, "section node order", &order));
+    for (cupid_int v = 0; v < b->n_snodes; v++) order[v] = v;
+    sort_xz = b->sxz;
+    qsort(order, (size_t)b->n_snodes, sizeof *order, cmp_x);
+    sort_xz = NULL;
+    cupid_status st = CUPID_SUCCESS;
+    for (cupid_int e = 0; e < b->n_selem && st == CUPID_SUCCESS; e++) {
+      const cupid_int *c = b->sconn + e * q->npe;
+      int corner[4] = {0, 0, 0, 0};
+      for (int a = 0; a < q->npe; a++) {
+        int ia = q->ia[a], ib = q->ib[a], last = q->n - 1;
+        if (ia == 0 && ib == 0) corner[0] = a;
+        if (ia == last && ib == 0) corner[1] = a;
+        if (ia == last && ib == last) corner[2] = a;
+        if (ia == 0 && ib == last) corner[3] = a;
+      }
+      const double *bx = b->sbox + 4 * e;
       double tol = b->tol_xz;
-      if (p[0] < bx[0] - tol || p[0] > bx[1] + tol || p[1] < bx[2] - tol || p[1] > bx[3] + tol)
-        continue;
-      int own = 0;
-      for (int a = 0; a < q->npe; a++) own |= c[a] == v;
-      if (own) continue;
-      for (int k = 0; k < 4; k++) {
-        const double *A = b->sxz + 2 * c[corner[k]], *B = b->sxz + 2 * c[corner[(k + 1) % 4]];
-        double ex = B[0] - A[0], ez = B[1] - A[1], L2 = ex * ex + ez * ez;
-        double t = ((p[0] - A[0]) * ex + (p[1] - A[1]) * ez) / L2;
-        double dx = A[0] + t * ex - p[0], dz = A[1] + t * ez - p[1];
-        double L = sqrt(L2);
-        if (t * L > tol && (1 - t) * L > tol && sqrt(dx * dx + dz * dz) <= tol) {
-          char msg[300];
-          snprintf(msg, sizeof msg,
-                   "section node (%g, %g) lies inside an edge of section element %lld "
-                   "(components do not match there: add breakpoints so edges share nodes)",
-                   p[0], p[1], (long long)e);
-          return sec_error(model, mark, msg);
+      cupid_int lo = 0, hi = b->n_snodes;
+      while (lo < hi) { /* first node with x >= xmin - tol */
+        cupid_int mid = (lo + hi) / 2;
+        if (b->sxz[2 * order[mid]] < bx[0] - tol) lo = mid + 1;
+        else hi = mid;
+      }
+      for (cupid_int k = lo; k < b->n_snodes && st == CUPID_SUCCESS; k++) {
+        cupid_int v = order[k];
+        const double *p = b->sxz + 2 * v;
+        if (p[0] > bx[1] + tol) break;
+        if (p[1] < bx[2] - tol || p[1] > bx[3] + tol) continue;
+        int own = 0;
+        for (int a = 0; a < q->npe; a++) own |= c[a] == v;
+        if (own) continue;
+        for (int k2 = 0; k2 < 4; k2++) {
+          const double *A = b->sxz + 2 * c[corner[k2]], *B = b->sxz + 2 * c[corner[(k2 + 1) % 4]];
+          double ex = B[0] - A[0], ez = B[1] - A[1], L2 = ex * ex + ez * ez;
+          double t = ((p[0] - A[0]) * ex + (p[1] - A[1]) * ez) / L2;
+          double dx = A[0] + t * ex - p[0], dz = A[1] + t * ez - p[1];
+          double L = sqrt(L2);
+          if (t * L > tol && (1 - t) * L > tol && sqrt(dx * dx + dz * dz) <= tol) {
+            char msg[300];
+            snprintf(msg, sizeof msg,
+                     "section node (%g, %g) lies inside an edge of section element %lld "
+                     "(components do not match there: add breakpoints so edges share nodes)",
+                     p[0], p[1], (long long)e);
+            st = sec_error(model, mark, msg);
+            break;
+          }
         }
       }
     }
+    cupid_free(&order);
+    CUPID_CALL(st);
   }
   /* overlapping rectangles (components that cover the same area) */
   for (cupid_int e = 0; e < b->n_selem; e++) {
