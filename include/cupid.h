@@ -2,6 +2,7 @@
 #ifndef CUPID_H
 #define CUPID_H
 #include "cupid/base.h"
+#include "cupid/cuf.h"
 #include "cupid/error.h"
 #include "cupid/expr.h"
 #include "cupid/io.h"

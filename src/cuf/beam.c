@@ -9,33 +9,11 @@
 
 typedef struct cupid_cuf_beam_private beam_t;
 
-/* cupid_value_eval() belongs to the model subsystem, which is built separately; a weak
- * reference keeps this library linkable without it (constants never need it). */
-extern double cupid_value_eval(const cupid_value *v, double x, double y, double z, double t,
-                               double density) __attribute__((weak));
-
-cupid_status cuf_model_error(const cupid_model_t *model, const cupid_mark *mark, const char *fmt, ...) {
-  char msg[1024];
-  va_list ap;
-  va_start(ap, fmt);
-  vsnprintf(msg, sizeof msg, fmt, ap);
-  va_end(ap);
-  if (mark && mark->line > 0 && model && model->file)
-    return CUPID_ERROR(CUPID_ERR_MODEL, "%s:%d:%d: %s: %s", model->file, mark->line, mark->column,
-                       mark->key, msg);
-  if (mark && mark->key[0]) return CUPID_ERROR(CUPID_ERR_MODEL, "%s: %s", mark->key, msg);
-  return CUPID_ERROR(CUPID_ERR_MODEL, "%s", msg);
-}
-
-int cuf_value_ok(const cupid_value *v) {
-  return v->kind != CUPID_VALUE_EXPR || cupid_value_eval != NULL;
-}
-
 double cuf_value(const cupid_value *v, const double p[3], double density) {
   switch (v->kind) {
     case CUPID_VALUE_NONE: return 0.0;
     case CUPID_VALUE_CONSTANT: return v->constant;
-    default: return cupid_value_eval ? cupid_value_eval(v, p[0], p[1], p[2], 0.0, density) : NAN;
+    default: return cupid_value_eval(v, p[0], p[1], p[2], 0.0, density);
   }
 }
 
@@ -70,7 +48,7 @@ static cupid_status beam_create(const cupid_beam *def, const cupid_material *mat
   *out = NULL;
   CUPID_TRY(cupid_calloc(1, sizeof *b, "CUF beam", &b));
   if (def->material < 0 || def->material >= n_materials) {
-    st = cuf_model_error(model, &def->mark, "beam material index %d out of range (%d materials)",
+    st = cupid_model_error(model, &def->mark, "beam material index %d out of range (%d materials)",
                          def->material, n_materials);
     goto cleanup;
   }
@@ -79,19 +57,19 @@ static cupid_status beam_create(const cupid_beam *def, const cupid_material *mat
   for (int k = 0; k < n_materials; k++) {
     st = cuf_material_stiffness(&materials[k], b->mat[k].C);
     if (st != CUPID_SUCCESS) {
-      st = cuf_model_error(model, &materials[k].mark, "%s", cupid_error_message());
+      st = cupid_model_error(model, &materials[k].mark, "%s", cupid_error_message());
       goto cleanup;
     }
     b->mat[k].density = materials[k].has_density ? materials[k].density : 0.0;
   }
   b->expansion = def->expansion;
   if (b->expansion == CUPID_EXPANSION_TE && (def->te_order < 0 || def->te_order > 20)) {
-    st = cuf_model_error(model, &def->mark, "TE order must be in 0..20, got %d", def->te_order);
+    st = cupid_model_error(model, &def->mark, "TE order must be in 0..20, got %d", def->te_order);
     goto cleanup;
   }
   b->te_order = b->expansion == CUPID_EXPANSION_TE ? def->te_order : 0;
   if (def->integration < 0 || def->integration > 2) {
-    st = cuf_model_error(model, &def->mark, "integration must be 0 (full), 1 (reduced) or 2 (mitc)");
+    st = cupid_model_error(model, &def->mark, "integration must be 0 (full), 1 (reduced) or 2 (mitc)");
     goto cleanup;
   }
   b->integration = def->integration;

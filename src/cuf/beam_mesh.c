@@ -8,17 +8,17 @@ typedef struct cupid_cuf_beam_private beam_t;
 
 cupid_status cuf_axis_build(beam_t *b, const cupid_beam *def, const cupid_model_t *model) {
   if (def->element_nodes < 2 || def->element_nodes > 4)
-    return cuf_model_error(model, &def->mark, "beam element type must be B2, B3 or B4 (got %d nodes)",
+    return cupid_model_error(model, &def->mark, "beam element type must be B2, B3 or B4 (got %d nodes)",
                            def->element_nodes);
   if (def->n_axis < 2 || !def->axis_y || !def->axis_elements)
-    return cuf_model_error(model, &def->mark, "the beam axis needs at least two breakpoints");
+    return cupid_model_error(model, &def->mark, "the beam axis needs at least two breakpoints");
   cupid_int ne = 0;
   for (int k = 0; k + 1 < def->n_axis; k++) {
     if (!(def->axis_y[k + 1] > def->axis_y[k]))
-      return cuf_model_error(model, &def->mark, "axis breakpoints must increase (%g then %g)",
+      return cupid_model_error(model, &def->mark, "axis breakpoints must increase (%g then %g)",
                              def->axis_y[k], def->axis_y[k + 1]);
     if (def->axis_elements[k] < 1)
-      return cuf_model_error(model, &def->mark, "axis span %d needs at least one element", k);
+      return cupid_model_error(model, &def->mark, "axis span %d needs at least one element", k);
     ne += def->axis_elements[k];
   }
   b->p = def->element_nodes;

@@ -161,7 +161,7 @@ cupid_status cupid_cuf_constraint_apply(const cupid_cuf_beam b, const cupid_mode
     case CUPID_CONSTRAINT_CLAMP: {
       cupid_int node = cupid_cuf_beam_node_at(b, c->plane_y);
       if (node < 0)
-        return cuf_model_error(model, &c->mark,
+        return cupid_model_error(model, &c->mark,
                                "clamp plane y = %g is not a beam node (put an axis breakpoint there; "
                                "the beam spans y in [%g, %g])",
                                c->plane_y, b->ymin, b->ymax);
@@ -172,11 +172,7 @@ cupid_status cupid_cuf_constraint_apply(const cupid_cuf_beam b, const cupid_mode
       break;
     case CUPID_CONSTRAINT_DISPLACEMENT: {
       int mask[3];
-      for (int k = 0; k < 3; k++) {
-        mask[k] = c->value[k].kind != CUPID_VALUE_NONE;
-        if (!cuf_value_ok(&c->value[k]))
-          return CUPID_ERROR(CUPID_ERR_UNSUPPORTED, "constraint expressions need the model subsystem");
-      }
+      for (int k = 0; k < 3; k++) mask[k] = c->value[k].kind != CUPID_VALUE_NONE;
       st = cupid_cuf_prescribe(b, &c->box, mask, value_field, (void *)(uintptr_t)c->value, bc, &count);
       break;
     }
@@ -185,10 +181,10 @@ cupid_status cupid_cuf_constraint_apply(const cupid_cuf_beam b, const cupid_mode
   if (st == CUPID_ERR_MODEL) {
     char msg[1024];
     snprintf(msg, sizeof msg, "%s", cupid_error_message());
-    return cuf_model_error(model, &c->mark, "%s", msg);
+    return cupid_model_error(model, &c->mark, "%s", msg);
   }
   if (st == CUPID_SUCCESS && count == 0)
-    return cuf_model_error(model, &c->mark, "the box contains no node of the beam");
+    return cupid_model_error(model, &c->mark, "the box contains no node of the beam");
   return st;
 }
 

@@ -157,12 +157,7 @@ cupid_status cuf_te_project(const struct cupid_cuf_beam_private *b, double y, cu
                             void *ctx, double *c);
 
 /* ---- misc ---- */
-/* A model error at a mark (file:line:col: key: message), without the model subsystem. */
-cupid_status cuf_model_error(const cupid_model_t *model, const cupid_mark *mark, const char *fmt,
-                             ...) __attribute__((format(printf, 3, 4)));
 /* Evaluate a model value; NONE -> 0. */
 double cuf_value(const cupid_value *v, const double p[3], double density);
-/* 1 if every expression value can be evaluated in this build. */
-int cuf_value_ok(const cupid_value *v);
 
 #endif

@@ -205,9 +205,6 @@ static void value_field(void *ctx, const double p[3], double density, double out
 
 cupid_status cupid_cuf_load_add(const cupid_cuf_beam b, const cupid_model_t *model,
                                 const cupid_load *load, double *f) {
-  for (int k = 0; k < 3; k++)
-    if (!cuf_value_ok(&load->value[k]))
-      return CUPID_ERROR(CUPID_ERR_UNSUPPORTED, "load expressions need the model subsystem");
   cupid_status st;
   void *ctx = (void *)(uintptr_t)load->value; /* read only */
   switch (load->kind) {
@@ -228,7 +225,7 @@ cupid_status cupid_cuf_load_add(const cupid_cuf_beam b, const cupid_model_t *mod
   if (st == CUPID_ERR_MODEL) {
     char msg[1024];
     snprintf(msg, sizeof msg, "%s", cupid_error_message());
-    return cuf_model_error(model, &load->mark, "%s", msg);
+    return cupid_model_error(model, &load->mark, "%s", msg);
   }
   return st;
 }

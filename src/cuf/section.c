@@ -171,7 +171,7 @@ void cuf_section_integrals(const beam_t *b, cupid_int e, int ng, double *E) {
 /* ---------------------------------------------------------------- building */
 
 static cupid_status sec_error(const cupid_model_t *model, const cupid_mark *mark, const char *what) {
-  return cuf_model_error(model, mark, "%s", what);
+  return cupid_model_error(model, mark, "%s", what);
 }
 
 /* Candidate nodes and elements from explicit lists and components. */
@@ -190,7 +190,7 @@ static cupid_status collect(const cupid_beam *def, const cupid_model_t *model, i
   for (int k = 0; k < def->n_components; k++) {
     const cupid_section_component *cp = &def->components[k];
     if (cp->nx < 2 || cp->nz < 2)
-      return cuf_model_error(model, &cp->mark, "a component needs at least 2 x and 2 z breakpoints");
+      return cupid_model_error(model, &cp->mark, "a component needs at least 2 x and 2 z breakpoints");
     cupid_int cells = (cupid_int)(cp->nx - 1) * (cp->nz - 1);
     ne += cells;
     nc += cells * npe;
@@ -208,7 +208,7 @@ static cupid_status collect(const cupid_beam *def, const cupid_model_t *model, i
     for (int a = 0; a < npe; a++) {
       int id = def->section_elements[(size_t)k * npe + a];
       if (id < 0 || id >= def->n_section_nodes)
-        return cuf_model_error(model, &def->mark,
+        return cupid_model_error(model, &def->mark,
                                "section element %d refers to node %d (there are %d nodes)", k, id,
                                def->n_section_nodes);
       c->conn[e * npe + a] = id;
@@ -220,13 +220,13 @@ static cupid_status collect(const cupid_beam *def, const cupid_model_t *model, i
     const cupid_section_component *cp = &def->components[k];
     for (int i = 0; i + 1 < cp->nx; i++)
       if (!(cp->x[i + 1] > cp->x[i]))
-        return cuf_model_error(model, &cp->mark, "x breakpoints must increase");
+        return cupid_model_error(model, &cp->mark, "x breakpoints must increase");
     for (int j = 0; j + 1 < cp->nz; j++)
       if (!(cp->z[j + 1] > cp->z[j]))
-        return cuf_model_error(model, &cp->mark, "z breakpoints must increase");
+        return cupid_model_error(model, &cp->mark, "z breakpoints must increase");
     int mat = cp->material < 0 ? def->material : cp->material;
     if (mat < 0 || mat >= n_mat)
-      return cuf_model_error(model, &cp->mark, "material index %d out of range", mat);
+      return cupid_model_error(model, &cp->mark, "material index %d out of range", mat);
     for (int j = 0; j + 1 < cp->nz; j++)
       for (int i = 0; i + 1 < cp->nx; i++, e++) {
         for (int a = 0; a < npe; a++) {
@@ -405,19 +405,19 @@ cupid_status cuf_section_build(beam_t *b, const cupid_beam *def, const cupid_mod
   if (def->n_section_elements > 0 || def->expansion == CUPID_EXPANSION_LE) {
     int ln = def->le_nodes;
     if (ln != 4 && ln != 9 && ln != 16) {
-      st = cuf_model_error(model, &def->mark, "section element must be L4, L9 or L16 (got %d nodes)", ln);
+      st = cupid_model_error(model, &def->mark, "section element must be L4, L9 or L16 (got %d nodes)", ln);
       goto cleanup;
     }
     n = ln == 4 ? 2 : ln == 9 ? 3 : 4;
   }
   if (def->n_section_elements > 0 && (!def->section_nodes || !def->section_elements)) {
-    st = cuf_model_error(model, &def->mark, "section elements need a node list");
+    st = cupid_model_error(model, &def->mark, "section elements need a node list");
     goto cleanup;
   }
   cuf_quad_init(&b->quad, n);
   CUPID_TRY(collect(def, model, b->n_mat, &b->quad, &c));
   if (c.ne == 0) {
-    st = cuf_model_error(model, &def->mark, "the beam section has no component and no element");
+    st = cupid_model_error(model, &def->mark, "the beam section has no component and no element");
     goto cleanup;
   }
   /* geometric tolerance from the extent of the candidates */
@@ -453,7 +453,7 @@ cupid_status cuf_section_build(beam_t *b, const cupid_beam *def, const cupid_mod
     for (int a = 0; a < npe; a++)
       for (int a2 = 0; a2 < a; a2++)
         if (b->sconn[e * npe + a] == b->sconn[e * npe + a2]) {
-          st = cuf_model_error(model, &def->mark, "section element %lld has two coincident nodes",
+          st = cupid_model_error(model, &def->mark, "section element %lld has two coincident nodes",
                                (long long)e);
           goto cleanup;
         }
@@ -463,7 +463,7 @@ cupid_status cuf_section_build(beam_t *b, const cupid_beam *def, const cupid_mod
   for (cupid_int e = 0; e < c.ne; e++) {
     b->smat[e] = c.mat[e];
     if (c.mat[e] < 0 || c.mat[e] >= b->n_mat) {
-      st = cuf_model_error(model, &def->mark, "section element %lld: material index %d out of range",
+      st = cupid_model_error(model, &def->mark, "section element %lld: material index %d out of range",
                            (long long)e, c.mat[e]);
       goto cleanup;
     }
