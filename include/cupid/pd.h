@@ -43,7 +43,11 @@ cupid_status cupid_pd_grid_create(const cupid_pd_grid_options *opts, int n_boxes
                                   const cupid_box *boxes, const int *materials,
                                   cupid_pd_grid *grid);
 
-/** The grid of the model's `peridynamics:` regions; errors are reported against the file. */
+/**
+ * The grid of the model's `peridynamics:` regions (spacing, dimension, area; each region's
+ * material, else the section's `material:`); errors name the region's file:line:col
+ * through cupid_model_error(). Lives in its own object file (src/pd/grid_model.c).
+ */
 cupid_status cupid_pd_grid_create_from_model(const cupid_model_t *model, cupid_pd_grid *grid);
 
 void cupid_pd_grid_destroy(cupid_pd_grid *grid);
@@ -59,7 +63,8 @@ double cupid_pd_grid_spacing(const cupid_pd_grid grid);
 int cupid_pd_grid_dimension(const cupid_pd_grid grid);
 /** Node at integer lattice position (i, j, k), or -1 (in 1D pass i = k = 0). */
 cupid_int cupid_pd_grid_node_at(const cupid_pd_grid grid, cupid_int i, cupid_int j, cupid_int k);
-/** Lattice origin (the centre of cell (0,0,0) is origin + h/2 on each axis). */
+/** Lattice origin (the centre of cell (0,0,0) is origin + h/2 on each axis; in 1D the
+ *  x and z origins are -h/2 so that x = z = 0). */
 void cupid_pd_grid_origin(const cupid_pd_grid grid, double origin[3]);
 /** Bounding box of the union: lowest corner and number of cells per axis. */
 void cupid_pd_grid_extent(const cupid_pd_grid grid, cupid_int ncells[3]);
@@ -69,7 +74,8 @@ void cupid_pd_grid_node_lattice(const cupid_pd_grid grid, cupid_int node, cupid_
  * Interior flags: flags[i] = 1 when every lattice point within @p radius of node i
  * (|offset| h <= radius) is a node of the grid, i.e. node i is farther than @p radius
  * from the surface of the union; else 0. Useful to pick nodes with complete families
- * (radius delta for bond-based, 2 delta for LPS forces).
+ * (radius delta for bond-based, 2 delta for LPS forces; with EXACT partial volumes the
+ * family reaches delta + sqrt(3)/2 h).
  */
 cupid_status cupid_pd_grid_interior(const cupid_pd_grid grid, double radius, unsigned char *flags);
 
@@ -90,8 +96,9 @@ typedef struct {
 /**
  * Neighbour lists (cell-list / integer-stencil search, OpenMP), quadrature coefficients
  * beta, influence omega, weighted volumes m_i (Eq. 18) and material constants.
- * LPS requires dimension 3; the 1D grid supports the bond-based model
- * (micromodulus 2E/(A delta^2) for constant influence).
+ * LPS requires dimension 3 (CUPID_ERR_UNSUPPORTED otherwise); the 1D grid supports the
+ * bond-based model (micromodulus below). A node without neighbours (horizon below the
+ * spacing) or a material with E <= 0 or nu outside (-1, 0.5) is CUPID_ERR_MODEL.
  *
  * The grid is borrowed and must outlive the operator. Constants per node from its
  * material: K = E/(3(1-2nu)), mu = E/(2(1+nu)).
@@ -110,7 +117,8 @@ typedef struct {
  * bulk: 3D c = 18 K / S, 1D c = 2 E / S, S = sum over the full stencil of omega x beta V
  * (continuum limit, constant omega: 18K/(pi delta^4) and 2E/(A delta^2), paper 004).
  * Bond-based PD has nu = 1/4 in 3D; other nu are accepted, K is taken from E and nu as
- * given (the shear response is then 3K/5, not mu).
+ * given (the shear response is then 3K/5, not mu). Energy: E = sum_i V/4 sum_j c_ij omega
+ * beta V e_ij^2 / x_ij.
  */
 cupid_status cupid_pd_operator_create(const cupid_pd_grid grid,
                                       const cupid_pd_operator_options *opts,
@@ -157,7 +165,8 @@ typedef struct {
   cupid_int nodes;
   cupid_int bonds;        /**< exact: stored bonds (both directions) */
   cupid_int blocks;       /**< 3x3 blocks of the assembled K: exact for bond-based, an
-                               upper bound for LPS (lattice points within two stencil hops) */
+                               upper bound for LPS (lattice points within two stencil hops;
+                               equal on boxes) */
   int64_t bytes_operator; /**< bonds + per-node data of the operator */
   int64_t bytes_matrix;   /**< rowptr + col + val of the assembled K */
 } cupid_pd_estimate;

@@ -6,10 +6,15 @@
  *  - LPS dilatation term: c_p = V (3K_p - 5mu_p)/3 and g_p = d theta_p / dU, non-zero on
  *    p (g_p[p] = -3V/m_p sum_j omega beta x n_pj) and on its neighbours
  *    (g_p[j] = 3V/m_p omega beta x n_pj). It couples nodes up to 2 delta apart.
+ *
  * Row-wise gather, no atomics: row r collects block(r,k) += c_p g_p[r] (x) g_p[k] for
- * p in H_r + {r}, k in H_p + {p}. A per-thread marker (node -> row stamp) finds the row's
- * columns, which come out sorted by scanning the stencil sum (pd_stencil_sum) in
- * lexicographic order; a per-thread slot array then maps each column to its place. */
+ * p in H_r + {r}, k in H_p + {p}. On the uniform grid every column k of row r sits at a
+ * lattice offset k - r in the stencil sum D (pd_stencil_sum, sorted like node indices),
+ * so each thread accumulates the row in a small dense buffer indexed by that offset
+ * (found with one table look-up per pair, all in cache), then copies the touched entries
+ * out in D order: the columns come out sorted. A first pass counts the touched entries to
+ * size the rows. Work and memory are O(nodes). */
+#include <stdlib.h>
 #include <string.h>
 #ifdef _OPENMP
 #include <omp.h>
@@ -22,64 +27,137 @@ static inline void add_outer(double *blk, double w, const double *a, const doubl
     for (int c = 0; c < 3; c++) blk[3 * r + c] += w * a[r] * b[c];
 }
 
-/* Stamp every column of row r in mark[] (with value r). */
-static void mark_row(const struct cupid_pd_operator_private *op, cupid_int r, cupid_int *mark) {
-  mark[r] = r;
-  for (cupid_int b = op->bptr[r]; b < op->bptr[r + 1]; b++) {
-    const cupid_int p = op->bnbr[b];
-    mark[p] = r;
-    if (op->model == CUPID_PD_BOND) continue;
-    for (cupid_int bb = op->bptr[p]; bb < op->bptr[p + 1]; bb++) mark[op->bnbr[bb]] = r;
-  }
+/* blk += v (x) b with v in registers (the hot loop of the assembly). */
+static inline void add_vb(double *restrict blk, double v0, double v1, double v2,
+                          const double *restrict b) {
+  const double b0 = b[0], b1 = b[1], b2 = b[2];
+  blk[0] += v0 * b0;
+  blk[1] += v0 * b1;
+  blk[2] += v0 * b2;
+  blk[3] += v1 * b0;
+  blk[4] += v1 * b1;
+  blk[5] += v1 * b2;
+  blk[6] += v2 * b0;
+  blk[7] += v2 * b1;
+  blk[8] += v2 * b2;
 }
 
-/* The sorted columns of row r: count them, and with col/slot given, store them. */
-static cupid_int scan_row(const struct cupid_pd_operator_private *op, cupid_int r, int nd,
-                          const int32_t *doff, const cupid_int *mark, cupid_int *col,
-                          int32_t *slot) {
-  const struct cupid_pd_grid_private *g = op->grid;
-  const int32_t *q = g->ijk + 3 * r;
-  cupid_int n = 0;
-  for (int d = 0; d < nd; d++) {
-    const cupid_int k = pd_grid_lookup(g, q[0] + doff[3 * d], q[1] + doff[3 * d + 1],
-                                       q[2] + doff[3 * d + 2]);
-    if (k < 0 || mark[k] != r) continue;
-    if (col) {
-      col[n] = k;
-      slot[k] = (int32_t)n;
-    }
-    n++;
-  }
-  return n;
+/* Offsets of the stencil sum D, addressed through a dense cube around the zero offset:
+ * dindex[center + lin(o)] = position of offset o in D (or -1); lin(o) = ox + side (oy +
+ * side oz), precomputed for every stencil entry in lin[]. */
+typedef struct {
+  int nd;
+  int32_t *doff;     /* 3 per D entry */
+  int32_t *dindex;   /* side^3 */
+  cupid_int center;  /* position of the zero offset in the cube */
+  cupid_int *lin;    /* per stencil entry */
+} offset_table;
+
+static void offset_table_free(offset_table *t) {
+  cupid_free(&t->doff);
+  cupid_free(&t->dindex);
+  cupid_free(&t->lin);
 }
 
-/* Values of row r into blocks val (9 per column, zeroed), columns located through slot. */
-static void fill_row(const struct cupid_pd_operator_private *op, cupid_int r, const int32_t *slot,
-                     double *val) {
+static cupid_status offset_table_build(const struct cupid_pd_operator_private *op, offset_table *t) {
+  cupid_status st = CUPID_SUCCESS;
+  memset(t, 0, sizeof *t);
   const pd_stencil *S = &op->st;
-  double *diag = val + 9 * (size_t)slot[r];
+  CUPID_TRY(pd_stencil_sum(S, op->model == CUPID_PD_BOND, &t->nd, &t->doff));
+  int R2 = 0;
+  for (int q = 0; q < 3 * t->nd; q++) R2 = abs(t->doff[q]) > R2 ? abs(t->doff[q]) : R2;
+  const cupid_int side = 2 * (cupid_int)R2 + 1;
+  CUPID_TRY(cupid_malloc((size_t)(side * side * side), sizeof *t->dindex, "PD offset table", &t->dindex));
+  for (cupid_int q = 0; q < side * side * side; q++) t->dindex[q] = -1;
+  t->center = R2 + side * (R2 + side * R2);
+  for (int d = 0; d < t->nd; d++) {
+    const int32_t *o = t->doff + 3 * d;
+    t->dindex[t->center + o[0] + side * (o[1] + side * o[2])] = d;
+  }
+  CUPID_TRY(cupid_malloc((size_t)S->n, sizeof *t->lin, "PD offset table", &t->lin));
+  for (int s = 0; s < S->n; s++) {
+    const int32_t *o = S->off + 3 * s;
+    t->lin[s] = o[0] + side * (o[1] + side * o[2]);
+  }
+cleanup:
+  if (st != CUPID_SUCCESS) offset_table_free(t);
+  return st;
+}
+
+/* Per-thread row buffer: 9 doubles and a touched flag per D entry. */
+typedef struct {
+  double *acc;
+  unsigned char *hit;
+} row_buffer;
+
+/* Mark (and with acc, accumulate) row r in the D-indexed buffer. */
+static void gather_row(const struct cupid_pd_operator_private *op, const offset_table *t,
+                       cupid_int r, row_buffer *buf, int values) {
+  const pd_stencil *S = &op->st;
+  const int32_t *dx = t->dindex + t->center;
+  unsigned char *hit = buf->hit;
+  double *acc = buf->acc;
+  hit[dx[0]] = 1;
   for (cupid_int b = op->bptr[r]; b < op->bptr[r + 1]; b++) {
-    const cupid_int q = op->bnbr[b];
     const int s = op->bst[b];
+    const int32_t d = dx[t->lin[s]];
+    hit[d] = 1;
+    if (!values) continue;
     const double *n = S->nrm + 3 * s;
-    const double w = pd_pair_coefficient(op, r, q, s);
-    add_outer(diag, w, n, n);
-    add_outer(val + 9 * (size_t)slot[q], -w, n, n);
+    const double w = pd_pair_coefficient(op, r, op->bnbr[b], s);
+    add_outer(acc + 9 * (size_t)dx[0], w, n, n);
+    add_outer(acc + 9 * (size_t)d, -w, n, n);
   }
   if (op->model == CUPID_PD_BOND) return;
   /* p = r itself, then p over the neighbours of r. */
   for (cupid_int b = op->bptr[r] - 1; b < op->bptr[r + 1]; b++) {
-    const cupid_int p = b < op->bptr[r] ? r : op->bnbr[b];
+    const int self = b < op->bptr[r];
+    const cupid_int p = self ? r : op->bnbr[b];
+    const int32_t *dp = dx + (self ? 0 : t->lin[op->bst[b]]); /* offsets relative to p - r */
+    if (!values) {
+      hit[dp[0]] = 1;
+      for (cupid_int bb = op->bptr[p]; bb < op->bptr[p + 1]; bb++) hit[dp[t->lin[op->bst[bb]]]] = 1;
+      continue;
+    }
     const double Gp = 3.0 * op->V / op->m[p], cp = op->V * op->kappa[p] / 3.0;
-    const double *dir = p == r ? op->gself + 3 * r : S->wxn + 3 * op->bst[b];
-    double v[3]; /* c_p g_p[r] Gp: g_p[r] = -Gp gself_r, or -Gp wxn(r->p) */
-    for (int c = 0; c < 3; c++) v[c] = -cp * Gp * dir[c] * Gp;
-    double mgs[3]; /* g_p[p]/Gp = -gself_p */
+    const double *dir = self ? op->gself + 3 * r : S->wxn + 3 * op->bst[b];
+    double v[3]; /* c_p g_p[r] Gp, with g_p[r] = -Gp gself_r, or -Gp wxn(r->p) */
+    for (int c = 0; c < 3; c++) v[c] = -cp * Gp * Gp * dir[c];
+    double mgs[3]; /* g_p[p] / Gp = -gself_p */
     for (int c = 0; c < 3; c++) mgs[c] = -op->gself[3 * p + c];
-    add_outer(val + 9 * (size_t)slot[p], 1.0, v, mgs);
-    for (cupid_int bb = op->bptr[p]; bb < op->bptr[p + 1]; bb++)
-      add_outer(val + 9 * (size_t)slot[op->bnbr[bb]], 1.0, v, S->wxn + 3 * op->bst[bb]);
+    hit[dp[0]] = 1;
+    add_outer(acc + 9 * (size_t)dp[0], 1.0, v, mgs);
+    const cupid_int *lin = t->lin;
+    const int32_t *bst = op->bst;
+    const double *wxn = S->wxn;
+    for (cupid_int bb = op->bptr[p]; bb < op->bptr[p + 1]; bb++) {
+      const int s2 = bst[bb];
+      const int32_t d = dp[lin[s2]];
+      hit[d] = 1;
+      add_vb(acc + 9 * (size_t)d, v[0], v[1], v[2], wxn + 3 * s2);
+    }
   }
+}
+
+/* Copy the touched entries of the buffer out in D order (sorted columns), clearing them;
+ * with col == NULL only count them. */
+static cupid_int flush_row(const struct cupid_pd_operator_private *op, const offset_table *t,
+                           cupid_int r, row_buffer *buf, cupid_int *col, double *val) {
+  const struct cupid_pd_grid_private *g = op->grid;
+  const int32_t *q = g->ijk + 3 * r;
+  cupid_int n = 0;
+  for (int d = 0; d < t->nd; d++) {
+    if (!buf->hit[d]) continue;
+    buf->hit[d] = 0;
+    if (col) {
+      const int32_t *o = t->doff + 3 * d;
+      col[n] = pd_grid_lookup(g, q[0] + o[0], q[1] + o[1], q[2] + o[2]);
+      memcpy(val + 9 * (size_t)n, buf->acc + 9 * (size_t)d, 9 * sizeof *val);
+      memset(buf->acc + 9 * (size_t)d, 0, 9 * sizeof *val);
+    }
+    n++;
+  }
+  return n;
 }
 
 static int num_threads(void) {
@@ -101,17 +179,16 @@ static int thread_id(void) {
 cupid_status cupid_pd_operator_assemble(const cupid_pd_operator op, cupid_csr *Kout) {
   cupid_status st = CUPID_SUCCESS;
   cupid_csr_t *K = NULL;
-  cupid_int *mark = NULL;
-  int32_t *slot = NULL, *doff = NULL;
-  int nd = 0;
+  offset_table t = {0};
+  double *acc = NULL;
+  unsigned char *hit = NULL;
   CUPID_CHECK(op && Kout, CUPID_ERR_ARGUMENT, "assemble needs an operator and an output");
   *Kout = NULL;
   const cupid_int nn = op->nnodes;
   const int nt = nn > PD_OMP_MIN_NODES ? num_threads() : 1;
-  CUPID_TRY(pd_stencil_sum(&op->st, op->model == CUPID_PD_BOND, &nd, &doff));
-  CUPID_TRY(cupid_malloc((size_t)nt * (size_t)nn, sizeof *mark, "assembly markers", &mark));
-  CUPID_TRY(cupid_malloc((size_t)nt * (size_t)nn, sizeof *slot, "assembly slots", &slot));
-  for (size_t q = 0; q < (size_t)nt * (size_t)nn; q++) mark[q] = -1;
+  CUPID_TRY(offset_table_build(op, &t));
+  CUPID_TRY(cupid_calloc((size_t)nt * 9 * (size_t)t.nd, sizeof *acc, "assembly buffers", &acc));
+  CUPID_TRY(cupid_calloc((size_t)nt * (size_t)t.nd, 1, "assembly buffers", &hit));
   CUPID_TRY(cupid_calloc(1, sizeof *K, "the PD stiffness matrix", &K));
   K->nrows = K->ncols = nn;
   K->bs = 3;
@@ -119,30 +196,24 @@ cupid_status cupid_pd_operator_assemble(const cupid_pd_operator op, cupid_csr *K
   K->rowptr[0] = 0;
 #pragma omp parallel num_threads(nt)
   {
-    cupid_int *mk = mark + (size_t)thread_id() * (size_t)nn;
+    row_buffer buf = {acc + 9 * (size_t)thread_id() * (size_t)t.nd, hit + (size_t)thread_id() * (size_t)t.nd};
 #pragma omp for schedule(dynamic, 64)
     for (cupid_int r = 0; r < nn; r++) {
-      mark_row(op, r, mk);
-      K->rowptr[r + 1] = scan_row(op, r, nd, doff, mk, NULL, NULL);
+      gather_row(op, &t, r, &buf, 0);
+      K->rowptr[r + 1] = flush_row(op, &t, r, &buf, NULL, NULL);
     }
   }
   for (cupid_int r = 0; r < nn; r++) K->rowptr[r + 1] += K->rowptr[r];
   const cupid_int nblk = K->rowptr[nn];
   CUPID_TRY(cupid_malloc((size_t)nblk, sizeof *K->col, "PD matrix columns", &K->col));
   CUPID_TRY(cupid_malloc(9 * (size_t)nblk, sizeof *K->val, "PD matrix values", &K->val));
-  for (size_t q = 0; q < (size_t)nt * (size_t)nn; q++) mark[q] = -1;
 #pragma omp parallel num_threads(nt)
   {
-    cupid_int *mk = mark + (size_t)thread_id() * (size_t)nn;
-    int32_t *sl = slot + (size_t)thread_id() * (size_t)nn;
+    row_buffer buf = {acc + 9 * (size_t)thread_id() * (size_t)t.nd, hit + (size_t)thread_id() * (size_t)t.nd};
 #pragma omp for schedule(dynamic, 64)
     for (cupid_int r = 0; r < nn; r++) {
-      const cupid_int start = K->rowptr[r];
-      double *val = K->val + 9 * (size_t)start;
-      memset(val, 0, 9 * (size_t)(K->rowptr[r + 1] - start) * sizeof *val);
-      mark_row(op, r, mk);
-      scan_row(op, r, nd, doff, mk, K->col + start, sl);
-      fill_row(op, r, sl, val);
+      gather_row(op, &t, r, &buf, 1);
+      flush_row(op, &t, r, &buf, K->col + K->rowptr[r], K->val + 9 * (size_t)K->rowptr[r]);
     }
   }
   *Kout = K;
@@ -154,9 +225,9 @@ cleanup:
     cupid_free(&K->val);
     cupid_free(&K);
   }
-  cupid_free(&mark);
-  cupid_free(&slot);
-  cupid_free(&doff);
+  offset_table_free(&t);
+  cupid_free(&acc);
+  cupid_free(&hit);
   return st;
 }
 
