@@ -183,7 +183,7 @@ static cupid_status factor_cholmod(direct_factor *F, const cupid_int *global, in
   cholmod_common *c = &F->cc;
   const cupid_int n = F->A.n;
   cholmod_message[0] = '\0';
-  cholmod_l_start(c);
+  if (!cholmod_l_start(c)) return CUPID_ERROR(CUPID_ERR_INTERNAL, "CHOLMOD could not start");
   F->cc_started = 1;
   c->print = 0; /* errors are reported by cupid */
   c->error_handler = cholmod_record;
