@@ -19,6 +19,11 @@ _Static_assert(sizeof(SuiteSparse_long) == sizeof(cupid_int), "SuiteSparse_long 
 #define REFINE_ABOVE 1e-12
 #define FAIL_ABOVE 1e-8
 
+/* The singularity bound on the pivot ratio for n equations (solvers.h). */
+static double pivot_ratio_min(cupid_int n) {
+  return CUPID_DIRECT_PIVOT_TOL * (double)(n > 64 ? n : 64);
+}
+
 /* The reduced matrix rows of K_ff (scalar CSR with free-DOF numbering), possibly one triangle. */
 typedef struct {
   cupid_int n;     /* free DOFs */
@@ -36,6 +41,7 @@ typedef struct {
   int cc_started;
   cholmod_sparse Ac; /* a view of A (not owned by CHOLMOD) */
   cholmod_factor *L;
+  cupid_int weakest; /* CHOLMOD: free DOF of the smallest pivot */
   void *symbolic, *numeric;
   double control[UMFPACK_CONTROL], uinfo[UMFPACK_INFO];
 } direct_factor;
@@ -177,7 +183,7 @@ static cupid_status factor_cholmod(direct_factor *F, const cupid_int *global, in
   cholmod_common *c = &F->cc;
   const cupid_int n = F->A.n;
   cholmod_message[0] = '\0';
-  cholmod_l_start(c);
+  if (!cholmod_l_start(c)) return CUPID_ERROR(CUPID_ERR_INTERNAL, "CHOLMOD could not start");
   F->cc_started = 1;
   c->print = 0; /* errors are reported by cupid */
   c->error_handler = cholmod_record;
@@ -214,9 +220,10 @@ static cupid_status factor_cholmod(direct_factor *F, const cupid_int *global, in
 
   cupid_int kmin;
   info->pivot_ratio = cholmod_pivot_ratio(F->L, &kmin, &info->nnz_factor);
-  if (info->pivot_ratio < CUPID_DIRECT_PIVOT_RATIO_MIN) {
-    const SuiteSparse_long *perm = F->L->Perm;
-    info->failed_dof = global[perm ? perm[kmin] : kmin];
+  const SuiteSparse_long *perm = F->L->Perm;
+  F->weakest = perm ? perm[kmin] : kmin;
+  if (info->pivot_ratio < pivot_ratio_min(n)) {
+    info->failed_dof = global[F->weakest];
     char how[96];
     snprintf(how, sizeof how, "pivot ratio %.3g", info->pivot_ratio);
     return singular_error(info->failed_dof, bs, how);
@@ -290,7 +297,7 @@ static cupid_status factor_umfpack(direct_factor *F, const cupid_int *global, in
   info->pivot_ratio = F->uinfo[UMFPACK_RCOND];
   if (s != UMFPACK_OK && s != UMFPACK_WARNING_singular_matrix)
     return umfpack_failure(F, "factorisation", s);
-  if (s == UMFPACK_WARNING_singular_matrix || !(info->pivot_ratio >= CUPID_DIRECT_PIVOT_RATIO_MIN)) {
+  if (s == UMFPACK_WARNING_singular_matrix || !(info->pivot_ratio >= pivot_ratio_min(n))) {
     cupid_int col = 0;
     CUPID_CALL(umfpack_weakest_pivot(F, &col));
     info->failed_dof = global[col];
@@ -453,11 +460,21 @@ cupid_status cupid_direct_solve(const cupid_csr_t *K, cupid_matrix_kind kind, co
     info->refinements = 1;
   }
   info->time_solve = cupid_wtime() - t0;
-  CUPID_TRY_CHECK(info->residual <= FAIL_ABOVE, CUPID_ERR_NUMERIC,
-                  "%s: relative residual %.3g exceeds %.0e after iterative refinement: the "
-                  "stiffness matrix is ill-conditioned or nearly singular%s",
-                  info->method, info->residual, FAIL_ABOVE,
-                  kind == CUPID_MATRIX_SPD ? ", or not symmetric" : "");
+  if (!(info->residual <= FAIL_ABOVE)) {
+    /* Point at the smallest pivot: where a near-singularity shows up. */
+    cupid_int weak = F.weakest;
+    if (kind == CUPID_MATRIX_GENERAL) CUPID_TRY(umfpack_weakest_pivot(&F, &weak));
+    info->failed_dof = global[weak];
+    char where[96];
+    describe_dof(where, sizeof where, info->failed_dof, bs);
+    st = CUPID_ERROR(CUPID_ERR_NUMERIC,
+                     "%s: relative residual %.3g exceeds %.0e after iterative refinement: the "
+                     "stiffness matrix is singular or ill-conditioned%s (smallest pivot ratio "
+                     "%.3g at %s): the model may be unconstrained or a region disconnected",
+                     info->method, info->residual, FAIL_ABOVE,
+                     kind == CUPID_MATRIX_SPD ? ", or not symmetric" : "", info->pivot_ratio,
+                     where);
+  }
 cleanup:
   factor_free(&F);
   cupid_free(&global);

@@ -179,8 +179,312 @@ static void test_general_known_solution(void **state) {
   check_known_solution(&pure3, CUPID_MATRIX_GENERAL, 1, 9);
 }
 
+/* A singular K must fail with CUPID_ERR_NUMERIC and name a DOF; returns that DOF. */
+static cupid_int check_singular(const grid_spec *g, cupid_matrix_kind kind, int fix_face) {
+  cupid_csr K = grid_matrix(g);
+  const cupid_int n = K->nrows * K->bs;
+  double *f = malloc((size_t)n * sizeof *f), *u = malloc((size_t)n * sizeof *u);
+  uint64_t seed = 77;
+  for (cupid_int k = 0; k < n; k++) f[k] = cupid_test_random(&seed);
+  double *zero = calloc((size_t)n, sizeof *zero);
+  cupid_dirichlet bc = fix_face ? face_bc(g, zero, 0) : NULL;
+  cupid_solve_info info;
+  const cupid_status st = cupid_direct_solve(K, kind, f, bc, u, &info);
+  print_message("  %s %dx%dx%d bs=%d: status %d, failed DOF %lld, pivots %.2e: %s\n", info.method,
+                g->nx, g->ny, g->nz, g->bs, (int)st, (long long)info.failed_dof, info.pivot_ratio,
+                cupid_error_message());
+  assert_int_equal(st, CUPID_ERR_NUMERIC);
+  assert_true(info.failed_dof >= 0 && info.failed_dof < n);
+  assert_true(bc == NULL || !bc->fixed[info.failed_dof]);
+  assert_non_null(strstr(cupid_error_message(), "singular"));
+  assert_non_null(strstr(cupid_error_message(), "node"));
+  if (g->bs == 3) assert_non_null(strstr(cupid_error_message(), "component"));
+  const cupid_int dof = info.failed_dof;
+  cupid_dirichlet_destroy(&bc);
+  cupid_csr_destroy(&K);
+  free(f);
+  free(u);
+  free(zero);
+  return dof;
+}
+
+static void test_singular(void **state) {
+  (void)state;
+  const int sizes[][3] = {{2, 2, 2}, {6, 5, 4}, {12, 10, 9}, {20, 20, 20}};
+  const int nsizes = getenv("CUPID_TEST_SMALL") ? 3 : 4; /* see test_size */
+  for (int s = 0; s < nsizes; s++) {
+    grid_spec g = {sizes[s][0], sizes[s][1], sizes[s][2], 3, B_SPD, 0.0, 0.0, 0};
+    check_singular(&g, CUPID_MATRIX_SPD, 0);
+    check_singular(&g, CUPID_MATRIX_GENERAL, 0);
+    g.bs = 1;
+    g.B = ONE;
+    check_singular(&g, CUPID_MATRIX_SPD, 0);
+    check_singular(&g, CUPID_MATRIX_GENERAL, 0);
+    g.convection = 2.0;
+    check_singular(&g, CUPID_MATRIX_GENERAL, 0);
+  }
+}
+
+/* A component cut off from the supports: the failing DOF must lie in it (ix >= cut). */
+static void test_floating_component(void **state) {
+  (void)state;
+  const grid_spec g3 = {9, 5, 4, 3, B_SPD, 0.0, 0.0, 5};
+  cupid_int dof = check_singular(&g3, CUPID_MATRIX_SPD, 1);
+  assert_true((dof / 3) % g3.nx >= g3.cut);
+  dof = check_singular(&g3, CUPID_MATRIX_GENERAL, 1);
+  assert_true((dof / 3) % g3.nx >= g3.cut);
+  const grid_spec g1 = {12, 8, 7, 1, ONE, 0.0, 0.0, 4};
+  dof = check_singular(&g1, CUPID_MATRIX_SPD, 1);
+  assert_true(dof % g1.nx >= g1.cut);
+  const grid_spec c1 = {12, 8, 7, 1, ONE, 0.0, 1.0, 4};
+  dof = check_singular(&c1, CUPID_MATRIX_GENERAL, 1);
+  assert_true(dof % c1.nx >= c1.cut);
+}
+
+/*
+ * An indefinite matrix for CHOLMOD: an SPD matrix with one negative diagonal entry. Every
+ * principal submatrix without that DOF is still positive definite, so LL' breaks down exactly
+ * at that DOF whatever the ordering.
+ */
+static void test_indefinite(void **state) {
+  (void)state;
+  const grid_spec g = {7, 6, 5, 3, B_SPD, 0.3, 0.0, 0};
+  const cupid_int bad = 3 * 101 + 1;
+  cupid_csr K = grid_matrix(&g);
+  const cupid_int n = K->nrows * 3;
+  cupid_csr_find(K, bad / 3, bad / 3)[4] = -10.0; /* component y of node 101 */
+  double *f = calloc((size_t)n, sizeof *f), *u = malloc((size_t)n * sizeof *u);
+  f[0] = 1.0;
+  cupid_solve_info info;
+  assert_int_equal(cupid_direct_solve(K, CUPID_MATRIX_SPD, f, NULL, u, &info), CUPID_ERR_NUMERIC);
+  print_message("  %s\n", cupid_error_message());
+  assert_int_equal(info.failed_dof, bad);
+  assert_non_null(strstr(cupid_error_message(), "DOF 304 = node 101, component y"));
+  /* the same DOF through the free-DOF numbering, with the face ix = 0 fixed */
+  double *zero = calloc((size_t)n, sizeof *zero);
+  cupid_dirichlet bc = face_bc(&g, zero, 0);
+  assert_false(bc->fixed[bad]);
+  assert_int_equal(cupid_direct_solve(K, CUPID_MATRIX_SPD, f, bc, u, &info), CUPID_ERR_NUMERIC);
+  assert_int_equal(info.failed_dof, bad);
+  /* UMFPACK pivots its way through an indefinite (non-singular) matrix */
+  CUPID_ASSERT_OK(cupid_direct_solve(K, CUPID_MATRIX_GENERAL, f, bc, u, &info));
+  assert_true(info.residual < 1e-12);
+  cupid_dirichlet_destroy(&bc);
+  cupid_csr_destroy(&K);
+  free(f);
+  free(u);
+  free(zero);
+}
+
+/* CHOLMOD reads one triangle: a non-symmetric K declared SPD must fail the residual check. */
+static void test_spd_not_symmetric(void **state) {
+  (void)state;
+  const grid_spec g = {6, 5, 4, 1, ONE, 0.2, 1.0, 0};
+  cupid_csr K = grid_matrix(&g);
+  const cupid_int n = K->nrows;
+  double *f = malloc((size_t)n * sizeof *f), *u = malloc((size_t)n * sizeof *u);
+  uint64_t seed = 4;
+  for (cupid_int k = 0; k < n; k++) f[k] = cupid_test_random(&seed);
+  cupid_solve_info info;
+  assert_int_equal(cupid_direct_solve(K, CUPID_MATRIX_SPD, f, NULL, u, &info), CUPID_ERR_NUMERIC);
+  assert_non_null(strstr(cupid_error_message(), "not symmetric"));
+  assert_true(info.residual > 1e-8);
+  cupid_csr_destroy(&K);
+  free(f);
+  free(u);
+}
+
+/* A random sparse SPD matrix (symmetric, strictly diagonally dominant) from triplets. */
+static void test_random_spd(void **state) {
+  (void)state;
+  enum { N = 400, T = 3000 };
+  uint64_t seed = 99;
+  cupid_int *I = malloc((2 * T + N) * sizeof *I), *J = malloc((2 * T + N) * sizeof *J);
+  double *V = malloc((2 * T + N) * sizeof *V), rowsum[N] = {0};
+  cupid_int t = 0;
+  for (int k = 0; k < T; k++) {
+    const cupid_int a = (cupid_int)((cupid_test_random(&seed) + 1.0) * 0.5 * N);
+    const cupid_int b = (cupid_int)((cupid_test_random(&seed) + 1.0) * 0.5 * N);
+    const double v = cupid_test_random(&seed);
+    I[t] = a, J[t] = b, V[t++] = v;
+    I[t] = b, J[t] = a, V[t++] = v;
+    rowsum[a] += fabs(v);
+    rowsum[b] += fabs(v);
+  }
+  for (cupid_int k = 0; k < N; k++) I[t] = J[t] = k, V[t++] = 2.0 * rowsum[k] + 0.1;
+  cupid_csr K = NULL;
+  CUPID_ASSERT_OK(cupid_csr_from_triplets(N, N, t, I, J, V, &K));
+  assert_true(cupid_csr_asymmetry(K) < 1e-15); /* sums of equal values in different order */
+  double ue[N], f[N], u[N];
+  for (int k = 0; k < N; k++) ue[k] = cupid_test_random(&seed);
+  cupid_csr_matvec(K, ue, f);
+  cupid_solve_info info;
+  for (int kind = 0; kind < 2; kind++) {
+    CUPID_ASSERT_OK(cupid_direct_solve(K, (cupid_matrix_kind)kind, f, NULL, u, &info));
+    /* diagonal dominance by a factor 2 bounds cond(K) by ~3 * max/min diagonal: error ~1e-15 */
+    assert_true(rel_error(N, u, ue) < 1e-10);
+    assert_true(info.residual < 1e-12);
+  }
+  cupid_csr_destroy(&K);
+  free(I);
+  free(J);
+  free(V);
+}
+
+/* Every DOF prescribed: u = prescribed values, nothing factored. Empty matrix: nothing to do. */
+static void test_all_fixed_and_empty(void **state) {
+  (void)state;
+  const grid_spec g = {3, 3, 3, 3, B_SPD, 0.0, 0.0, 0};
+  cupid_csr K = grid_matrix(&g);
+  const cupid_int n = K->nrows * 3;
+  cupid_dirichlet bc = NULL;
+  CUPID_ASSERT_OK(cupid_dirichlet_create(n, &bc));
+  for (cupid_int k = 0; k < n; k++) CUPID_ASSERT_OK(cupid_dirichlet_fix(bc, k, 0.1 * (double)k));
+  CUPID_ASSERT_OK(cupid_dirichlet_finalize(bc));
+  double *f = calloc((size_t)n, sizeof *f), *u = malloc((size_t)n * sizeof *u);
+  cupid_solve_info info;
+  for (int kind = 0; kind < 2; kind++) {
+    CUPID_ASSERT_OK(cupid_direct_solve(K, (cupid_matrix_kind)kind, f, bc, u, &info));
+    for (cupid_int k = 0; k < n; k++) assert_true(u[k] == 0.1 * (double)k);
+    assert_int_equal(info.n, 0);
+    assert_true(info.residual == 0.0);
+  }
+  cupid_dirichlet_destroy(&bc);
+  cupid_csr_destroy(&K);
+
+  const cupid_int rp[1] = {0};
+  CUPID_ASSERT_OK(cupid_csr_create(0, 0, 3, rp, NULL, &K));
+  CUPID_ASSERT_OK(cupid_direct_solve(K, CUPID_MATRIX_SPD, f, NULL, u, &info));
+  assert_int_equal(info.n, 0);
+  cupid_csr_destroy(&K);
+  free(f);
+  free(u);
+}
+
+static void test_bad_arguments(void **state) {
+  (void)state;
+  const grid_spec g = {3, 3, 2, 3, B_SPD, 1.0, 0.0, 0};
+  cupid_csr K = grid_matrix(&g);
+  const cupid_int n = K->nrows * 3;
+  double *f = calloc((size_t)n, sizeof *f), *u = malloc((size_t)n * sizeof *u);
+  cupid_dirichlet bc = NULL;
+  CUPID_ASSERT_OK(cupid_dirichlet_create(n - 1, &bc));
+  assert_int_equal(cupid_direct_solve(K, CUPID_MATRIX_SPD, f, bc, u, NULL), CUPID_ERR_ARGUMENT);
+  cupid_dirichlet_destroy(&bc);
+  CUPID_ASSERT_OK(cupid_dirichlet_create(n, &bc));
+  bc->fixed[5] = 1; /* not finalized */
+  assert_int_equal(cupid_direct_solve(K, CUPID_MATRIX_SPD, f, bc, u, NULL), CUPID_ERR_ARGUMENT);
+  assert_non_null(strstr(cupid_error_message(), "finalize"));
+  CUPID_ASSERT_OK(cupid_dirichlet_finalize(bc));
+  CUPID_ASSERT_OK(cupid_direct_solve(K, CUPID_MATRIX_SPD, f, bc, u, NULL));
+  assert_int_equal(cupid_direct_solve(K, (cupid_matrix_kind)7, f, bc, u, NULL),
+                   CUPID_ERR_ARGUMENT);
+  assert_int_equal(cupid_direct_solve(NULL, CUPID_MATRIX_SPD, f, bc, u, NULL), CUPID_ERR_ARGUMENT);
+  cupid_dirichlet_destroy(&bc);
+  cupid_csr_destroy(&K);
+  free(f);
+  free(u);
+}
+
+/*
+ * Equilibrium: for K = L (x) B with L 1 = 0, the rigid translations t_a satisfy K t_a = 0, so
+ * sum over all DOFs of component a of (K u - f) = -sum_a f. With K u = f on the free DOFs the
+ * reactions balance the applied load: sum_a r + sum_a f = 0, up to the solve's residual.
+ */
+static void test_reactions(void **state) {
+  (void)state;
+  const grid_spec g = {8, 6, 5, 3, B_SPD, 0.0, 0.0, 0};
+  cupid_csr K = grid_matrix(&g);
+  const cupid_int n = K->nrows * 3;
+  double *f = malloc((size_t)n * sizeof *f), *u = malloc((size_t)n * sizeof *u);
+  double *r = malloc((size_t)n * sizeof *r), *pres = malloc((size_t)n * sizeof *pres);
+  uint64_t seed = 17;
+  for (cupid_int k = 0; k < n; k++) {
+    f[k] = cupid_test_random(&seed);
+    pres[k] = 0.01 * cupid_test_random(&seed); /* non-zero prescribed displacements */
+  }
+  cupid_dirichlet bc = face_bc(&g, pres, 0);
+  cupid_solve_info info;
+  CUPID_ASSERT_OK(cupid_direct_solve(K, CUPID_MATRIX_SPD, f, bc, u, &info));
+  CUPID_ASSERT_OK(cupid_csr_reactions(K, u, f, bc, r));
+  double load[3] = {0}, react[3] = {0}, scale = 0.0;
+  for (cupid_int k = 0; k < n; k++) {
+    load[k % 3] += f[k];
+    react[k % 3] += r[k];
+    scale += fabs(f[k]);
+    if (!bc->fixed[k]) assert_true(r[k] == 0.0);
+  }
+  print_message("  load (%.6g %.6g %.6g) reactions (%.6g %.6g %.6g)\n", load[0], load[1],
+                load[2], react[0], react[1], react[2]);
+  /* |sum of residuals| <= sqrt(n) ||r_f|| ~ 1e-13 scale; 1e-10 leaves room for round-off */
+  for (int a = 0; a < 3; a++) ASSERT_NEAR(react[a] + load[a], 0.0, 1e-10 * scale);
+  /* without f: K u on the fixed DOFs, i.e. the reactions plus f there */
+  double *ku = malloc((size_t)n * sizeof *ku);
+  CUPID_ASSERT_OK(cupid_csr_reactions(K, u, NULL, bc, ku));
+  for (cupid_int k = 0; k < n; k++) ASSERT_NEAR(ku[k], bc->fixed[k] ? r[k] + f[k] : 0.0, 1e-14);
+  free(ku);
+  cupid_dirichlet_destroy(&bc);
+  cupid_csr_destroy(&K);
+  free(f);
+  free(u);
+  free(r);
+  free(pres);
+}
+
+/*
+ * Size check (not a timed assertion): the 7-point Laplacian on 30^3 nodes (27,000 unknowns
+ * after one face is fixed: 26,100), and a bs = 3 version on 20^3 nodes. Prints the figures.
+ * CUPID_TEST_SMALL=1 shrinks the grids (for valgrind runs).
+ */
+static void test_size(void **state) {
+  (void)state;
+  grid_spec cases[2] = {{30, 30, 30, 1, ONE, 0.0, 0.0, 0}, {20, 20, 20, 3, B_SPD, 0.0, 0.0, 0}};
+  if (getenv("CUPID_TEST_SMALL")) {
+    cases[0].nx = cases[0].ny = cases[0].nz = 8;
+    cases[1].nx = cases[1].ny = cases[1].nz = 5;
+  }
+  for (int c = 0; c < 2; c++) {
+    for (int kind = 0; kind < 2; kind++) {
+      cupid_csr K = grid_matrix(&cases[c]);
+      const cupid_int n = K->nrows * K->bs;
+      double *ue = malloc((size_t)n * sizeof *ue), *f = malloc((size_t)n * sizeof *f);
+      double *u = malloc((size_t)n * sizeof *u);
+      uint64_t seed = 5;
+      for (cupid_int k = 0; k < n; k++) ue[k] = cupid_test_random(&seed);
+      cupid_csr_matvec(K, ue, f);
+      cupid_dirichlet bc = face_bc(&cases[c], ue, 0);
+      cupid_solve_info info;
+      const double t0 = cupid_wtime();
+      CUPID_ASSERT_OK(cupid_direct_solve(K, (cupid_matrix_kind)kind, f, bc, u, &info));
+      const double t = cupid_wtime() - t0;
+      print_message("  %s bs=%d: n=%lld nnz(K_ff)=%lld nnz(factor)=%.3g flops=%.3g "
+                    "memory=%.1f MB factor %.3f s solve %.3f s total %.3f s residual %.1e "
+                    "error %.1e\n",
+                    info.method, K->bs, (long long)info.n, (long long)info.nnz_matrix,
+                    info.nnz_factor, info.flops_factor, (double)info.memory_factor / 1e6,
+                    info.time_factor, info.time_solve, t, info.residual, rel_error(n, u, ue));
+      /* cond(K_ff) ~ (2 nx / pi)^2 * cond(B) * 3 (weights) < 1e4: error ~1e-12 */
+      assert_true(rel_error(n, u, ue) < 1e-10);
+      cupid_dirichlet_destroy(&bc);
+      cupid_csr_destroy(&K);
+      free(ue);
+      free(f);
+      free(u);
+    }
+  }
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {cmocka_unit_test(test_spd_known_solution),
-                                     cmocka_unit_test(test_general_known_solution)};
+                                     cmocka_unit_test(test_general_known_solution),
+                                     cmocka_unit_test(test_singular),
+                                     cmocka_unit_test(test_floating_component),
+                                     cmocka_unit_test(test_indefinite),
+                                     cmocka_unit_test(test_spd_not_symmetric),
+                                     cmocka_unit_test(test_random_spd),
+                                     cmocka_unit_test(test_all_fixed_and_empty),
+                                     cmocka_unit_test(test_bad_arguments),
+                                     cmocka_unit_test(test_reactions),
+                                     cmocka_unit_test(test_size)};
   return cmocka_run_group_tests(tests, NULL, NULL);
 }
