@@ -123,12 +123,16 @@ typedef struct {
   double flops_factor;     /**< floating-point operations of the factorisation (0 = unknown) */
   double pivot_ratio;      /**< min/max pivot magnitude (CHOLMOD: L_kk^2; UMFPACK: |U_kk|) */
   int refinements;         /**< iterative refinement steps done by cupid (0 or 1) */
+  double backward_error;   /**< |r|_inf / (|K_ff|_inf |u_f|_inf + |b_f|_inf): the failure test
+                                (the solve fails above 1e-10) */
 } cupid_solve_info;
 
 /**
  * Solve K u = f with Dirichlet conditions: unknowns are the free DOFs, fixed DOFs take
  * bc->value; the system K_ff u_f = f_f - K_fc u_c is factored with CHOLMOD (SPD) or
- * UMFPACK (GENERAL) and the residual is checked (CUPID_ERR_NUMERIC above 1e-8).
+ * UMFPACK (GENERAL) and checked: one step of iterative refinement when the relative residual
+ * exceeds 1e-12, CUPID_ERR_NUMERIC when the normwise backward error stays above 1e-10 or the
+ * relative residual above 1e-4 (a singular system with an inconsistent load).
  * A singular or indefinite K_ff gives CUPID_ERR_NUMERIC with info->failed_dof set; so do a
  * pivot ratio below the CUPID_DIRECT_PIVOT_TOL bound (a matrix singular up to round-off) and a
  * residual failure (failed_dof is then the DOF of the smallest pivot).

@@ -3,6 +3,7 @@
 #define CUPID_APP_INTERNAL_H
 
 #include "cupid/app.h"
+#include "cupid/cuf.h"
 #include "cupid/model.h"
 #include "cupid/pd.h"
 #include "cupid/solvers.h"
@@ -42,7 +43,12 @@ typedef struct {
   cupid_int n_pd;          /**< PD nodes */
   cupid_int n_bonds;
 
-  /* The linear system: 3 DOFs per PD node (later issues append FE DOFs). */
+  /* CUF beam (FE): its DOFs follow the PD DOFs, from fe_offset = 3 n_pd. */
+  cupid_cuf_beam beam;
+  cupid_cuf_info fe_info;
+  cupid_int fe_offset, n_fe_dofs;
+
+  /* The linear system: [3 DOFs per PD node | FE DOFs]. */
   cupid_int ndof;
   cupid_csr K;
   cupid_dirichlet bc;
@@ -75,6 +81,15 @@ cupid_status cupid_app_sample(const cupid_job *job, const double p[3], double u[
 cupid_status cupid_app_write_outputs(cupid_job *job);
 /** Every output point must lie inside the model (checked before solving). */
 cupid_status cupid_app_check_points(const cupid_job *job);
+
+/* fe.c: the CUF beam of a model: creation, constraints, loads, sampling, VTU. */
+cupid_status cupid_app_fe_build(cupid_job *job);
+cupid_status cupid_app_fe_constraints(cupid_job *job);
+cupid_status cupid_app_fe_loads(cupid_job *job);
+cupid_status cupid_app_fe_impose_field(cupid_job *job);
+/** Unit-translation vectors: t[k * ndof + d] = generalised DOF d of the field e_k. */
+cupid_status cupid_app_translations(const cupid_job *job, double *t);
+cupid_status cupid_app_fe_write_vtu(cupid_job *job, const char *path);
 
 /* check.c: `cupid check` and the memory guard of `cupid run`. */
 cupid_status cupid_app_estimate(const cupid_job *job, int print);

@@ -51,15 +51,40 @@ static double physical_memory(void) {
   return pages > 0 && size > 0 ? (double)pages * (double)size : 0.0;
 }
 
+/* The beam's matrix: its exact pattern (cheap to build) and a banded-profile bound for the
+ * factor, since the beam axis orders the DOFs into a band of a few elements' width. */
+static cupid_status estimate_fe(const cupid_job *job, cupid_estimate *e) {
+  cupid_int *rowptr = NULL, *col = NULL;
+  CUPID_CALL(cupid_cuf_pattern(job->beam, &rowptr, &col));
+  cupid_int nb = job->fe_info.n_fe_nodes;
+  double blocks = (double)rowptr[nb];
+  cupid_free(&rowptr);
+  cupid_free(&col);
+  double ndof = (double)job->n_fe_dofs, bw = 9.0 * blocks / ndof;
+  e->matrix_blocks += blocks;
+  e->matrix_bytes += blocks * 80.0 + 8.0 * (double)nb;
+  e->factor_nnz += 2.0 * ndof * bw;
+  e->factor_bytes += 24.0 * ndof * bw;
+  e->factor_seconds += 4e-10 * ndof * bw * bw;
+  e->total_bytes += 1.5 * blocks * 80.0 + 24.0 * ndof * bw + 10.0 * ndof * 8.0;
+  return CUPID_SUCCESS;
+}
+
 cupid_status cupid_app_estimate(const cupid_job *job, int print) {
-  cupid_estimate e;
-  CUPID_CALL(estimate(job, &e));
+  cupid_estimate e = {0};
+  if (job->grid) CUPID_CALL(estimate(job, &e));
+  if (job->beam) CUPID_CALL(estimate_fe(job, &e));
   double limit = job->opts->max_memory_gb > 0 ? job->opts->max_memory_gb * 1e9 : 0.9 * physical_memory();
   if (print) {
     const cupid_model_t *m = job->model;
     printf("model: %s%s%s\n", m->file, m->title[0] ? " - " : "", m->title);
-    printf("PD nodes: %lld\nbonds: %lld\nDOFs: %lld\n", (long long)job->n_pd,
-           (long long)job->n_bonds, (long long)(3 * job->n_pd));
+    if (job->beam)
+      printf("beam: %lld nodes, %lld FE nodes, %lld FE DOFs\n",
+             (long long)job->fe_info.n_beam_nodes, (long long)job->fe_info.n_fe_nodes,
+             (long long)job->n_fe_dofs);
+    if (job->grid)
+      printf("PD nodes: %lld\nbonds: %lld\n", (long long)job->n_pd, (long long)job->n_bonds);
+    printf("DOFs: %lld\n", (long long)job->ndof);
     printf("stiffness matrix: about %.3g stored 3x3 blocks, %.3g GB\n", e.matrix_blocks,
            e.matrix_bytes / 1e9);
     printf("direct solver (CHOLMOD): about %.3g factor entries, %.3g GB, %.3g s\n", e.factor_nnz,

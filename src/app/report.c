@@ -78,8 +78,8 @@ static cupid_status write_pd_nodes(cupid_job *job) {
   return cupid_atomic_commit(&file);
 }
 
-/* `pd.vtu` (PD nodes as VTK vertices) and `model.pvd` (the collection ParaView opens). */
-static cupid_status write_vtu(cupid_job *job) {
+/* `pd.vtu`: PD nodes as VTK vertices. */
+static cupid_status write_pd_vtu(cupid_job *job) {
   cupid_status st = CUPID_SUCCESS;
   cupid_int n = job->n_pd, *conn = NULL, *offs = NULL;
   unsigned char *types = NULL;
@@ -122,11 +122,6 @@ static cupid_status write_vtu(cupid_job *job) {
                          .n_point_data = job->pd_stress ? 5 : 4};
   CUPID_TRY(join_path(job->outdir, "pd.vtu", path, sizeof path));
   CUPID_TRY(cupid_vtu_write(path, &mesh));
-  CUPID_TRY(join_path(job->outdir, "model.pvd", path, sizeof path));
-  const char *files[1] = {"pd.vtu"};
-  const double times[1] = {0.0};
-  const int parts[1] = {0};
-  CUPID_TRY(cupid_pvd_write(path, 1, files, times, parts));
 cleanup:
   cupid_free(&conn);
   cupid_free(&offs);
@@ -135,6 +130,27 @@ cleanup:
   cupid_free(&fixed);
   cupid_free(&stress);
   return st;
+}
+
+/* `beam.vtu` (the 3D reconstruction of the beam as hexahedra), `pd.vtu`, and `model.pvd`,
+ * the collection ParaView opens with both parts. */
+static cupid_status write_vtu(cupid_job *job) {
+  char path[4096];
+  const char *files[2];
+  const double times[2] = {0.0, 0.0};
+  const int parts[2] = {0, 1};
+  int n = 0;
+  if (job->beam) {
+    CUPID_CALL(join_path(job->outdir, "beam.vtu", path, sizeof path));
+    CUPID_CALL(cupid_app_fe_write_vtu(job, path));
+    files[n++] = "beam.vtu";
+  }
+  if (job->grid) {
+    CUPID_CALL(write_pd_vtu(job));
+    files[n++] = "pd.vtu";
+  }
+  CUPID_CALL(join_path(job->outdir, "model.pvd", path, sizeof path));
+  return cupid_pvd_write(path, n, files, times, parts);
 }
 
 static void json_vec3(cupid_json js, const char *key, const double v[3]) {
@@ -147,8 +163,8 @@ static void json_counts(cupid_json js, const cupid_job *job) {
   cupid_int nfixed = 0;
   for (cupid_int d = 0; d < job->ndof && job->bc; d++) nfixed += job->bc->fixed[d];
   cupid_json_begin_object(js, "counts");
-  cupid_json_integer(js, "fe_nodes", 0);
-  cupid_json_integer(js, "fe_dofs", 0);
+  cupid_json_integer(js, "fe_nodes", job->beam ? job->fe_info.n_fe_nodes : 0);
+  cupid_json_integer(js, "fe_dofs", job->n_fe_dofs);
   cupid_json_integer(js, "pd_nodes", job->n_pd);
   cupid_json_integer(js, "bonds", job->n_bonds);
   cupid_json_integer(js, "pd_dofs", 3 * job->n_pd);
@@ -261,12 +277,12 @@ cupid_status cupid_app_write_outputs(cupid_job *job) {
   const cupid_output *o = &job->model->output;
   double t0 = cupid_wtime();
   CUPID_CALL(cupid_mkdir_p(job->outdir));
-  if (needs_stress(job)) {
+  if (job->grid && needs_stress(job)) {
     CUPID_CALL(cupid_calloc((size_t)(6 * job->n_pd), sizeof(double), "PD stresses", &job->pd_stress));
     CUPID_CALL(cupid_pd_operator_stress(job->op, job->u, job->pd_stress));
   }
   for (int k = 0; k < o->n_lines; k++) CUPID_CALL(write_line(job, &o->lines[k]));
-  if (o->pd_nodes) CUPID_CALL(write_pd_nodes(job));
+  if (o->pd_nodes && job->grid) CUPID_CALL(write_pd_nodes(job));
   if (o->vtu) CUPID_CALL(write_vtu(job));
   /* The output phase is recorded before summary.json so that the file reports it. */
   cupid_job_phase_end(job, CUPID_PHASE_OUTPUT, t0);

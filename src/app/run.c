@@ -39,18 +39,17 @@ static cupid_status choose_solver(const cupid_job *job) {
 /* What this version can run; everything else is parsed and validated but refused plainly. */
 static cupid_status check_supported(const cupid_job *job) {
   const cupid_model_t *m = job->model;
-  if (m->has_beam)
-    return cupid_model_error(m, &m->beam.mark,
-                             "CUF beam models are not yet supported by cupid %s (the model was "
-                             "validated; remove `beam:` to run the peridynamics part alone)",
+  if (m->has_beam && m->has_peridynamics)
+    return cupid_model_error(m, &m->coupling.mark,
+                             "coupled beam + peridynamics models are not yet supported by cupid "
+                             "%s (the model was validated; run the beam or the peridynamics part "
+                             "alone)",
                              cupid_version());
   if (m->analysis.type == CUPID_ANALYSIS_DYNAMIC)
     return cupid_model_error(m, &m->analysis.mark,
                              "type dynamic is not yet supported by cupid %s (allowed now: static, "
                              "evaluate)",
                              cupid_version());
-  if (!m->has_peridynamics)
-    return cupid_model_error(m, &m->analysis.mark, "the model has nothing to solve");
   return CUPID_SUCCESS;
 }
 
@@ -86,7 +85,6 @@ static cupid_status build_pd(cupid_job *job) {
                                                 .n_materials = m->n_materials};
   CUPID_CALL(cupid_pd_operator_create(job->grid, &job->pd_options, &job->op));
   job->n_bonds = cupid_pd_operator_num_bonds(job->op);
-  job->ndof = 3 * job->n_pd;
   cupid_job_phase_end(job, CUPID_PHASE_GRID, t0);
   cupid_job_progress(job, "grid: %lld PD nodes, %lld bonds", (long long)job->n_pd,
                      (long long)job->n_bonds);
@@ -105,31 +103,48 @@ static cupid_status allocate_fields(cupid_job *job) {
 /* `evaluate`: impose the field everywhere and compute the internal forces K u. */
 static cupid_status run_evaluate(cupid_job *job) {
   const cupid_model_t *m = job->model;
-  const double *x = cupid_pd_grid_coords(job->grid);
   double t0 = cupid_wtime();
-  for (cupid_int i = 0; i < job->n_pd; i++)
-    for (int c = 0; c < 3; c++)
-      job->u[3 * i + c] = cupid_value_eval(&m->analysis.field[c], x[3 * i], x[3 * i + 1],
-                                           x[3 * i + 2], 0.0, 0.0);
-  CUPID_CALL(cupid_pd_operator_apply(job->op, job->u, job->f_int));
+  if (job->grid) {
+    const double *x = cupid_pd_grid_coords(job->grid);
+    for (cupid_int i = 0; i < job->n_pd; i++)
+      for (int c = 0; c < 3; c++)
+        job->u[3 * i + c] = cupid_value_eval(&m->analysis.field[c], x[3 * i], x[3 * i + 1],
+                                             x[3 * i + 2], 0.0, 0.0);
+    CUPID_CALL(cupid_pd_operator_apply(job->op, job->u, job->f_int));
+  }
+  if (job->beam) {
+    CUPID_CALL(cupid_app_fe_impose_field(job));
+    CUPID_CALL(cupid_cuf_assemble(job->beam, &job->K));
+    cupid_csr_matvec(job->K, job->u + job->fe_offset, job->f_int + job->fe_offset);
+  }
   cupid_job_phase_end(job, CUPID_PHASE_SOLVE, t0);
   cupid_job_progress(job, "evaluate: internal forces of the imposed field computed");
   return CUPID_SUCCESS;
 }
 
-/* Name the node and region where a factorisation broke down (exit status 2). */
+/* Name the node (PD) or beam node and expansion term (FE) where a factorisation broke
+ * down (exit status 2). */
 static cupid_status explain_singular(const cupid_job *job, cupid_status st) {
   cupid_int dof = job->solve.failed_dof;
   if (dof < 0 || dof >= job->ndof) return st;
   char msg[1024];
   snprintf(msg, sizeof msg, "%s", cupid_error_message());
-  const double *x = cupid_pd_grid_coords(job->grid);
-  cupid_int node = dof / 3;
+  char comp = "xyz"[dof % 3];
+  if (!job->beam || dof < job->fe_offset) {
+    const double *x = cupid_pd_grid_coords(job->grid);
+    cupid_int node = dof / 3;
+    return CUPID_ERROR(st,
+                       "%s; PD node %lld at (%g, %g, %g), component %c: check that every PD "
+                       "region is constrained against rigid motion (fix, clamp or displacement)",
+                       msg, (long long)node, x[3 * node], x[3 * node + 1], x[3 * node + 2], comp);
+  }
+  cupid_int fe_node = (dof - job->fe_offset) / 3, M = job->fe_info.M;
+  cupid_int beam_node = fe_node / M;
   return CUPID_ERROR(st,
-                     "%s; PD node %lld at (%g, %g, %g), component %c: check that every PD region "
-                     "is constrained against rigid motion (fix, clamp or displacement)",
-                     msg, (long long)node, x[3 * node], x[3 * node + 1], x[3 * node + 2],
-                     "xyz"[dof % 3]);
+                     "%s; beam node %lld at y = %g, expansion term %lld, component %c: check "
+                     "that the beam is clamped or fixed against rigid motion",
+                     msg, (long long)beam_node, cupid_cuf_beam_node_y(job->beam, beam_node),
+                     (long long)(fe_node % M), comp);
 }
 
 static cupid_status require_constraints(const cupid_job *job) {
@@ -138,8 +153,8 @@ static cupid_status require_constraints(const cupid_job *job) {
     if (job->bc->fixed[d]) fixed[d % 3] = 1;
   if (fixed[0] && fixed[1] && fixed[2]) return CUPID_SUCCESS;
   return CUPID_ERROR(CUPID_ERR_NUMERIC,
-                     "the model is unconstrained: no constraint fixes the %s%s%s displacement of "
-                     "any PD node, so the stiffness matrix is singular (rigid-body motion); add "
+                     "the model is unconstrained: no constraint fixes the %s%s%s displacement "
+                     "anywhere, so the stiffness matrix is singular (rigid-body motion); add "
                      "`fix`, `clamp` or `displacement` constraints",
                      fixed[0] ? "" : "x ", fixed[1] ? "" : "y ", fixed[2] ? "" : "z ");
 }
@@ -149,7 +164,10 @@ static cupid_status run_static(cupid_job *job) {
   double t0 = cupid_wtime();
   CUPID_CALL(require_constraints(job));
   CUPID_CALL(cupid_app_estimate(job, 0));
-  CUPID_CALL(cupid_pd_operator_assemble(job->op, &job->K));
+  if (job->grid)
+    CUPID_CALL(cupid_pd_operator_assemble(job->op, &job->K));
+  else
+    CUPID_CALL(cupid_cuf_assemble(job->beam, &job->K));
   cupid_job_phase_end(job, CUPID_PHASE_ASSEMBLY, t0);
   cupid_job_progress(job, "assembly: %lld non-zeros (%.1f MB)", (long long)cupid_csr_nnz(job->K),
                      (double)cupid_csr_bytes(job->K) / 1e6);
@@ -168,18 +186,31 @@ static cupid_status run_static(cupid_job *job) {
   return CUPID_SUCCESS;
 }
 
-/* Applied-load sum and reaction sum (reactions = K u - f on constrained DOFs). */
-static void sum_forces(cupid_job *job) {
-  for (int c = 0; c < 3; c++) job->load_sum[c] = job->reaction_sum[c] = 0.0;
-  for (cupid_int d = 0; d < job->ndof; d++) {
-    job->load_sum[d % 3] += job->f_ext[d];
-    if (job->bc->fixed[d]) job->reaction_sum[d % 3] += job->f_int[d] - job->f_ext[d];
+/* Resultants of the applied loads and of the reactions (K u - f on constrained DOFs): each
+ * is the work against a unit translation, whose generalised DOFs are 1 on PD nodes and the
+ * interpolated constant field on the beam (for TE only the constant term carries it). */
+static cupid_status sum_forces(cupid_job *job) {
+  double *t = NULL;
+  CUPID_CALL(cupid_calloc((size_t)(3 * job->ndof), sizeof *t, "translation vectors", &t));
+  cupid_status st = cupid_app_translations(job, t);
+  for (int k = 0; k < 3 && st == CUPID_SUCCESS; k++) {
+    const double *tk = t + (size_t)k * (size_t)job->ndof;
+    double load = 0.0, reaction = 0.0;
+    for (cupid_int d = 0; d < job->ndof; d++) {
+      load += job->f_ext[d] * tk[d];
+      if (job->bc->fixed[d]) reaction += (job->f_int[d] - job->f_ext[d]) * tk[d];
+    }
+    job->load_sum[k] = load;
+    job->reaction_sum[k] = reaction;
   }
+  cupid_free(&t);
+  return st;
 }
 
 static void job_destroy(cupid_job *job) {
   cupid_pd_operator_destroy(&job->op);
   cupid_pd_grid_destroy(&job->grid);
+  cupid_cuf_beam_destroy(&job->beam);
   cupid_csr_destroy(&job->K);
   cupid_dirichlet_destroy(&job->bc);
   cupid_free(&job->u);
@@ -198,7 +229,10 @@ cupid_status cupid_run_model(const cupid_model_t *model, const cupid_run_options
 
   CUPID_TRY(check_supported(&job));
   CUPID_TRY(choose_solver(&job));
-  CUPID_TRY(build_pd(&job));
+  if (model->has_peridynamics) CUPID_TRY(build_pd(&job));
+  if (model->has_beam) CUPID_TRY(cupid_app_fe_build(&job));
+  job.fe_offset = 3 * job.n_pd;
+  job.ndof = job.fe_offset + job.n_fe_dofs;
   CUPID_TRY(cupid_app_check_points(&job));
   if (opts->check_only) {
     st = cupid_app_estimate(&job, 1);
@@ -208,12 +242,14 @@ cupid_status cupid_run_model(const cupid_model_t *model, const cupid_run_options
   if (model->analysis.type == CUPID_ANALYSIS_EVALUATE) {
     CUPID_TRY(run_evaluate(&job));
   } else {
-    CUPID_TRY(cupid_app_pd_constraints(&job));
+    if (job.grid) CUPID_TRY(cupid_app_pd_constraints(&job));
+    if (job.beam) CUPID_TRY(cupid_app_fe_constraints(&job));
     CUPID_TRY(cupid_dirichlet_finalize(job.bc));
-    CUPID_TRY(cupid_app_pd_loads(&job));
+    if (job.grid) CUPID_TRY(cupid_app_pd_loads(&job));
+    if (job.beam) CUPID_TRY(cupid_app_fe_loads(&job));
     CUPID_TRY(run_static(&job));
   }
-  sum_forces(&job);
+  CUPID_TRY(sum_forces(&job));
   CUPID_TRY(cupid_app_write_outputs(&job));
   cupid_job_progress(&job, "done: results in %s", job.outdir);
 cleanup:

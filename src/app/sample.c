@@ -1,4 +1,5 @@
-/* Values at arbitrary points (output lines and points): inside a PD region, trilinear
+/* Values at arbitrary points (output lines and points): inside the beam, the CUF expansion
+ * (paper 000 Eqs. 23-24) and its stress; inside a PD region, trilinear
  * interpolation of the grid nodes (model-format.md, output.lines). Corners missing from the
  * grid (near region faces, where the point is less than h/2 from the surface) are dropped and
  * the weights renormalised, which extrapolates constantly over that last half cell. */
@@ -23,6 +24,13 @@ cupid_status cupid_app_sample(const cupid_job *job, const double p[3], double u[
   if (sigma)
     for (int c = 0; c < 6; c++) sigma[c] = NAN;
   *region = CUPID_REGION_NONE;
+  if (job->beam && cupid_cuf_contains(job->beam, p[0], p[1], p[2])) {
+    *region = CUPID_REGION_FE;
+    if (!job->u) return CUPID_SUCCESS;
+    CUPID_CALL(cupid_cuf_displacement_at(job->beam, job->u, p[0], p[1], p[2], u));
+    if (sigma) CUPID_CALL(cupid_cuf_stress_at(job->beam, job->u, p[0], p[1], p[2], sigma));
+    return CUPID_SUCCESS;
+  }
   if (!job->grid || !inside_pd(job, p)) return CUPID_SUCCESS;
   if (!job->u) { /* before the solve: only say where the point lies */
     *region = CUPID_REGION_PD;

@@ -4,6 +4,9 @@
 
 #include "cupid/solvers.h"
 
+/* Below a few thousand block rows a parallel region costs more than the loop it runs. */
+#define CUPID_CSR_PARALLEL(M) ((M)->nrows > 2048)
+
 /* Allocate a matrix of nnzb blocks; values zeroed, rowptr/col left for the caller. */
 static cupid_status csr_alloc(cupid_int nrows, cupid_int ncols, int bs, cupid_int nnzb,
                               cupid_csr *out) {
@@ -179,7 +182,7 @@ double *cupid_csr_find(const cupid_csr_t *A, cupid_int row, cupid_int col) {
 
 /* The 3x3-block product, the hot case (PD and beam stiffness). */
 static void matvec3(const cupid_csr_t *A, const double *x, double *y) {
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (CUPID_CSR_PARALLEL(A))
   for (cupid_int r = 0; r < A->nrows; r++) {
     double y0 = 0.0, y1 = 0.0, y2 = 0.0;
     for (cupid_int p = A->rowptr[r]; p < A->rowptr[r + 1]; p++) {
@@ -196,7 +199,7 @@ static void matvec3(const cupid_csr_t *A, const double *x, double *y) {
 }
 
 static void matvec1(const cupid_csr_t *A, const double *x, double *y) {
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (CUPID_CSR_PARALLEL(A))
   for (cupid_int r = 0; r < A->nrows; r++) {
     double s = 0.0;
     for (cupid_int p = A->rowptr[r]; p < A->rowptr[r + 1]; p++) s += A->val[p] * x[A->col[p]];
@@ -207,7 +210,7 @@ static void matvec1(const cupid_csr_t *A, const double *x, double *y) {
 /* Any block size (the struct is public, so do not rely on bs being 1 or 3). */
 static void matvec_general(const cupid_csr_t *A, const double *x, double *y) {
   const int bs = A->bs;
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (CUPID_CSR_PARALLEL(A))
   for (cupid_int r = 0; r < A->nrows; r++) {
     for (int a = 0; a < bs; a++) {
       double s = 0.0;
@@ -246,7 +249,7 @@ cupid_status cupid_csr_to_scalar(const cupid_csr_t *A, cupid_csr *S) {
   const cupid_int bs = A->bs;
   CUPID_CALL(csr_alloc(A->nrows * bs, A->ncols * bs, 1, cupid_csr_nnz(A), S));
   cupid_csr B = *S;
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (CUPID_CSR_PARALLEL(A))
   for (cupid_int r = 0; r < A->nrows; r++) {
     const cupid_int len = A->rowptr[r + 1] - A->rowptr[r];
     for (cupid_int a = 0; a < bs; a++) {
@@ -266,7 +269,7 @@ double cupid_csr_asymmetry(const cupid_csr_t *A) {
   if (A->nrows != A->ncols) return NAN;
   const int bs = A->bs;
   double maxdiff = 0.0, maxabs = 0.0;
-#pragma omp parallel for schedule(static) reduction(max : maxdiff, maxabs)
+#pragma omp parallel for schedule(static) reduction(max : maxdiff, maxabs) if (CUPID_CSR_PARALLEL(A))
   for (cupid_int r = 0; r < A->nrows; r++) {
     for (cupid_int p = A->rowptr[r]; p < A->rowptr[r + 1]; p++) {
       const cupid_int q = csr_position(A, A->col[p], r); /* block (col, row) */
@@ -294,13 +297,13 @@ int64_t cupid_csr_bytes(const cupid_csr_t *A) {
 
 void cupid_csr_zero(cupid_csr_t *A) {
   const cupid_int n = cupid_csr_nnz(A);
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (CUPID_CSR_PARALLEL(A))
   for (cupid_int k = 0; k < n; k++) A->val[k] = 0.0;
 }
 
 void cupid_csr_scale(cupid_csr_t *A, double alpha) {
   const cupid_int n = cupid_csr_nnz(A);
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (CUPID_CSR_PARALLEL(A))
   for (cupid_int k = 0; k < n; k++) A->val[k] *= alpha;
 }
 
@@ -320,7 +323,7 @@ cupid_status cupid_csr_axpy(double alpha, const cupid_csr_t *X, cupid_csr_t *Y) 
   CUPID_CHECK(same_pattern(X, Y), CUPID_ERR_ARGUMENT,
               "cupid_csr_axpy: the matrices have different sparsity patterns");
   const cupid_int n = cupid_csr_nnz(X);
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (CUPID_CSR_PARALLEL(X))
   for (cupid_int k = 0; k < n; k++) Y->val[k] += alpha * X->val[k];
   return CUPID_SUCCESS;
 }
@@ -331,7 +334,7 @@ cupid_status cupid_csr_diagonal(const cupid_csr_t *A, double *d) {
               "cupid_csr_diagonal: the matrix is %lld x %lld blocks, not square",
               (long long)A->nrows, (long long)A->ncols);
   const int bs = A->bs;
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (CUPID_CSR_PARALLEL(A))
   for (cupid_int r = 0; r < A->nrows; r++) {
     const cupid_int p = csr_position(A, r, r);
     for (int a = 0; a < bs; a++) d[r * bs + a] = p < 0 ? 0.0 : A->val[(p * bs + a) * bs + a];
@@ -346,7 +349,7 @@ cupid_status cupid_csr_reactions(const cupid_csr_t *K, const double *u, const do
   CUPID_CHECK(K->nrows == K->ncols && K->nrows * bs == bc->n, CUPID_ERR_ARGUMENT,
               "cupid_csr_reactions: %lld x %lld blocks of size %d do not match %lld DOFs",
               (long long)K->nrows, (long long)K->ncols, bs, (long long)bc->n);
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (CUPID_CSR_PARALLEL(K))
   for (cupid_int row = 0; row < K->nrows; row++) {
     for (int a = 0; a < bs; a++) {
       const cupid_int g = row * bs + a;

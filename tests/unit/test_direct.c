@@ -190,9 +190,10 @@ static cupid_int check_singular(const grid_spec *g, cupid_matrix_kind kind, int 
   cupid_dirichlet bc = fix_face ? face_bc(g, zero, 0) : NULL;
   cupid_solve_info info;
   const cupid_status st = cupid_direct_solve(K, kind, f, bc, u, &info);
-  print_message("  %s %dx%dx%d bs=%d: status %d, failed DOF %lld, pivots %.2e: %s\n", info.method,
-                g->nx, g->ny, g->nz, g->bs, (int)st, (long long)info.failed_dof, info.pivot_ratio,
-                cupid_error_message());
+  print_message("  %s %dx%dx%d bs=%d: status %d, failed DOF %lld, pivots %.2e, residual %.2e, "
+                "backward error %.2e: %s\n",
+                info.method, g->nx, g->ny, g->nz, g->bs, (int)st, (long long)info.failed_dof,
+                info.pivot_ratio, info.residual, info.backward_error, cupid_error_message());
   assert_int_equal(st, CUPID_ERR_NUMERIC);
   assert_true(info.failed_dof >= 0 && info.failed_dof < n);
   assert_true(bc == NULL || !bc->fixed[info.failed_dof]);
