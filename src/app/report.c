@@ -194,6 +194,7 @@ static void json_solver(cupid_json js, const cupid_job *job) {
     cupid_json_integer(js, "matrix_nonzeros", job->solve.nnz_matrix);
     cupid_json_number(js, "factor_nonzeros", job->solve.nnz_factor);
     cupid_json_number(js, "residual", job->solve.residual);
+    cupid_json_number(js, "backward_error", job->solve.backward_error);
   } else {
     cupid_json_string(js, "method", "none");
     cupid_json_null(js, "residual");

@@ -3,8 +3,8 @@
 
 usage: compare_summary.py EXPECTED.json SUMMARY.json [--update]
 
-EXPECTED holds {"example": path, "tolerance": rel, "points": {name: {field: value}},
-"counts": {name: value}, "checks": [...]}. Point values must agree to `tolerance` relative to
+EXPECTED holds {"example": path, "tolerance": rel, "why": reason, "points": {name: {field:
+value}}, "counts": {name: value}}. Point values must agree to `tolerance` relative to
 the largest stored displacement (or stress) of the file, so that components that are zero up to
 round-off do not need a tolerance of their own. Counts must agree exactly.
 """
@@ -50,13 +50,20 @@ def main():
             worst = max(worst, err)
             if not err <= tol:
                 failures.append(f"{name}.{f}: {got!r} != {v!r} (relative {err:.2e} > {tol})")
+    # A backward-stable direct solve leaves a normwise backward error of ~1e-16; 1e-12 flags a
+    # regression in the solver path without depending on the model's conditioning.
     res = summary["solver"].get("residual")
-    if res is not None and res > 1e-10:
-        failures.append(f"solver residual {res} > 1e-10")
+    eta = summary["solver"].get("backward_error")
+    if eta is not None and eta > 1e-12:
+        failures.append(f"solver backward error {eta} > 1e-12")
+    # The reaction resultant inherits the solve's residual (a few 1e-10 for the ill-conditioned
+    # thin-walled beams), so equilibrium is held to 100 times the residual, and never looser
+    # than 1e-6 or tighter than 1e-9 of the load.
     imbalance = max(abs(x) for x in summary["equilibrium_imbalance"])
     load = max(abs(x) for x in summary["applied_load_sum"]) or 1.0
-    if imbalance / load > 1e-9:
-        failures.append(f"equilibrium imbalance {imbalance} relative {imbalance/load:.2e} > 1e-9")
+    bound = min(1e-6, max(1e-9, 100.0 * (res or 0.0)))
+    if imbalance / load > bound:
+        failures.append(f"equilibrium imbalance {imbalance} relative {imbalance/load:.2e} > {bound:.1e}")
     for f in failures:
         print("FAIL:", f)
     print(f"{expected_path}: worst relative difference {worst:.2e} (tolerance {tol})")
