@@ -20,15 +20,6 @@ static void check(cupid_status st) {
   }
 }
 
-static void free_csr(cupid_csr *K) {
-  if (!*K) return;
-  cupid_free(&(*K)->rowptr);
-  cupid_free(&(*K)->col);
-  cupid_free(&(*K)->val);
-  cupid_free(K);
-}
-
-/* CPU time of the process (all threads), seconds: robust to other load on the machine. */
 static double cpu_time(void) {
   struct rusage ru;
   getrusage(RUSAGE_SELF, &ru);
@@ -50,29 +41,35 @@ static double assembly_pairs(const struct cupid_pd_operator_private *op) {
 }
 
 /* y = K u for the 3x3-block matrix (OpenMP over block rows). */
-static void matvec(const cupid_csr_t *A, const double *x, double *y) {
-#pragma omp parallel for schedule(static)
-  for (cupid_int r = 0; r < A->nrows; r++) {
-    double s0 = 0, s1 = 0, s2 = 0;
-    for (cupid_int q = A->rowptr[r]; q < A->rowptr[r + 1]; q++) {
-      const double *b = A->val + 9 * q, *xc = x + 3 * A->col[q];
-      s0 += b[0] * xc[0] + b[1] * xc[1] + b[2] * xc[2];
-      s1 += b[3] * xc[0] + b[4] * xc[1] + b[5] * xc[2];
-      s2 += b[6] * xc[0] + b[7] * xc[1] + b[8] * xc[2];
-    }
-    y[3 * r] = s0;
-    y[3 * r + 1] = s1;
-    y[3 * r + 2] = s2;
+/* A static solve on the assembled K with CHOLMOD: the layer z < 3 (one horizon) is held,
+ * the rest carries a uniform body force along z. Returns 0 on success. */
+static int solve(const cupid_csr_t *K, const double *coords, cupid_int nn, cupid_solve_info *info) {
+  cupid_dirichlet bc = NULL;
+  double *f = calloc(3 * (size_t)nn, sizeof *f), *u = calloc(3 * (size_t)nn, sizeof *u);
+  if (!f || !u) return 1;
+  check(cupid_dirichlet_create(3 * nn, &bc));
+  for (cupid_int i = 0; i < nn; i++) {
+    if (coords[3 * i + 2] < 3.0)
+      for (int c = 0; c < 3; c++) bc->fixed[3 * i + c] = 1;
+    f[3 * i + 2] = -1.0;
   }
+  check(cupid_dirichlet_finalize(bc));
+  check(cupid_direct_solve(K, CUPID_MATRIX_SPD, f, bc, u, info));
+  cupid_dirichlet_destroy(&bc);
+  free(f);
+  free(u);
+  return 0;
 }
 
 int main(int argc, char **argv) {
   int sizes[64], ns = 0;
   cupid_pd_model_kind model = CUPID_PD_LPS;
   cupid_partial_volume pv = CUPID_PARTIAL_PDLAMMPS;
+  int solve_max = 20; /* CHOLMOD solve for n <= solve_max (20^3 LPS: ~5 GB, minutes) */
   for (int a = 1; a < argc && ns < 64; a++) {
     if (!strcmp(argv[a], "--bond")) model = CUPID_PD_BOND;
     else if (!strcmp(argv[a], "--exact")) pv = CUPID_PARTIAL_EXACT;
+    else if (!strcmp(argv[a], "--solve-max") && a + 1 < argc) solve_max = atoi(argv[++a]);
     else sizes[ns++] = atoi(argv[a]);
   }
   if (ns == 0) {
@@ -83,8 +80,9 @@ int main(int argc, char **argv) {
          model == CUPID_PD_LPS ? "LPS" : "bond-based", pv == CUPID_PARTIAL_EXACT ? "exact" : "pdlammps",
          cupid_num_threads(), cupid_version());
   printf("| n | nodes | bonds | K blocks | K MB | grid s | neighbours s | assembly s | assembly CPU s "
-         "| assembly us/node | assembly CPU ns/pair | apply ms | K matvec ms | peak MB |\n");
-  printf("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
+         "| assembly us/node | assembly CPU ns/pair | apply ms | K matvec ms | factor s | solve s "
+         "| nnz(L) | peak MB |\n");
+  printf("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
   fflush(stdout);
   for (int s = 0; s < ns; s++) {
     const int n = sizes[s];
@@ -114,19 +112,27 @@ int main(int argc, char **argv) {
     double t4 = cupid_wtime();
     check(cupid_pd_operator_apply(op, u, f));
     double t5 = cupid_wtime();
-    matvec(K, u, f);
+    cupid_csr_matvec(K, u, f);
     double t6 = cupid_wtime();
+    cupid_solve_info info = {0};
+    int solved = n <= solve_max && !solve(K, cupid_pd_grid_coords(g), nn, &info);
     const cupid_int blocks = K->rowptr[nn];
     const double kmb = (double)((nn + 1) * 8 + blocks * (8 + 72)) / 1e6;
     const double pairs = model == CUPID_PD_LPS ? assembly_pairs(op) : (double)cupid_pd_operator_num_bonds(op);
-    printf("| %d | %lld | %lld | %lld | %.0f | %.3f | %.3f | %.2f | %.2f | %.1f | %.2f | %.1f | %.1f | %.0f |\n", n,
+    char fs[32] = "-", ss[32] = "-", ls[32] = "-";
+    if (solved) {
+      snprintf(fs, sizeof fs, "%.2f", info.time_factor);
+      snprintf(ss, sizeof ss, "%.3f", info.time_solve);
+      snprintf(ls, sizeof ls, "%.3g", info.nnz_factor);
+    }
+    printf("| %d | %lld | %lld | %lld | %.0f | %.3f | %.3f | %.2f | %.2f | %.1f | %.2f | %.1f | %.1f | %s | %s | %s | %.0f |\n", n,
            (long long)nn, (long long)cupid_pd_operator_num_bonds(op), (long long)blocks, kmb, t1 - t0,
            t2 - t1, t3 - t2, cpu, 1e6 * (t3 - t2) / (double)nn, 1e9 * cpu / pairs, 1e3 * (t5 - t4),
-           1e3 * (t6 - t5), (double)cupid_peak_memory() / 1e6);
+           1e3 * (t6 - t5), fs, ss, ls, (double)cupid_peak_memory() / 1e6);
     fflush(stdout);
     free(u);
     free(f);
-    free_csr(&K);
+    cupid_csr_destroy(&K);
     cupid_pd_operator_destroy(&op);
     cupid_pd_grid_destroy(&g);
   }
