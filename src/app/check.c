@@ -7,8 +7,9 @@
  * Direct factor: nested dissection on a 3D grid gives nnz(L) ~ c n^(4/3) and flops ~ n^2;
  * c and the time scale are fitted to the CHOLMOD measurements on this class of machine in
  * shared/reference/dependencies.md (bond-based, delta = 3h: 20^3 -> 5.3e7 nnz(L), 3.7 s;
- * 40^3 -> 1.23e9, 232 s). LPS's wider coupling is taken as 3x the fill and time: an estimate
- * to decide what fits, not a promise. */
+ * 40^3 -> 1.23e9, 232 s). LPS couples nodes 2 delta apart: bench/bench_pd_cube measured
+ * 15^3 -> 2.38e7 nnz(L), 3.3 s and 20^3 -> 1.08e8, 19 s, i.e. about 3x the fill and 7.5x the
+ * time of the bond-based fit. An estimate to decide what fits, not a promise. */
 #include <math.h>
 #include <stdio.h>
 #include <unistd.h>
@@ -35,7 +36,8 @@ static cupid_status estimate(const cupid_job *job, cupid_estimate *e) {
     e->factor_seconds = 1e-7 * e->factor_nnz;
   } else {
     e->factor_nnz = fill * 77.0 * pow(ndof, 4.0 / 3.0);
-    e->factor_seconds = fill * 3.7 * (ndof / 24000.0) * (ndof / 24000.0);
+    double slow = m->pd.model == CUPID_PD_LPS ? 7.5 : 1.0;
+    e->factor_seconds = slow * 3.7 * (ndof / 24000.0) * (ndof / 24000.0);
   }
   double dense = 0.5 * ndof * ndof;
   if (e->factor_nnz > dense) e->factor_nnz = dense;
