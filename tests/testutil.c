@@ -1,7 +1,10 @@
+#define _POSIX_C_SOURCE 200809L /* mkdtemp */
 #include "testutil.h"
 
 #include <stdio.h>
 #include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
 
 #include "cupid_config.h"
 
@@ -18,4 +21,17 @@ const char *cupid_test_source_path(const char *relative) {
   const char *root = getenv("CUPID_SOURCE_DIR");
   snprintf(buf, sizeof buf, "%s/%s", root ? root : CUPID_SOURCE_DIR, relative);
   return buf;
+}
+
+int cupid_test_mkdtemp(const char *tag, char *buf, size_t len) {
+  int n = snprintf(buf, len, "/tmp/cupid_test_%s_XXXXXX", tag);
+  if (n < 0 || (size_t)n >= len) return -1;
+  return mkdtemp(buf) ? 0 : -1;
+}
+
+int cupid_test_rmtree(const char *path) {
+  if (!path || !path[0] || strchr(path, '\'')) return -1; /* quoted below */
+  char cmd[4200];
+  snprintf(cmd, sizeof cmd, "rm -rf '%s'", path);
+  return system(cmd);
 }

@@ -30,6 +30,12 @@
 /** Deterministic uniform random numbers in [-1, 1) (splitmix64), for reproducible tests. */
 double cupid_test_random(uint64_t *state);
 
+/** Create a fresh directory /tmp/cupid_test_<tag>_XXXXXX into buf (len >= 64); 0 on success. */
+int cupid_test_mkdtemp(const char *tag, char *buf, size_t len);
+
+/** Remove a directory tree (rm -rf); 0 on success. */
+int cupid_test_rmtree(const char *path);
+
 /** Absolute path of a file in the source tree (tests run from the build tree). */
 const char *cupid_test_source_path(const char *relative);
 

@@ -15,15 +15,12 @@ static char root[256]; /* a fresh directory per test */
 
 static int setup(void **state) {
   (void)state;
-  snprintf(root, sizeof root, "/tmp/cupid_test_files_XXXXXX");
-  return mkdtemp(root) ? 0 : -1;
+  return cupid_test_mkdtemp("files", root, sizeof root);
 }
 
 static int teardown(void **state) {
   (void)state;
-  char cmd[512];
-  snprintf(cmd, sizeof cmd, "rm -rf '%s'", root);
-  return system(cmd);
+  return cupid_test_rmtree(root);
 }
 
 static const char *in_root(const char *name) {

@@ -124,15 +124,12 @@ static char dir[64]; /* a fresh directory for test_python_parses */
 
 static int setup(void **state) {
   (void)state;
-  snprintf(dir, sizeof dir, "/tmp/cupid_test_json_XXXXXX");
-  return mkdtemp(dir) ? 0 : -1;
+  return cupid_test_mkdtemp("json", dir, sizeof dir);
 }
 
 static int teardown(void **state) { /* runs after a failure too */
   (void)state;
-  char cmd[128];
-  snprintf(cmd, sizeof cmd, "rm -rf '%s'", dir);
-  return system(cmd);
+  return cupid_test_rmtree(dir);
 }
 
 static void test_python_parses(void **state) {

@@ -14,8 +14,7 @@ static char saved_path[8192]; /* PATH before the test */
 
 static int setup(void **state) {
   (void)state;
-  snprintf(root, sizeof root, "/tmp/cupid_test_plot_XXXXXX");
-  if (!mkdtemp(root)) return -1;
+  if (cupid_test_mkdtemp("plot", root, sizeof root)) return -1;
   snprintf(dir, sizeof dir, "%s/plot dir 'q'", root);
   const char *path = getenv("PATH");
   snprintf(saved_path, sizeof saved_path, "%s", path ? path : "/usr/bin:/bin");
@@ -25,9 +24,7 @@ static int setup(void **state) {
 static int teardown(void **state) {
   (void)state;
   setenv("PATH", saved_path, 1);
-  char cmd[512];
-  snprintf(cmd, sizeof cmd, "rm -rf '%s'", root);
-  return system(cmd);
+  return cupid_test_rmtree(root);
 }
 
 static const char *in_dir(const char *name) {

@@ -14,15 +14,12 @@ static char root[256];
 
 static int setup(void **state) {
   (void)state;
-  snprintf(root, sizeof root, "/tmp/cupid_test_vtu_XXXXXX");
-  return mkdtemp(root) ? 0 : -1;
+  return cupid_test_mkdtemp("vtu", root, sizeof root);
 }
 
 static int teardown(void **state) {
   (void)state;
-  char cmd[512];
-  snprintf(cmd, sizeof cmd, "rm -rf '%s'", root);
-  return system(cmd);
+  return cupid_test_rmtree(root);
 }
 
 static const char *in_root(const char *name) {
