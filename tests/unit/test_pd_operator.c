@@ -9,27 +9,6 @@
 
 #include "testutil.h"
 
-/* TODO(lead): replace by cupid_csr_destroy / cupid_csr_matvec once src/solvers lands. */
-static void csr_free(cupid_csr *A) {
-  if (!*A) return;
-  cupid_free(&(*A)->rowptr);
-  cupid_free(&(*A)->col);
-  cupid_free(&(*A)->val);
-  cupid_free(A);
-}
-
-static void csr_matvec(const cupid_csr_t *A, const double *x, double *y) {
-  for (cupid_int r = 0; r < A->nrows; r++) {
-    double s[3] = {0, 0, 0};
-    for (cupid_int q = A->rowptr[r]; q < A->rowptr[r + 1]; q++) {
-      const double *b = A->val + 9 * q;
-      const double *xc = x + 3 * A->col[q];
-      for (int i = 0; i < 3; i++) s[i] += b[3 * i] * xc[0] + b[3 * i + 1] * xc[1] + b[3 * i + 2] * xc[2];
-    }
-    for (int i = 0; i < 3; i++) y[3 * r + i] = s[i];
-  }
-}
-
 /* Dense copy of a small block matrix (3n x 3n, row-major). */
 static double *csr_dense(const cupid_csr_t *A) {
   const cupid_int n = 3 * A->nrows;
@@ -171,7 +150,7 @@ static cupid_csr check_operator(cupid_pd_grid g, cupid_pd_operator op, const cha
   double E0;
   CUPID_ASSERT_OK(cupid_pd_operator_energy(op, u, &E0));
   CUPID_ASSERT_OK(cupid_pd_operator_apply(op, u, f));
-  csr_matvec(K, v, Kv);
+  cupid_csr_matvec(K, v, Kv);
   const double grad_fd = (Ep - Em) / (2 * eps), grad = dot(v, f, n);
   const double hess_fd = (Epp - Epm - Emp + Emm) / (4 * eps * eps), hess = dot(w, Kv, n);
   const double escale = fabs(E0) + 1e-300;
@@ -207,7 +186,7 @@ static cupid_csr check_operator(cupid_pd_grid g, cupid_pd_operator op, const cha
       }
       for (int c = 0; c < 3; c++) t[3 * p + c] = r[c];
     }
-    csr_matvec(K, t, Kv);
+    cupid_csr_matvec(K, t, Kv);
     CUPID_ASSERT_OK(cupid_pd_operator_apply(op, t, f));
     const double rn = max_abs(t, n);
     if (max_abs(Kv, n) > 1e-12 * knorm * rn || max_abs(f, n) > 1e-12 * knorm * rn)
@@ -246,7 +225,7 @@ static void all_options_on(cupid_pd_grid g, const double *deltas, int ndeltas, i
           CUPID_ASSERT_OK(cupid_pd_operator_estimate(g, &o, &est));
           if (model == CUPID_PD_BOND) assert_int_equal(est.blocks, K->rowptr[K->nrows]);
           else assert_true(est.blocks >= K->rowptr[K->nrows]);
-          csr_free(&K);
+          cupid_csr_destroy(&K);
           cupid_pd_operator_destroy(&op);
           assert_null(op);
         }
@@ -343,7 +322,7 @@ static void patch_test(cupid_pd_grid g, int model, int infl, int pvr, double del
   free(theta);
   free(in1);
   free(in2);
-  csr_free(&K);
+  cupid_csr_destroy(&K);
   cupid_pd_operator_destroy(&op);
 }
 

@@ -12,8 +12,8 @@
 static const char *infl_name[] = {"gaussian", "inverse", "constant"};
 static const char *pv_name[] = {"none", "pdlammps", "exact"};
 
-/* TODO(lead): use cupid_direct_solve once src/solvers lands; a dense Cholesky suffices
- * for ~100 unknowns. Solves A x = b in place (A n x n row-major, SPD). */
+/* A dense Cholesky, independent of the sparse solver (the example pd_bar_1d covers that
+ * path end to end): ~100 unknowns. Solves A x = b in place (A n x n row-major, SPD). */
 static void dense_cholesky_solve(double *A, double *b, int n) {
   for (int j = 0; j < n; j++) {
     double d = A[j * n + j];
