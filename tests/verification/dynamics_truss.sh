@@ -63,7 +63,7 @@ PY
 expect 1 'central_unstable.yaml:[0-9]+:[0-9]+: analysis.dynamic: .*unstable with dt = 0.0001' -- "$CUPID" run "$M/central_unstable.yaml" -o cu
 [ ! -e cu/summary.json ] && ok || bad "a refused run left summary.json"
 expect 1 'central_consistent.yaml:[0-9]+:[0-9]+: analysis.dynamic: integrator: central needs a diagonal mass' -- "$CUPID" run "$M/central_consistent.yaml" -o cc
- materials.steel: needs a density for a dynamic analysis" -- "$CUPID" run "$M/no_density.yaml" -o nd
+expect 1 "no_density.yaml:[0-9]+:[0-9]+: materials.steel: needs a density for a dynamic analysis" -- "$CUPID" run "$M/no_density.yaml" -o nd
 
 echo "dynamics_truss: $pass passed, $fail failed"
 [ "$fail" -eq 0 ]
