@@ -64,13 +64,15 @@ typedef struct {
   double dt_bound;       /**< guaranteed-stable step from a Gershgorin bound (central only) */
   cupid_solve_info factor; /**< the factorisation of K + a0 M + a1 C (Newmark) */
   double time_step_s;    /**< wall time in the time loop */
-  double max_balance;    /**< max |balance| / max(E0, max energy) over all steps */
+  double max_balance;    /**< max |balance| / max(E0, max energy) over the output steps */
 } cupid_dynamics_info;
 
 /**
  * Called at step 0 (t = 0, before any step) and after every step; @p output is 1 at steps
  * that are multiples of `every` and at the last step. u, v, a are full vectors (n entries).
- * A non-success return stops the run with that status.
+ * The kinetic and strain energies (and the balance) are evaluated at output steps only (the
+ * other steps see the last output's values; damping and external work are accumulated at
+ * every step). A non-success return stops the run with that status.
  */
 typedef cupid_status (*cupid_dynamics_monitor)(void *ctx, cupid_int step, double t, int output,
                                                const double *u, const double *v, const double *a,

@@ -59,6 +59,39 @@ static cupid_status check_density(const cupid_job *job) {
   return CUPID_SUCCESS;
 }
 
+/* 1 if a value changes with t (sampled: a few points and times; loads and prescribed
+ * displacements are assembled once, at t = 0). */
+static int depends_on_time(const cupid_value *v) {
+  if (v->kind != CUPID_VALUE_EXPR) return 0;
+  static const double ts[3] = {0.37, 1.9e-3, 41.0}, xs[3] = {0.0, 0.3, 1.7};
+  for (int a = 0; a < 3; a++)
+    for (int k = 0; k < 3; k++) {
+      double p = xs[a], ref = cupid_value_eval(v, p, p, p, 0.0, 1.0), val;
+      val = cupid_value_eval(v, p, p, p, ts[k], 1.0);
+      if (val != ref && !(isnan(val) && isnan(ref))) return 1;
+    }
+  return 0;
+}
+
+static cupid_status check_time_independent(const cupid_model_t *m) {
+  for (int k = 0; k < m->n_loads; k++)
+    for (int c = 0; c < 3; c++)
+      if (depends_on_time(&m->loads[k].value[c]))
+        return cupid_model_error(m, &m->loads[k].mark,
+                                 "time-dependent loads (expressions in t) are not yet supported "
+                                 "by cupid %s; dynamic loads are constant (applied at t = 0)",
+                                 cupid_version());
+  for (int k = 0; k < m->n_constraints; k++)
+    for (int c = 0; c < 3; c++)
+      if (m->constraints[k].kind == CUPID_CONSTRAINT_DISPLACEMENT &&
+          depends_on_time(&m->constraints[k].value[c]))
+        return cupid_model_error(m, &m->constraints[k].mark,
+                                 "time-dependent prescribed displacements are not yet supported "
+                                 "by cupid %s; prescribed values are held constant",
+                                 cupid_version());
+  return CUPID_SUCCESS;
+}
+
 cupid_status cupid_app_dynamic_check(const cupid_job *job) {
   const cupid_model_t *m = job->model;
   if (m->has_beam && m->has_peridynamics)
@@ -66,6 +99,7 @@ cupid_status cupid_app_dynamic_check(const cupid_job *job) {
                              "type dynamic of coupled beam + peridynamics models is not yet "
                              "supported by cupid %s (FE-only and PD-only models are)",
                              cupid_version());
+  CUPID_CALL(check_time_independent(m));
   return check_density(job);
 }
 
