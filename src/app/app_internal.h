@@ -104,7 +104,8 @@ cupid_status cupid_app_fe_write_vtu(cupid_job *job, const char *path);
 
 /* dynamic.c: type dynamic (FE-only and PD-only models). */
 cupid_status cupid_app_dynamic_check(const cupid_job *job);
-/** Assemble K and M, integrate, write history.csv, energies.csv, the VTU series and plots. */
+/** Assemble K (unless job->K is already set, e.g. a coupled global K) and M, integrate, write
+ *  history.csv, energies.csv, the VTU series and plots. */
 cupid_status cupid_app_run_dynamic(cupid_job *job);
 /** The "dynamic" block of summary.json. */
 void cupid_app_dynamic_json(cupid_json js, const cupid_job *job);

@@ -103,21 +103,37 @@ cupid_status cupid_app_dynamic_check(const cupid_job *job) {
   return check_density(job);
 }
 
-/* PD nodal mass rho V (every component), FE consistent matrix or HRZ diagonal. */
+/* PD nodal mass rho V (every component), FE consistent matrix or HRZ diagonal. With both PD
+ * and FE (a coupled layout) and a consistent FE mass, M takes K's global pattern: the beam's
+ * mass at its DOF offset and rho V on the PD diagonal (Arlequin weights are the coupling's). */
 static cupid_status build_mass(cupid_job *job, cupid_csr *M, double **m_lumped) {
   const cupid_model_t *m = job->model;
   int lumped = m->analysis.dynamic.lumped_mass || !job->beam;
-  if (lumped) CUPID_CALL(cupid_calloc((size_t)job->ndof, sizeof(double), "lumped mass", m_lumped));
+  CUPID_CALL(cupid_calloc((size_t)job->ndof, sizeof(double), "lumped mass", m_lumped));
   if (job->grid) {
     const int *mat = cupid_pd_grid_materials(job->grid);
     double vol = cupid_pd_grid_cell_volume(job->grid);
     for (cupid_int i = 0; i < job->n_pd; i++)
       for (int c = 0; c < 3; c++) (*m_lumped)[3 * i + c] = m->materials[mat[i]].density * vol;
   }
-  if (job->beam) {
-    if (lumped) CUPID_CALL(cupid_cuf_mass_lumped(job->beam, *m_lumped));
-    else CUPID_CALL(cupid_cuf_mass_assemble(job->beam, M));
+  if (lumped) {
+    if (job->beam) CUPID_CALL(cupid_cuf_mass_lumped(job->beam, *m_lumped));
+    return CUPID_SUCCESS;
   }
+  if (!job->grid) {
+    CUPID_CALL(cupid_cuf_mass_assemble(job->beam, M));
+  } else {
+    CUPID_CALL(cupid_csr_duplicate(job->K, M));
+    cupid_csr_zero(*M);
+    CUPID_CALL(cupid_cuf_mass_add(job->beam, *M));
+    for (cupid_int i = 0; i < job->n_pd; i++) {
+      double *blk = cupid_csr_find(*M, i, i);
+      CUPID_CHECK(blk, CUPID_ERR_INTERNAL, "the stiffness lacks the diagonal block of PD node %lld",
+                  (long long)i);
+      for (int c = 0; c < 3; c++) blk[4 * c] += (*m_lumped)[3 * i + c];
+    }
+  }
+  cupid_free(m_lumped);
   return CUPID_SUCCESS;
 }
 
@@ -308,8 +324,9 @@ cupid_status cupid_app_run_dynamic(cupid_job *job) {
   double *m_lumped = NULL, *v = NULL, t0 = cupid_wtime();
   dyn_output o = {.job = job};
   CUPID_TRY(cupid_app_estimate(job, 0));
-  if (job->grid) CUPID_TRY(cupid_pd_operator_assemble(job->op, &job->K));
-  else CUPID_TRY(cupid_cuf_assemble(job->beam, &job->K));
+  /* A coupled pipeline assembles its global K (with the coupling terms) before calling. */
+  if (!job->K && job->grid) CUPID_TRY(cupid_pd_operator_assemble(job->op, &job->K));
+  else if (!job->K) CUPID_TRY(cupid_cuf_assemble(job->beam, &job->K));
   CUPID_TRY(build_mass(job, &M, &m_lumped));
   cupid_job_phase_end(job, CUPID_PHASE_ASSEMBLY, t0);
   CUPID_TRY(cupid_calloc((size_t)job->ndof, sizeof *v, "velocities", &v));
