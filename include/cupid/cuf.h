@@ -241,6 +241,31 @@ cupid_status cupid_cuf_vtu_build(const cupid_cuf_beam beam, const double *u, int
 /** Destroy and set *vtu to NULL (NULL-safe). */
 void cupid_cuf_vtu_destroy(cupid_cuf_vtu **vtu);
 
+
+/* ---- Mass matrix (src/cuf/mass.c; dynamics, issue 5) ----
+ * Nucleus (paper 004 Eq. 3 in CUF form): M_ij^{tau s} = delta_kl int rho F_tau F_s N_i N_j dV,
+ * rho the density of each section element's material (0 if not given). */
+
+/** Assemble the consistent mass matrix (local numbering, bs = 3, the stiffness pattern of
+ *  cupid_cuf_pattern()) into a new matrix *M. */
+cupid_status cupid_cuf_mass_assemble(const cupid_cuf_beam beam, cupid_csr *M);
+
+/** Add the consistent mass into an existing bs = 3 matrix at the beam's dof_offset (coupled
+ *  systems; the pattern must contain the beam's). */
+cupid_status cupid_cuf_mass_add(const cupid_cuf_beam beam, cupid_csr M);
+
+/**
+ * Add the lumped (diagonal) mass into d (global vector, dof_offset applied): HRZ lumping per
+ * (beam element, section element) pair: the diagonal of the pair's consistent mass scaled so
+ * that the translational functions (every LE node; the constant TE term) carry the pair's mass
+ * rho V in each direction. Higher TE terms keep their diagonal in the same proportion.
+ */
+cupid_status cupid_cuf_mass_lumped(const cupid_cuf_beam beam, double *d);
+
+/** Total mass sum rho V over the active pairs. */
+cupid_status cupid_cuf_mass_total(const cupid_cuf_beam beam, double *total);
+/* ---- end of the mass block ---- */
+
 #ifdef __cplusplus
 }
 #endif

@@ -143,6 +143,35 @@ typedef struct {
 cupid_status cupid_direct_solve(const cupid_csr_t *K, cupid_matrix_kind kind, const double *f,
                                 const cupid_dirichlet_t *bc, double *u, cupid_solve_info *info);
 
+
+/* ---- Reusable SPD factorisation (src/solvers/factor.c; added for dynamics, issue 5) ----
+ * One CHOLMOD factorisation of K_ff, solved many times (implicit time stepping with a
+ * constant step). cupid_direct_solve() is unchanged. */
+
+/** A factorisation of the free-DOF block K_ff of an SPD matrix (opaque). */
+typedef struct cupid_direct_factor_private *cupid_direct_factor;
+
+/**
+ * Factor K_ff (CHOLMOD LL', one triangle of K used; K symmetric) for the free DOFs of @p bc
+ * (NULL: all free; bc must be finalized). K is copied: it may be freed afterwards.
+ * CUPID_ERR_NUMERIC if K_ff is not positive definite or its pivot ratio is below the
+ * CUPID_DIRECT_PIVOT_TOL bound; info (may be NULL) receives method, n, nnz, time_factor,
+ * pivot_ratio, failed_dof.
+ */
+cupid_status cupid_direct_factor_create(const cupid_csr_t *K, const cupid_dirichlet_t *bc,
+                                        cupid_direct_factor *F, cupid_solve_info *info);
+
+/**
+ * Solve K_ff x_f = b_f for full-length vectors: b and x have K->nrows*bs entries, only the
+ * free entries of b are read and only the free entries of x are written (the caller moves
+ * K_fc u_c to the right-hand side if prescribed values are non-zero). b and x may alias.
+ */
+cupid_status cupid_direct_factor_solve(cupid_direct_factor F, const double *b, double *x);
+
+/** Destroy and set *F to NULL (NULL-safe). */
+void cupid_direct_factor_destroy(cupid_direct_factor *F);
+/* ---- end of the reusable factorisation block ---- */
+
 #ifdef __cplusplus
 }
 #endif

@@ -4,6 +4,7 @@
 
 #include "cupid/app.h"
 #include "cupid/cuf.h"
+#include "cupid/dynamics.h"
 #include "cupid/model.h"
 #include "cupid/pd.h"
 #include "cupid/solvers.h"
@@ -25,6 +26,14 @@ typedef struct {
   int64_t peak_memory; /**< process peak RSS at the end of the phase */
   int used;
 } cupid_phase_record;
+
+/** State of a `type: dynamic` run (src/app/dynamic.c). */
+typedef struct {
+  cupid_dynamics_info info;
+  cupid_dynamics_energy energy; /**< at the last step */
+  cupid_int steps;
+  int lumped, done;
+} cupid_job_dynamic;
 
 /** Where a sampled point lies. */
 typedef enum { CUPID_REGION_NONE = 0, CUPID_REGION_PD = 1, CUPID_REGION_FE = 2 } cupid_region_kind;
@@ -59,6 +68,8 @@ typedef struct {
   cupid_solve_info solve;
   int solved;              /**< a linear solve was done */
 
+  cupid_job_dynamic dyn;   /**< type: dynamic */
+
   double load_sum[3], reaction_sum[3];
   cupid_phase_record phases[CUPID_PHASE_COUNT];
   double t_start;
@@ -90,6 +101,14 @@ cupid_status cupid_app_fe_impose_field(cupid_job *job);
 /** Unit-translation vectors: t[k * ndof + d] = generalised DOF d of the field e_k. */
 cupid_status cupid_app_translations(const cupid_job *job, double *t);
 cupid_status cupid_app_fe_write_vtu(cupid_job *job, const char *path);
+
+/* dynamic.c: type dynamic (FE-only and PD-only models). */
+cupid_status cupid_app_dynamic_check(const cupid_job *job);
+/** Assemble K (unless job->K is already set, e.g. a coupled global K) and M, integrate, write
+ *  history.csv, energies.csv, the VTU series and plots. */
+cupid_status cupid_app_run_dynamic(cupid_job *job);
+/** The "dynamic" block of summary.json. */
+void cupid_app_dynamic_json(cupid_json js, const cupid_job *job);
 
 /* check.c: `cupid check` and the memory guard of `cupid run`. */
 cupid_status cupid_app_estimate(const cupid_job *job, int print);

@@ -253,6 +253,7 @@ static cupid_status write_summary(cupid_job *job) {
   json_vec3(js, "applied_load_sum", job->load_sum);
   json_vec3(js, "reaction_sum", job->reaction_sum);
   json_vec3(js, "equilibrium_imbalance", imbalance);
+  if (job->dyn.done) cupid_app_dynamic_json(js, job);
   cupid_json_number(js, "total_time_s", cupid_wtime() - job->t_start);
   cupid_json_integer(js, "peak_memory_bytes", cupid_peak_memory());
   CUPID_TRY(json_points(js, job));
@@ -284,7 +285,8 @@ cupid_status cupid_app_write_outputs(cupid_job *job) {
   }
   for (int k = 0; k < o->n_lines; k++) CUPID_CALL(write_line(job, &o->lines[k]));
   if (o->pd_nodes && job->grid) CUPID_CALL(write_pd_nodes(job));
-  if (o->vtu) CUPID_CALL(write_vtu(job));
+  /* dynamic runs wrote their VTU time series (src/app/dynamic.c) */
+  if (o->vtu && job->model->analysis.type != CUPID_ANALYSIS_DYNAMIC) CUPID_CALL(write_vtu(job));
   /* The output phase is recorded before summary.json so that the file reports it. */
   cupid_job_phase_end(job, CUPID_PHASE_OUTPUT, t0);
   return write_summary(job);

@@ -45,11 +45,7 @@ static cupid_status check_supported(const cupid_job *job) {
                              "%s (the model was validated; run the beam or the peridynamics part "
                              "alone)",
                              cupid_version());
-  if (m->analysis.type == CUPID_ANALYSIS_DYNAMIC)
-    return cupid_model_error(m, &m->analysis.mark,
-                             "type dynamic is not yet supported by cupid %s (allowed now: static, "
-                             "evaluate)",
-                             cupid_version());
+  if (m->analysis.type == CUPID_ANALYSIS_DYNAMIC) return cupid_app_dynamic_check(job);
   return CUPID_SUCCESS;
 }
 
@@ -247,7 +243,8 @@ cupid_status cupid_run_model(const cupid_model_t *model, const cupid_run_options
     CUPID_TRY(cupid_dirichlet_finalize(job.bc));
     if (job.grid) CUPID_TRY(cupid_app_pd_loads(&job));
     if (job.beam) CUPID_TRY(cupid_app_fe_loads(&job));
-    CUPID_TRY(run_static(&job));
+    if (model->analysis.type == CUPID_ANALYSIS_DYNAMIC) CUPID_TRY(cupid_app_run_dynamic(&job));
+    else CUPID_TRY(run_static(&job));
   }
   CUPID_TRY(sum_forces(&job));
   CUPID_TRY(cupid_app_write_outputs(&job));

@@ -1,0 +1,106 @@
+#!/usr/bin/env python3
+"""Run the truss models (paper 004, section 4) and compare FE, PD and the exact solution.
+
+usage: examples/truss/compare_truss.py [--cupid build/cupid] [--out out/truss]
+
+Runs every examples/truss/truss_*.yaml with `cupid run -o OUT/<name>`, then writes into OUT:
+  comparison.md             RMS differences of the tip and mid-point histories against the
+                            exact solution (mode sum, with the Rayleigh damping of each mode),
+                            the energy balance and timings;
+  exact.csv                 the exact histories (t, tip, mid; undamped and damped);
+  compare_<point>[_damped].png   FE, PD and exact histories (gnuplot).
+Exact solution of the released uniform stretch eps0 = 1e-3 of a fixed-free bar:
+  u(y, t) = sum_k 8 eps0 L (-1)^(k+1) / (pi^2 (2k-1)^2) sin(w_k y / c) q_k(t),
+  w_k = (2k-1) pi c / (2L), q_k the free response of a mode with zeta_k = a/(2w_k) + b w_k/2
+(the tip is a triangle wave of period T1 = 4L/c and amplitude eps0 L when undamped).
+"""
+import argparse
+import csv
+import json
+import math
+import os
+import shutil
+import subprocess
+
+E, RHO, L, EPS0 = 1e9, 7800.0, 1.0, 1e-3
+C = math.sqrt(E / RHO)
+MODES = 400
+
+
+def exact(y, t, a=0.0, b=0.0):
+    u = 0.0
+    for k in range(1, MODES + 1):
+        w = (2 * k - 1) * math.pi * C / (2 * L)
+        amp = 8 * EPS0 * L * (-1) ** (k + 1) / (math.pi ** 2 * (2 * k - 1) ** 2)
+        z = a / (2 * w) + b * w / 2
+        if z < 1:
+            wd = w * math.sqrt(1 - z * z)
+            q = math.exp(-z * w * t) * (math.cos(wd * t) + z / math.sqrt(1 - z * z) * math.sin(wd * t))
+        else:  # overdamped high modes: they carry ~nothing; critically damped form
+            q = math.exp(-w * t) * (1 + w * t)
+        u += amp * math.sin(w * y / C) * q
+    return u
+
+
+def read_history(path):
+    with open(path) as f:
+        r = csv.DictReader(f)
+        return [{k: float(v) for k, v in row.items()} for row in r]
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--cupid", default="build/cupid")
+    ap.add_argument("--out", default="out/truss")
+    a = ap.parse_args()
+    here = os.path.dirname(os.path.abspath(__file__))
+    models = sorted(f for f in os.listdir(here) if f.startswith("truss_") and f.endswith(".yaml"))
+    os.makedirs(a.out, exist_ok=True)
+    results = {}
+    for m in models:
+        name = m[len("truss_"):-len(".yaml")]
+        d = os.path.join(a.out, name)
+        subprocess.run([a.cupid, "run", os.path.join(here, m), "-o", d, "--quiet"], check=True)
+        results[name] = (read_history(os.path.join(d, "history.csv")),
+                         json.load(open(os.path.join(d, "summary.json"))))
+    # exact histories on the FE time grid
+    ts = [row["t"] for row in results["fe"][0]]
+    with open(os.path.join(a.out, "exact.csv"), "w") as f:
+        f.write("t,tip,mid,tip_damped,mid_damped\n")
+        for t in ts[::5]:
+            vals = (exact(1.0, t), exact(0.5, t), exact(1.0, t, 0.1, 3.2e-6), exact(0.5, t, 0.1, 3.2e-6))
+            f.write("%.8e,%.8e,%.8e,%.8e,%.8e\n" % ((t,) + vals))
+    lines = ["| model | tip RMS err / 1e-3 | mid RMS err / 1e-3 | max energy balance | steps | time-stepping s |",
+             "|---|---|---|---|---|---|"]
+    for name, (hist, summ) in results.items():
+        ab = (0.1, 3.2e-6) if "damped" in name else (0.0, 0.0)
+        err = {"tip": 0.0, "mid": 0.0}
+        n = 0
+        for row in hist[::5]:  # every 5th step: 1100+ samples over 5 periods
+            t = row["t"]
+            err["tip"] += (row["tip_uy"] - exact(1.0, t, *ab)) ** 2
+            err["mid"] += (row["mid_uy"] - exact(0.5, t, *ab)) ** 2
+            n += 1
+        dyn = summ["dynamic"]
+        lines.append("| %s | %.4f | %.4f | %.1e | %d | %.3f |" % (
+            name, math.sqrt(err["tip"] / n) / EPS0, math.sqrt(err["mid"] / n) / EPS0,
+            dyn["max_energy_balance_relative"], dyn["steps"], dyn["time_stepping_s"]))
+    with open(os.path.join(a.out, "comparison.md"), "w") as f:
+        f.write("\n".join(lines) + "\n")
+    print("\n".join(lines))
+    if shutil.which("gnuplot"):
+        for point in ("tip", "mid"):
+            for suffix, col in (("", point), ("_damped", point + "_damped")):
+                gp = os.path.join(a.out, "compare_%s%s.gp" % (point, suffix))
+                with open(gp, "w") as f:
+                    f.write('set terminal pngcairo size 1100,600\nset output "compare_%s%s.png"\n' % (point, suffix))
+                    f.write('set datafile separator ","\nset key outside\nset xlabel "t (s)"\n')
+                    f.write('set ylabel "u_y at %s (m)"\nset title "Truss (paper 004): %s%s"\n' % (point, point, suffix.replace("_", ", ")))
+                    f.write('plot "exact.csv" u 1:"%s" w l lw 3 lc rgb "gray" t "exact (mode sum)", ' % col)
+                    f.write('"fe%s/history.csv" u 1:"%s_uy" w l t "FE (CUF TE0, 80 nodes)", ' % (suffix, point))
+                    f.write('"pd%s/history.csv" u 1:"%s_uy" w l t "PD (bond, 80 nodes)"\n' % (suffix, point))
+                subprocess.run(["gnuplot", os.path.basename(gp)], cwd=a.out, check=True)
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,126 @@
+/**
+ * @file dynamics.h
+ * @brief Linear structural dynamics M a + C v + K u = f (paper 004 Eq. 3 with Rayleigh damping,
+ *        paper 004 section 4): implicit Newmark with one factorisation for a constant step,
+ *        explicit central differences with a lumped mass and a stable-step check, energies,
+ *        and a small dense generalised eigen solver for verification.
+ *
+ * The system is given as global matrices on any DOF layout: PD-only, FE-only, or a coupled
+ * [3 per PD node | FE DOFs] system (K then includes the coupling terms). Fixed DOFs of the
+ * Dirichlet conditions are held at their (constant) prescribed values with zero velocity and
+ * acceleration; the load f is constant in time.
+ *
+ * Damping: C = a M + b K (Rayleigh), modal damping ratio zeta = a / (2 omega) + b omega / 2.
+ */
+#ifndef CUPID_DYNAMICS_H
+#define CUPID_DYNAMICS_H
+
+#include "cupid/base.h"
+#include "cupid/model.h"
+#include "cupid/solvers.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/** The semi-discrete system. Exactly one of M (consistent, same shape as K) and m_lumped
+ *  (one mass per scalar DOF) is given; central differences need m_lumped. */
+typedef struct {
+  const cupid_csr_t *K;          /**< stiffness, SPD on the free DOFs */
+  const cupid_csr_t *M;          /**< consistent mass, or NULL */
+  const double *m_lumped;        /**< diagonal mass (n entries), or NULL */
+  const cupid_dirichlet_t *bc;   /**< finalized conditions, or NULL (nothing fixed) */
+  const double *f;               /**< constant external force (n entries), or NULL */
+} cupid_dynamics_system;
+
+/** Integration settings (cupid_dynamics_defaults() gives average-acceleration Newmark). */
+typedef struct {
+  cupid_integrator integrator;   /**< CUPID_INTEGRATOR_NEWMARK or _CENTRAL */
+  double dt;                     /**< time step */
+  cupid_int steps;               /**< number of steps */
+  int every;                     /**< output every this many steps (>= 1) */
+  double beta, gamma;            /**< Newmark parameters (default 1/4, 1/2) */
+  double rayleigh_mass;          /**< a in C = a M + b K */
+  double rayleigh_stiffness;     /**< b */
+} cupid_dynamics_options;
+
+/** Energies at one instant. With E0 the initial kinetic + strain energy, the balance is
+ *  kinetic + strain + damping - external = E0 (drift reported as its residual). */
+typedef struct {
+  double kinetic;   /**< v.M v / 2 */
+  double strain;    /**< u.K u / 2 */
+  double damping;   /**< energy dissipated by C since t = 0 (midpoint rule) */
+  double external;  /**< work of f since t = 0 */
+  double balance;   /**< kinetic + strain + damping - external - E0 */
+} cupid_dynamics_energy;
+
+/** What a run did. */
+typedef struct {
+  cupid_int steps;
+  double dt;
+  double omega_max;      /**< estimate of the largest free frequency (power iteration on
+                              M^-1 K; central differences only, else 0) */
+  double dt_critical;    /**< stable step 2/omega_max, reduced for damping (central only) */
+  double dt_bound;       /**< guaranteed-stable step from a Gershgorin bound (central only) */
+  cupid_solve_info factor; /**< the factorisation of K + a0 M + a1 C (Newmark) */
+  double time_step_s;    /**< wall time in the time loop */
+  double max_balance;    /**< max |balance| / max(E0, max energy) over the output steps */
+} cupid_dynamics_info;
+
+/**
+ * Called at step 0 (t = 0, before any step) and after every step; @p output is 1 at steps
+ * that are multiples of `every` and at the last step. u, v, a are full vectors (n entries).
+ * The kinetic and strain energies (and the balance) are evaluated at output steps only (the
+ * other steps see the last output's values; damping and external work are accumulated at
+ * every step). A non-success return stops the run with that status.
+ */
+typedef cupid_status (*cupid_dynamics_monitor)(void *ctx, cupid_int step, double t, int output,
+                                               const double *u, const double *v, const double *a,
+                                               const cupid_dynamics_energy *energy);
+
+/** Defaults: Newmark beta = 1/4, gamma = 1/2, every = 1, no damping (dt and steps to set). */
+cupid_dynamics_options cupid_dynamics_defaults(void);
+
+/**
+ * Integrate from u (initial displacement, overwritten by the final one) and v (initial
+ * velocity, overwritten), both with n = K->nrows * K->bs entries; fixed DOFs are reset to
+ * their prescribed value and zero velocity. Newmark: K_eff = K + a0 M + a1 C is factored once
+ * (CUPID_ERR_NUMERIC if singular); the initial acceleration solves M a = f - K u - C v
+ * (a second factorisation for a consistent M). Central differences (needs m_lumped, every
+ * free DOF with positive mass): v_{n+1/2} = v_n + dt/2 a_n, u_{n+1} = u_n + dt v_{n+1/2},
+ * a_{n+1} = M^-1 (f - K u_{n+1} - C v_{n+1/2}) (damping lagged half a step),
+ * v_{n+1} = v_{n+1/2} + dt/2 a_{n+1}; refused (CUPID_ERR_ARGUMENT, stating both steps) when
+ * dt exceeds the critical step 2/omega_max (sqrt(1 + xi^2) - xi), xi the damping ratio of the
+ * highest mode; info->dt_bound is the guaranteed (Gershgorin) bound.
+ * monitor and info may be NULL.
+ */
+cupid_status cupid_dynamics_run(const cupid_dynamics_system *sys, const cupid_dynamics_options *opts,
+                                double *u, double *v, cupid_dynamics_monitor monitor, void *ctx,
+                                cupid_dynamics_info *info);
+
+/**
+ * Largest eigenvalue lambda of M^-1 K on the free DOFs, for a lumped mass: power iteration
+ * (*estimate, a lower bound converging from below; @p iterations steps) and the Gershgorin
+ * bound of M^-1/2 K M^-1/2 (*bound, an upper bound). Either pointer may be NULL.
+ */
+cupid_status cupid_dynamics_lambda_max(const cupid_csr_t *K, const double *m_lumped,
+                                       const cupid_dirichlet_t *bc, int iterations,
+                                       double *estimate, double *bound);
+
+/**
+ * The @p nev lowest eigenpairs of K x = lambda M x on the free DOFs, by a dense Cholesky
+ * reduction and cyclic Jacobi rotations: for verification on small models (free DOFs <= 3000;
+ * O(n^3)). omega[k] = sqrt(lambda_k) ascending; modes (may be NULL) receives nev full-length
+ * vectors (n each, zero on fixed DOFs), M-normalised. M or m_lumped as in the system.
+ */
+cupid_status cupid_dynamics_eigen_dense(const cupid_csr_t *K, const cupid_csr_t *M,
+                                        const double *m_lumped, const cupid_dirichlet_t *bc,
+                                        int nev, double *omega, double *modes);
+
+/** Modal damping ratio of Rayleigh damping at frequency omega: a/(2 omega) + b omega/2. */
+double cupid_dynamics_rayleigh_zeta(double a, double b, double omega);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

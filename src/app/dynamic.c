@@ -1,0 +1,414 @@
+/* `type: dynamic` (model-format.md analysis.dynamic; issue 5): mass, initial conditions, time
+ * integration by src/dynamics, and the time-series outputs: history.csv (the output points at
+ * every step), energies.csv and pd_<step>.vtu / beam_<step>.vtu at every `every` steps,
+ * model.pvd with their times, PNG plots, and a "dynamic" block in summary.json.
+ *
+ * FE-only and PD-only models. The global system uses the [3 per PD node | FE DOFs] layout of
+ * the job, so a coupled model only needs its coupling terms in K (and, for Arlequin, the
+ * weighted masses) before cupid_dynamics_run(); it is refused here until then. */
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+
+#include "app_internal.h"
+#include "cupid/dynamics.h"
+#include "cupid/io.h"
+
+/* The state of the output during a run. */
+typedef struct {
+  cupid_job *job;
+  cupid_atomic_file history, energies;
+  char (*files)[64];
+  double *times;
+  int n_files, cap_files;
+  cupid_int out_count;
+  double *velocity; /* for the PD VTU */
+} dyn_output;
+
+static cupid_status out_path(const cupid_job *job, const char *name, char *path, size_t len) {
+  int n = snprintf(path, len, "%s/%s", job->outdir, name);
+  CUPID_CHECK(n > 0 && (size_t)n < len, CUPID_ERR_IO, "output path too long: %s/%s", job->outdir,
+              name);
+  return CUPID_SUCCESS;
+}
+
+/* Every material used by the model needs a density. */
+static cupid_status check_density(const cupid_job *job) {
+  const cupid_model_t *m = job->model;
+  const cupid_dynamic *d = &m->analysis.dynamic;
+  for (int k = 0; k < m->n_materials; k++) {
+    int used = 0;
+    if (m->has_beam) {
+      used |= m->beam.material == k;
+      for (int c = 0; c < m->beam.n_components; c++) used |= m->beam.components[c].material == k;
+    }
+    for (int r = 0; r < m->pd.n_regions && m->has_peridynamics; r++)
+      used |= m->pd.regions[r].material == k;
+    if (used && !(m->materials[k].has_density && m->materials[k].density > 0))
+      return cupid_model_error(m, &m->materials[k].mark,
+                               "material '%s' needs a positive density for type: dynamic",
+                               m->materials[k].name);
+  }
+  if (d->integrator == CUPID_INTEGRATOR_NEWMARK && !(d->newmark_beta > 0))
+    return cupid_model_error(m, &d->mark,
+                             "newmark beta = 0 is the explicit method: use integrator: central");
+  if (d->integrator == CUPID_INTEGRATOR_CENTRAL && m->has_beam && !d->lumped_mass)
+    return cupid_model_error(m, &d->mark,
+                             "integrator: central needs a diagonal mass: set lumped: true (the "
+                             "consistent CUF mass would need a solve per step)");
+  return CUPID_SUCCESS;
+}
+
+/* 1 if a value changes with t (sampled: a few points and times; loads and prescribed
+ * displacements are assembled once, at t = 0). */
+static int depends_on_time(const cupid_value *v) {
+  if (v->kind != CUPID_VALUE_EXPR) return 0;
+  static const double ts[3] = {0.37, 1.9e-3, 41.0}, xs[3] = {0.0, 0.3, 1.7};
+  for (int a = 0; a < 3; a++)
+    for (int k = 0; k < 3; k++) {
+      double p = xs[a], ref = cupid_value_eval(v, p, p, p, 0.0, 1.0), val;
+      val = cupid_value_eval(v, p, p, p, ts[k], 1.0);
+      if (val != ref && !(isnan(val) && isnan(ref))) return 1;
+    }
+  return 0;
+}
+
+static cupid_status check_time_independent(const cupid_model_t *m) {
+  for (int k = 0; k < m->n_loads; k++)
+    for (int c = 0; c < 3; c++)
+      if (depends_on_time(&m->loads[k].value[c]))
+        return cupid_model_error(m, &m->loads[k].mark,
+                                 "time-dependent loads (expressions in t) are not yet supported "
+                                 "by cupid %s; dynamic loads are constant (applied at t = 0)",
+                                 cupid_version());
+  for (int k = 0; k < m->n_constraints; k++)
+    for (int c = 0; c < 3; c++)
+      if (m->constraints[k].kind == CUPID_CONSTRAINT_DISPLACEMENT &&
+          depends_on_time(&m->constraints[k].value[c]))
+        return cupid_model_error(m, &m->constraints[k].mark,
+                                 "time-dependent prescribed displacements are not yet supported "
+                                 "by cupid %s; prescribed values are held constant",
+                                 cupid_version());
+  return CUPID_SUCCESS;
+}
+
+cupid_status cupid_app_dynamic_check(const cupid_job *job) {
+  const cupid_model_t *m = job->model;
+  if (m->has_beam && m->has_peridynamics)
+    return cupid_model_error(m, &m->analysis.dynamic.mark,
+                             "type dynamic of coupled beam + peridynamics models is not yet "
+                             "supported by cupid %s (FE-only and PD-only models are)",
+                             cupid_version());
+  CUPID_CALL(check_time_independent(m));
+  return check_density(job);
+}
+
+/* PD nodal mass rho V (every component), FE consistent matrix or HRZ diagonal. With both PD
+ * and FE (a coupled layout) and a consistent FE mass, M takes K's global pattern: the beam's
+ * mass at its DOF offset and rho V on the PD diagonal (Arlequin weights are the coupling's). */
+static cupid_status build_mass(cupid_job *job, cupid_csr *M, double **m_lumped) {
+  const cupid_model_t *m = job->model;
+  int lumped = m->analysis.dynamic.lumped_mass || !job->beam;
+  CUPID_CALL(cupid_calloc((size_t)job->ndof, sizeof(double), "lumped mass", m_lumped));
+  if (job->grid) {
+    const int *mat = cupid_pd_grid_materials(job->grid);
+    double vol = cupid_pd_grid_cell_volume(job->grid);
+    for (cupid_int i = 0; i < job->n_pd; i++)
+      for (int c = 0; c < 3; c++) (*m_lumped)[3 * i + c] = m->materials[mat[i]].density * vol;
+  }
+  if (lumped) {
+    if (job->beam) CUPID_CALL(cupid_cuf_mass_lumped(job->beam, *m_lumped));
+    return CUPID_SUCCESS;
+  }
+  if (!job->grid) {
+    CUPID_CALL(cupid_cuf_mass_assemble(job->beam, M));
+  } else {
+    CUPID_CALL(cupid_csr_duplicate(job->K, M));
+    cupid_csr_zero(*M);
+    CUPID_CALL(cupid_cuf_mass_add(job->beam, *M));
+    for (cupid_int i = 0; i < job->n_pd; i++) {
+      double *blk = cupid_csr_find(*M, i, i);
+      CUPID_CHECK(blk, CUPID_ERR_INTERNAL, "the stiffness lacks the diagonal block of PD node %lld",
+                  (long long)i);
+      for (int c = 0; c < 3; c++) blk[4 * c] += (*m_lumped)[3 * i + c];
+    }
+  }
+  cupid_free(m_lumped);
+  return CUPID_SUCCESS;
+}
+
+static void field_of_values(void *ctx, const double p[3], double density, double out[3]) {
+  const cupid_value *v = ctx;
+  for (int c = 0; c < 3; c++) out[c] = cupid_value_eval(&v[c], p[0], p[1], p[2], 0.0, density);
+}
+
+/* u0, v0 from the model's expressions (PD: nodal values; FE: cupid_cuf_interpolate). */
+static cupid_status initial_state(cupid_job *job, double *v) {
+  const cupid_model_t *m = job->model;
+  const cupid_dynamic *d = &m->analysis.dynamic;
+  if (job->grid) {
+    const double *x = cupid_pd_grid_coords(job->grid);
+    const int *mat = cupid_pd_grid_materials(job->grid);
+    for (cupid_int i = 0; i < job->n_pd; i++) {
+      const double *p = x + 3 * i;
+      double rho = m->materials[mat[i]].density;
+      for (int c = 0; c < 3; c++) {
+        job->u[3 * i + c] = cupid_value_eval(&d->initial_displacement[c], p[0], p[1], p[2], 0, rho);
+        v[3 * i + c] = cupid_value_eval(&d->initial_velocity[c], p[0], p[1], p[2], 0, rho);
+      }
+    }
+  }
+  if (job->beam) {
+    CUPID_CALL(cupid_cuf_interpolate(job->beam, field_of_values, (void *)d->initial_displacement,
+                                     job->u));
+    CUPID_CALL(cupid_cuf_interpolate(job->beam, field_of_values, (void *)d->initial_velocity, v));
+  }
+  return CUPID_SUCCESS;
+}
+
+/* PD nodes as VTK vertices with displacement and velocity. */
+static cupid_status write_pd_step(dyn_output *o, const char *path, const double *v) {
+  cupid_job *job = o->job;
+  cupid_status st = CUPID_SUCCESS;
+  cupid_int n = job->n_pd, *conn = NULL, *offs = NULL;
+  unsigned char *types = NULL;
+  CUPID_TRY(cupid_malloc((size_t)n, sizeof *conn, "VTU connectivity", &conn));
+  CUPID_TRY(cupid_malloc((size_t)n, sizeof *offs, "VTU offsets", &offs));
+  CUPID_TRY(cupid_malloc((size_t)n, sizeof *types, "VTU cell types", &types));
+  for (cupid_int i = 0; i < n; i++) conn[i] = i, offs[i] = i + 1, types[i] = CUPID_VTK_VERTEX;
+  cupid_vtu_array pdata[2] = {{"displacement", 3, job->u}, {"velocity", 3, v}};
+  cupid_vtu_mesh mesh = {.n_points = n, .points = cupid_pd_grid_coords(job->grid), .n_cells = n,
+                         .connectivity = conn, .offsets = offs, .types = types,
+                         .point_data = pdata, .n_point_data = 2};
+  CUPID_TRY(cupid_vtu_write(path, &mesh));
+cleanup:
+  cupid_free(&conn);
+  cupid_free(&offs);
+  cupid_free(&types);
+  return st;
+}
+
+static cupid_status write_vtu_step(dyn_output *o, cupid_int step, double t, const double *v) {
+  cupid_job *job = o->job;
+  char name[64], path[4096];
+  snprintf(name, sizeof name, "%s_%06lld.vtu", job->grid ? "pd" : "beam", (long long)step);
+  CUPID_CALL(out_path(job, name, path, sizeof path));
+  if (job->grid) CUPID_CALL(write_pd_step(o, path, v));
+  else CUPID_CALL(cupid_app_fe_write_vtu(job, path));
+  if (o->n_files == o->cap_files) {
+    int cap = o->cap_files ? 2 * o->cap_files : 64;
+    char(*files)[64] = NULL;
+    double *times = NULL;
+    CUPID_CALL(cupid_calloc((size_t)cap, sizeof *files, "VTU file names", &files));
+    if (cupid_calloc((size_t)cap, sizeof *times, "VTU times", &times) != CUPID_SUCCESS) {
+      cupid_free(&files);
+      return CUPID_ERR_MEMORY;
+    }
+    if (o->n_files) {
+      memcpy(files, o->files, sizeof *files * (size_t)o->n_files);
+      memcpy(times, o->times, sizeof *times * (size_t)o->n_files);
+    }
+    cupid_free(&o->files);
+    cupid_free(&o->times);
+    o->files = files;
+    o->times = times;
+    o->cap_files = cap;
+  }
+  snprintf(o->files[o->n_files], 64, "%s", name);
+  o->times[o->n_files++] = t;
+  return CUPID_SUCCESS;
+}
+
+static cupid_status history_row(dyn_output *o, double t) {
+  const cupid_output *out = &o->job->model->output;
+  FILE *f = cupid_atomic_stream(o->history);
+  fprintf(f, "%.10e", t);
+  for (int k = 0; k < out->n_points; k++) {
+    double u[3];
+    cupid_region_kind region;
+    CUPID_CALL(cupid_app_sample(o->job, out->points[k].at, u, NULL, &region));
+    fprintf(f, ",%.10e,%.10e,%.10e", u[0], u[1], u[2]);
+  }
+  fputc('\n', f);
+  return CUPID_SUCCESS;
+}
+
+static cupid_status monitor(void *ctx, cupid_int step, double t, int output, const double *u,
+                            const double *v, const double *a, const cupid_dynamics_energy *e) {
+  dyn_output *o = ctx;
+  if (o->history) CUPID_CALL(history_row(o, t));
+  if (!output) return CUPID_SUCCESS;
+  o->out_count++;
+  fprintf(cupid_atomic_stream(o->energies), "%.10e,%lld,%.10e,%.10e,%.10e,%.10e,%.10e,%.10e\n", t,
+          (long long)step, e->kinetic, e->strain, e->damping, e->external,
+          e->kinetic + e->strain + e->damping - e->external, e->balance);
+  if (o->job->model->output.vtu) CUPID_CALL(write_vtu_step(o, step, t, v));
+  o->job->dyn.energy = *e;
+  if (step > 0 && step % (o->job->dyn.steps / 10 > 0 ? o->job->dyn.steps / 10 : 1) == 0)
+    cupid_job_progress(o->job, "dynamics: step %lld / %lld, t = %.4g", (long long)step,
+                       (long long)o->job->dyn.steps, t);
+  return CUPID_SUCCESS;
+}
+
+static cupid_status open_outputs(dyn_output *o) {
+  cupid_job *job = o->job;
+  const cupid_output *out = &job->model->output;
+  char path[4096];
+  CUPID_CALL(cupid_mkdir_p(job->outdir));
+  CUPID_CALL(out_path(job, "energies.csv", path, sizeof path));
+  CUPID_CALL(cupid_atomic_open(path, &o->energies));
+  fprintf(cupid_atomic_stream(o->energies),
+          "t,step,kinetic,strain,damping_dissipated,external_work,total,balance\n");
+  if (out->n_points == 0) return CUPID_SUCCESS;
+  CUPID_CALL(out_path(job, "history.csv", path, sizeof path));
+  CUPID_CALL(cupid_atomic_open(path, &o->history));
+  FILE *f = cupid_atomic_stream(o->history);
+  fprintf(f, "t");
+  for (int k = 0; k < out->n_points; k++)
+    fprintf(f, ",%s_ux,%s_uy,%s_uz", out->points[k].name, out->points[k].name,
+            out->points[k].name);
+  fputc('\n', f);
+  return CUPID_SUCCESS;
+}
+
+static cupid_status plots(const cupid_job *job) {
+  const cupid_output *out = &job->model->output;
+  const char *title = job->model->title[0] ? job->model->title : "cupid";
+  char t[600];
+  int made = 0;
+  cupid_plot_curve ec[5];
+  static const char *enames[5] = {"kinetic", "strain", "damping_dissipated", "external_work", "total"};
+  for (int k = 0; k < 5; k++)
+    ec[k] = (cupid_plot_curve){.csv = "energies.csv", .xname = "t", .yname = enames[k],
+                               .title = enames[k]};
+  snprintf(t, sizeof t, "%s: energies", title);
+  CUPID_CALL(cupid_plot(job->outdir, "energies", t, "t", "energy", 5, ec, &made));
+  for (int k = 0; k < out->n_points; k++) {
+    char stem[512], cols[3][200];
+    cupid_plot_curve hc[3];
+    for (int c = 0; c < 3; c++) {
+      snprintf(cols[c], sizeof cols[c], "%s_u%c", out->points[k].name, "xyz"[c]);
+      hc[c] = (cupid_plot_curve){.csv = "history.csv", .xname = "t", .yname = cols[c],
+                                 .title = cols[c]};
+    }
+    snprintf(stem, sizeof stem, "history_%s", out->points[k].name);
+    snprintf(t, sizeof t, "%s: displacement history at '%s'", title, out->points[k].name);
+    CUPID_CALL(cupid_plot(job->outdir, stem, t, "t", "displacement", 3, hc, &made));
+  }
+  return CUPID_SUCCESS;
+}
+
+static cupid_status finish_outputs(dyn_output *o) {
+  cupid_job *job = o->job;
+  char path[4096];
+  if (o->history) CUPID_CALL(cupid_atomic_commit(&o->history));
+  CUPID_CALL(cupid_atomic_commit(&o->energies));
+  if (o->n_files) {
+    const char **names = NULL;
+    CUPID_CALL(cupid_calloc((size_t)o->n_files, sizeof *names, "PVD names", &names));
+    for (int k = 0; k < o->n_files; k++) names[k] = o->files[k];
+    cupid_status st = out_path(job, "model.pvd", path, sizeof path);
+    if (st == CUPID_SUCCESS) st = cupid_pvd_write(path, o->n_files, names, o->times, NULL);
+    cupid_free(&names);
+    CUPID_CALL(st);
+  }
+  if (job->model->output.plots) CUPID_CALL(plots(job));
+  return CUPID_SUCCESS;
+}
+
+cupid_status cupid_app_run_dynamic(cupid_job *job) {
+  const cupid_model_t *m = job->model;
+  const cupid_dynamic *d = &m->analysis.dynamic;
+  cupid_status st = CUPID_SUCCESS;
+  cupid_csr M = NULL;
+  double *m_lumped = NULL, *v = NULL, t0 = cupid_wtime();
+  dyn_output o = {.job = job};
+  CUPID_TRY(cupid_app_estimate(job, 0));
+  /* A coupled pipeline assembles its global K (with the coupling terms) before calling. */
+  if (!job->K && job->grid) CUPID_TRY(cupid_pd_operator_assemble(job->op, &job->K));
+  else if (!job->K) CUPID_TRY(cupid_cuf_assemble(job->beam, &job->K));
+  CUPID_TRY(build_mass(job, &M, &m_lumped));
+  cupid_job_phase_end(job, CUPID_PHASE_ASSEMBLY, t0);
+  CUPID_TRY(cupid_calloc((size_t)job->ndof, sizeof *v, "velocities", &v));
+  CUPID_TRY(initial_state(job, v));
+
+  cupid_dynamics_options opt = cupid_dynamics_defaults();
+  opt.integrator = d->integrator;
+  opt.dt = d->dt;
+  opt.steps = (cupid_int)llround(d->duration / d->dt);
+  if (opt.steps < 1) opt.steps = 1;
+  opt.every = d->every;
+  opt.beta = d->newmark_beta;
+  opt.gamma = d->newmark_gamma;
+  opt.rayleigh_mass = d->rayleigh_mass;
+  opt.rayleigh_stiffness = d->rayleigh_stiffness;
+  job->dyn.steps = opt.steps;
+  job->dyn.lumped = m_lumped != NULL;
+  cupid_dynamics_system sys = {.K = job->K, .M = M, .m_lumped = m_lumped, .bc = job->bc,
+                               .f = job->f_ext};
+  CUPID_TRY(open_outputs(&o));
+  cupid_job_progress(job, "dynamics: %s, %lld steps of %g, %s mass",
+                     d->integrator == CUPID_INTEGRATOR_NEWMARK ? "newmark" : "central",
+                     (long long)opt.steps, opt.dt, m_lumped ? "lumped" : "consistent");
+  t0 = cupid_wtime();
+  st = cupid_dynamics_run(&sys, &opt, job->u, v, monitor, &o, &job->dyn.info);
+  if (st == CUPID_ERR_ARGUMENT && d->integrator == CUPID_INTEGRATOR_CENTRAL &&
+      job->dyn.info.dt_critical > 0 && d->dt > job->dyn.info.dt_critical)
+    st = cupid_model_error(m, &d->mark, "%s", cupid_error_message());
+  CUPID_TRY(st);
+  job->phases[CUPID_PHASE_FACTORISATION] =
+      (cupid_phase_record){job->dyn.info.factor.time_factor, cupid_peak_memory(), 1};
+  job->phases[CUPID_PHASE_SOLVE] = (cupid_phase_record){cupid_wtime() - t0, cupid_peak_memory(), 1};
+  if (d->integrator == CUPID_INTEGRATOR_NEWMARK) {
+    job->solve = job->dyn.info.factor;
+    job->solved = 1;
+  }
+  cupid_csr_matvec(job->K, job->u, job->f_int);
+  t0 = cupid_wtime();
+  CUPID_TRY(finish_outputs(&o));
+  cupid_job_phase_end(job, CUPID_PHASE_OUTPUT, t0);
+  job->dyn.done = 1;
+  cupid_job_progress(job, "dynamics: done, %lld output steps, energy balance %.2e (relative)",
+                     (long long)o.out_count, job->dyn.info.max_balance);
+cleanup:
+  cupid_atomic_abort(&o.history);
+  cupid_atomic_abort(&o.energies);
+  cupid_free(&o.files);
+  cupid_free(&o.times);
+  cupid_csr_destroy(&M);
+  cupid_free(&m_lumped);
+  cupid_free(&v);
+  return st;
+}
+
+void cupid_app_dynamic_json(cupid_json js, const cupid_job *job) {
+  const cupid_dynamic *d = &job->model->analysis.dynamic;
+  const cupid_dynamics_info *in = &job->dyn.info;
+  cupid_json_begin_object(js, "dynamic");
+  int nm = d->integrator == CUPID_INTEGRATOR_NEWMARK;
+  cupid_json_string(js, "integrator", nm ? "newmark" : "central");
+  cupid_json_number(js, "dt", d->dt);
+  cupid_json_integer(js, "steps", job->dyn.steps);
+  cupid_json_number(js, "duration", d->dt * (double)job->dyn.steps);
+  cupid_json_integer(js, "every", d->every);
+  cupid_json_string(js, "mass", job->dyn.lumped ? "lumped" : "consistent");
+  if (nm) {
+    cupid_json_number(js, "newmark_beta", d->newmark_beta);
+    cupid_json_number(js, "newmark_gamma", d->newmark_gamma);
+  } else {
+    cupid_json_number(js, "omega_max", in->omega_max);
+    cupid_json_number(js, "dt_critical", in->dt_critical);
+    cupid_json_number(js, "dt_guaranteed_stable", in->dt_bound);
+  }
+  cupid_json_number(js, "rayleigh_mass", d->rayleigh_mass);
+  cupid_json_number(js, "rayleigh_stiffness", d->rayleigh_stiffness);
+  cupid_json_number(js, "time_stepping_s", in->time_step_s);
+  cupid_json_begin_object(js, "final_energy");
+  cupid_json_number(js, "kinetic", job->dyn.energy.kinetic);
+  cupid_json_number(js, "strain", job->dyn.energy.strain);
+  cupid_json_number(js, "damping_dissipated", job->dyn.energy.damping);
+  cupid_json_number(js, "external_work", job->dyn.energy.external);
+  cupid_json_end_object(js);
+  cupid_json_number(js, "max_energy_balance_relative", in->max_balance);
+  cupid_json_end_object(js);
+}

@@ -1,0 +1,18 @@
+/* Private helpers of src/dynamics: vectors on the free DOFs and mass products. */
+#ifndef CUPID_DYNAMICS_INTERNAL_H
+#define CUPID_DYNAMICS_INTERNAL_H
+
+#include "cupid/dynamics.h"
+
+/* 1 if scalar DOF d is fixed. */
+static inline int dyn_fixed(const cupid_dirichlet_t *bc, cupid_int d) {
+  return bc && bc->fixed[d];
+}
+
+/* y = M x (consistent or lumped). */
+void dyn_mass_apply(const cupid_dynamics_system *sys, const double *x, double *y);
+
+/* x . y over all n entries. */
+double dyn_dot(cupid_int n, const double *x, const double *y);
+
+#endif

@@ -1,0 +1,296 @@
+/* Time integration of M a + C v + K u = f (include/cupid/dynamics.h): Newmark with one
+ * factorisation of the effective matrix, and explicit central differences (velocity-Verlet
+ * form) with a lumped mass. Energies by the midpoint rule, for which the Newmark
+ * average-acceleration balance is exact (it is the trapezoidal rule). */
+#include <math.h>
+#include <string.h>
+
+#include "dynamics/dynamics_internal.h"
+
+cupid_dynamics_options cupid_dynamics_defaults(void) {
+  return (cupid_dynamics_options){.integrator = CUPID_INTEGRATOR_NEWMARK, .every = 1,
+                                  .beta = 0.25, .gamma = 0.5};
+}
+
+double cupid_dynamics_rayleigh_zeta(double a, double b, double omega) {
+  return a / (2.0 * omega) + 0.5 * b * omega;
+}
+
+void dyn_mass_apply(const cupid_dynamics_system *sys, const double *x, double *y) {
+  cupid_int n = sys->K->nrows * sys->K->bs;
+  if (sys->M) {
+    cupid_csr_matvec(sys->M, x, y);
+    return;
+  }
+#pragma omp parallel for schedule(static) if (n > 100000)
+  for (cupid_int d = 0; d < n; d++) y[d] = sys->m_lumped[d] * x[d];
+}
+
+double dyn_dot(cupid_int n, const double *x, const double *y) {
+  double s = 0.0;
+#pragma omp parallel for reduction(+ : s) schedule(static) if (n > 100000)
+  for (cupid_int d = 0; d < n; d++) s += x[d] * y[d];
+  return s;
+}
+
+/* Work vectors of a run. */
+typedef struct {
+  cupid_int n;
+  const cupid_dynamics_system *sys;
+  const cupid_dynamics_options *opt;
+  double *a, *un, *vn, *an, *w1, *w2, *t1, *t2, *g;
+  cupid_dynamics_energy e;
+  double e0, scale, max_balance;
+} dyn_state;
+
+static void state_free(dyn_state *s) {
+  double **arrays[] = {&s->a, &s->un, &s->vn, &s->an, &s->w1, &s->w2, &s->t1, &s->t2, &s->g};
+  for (size_t k = 0; k < sizeof arrays / sizeof *arrays; k++) cupid_free(arrays[k]);
+}
+
+static cupid_status state_alloc(dyn_state *s) {
+  double **arrays[] = {&s->a, &s->un, &s->vn, &s->an, &s->w1, &s->w2, &s->t1, &s->t2, &s->g};
+  for (size_t k = 0; k < sizeof arrays / sizeof *arrays; k++)
+    CUPID_CALL(cupid_calloc((size_t)s->n, sizeof(double), "dynamics work vector", arrays[k]));
+  return CUPID_SUCCESS;
+}
+
+/* y = C x = a M x + b K x (t is scratch). */
+static void damping_apply(const dyn_state *s, const double *x, double *y, double *t) {
+  double a = s->opt->rayleigh_mass, b = s->opt->rayleigh_stiffness;
+  memset(y, 0, sizeof *y * (size_t)s->n);
+  if (a != 0.0) {
+    dyn_mass_apply(s->sys, x, t);
+    for (cupid_int d = 0; d < s->n; d++) y[d] += a * t[d];
+  }
+  if (b != 0.0) {
+    cupid_csr_matvec(s->sys->K, x, t);
+    for (cupid_int d = 0; d < s->n; d++) y[d] += b * t[d];
+  }
+}
+
+/* Kinetic and strain energy of (u, v); damping and external are accumulated by the steppers. */
+static void energies(dyn_state *s, const double *u, const double *v) {
+  dyn_mass_apply(s->sys, v, s->t1);
+  s->e.kinetic = 0.5 * dyn_dot(s->n, v, s->t1);
+  cupid_csr_matvec(s->sys->K, u, s->t1);
+  s->e.strain = 0.5 * dyn_dot(s->n, u, s->t1);
+  s->e.balance = s->e.kinetic + s->e.strain + s->e.damping - s->e.external - s->e0;
+  double level = fmax(s->e.kinetic + s->e.strain, fmax(s->e.damping, fabs(s->e.external)));
+  if (level > s->scale) s->scale = level;
+  if (fabs(s->e.balance) > s->max_balance) s->max_balance = fabs(s->e.balance);
+}
+
+/* Midpoint-rule increments of the dissipated energy and of the external work. */
+static void accumulate(dyn_state *s, const double *u0, const double *u1, const double *vm) {
+  const double *f = s->sys->f;
+  if (f)
+    for (cupid_int d = 0; d < s->n; d++) s->e.external += f[d] * (u1[d] - u0[d]);
+  if (s->opt->rayleigh_mass != 0.0 || s->opt->rayleigh_stiffness != 0.0) {
+    damping_apply(s, vm, s->t1, s->t2);
+    s->e.damping += s->opt->dt * dyn_dot(s->n, vm, s->t1);
+  }
+}
+
+/* r = f - K u - C v on free DOFs, 0 on fixed ones. */
+static void residual_force(dyn_state *s, const double *u, const double *v, double *r) {
+  const cupid_dirichlet_t *bc = s->sys->bc;
+  cupid_csr_matvec(s->sys->K, u, r);
+  damping_apply(s, v, s->w1, s->t2);
+  for (cupid_int d = 0; d < s->n; d++)
+    r[d] = dyn_fixed(bc, d) ? 0.0 : (s->sys->f ? s->sys->f[d] : 0.0) - r[d] - s->w1[d];
+}
+
+/* Initial acceleration M a = f - K u - C v on the free DOFs. */
+static cupid_status initial_acceleration(dyn_state *s, const double *u, const double *v) {
+  residual_force(s, u, v, s->t1);
+  const cupid_dirichlet_t *bc = s->sys->bc;
+  if (!s->sys->M) {
+    for (cupid_int d = 0; d < s->n; d++)
+      s->a[d] = dyn_fixed(bc, d) ? 0.0 : s->t1[d] / s->sys->m_lumped[d];
+    return CUPID_SUCCESS;
+  }
+  cupid_direct_factor F = NULL;
+  CUPID_CALL(cupid_direct_factor_create(s->sys->M, bc, &F, NULL));
+  cupid_status st = cupid_direct_factor_solve(F, s->t1, s->a);
+  cupid_direct_factor_destroy(&F);
+  for (cupid_int d = 0; d < s->n; d++)
+    if (dyn_fixed(bc, d)) s->a[d] = 0.0;
+  return st;
+}
+
+/* Kinetic and strain energy cost two products per call, so they are evaluated at output
+ * steps only (the balance check samples those); the monitor sees them there. */
+static cupid_status notify(dyn_state *s, cupid_dynamics_monitor fn, void *ctx, cupid_int step,
+                           const double *u, const double *v) {
+  int out = step % s->opt->every == 0 || step == s->opt->steps;
+  if (out) energies(s, u, v);
+  if (!fn) return CUPID_SUCCESS;
+  return fn(ctx, step, (double)step * s->opt->dt, out, u, v, s->a, &s->e);
+}
+
+/* K_eff = (1 + a1 b) K + (a0 + a1 a) M. */
+static cupid_status effective_matrix(const dyn_state *s, double cm, double ck, cupid_csr *Keff) {
+  const cupid_dynamics_system *sys = s->sys;
+  CUPID_CALL(cupid_csr_duplicate(sys->K, Keff));
+  cupid_csr_scale(*Keff, ck);
+  if (sys->M) return cupid_csr_axpy(cm, sys->M, *Keff);
+  int bs = sys->K->bs;
+  for (cupid_int row = 0; row < sys->K->nrows; row++) {
+    double *blk = cupid_csr_find(*Keff, row, row);
+    CUPID_CHECK(blk, CUPID_ERR_ARGUMENT, "the stiffness lacks the diagonal block of row %lld",
+                (long long)row);
+    for (int k = 0; k < bs; k++) blk[k * bs + k] += cm * sys->m_lumped[row * bs + k];
+  }
+  return CUPID_SUCCESS;
+}
+
+static cupid_status run_newmark(dyn_state *s, double *u, double *v, cupid_dynamics_monitor fn,
+                                void *ctx, cupid_dynamics_info *info) {
+  cupid_status st = CUPID_SUCCESS;
+  const cupid_dynamics_options *o = s->opt;
+  const cupid_dirichlet_t *bc = s->sys->bc;
+  double dt = o->dt, beta = o->beta, gamma = o->gamma;
+  double a0 = 1.0 / (beta * dt * dt), a1 = gamma / (beta * dt), a2 = 1.0 / (beta * dt);
+  double a3 = 1.0 / (2.0 * beta) - 1.0, a4 = gamma / beta - 1.0, a5 = 0.5 * dt * (gamma / beta - 2.0);
+  double ra = o->rayleigh_mass, rb = o->rayleigh_stiffness;
+  cupid_csr Keff = NULL;
+  cupid_direct_factor F = NULL;
+  CUPID_TRY(initial_acceleration(s, u, v));
+  CUPID_TRY(effective_matrix(s, a0 + a1 * ra, 1.0 + a1 * rb, &Keff));
+  CUPID_TRY(cupid_direct_factor_create(Keff, bc, &F, &info->factor));
+  /* g = K_eff u_c: the prescribed values moved to the right-hand side (constant). */
+  for (cupid_int d = 0; d < s->n; d++) s->t1[d] = dyn_fixed(bc, d) ? u[d] : 0.0;
+  cupid_csr_matvec(Keff, s->t1, s->g);
+  CUPID_TRY(notify(s, fn, ctx, 0, u, v));
+  double t0 = cupid_wtime();
+  for (cupid_int step = 1; step <= o->steps; step++) {
+    /* rhs = f + M (w1 + a w2) + b K w2, w1 = a0 u + a2 v + a3 a, w2 = a1 u + a4 v + a5 a */
+    for (cupid_int d = 0; d < s->n; d++) {
+      s->w2[d] = a1 * u[d] + a4 * v[d] + a5 * s->a[d];
+      s->w1[d] = a0 * u[d] + a2 * v[d] + a3 * s->a[d] + ra * s->w2[d];
+    }
+    dyn_mass_apply(s->sys, s->w1, s->t1);
+    if (rb != 0.0) {
+      cupid_csr_matvec(s->sys->K, s->w2, s->t2);
+      for (cupid_int d = 0; d < s->n; d++) s->t1[d] += rb * s->t2[d];
+    }
+    for (cupid_int d = 0; d < s->n; d++) s->t1[d] += (s->sys->f ? s->sys->f[d] : 0.0) - s->g[d];
+    memcpy(s->un, u, sizeof *u * (size_t)s->n);
+    CUPID_TRY(cupid_direct_factor_solve(F, s->t1, s->un));
+    for (cupid_int d = 0; d < s->n; d++) {
+      if (dyn_fixed(bc, d)) {
+        s->an[d] = s->vn[d] = 0.0;
+        continue;
+      }
+      s->an[d] = a0 * (s->un[d] - u[d]) - a2 * v[d] - a3 * s->a[d];
+      s->vn[d] = v[d] + dt * ((1.0 - gamma) * s->a[d] + gamma * s->an[d]);
+    }
+    for (cupid_int d = 0; d < s->n; d++) s->w1[d] = 0.5 * (v[d] + s->vn[d]);
+    accumulate(s, u, s->un, s->w1);
+    memcpy(u, s->un, sizeof *u * (size_t)s->n);
+    memcpy(v, s->vn, sizeof *v * (size_t)s->n);
+    memcpy(s->a, s->an, sizeof *v * (size_t)s->n);
+    CUPID_TRY(notify(s, fn, ctx, step, u, v));
+  }
+  info->time_step_s = cupid_wtime() - t0;
+cleanup:
+  cupid_direct_factor_destroy(&F);
+  cupid_csr_destroy(&Keff);
+  return st;
+}
+
+/* The critical step of central differences for the highest mode, with its damping ratio. */
+static double critical_step(double lambda, double a, double b) {
+  if (!(lambda > 0.0)) return INFINITY;
+  double w = sqrt(lambda), xi = cupid_dynamics_rayleigh_zeta(a, b, w);
+  return 2.0 / w * (sqrt(1.0 + xi * xi) - xi);
+}
+
+static cupid_status check_stable(dyn_state *s, cupid_dynamics_info *info) {
+  const cupid_dynamics_options *o = s->opt;
+  double est = 0.0, bound = 0.0;
+  CUPID_CALL(cupid_dynamics_lambda_max(s->sys->K, s->sys->m_lumped, s->sys->bc, 200, &est, &bound));
+  info->omega_max = sqrt(est);
+  info->dt_critical = critical_step(est, o->rayleigh_mass, o->rayleigh_stiffness);
+  info->dt_bound = critical_step(bound, o->rayleigh_mass, o->rayleigh_stiffness);
+  CUPID_CHECK(o->dt <= info->dt_critical, CUPID_ERR_ARGUMENT,
+              "central differences are unstable with dt = %g: the critical step is about %g "
+              "(omega_max = %g by power iteration; guaranteed stable below %g); use a smaller "
+              "dt or the newmark integrator",
+              o->dt, info->dt_critical, info->omega_max, info->dt_bound);
+  return CUPID_SUCCESS;
+}
+
+static cupid_status run_central(dyn_state *s, double *u, double *v, cupid_dynamics_monitor fn,
+                                void *ctx, cupid_dynamics_info *info) {
+  const cupid_dynamics_options *o = s->opt;
+  const cupid_dirichlet_t *bc = s->sys->bc;
+  double dt = o->dt;
+  CUPID_CHECK(s->sys->m_lumped && !s->sys->M, CUPID_ERR_ARGUMENT,
+              "central differences need a lumped (diagonal) mass");
+  for (cupid_int d = 0; d < s->n; d++)
+    CUPID_CHECK(dyn_fixed(bc, d) || s->sys->m_lumped[d] > 0.0, CUPID_ERR_ARGUMENT,
+                "free DOF %lld has no mass (central differences need a positive lumped mass)",
+                (long long)d);
+  CUPID_CALL(check_stable(s, info));
+  CUPID_CALL(initial_acceleration(s, u, v));
+  CUPID_CALL(notify(s, fn, ctx, 0, u, v));
+  double t0 = cupid_wtime();
+  for (cupid_int step = 1; step <= o->steps; step++) {
+    double *vh = s->vn; /* v_{n+1/2} */
+    for (cupid_int d = 0; d < s->n; d++) {
+      vh[d] = v[d] + 0.5 * dt * s->a[d];
+      s->un[d] = dyn_fixed(bc, d) ? u[d] : u[d] + dt * vh[d];
+    }
+    accumulate(s, u, s->un, vh);
+    memcpy(u, s->un, sizeof *u * (size_t)s->n);
+    residual_force(s, u, vh, s->t1);
+    for (cupid_int d = 0; d < s->n; d++) {
+      s->a[d] = dyn_fixed(bc, d) ? 0.0 : s->t1[d] / s->sys->m_lumped[d];
+      v[d] = dyn_fixed(bc, d) ? 0.0 : vh[d] + 0.5 * dt * s->a[d];
+    }
+    CUPID_CALL(notify(s, fn, ctx, step, u, v));
+  }
+  info->time_step_s = cupid_wtime() - t0;
+  return CUPID_SUCCESS;
+}
+
+cupid_status cupid_dynamics_run(const cupid_dynamics_system *sys, const cupid_dynamics_options *opts,
+                                double *u, double *v, cupid_dynamics_monitor monitor, void *ctx,
+                                cupid_dynamics_info *info) {
+  CUPID_CHECK(sys && sys->K && opts && u && v, CUPID_ERR_ARGUMENT,
+              "cupid_dynamics_run: NULL argument");
+  CUPID_CHECK(!sys->M != !sys->m_lumped, CUPID_ERR_ARGUMENT,
+              "cupid_dynamics_run: give exactly one of a consistent and a lumped mass");
+  CUPID_CHECK(opts->dt > 0.0 && isfinite(opts->dt) && opts->steps >= 0 && opts->every >= 1,
+              CUPID_ERR_ARGUMENT, "cupid_dynamics_run: need dt > 0, steps >= 0, every >= 1");
+  CUPID_CHECK(opts->integrator != CUPID_INTEGRATOR_NEWMARK ||
+                  (opts->beta > 0.0 && opts->gamma >= 0.5),
+              CUPID_ERR_ARGUMENT, "Newmark needs beta > 0 and gamma >= 1/2 (got %g, %g)",
+              opts->beta, opts->gamma);
+  cupid_dynamics_info local;
+  if (!info) info = &local;
+  memset(info, 0, sizeof *info);
+  info->dt = opts->dt;
+  info->steps = opts->steps;
+  dyn_state s = {.n = sys->K->nrows * sys->K->bs, .sys = sys, .opt = opts};
+  cupid_status st = CUPID_SUCCESS;
+  CUPID_TRY(state_alloc(&s));
+  const cupid_dirichlet_t *bc = sys->bc;
+  for (cupid_int d = 0; d < s.n; d++)
+    if (dyn_fixed(bc, d)) u[d] = bc->value[d], v[d] = 0.0;
+  /* E0: the energy at t = 0, the reference of the balance. */
+  dyn_mass_apply(sys, v, s.t1);
+  s.e0 = 0.5 * dyn_dot(s.n, v, s.t1);
+  cupid_csr_matvec(sys->K, u, s.t1);
+  s.e0 += 0.5 * dyn_dot(s.n, u, s.t1);
+  if (opts->integrator == CUPID_INTEGRATOR_NEWMARK)
+    CUPID_TRY(run_newmark(&s, u, v, monitor, ctx, info));
+  else
+    CUPID_TRY(run_central(&s, u, v, monitor, ctx, info));
+  info->max_balance = s.scale > 0.0 ? s.max_balance / s.scale : 0.0;
+cleanup:
+  state_free(&s);
+  return st;
+}

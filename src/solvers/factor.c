@@ -1,0 +1,210 @@
+/*
+ * A reusable CHOLMOD factorisation of K_ff (include/cupid/solvers.h, "reusable SPD
+ * factorisation" block): factored once, solved at every step of an implicit time integration
+ * with a constant step (Newmark). Only the free DOFs are factored, lower triangle stored.
+ */
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+
+#include <cholmod.h>
+
+#include "cupid/solvers.h"
+
+_Static_assert(sizeof(SuiteSparse_long) == sizeof(cupid_int), "SuiteSparse_long is not 64-bit");
+
+struct cupid_direct_factor_private {
+  cupid_int n_full, n;  /* all scalar DOFs, free DOFs */
+  cupid_int *global;    /* free index -> global DOF */
+  cupid_int *p, *i;     /* lower triangle of K_ff, compressed column */
+  double *x;
+  cholmod_common cc;
+  int cc_started;
+  cholmod_factor *L;
+  double *work;         /* n: right-hand side / solution in free numbering */
+};
+
+/* Columns of the lower triangle of K_ff = rows of the upper part of the symmetric K_ff, in
+ * free numbering (free DOFs are numbered in increasing global order, so indices stay sorted). */
+static cupid_status reduce_lower(cupid_direct_factor F, const cupid_csr_t *K, const cupid_int *fi) {
+  const int bs = K->bs;
+  CUPID_CALL(cupid_calloc((size_t)F->n + 1, sizeof *F->p, "factor pointers", &F->p));
+  for (int pass = 0; pass < 2; pass++) {
+    for (cupid_int k = 0; k < F->n; k++) {
+      cupid_int g = F->global[k], row = g / bs, t = pass ? F->p[k] : 0;
+      int a = (int)(g % bs);
+      for (cupid_int q = K->rowptr[row]; q < K->rowptr[row + 1]; q++)
+        for (int b = 0; b < bs; b++) {
+          cupid_int c = fi ? fi[K->col[q] * bs + b] : K->col[q] * bs + b;
+          if (c < k) continue;
+          if (pass) {
+            F->i[t] = c;
+            F->x[t] = K->val[(q * bs + a) * bs + b];
+          }
+          t++;
+        }
+      if (!pass) F->p[k + 1] = t;
+    }
+    if (!pass) {
+      for (cupid_int k = 0; k < F->n; k++) F->p[k + 1] += F->p[k];
+      CUPID_CALL(cupid_malloc((size_t)F->p[F->n], sizeof *F->i, "factor indices", &F->i));
+      CUPID_CALL(cupid_malloc((size_t)F->p[F->n], sizeof *F->x, "factor values", &F->x));
+    }
+  }
+  return CUPID_SUCCESS;
+}
+
+/* min/max of the pivots L_kk^2 (supernodal or simplicial LL'). */
+static double pivot_ratio(const cholmod_factor *L, cupid_int *kmin) {
+  const double *x = L->x;
+  double lo = INFINITY, hi = 0.0;
+  *kmin = 0;
+  if (L->is_super) {
+    const SuiteSparse_long *super = L->super, *pi = L->pi, *px = L->px;
+    for (size_t s = 0; s < L->nsuper; s++) {
+      SuiteSparse_long k1 = super[s], k2 = super[s + 1], nsrow = pi[s + 1] - pi[s];
+      for (SuiteSparse_long j = k1; j < k2; j++) {
+        double d = x[px[s] + (j - k1) * (nsrow + 1)], piv = d * d;
+        if (piv < lo) lo = piv, *kmin = j;
+        if (piv > hi) hi = piv;
+      }
+    }
+  } else {
+    const SuiteSparse_long *p = L->p;
+    for (size_t j = 0; j < L->n; j++) {
+      double d = x[p[j]], piv = L->is_ll ? d * d : fabs(d);
+      if (piv < lo) lo = piv, *kmin = (cupid_int)j;
+      if (piv > hi) hi = piv;
+    }
+  }
+  return hi > 0.0 ? lo / hi : 0.0;
+}
+
+static cupid_status factorise(cupid_direct_factor F, cupid_solve_info *info) {
+  cholmod_common *c = &F->cc;
+  CUPID_CHECK(cholmod_l_start(c), CUPID_ERR_INTERNAL, "CHOLMOD could not start");
+  F->cc_started = 1;
+  c->print = 0;
+  c->supernodal = CHOLMOD_AUTO;
+  c->quick_return_if_not_posdef = 1;
+  cholmod_sparse A;
+  memset(&A, 0, sizeof A);
+  A.nrow = A.ncol = (size_t)F->n;
+  A.nzmax = (size_t)F->p[F->n];
+  A.p = F->p;
+  A.i = F->i;
+  A.x = F->x;
+  A.stype = -1;
+  A.itype = CHOLMOD_LONG;
+  A.xtype = CHOLMOD_REAL;
+  A.dtype = CHOLMOD_DOUBLE;
+  A.sorted = A.packed = 1;
+  F->L = cholmod_l_analyze(&A, c);
+  CUPID_CHECK(F->L && c->status >= CHOLMOD_OK, CUPID_ERR_INTERNAL,
+              "CHOLMOD analysis failed (status %d)", c->status);
+  int ok = cholmod_l_factorize(&A, F->L, c);
+  const SuiteSparse_long *perm = F->L->Perm;
+  if (c->status == CHOLMOD_NOT_POSDEF || F->L->minor < (size_t)F->n) {
+    size_t k = F->L->minor < (size_t)F->n ? F->L->minor : (size_t)F->n - 1;
+    if (info) info->failed_dof = F->global[perm ? perm[k] : (cupid_int)k];
+    return CUPID_ERROR(CUPID_ERR_NUMERIC,
+                       "the matrix is not positive definite (factorisation broke down at DOF "
+                       "%lld): the model may be unconstrained",
+                       (long long)F->global[perm ? perm[k] : (cupid_int)k]);
+  }
+  CUPID_CHECK(ok && c->status >= CHOLMOD_OK, CUPID_ERR_INTERNAL,
+              "CHOLMOD factorisation failed (status %d)", c->status);
+  cupid_int kmin;
+  double ratio = pivot_ratio(F->L, &kmin);
+  cupid_int weakest = F->global[perm ? perm[kmin] : kmin];
+  if (info) {
+    info->pivot_ratio = ratio;
+    info->nnz_factor = (double)c->lnz;
+    info->flops_factor = c->fl;
+    info->memory_factor = (int64_t)c->memory_usage;
+  }
+  double bound = CUPID_DIRECT_PIVOT_TOL * (double)(F->n > 64 ? F->n : 64);
+  if (ratio < bound) {
+    if (info) info->failed_dof = weakest;
+    return CUPID_ERROR(CUPID_ERR_NUMERIC,
+                       "the matrix is singular to round-off (pivot ratio %.3g at DOF %lld): the "
+                       "model may be unconstrained",
+                       ratio, (long long)weakest);
+  }
+  return CUPID_SUCCESS;
+}
+
+cupid_status cupid_direct_factor_create(const cupid_csr_t *K, const cupid_dirichlet_t *bc,
+                                        cupid_direct_factor *out, cupid_solve_info *info) {
+  cupid_status st = CUPID_SUCCESS;
+  cupid_direct_factor F = NULL;
+  CUPID_CHECK(K && out && K->nrows == K->ncols, CUPID_ERR_ARGUMENT,
+              "cupid_direct_factor_create: need a square matrix");
+  *out = NULL;
+  double t0 = cupid_wtime();
+  cupid_int n_full = K->nrows * K->bs;
+  CUPID_CHECK(!bc || bc->n == n_full, CUPID_ERR_ARGUMENT,
+              "cupid_direct_factor_create: the conditions have %lld DOFs, the matrix %lld",
+              (long long)(bc ? bc->n : 0), (long long)n_full);
+  if (info) {
+    memset(info, 0, sizeof *info);
+    info->method = "cholmod";
+    info->failed_dof = -1;
+  }
+  CUPID_TRY(cupid_calloc(1, sizeof *F, "factorisation", &F));
+  F->n_full = n_full;
+  F->n = bc ? bc->n_free : n_full;
+  CUPID_TRY_CHECK(F->n > 0, CUPID_ERR_NUMERIC, "no free DOF to solve for");
+  CUPID_TRY(cupid_malloc((size_t)F->n, sizeof *F->global, "free DOF map", &F->global));
+  CUPID_TRY(cupid_malloc((size_t)F->n, sizeof *F->work, "factor work", &F->work));
+  for (cupid_int d = 0, k = 0; d < n_full; d++)
+    if (!bc || !bc->fixed[d]) F->global[k++] = d;
+  CUPID_TRY(reduce_lower(F, K, bc ? bc->free_index : NULL));
+  CUPID_TRY(factorise(F, info));
+  if (info) {
+    info->n = F->n;
+    info->nnz_matrix = 2 * F->p[F->n] - F->n;
+    info->time_factor = cupid_wtime() - t0;
+  }
+  *out = F;
+  F = NULL;
+cleanup:
+  cupid_direct_factor_destroy(&F);
+  return st;
+}
+
+cupid_status cupid_direct_factor_solve(cupid_direct_factor F, const double *b, double *x) {
+  CUPID_CHECK(F && b && x, CUPID_ERR_ARGUMENT, "cupid_direct_factor_solve: NULL argument");
+  for (cupid_int k = 0; k < F->n; k++) F->work[k] = b[F->global[k]];
+  cholmod_dense B;
+  memset(&B, 0, sizeof B);
+  B.nrow = B.nzmax = B.d = (size_t)F->n;
+  B.ncol = 1;
+  B.x = F->work;
+  B.xtype = CHOLMOD_REAL;
+  B.dtype = CHOLMOD_DOUBLE;
+  cholmod_dense *X = cholmod_l_solve(CHOLMOD_A, F->L, &B, &F->cc);
+  if (!X || F->cc.status < CHOLMOD_OK) {
+    cholmod_l_free_dense(&X, &F->cc);
+    return CUPID_ERROR(CUPID_ERR_INTERNAL, "CHOLMOD solve failed (status %d)", F->cc.status);
+  }
+  const double *xs = X->x;
+  for (cupid_int k = 0; k < F->n; k++) x[F->global[k]] = xs[k];
+  cholmod_l_free_dense(&X, &F->cc);
+  return CUPID_SUCCESS;
+}
+
+void cupid_direct_factor_destroy(cupid_direct_factor *F) {
+  if (!F || !*F) return;
+  cupid_direct_factor f = *F;
+  if (f->cc_started) {
+    cholmod_l_free_factor(&f->L, &f->cc);
+    cholmod_l_finish(&f->cc);
+  }
+  cupid_free(&f->global);
+  cupid_free(&f->work);
+  cupid_free(&f->p);
+  cupid_free(&f->i);
+  cupid_free(&f->x);
+  cupid_free(F);
+}

@@ -1,0 +1,71 @@
+#!/usr/bin/env bash
+# `cupid run` with type: dynamic (issue 5) on small trusses (paper 004 material): the output
+# files, the energy balance, the tip history against the exact triangle wave, and the model
+# errors (unstable central step, consistent mass with central, missing density).
+set -u
+CUPID=$(realpath "${CUPID:-build/cupid}")
+SRC=$(realpath "${CUPID_SOURCE_DIR:-.}")
+M=$SRC/tests/models/dynamics
+work=$(mktemp -d)
+trap 'rm -rf "$work"' EXIT
+cd "$work"
+pass=0; fail=0
+ok() { pass=$((pass+1)); }
+bad() { echo "FAIL: $*"; fail=$((fail+1)); }
+
+expect() {
+  local code=$1 pattern=$2; shift 3
+  local out rc
+  out=$("$@" 2>&1); rc=$?
+  if [ "$rc" -ne "$code" ]; then bad "$* -> exit $rc, expected $code"; echo "$out" | head -5; return; fi
+  if ! grep -qE -- "$pattern" <<<"$out"; then bad "$* -> output does not match '$pattern'"; echo "$out" | head -5; return; fi
+  ok
+}
+
+for m in fe_truss pd_truss; do
+  expect 0 '' -- "$CUPID" run "$M/$m.yaml" -o "$m" --quiet
+  for f in history.csv energies.csv model.pvd summary.json; do
+    [ -s "$m/$f" ] && ok || bad "$m/$f missing"
+  done
+  ls "$m"/*_000100.vtu >/dev/null 2>&1 && ok || bad "$m: no VTU at step 100"
+done
+
+# Checks on the numbers (python3, standard library only):
+#  - FE Newmark average acceleration, undamped: energy balance to round-off (tolerance 1e-9
+#    relative) and the tip within 3 % RMS of the exact triangle wave of period 4L/c
+#    (40 elements, 2 periods: measured 0.8 %);
+#  - PD damped: the balance with the dissipated energy holds (1e-9), the dissipated energy is
+#    positive, the final total (kinetic + strain) is below the initial 500 J, and the initial
+#    strain energy is the stretched bar's.
+python3 - "$work" <<'PY' && ok || bad "history/energy checks"
+import csv, json, math, sys
+w = sys.argv[1]
+fe = json.load(open(w + "/fe_truss/summary.json"))["dynamic"]
+assert fe["max_energy_balance_relative"] < 1e-9, fe
+T = 4 / math.sqrt(1e9 / 7800)
+def tri(t):
+    s = (t / T) % 1.0
+    return 1e-3 * (1 - 4 * s) if s < 0.5 else 1e-3 * (-1 + 4 * (s - 0.5))
+rows = list(csv.DictReader(open(w + "/fe_truss/history.csv")))
+rms = math.sqrt(sum((float(r["tip_uy"]) - tri(float(r["t"]))) ** 2 for r in rows) / len(rows)) / 1e-3
+print("FE tip RMS error vs triangle wave: %.4f" % rms)
+assert rms < 0.03, rms
+pd = json.load(open(w + "/pd_truss/summary.json"))["dynamic"]
+assert pd["max_energy_balance_relative"] < 1e-9, pd
+e = pd["final_energy"]
+assert e["damping_dissipated"] > 0 and e["kinetic"] + e["strain"] < 500, e
+rows = list(csv.DictReader(open(w + "/pd_truss/energies.csv")))
+# initial strain energy E A eps0^2 L / 2 = 500 J less the PD surface effect: the last horizon
+# before the free end has incomplete families (measured 480.03 J): within 5 %
+assert abs(float(rows[0]["strain"]) - 500) < 0.05 * 500, rows[0]
+PY
+
+expect 1 'central_unstable.yaml:[0-9]+:[0-9]+: analysis.dynamic: .*unstable with dt = 0.0001' -- "$CUPID" run "$M/central_unstable.yaml" -o cu
+[ ! -e cu/summary.json ] && ok || bad "a refused run left summary.json"
+expect 1 'central_consistent.yaml:[0-9]+:[0-9]+: analysis.dynamic: integrator: central needs a diagonal mass' -- "$CUPID" run "$M/central_consistent.yaml" -o cc
+expect 1 "no_density.yaml:[0-9]+:[0-9]+: materials.steel: needs a density for a dynamic analysis" -- "$CUPID" run "$M/no_density.yaml" -o nd
+
+expect 1 "time_load.yaml:[0-9]+:[0-9]+: .*time-dependent loads .* are not yet supported" -- "$CUPID" run "$M/time_load.yaml" -o tl
+
+echo "dynamics_truss: $pass passed, $fail failed"
+[ "$fail" -eq 0 ]
