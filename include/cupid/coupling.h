@@ -86,6 +86,28 @@ cupid_status cupid_coupling_create(cupid_cuf_beam beam, cupid_pd_grid grid,
                                    const cupid_coupling_options *opts, cupid_coupling_h *c,
                                    cupid_csr *K);
 
+/**
+ * The Lagrange-multiplier coupling (Pagani & Carrera 2020, the baseline of paper 000 section
+ * 5.1; cuf.md section 7), solved by elimination: every real PD node q on the PD plane nearest
+ * an interface y_I (y_I +- h/2) is tied to the CUF field of the interface section,
+ * u_q = sum_tau F_tau(x_q, z_q) u_{tau, I}. Eliminating the constraints (u = T [u_m; u_FE])
+ * gives the symmetric positive definite K = T^T diag(K_PD, K_FE) T, identical to the
+ * saddle-point solution; the multipliers are the reactions of the tied nodes. The PD grid holds
+ * the real nodes only (no fictitious nodes): the truncated families at the interfaces cause
+ * the distortions paper 000 reports. *K has the layout of cupid_coupling_create(); the rows
+ * and columns of tied PD nodes are empty but for a zero diagonal block: fix their DOFs
+ * (cupid_coupling_tied()) and fill them after the solve with cupid_coupling_recover().
+ */
+cupid_status cupid_coupling_lagrange_create(cupid_cuf_beam beam, cupid_pd_grid grid,
+                                            const cupid_coupling_options *opts,
+                                            cupid_coupling_h *c, cupid_csr *K);
+
+/** Tied PD nodes of the Lagrange coupling (NULL, 0 for the fictitious-node method). */
+void cupid_coupling_tied(const cupid_coupling_h c, const cupid_int **nodes, cupid_int *n);
+
+/** Set the displacements of the tied PD nodes from the FE DOFs of u (Lagrange coupling). */
+void cupid_coupling_recover(const cupid_coupling_h c, double *u);
+
 /** Destroy and set *c to NULL (NULL-safe). */
 void cupid_coupling_destroy(cupid_coupling_h *c);
 

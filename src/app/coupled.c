@@ -1,7 +1,7 @@
 /* Coupled models (beam + peridynamics) inside a run: the beam gives way inside the PD regions,
  * constraints and loads go to the part they touch, the coupled matrix of paper 000 Eq. 38
- * (src/coupling) is solved by UMFPACK (it is not symmetric). Only the fictitious-node method
- * (coupling.method: fictitious) is implemented; lagrange and arlequin are refused plainly. */
+ * (src/coupling) is solved by UMFPACK (it is not symmetric). Methods: fictitious (default) and
+ * lagrange (eliminated, SPD, CHOLMOD); arlequin is refused plainly. */
 #include <math.h>
 #include <stdio.h>
 #include <string.h>
@@ -17,11 +17,10 @@ int cupid_app_is_coupled(const cupid_job *job) {
 
 cupid_status cupid_app_coupled_check(const cupid_job *job) {
   const cupid_model_t *m = job->model;
-  if (m->coupling.method != CUPID_COUPLING_FICTITIOUS)
+  if (m->coupling.method == CUPID_COUPLING_ARLEQUIN)
     return cupid_model_error(m, &m->coupling.mark,
-                             "method %s is not yet supported by cupid %s (allowed now: "
-                             "fictitious, the improved coupling of paper 000)",
-                             m->coupling.method == CUPID_COUPLING_LAGRANGE ? "lagrange" : "arlequin",
+                             "method arlequin is not yet supported by cupid %s (allowed now: "
+                             "fictitious, the improved coupling of paper 000, and lagrange)",
                              cupid_version());
   if (m->pd.dimension != 3)
     return cupid_model_error(m, &m->pd.mark,
@@ -164,6 +163,10 @@ cleanup:
 
 /* ----------------------------------------------------------------------- assembly */
 
+static int is_lagrange(const cupid_job *job) {
+  return job->model->coupling.method == CUPID_COUPLING_LAGRANGE;
+}
+
 static cupid_status assemble(cupid_job *job) {
   const cupid_model_t *m = job->model;
   double t0 = cupid_wtime();
@@ -185,16 +188,29 @@ static cupid_status assemble(cupid_job *job) {
                                .region_materials = mats,
                                .spacing = m->pd.spacing,
                                .pd = job->pd_options};
-  CUPID_TRY(cupid_coupling_create(job->beam, job->grid, &co, &job->coupling, &job->K));
+  if (is_lagrange(job))
+    CUPID_TRY(cupid_coupling_lagrange_create(job->beam, job->grid, &co, &job->coupling, &job->K));
+  else
+    CUPID_TRY(cupid_coupling_create(job->beam, job->grid, &co, &job->coupling, &job->K));
   cupid_coupling_info ci;
   cupid_coupling_get_info(job->coupling, &ci);
   job->n_fictitious = ci.n_fictitious_pd;
   cupid_job_phase_end(job, CUPID_PHASE_COUPLING, t0);
-  cupid_job_progress(job,
-                     "coupling (fictitious nodes): %d interfaces, %lld fictitious PD nodes, "
-                     "%lld fictitious FE nodes; %lld non-zeros (%.1f MB)",
-                     ci.n_interfaces, (long long)ci.n_fictitious_pd, (long long)ci.n_fictitious_fe,
-                     (long long)cupid_csr_nnz(job->K), (double)cupid_csr_bytes(job->K) / 1e6);
+  if (is_lagrange(job)) {
+    const cupid_int *tied;
+    cupid_int nt;
+    cupid_coupling_tied(job->coupling, &tied, &nt);
+    cupid_job_progress(job, "coupling (Lagrange multipliers, eliminated): %d interfaces, %lld "
+                       "tied PD nodes; %lld non-zeros (%.1f MB)", ci.n_interfaces, (long long)nt,
+                       (long long)cupid_csr_nnz(job->K), (double)cupid_csr_bytes(job->K) / 1e6);
+  } else {
+    cupid_job_progress(job,
+                       "coupling (fictitious nodes): %d interfaces, %lld fictitious PD nodes, "
+                       "%lld fictitious FE nodes; %lld non-zeros (%.1f MB)",
+                       ci.n_interfaces, (long long)ci.n_fictitious_pd,
+                       (long long)ci.n_fictitious_fe, (long long)cupid_csr_nnz(job->K),
+                       (double)cupid_csr_bytes(job->K) / 1e6);
+  }
 cleanup:
   cupid_free(&boxes);
   cupid_free(&mats);
@@ -220,16 +236,16 @@ static cupid_status evaluate(cupid_job *job) {
 }
 
 static cupid_status solve(cupid_job *job) {
-  CUPID_CALL(cupid_app_estimate(job, 0));
-  CUPID_CALL(assemble(job));
-  cupid_status st = cupid_direct_solve(job->K, CUPID_MATRIX_GENERAL, job->f_ext, job->bc, job->u,
-                                       &job->solve);
+  /* Eq. 38 is not symmetric (UMFPACK); the eliminated Lagrange system is SPD (CHOLMOD). */
+  cupid_status st = cupid_direct_solve(job->K, is_lagrange(job) ? CUPID_MATRIX_SPD : CUPID_MATRIX_GENERAL,
+                                       job->f_ext, job->bc, job->u, &job->solve);
   job->phases[CUPID_PHASE_FACTORISATION] =
       (cupid_phase_record){job->solve.time_factor, cupid_peak_memory(), 1};
   job->phases[CUPID_PHASE_SOLVE] =
       (cupid_phase_record){job->solve.time_solve, cupid_peak_memory(), 1};
   CUPID_CALL(st);
   job->solved = 1;
+  if (is_lagrange(job)) cupid_coupling_recover(job->coupling, job->u);
   cupid_csr_matvec(job->K, job->u, job->f_int);
   cupid_job_progress(job, "solve: %s, %lld equations, residual %.2e", job->solve.method,
                      (long long)job->solve.n, job->solve.residual);
@@ -238,7 +254,16 @@ static cupid_status solve(cupid_job *job) {
 
 cupid_status cupid_app_coupled_run(cupid_job *job) {
   if (job->model->analysis.type == CUPID_ANALYSIS_EVALUATE) return evaluate(job);
+  CUPID_CALL(cupid_app_estimate(job, 0));
+  CUPID_CALL(assemble(job));
   CUPID_CALL(apply_constraints(job));
+  if (is_lagrange(job)) { /* tied PD nodes follow the beam: eliminated, recovered after */
+    const cupid_int *tied;
+    cupid_int nt;
+    cupid_coupling_tied(job->coupling, &tied, &nt);
+    for (cupid_int t = 0; t < nt; t++)
+      for (int c = 0; c < 3; c++) CUPID_CALL(cupid_dirichlet_fix(job->bc, 3 * tied[t] + c, 0.0));
+  }
   CUPID_CALL(cupid_dirichlet_finalize(job->bc));
   CUPID_CALL(apply_loads(job));
   return solve(job);

@@ -4,6 +4,7 @@
 #define CUPID_COUPLING_INTERNAL_H
 
 #include "cupid/base.h"
+#include "cupid/coupling.h"
 #include "cupid/solvers.h"
 
 typedef struct {
@@ -27,5 +28,32 @@ cupid_status cpl_rowbuild_end_row(cpl_rowbuild *rb, cupid_int diag);
 /** Hand the matrix over as *K (the builder's arrays move into it). */
 cupid_status cpl_rowbuild_finish(cpl_rowbuild *rb, cupid_csr *K);
 void cpl_rowbuild_free(cpl_rowbuild *rb);
+
+/* One interface plane normal to the axis: the fictitious element and its section fit. */
+typedef struct {
+  double y_i, y_s;      /* interface plane and the nearest plane of real PD nodes */
+  int region;
+  cupid_int beam_node;  /* real beam node on the interface */
+  cupid_cuf_beam aux;   /* the fictitious element (a one-element B2 beam from y_i to y_s) */
+  int end_i;            /* node of aux on y_i (0 or 1); the other lies on y_s */
+  cupid_int n_q;        /* real PD nodes on y_s */
+  cupid_int *q;         /* their indices */
+  double *G;            /* M x n_q: U^{fs-FE} = G U^PD per component (Eq. 35) */
+} interface_t;
+
+struct cupid_coupling_private {
+  cupid_coupling_info info;
+  interface_t *iface;
+  int n_iface;
+  /* Lagrange coupling: tied PD nodes and their CUF weights (CSR over tied nodes). */
+  cupid_int n_tied, *tied, *tptr, *tnode;
+  double *tw;
+  cupid_int fe_block; /* first FE block (= real PD nodes) */
+};
+
+/** The interfaces: region y bounds whose beam node is still used by an active pair
+ *  (fills c->iface, c->n_iface; y_s = y_i +- h/2 on the PD side). */
+cupid_status cpl_find_interfaces(cupid_cuf_beam beam, const cupid_coupling_options *o,
+                                 cupid_coupling_h c);
 
 #endif

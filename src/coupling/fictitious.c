@@ -9,24 +9,6 @@
 #include "coupling_internal.h"
 #include "cupid/coupling.h"
 
-/* One interface plane normal to the axis: the fictitious element and its section fit. */
-typedef struct {
-  double y_i, y_s;      /* interface plane and the nearest plane of real PD nodes */
-  int region;
-  cupid_int beam_node;  /* real beam node on the interface */
-  cupid_cuf_beam aux;   /* the fictitious element (a one-element B2 beam from y_i to y_s) */
-  int end_i;            /* node of aux on y_i (0 or 1); the other lies on y_s */
-  cupid_int n_q;        /* real PD nodes on y_s */
-  cupid_int *q;         /* their indices */
-  double *G;            /* M x n_q: U^{fs-FE} = G U^PD per component (Eq. 35) */
-} interface_t;
-
-struct cupid_coupling_private {
-  cupid_coupling_info info;
-  interface_t *iface;
-  int n_iface;
-};
-
 #define TOL 1e-9
 
 /* ------------------------------------------------------------------------------ geometry */
@@ -439,7 +421,7 @@ static cupid_status fe_rows(cpl_rowbuild *rb, const cupid_csr_t *Kb, const inter
 }
 
 /* The interfaces: region y bounds whose beam node is still used by an active pair. */
-static cupid_status find_interfaces(cupid_cuf_beam beam, const cupid_coupling_options *o,
+cupid_status cpl_find_interfaces(cupid_cuf_beam beam, const cupid_coupling_options *o,
                                     cupid_coupling_h c) {
   CUPID_CALL(cupid_calloc((size_t)(2 * o->n_regions), sizeof *c->iface, "interfaces", &c->iface));
   for (int r = 0; r < o->n_regions; r++)
@@ -475,7 +457,7 @@ cupid_status cupid_coupling_create(cupid_cuf_beam beam, cupid_pd_grid grid,
               "the beam's DOF offset (%lld) must be 3 x the real PD nodes (%lld)",
               (long long)info.dof_offset, (long long)(3 * n_pd));
   CUPID_CALL(cupid_calloc(1, sizeof *c, "coupling", &c));
-  CUPID_TRY(find_interfaces(beam, o, c));
+  CUPID_TRY(cpl_find_interfaces(beam, o, c));
   for (int f = 0; f < c->n_iface; f++) CUPID_TRY(build_interface(&c->iface[f], o, grid, M, 2));
 
   CUPID_TRY(extended_grid(o, c->iface, c->n_iface, info.y_min, info.y_max, &ext));
@@ -527,6 +509,10 @@ void cupid_coupling_destroy(cupid_coupling_h *c) {
     cupid_free(&(*c)->iface[f].G);
   }
   cupid_free(&(*c)->iface);
+  cupid_free(&(*c)->tied);
+  cupid_free(&(*c)->tptr);
+  cupid_free(&(*c)->tnode);
+  cupid_free(&(*c)->tw);
   cupid_free(c);
 }
 
