@@ -40,8 +40,14 @@ cupid_status cupid_app_coupled_prepare(cupid_job *job) {
     if (st != CUPID_SUCCESS) {
       char msg[1024];
       const char *e = cupid_error_message();
+      /* The library names the region "PD region 0" (it saw one box); the mark names it here. */
       const char *tail = strstr(e, "PD region 0");
-      snprintf(msg, sizeof msg, "%s", tail ? tail + strlen("PD region 0") + 2 : e);
+      if (tail) {
+        tail += strlen("PD region 0");
+        if (*tail == ':') tail++;
+        while (*tail == ' ') tail++;
+      }
+      snprintf(msg, sizeof msg, "%s", tail ? tail : e);
       st = cupid_model_error(m, &m->pd.regions[r].mark, "%s", msg);
       return st;
     }
