@@ -241,6 +241,31 @@ static cupid_status evaluate(cupid_job *job) {
   return CUPID_SUCCESS;
 }
 
+/* |R + P| / |P| along y (the axis; x, z printed too): the fictitious-node method does not
+ * conserve momentum (docs/coupling.md), so the imbalance is a figure of merit of the run. */
+static cupid_status print_equilibrium(const cupid_job *job) {
+  double *t = NULL, load[3], reac[3];
+  CUPID_CALL(cupid_calloc((size_t)(3 * job->ndof), sizeof *t, "translation vectors", &t));
+  cupid_status st = cupid_app_translations(job, t);
+  for (int k = 0; k < 3; k++) {
+    const double *tk = t + (size_t)k * (size_t)job->ndof;
+    load[k] = reac[k] = 0.0;
+    for (cupid_int d = 0; d < job->ndof; d++) {
+      load[k] += job->f_ext[d] * tk[d];
+      if (job->bc->fixed[d]) reac[k] += (job->f_int[d] - job->f_ext[d]) * tk[d];
+    }
+  }
+  cupid_free(&t);
+  CUPID_CALL(st);
+  double pn = sqrt(load[0] * load[0] + load[1] * load[1] + load[2] * load[2]);
+  double in = sqrt((load[0] + reac[0]) * (load[0] + reac[0]) + (load[1] + reac[1]) * (load[1] + reac[1]) +
+                   (load[2] + reac[2]) * (load[2] + reac[2]));
+  cupid_job_progress(job, "equilibrium: load (%.6g, %.6g, %.6g), reaction (%.6g, %.6g, %.6g), "
+                     "|R + P| / |P| = %.3e", load[0], load[1], load[2], reac[0], reac[1], reac[2],
+                     pn > 0 ? in / pn : in);
+  return CUPID_SUCCESS;
+}
+
 static cupid_status solve(cupid_job *job) {
   /* Eq. 38 is not symmetric (UMFPACK); the eliminated Lagrange system is SPD (CHOLMOD). */
   cupid_status st = cupid_direct_solve(job->K, is_lagrange(job) ? CUPID_MATRIX_SPD : CUPID_MATRIX_GENERAL,
@@ -255,6 +280,7 @@ static cupid_status solve(cupid_job *job) {
   cupid_csr_matvec(job->K, job->u, job->f_int);
   cupid_job_progress(job, "solve: %s, %lld equations, residual %.2e", job->solve.method,
                      (long long)job->solve.n, job->solve.residual);
+  if (!job->quiet) CUPID_CALL(print_equilibrium(job));
   return CUPID_SUCCESS;
 }
 
