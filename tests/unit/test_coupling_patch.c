@@ -26,6 +26,8 @@ typedef struct {
   cupid_pd_model_kind kind;
   double delta;
   double nu;
+  int layout;      /* 0: FE|PD|FE on [0,6,12,18]; 1: two PD regions [3,6] and [12,15] on
+                      [0,3,6,12,15,18]; 2: two touching PD regions [6,9] and [9,12] */
 } patch_case;
 
 typedef struct {
@@ -37,8 +39,9 @@ typedef struct {
   cupid_pd_operator_options pdo;
   cupid_coupling_h cpl;
   cupid_csr K;
-  cupid_box region;
-  int region_mat;
+  cupid_box region[2];
+  int n_regions;
+  int region_mat[2];
   cupid_int n_pd, ndof;
 } patch_model;
 
@@ -52,18 +55,23 @@ static void build(patch_model *m, const patch_case *pc) {
     tb_le(&m->tb, pc->le_nodes);
     tb_rect(&m->tb, 0, XW, pc->le_n, 0, XW, pc->le_n, -1);
   }
-  double ys[4] = {0, 6, 12, YL};
-  for (int k = 0; k < 4; k++) m->tb.axis_y[k] = ys[k];
-  for (int k = 0; k < 3; k++) m->tb.axis_el[k] = 1;
-  m->tb.def.n_axis = 4;
+  static const double axes[3][6] = {{0, 6, 12, YL}, {0, 3, 6, 12, 15, YL}, {0, 6, 9, 12, YL}};
+  static const int n_axis[3] = {4, 6, 5};
+  static const double reg[3][2][2] = {{{6, 12}}, {{3, 6}, {12, 15}}, {{6, 9}, {9, 12}}};
+  int L = pc->layout;
+  for (int k = 0; k < n_axis[L]; k++) m->tb.axis_y[k] = axes[L][k];
+  for (int k = 0; k + 1 < n_axis[L]; k++) m->tb.axis_el[k] = 1;
+  m->tb.def.n_axis = n_axis[L];
   m->tb.def.element_nodes = pc->p;
   m->beam = tb_create(&m->tb);
 
-  m->region = (cupid_box){.lo = {0, 6, 0}, .hi = {XW, 12, XW}, .has = {1, 1, 1}};
+  m->n_regions = L == 0 ? 1 : 2;
+  for (int r = 0; r < m->n_regions; r++)
+    m->region[r] = (cupid_box){.lo = {0, reg[L][r][0], 0}, .hi = {XW, reg[L][r][1], XW}, .has = {1, 1, 1}};
   cupid_pd_grid_options go = {.spacing = 1.0, .dimension = 3};
-  CUPID_ASSERT_OK(cupid_pd_grid_create(&go, 1, &m->region, &m->region_mat, &m->grid));
+  CUPID_ASSERT_OK(cupid_pd_grid_create(&go, m->n_regions, m->region, m->region_mat, &m->grid));
   m->n_pd = cupid_pd_grid_num_nodes(m->grid);
-  CUPID_ASSERT_OK(cupid_coupling_deactivate(m->beam, 1, &m->region));
+  CUPID_ASSERT_OK(cupid_coupling_deactivate(m->beam, m->n_regions, m->region));
   CUPID_ASSERT_OK(cupid_cuf_set_dof_offset(m->beam, 3 * m->n_pd));
   m->ndof = 3 * m->n_pd + cupid_cuf_num_dofs(m->beam);
 
@@ -77,9 +85,9 @@ static void build(patch_model *m, const patch_case *pc) {
   cupid_coupling_options co = {.beam_def = &m->tb.def,
                                .materials = m->tb.mat,
                                .n_materials = m->tb.n_mat,
-                               .n_regions = 1,
-                               .regions = &m->region,
-                               .region_materials = &m->region_mat,
+                               .n_regions = m->n_regions,
+                               .regions = m->region,
+                               .region_materials = m->region_mat,
                                .spacing = 1.0,
                                .pd = m->pdo};
   CUPID_ASSERT_OK(cupid_coupling_create(m->beam, m->grid, &co, &m->cpl, &m->K));
@@ -87,7 +95,10 @@ static void build(patch_model *m, const patch_case *pc) {
 
   /* The all-PD bar: the reference for the PD rows. */
   cupid_box whole = {.lo = {0, 0, 0}, .hi = {XW, YL, XW}, .has = {1, 1, 1}};
-  CUPID_ASSERT_OK(cupid_pd_grid_create(&go, 1, &whole, &m->region_mat, &m->full));
+  CUPID_ASSERT_OK(cupid_pd_grid_create(&go, 1, &whole, m->region_mat, &m->full));
+  cupid_coupling_info ci;
+  cupid_coupling_get_info(m->cpl, &ci);
+  assert_int_equal(ci.n_interfaces, L == 2 ? 2 : 2 * m->n_regions); /* touching: none between */
   CUPID_ASSERT_OK(cupid_pd_operator_create(m->full, &m->pdo, &m->full_op));
 }
 
@@ -291,6 +302,16 @@ static void l4_2x2_bond(void **state) {
   check_ghost_forces(
       &(patch_case){.le_nodes = 4, .le_n = 2, .p = 3, .kind = CUPID_PD_BOND, .delta = 1.5, .nu = 0.0});
 }
+static void two_regions_te2_lps(void **state) {
+  (void)state;
+  check_ghost_forces(
+      &(patch_case){.te = 2, .p = 2, .kind = CUPID_PD_LPS, .delta = 1.5, .nu = 0.2, .layout = 1});
+}
+static void touching_regions_l9_bond(void **state) {
+  (void)state;
+  check_ghost_forces(&(patch_case){
+      .le_nodes = 9, .le_n = 1, .p = 3, .kind = CUPID_PD_BOND, .delta = 1.5, .nu = 0.25, .layout = 2});
+}
 static void l9_2x2_b4_lps_nu0(void **state) {
   (void)state;
   check_ghost_forces(
@@ -302,6 +323,7 @@ int main(void) {
       cmocka_unit_test(te1_lps),     cmocka_unit_test(te2_b3_lps),
       cmocka_unit_test(te3_b4_bond), cmocka_unit_test(l9_lps),
       cmocka_unit_test(l4_2x2_bond), cmocka_unit_test(l9_2x2_b4_lps_nu0),
+      cmocka_unit_test(two_regions_te2_lps), cmocka_unit_test(touching_regions_l9_bond),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }
