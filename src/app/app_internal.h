@@ -3,6 +3,7 @@
 #define CUPID_APP_INTERNAL_H
 
 #include "cupid/app.h"
+#include "cupid/coupling.h"
 #include "cupid/cuf.h"
 #include "cupid/dynamics.h"
 #include "cupid/model.h"
@@ -70,6 +71,10 @@ typedef struct {
 
   cupid_job_dynamic dyn;   /**< type: dynamic */
 
+  /* Coupled models (coupled.c) */
+  cupid_coupling_h coupling;
+  cupid_int n_fictitious;  /**< fictitious PD nodes */
+
   double load_sum[3], reaction_sum[3];
   cupid_phase_record phases[CUPID_PHASE_COUNT];
   double t_start;
@@ -109,6 +114,15 @@ cupid_status cupid_app_dynamic_check(const cupid_job *job);
 cupid_status cupid_app_run_dynamic(cupid_job *job);
 /** The "dynamic" block of summary.json. */
 void cupid_app_dynamic_json(cupid_json js, const cupid_job *job);
+
+/* coupled.c: beam + peridynamics models (paper 000 section 4, fictitious nodes). */
+int cupid_app_is_coupled(const cupid_job *job);
+/** Refuse what coupled models cannot do yet (methods, 1D grids, dynamics). */
+cupid_status cupid_app_coupled_check(const cupid_job *job);
+/** Make the beam give way inside the PD regions (after the beam is built). */
+cupid_status cupid_app_coupled_prepare(cupid_job *job);
+/** Constraints, loads, the coupled matrix and the solve (or `evaluate`). */
+cupid_status cupid_app_coupled_run(cupid_job *job);
 
 /* check.c: `cupid check` and the memory guard of `cupid run`. */
 cupid_status cupid_app_estimate(const cupid_job *job, int print);

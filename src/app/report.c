@@ -168,7 +168,7 @@ static void json_counts(cupid_json js, const cupid_job *job) {
   cupid_json_integer(js, "pd_nodes", job->n_pd);
   cupid_json_integer(js, "bonds", job->n_bonds);
   cupid_json_integer(js, "pd_dofs", 3 * job->n_pd);
-  cupid_json_integer(js, "fictitious_nodes", 0);
+  cupid_json_integer(js, "fictitious_nodes", job->n_fictitious);
   cupid_json_integer(js, "dofs", job->ndof);
   cupid_json_integer(js, "constrained_dofs", nfixed);
   cupid_json_integer(js, "matrix_nonzeros", job->K ? cupid_csr_nnz(job->K) : 0);

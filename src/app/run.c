@@ -39,12 +39,7 @@ static cupid_status choose_solver(const cupid_job *job) {
 /* What this version can run; everything else is parsed and validated but refused plainly. */
 static cupid_status check_supported(const cupid_job *job) {
   const cupid_model_t *m = job->model;
-  if (m->has_beam && m->has_peridynamics)
-    return cupid_model_error(m, &m->coupling.mark,
-                             "coupled beam + peridynamics models are not yet supported by cupid "
-                             "%s (the model was validated; run the beam or the peridynamics part "
-                             "alone)",
-                             cupid_version());
+  if (cupid_app_is_coupled(job)) return cupid_app_coupled_check(job);
   if (m->analysis.type == CUPID_ANALYSIS_DYNAMIC) return cupid_app_dynamic_check(job);
   return CUPID_SUCCESS;
 }
@@ -204,6 +199,7 @@ static cupid_status sum_forces(cupid_job *job) {
 }
 
 static void job_destroy(cupid_job *job) {
+  cupid_coupling_destroy(&job->coupling);
   cupid_pd_operator_destroy(&job->op);
   cupid_pd_grid_destroy(&job->grid);
   cupid_cuf_beam_destroy(&job->beam);
@@ -227,6 +223,7 @@ cupid_status cupid_run_model(const cupid_model_t *model, const cupid_run_options
   CUPID_TRY(choose_solver(&job));
   if (model->has_peridynamics) CUPID_TRY(build_pd(&job));
   if (model->has_beam) CUPID_TRY(cupid_app_fe_build(&job));
+  if (cupid_app_is_coupled(&job)) CUPID_TRY(cupid_app_coupled_prepare(&job));
   job.fe_offset = 3 * job.n_pd;
   job.ndof = job.fe_offset + job.n_fe_dofs;
   CUPID_TRY(cupid_app_check_points(&job));
@@ -235,7 +232,9 @@ cupid_status cupid_run_model(const cupid_model_t *model, const cupid_run_options
     goto cleanup;
   }
   CUPID_TRY(allocate_fields(&job));
-  if (model->analysis.type == CUPID_ANALYSIS_EVALUATE) {
+  if (cupid_app_is_coupled(&job)) {
+    CUPID_TRY(cupid_app_coupled_run(&job));
+  } else if (model->analysis.type == CUPID_ANALYSIS_EVALUATE) {
     CUPID_TRY(run_evaluate(&job));
   } else {
     if (job.grid) CUPID_TRY(cupid_app_pd_constraints(&job));

@@ -1,0 +1,120 @@
+/**
+ * @file coupling.h
+ * @brief PD-CUF coupling: a CUF beam with embedded peridynamic regions, joined by the
+ *        improved coupling with fictitious nodes of paper 000, section 4 (Eqs. 29-38).
+ *
+ * Geometry. One CUF beam (axis y) and PD regions (boxes). Where a region lies inside the beam,
+ * the beam gives way: the (beam element, section element) pairs inside the region's box are
+ * made inactive (cupid_coupling_deactivate()). Region y bounds must be beam-element ends.
+ * This version supports regions that span the whole cross-section (interfaces normal to the
+ * axis, e.g. the coupled bar); a region over part of the section (interfaces parallel to the
+ * axis) is CUPID_ERR_UNSUPPORTED.
+ *
+ * Fictitious PD nodes (section 4.2). One PD grid holds the real nodes and, inside the beam,
+ * fictitious nodes up to 2 delta (rounded up to whole spacings) beyond every interface: LPS
+ * couples nodes 2 delta apart. Its stiffness is assembled once; the rows of real nodes are
+ * kept and the fictitious columns are replaced by u_f = I^{f-PD} u_FE (Eqs. 29-30, the CUF
+ * expansion at the node, cupid_cuf_shape_at()).
+ *
+ * Fictitious FE elements (section 4.3). At every interface plane y_I a fictitious B2 beam
+ * element (the same cross-section) spans from y_I to the plane of the nearest real PD nodes,
+ * y_s = y_I +- h/2. Its far section's DOFs are U^{fs-FE} = [A I^{fs-PD}]^{-1} A U^PD (Eqs.
+ * 31-35): I^{fs-PD}_{q,tau} = F_tau(x_q, z_q) over the real PD nodes q on y_s, A the weighted
+ * average of Eq. 33 (weights |N_i F_tau|). Its element stiffness adds the real-real block to
+ * the interface FE rows and the fictitious columns, through I^{f-FE}, to PD columns (Eq. 38);
+ * the rows of the fictitious DOFs are dropped (they would be FE forces in the PD region).
+ * The fictitious element is B2 whatever the real elements are: its nodes must lie on the
+ * interface and on a PD plane (h/2 away), and a B2 element is exact for the affine fields of
+ * the patch test.
+ *
+ * The coupled matrix (Eq. 38) is not symmetric; it is bs = 3 block CSR over
+ * [3 DOFs per real PD node | FE DOFs], the FE DOFs starting at block n_pd (the beam's DOF
+ * offset must be 3 n_pd). FE nodes used by no active pair keep an empty row but for a zero
+ * diagonal block and must be fixed by the caller (cupid_cuf_node_used()).
+ */
+#ifndef CUPID_COUPLING_H
+#define CUPID_COUPLING_H
+
+#include "cupid/base.h"
+#include "cupid/cuf.h"
+#include "cupid/model.h"
+#include "cupid/pd.h"
+#include "cupid/solvers.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/** A built coupling (opaque). */
+typedef struct cupid_coupling_private *cupid_coupling_h;
+
+/** What the coupling needs besides the beam and the real PD grid. */
+typedef struct {
+  const cupid_beam *beam_def;          /**< the beam's definition (for fictitious elements) */
+  const cupid_material *materials;     /**< the model's material table */
+  int n_materials;
+  int n_regions;
+  const cupid_box *regions;            /**< PD region boxes */
+  const int *region_materials;         /**< material index per region */
+  double spacing;                      /**< PD grid spacing h */
+  cupid_pd_operator_options pd;        /**< the PD operator of the real grid */
+} cupid_coupling_options;
+
+/** Counts, for summaries. */
+typedef struct {
+  cupid_int n_real_pd;         /**< real PD nodes */
+  cupid_int n_fictitious_pd;   /**< fictitious PD nodes (inside the beam) */
+  int n_interfaces;            /**< interface planes (one fictitious FE element each) */
+  cupid_int n_fictitious_fe;   /**< fictitious FE nodes (section DOF groups of those elements) */
+} cupid_coupling_info;
+
+/**
+ * Make inactive every (beam element, section element) pair inside a PD region. Errors
+ * (CUPID_ERR_MODEL, message naming region index and the boundary to move): a y bound that is
+ * not a beam-element end, a region outside the beam's y range. CUPID_ERR_UNSUPPORTED: a
+ * region not covering the whole section.
+ */
+cupid_status cupid_coupling_deactivate(cupid_cuf_beam beam, int n_regions,
+                                       const cupid_box *regions);
+
+/**
+ * Build the fictitious nodes and elements and the coupled matrix *K (Eq. 38). The beam must
+ * have been deactivated and its DOF offset set to 3 * (real PD nodes). @p grid is the grid of
+ * the real PD nodes (borrowed).
+ */
+cupid_status cupid_coupling_create(cupid_cuf_beam beam, cupid_pd_grid grid,
+                                   const cupid_coupling_options *opts, cupid_coupling_h *c,
+                                   cupid_csr *K);
+
+/**
+ * The Lagrange-multiplier coupling (Pagani & Carrera 2020, the baseline of paper 000 section
+ * 5.1; cuf.md section 7), solved by elimination: every real PD node q on the PD plane nearest
+ * an interface y_I (y_I +- h/2) is tied to the CUF field of the interface section,
+ * u_q = sum_tau F_tau(x_q, z_q) u_{tau, I}. Eliminating the constraints (u = T [u_m; u_FE])
+ * gives the symmetric positive definite K = T^T diag(K_PD, K_FE) T, identical to the
+ * saddle-point solution; the multipliers are the reactions of the tied nodes. The PD grid holds
+ * the real nodes only (no fictitious nodes): the truncated families at the interfaces cause
+ * the distortions paper 000 reports. *K has the layout of cupid_coupling_create(); the rows
+ * and columns of tied PD nodes are empty but for a zero diagonal block: fix their DOFs
+ * (cupid_coupling_tied()) and fill them after the solve with cupid_coupling_recover().
+ */
+cupid_status cupid_coupling_lagrange_create(cupid_cuf_beam beam, cupid_pd_grid grid,
+                                            const cupid_coupling_options *opts,
+                                            cupid_coupling_h *c, cupid_csr *K);
+
+/** Tied PD nodes of the Lagrange coupling (NULL, 0 for the fictitious-node method). */
+void cupid_coupling_tied(const cupid_coupling_h c, const cupid_int **nodes, cupid_int *n);
+
+/** Set the displacements of the tied PD nodes from the FE DOFs of u (Lagrange coupling). */
+void cupid_coupling_recover(const cupid_coupling_h c, double *u);
+
+/** Destroy and set *c to NULL (NULL-safe). */
+void cupid_coupling_destroy(cupid_coupling_h *c);
+
+/** Counts. */
+void cupid_coupling_get_info(const cupid_coupling_h c, cupid_coupling_info *info);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

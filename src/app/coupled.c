@@ -1,0 +1,302 @@
+/* Coupled models (beam + peridynamics) inside a run: the beam gives way inside the PD regions,
+ * constraints and loads go to the part they touch, the coupled matrix of paper 000 Eq. 38
+ * (src/coupling) is solved by UMFPACK (it is not symmetric). Methods: fictitious (default) and
+ * lagrange (eliminated, SPD, CHOLMOD); arlequin is refused plainly. */
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+
+#include "app_internal.h"
+#include "cupid/coupling.h"
+
+#define LATTICE_TOL 1e-9
+
+int cupid_app_is_coupled(const cupid_job *job) {
+  return job->model->has_beam && job->model->has_peridynamics;
+}
+
+cupid_status cupid_app_coupled_check(const cupid_job *job) {
+  const cupid_model_t *m = job->model;
+  if (m->coupling.method == CUPID_COUPLING_ARLEQUIN)
+    return cupid_model_error(m, &m->coupling.mark,
+                             "method arlequin is not yet supported by cupid %s (allowed now: "
+                             "fictitious, the improved coupling of paper 000, and lagrange)",
+                             cupid_version());
+  if (m->pd.dimension != 3)
+    return cupid_model_error(m, &m->pd.mark,
+                             "a coupled model needs a 3D peridynamic grid (dimension: 3)");
+  if (m->analysis.type == CUPID_ANALYSIS_DYNAMIC)
+    return cupid_model_error(m, &m->analysis.mark,
+                             "type dynamic is not yet supported for coupled models (allowed: "
+                             "static, evaluate)");
+  return CUPID_SUCCESS;
+}
+
+/* The beam gives way inside every PD region (region by region, so errors name the region). */
+cupid_status cupid_app_coupled_prepare(cupid_job *job) {
+  const cupid_model_t *m = job->model;
+  for (int r = 0; r < m->pd.n_regions; r++) {
+    cupid_status st = cupid_coupling_deactivate(job->beam, 1, &m->pd.regions[r].box);
+    if (st != CUPID_SUCCESS) {
+      char msg[1024];
+      const char *e = cupid_error_message();
+      /* The library names the region "PD region 0" (it saw one box); the mark names it here. */
+      const char *tail = strstr(e, "PD region 0");
+      if (tail) {
+        tail += strlen("PD region 0");
+        if (*tail == ':') tail++;
+        while (*tail == ' ') tail++;
+      }
+      snprintf(msg, sizeof msg, "%s", tail ? tail : e);
+      st = cupid_model_error(m, &m->pd.regions[r].mark, "%s", msg);
+      return st;
+    }
+  }
+  return CUPID_SUCCESS;
+}
+
+/* ------------------------------------------------------------ constraints and loads */
+
+static int pd_node_in_box(const cupid_job *job, const cupid_box *b) {
+  const double *x = cupid_pd_grid_coords(job->grid);
+  double h = cupid_pd_grid_spacing(job->grid);
+  for (cupid_int i = 0; i < job->n_pd; i++)
+    if (cupid_box_contains(b, x + 3 * i, LATTICE_TOL * h)) return 1;
+  return 0;
+}
+
+/* A used beam node lies at y. */
+static int fe_node_at(const cupid_job *job, double y) {
+  cupid_int bn = cupid_cuf_beam_node_at(job->beam, y);
+  if (bn < 0) return 0;
+  for (int tau = 0; tau < job->fe_info.M; tau++)
+    if (cupid_cuf_node_used(job->beam, tau, bn)) return 1;
+  return 0;
+}
+
+/* A used beam node lies in the y range of the box. */
+static int fe_node_in_box(const cupid_job *job, const cupid_box *b) {
+  double tol = LATTICE_TOL * (job->fe_info.y_max - job->fe_info.y_min);
+  for (cupid_int bn = 0; bn < job->fe_info.n_beam_nodes; bn++) {
+    double y = cupid_cuf_beam_node_y(job->beam, bn);
+    if (b->has[1] && (y < b->lo[1] - tol || y > b->hi[1] + tol)) continue;
+    for (int tau = 0; tau < job->fe_info.M; tau++)
+      if (cupid_cuf_node_used(job->beam, tau, bn)) return 1;
+  }
+  return 0;
+}
+
+/* Run the PD-side stage on the model's PD items only (a shallow copy of the model). */
+static cupid_status pd_stage(cupid_job *job, cupid_constraint *cons, int nc, cupid_load *loads,
+                             int nl, int constraints) {
+  cupid_model_t part = *job->model;
+  part.constraints = cons;
+  part.n_constraints = nc;
+  part.loads = loads;
+  part.n_loads = nl;
+  const cupid_model_t *saved = job->model;
+  job->model = &part;
+  cupid_status st = constraints ? cupid_app_pd_constraints(job) : cupid_app_pd_loads(job);
+  job->model = saved;
+  return st;
+}
+
+static cupid_status apply_constraints(cupid_job *job) {
+  const cupid_model_t *m = job->model;
+  cupid_status st = CUPID_SUCCESS;
+  cupid_constraint *pd = NULL;
+  int npd = 0;
+  CUPID_CALL(cupid_calloc((size_t)m->n_constraints + 1, sizeof *pd, "PD constraints", &pd));
+  for (int k = 0; k < m->n_constraints; k++) {
+    const cupid_constraint *c = &m->constraints[k];
+    int on_fe, on_pd;
+    if (c->kind == CUPID_CONSTRAINT_CLAMP) {
+      on_fe = fe_node_at(job, c->plane_y);
+      on_pd = !on_fe;
+    } else {
+      on_fe = fe_node_in_box(job, &c->box);
+      on_pd = pd_node_in_box(job, &c->box);
+    }
+    if (!on_fe && !on_pd) {
+      st = cupid_model_error(m, &c->mark,
+                             "the constraint touches neither the beam (outside the PD regions) "
+                             "nor a PD node");
+      goto cleanup;
+    }
+    if (on_fe) CUPID_TRY(cupid_cuf_constraint_apply(job->beam, m, c, job->bc));
+    if (on_pd) pd[npd++] = *c;
+  }
+  CUPID_TRY(pd_stage(job, pd, npd, NULL, 0, 1));
+  /* FE nodes inside the PD regions carry no stiffness: hold them at zero. */
+  for (cupid_int n = 0; n < job->fe_info.n_fe_nodes; n++) {
+    int tau = (int)(n % job->fe_info.M);
+    if (cupid_cuf_node_used(job->beam, tau, n / job->fe_info.M)) continue;
+    for (int c = 0; c < 3; c++) CUPID_TRY(cupid_dirichlet_fix(job->bc, job->fe_offset + 3 * n + c, 0.0));
+  }
+cleanup:
+  cupid_free(&pd);
+  return st;
+}
+
+static cupid_status apply_loads(cupid_job *job) {
+  const cupid_model_t *m = job->model;
+  cupid_status st = CUPID_SUCCESS;
+  cupid_load *pd = NULL;
+  int npd = 0;
+  CUPID_CALL(cupid_calloc((size_t)m->n_loads + 1, sizeof *pd, "PD loads", &pd));
+  for (int k = 0; k < m->n_loads; k++) {
+    const cupid_load *l = &m->loads[k];
+    int on_fe = 0, on_pd = 0;
+    switch (l->kind) {
+    case CUPID_LOAD_TRACTION: on_fe = fe_node_at(job, l->plane_y); on_pd = !on_fe; break;
+    case CUPID_LOAD_POINT:
+      on_fe = cupid_cuf_contains(job->beam, l->at[0], l->at[1], l->at[2]);
+      on_pd = !on_fe;
+      break;
+    case CUPID_LOAD_BODY:
+      on_fe = fe_node_in_box(job, &l->box);
+      on_pd = pd_node_in_box(job, &l->box);
+      break;
+    }
+    if (on_fe) CUPID_TRY(cupid_cuf_load_add(job->beam, m, l, job->f_ext));
+    if (on_pd) pd[npd++] = *l;
+  }
+  CUPID_TRY(pd_stage(job, NULL, 0, pd, npd, 0));
+cleanup:
+  cupid_free(&pd);
+  return st;
+}
+
+/* ----------------------------------------------------------------------- assembly */
+
+static int is_lagrange(const cupid_job *job) {
+  return job->model->coupling.method == CUPID_COUPLING_LAGRANGE;
+}
+
+static cupid_status assemble(cupid_job *job) {
+  const cupid_model_t *m = job->model;
+  double t0 = cupid_wtime();
+  cupid_status st = CUPID_SUCCESS;
+  cupid_box *boxes = NULL;
+  int *mats = NULL;
+  int nr = m->pd.n_regions;
+  CUPID_TRY(cupid_calloc((size_t)nr, sizeof *boxes, "region boxes", &boxes));
+  CUPID_TRY(cupid_calloc((size_t)nr, sizeof *mats, "region materials", &mats));
+  for (int r = 0; r < nr; r++) {
+    boxes[r] = m->pd.regions[r].box;
+    mats[r] = m->pd.regions[r].material;
+  }
+  cupid_coupling_options co = {.beam_def = &m->beam,
+                               .materials = m->materials,
+                               .n_materials = m->n_materials,
+                               .n_regions = nr,
+                               .regions = boxes,
+                               .region_materials = mats,
+                               .spacing = m->pd.spacing,
+                               .pd = job->pd_options};
+  if (is_lagrange(job))
+    CUPID_TRY(cupid_coupling_lagrange_create(job->beam, job->grid, &co, &job->coupling, &job->K));
+  else
+    CUPID_TRY(cupid_coupling_create(job->beam, job->grid, &co, &job->coupling, &job->K));
+  cupid_coupling_info ci;
+  cupid_coupling_get_info(job->coupling, &ci);
+  job->n_fictitious = ci.n_fictitious_pd;
+  cupid_job_phase_end(job, CUPID_PHASE_COUPLING, t0);
+  if (is_lagrange(job)) {
+    const cupid_int *tied;
+    cupid_int nt;
+    cupid_coupling_tied(job->coupling, &tied, &nt);
+    cupid_job_progress(job, "coupling (Lagrange multipliers, eliminated): %d interfaces, %lld "
+                       "tied PD nodes; %lld non-zeros (%.1f MB)", ci.n_interfaces, (long long)nt,
+                       (long long)cupid_csr_nnz(job->K), (double)cupid_csr_bytes(job->K) / 1e6);
+  } else {
+    cupid_job_progress(job,
+                       "coupling (fictitious nodes): %d interfaces, %lld fictitious PD nodes, "
+                       "%lld fictitious FE nodes; %lld non-zeros (%.1f MB)",
+                       ci.n_interfaces, (long long)ci.n_fictitious_pd,
+                       (long long)ci.n_fictitious_fe, (long long)cupid_csr_nnz(job->K),
+                       (double)cupid_csr_bytes(job->K) / 1e6);
+  }
+cleanup:
+  cupid_free(&boxes);
+  cupid_free(&mats);
+  return st;
+}
+
+static cupid_status evaluate(cupid_job *job) {
+  const cupid_model_t *m = job->model;
+  const double *x = cupid_pd_grid_coords(job->grid);
+  for (cupid_int i = 0; i < job->n_pd; i++)
+    for (int c = 0; c < 3; c++)
+      job->u[3 * i + c] =
+          cupid_value_eval(&m->analysis.field[c], x[3 * i], x[3 * i + 1], x[3 * i + 2], 0.0, 0.0);
+  CUPID_CALL(cupid_app_fe_impose_field(job));
+  /* FE nodes inside the PD regions are not part of the model. */
+  for (cupid_int n = 0; n < job->fe_info.n_fe_nodes; n++)
+    if (!cupid_cuf_node_used(job->beam, (int)(n % job->fe_info.M), n / job->fe_info.M))
+      for (int c = 0; c < 3; c++) job->u[job->fe_offset + 3 * n + c] = 0.0;
+  CUPID_CALL(assemble(job));
+  cupid_csr_matvec(job->K, job->u, job->f_int);
+  cupid_job_progress(job, "evaluate: internal forces of the imposed field computed");
+  return CUPID_SUCCESS;
+}
+
+/* |R + P| / |P| along y (the axis; x, z printed too): the fictitious-node method does not
+ * conserve momentum (docs/coupling.md), so the imbalance is a figure of merit of the run. */
+static cupid_status print_equilibrium(const cupid_job *job) {
+  double *t = NULL, load[3], reac[3];
+  CUPID_CALL(cupid_calloc((size_t)(3 * job->ndof), sizeof *t, "translation vectors", &t));
+  cupid_status st = cupid_app_translations(job, t);
+  for (int k = 0; k < 3; k++) {
+    const double *tk = t + (size_t)k * (size_t)job->ndof;
+    load[k] = reac[k] = 0.0;
+    for (cupid_int d = 0; d < job->ndof; d++) {
+      load[k] += job->f_ext[d] * tk[d];
+      if (job->bc->fixed[d]) reac[k] += (job->f_int[d] - job->f_ext[d]) * tk[d];
+    }
+  }
+  cupid_free(&t);
+  CUPID_CALL(st);
+  double pn = sqrt(load[0] * load[0] + load[1] * load[1] + load[2] * load[2]);
+  double in = sqrt((load[0] + reac[0]) * (load[0] + reac[0]) + (load[1] + reac[1]) * (load[1] + reac[1]) +
+                   (load[2] + reac[2]) * (load[2] + reac[2]));
+  cupid_job_progress(job, "equilibrium: load (%.6g, %.6g, %.6g), reaction (%.6g, %.6g, %.6g), "
+                     "|R + P| / |P| = %.3e", load[0], load[1], load[2], reac[0], reac[1], reac[2],
+                     pn > 0 ? in / pn : in);
+  return CUPID_SUCCESS;
+}
+
+static cupid_status solve(cupid_job *job) {
+  /* Eq. 38 is not symmetric (UMFPACK); the eliminated Lagrange system is SPD (CHOLMOD). */
+  cupid_status st = cupid_direct_solve(job->K, is_lagrange(job) ? CUPID_MATRIX_SPD : CUPID_MATRIX_GENERAL,
+                                       job->f_ext, job->bc, job->u, &job->solve);
+  job->phases[CUPID_PHASE_FACTORISATION] =
+      (cupid_phase_record){job->solve.time_factor, cupid_peak_memory(), 1};
+  job->phases[CUPID_PHASE_SOLVE] =
+      (cupid_phase_record){job->solve.time_solve, cupid_peak_memory(), 1};
+  CUPID_CALL(st);
+  job->solved = 1;
+  if (is_lagrange(job)) cupid_coupling_recover(job->coupling, job->u);
+  cupid_csr_matvec(job->K, job->u, job->f_int);
+  cupid_job_progress(job, "solve: %s, %lld equations, residual %.2e", job->solve.method,
+                     (long long)job->solve.n, job->solve.residual);
+  if (!job->quiet) CUPID_CALL(print_equilibrium(job));
+  return CUPID_SUCCESS;
+}
+
+cupid_status cupid_app_coupled_run(cupid_job *job) {
+  if (job->model->analysis.type == CUPID_ANALYSIS_EVALUATE) return evaluate(job);
+  CUPID_CALL(cupid_app_estimate(job, 0));
+  CUPID_CALL(assemble(job));
+  CUPID_CALL(apply_constraints(job));
+  if (is_lagrange(job)) { /* tied PD nodes follow the beam: eliminated, recovered after */
+    const cupid_int *tied;
+    cupid_int nt;
+    cupid_coupling_tied(job->coupling, &tied, &nt);
+    for (cupid_int t = 0; t < nt; t++)
+      for (int c = 0; c < 3; c++) CUPID_CALL(cupid_dirichlet_fix(job->bc, 3 * tied[t] + c, 0.0));
+  }
+  CUPID_CALL(cupid_dirichlet_finalize(job->bc));
+  CUPID_CALL(apply_loads(job));
+  return solve(job);
+}

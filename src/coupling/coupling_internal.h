@@ -1,0 +1,59 @@
+/* Private to src/coupling: a row-by-row builder of bs = 3 block-CSR matrices (each row's
+ * blocks are gathered through a column -> slot marker, then sorted and appended). */
+#ifndef CUPID_COUPLING_INTERNAL_H
+#define CUPID_COUPLING_INTERNAL_H
+
+#include "cupid/base.h"
+#include "cupid/coupling.h"
+#include "cupid/solvers.h"
+
+typedef struct {
+  cupid_int ncols;
+  cupid_int *slot;    /* ncols: slot of a column in the current row, or -1 */
+  cupid_int *cols;    /* current row's columns */
+  double *vals;       /* current row's blocks, 9 each */
+  cupid_int n, cap;
+  cupid_int nrows_done, nrows;
+  cupid_int *rowptr;  /* nrows + 1 */
+  cupid_int *col;     /* all rows */
+  double *val;
+  cupid_int nnz, cap_out;
+} cpl_rowbuild;
+
+cupid_status cpl_rowbuild_init(cpl_rowbuild *rb, cupid_int nrows, cupid_int ncols);
+/** Add s * blk (3x3 row-major) at column c of the current row. */
+cupid_status cpl_rowbuild_add(cpl_rowbuild *rb, cupid_int c, double s, const double *blk);
+/** Close the current row (a zero diagonal block is added when @p diag >= 0 and absent). */
+cupid_status cpl_rowbuild_end_row(cpl_rowbuild *rb, cupid_int diag);
+/** Hand the matrix over as *K (the builder's arrays move into it). */
+cupid_status cpl_rowbuild_finish(cpl_rowbuild *rb, cupid_csr *K);
+void cpl_rowbuild_free(cpl_rowbuild *rb);
+
+/* One interface plane normal to the axis: the fictitious element and its section fit. */
+typedef struct {
+  double y_i, y_s;      /* interface plane and the nearest plane of real PD nodes */
+  int region;
+  cupid_int beam_node;  /* real beam node on the interface */
+  cupid_cuf_beam aux;   /* the fictitious element (a one-element B2 beam from y_i to y_s) */
+  int end_i;            /* node of aux on y_i (0 or 1); the other lies on y_s */
+  cupid_int n_q;        /* real PD nodes on y_s */
+  cupid_int *q;         /* their indices */
+  double *G;            /* M x n_q: U^{fs-FE} = G U^PD per component (Eq. 35) */
+} interface_t;
+
+struct cupid_coupling_private {
+  cupid_coupling_info info;
+  interface_t *iface;
+  int n_iface;
+  /* Lagrange coupling: tied PD nodes and their CUF weights (CSR over tied nodes). */
+  cupid_int n_tied, *tied, *tptr, *tnode;
+  double *tw;
+  cupid_int fe_block; /* first FE block (= real PD nodes) */
+};
+
+/** The interfaces: region y bounds whose beam node is still used by an active pair
+ *  (fills c->iface, c->n_iface; y_s = y_i +- h/2 on the PD side). */
+cupid_status cpl_find_interfaces(cupid_cuf_beam beam, const cupid_coupling_options *o,
+                                 cupid_coupling_h c);
+
+#endif

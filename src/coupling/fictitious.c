@@ -1,0 +1,521 @@
+/* The improved PD-CUF coupling with fictitious nodes (paper 000, section 4; see coupling.h):
+ * fictitious PD nodes in the beam up to 2 delta from each interface (Eqs. 29-30), one
+ * fictitious B2 element per interface whose far section is fitted to the real PD nodes on the
+ * nearest PD plane (Eqs. 31-36), and the non-symmetric coupled matrix of Eq. 38. */
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+
+#include "coupling_internal.h"
+#include "cupid/coupling.h"
+
+#define TOL 1e-9
+
+/* ------------------------------------------------------------------------------ geometry */
+
+static void section_bbox(const cupid_cuf_beam beam, double bb[4]) {
+  cupid_cuf_info info;
+  cupid_cuf_get_info(beam, &info);
+  bb[0] = bb[2] = INFINITY;
+  bb[1] = bb[3] = -INFINITY;
+  for (cupid_int se = 0; se < info.n_section_elements; se++) {
+    int npe, mat;
+    double box[4];
+    cupid_cuf_section_element(beam, se, &npe, NULL, &mat, box);
+    bb[0] = fmin(bb[0], box[0]);
+    bb[1] = fmax(bb[1], box[1]);
+    bb[2] = fmin(bb[2], box[2]);
+    bb[3] = fmax(bb[3], box[3]);
+  }
+}
+
+/* The beam node at y if it ends a beam element, else -1; *below / *above get the nearest ends. */
+static cupid_int element_end_at(const cupid_cuf_beam beam, double y, double *below, double *above) {
+  cupid_cuf_info info;
+  cupid_cuf_get_info(beam, &info);
+  *below = -INFINITY;
+  *above = INFINITY;
+  for (cupid_int e = 0; e < info.n_beam_elements; e++) {
+    cupid_int first;
+    double y0, y1;
+    cupid_cuf_beam_element(beam, e, &first, &y0, &y1);
+    double tol = TOL * (info.y_max - info.y_min);
+    if (fabs(y0 - y) <= tol) return first;
+    if (fabs(y1 - y) <= tol) return first + info.element_nodes - 1;
+    if (y0 < y) *below = fmax(*below, y0);
+    if (y1 < y) *below = fmax(*below, y1);
+    if (y0 > y) *above = fmin(*above, y0);
+    if (y1 > y) *above = fmin(*above, y1);
+  }
+  return -1;
+}
+
+cupid_status cupid_coupling_deactivate(cupid_cuf_beam beam, int n_regions,
+                                       const cupid_box *regions) {
+  cupid_cuf_info info;
+  cupid_cuf_get_info(beam, &info);
+  double bb[4], len = info.y_max - info.y_min;
+  section_bbox(beam, bb);
+  double stol = TOL * fmax(bb[1] - bb[0], bb[3] - bb[2]);
+  for (int r = 0; r < n_regions; r++) {
+    const cupid_box *b = &regions[r];
+    CUPID_CHECK(b->has[1], CUPID_ERR_MODEL, "PD region %d: needs y bounds", r);
+    double ylo = b->lo[1], yhi = b->hi[1];
+    CUPID_CHECK(ylo >= info.y_min - TOL * len && yhi <= info.y_max + TOL * len, CUPID_ERR_MODEL,
+                "PD region %d: y in [%g, %g] reaches beyond the beam (y in [%g, %g]); a PD "
+                "region must lie inside the beam it replaces",
+                r, ylo, yhi, info.y_min, info.y_max);
+    for (int side = 0; side < 2; side++) {
+      double y = side ? yhi : ylo, below, above;
+      if (element_end_at(beam, y, &below, &above) < 0)
+        return CUPID_ERROR(CUPID_ERR_MODEL,
+                           "PD region %d: its bound y = %g is not a beam-element end (nearest "
+                           "ends %g and %g); move the region bound or the beam's axis "
+                           "breakpoints so that they coincide",
+                           r, y, below, above);
+    }
+    int full = (!b->has[0] || (b->lo[0] <= bb[0] + stol && b->hi[0] >= bb[1] - stol)) &&
+               (!b->has[2] || (b->lo[2] <= bb[2] + stol && b->hi[2] >= bb[3] - stol));
+    if (!full)
+      return CUPID_ERROR(CUPID_ERR_UNSUPPORTED,
+                         "PD region %d covers part of the cross-section (x in [%g, %g], z in "
+                         "[%g, %g] of the section's [%g, %g] x [%g, %g]): interfaces parallel to "
+                         "the beam axis are not yet supported; make the region span the whole "
+                         "section",
+                         r, b->lo[0], b->hi[0], b->lo[2], b->hi[2], bb[0], bb[1], bb[2], bb[3]);
+    for (cupid_int e = 0; e < info.n_beam_elements; e++) {
+      cupid_int first;
+      double y0, y1;
+      cupid_cuf_beam_element(beam, e, &first, &y0, &y1);
+      if (y0 < ylo - TOL * len || y1 > yhi + TOL * len) continue;
+      for (cupid_int se = 0; se < info.n_section_elements; se++)
+        CUPID_CALL(cupid_cuf_set_active(beam, e, se, 0));
+    }
+  }
+  return CUPID_SUCCESS;
+}
+
+/* ------------------------------------------------------------------ fictitious FE element */
+
+/* Solve B X = R in place (B n x n, R n x m, row-major) by Gaussian elimination with partial
+ * pivoting; a pivot below 1e-12 of the largest entry of B is CUPID_ERR_NUMERIC. */
+static cupid_status dense_solve(int n, double *B, cupid_int m, double *R) {
+  double bmax = 0.0;
+  for (int i = 0; i < n * n; i++) bmax = fmax(bmax, fabs(B[i]));
+  for (int k = 0; k < n; k++) {
+    int p = k;
+    for (int i = k + 1; i < n; i++)
+      if (fabs(B[i * n + k]) > fabs(B[p * n + k])) p = i;
+    CUPID_CHECK(fabs(B[p * n + k]) > 1e-12 * bmax, CUPID_ERR_NUMERIC,
+                "the section fit [A I] is singular at expansion term %d", k);
+    if (p != k) {
+      for (int j = 0; j < n; j++) {
+        double t = B[k * n + j];
+        B[k * n + j] = B[p * n + j];
+        B[p * n + j] = t;
+      }
+      for (cupid_int j = 0; j < m; j++) {
+        double t = R[k * m + j];
+        R[k * m + j] = R[p * m + j];
+        R[p * m + j] = t;
+      }
+    }
+    for (int i = k + 1; i < n; i++) {
+      double f = B[i * n + k] / B[k * n + k];
+      if (f == 0.0) continue;
+      for (int j = k; j < n; j++) B[i * n + j] -= f * B[k * n + j];
+      for (cupid_int j = 0; j < m; j++) R[i * m + j] -= f * R[k * m + j];
+    }
+  }
+  for (int k = n - 1; k >= 0; k--) {
+    for (cupid_int j = 0; j < m; j++) {
+      double s = R[k * m + j];
+      for (int i = k + 1; i < n; i++) s -= B[k * n + i] * R[i * m + j];
+      R[k * m + j] = s / B[k * n + k];
+    }
+  }
+  return CUPID_SUCCESS;
+}
+
+/* G = [A I]^{-1} A (Eq. 35) for the real PD nodes on the fictitious section y_s:
+ * I_{q,tau} = F_tau(x_q, z_q) (N = 1 on the section), A_{tau,q} = |I_{q,tau}| / sum_q |.|
+ * (Eq. 33). With @p signed_weights A uses F_tau itself: then [A I] = I^T I up to row scaling
+ * and Eq. 35 is the least-squares fit of the expansion to the PD nodes. TE needs this: its
+ * monomials are centred on the section (cuf.h), so an odd term has sum_q |F| F = 0 on a
+ * symmetric section and the |F| rows of [A I] coincide (singular). Both are exact for fields
+ * in the span of the expansion (the patch test). */
+static cupid_status section_fit(interface_t *it, const double *x, int M, int p,
+                                int signed_weights) {
+  cupid_status st = CUPID_SUCCESS;
+  double *I = NULL, *A = NULL, *B = NULL, *w = NULL;
+  cupid_int *node = NULL, n_q = it->n_q;
+  CUPID_TRY(cupid_calloc((size_t)(n_q * M), sizeof *I, "section fit I", &I));
+  CUPID_TRY(cupid_calloc((size_t)(n_q * M), sizeof *A, "section fit A", &A));
+  CUPID_TRY(cupid_calloc((size_t)(M * M), sizeof *B, "section fit [A I]", &B));
+  CUPID_TRY(cupid_malloc((size_t)(M * p), sizeof *w, "shape weights", &w));
+  CUPID_TRY(cupid_malloc((size_t)(M * p), sizeof *node, "shape nodes", &node));
+  cupid_int far = 1 - it->end_i;
+  for (cupid_int k = 0; k < n_q; k++) {
+    const double *xq = x + 3 * it->q[k];
+    int count;
+    CUPID_TRY(cupid_cuf_shape_at(it->aux, xq[0], it->y_s, xq[2], node, w, &count));
+    for (int n = 0; n < count; n++)
+      if (node[n] / M == far) I[k * M + node[n] % M] += w[n];
+  }
+  for (int t = 0; t < M; t++) {
+    double s = 0.0;
+    for (cupid_int k = 0; k < n_q; k++) s += fabs(I[k * M + t]);
+    CUPID_TRY_CHECK(s > 0.0, CUPID_ERR_MODEL,
+                    "fictitious section y = %g: expansion term %d is zero at every PD node of "
+                    "that plane (too few PD nodes for the section mesh)",
+                    it->y_s, t);
+    for (cupid_int k = 0; k < n_q; k++)
+      A[t * n_q + k] = (signed_weights ? I[k * M + t] : fabs(I[k * M + t])) / s;
+  }
+  for (int t = 0; t < M; t++)
+    for (int u = 0; u < M; u++) {
+      double s = 0.0;
+      for (cupid_int k = 0; k < n_q; k++) s += A[t * n_q + k] * I[k * M + u];
+      B[t * M + u] = s;
+    }
+  /* Solve in place: A becomes G. */
+  st = dense_solve(M, B, n_q, A);
+  if (st != CUPID_SUCCESS) {
+    char msg[512];
+    snprintf(msg, sizeof msg, "%s", cupid_error_message());
+    st = CUPID_ERROR(st, "fictitious section y = %g: %s", it->y_s, msg);
+    goto cleanup;
+  }
+  it->G = A;
+  A = NULL;
+cleanup:
+  cupid_free(&I);
+  cupid_free(&A);
+  cupid_free(&B);
+  cupid_free(&w);
+  cupid_free(&node);
+  return st;
+}
+
+static cupid_status build_interface(interface_t *it, const cupid_coupling_options *o,
+                                    cupid_pd_grid grid, int M, int p) {
+  cupid_beam def = *o->beam_def;
+  double ys[2] = {fmin(it->y_i, it->y_s), fmax(it->y_i, it->y_s)};
+  int one = 1;
+  def.axis_y = ys;
+  def.axis_elements = &one;
+  def.n_axis = 2;
+  def.element_nodes = 2;
+  CUPID_CALL(cupid_cuf_beam_create_from(&def, o->materials, o->n_materials, &it->aux));
+  it->end_i = it->y_i < it->y_s ? 0 : 1;
+
+  const double *x = cupid_pd_grid_coords(grid);
+  cupid_int n = cupid_pd_grid_num_nodes(grid);
+  double h = o->spacing;
+  const cupid_box *rb = &o->regions[it->region];
+  it->n_q = 0;
+  for (int pass = 0; pass < 2; pass++) {
+    cupid_int k = 0;
+    for (cupid_int i = 0; i < n; i++) {
+      const double *xi = x + 3 * i;
+      if (fabs(xi[1] - it->y_s) > TOL * h) continue;
+      double pt[3] = {xi[0], it->y_s, xi[2]};
+      if (!cupid_box_contains(rb, pt, TOL * h)) continue;
+      if (pass) it->q[k] = i;
+      k++;
+    }
+    if (!pass) {
+      CUPID_CHECK(k > 0, CUPID_ERR_MODEL, "no real PD node on the plane y = %g next to the "
+                  "interface y = %g", it->y_s, it->y_i);
+      it->n_q = k;
+      CUPID_CALL(cupid_malloc((size_t)k, sizeof *it->q, "section PD nodes", &it->q));
+    }
+  }
+  cupid_cuf_info info;
+  cupid_cuf_get_info(it->aux, &info);
+  return section_fit(it, x, M, p, info.expansion == CUPID_EXPANSION_TE);
+}
+
+/* ----------------------------------------------------------------- fictitious PD nodes */
+
+/* Extended grid: real regions first (so real nodes keep their materials), then, for every
+ * interface, a slab of the region's section reaching 2 delta (whole spacings) into the beam. */
+static cupid_status extended_grid(const cupid_coupling_options *o, const interface_t *iface,
+                                  int n_iface, double y_min, double y_max, cupid_pd_grid *ext) {
+  cupid_status st = CUPID_SUCCESS;
+  int nb = o->n_regions + n_iface;
+  cupid_box *boxes = NULL;
+  int *mats = NULL;
+  double h = o->spacing;
+  /* LPS couples nodes two family radii apart; with EXACT partial volumes a family reaches
+   * delta + sqrt(3)/2 h (pd.h). Bond-based needs one radius, the slab is kept the same. */
+  double radius = o->pd.horizon + (o->pd.partial_volume == CUPID_PARTIAL_EXACT ? 0.5 * sqrt(3.0) * h : 0.0);
+  double L = h * ceil(2.0 * radius / h - TOL);
+  CUPID_TRY(cupid_calloc((size_t)nb, sizeof *boxes, "extended boxes", &boxes));
+  CUPID_TRY(cupid_calloc((size_t)nb, sizeof *mats, "extended materials", &mats));
+  for (int r = 0; r < o->n_regions; r++) {
+    boxes[r] = o->regions[r];
+    mats[r] = o->region_materials[r];
+  }
+  int k = o->n_regions;
+  for (int f = 0; f < n_iface; f++) {
+    const interface_t *it = &iface[f];
+    cupid_box b = o->regions[it->region];
+    if (it->y_s > it->y_i) { /* PD above: fictitious nodes below */
+      double room = h * floor((it->y_i - y_min) / h + TOL);
+      b.lo[1] = it->y_i - fmin(L, room);
+      b.hi[1] = it->y_i;
+    } else {
+      double room = h * floor((y_max - it->y_i) / h + TOL);
+      b.lo[1] = it->y_i;
+      b.hi[1] = it->y_i + fmin(L, room);
+    }
+    if (b.hi[1] - b.lo[1] < 0.5 * h) continue;
+    boxes[k] = b;
+    mats[k++] = o->region_materials[it->region];
+  }
+  cupid_pd_grid_options go = {.spacing = h, .dimension = 3, .area = 0.0};
+  CUPID_TRY(cupid_pd_grid_create(&go, k, boxes, mats, ext));
+cleanup:
+  cupid_free(&boxes);
+  cupid_free(&mats);
+  return st;
+}
+
+/* For every extended node: its real node, or -1 and its interpolation from the FE field. */
+typedef struct {
+  cupid_int *real;                 /* ext node -> real node or -1 */
+  cupid_int *fptr;                 /* ext node -> first weight (n_ext + 1) */
+  cupid_int *fnode;                /* FE node (local) */
+  double *fw;                      /* weight N_i F_tau (Eq. 29) */
+} ext_map;
+
+static void ext_map_free(ext_map *m) {
+  cupid_free(&m->real);
+  cupid_free(&m->fptr);
+  cupid_free(&m->fnode);
+  cupid_free(&m->fw);
+}
+
+static cupid_status map_extended(cupid_pd_grid ext, cupid_pd_grid grid, cupid_cuf_beam beam,
+                                 int M, int p, ext_map *m, cupid_int *n_fict) {
+  cupid_int n_ext = cupid_pd_grid_num_nodes(ext);
+  const double *xe = cupid_pd_grid_coords(ext), *xr = cupid_pd_grid_coords(grid);
+  double o[3], h = cupid_pd_grid_spacing(grid);
+  cupid_pd_grid_origin(grid, o);
+  CUPID_CALL(cupid_malloc((size_t)n_ext, sizeof *m->real, "extended map", &m->real));
+  CUPID_CALL(cupid_calloc((size_t)n_ext + 1, sizeof *m->fptr, "fictitious pointers", &m->fptr));
+  cupid_int cap = 1024, nw = 0;
+  CUPID_CALL(cupid_malloc((size_t)cap, sizeof *m->fnode, "fictitious weights", &m->fnode));
+  CUPID_CALL(cupid_malloc((size_t)cap, sizeof *m->fw, "fictitious weights", &m->fw));
+  cupid_int *node = NULL;
+  double *w = NULL;
+  cupid_status st = CUPID_SUCCESS;
+  CUPID_TRY(cupid_malloc((size_t)(M * p), sizeof *node, "shape nodes", &node));
+  CUPID_TRY(cupid_malloc((size_t)(M * p), sizeof *w, "shape weights", &w));
+  *n_fict = 0;
+  for (cupid_int i = 0; i < n_ext; i++) {
+    const double *x = xe + 3 * i;
+    cupid_int ijk[3];
+    for (int a = 0; a < 3; a++) ijk[a] = (cupid_int)floor((x[a] - o[a]) / h);
+    cupid_int r = cupid_pd_grid_node_at(grid, ijk[0], ijk[1], ijk[2]);
+    if (r >= 0) {
+      const double *y = xr + 3 * r;
+      for (int a = 0; a < 3; a++)
+        CUPID_TRY_CHECK(fabs(y[a] - x[a]) < 1e-6 * h, CUPID_ERR_ARGUMENT,
+                        "extended and real PD lattices differ at (%g, %g, %g)", x[0], x[1], x[2]);
+    }
+    m->real[i] = r;
+    if (r < 0) {
+      int count;
+      st = cupid_cuf_shape_at(beam, x[0], x[1], x[2], node, w, &count);
+      if (st != CUPID_SUCCESS) {
+        st = CUPID_ERROR(CUPID_ERR_MODEL,
+                         "fictitious PD node (%g, %g, %g), within 2 delta of an interface, lies "
+                         "outside the beam's active part; keep PD regions at least 2 delta "
+                         "from the beam ends and from each other",
+                         x[0], x[1], x[2]);
+        goto cleanup;
+      }
+      (*n_fict)++;
+      for (int n = 0; n < count; n++) {
+        if (w[n] == 0.0) continue;
+        if (nw == cap) {
+          cap *= 2;
+          CUPID_TRY(cupid_realloc((size_t)cap, sizeof *m->fnode, "fictitious weights", &m->fnode));
+          CUPID_TRY(cupid_realloc((size_t)cap, sizeof *m->fw, "fictitious weights", &m->fw));
+        }
+        m->fnode[nw] = node[n];
+        m->fw[nw++] = w[n];
+      }
+    }
+    m->fptr[i + 1] = nw;
+  }
+cleanup:
+  cupid_free(&node);
+  cupid_free(&w);
+  return st;
+}
+
+/* ------------------------------------------------------------------------- assembly */
+
+/* Rows of real PD nodes: K^PD on real columns, K^{f-PD} I^{f-PD} on FE columns (Eq. 38). */
+static cupid_status pd_rows(cpl_rowbuild *rb, const cupid_csr_t *Ke, const ext_map *m,
+                            cupid_int n_ext, cupid_int n_pd) {
+  cupid_int *ext_of = NULL;
+  CUPID_CALL(cupid_malloc((size_t)n_pd, sizeof *ext_of, "real -> extended", &ext_of));
+  for (cupid_int i = 0; i < n_ext; i++)
+    if (m->real[i] >= 0) ext_of[m->real[i]] = i;
+  cupid_status st = CUPID_SUCCESS;
+  for (cupid_int r = 0; r < n_pd; r++) {
+    cupid_int I = ext_of[r];
+    for (cupid_int k = Ke->rowptr[I]; k < Ke->rowptr[I + 1]; k++) {
+      cupid_int J = Ke->col[k];
+      const double *blk = Ke->val + 9 * k;
+      if (m->real[J] >= 0) {
+        CUPID_TRY(cpl_rowbuild_add(rb, m->real[J], 1.0, blk));
+      } else {
+        for (cupid_int n = m->fptr[J]; n < m->fptr[J + 1]; n++)
+          CUPID_TRY(cpl_rowbuild_add(rb, n_pd + m->fnode[n], m->fw[n], blk));
+      }
+    }
+    CUPID_TRY(cpl_rowbuild_end_row(rb, r));
+  }
+cleanup:
+  cupid_free(&ext_of);
+  return st;
+}
+
+/* Rows of FE nodes: K^FE, plus on interface nodes the fictitious element: its real-real block
+ * and K^{f-FE} I^{f-FE} on PD columns (Eq. 38). */
+static cupid_status fe_rows(cpl_rowbuild *rb, const cupid_csr_t *Kb, const interface_t *iface,
+                            int n_iface, cupid_int n_pd, int M, cupid_int n_fe_nodes,
+                            cupid_csr *Kaux) {
+  for (cupid_int a = 0; a < n_fe_nodes; a++) {
+    for (cupid_int k = Kb->rowptr[a]; k < Kb->rowptr[a + 1]; k++)
+      CUPID_CALL(cpl_rowbuild_add(rb, n_pd + Kb->col[k], 1.0, Kb->val + 9 * k));
+    cupid_int bn = a / M;
+    int tau = (int)(a % M);
+    for (int f = 0; f < n_iface; f++) {
+      const interface_t *it = &iface[f];
+      if (it->beam_node != bn) continue;
+      const cupid_csr_t *Ka = Kaux[f];
+      cupid_int row = (cupid_int)it->end_i * M + tau;
+      for (cupid_int k = Ka->rowptr[row]; k < Ka->rowptr[row + 1]; k++) {
+        cupid_int c = Ka->col[k];
+        const double *blk = Ka->val + 9 * k;
+        int s = (int)(c % M);
+        if (c / M == it->end_i) {
+          CUPID_CALL(cpl_rowbuild_add(rb, n_pd + bn * M + s, 1.0, blk));
+        } else {
+          for (cupid_int q = 0; q < it->n_q; q++) {
+            double g = it->G[s * it->n_q + q];
+            if (g != 0.0) CUPID_CALL(cpl_rowbuild_add(rb, it->q[q], g, blk));
+          }
+        }
+      }
+    }
+    CUPID_CALL(cpl_rowbuild_end_row(rb, n_pd + a));
+  }
+  return CUPID_SUCCESS;
+}
+
+/* The interfaces: region y bounds whose beam node is still used by an active pair. */
+cupid_status cpl_find_interfaces(cupid_cuf_beam beam, const cupid_coupling_options *o,
+                                    cupid_coupling_h c) {
+  CUPID_CALL(cupid_calloc((size_t)(2 * o->n_regions), sizeof *c->iface, "interfaces", &c->iface));
+  for (int r = 0; r < o->n_regions; r++)
+    for (int side = 0; side < 2; side++) {
+      double y = side ? o->regions[r].hi[1] : o->regions[r].lo[1], below, above;
+      cupid_int bn = element_end_at(beam, y, &below, &above);
+      if (bn < 0 || !cupid_cuf_node_used(beam, 0, bn)) continue;
+      interface_t *it = &c->iface[c->n_iface++];
+      it->y_i = cupid_cuf_beam_node_y(beam, bn);
+      it->y_s = it->y_i + (side ? -0.5 : 0.5) * o->spacing;
+      it->region = r;
+      it->beam_node = bn;
+    }
+  return CUPID_SUCCESS;
+}
+
+cupid_status cupid_coupling_create(cupid_cuf_beam beam, cupid_pd_grid grid,
+                                   const cupid_coupling_options *o, cupid_coupling_h *out,
+                                   cupid_csr *K) {
+  cupid_status st = CUPID_SUCCESS;
+  cupid_coupling_h c = NULL;
+  cupid_pd_grid ext = NULL;
+  cupid_pd_operator op = NULL;
+  cupid_csr Ke = NULL, Kb = NULL, *Kaux = NULL;
+  int n_aux = 0;
+  ext_map map = {0};
+  cpl_rowbuild rb = {0};
+  cupid_cuf_info info;
+  cupid_cuf_get_info(beam, &info);
+  int M = info.M, p = info.element_nodes;
+  cupid_int n_pd = cupid_pd_grid_num_nodes(grid);
+  CUPID_CHECK(info.dof_offset == 3 * n_pd, CUPID_ERR_ARGUMENT,
+              "the beam's DOF offset (%lld) must be 3 x the real PD nodes (%lld)",
+              (long long)info.dof_offset, (long long)(3 * n_pd));
+  CUPID_CALL(cupid_calloc(1, sizeof *c, "coupling", &c));
+  CUPID_TRY(cpl_find_interfaces(beam, o, c));
+  for (int f = 0; f < c->n_iface; f++) CUPID_TRY(build_interface(&c->iface[f], o, grid, M, 2));
+
+  CUPID_TRY(extended_grid(o, c->iface, c->n_iface, info.y_min, info.y_max, &ext));
+  cupid_int n_ext = cupid_pd_grid_num_nodes(ext), n_fict = 0;
+  CUPID_TRY(map_extended(ext, grid, beam, M, p, &map, &n_fict));
+  CUPID_TRY_CHECK(n_ext - n_fict == n_pd, CUPID_ERR_ARGUMENT,
+                  "extended grid holds %lld real nodes, expected %lld", (long long)(n_ext - n_fict),
+                  (long long)n_pd);
+  CUPID_TRY(cupid_pd_operator_create(ext, &o->pd, &op));
+  CUPID_TRY(cupid_pd_operator_assemble(op, &Ke));
+  cupid_pd_operator_destroy(&op);
+
+  CUPID_TRY(cupid_cuf_assemble(beam, &Kb));
+  CUPID_TRY(cupid_calloc((size_t)(c->n_iface + 1), sizeof *Kaux, "fictitious elements", &Kaux));
+  n_aux = c->n_iface;
+  for (int f = 0; f < n_aux; f++) CUPID_TRY(cupid_cuf_assemble(c->iface[f].aux, &Kaux[f]));
+
+  cupid_int N = n_pd + info.n_fe_nodes;
+  CUPID_TRY(cpl_rowbuild_init(&rb, N, N));
+  CUPID_TRY(pd_rows(&rb, Ke, &map, n_ext, n_pd));
+  cupid_csr_destroy(&Ke);
+  CUPID_TRY(fe_rows(&rb, Kb, c->iface, c->n_iface, n_pd, M, info.n_fe_nodes, Kaux));
+  CUPID_TRY(cpl_rowbuild_finish(&rb, K));
+
+  c->info = (cupid_coupling_info){.n_real_pd = n_pd,
+                                  .n_fictitious_pd = n_fict,
+                                  .n_interfaces = c->n_iface,
+                                  .n_fictitious_fe = (cupid_int)c->n_iface * M};
+  *out = c;
+  c = NULL;
+cleanup:
+  for (int f = 0; f < n_aux; f++) cupid_csr_destroy(&Kaux[f]);
+  cupid_free(&Kaux);
+  cupid_csr_destroy(&Ke);
+  cupid_csr_destroy(&Kb);
+  cupid_pd_operator_destroy(&op);
+  cupid_pd_grid_destroy(&ext);
+  ext_map_free(&map);
+  cpl_rowbuild_free(&rb);
+  cupid_coupling_destroy(&c);
+  return st;
+}
+
+void cupid_coupling_destroy(cupid_coupling_h *c) {
+  if (!c || !*c) return;
+  for (int f = 0; f < (*c)->n_iface; f++) {
+    cupid_cuf_beam_destroy(&(*c)->iface[f].aux);
+    cupid_free(&(*c)->iface[f].q);
+    cupid_free(&(*c)->iface[f].G);
+  }
+  cupid_free(&(*c)->iface);
+  cupid_free(&(*c)->tied);
+  cupid_free(&(*c)->tptr);
+  cupid_free(&(*c)->tnode);
+  cupid_free(&(*c)->tw);
+  cupid_free(c);
+}
+
+void cupid_coupling_get_info(const cupid_coupling_h c, cupid_coupling_info *info) {
+  *info = c->info;
+}

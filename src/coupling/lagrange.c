@@ -1,0 +1,165 @@
+/* The Lagrange-multiplier PD-CUF coupling (the baseline of paper 000, section 5.1; cuf.md
+ * section 7), by elimination of the constraints u_q = sum_tau F_tau(x_q, z_q) u_{tau,I} for the
+ * real PD nodes q of the plane nearest each interface (see coupling.h). */
+#include <math.h>
+#include <string.h>
+
+#include "coupling_internal.h"
+
+#define TOL 1e-9
+
+/* The tied nodes and their weights (the CUF expansion of the interface section). */
+static cupid_status tie_nodes(cupid_coupling_h c, cupid_cuf_beam beam, cupid_pd_grid grid,
+                              const cupid_coupling_options *o, int M, int p) {
+  cupid_int n = cupid_pd_grid_num_nodes(grid);
+  const double *x = cupid_pd_grid_coords(grid);
+  double h = o->spacing;
+  cupid_int cap = 1024, nw = 0;
+  cupid_int *node = NULL;
+  double *w = NULL;
+  cupid_status st = CUPID_SUCCESS;
+  CUPID_TRY(cupid_malloc((size_t)n, sizeof *c->tied, "tied nodes", &c->tied));
+  CUPID_TRY(cupid_calloc((size_t)n + 1, sizeof *c->tptr, "tied pointers", &c->tptr));
+  CUPID_TRY(cupid_malloc((size_t)cap, sizeof *c->tnode, "tied weights", &c->tnode));
+  CUPID_TRY(cupid_malloc((size_t)cap, sizeof *c->tw, "tied weights", &c->tw));
+  CUPID_TRY(cupid_malloc((size_t)(M * p), sizeof *node, "shape nodes", &node));
+  CUPID_TRY(cupid_malloc((size_t)(M * p), sizeof *w, "shape weights", &w));
+  for (cupid_int i = 0; i < n; i++) {
+    const double *xi = x + 3 * i;
+    int f = 0;
+    for (; f < c->n_iface; f++) {
+      const interface_t *it = &c->iface[f];
+      double pt[3] = {xi[0], it->y_s, xi[2]};
+      if (fabs(xi[1] - it->y_s) <= TOL * h && cupid_box_contains(&o->regions[it->region], pt, TOL * h))
+        break;
+    }
+    if (f == c->n_iface) continue;
+    int count;
+    CUPID_TRY(cupid_cuf_shape_at(beam, xi[0], c->iface[f].y_i, xi[2], node, w, &count));
+    for (int k = 0; k < count; k++) {
+      if (w[k] == 0.0) continue;
+      if (nw == cap) {
+        cap *= 2;
+        CUPID_TRY(cupid_realloc((size_t)cap, sizeof *c->tnode, "tied weights", &c->tnode));
+        CUPID_TRY(cupid_realloc((size_t)cap, sizeof *c->tw, "tied weights", &c->tw));
+      }
+      c->tnode[nw] = node[k];
+      c->tw[nw++] = w[k];
+    }
+    c->tied[c->n_tied++] = i;
+    c->tptr[c->n_tied] = nw;
+  }
+cleanup:
+  cupid_free(&node);
+  cupid_free(&w);
+  return st;
+}
+
+/* Row i of K_PD through T: master columns stay, tied columns go to FE columns. */
+static cupid_status pd_row_through_t(cpl_rowbuild *rb, const cupid_csr_t *Kp, cupid_int i,
+                                     double s, const cupid_int *tied_of, const cupid_coupling_h c) {
+  for (cupid_int k = Kp->rowptr[i]; k < Kp->rowptr[i + 1]; k++) {
+    cupid_int j = Kp->col[k];
+    const double *blk = Kp->val + 9 * k;
+    cupid_int t = tied_of[j];
+    if (t < 0) {
+      CUPID_CALL(cpl_rowbuild_add(rb, j, s, blk));
+    } else {
+      for (cupid_int n = c->tptr[t]; n < c->tptr[t + 1]; n++)
+        CUPID_CALL(cpl_rowbuild_add(rb, c->fe_block + c->tnode[n], s * c->tw[n], blk));
+    }
+  }
+  return CUPID_SUCCESS;
+}
+
+cupid_status cupid_coupling_lagrange_create(cupid_cuf_beam beam, cupid_pd_grid grid,
+                                            const cupid_coupling_options *o, cupid_coupling_h *out,
+                                            cupid_csr *K) {
+  cupid_status st = CUPID_SUCCESS;
+  cupid_coupling_h c = NULL;
+  cupid_pd_operator op = NULL;
+  cupid_csr Kp = NULL, Kb = NULL;
+  cupid_int *tied_of = NULL, *fptr = NULL, *flist = NULL;
+  double *fw = NULL;
+  cpl_rowbuild rb = {0};
+  cupid_cuf_info info;
+  cupid_cuf_get_info(beam, &info);
+  int M = info.M, p = info.element_nodes;
+  cupid_int n_pd = cupid_pd_grid_num_nodes(grid), nfe = info.n_fe_nodes;
+  CUPID_CHECK(info.dof_offset == 3 * n_pd, CUPID_ERR_ARGUMENT,
+              "the beam's DOF offset (%lld) must be 3 x the real PD nodes (%lld)",
+              (long long)info.dof_offset, (long long)(3 * n_pd));
+  CUPID_CALL(cupid_calloc(1, sizeof *c, "coupling", &c));
+  c->fe_block = n_pd;
+  CUPID_TRY(cpl_find_interfaces(beam, o, c));
+  CUPID_TRY(tie_nodes(c, beam, grid, o, M, p));
+
+  /* Transpose of the tie map: for each FE node, the tied nodes and weights. */
+  CUPID_TRY(cupid_malloc((size_t)n_pd, sizeof *tied_of, "tied index", &tied_of));
+  for (cupid_int i = 0; i < n_pd; i++) tied_of[i] = -1;
+  for (cupid_int t = 0; t < c->n_tied; t++) tied_of[c->tied[t]] = t;
+  cupid_int nw = c->n_tied ? c->tptr[c->n_tied] : 0;
+  CUPID_TRY(cupid_calloc((size_t)nfe + 1, sizeof *fptr, "FE tie pointers", &fptr));
+  CUPID_TRY(cupid_malloc((size_t)nw + 1, sizeof *flist, "FE tie list", &flist));
+  CUPID_TRY(cupid_malloc((size_t)nw + 1, sizeof *fw, "FE tie weights", &fw));
+  for (cupid_int k = 0; k < nw; k++) fptr[c->tnode[k] + 1]++;
+  for (cupid_int a = 0; a < nfe; a++) fptr[a + 1] += fptr[a];
+  for (cupid_int t = 0; t < c->n_tied; t++)
+    for (cupid_int k = c->tptr[t]; k < c->tptr[t + 1]; k++) {
+      cupid_int a = c->tnode[k], pos = fptr[a]++;
+      flist[pos] = c->tied[t];
+      fw[pos] = c->tw[k];
+    }
+  for (cupid_int a = nfe; a > 0; a--) fptr[a] = fptr[a - 1];
+  fptr[0] = 0;
+
+  CUPID_TRY(cupid_pd_operator_create(grid, &o->pd, &op));
+  CUPID_TRY(cupid_pd_operator_assemble(op, &Kp));
+  cupid_pd_operator_destroy(&op);
+  CUPID_TRY(cupid_cuf_assemble(beam, &Kb));
+
+  /* K = T^T diag(K_PD, K_FE) T, row by row. */
+  CUPID_TRY(cpl_rowbuild_init(&rb, n_pd + nfe, n_pd + nfe));
+  for (cupid_int i = 0; i < n_pd; i++) {
+    if (tied_of[i] < 0) CUPID_TRY(pd_row_through_t(&rb, Kp, i, 1.0, tied_of, c));
+    CUPID_TRY(cpl_rowbuild_end_row(&rb, i));
+  }
+  for (cupid_int a = 0; a < nfe; a++) {
+    for (cupid_int k = Kb->rowptr[a]; k < Kb->rowptr[a + 1]; k++)
+      CUPID_TRY(cpl_rowbuild_add(&rb, n_pd + Kb->col[k], 1.0, Kb->val + 9 * k));
+    for (cupid_int k = fptr[a]; k < fptr[a + 1]; k++)
+      CUPID_TRY(pd_row_through_t(&rb, Kp, flist[k], fw[k], tied_of, c));
+    CUPID_TRY(cpl_rowbuild_end_row(&rb, n_pd + a));
+  }
+  CUPID_TRY(cpl_rowbuild_finish(&rb, K));
+  c->info = (cupid_coupling_info){.n_real_pd = n_pd, .n_interfaces = c->n_iface};
+  *out = c;
+  c = NULL;
+cleanup:
+  cupid_csr_destroy(&Kp);
+  cupid_csr_destroy(&Kb);
+  cupid_pd_operator_destroy(&op);
+  cupid_free(&tied_of);
+  cupid_free(&fptr);
+  cupid_free(&flist);
+  cupid_free(&fw);
+  cpl_rowbuild_free(&rb);
+  cupid_coupling_destroy(&c);
+  return st;
+}
+
+void cupid_coupling_tied(const cupid_coupling_h c, const cupid_int **nodes, cupid_int *n) {
+  *nodes = c->tied;
+  *n = c->n_tied;
+}
+
+void cupid_coupling_recover(const cupid_coupling_h c, double *u) {
+  for (cupid_int t = 0; t < c->n_tied; t++) {
+    double *ui = u + 3 * c->tied[t];
+    ui[0] = ui[1] = ui[2] = 0.0;
+    for (cupid_int k = c->tptr[t]; k < c->tptr[t + 1]; k++) {
+      const double *v = u + 3 * (c->fe_block + c->tnode[k]);
+      for (int a = 0; a < 3; a++) ui[a] += c->tw[k] * v[a];
+    }
+  }
+}
