@@ -5,7 +5,7 @@
  *
  * FE-only and PD-only models. The global system uses the [3 per PD node | FE DOFs] layout of
  * the job, so a coupled model only needs its coupling terms in K (and, for Arlequin, the
- * weighted masses) before cupid_dynamics_run(); it is refused here until then. */
+ * weighted masses: coupled_arlequin.c) before cupid_dynamics_run(). */
 #include <math.h>
 #include <stdio.h>
 #include <string.h>
