@@ -11,7 +11,10 @@
  *    (1e-12 relative);
  *  - static end load F at the PD end, clamp at y = 0: the reaction balances F (1e-9) and the
  *    FE-only span [0, 0.4] carries exactly F, so u(y) = F y / (EA) there (1e-9 relative,
- *    whatever the penalty). */
+ *    whatever the penalty);
+ *  - 3D: a bar 4 x 4 (h = 1), TE1 rod (nu = 0) on y in [0, 12] + 3D bond PD (delta = 1.5) on
+ *    [8, 20], overlap [8, 12]: K symmetric and free of all three rigid translations (1e-12),
+ *    end load: reaction (1e-9) and the FE-only span u_y = F y/(EA) (1e-9). */
 #include <math.h>
 #include <stdio.h>
 #include <string.h>
@@ -241,12 +244,94 @@ static void test_static(void **state) {
   static_case(1e13);
 }
 
+static void test_3d(void **state) {
+  (void)state;
+  tb_beam tb;
+  tb_init(&tb, 1000.0, 0.0);
+  tb_te(&tb, 1);
+  tb_rect(&tb, 0, 4, 1, 0, 4, 1, -1);
+  tb_axis(&tb, 0.0, 12.0, 12, 2);
+  cupid_cuf_beam beam = tb_create(&tb);
+  cupid_box region = {.lo = {0, 8, 0}, .hi = {4, 20, 4}, .has = {1, 1, 1}};
+  int rmat = 0;
+  cupid_pd_grid grid = NULL;
+  cupid_pd_grid_options go = {.spacing = 1.0, .dimension = 3};
+  CUPID_ASSERT_OK(cupid_pd_grid_create(&go, 1, &region, &rmat, &grid));
+  cupid_pd_material mat = {.E = 1000.0, .nu = 0.25};
+  cupid_pd_operator_options po = {.horizon = 1.5, .model = CUPID_PD_BOND,
+                                  .influence = CUPID_INFLUENCE_CONSTANT,
+                                  .partial_volume = CUPID_PARTIAL_NONE, .materials = &mat,
+                                  .n_materials = 1};
+  cupid_pd_operator op = NULL;
+  CUPID_ASSERT_OK(cupid_pd_operator_create(grid, &po, &op));
+  cupid_int n_pd = cupid_pd_grid_num_nodes(grid), ndof;
+  CUPID_ASSERT_OK(cupid_cuf_set_dof_offset(beam, 3 * n_pd));
+  ndof = 3 * n_pd + cupid_cuf_num_dofs(beam);
+  cupid_arlequin_options o = {
+      .weight = {.lo = 8, .hi = 12, .fe_below = 1, .kind = CUPID_WEIGHT_SMOOTH}, .penalty = 1e5};
+  cupid_csr K = NULL;
+  cupid_arlequin_info info;
+  CUPID_ASSERT_OK(cupid_arlequin_assemble(beam, grid, op, &o, &K, &info));
+  assert_int_equal(info.n_tied, 4 * 4 * 4);
+  assert_int_equal(info.components, 3);
+  assert_true(cupid_csr_asymmetry(K) <= 1e-14);
+  double *v = NULL, *f = NULL, *u = NULL, *r = NULL, s = max_abs(K);
+  CUPID_ASSERT_OK(cupid_calloc((size_t)ndof, sizeof *v, "v", &v));
+  CUPID_ASSERT_OK(cupid_calloc((size_t)ndof, sizeof *f, "f", &f));
+  CUPID_ASSERT_OK(cupid_calloc((size_t)ndof, sizeof *u, "u", &u));
+  CUPID_ASSERT_OK(cupid_calloc((size_t)ndof, sizeof *r, "r", &r));
+  for (int k = 0; k < 3; k++) { /* rigid translations: PD 1, TE1 constant term 1 */
+    memset(v, 0, sizeof *v * (size_t)ndof);
+    for (cupid_int i = 0; i < n_pd; i++) v[3 * i + k] = 1.0;
+    for (cupid_int bn = 0; bn < 13; bn++) v[cupid_cuf_dof(beam, 0, bn, k)] = 1.0;
+    cupid_csr_matvec(K, v, r);
+    double fm = 0.0;
+    for (cupid_int d = 0; d < ndof; d++) fm = fmax(fm, fabs(r[d]));
+    assert_true(fm <= 1e-12 * s);
+  }
+  cupid_dirichlet bc = NULL;
+  CUPID_ASSERT_OK(cupid_dirichlet_create(ndof, &bc));
+  CUPID_ASSERT_OK(cupid_cuf_clamp_node(beam, 0, bc));
+  CUPID_ASSERT_OK(cupid_dirichlet_finalize(bc));
+  const double *x = cupid_pd_grid_coords(grid);
+  double F = 16.0;
+  for (cupid_int i = 0; i < n_pd; i++)
+    if (x[3 * i + 1] > 19.0) f[3 * i + 1] = F / 16.0; /* the end plane y = 19.5 */
+  cupid_solve_info si;
+  CUPID_ASSERT_OK(cupid_direct_solve(K, CUPID_MATRIX_SPD, f, bc, u, &si));
+  cupid_csr_matvec(K, u, r);
+  double reaction = 0.0;
+  for (cupid_int d = 1; d < ndof; d += 3)
+    if (bc->fixed[d]) reaction += r[d] - f[d];
+  ASSERT_NEAR(reaction, -F, 1e-9 * F);
+  double err = 0.0, ex8 = F * 8.0 / (1000.0 * 16.0);
+  for (cupid_int bn = 0; bn <= 8; bn++) {
+    double y = cupid_cuf_beam_node_y(beam, bn), uy = u[cupid_cuf_dof(beam, 0, bn, 1)];
+    err = fmax(err, fabs(uy - F * y / (1000.0 * 16.0)));
+  }
+  double gap;
+  CUPID_ASSERT_OK(cupid_arlequin_gap(beam, grid, &o, u, &gap));
+  printf("3D: max |u_y - F y/(EA)| on [0, 8] = %.2e (u(8) = %.3e), gap %.2e, pivot ratio %.2e\n",
+         err, ex8, gap, si.pivot_ratio);
+  assert_true(err <= 1e-9 * ex8);
+  cupid_free(&v);
+  cupid_free(&f);
+  cupid_free(&u);
+  cupid_free(&r);
+  cupid_dirichlet_destroy(&bc);
+  cupid_csr_destroy(&K);
+  cupid_pd_operator_destroy(&op);
+  cupid_pd_grid_destroy(&grid);
+  cupid_cuf_beam_destroy(&beam);
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_alpha),
       cmocka_unit_test(test_weighted_cuf),
       cmocka_unit_test(test_coupled_matrix),
       cmocka_unit_test(test_static),
+      cmocka_unit_test(test_3d),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }
