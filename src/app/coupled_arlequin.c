@@ -1,6 +1,7 @@
 /* Coupled models with `coupling: {method: arlequin}` inside a run (paper 004 section 3;
  * src/coupling/arlequin.c for the method). Layout supported: the beam and one bond-based PD
- * region overlap on [lo, hi] = the `overlap` box's y range, the beam ends on one edge of the
+ * region (1D or 3D) overlap on [lo, hi] = the `overlap` box's y range (its x/z bounds are not
+ * used: every PD node of that y range is tied and must lie in the beam), the beam ends on one edge of the
  * overlap and the region on the other (e.g. beam y in [0, 0.6], PD [0.4, 1], overlap
  * [0.4, 0.6]); nothing is deactivated. Constraints and loads go to the part they touch; loads
  * inside the overlap (which both models would carry, each with its weight) are not yet
@@ -26,11 +27,6 @@ cupid_status cupid_app_arlequin_check(const cupid_job *job) {
     return cupid_model_error(m, &m->pd.mark,
                              "method arlequin supports one PD region (this model has %d)",
                              m->pd.n_regions);
-  if (m->pd.dimension != 1)
-    return cupid_model_error(m, &m->pd.mark,
-                             "method arlequin is not yet supported with a 3D peridynamic grid "
-                             "by cupid %s (dimension: 1, the truss of paper 004, is)",
-                             cupid_version());
   if (m->pd.model != CUPID_PD_BOND)
     return cupid_model_error(m, &m->pd.mark,
                              "method arlequin is not yet supported with LPS peridynamics: the "
@@ -113,7 +109,7 @@ static int pd_node_in_box(const cupid_job *job, const cupid_box *b) {
   const double *x = cupid_pd_grid_coords(job->grid);
   double h = cupid_pd_grid_spacing(job->grid);
   cupid_box bb = *b;
-  bb.has[0] = bb.has[2] = 0; /* 1D grid: a bar along y */
+  if (cupid_pd_grid_dimension(job->grid) == 1) bb.has[0] = bb.has[2] = 0; /* a bar along y */
   for (cupid_int i = 0; i < job->n_pd; i++)
     if (cupid_box_contains(&bb, x + 3 * i, ARL_TOL * h)) return 1;
   return 0;
