@@ -1,9 +1,11 @@
 /* Coupled models with `coupling: {method: arlequin}` inside a run (paper 004 section 3;
  * src/coupling/arlequin.c for the method). Layout supported: the beam and one bond-based PD
  * region (1D or 3D) overlap on [lo, hi] = the `overlap` box's y range (its x/z bounds are not
- * used: every PD node of that y range is tied and must lie in the beam), the beam ends on one edge of the
- * overlap and the region on the other (e.g. beam y in [0, 0.6], PD [0.4, 1], overlap
- * [0.4, 0.6]); nothing is deactivated. Constraints and loads go to the part they touch; loads
+ * used: every PD node of that y range is tied and must lie in the beam). The PD region starts
+ * on one edge of the overlap and extends beyond the other; the beam extends beyond the first
+ * edge and either ends on the second (beam [0, 0.6], PD [0.4, 1], overlap [0.4, 0.6]: nothing
+ * is deactivated) or runs on inside the PD region, where it gives way (beam [0, 1]: the pairs
+ * on [0.6, 1] are made inactive, their FE nodes held at zero). Constraints and loads go to the part they touch; loads
  * inside the overlap (which both models would carry, each with its weight) are not yet
  * supported. Static (CHOLMOD: the system is symmetric), evaluate, and dynamic runs (through
  * cupid_app_run_dynamic() with the weighted masses of cupid_app_arlequin_mass()). */
@@ -47,7 +49,9 @@ static cupid_arlequin_options options(const cupid_job *job) {
   cupid_arlequin_options o = {.weight = {.lo = c->overlap.lo[1], .hi = c->overlap.hi[1],
                                          .kind = c->weight},
                               .penalty = c->penalty};
-  o.weight.fe_below = job->fe_info.y_min < o.weight.lo;
+  /* the PD region starts on the overlap's lower edge: the FE-only side is below */
+  double tol = ARL_TOL * (job->fe_info.y_max - job->fe_info.y_min);
+  o.weight.fe_below = job->model->pd.regions[0].box.lo[1] >= o.weight.lo - tol;
   return o;
 }
 
@@ -57,26 +61,21 @@ cupid_status cupid_app_arlequin_prepare(cupid_job *job) {
   const cupid_model_t *m = job->model;
   const cupid_mark *mk = &m->coupling.mark;
   double lo = m->coupling.overlap.lo[1], hi = m->coupling.overlap.hi[1];
-  double b0 = job->fe_info.y_min, b1 = job->fe_info.y_max, L = b1 - b0;
+  double b0 = job->fe_info.y_min, b1 = job->fe_info.y_max, L = b1 - b0, tol = ARL_TOL * L;
   const cupid_box *r = &m->pd.regions[0].box;
-  if (lo < b0 - ARL_TOL * L || hi > b1 + ARL_TOL * L)
+  if (lo < b0 - tol || hi > b1 + tol)
     return cupid_model_error(m, mk, "the overlap y in [%g, %g] must lie inside the beam [%g, %g]",
                              lo, hi, b0, b1);
-  int below = b0 < lo - ARL_TOL * L && close_to(b1, hi, L);
-  int above = b1 > hi + ARL_TOL * L && close_to(b0, lo, L);
+  /* The PD region starts on one edge of the overlap and extends beyond the other; the beam
+   * extends beyond the first edge (its FE-only side). */
+  int below = close_to(r->lo[1], lo, L) && r->hi[1] > hi + tol && b0 < lo - tol;
+  int above = close_to(r->hi[1], hi, L) && r->lo[1] < lo - tol && b1 > hi + tol;
   if (!below && !above)
-    return cupid_model_error(m, mk,
-                             "the beam [%g, %g] must end on one edge of the overlap [%g, %g] and "
-                             "extend beyond the other (a beam running through the PD region "
-                             "would have to give way there: not yet supported)",
-                             b0, b1, lo, hi);
-  int region_ok = below ? close_to(r->lo[1], lo, L) && r->hi[1] > hi
-                        : close_to(r->hi[1], hi, L) && r->lo[1] < lo;
-  if (!region_ok)
     return cupid_model_error(m, &m->pd.regions[0].mark,
-                             "the PD region y in [%g, %g] must start on the overlap's edge %g "
-                             "and extend beyond the overlap [%g, %g]",
-                             r->lo[1], r->hi[1], below ? lo : hi, lo, hi);
+                             "the PD region y in [%g, %g] must start on one edge of the overlap "
+                             "[%g, %g] and extend beyond the other, and the beam [%g, %g] must "
+                             "extend beyond the first edge",
+                             r->lo[1], r->hi[1], lo, hi, b0, b1);
   /* The weight has kinks at lo and hi: they must be element ends for exact integration. */
   double ends[2] = {lo, hi};
   for (int k = 0; k < 2; k++)
@@ -86,21 +85,41 @@ cupid_status cupid_app_arlequin_prepare(cupid_job *job) {
                                "to an element end (the weight's kinks must fall between "
                                "elements)",
                                ends[k]);
+  /* Beyond the overlap, inside the PD region, the beam gives way (alpha = 0 there). */
+  cupid_box give = {.lo = {0, below ? hi : b0, 0}, .hi = {0, below ? b1 : lo, 0}, .has = {0, 1, 0}};
+  if (give.hi[1] - give.lo[1] <= tol) return CUPID_SUCCESS; /* the beam ends on the overlap */
+  if ((below && b1 > r->hi[1] + tol) || (above && b0 < r->lo[1] - tol))
+    return cupid_model_error(m, mk,
+                             "the beam [%g, %g] runs through the PD region [%g, %g] and out of "
+                             "it: a second interface is not yet supported with method arlequin",
+                             b0, b1, r->lo[1], r->hi[1]);
+  cupid_status st = cupid_coupling_deactivate(job->beam, 1, &give);
+  if (st != CUPID_SUCCESS)
+    return cupid_model_error(m, mk, "the beam cannot give way beyond the overlap: %s",
+                             cupid_error_message());
+  cupid_job_progress(job, "Arlequin: the beam gives way on y in [%g, %g] (PD only there)",
+                     give.lo[1], give.hi[1]);
   return CUPID_SUCCESS;
 }
 
 /* --------------------------------------------------------------- constraints and loads */
 
+static int fe_used(const cupid_job *job, cupid_int bn) {
+  for (int tau = 0; tau < job->fe_info.M; tau++)
+    if (cupid_cuf_node_used(job->beam, tau, bn)) return 1;
+  return 0;
+}
+
 static int fe_node_at(const cupid_job *job, double y) {
   cupid_int bn = cupid_cuf_beam_node_at(job->beam, y);
-  return bn >= 0;
+  return bn >= 0 && fe_used(job, bn);
 }
 
 static int fe_node_in_box(const cupid_job *job, const cupid_box *b) {
   double tol = ARL_TOL * (job->fe_info.y_max - job->fe_info.y_min);
   for (cupid_int bn = 0; bn < job->fe_info.n_beam_nodes; bn++) {
     double y = cupid_cuf_beam_node_y(job->beam, bn);
-    if (!b->has[1] || (y >= b->lo[1] - tol && y <= b->hi[1] + tol)) return 1;
+    if ((!b->has[1] || (y >= b->lo[1] - tol && y <= b->hi[1] + tol)) && fe_used(job, bn)) return 1;
   }
   return 0;
 }
@@ -161,6 +180,12 @@ static cupid_status apply_constraints(cupid_job *job) {
     if (on_pd) pd[npd++] = *c;
   }
   CUPID_TRY(pd_stage(job, pd, npd, NULL, 0, 1)); /* also holds x, z of the 1D grid */
+  /* FE nodes where the beam gave way carry nothing: hold them at zero. */
+  for (cupid_int n = 0; n < job->fe_info.n_fe_nodes; n++) {
+    if (cupid_cuf_node_used(job->beam, (int)(n % job->fe_info.M), n / job->fe_info.M)) continue;
+    for (int c = 0; c < 3; c++)
+      CUPID_TRY(cupid_dirichlet_fix(job->bc, job->fe_offset + 3 * n + c, 0.0));
+  }
 cleanup:
   cupid_free(&pd);
   return st;
@@ -245,6 +270,9 @@ static cupid_status evaluate(cupid_job *job) {
       job->u[3 * i + c] =
           cupid_value_eval(&m->analysis.field[c], x[3 * i], x[3 * i + 1], x[3 * i + 2], 0.0, 0.0);
   CUPID_CALL(cupid_app_fe_impose_field(job));
+  for (cupid_int n = 0; n < job->fe_info.n_fe_nodes; n++) /* where the beam gave way */
+    if (!cupid_cuf_node_used(job->beam, (int)(n % job->fe_info.M), n / job->fe_info.M))
+      for (int c = 0; c < 3; c++) job->u[job->fe_offset + 3 * n + c] = 0.0;
   CUPID_CALL(assemble(job));
   cupid_csr_matvec(job->K, job->u, job->f_int);
   cupid_job_progress(job, "evaluate: internal forces of the imposed field computed");
