@@ -3,12 +3,14 @@
 
 usage: examples/truss/compare_truss.py [--cupid build/cupid] [--out out/truss]
 
-Runs every examples/truss/truss_*.yaml with `cupid run -o OUT/<name>`, then writes into OUT:
+Runs every examples/truss/truss_*.yaml (FE, PD and the Arlequin-coupled trusses) with
+`cupid run -o OUT/<name>`, then writes into OUT:
   comparison.md             RMS differences of the tip and mid-point histories against the
                             exact solution (mode sum, with the Rayleigh damping of each mode),
                             the energy balance and timings;
   exact.csv                 the exact histories (t, tip, mid; undamped and damped);
-  compare_<point>[_damped].png   FE, PD and exact histories (gnuplot).
+  compare_<point>[_damped].png   FE, PD, Arlequin and exact histories (gnuplot).
+The penalty and overlap-size sweeps of the Arlequin truss: examples/truss/arlequin_sweep.py.
 Exact solution of the released uniform stretch eps0 = 1e-3 of a fixed-free bar:
   u(y, t) = sum_k 8 eps0 L (-1)^(k+1) / (pi^2 (2k-1)^2) sin(w_k y / c) q_k(t),
   w_k = (2k-1) pi c / (2L), q_k the free response of a mode with zeta_k = a/(2w_k) + b w_k/2
@@ -98,7 +100,13 @@ def main():
                     f.write('set ylabel "u_y at %s (m)"\nset title "Truss (paper 004): %s%s"\n' % (point, point, suffix.replace("_", ", ")))
                     f.write('plot "exact.csv" u 1:"%s" w l lw 3 lc rgb "gray" t "exact (mode sum)", ' % col)
                     f.write('"fe%s/history.csv" u 1:"%s_uy" w l t "FE (CUF TE0, 80 nodes)", ' % (suffix, point))
-                    f.write('"pd%s/history.csv" u 1:"%s_uy" w l t "PD (bond, 80 nodes)"\n' % (suffix, point))
+                    f.write('"pd%s/history.csv" u 1:"%s_uy" w l t "PD (bond, 80 nodes)"' % (suffix, point))
+                    # the Arlequin trusses (FE [0, 0.6] + PD [0.4, 1], 80 nodes), where present
+                    for arl, label in (("arlequin" + suffix, "Arlequin, kappa 1e9"),
+                                       ("arlequin_k1e11" + suffix, "Arlequin, kappa 1e11")):
+                        if arl in results:
+                            f.write(', "%s/history.csv" u 1:"%s_uy" w l t "%s"' % (arl, point, label))
+                    f.write("\n")
                 subprocess.run(["gnuplot", os.path.basename(gp)], cwd=a.out, check=True)
 
 

@@ -114,6 +114,66 @@ void cupid_coupling_destroy(cupid_coupling_h *c);
 /** Counts. */
 void cupid_coupling_get_info(const cupid_coupling_h c, cupid_coupling_info *info);
 
+
+/* ---- Arlequin coupling (paper 004 section 3; src/coupling/arlequin.c) ----
+ * The beam and one PD region overlap on [lo, hi] along the axis y; both models live there.
+ * The Hamiltonian is H = alpha H_FE + (1 - alpha) H_PD (Eq. 8): alpha = 1 on the FE-only side,
+ * 0 on the PD-only side, a ramp across the overlap (Eq. 9: linear; also constant 0.5 and the
+ * C1 cubic 1 - 3s^2 + 2s^3). The FE stiffness and mass are integrated with alpha at the axis
+ * Gauss points (cupid_cuf_assemble_weighted_add(), Eqs. 12, 14); every PD bond is weighted by
+ * the mean of its end weights (1 - alpha_i + 1 - alpha_j)/2 and every PD mass by 1 - alpha_i
+ * (Eqs. 12, 14). Every PD node q in the overlap is tied to the beam by a penalty (Eqs. 15-19):
+ * energy kappa/2 |d_q - N(x_q) u_FE|^2, one spring of stiffness kappa (N/m) per tied node and
+ * component (the node-by-node form of Eq. 16-17; the volumetric penalty of Eq. 16 is
+ * kappa_v = kappa / V_q). The coupled K is symmetric (CHOLMOD), layout [3 per PD node | FE].
+ * 1D grids tie the axial component only; 3D grids all three. The PD operator must be
+ * pairwise (bond-based): the weighting scales each bond, which LPS has not. */
+
+/** The Arlequin weight alpha(y) of the FE model. */
+typedef struct {
+  double lo, hi;        /**< the overlap along y */
+  int fe_below;         /**< 1: the FE-only side is y < lo (alpha = 1 there); 0: y > hi */
+  cupid_weight kind;    /**< linear (Eq. 9), constant (0.5 inside), smooth (C1 cubic) */
+} cupid_arlequin_weight;
+
+/** alpha(y): 1 on the FE-only side, 0 on the PD-only side, the ramp of @p w in [lo, hi]. */
+double cupid_arlequin_alpha(const cupid_arlequin_weight *w, double y);
+
+typedef struct {
+  cupid_arlequin_weight weight;
+  double penalty;       /**< kappa, N/m per tied node and component */
+} cupid_arlequin_options;
+
+typedef struct {
+  cupid_int n_tied;     /**< PD nodes tied to the beam (those in the overlap) */
+  int components;       /**< tied components per node (1 in 1D, 3 in 3D) */
+  double pd_weight_min; /**< smallest PD nodal weight 1 - alpha_i */
+} cupid_arlequin_info;
+
+/**
+ * The coupled stiffness: weighted PD (@p op on @p grid, pairwise) + weighted beam + the
+ * penalty K_z = kappa [I, -N; -N^T, N^T N] (Eq. 18, sign as coupling.md 7.2). The beam's DOF
+ * offset must be 3 * nodes of the grid. CUPID_ERR_UNSUPPORTED if the PD operator is not
+ * pairwise; CUPID_ERR_MODEL if a PD node of the overlap lies outside the beam.
+ */
+cupid_status cupid_arlequin_assemble(cupid_cuf_beam beam, cupid_pd_grid grid,
+                                     cupid_pd_operator op, const cupid_arlequin_options *o,
+                                     cupid_csr *K, cupid_arlequin_info *info);
+
+/**
+ * The weighted mass (Eq. 14): into @p M (consistent FE mass; K's pattern, zeroed by the
+ * caller) or into the diagonal @p lumped (HRZ FE mass); exactly one is non-NULL. @p pd_mass
+ * holds the unweighted PD nodal mass rho V per node.
+ */
+cupid_status cupid_arlequin_mass(cupid_cuf_beam beam, cupid_pd_grid grid,
+                                 const cupid_arlequin_options *o, const double *pd_mass,
+                                 cupid_csr M, double *lumped);
+
+/** Largest constraint gap max_q |d_q - N(x_q) u_FE| over the tied nodes and components. */
+cupid_status cupid_arlequin_gap(cupid_cuf_beam beam, cupid_pd_grid grid,
+                                const cupid_arlequin_options *o, const double *u, double *gap);
+/* ---- end of the Arlequin block ---- */
+
 #ifdef __cplusplus
 }
 #endif

@@ -266,6 +266,37 @@ cupid_status cupid_cuf_mass_lumped(const cupid_cuf_beam beam, double *d);
 cupid_status cupid_cuf_mass_total(const cupid_cuf_beam beam, double *total);
 /* ---- end of the mass block ---- */
 
+/* ---- Weighted stiffness and mass (src/cuf/weighted.c; Arlequin coupling, paper 004 Eqs.
+ * 12 and 14) ----
+ * The beam's energies multiplied by a weight alpha(y) that depends on the axis coordinate only
+ * (overlap zones normal to the axis), evaluated at the axis Gauss points: K_alpha = int alpha
+ * B^T C B dV, M_alpha = int alpha rho N^T N dV. The axis rule has p + 2 points (p = nodes per
+ * beam element), exact when alpha is a polynomial of degree <= 3 on every beam element (put
+ * the kinks of a piecewise weight on element ends). Full and selective reduced integration
+ * are supported; MITC is CUPID_ERR_UNSUPPORTED (its tied axis functions are not weighted). */
+
+/** An axis weight alpha(y). */
+typedef double (*cupid_cuf_weight_fn)(void *ctx, double y);
+
+/** Add the alpha-weighted stiffness into an existing bs = 3 matrix at the beam's dof_offset
+ *  (the pattern must contain the beam's). */
+cupid_status cupid_cuf_assemble_weighted_add(const cupid_cuf_beam beam, cupid_cuf_weight_fn fn,
+                                             void *ctx, cupid_csr K);
+
+/** The alpha-weighted stiffness in a new matrix (local numbering, cupid_cuf_pattern()). */
+cupid_status cupid_cuf_assemble_weighted(const cupid_cuf_beam beam, cupid_cuf_weight_fn fn,
+                                         void *ctx, cupid_csr *K);
+
+/** Add the alpha-weighted consistent mass into an existing bs = 3 matrix at dof_offset. */
+cupid_status cupid_cuf_mass_weighted_add(const cupid_cuf_beam beam, cupid_cuf_weight_fn fn,
+                                         void *ctx, cupid_csr M);
+
+/** Add the alpha-weighted HRZ-lumped mass into d (global vector, dof_offset applied): the
+ *  lumping of cupid_cuf_mass_lumped() applied to the weighted pair matrices. */
+cupid_status cupid_cuf_mass_lumped_weighted(const cupid_cuf_beam beam, cupid_cuf_weight_fn fn,
+                                            void *ctx, double *d);
+/* ---- end of the weighted block ---- */
+
 #ifdef __cplusplus
 }
 #endif

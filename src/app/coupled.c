@@ -1,12 +1,13 @@
 /* Coupled models (beam + peridynamics) inside a run: the beam gives way inside the PD regions,
  * constraints and loads go to the part they touch, the coupled matrix of paper 000 Eq. 38
  * (src/coupling) is solved by UMFPACK (it is not symmetric). Methods: fictitious (default) and
- * lagrange (eliminated, SPD, CHOLMOD); arlequin is refused plainly. */
+ * lagrange (eliminated, SPD, CHOLMOD); arlequin dispatches to coupled_arlequin.c. */
 #include <math.h>
 #include <stdio.h>
 #include <string.h>
 
 #include "app_internal.h"
+#include "coupled_arlequin.h"
 #include "cupid/coupling.h"
 
 #define LATTICE_TOL 1e-9
@@ -17,11 +18,7 @@ int cupid_app_is_coupled(const cupid_job *job) {
 
 cupid_status cupid_app_coupled_check(const cupid_job *job) {
   const cupid_model_t *m = job->model;
-  if (m->coupling.method == CUPID_COUPLING_ARLEQUIN)
-    return cupid_model_error(m, &m->coupling.mark,
-                             "method arlequin is not yet supported by cupid %s (allowed now: "
-                             "fictitious, the improved coupling of paper 000, and lagrange)",
-                             cupid_version());
+  if (cupid_app_is_arlequin(job)) return cupid_app_arlequin_check(job); /* coupled_arlequin.c */
   if (m->pd.dimension != 3)
     return cupid_model_error(m, &m->pd.mark,
                              "a coupled model needs a 3D peridynamic grid (dimension: 3)");
@@ -35,6 +32,7 @@ cupid_status cupid_app_coupled_check(const cupid_job *job) {
 /* The beam gives way inside every PD region (region by region, so errors name the region). */
 cupid_status cupid_app_coupled_prepare(cupid_job *job) {
   const cupid_model_t *m = job->model;
+  if (cupid_app_is_arlequin(job)) return cupid_app_arlequin_prepare(job); /* the beam stays */
   for (int r = 0; r < m->pd.n_regions; r++) {
     cupid_status st = cupid_coupling_deactivate(job->beam, 1, &m->pd.regions[r].box);
     if (st != CUPID_SUCCESS) {
@@ -285,6 +283,7 @@ static cupid_status solve(cupid_job *job) {
 }
 
 cupid_status cupid_app_coupled_run(cupid_job *job) {
+  if (cupid_app_is_arlequin(job)) return cupid_app_arlequin_run(job);
   if (job->model->analysis.type == CUPID_ANALYSIS_EVALUATE) return evaluate(job);
   CUPID_CALL(cupid_app_estimate(job, 0));
   CUPID_CALL(assemble(job));

@@ -5,12 +5,13 @@
  *
  * FE-only and PD-only models. The global system uses the [3 per PD node | FE DOFs] layout of
  * the job, so a coupled model only needs its coupling terms in K (and, for Arlequin, the
- * weighted masses) before cupid_dynamics_run(); it is refused here until then. */
+ * weighted masses: coupled_arlequin.c) before cupid_dynamics_run(). */
 #include <math.h>
 #include <stdio.h>
 #include <string.h>
 
 #include "app_internal.h"
+#include "coupled_arlequin.h"
 #include "cupid/dynamics.h"
 #include "cupid/io.h"
 
@@ -94,10 +95,10 @@ static cupid_status check_time_independent(const cupid_model_t *m) {
 
 cupid_status cupid_app_dynamic_check(const cupid_job *job) {
   const cupid_model_t *m = job->model;
-  if (m->has_beam && m->has_peridynamics)
+  if (m->has_beam && m->has_peridynamics && !cupid_app_is_arlequin(job))
     return cupid_model_error(m, &m->analysis.dynamic.mark,
                              "type dynamic of coupled beam + peridynamics models is not yet "
-                             "supported by cupid %s (FE-only and PD-only models are)",
+                             "supported by cupid %s (FE-only, PD-only and Arlequin models are)",
                              cupid_version());
   CUPID_CALL(check_time_independent(m));
   return check_density(job);
@@ -108,6 +109,7 @@ cupid_status cupid_app_dynamic_check(const cupid_job *job) {
  * mass at its DOF offset and rho V on the PD diagonal (Arlequin weights are the coupling's). */
 static cupid_status build_mass(cupid_job *job, cupid_csr *M, double **m_lumped) {
   const cupid_model_t *m = job->model;
+  if (cupid_app_is_arlequin(job)) return cupid_app_arlequin_mass(job, M, m_lumped); /* Eq. 14 */
   int lumped = m->analysis.dynamic.lumped_mass || !job->beam;
   CUPID_CALL(cupid_calloc((size_t)job->ndof, sizeof(double), "lumped mass", m_lumped));
   if (job->grid) {

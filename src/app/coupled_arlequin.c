@@ -1,0 +1,332 @@
+/* Coupled models with `coupling: {method: arlequin}` inside a run (paper 004 section 3;
+ * src/coupling/arlequin.c for the method). Layout supported: the beam and one bond-based PD
+ * region (1D or 3D) overlap on [lo, hi] = the `overlap` box's y range (its x/z bounds are not
+ * used: every PD node of that y range is tied and must lie in the beam). The PD region starts
+ * on one edge of the overlap and extends beyond the other; the beam extends beyond the first
+ * edge and either ends on the second (beam [0, 0.6], PD [0.4, 1], overlap [0.4, 0.6]: nothing
+ * is deactivated) or runs on inside the PD region, where it gives way (beam [0, 1]: the pairs
+ * on [0.6, 1] are made inactive, their FE nodes held at zero). Constraints and loads go to the part they touch; loads
+ * inside the overlap (which both models would carry, each with its weight) are not yet
+ * supported. Static (CHOLMOD: the system is symmetric), evaluate, and dynamic runs (through
+ * cupid_app_run_dynamic() with the weighted masses of cupid_app_arlequin_mass()). */
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+
+#include "coupled_arlequin.h"
+
+#define ARL_TOL 1e-9
+
+int cupid_app_is_arlequin(const cupid_job *job) {
+  const cupid_model_t *m = job->model;
+  return m->has_beam && m->has_peridynamics && m->coupling.method == CUPID_COUPLING_ARLEQUIN;
+}
+
+cupid_status cupid_app_arlequin_check(const cupid_job *job) {
+  const cupid_model_t *m = job->model;
+  const cupid_coupling *c = &m->coupling;
+  if (m->pd.n_regions != 1)
+    return cupid_model_error(m, &m->pd.mark,
+                             "method arlequin supports one PD region (this model has %d)",
+                             m->pd.n_regions);
+  if (m->pd.model != CUPID_PD_BOND)
+    return cupid_model_error(m, &m->pd.mark,
+                             "method arlequin is not yet supported with LPS peridynamics: the "
+                             "energy weights scale bonds one by one (use model: bond)");
+  if (!c->overlap.has[1])
+    return cupid_model_error(m, &c->mark, "coupling.arlequin.overlap needs a y range");
+  if (m->beam.integration == CUPID_CUF_MITC)
+    return cupid_model_error(m, &c->mark,
+                             "method arlequin: MITC beam integration is not yet supported (use "
+                             "full or reduced)");
+  if (m->analysis.type == CUPID_ANALYSIS_DYNAMIC) return cupid_app_dynamic_check(job);
+  return CUPID_SUCCESS;
+}
+
+/* The options of the run: the overlap, which side is FE-only, the weight and the penalty. */
+static cupid_arlequin_options options(const cupid_job *job) {
+  const cupid_coupling *c = &job->model->coupling;
+  cupid_arlequin_options o = {.weight = {.lo = c->overlap.lo[1], .hi = c->overlap.hi[1],
+                                         .kind = c->weight},
+                              .penalty = c->penalty};
+  /* the PD region starts on the overlap's lower edge: the FE-only side is below */
+  double tol = ARL_TOL * (job->fe_info.y_max - job->fe_info.y_min);
+  o.weight.fe_below = job->model->pd.regions[0].box.lo[1] >= o.weight.lo - tol;
+  return o;
+}
+
+static int close_to(double a, double b, double scale) { return fabs(a - b) <= ARL_TOL * scale; }
+
+cupid_status cupid_app_arlequin_prepare(cupid_job *job) {
+  const cupid_model_t *m = job->model;
+  const cupid_mark *mk = &m->coupling.mark;
+  double lo = m->coupling.overlap.lo[1], hi = m->coupling.overlap.hi[1];
+  double b0 = job->fe_info.y_min, b1 = job->fe_info.y_max, L = b1 - b0, tol = ARL_TOL * L;
+  const cupid_box *r = &m->pd.regions[0].box;
+  if (lo < b0 - tol || hi > b1 + tol)
+    return cupid_model_error(m, mk, "the overlap y in [%g, %g] must lie inside the beam [%g, %g]",
+                             lo, hi, b0, b1);
+  /* The PD region starts on one edge of the overlap and extends beyond the other; the beam
+   * extends beyond the first edge (its FE-only side). */
+  int below = close_to(r->lo[1], lo, L) && r->hi[1] > hi + tol && b0 < lo - tol;
+  int above = close_to(r->hi[1], hi, L) && r->lo[1] < lo - tol && b1 > hi + tol;
+  if (!below && !above)
+    return cupid_model_error(m, &m->pd.regions[0].mark,
+                             "the PD region y in [%g, %g] must start on one edge of the overlap "
+                             "[%g, %g] and extend beyond the other, and the beam [%g, %g] must "
+                             "extend beyond the first edge",
+                             r->lo[1], r->hi[1], lo, hi, b0, b1);
+  /* The weight has kinks at lo and hi: they must be element ends for exact integration. */
+  double ends[2] = {lo, hi};
+  for (int k = 0; k < 2; k++)
+    if (cupid_cuf_beam_node_at(job->beam, ends[k]) < 0)
+      return cupid_model_error(m, mk,
+                               "the overlap bound y = %g is not a beam-node position: move it "
+                               "to an element end (the weight's kinks must fall between "
+                               "elements)",
+                               ends[k]);
+  /* Beyond the overlap, inside the PD region, the beam gives way (alpha = 0 there). */
+  cupid_box give = {.lo = {0, below ? hi : b0, 0}, .hi = {0, below ? b1 : lo, 0}, .has = {0, 1, 0}};
+  if (give.hi[1] - give.lo[1] <= tol) return CUPID_SUCCESS; /* the beam ends on the overlap */
+  if ((below && b1 > r->hi[1] + tol) || (above && b0 < r->lo[1] - tol))
+    return cupid_model_error(m, mk,
+                             "the beam [%g, %g] runs through the PD region [%g, %g] and out of "
+                             "it: a second interface is not yet supported with method arlequin",
+                             b0, b1, r->lo[1], r->hi[1]);
+  cupid_status st = cupid_coupling_deactivate(job->beam, 1, &give);
+  if (st != CUPID_SUCCESS)
+    return cupid_model_error(m, mk, "the beam cannot give way beyond the overlap: %s",
+                             cupid_error_message());
+  cupid_job_progress(job, "Arlequin: the beam gives way on y in [%g, %g] (PD only there)",
+                     give.lo[1], give.hi[1]);
+  return CUPID_SUCCESS;
+}
+
+/* --------------------------------------------------------------- constraints and loads */
+
+static int fe_used(const cupid_job *job, cupid_int bn) {
+  for (int tau = 0; tau < job->fe_info.M; tau++)
+    if (cupid_cuf_node_used(job->beam, tau, bn)) return 1;
+  return 0;
+}
+
+static int fe_node_at(const cupid_job *job, double y) {
+  cupid_int bn = cupid_cuf_beam_node_at(job->beam, y);
+  return bn >= 0 && fe_used(job, bn);
+}
+
+static int fe_node_in_box(const cupid_job *job, const cupid_box *b) {
+  double tol = ARL_TOL * (job->fe_info.y_max - job->fe_info.y_min);
+  for (cupid_int bn = 0; bn < job->fe_info.n_beam_nodes; bn++) {
+    double y = cupid_cuf_beam_node_y(job->beam, bn);
+    if ((!b->has[1] || (y >= b->lo[1] - tol && y <= b->hi[1] + tol)) && fe_used(job, bn)) return 1;
+  }
+  return 0;
+}
+
+static int pd_node_in_box(const cupid_job *job, const cupid_box *b) {
+  const double *x = cupid_pd_grid_coords(job->grid);
+  double h = cupid_pd_grid_spacing(job->grid);
+  cupid_box bb = *b;
+  if (cupid_pd_grid_dimension(job->grid) == 1) bb.has[0] = bb.has[2] = 0; /* a bar along y */
+  for (cupid_int i = 0; i < job->n_pd; i++)
+    if (cupid_box_contains(&bb, x + 3 * i, ARL_TOL * h)) return 1;
+  return 0;
+}
+
+static int pd_node_near(const cupid_job *job, double y, double layer) {
+  const double *x = cupid_pd_grid_coords(job->grid);
+  for (cupid_int i = 0; i < job->n_pd; i++)
+    if (fabs(x[3 * i + 1] - y) < layer) return 1;
+  return 0;
+}
+
+/* Run a PD-side stage of pd_bc.c on a subset of the model's items. */
+static cupid_status pd_stage(cupid_job *job, cupid_constraint *cons, int nc, cupid_load *loads,
+                             int nl, int constraints) {
+  cupid_model_t part = *job->model;
+  part.constraints = cons;
+  part.n_constraints = nc;
+  part.loads = loads;
+  part.n_loads = nl;
+  const cupid_model_t *saved = job->model;
+  job->model = &part;
+  cupid_status st = constraints ? cupid_app_pd_constraints(job) : cupid_app_pd_loads(job);
+  job->model = saved;
+  return st;
+}
+
+static cupid_status apply_constraints(cupid_job *job) {
+  const cupid_model_t *m = job->model;
+  cupid_status st = CUPID_SUCCESS;
+  cupid_constraint *pd = NULL;
+  int npd = 0;
+  CUPID_CALL(cupid_calloc((size_t)m->n_constraints + 1, sizeof *pd, "PD constraints", &pd));
+  for (int k = 0; k < m->n_constraints; k++) {
+    const cupid_constraint *c = &m->constraints[k];
+    int on_fe, on_pd;
+    if (c->kind == CUPID_CONSTRAINT_CLAMP) {
+      on_fe = fe_node_at(job, c->plane_y);
+      on_pd = pd_node_near(job, c->plane_y, c->layer > 0 ? c->layer : m->pd.horizon);
+    } else {
+      on_fe = fe_node_in_box(job, &c->box);
+      on_pd = pd_node_in_box(job, &c->box);
+    }
+    if (!on_fe && !on_pd) {
+      st = cupid_model_error(m, &c->mark, "the constraint touches neither the beam nor a PD node");
+      goto cleanup;
+    }
+    if (on_fe) CUPID_TRY(cupid_cuf_constraint_apply(job->beam, m, c, job->bc));
+    if (on_pd) pd[npd++] = *c;
+  }
+  CUPID_TRY(pd_stage(job, pd, npd, NULL, 0, 1)); /* also holds x, z of the 1D grid */
+  /* FE nodes where the beam gave way carry nothing: hold them at zero. */
+  for (cupid_int n = 0; n < job->fe_info.n_fe_nodes; n++) {
+    if (cupid_cuf_node_used(job->beam, (int)(n % job->fe_info.M), n / job->fe_info.M)) continue;
+    for (int c = 0; c < 3; c++)
+      CUPID_TRY(cupid_dirichlet_fix(job->bc, job->fe_offset + 3 * n + c, 0.0));
+  }
+cleanup:
+  cupid_free(&pd);
+  return st;
+}
+
+/* 1 if the load acts inside the overlap (both models there: not yet supported). */
+static int load_in_overlap(const cupid_load *l, double lo, double hi, double tol) {
+  switch (l->kind) {
+  case CUPID_LOAD_TRACTION: return l->plane_y > lo + tol && l->plane_y < hi - tol;
+  case CUPID_LOAD_POINT: return l->at[1] >= lo - tol && l->at[1] <= hi + tol;
+  case CUPID_LOAD_BODY:
+  default: return !l->box.has[1] || (l->box.lo[1] < hi - tol && l->box.hi[1] > lo + tol);
+  }
+}
+
+static cupid_status apply_loads(cupid_job *job) {
+  const cupid_model_t *m = job->model;
+  cupid_status st = CUPID_SUCCESS;
+  cupid_load *pd = NULL;
+  int npd = 0;
+  double lo = m->coupling.overlap.lo[1], hi = m->coupling.overlap.hi[1];
+  double tol = ARL_TOL * (job->fe_info.y_max - job->fe_info.y_min);
+  CUPID_CALL(cupid_calloc((size_t)m->n_loads + 1, sizeof *pd, "PD loads", &pd));
+  for (int k = 0; k < m->n_loads; k++) {
+    const cupid_load *l = &m->loads[k];
+    if (load_in_overlap(l, lo, hi, tol)) {
+      st = cupid_model_error(m, &l->mark,
+                             "a load inside the Arlequin overlap [%g, %g] is not yet supported "
+                             "(both models carry it there, each with its weight)", lo, hi);
+      goto cleanup;
+    }
+    int on_fe = 0;
+    switch (l->kind) {
+    case CUPID_LOAD_TRACTION: on_fe = fe_node_at(job, l->plane_y); break;
+    case CUPID_LOAD_POINT: on_fe = cupid_cuf_contains(job->beam, l->at[0], l->at[1], l->at[2]); break;
+    case CUPID_LOAD_BODY: on_fe = fe_node_in_box(job, &l->box); break;
+    }
+    if (on_fe) CUPID_TRY(cupid_cuf_load_add(job->beam, m, l, job->f_ext));
+    if (!on_fe || (l->kind == CUPID_LOAD_BODY && pd_node_in_box(job, &l->box))) pd[npd++] = *l;
+  }
+  CUPID_TRY(pd_stage(job, NULL, 0, pd, npd, 0));
+cleanup:
+  cupid_free(&pd);
+  return st;
+}
+
+/* ------------------------------------------------------------------------ the runs */
+
+static cupid_status assemble(cupid_job *job) {
+  double t0 = cupid_wtime();
+  cupid_arlequin_options o = options(job);
+  cupid_arlequin_info info;
+  CUPID_CALL(cupid_arlequin_assemble(job->beam, job->grid, job->op, &o, &job->K, &info));
+  cupid_job_phase_end(job, CUPID_PHASE_COUPLING, t0);
+  static const char *wn[] = {"linear", "constant", "smooth"};
+  cupid_job_progress(job,
+                     "coupling (Arlequin, penalty): overlap y in [%g, %g], %s weight, kappa = %g "
+                     "N/m, %lld tied PD nodes (%d components), min PD weight %.3g; %lld "
+                     "non-zeros",
+                     o.weight.lo, o.weight.hi, wn[o.weight.kind], o.penalty,
+                     (long long)info.n_tied, info.components, info.pd_weight_min,
+                     (long long)cupid_csr_nnz(job->K));
+  return CUPID_SUCCESS;
+}
+
+static cupid_status report_gap(const cupid_job *job) {
+  cupid_arlequin_options o = options(job);
+  double gap, umax = 0.0;
+  CUPID_CALL(cupid_arlequin_gap(job->beam, job->grid, &o, job->u, &gap));
+  for (cupid_int d = 0; d < job->ndof; d++)
+    if (fabs(job->u[d]) > umax) umax = fabs(job->u[d]);
+  cupid_job_progress(job, "Arlequin constraint gap max |d - N u| = %.3e (%.3e of max |u|)", gap,
+                     umax > 0 ? gap / umax : 0.0);
+  return CUPID_SUCCESS;
+}
+
+static cupid_status evaluate(cupid_job *job) {
+  const cupid_model_t *m = job->model;
+  const double *x = cupid_pd_grid_coords(job->grid);
+  for (cupid_int i = 0; i < job->n_pd; i++)
+    for (int c = 0; c < 3; c++)
+      job->u[3 * i + c] =
+          cupid_value_eval(&m->analysis.field[c], x[3 * i], x[3 * i + 1], x[3 * i + 2], 0.0, 0.0);
+  CUPID_CALL(cupid_app_fe_impose_field(job));
+  for (cupid_int n = 0; n < job->fe_info.n_fe_nodes; n++) /* where the beam gave way */
+    if (!cupid_cuf_node_used(job->beam, (int)(n % job->fe_info.M), n / job->fe_info.M))
+      for (int c = 0; c < 3; c++) job->u[job->fe_offset + 3 * n + c] = 0.0;
+  CUPID_CALL(assemble(job));
+  cupid_csr_matvec(job->K, job->u, job->f_int);
+  cupid_job_progress(job, "evaluate: internal forces of the imposed field computed");
+  return report_gap(job);
+}
+
+static cupid_status solve(cupid_job *job) {
+  cupid_status st = cupid_direct_solve(job->K, CUPID_MATRIX_SPD, job->f_ext, job->bc, job->u,
+                                       &job->solve);
+  job->phases[CUPID_PHASE_FACTORISATION] =
+      (cupid_phase_record){job->solve.time_factor, cupid_peak_memory(), 1};
+  job->phases[CUPID_PHASE_SOLVE] =
+      (cupid_phase_record){job->solve.time_solve, cupid_peak_memory(), 1};
+  CUPID_CALL(st);
+  job->solved = 1;
+  cupid_csr_matvec(job->K, job->u, job->f_int);
+  cupid_job_progress(job, "solve: %s, %lld equations, residual %.2e, pivot ratio %.2e",
+                     job->solve.method, (long long)job->solve.n, job->solve.residual,
+                     job->solve.pivot_ratio);
+  return report_gap(job);
+}
+
+cupid_status cupid_app_arlequin_run(cupid_job *job) {
+  if (job->model->analysis.type == CUPID_ANALYSIS_EVALUATE) return evaluate(job);
+  CUPID_CALL(cupid_app_estimate(job, 0));
+  CUPID_CALL(assemble(job));
+  CUPID_CALL(apply_constraints(job));
+  CUPID_CALL(cupid_dirichlet_finalize(job->bc));
+  CUPID_CALL(apply_loads(job));
+  if (job->model->analysis.type == CUPID_ANALYSIS_DYNAMIC) {
+    CUPID_CALL(cupid_app_run_dynamic(job));
+    return report_gap(job);
+  }
+  return solve(job);
+}
+
+cupid_status cupid_app_arlequin_mass(cupid_job *job, cupid_csr *M, double **m_lumped) {
+  const cupid_model_t *m = job->model;
+  cupid_status st = CUPID_SUCCESS;
+  double *pd_mass = NULL;
+  cupid_arlequin_options o = options(job);
+  const int *mat = cupid_pd_grid_materials(job->grid);
+  double vol = cupid_pd_grid_cell_volume(job->grid);
+  CUPID_TRY(cupid_malloc((size_t)job->n_pd + 1, sizeof *pd_mass, "PD masses", &pd_mass));
+  for (cupid_int i = 0; i < job->n_pd; i++) pd_mass[i] = m->materials[mat[i]].density * vol;
+  if (m->analysis.dynamic.lumped_mass) {
+    CUPID_TRY(cupid_calloc((size_t)job->ndof, sizeof **m_lumped, "lumped mass", m_lumped));
+    CUPID_TRY(cupid_arlequin_mass(job->beam, job->grid, &o, pd_mass, NULL, *m_lumped));
+  } else {
+    CUPID_TRY(cupid_csr_duplicate(job->K, M));
+    cupid_csr_zero(*M);
+    CUPID_TRY(cupid_arlequin_mass(job->beam, job->grid, &o, pd_mass, *M, NULL));
+  }
+cleanup:
+  cupid_free(&pd_mass);
+  return st;
+}

@@ -1,0 +1,290 @@
+/* Arlequin coupling of a CUF beam and a bond-based PD region with a penalty (paper 004,
+ * section 3; coupling.md section 7). The two models overlap on [lo, hi] along the axis. The
+ * coupled Hamiltonian is alpha H_FE + (1 - alpha) H_PD (Eq. 8) plus the penalty energy
+ * kappa/2 sum_q |d_q - N(x_q) u|^2 over the PD nodes q of the overlap (Eqs. 16-17, node by
+ * node), so the stiffness is K = K_FE(alpha) + K_PD(1 - alpha) + K_z (Eq. 18) and the mass
+ * M = M_FE(alpha) + (1 - alpha) rho V (Eq. 14): symmetric, positive definite once the beam
+ * is held (CHOLMOD). */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "coupling/coupling_internal.h"
+
+/* Lattice tolerance (relative to h) for "a PD node lies in the overlap". */
+#define ARL_TOL 1e-9
+
+double cupid_arlequin_alpha(const cupid_arlequin_weight *w, double y) {
+  double len = w->hi - w->lo;
+  /* s: 0 on the FE-only edge of the overlap, 1 on the PD-only edge */
+  double s = w->fe_below ? (y - w->lo) / len : (w->hi - y) / len;
+  if (s <= 0.0) return s < 0.0 || w->kind != CUPID_WEIGHT_CONSTANT ? 1.0 : 0.5;
+  if (s >= 1.0) return s > 1.0 || w->kind != CUPID_WEIGHT_CONSTANT ? 0.0 : 0.5;
+  switch (w->kind) {
+  case CUPID_WEIGHT_CONSTANT: return 0.5;
+  case CUPID_WEIGHT_SMOOTH: return 1.0 - s * s * (3.0 - 2.0 * s); /* C1 smoothstep */
+  case CUPID_WEIGHT_LINEAR:
+  default: return 1.0 - s; /* Eq. 9 */
+  }
+}
+
+static double alpha_fn(void *ctx, double y) { return cupid_arlequin_alpha(ctx, y); }
+
+/* The PD nodes of the overlap and their beam weights: CSR over tied nodes (tptr, tnode, tw). */
+typedef struct {
+  cupid_int n, *node, *ptr, *fe;
+  double *w;
+  int comps; /* tied components: 1 (y) in 1D, 3 in 3D */
+} tied_t;
+
+static void tied_free(tied_t *t) {
+  cupid_free(&t->node);
+  cupid_free(&t->ptr);
+  cupid_free(&t->fe);
+  cupid_free(&t->w);
+}
+
+static cupid_status tied_build(cupid_cuf_beam beam, cupid_pd_grid grid,
+                               const cupid_arlequin_options *o, tied_t *t) {
+  cupid_status st = CUPID_SUCCESS;
+  cupid_cuf_info fi;
+  cupid_cuf_get_info(beam, &fi);
+  cupid_int n_pd = cupid_pd_grid_num_nodes(grid), per = (cupid_int)fi.M * fi.element_nodes;
+  const double *x = cupid_pd_grid_coords(grid);
+  double tol = ARL_TOL * cupid_pd_grid_spacing(grid);
+  memset(t, 0, sizeof *t);
+  t->comps = cupid_pd_grid_dimension(grid) == 1 ? 1 : 3;
+  CUPID_TRY(cupid_malloc((size_t)n_pd, sizeof *t->node, "tied PD nodes", &t->node));
+  for (cupid_int i = 0; i < n_pd; i++) {
+    double y = x[3 * i + 1];
+    if (y >= o->weight.lo - tol && y <= o->weight.hi + tol) t->node[t->n++] = i;
+  }
+  CUPID_TRY(cupid_calloc((size_t)t->n + 1, sizeof *t->ptr, "tied rows", &t->ptr));
+  CUPID_TRY(cupid_malloc((size_t)(t->n * per + 1), sizeof *t->fe, "tied FE nodes", &t->fe));
+  CUPID_TRY(cupid_malloc((size_t)(t->n * per + 1), sizeof *t->w, "tied weights", &t->w));
+  for (cupid_int k = 0; k < t->n; k++) {
+    const double *p = x + 3 * t->node[k];
+    int count = 0;
+    st = cupid_cuf_shape_at(beam, p[0], p[1], p[2], t->fe + t->ptr[k], t->w + t->ptr[k], &count);
+    if (st != CUPID_SUCCESS) {
+      st = CUPID_ERROR(CUPID_ERR_MODEL,
+                       "Arlequin overlap: PD node %lld at (%g, %g, %g) lies in the overlap but "
+                       "outside the beam; the beam must cover the overlap",
+                       (long long)t->node[k], p[0], p[1], p[2]);
+      goto cleanup;
+    }
+    t->ptr[k + 1] = t->ptr[k] + count;
+  }
+  return CUPID_SUCCESS;
+cleanup:
+  tied_free(t);
+  return st;
+}
+
+static int cmp_key(const void *a, const void *b) {
+  int64_t x = *(const int64_t *)a, y = *(const int64_t *)b;
+  return (x > y) - (x < y);
+}
+
+/* The union pattern: PD K, the beam's (shifted to block n_pd), and the penalty couplings. */
+static cupid_status build_pattern(cupid_cuf_beam beam, const cupid_csr_t *Kpd, const tied_t *t,
+                                  cupid_int n_pd, cupid_int n_fe, cupid_csr *K) {
+  cupid_status st = CUPID_SUCCESS;
+  cupid_int *frp = NULL, *fcol = NULL, *rowptr = NULL, *col = NULL, nb = n_pd + n_fe;
+  int64_t *key = NULL;
+  CUPID_TRY(cupid_cuf_pattern(beam, &frp, &fcol));
+  size_t cap = (size_t)Kpd->rowptr[n_pd] + (size_t)frp[n_fe], n = 0;
+  for (cupid_int k = 0; k < t->n; k++) {
+    size_t c = (size_t)(t->ptr[k + 1] - t->ptr[k]);
+    cap += 2 * c + c * c;
+  }
+  CUPID_TRY(cupid_malloc(cap + 1, sizeof *key, "Arlequin pattern", &key));
+  for (cupid_int r = 0; r < n_pd; r++)
+    for (cupid_int q = Kpd->rowptr[r]; q < Kpd->rowptr[r + 1]; q++)
+      key[n++] = (int64_t)r * nb + Kpd->col[q];
+  for (cupid_int r = 0; r < n_fe; r++)
+    for (cupid_int q = frp[r]; q < frp[r + 1]; q++)
+      key[n++] = (int64_t)(n_pd + r) * nb + n_pd + fcol[q];
+  for (cupid_int k = 0; k < t->n; k++)
+    for (cupid_int a = t->ptr[k]; a < t->ptr[k + 1]; a++) {
+      cupid_int fa = n_pd + t->fe[a];
+      key[n++] = (int64_t)t->node[k] * nb + fa;
+      key[n++] = (int64_t)fa * nb + t->node[k];
+      for (cupid_int b = t->ptr[k]; b < t->ptr[k + 1]; b++)
+        key[n++] = (int64_t)fa * nb + n_pd + t->fe[b];
+    }
+  qsort(key, n, sizeof *key, cmp_key);
+  CUPID_TRY(cupid_calloc((size_t)nb + 1, sizeof *rowptr, "Arlequin rows", &rowptr));
+  CUPID_TRY(cupid_malloc(n + 1, sizeof *col, "Arlequin columns", &col));
+  size_t m = 0;
+  for (size_t q = 0; q < n; q++) {
+    if (q > 0 && key[q] == key[q - 1]) continue;
+    cupid_int r = (cupid_int)(key[q] / nb);
+    col[m++] = (cupid_int)(key[q] % nb);
+    rowptr[r + 1]++;
+  }
+  for (cupid_int r = 0; r < nb; r++) rowptr[r + 1] += rowptr[r];
+  CUPID_TRY(cupid_csr_create(nb, nb, 3, rowptr, col, K));
+cleanup:
+  cupid_free(&frp);
+  cupid_free(&fcol);
+  cupid_free(&rowptr);
+  cupid_free(&col);
+  cupid_free(&key);
+  return st;
+}
+
+/* Copy the PD matrix with every bond weighted by the mean of its end weights; the diagonal
+ * block is rebuilt as minus the sum of the row's weighted bonds (a pairwise operator's rows
+ * sum to zero: translation invariance; checked, since LPS's do too but are not pairwise -
+ * LPS is refused by the caller through the model kind). */
+static cupid_status add_weighted_pd(const cupid_csr_t *Kpd, const double *wn, cupid_csr K) {
+  for (cupid_int r = 0; r < Kpd->nrows; r++) {
+    double diag[9] = {0}, rowsum[9] = {0}, scale = 0.0;
+    for (cupid_int q = Kpd->rowptr[r]; q < Kpd->rowptr[r + 1]; q++) {
+      cupid_int c = Kpd->col[q];
+      const double *src = Kpd->val + 9 * q;
+      for (int e = 0; e < 9; e++) {
+        rowsum[e] += src[e];
+        if (fabs(src[e]) > scale) scale = fabs(src[e]);
+      }
+      if (c == r) continue;
+      double w = 0.5 * (wn[r] + wn[c]), *dst = cupid_csr_find(K, r, c);
+      CUPID_CHECK(dst, CUPID_ERR_INTERNAL, "Arlequin pattern lacks a PD block");
+      for (int e = 0; e < 9; e++) {
+        dst[e] += w * src[e];
+        diag[e] -= w * src[e];
+      }
+    }
+    for (int e = 0; e < 9; e++)
+      CUPID_CHECK(fabs(rowsum[e]) <= 1e-10 * scale, CUPID_ERR_UNSUPPORTED,
+                  "Arlequin: the PD operator is not pairwise (row %lld does not sum to zero); "
+                  "only bond-based peridynamics can be weighted bond by bond",
+                  (long long)r);
+    double *dst = cupid_csr_find(K, r, r);
+    CUPID_CHECK(dst, CUPID_ERR_INTERNAL, "Arlequin pattern lacks a PD diagonal block");
+    for (int e = 0; e < 9; e++) dst[e] += diag[e];
+  }
+  return CUPID_SUCCESS;
+}
+
+/* K_z = kappa [P, -N P; -N^T P, N^T N P] per tied node (P: the tied components). */
+static cupid_status add_penalty(const tied_t *t, double kappa, cupid_int n_pd, cupid_csr K) {
+  int c0 = t->comps == 1 ? 1 : 0, c1 = t->comps == 1 ? 2 : 3;
+  for (cupid_int k = 0; k < t->n; k++) {
+    cupid_int q = t->node[k];
+    double *blk = cupid_csr_find(K, q, q);
+    CUPID_CHECK(blk, CUPID_ERR_INTERNAL, "Arlequin pattern lacks a tied block");
+    for (int c = c0; c < c1; c++) blk[4 * c] += kappa;
+    for (cupid_int a = t->ptr[k]; a < t->ptr[k + 1]; a++) {
+      cupid_int fa = n_pd + t->fe[a];
+      double *qa = cupid_csr_find(K, q, fa), *aq = cupid_csr_find(K, fa, q);
+      CUPID_CHECK(qa && aq, CUPID_ERR_INTERNAL, "Arlequin pattern lacks a penalty block");
+      for (int c = c0; c < c1; c++) {
+        qa[4 * c] -= kappa * t->w[a];
+        aq[4 * c] -= kappa * t->w[a];
+      }
+      for (cupid_int b = t->ptr[k]; b < t->ptr[k + 1]; b++) {
+        double *ab = cupid_csr_find(K, fa, n_pd + t->fe[b]);
+        CUPID_CHECK(ab, CUPID_ERR_INTERNAL, "Arlequin pattern lacks a penalty block");
+        for (int c = c0; c < c1; c++) ab[4 * c] += kappa * t->w[a] * t->w[b];
+      }
+    }
+  }
+  return CUPID_SUCCESS;
+}
+
+static cupid_status check_options(cupid_cuf_beam beam, cupid_pd_grid grid,
+                                  const cupid_arlequin_options *o) {
+  CUPID_CHECK(beam && grid && o, CUPID_ERR_ARGUMENT, "Arlequin: NULL argument");
+  CUPID_CHECK(o->weight.hi > o->weight.lo, CUPID_ERR_ARGUMENT,
+              "Arlequin: empty overlap [%g, %g]", o->weight.lo, o->weight.hi);
+  CUPID_CHECK(o->penalty > 0, CUPID_ERR_ARGUMENT, "Arlequin: the penalty must be positive");
+  cupid_cuf_info fi;
+  cupid_cuf_get_info(beam, &fi);
+  CUPID_CHECK(fi.dof_offset == 3 * cupid_pd_grid_num_nodes(grid), CUPID_ERR_ARGUMENT,
+              "Arlequin: the beam's DOF offset must be 3 x PD nodes");
+  return CUPID_SUCCESS;
+}
+
+/* PD nodal weights 1 - alpha(y_i). */
+static cupid_status pd_weights(cupid_pd_grid grid, const cupid_arlequin_weight *w, double **wn,
+                               double *wmin) {
+  cupid_int n = cupid_pd_grid_num_nodes(grid);
+  const double *x = cupid_pd_grid_coords(grid);
+  CUPID_CALL(cupid_malloc((size_t)n + 1, sizeof **wn, "PD weights", wn));
+  *wmin = 1.0;
+  for (cupid_int i = 0; i < n; i++) {
+    (*wn)[i] = 1.0 - cupid_arlequin_alpha(w, x[3 * i + 1]);
+    if ((*wn)[i] < *wmin) *wmin = (*wn)[i];
+  }
+  return CUPID_SUCCESS;
+}
+
+cupid_status cupid_arlequin_assemble(cupid_cuf_beam beam, cupid_pd_grid grid, cupid_pd_operator op,
+                                     const cupid_arlequin_options *o, cupid_csr *K,
+                                     cupid_arlequin_info *info) {
+  cupid_status st = CUPID_SUCCESS;
+  cupid_csr Kpd = NULL;
+  double *wn = NULL;
+  tied_t t = {0};
+  CUPID_CALL(check_options(beam, grid, o));
+  *K = NULL;
+  cupid_int n_pd = cupid_pd_grid_num_nodes(grid), n_fe = cupid_cuf_num_dofs(beam) / 3;
+  CUPID_TRY(cupid_pd_operator_assemble(op, &Kpd));
+  CUPID_TRY(tied_build(beam, grid, o, &t));
+  CUPID_TRY(build_pattern(beam, Kpd, &t, n_pd, n_fe, K));
+  double wmin;
+  CUPID_TRY(pd_weights(grid, &o->weight, &wn, &wmin));
+  CUPID_TRY(add_weighted_pd(Kpd, wn, *K));
+  CUPID_TRY(cupid_cuf_assemble_weighted_add(beam, alpha_fn, (void *)&o->weight, *K));
+  CUPID_TRY(add_penalty(&t, o->penalty, n_pd, *K));
+  if (info) *info = (cupid_arlequin_info){.n_tied = t.n, .components = t.comps, .pd_weight_min = wmin};
+cleanup:
+  if (st != CUPID_SUCCESS) cupid_csr_destroy(K);
+  cupid_csr_destroy(&Kpd);
+  cupid_free(&wn);
+  tied_free(&t);
+  return st;
+}
+
+cupid_status cupid_arlequin_mass(cupid_cuf_beam beam, cupid_pd_grid grid,
+                                 const cupid_arlequin_options *o, const double *pd_mass,
+                                 cupid_csr M, double *lumped) {
+  CUPID_CALL(check_options(beam, grid, o));
+  CUPID_CHECK(pd_mass && (M != NULL) != (lumped != NULL), CUPID_ERR_ARGUMENT,
+              "cupid_arlequin_mass: give the PD masses and exactly one of M, lumped");
+  cupid_int n = cupid_pd_grid_num_nodes(grid);
+  const double *x = cupid_pd_grid_coords(grid);
+  for (cupid_int i = 0; i < n; i++) {
+    double m = (1.0 - cupid_arlequin_alpha(&o->weight, x[3 * i + 1])) * pd_mass[i]; /* Eq. 14 */
+    if (lumped) {
+      for (int c = 0; c < 3; c++) lumped[3 * i + c] += m;
+      continue;
+    }
+    double *blk = cupid_csr_find(M, i, i);
+    CUPID_CHECK(blk, CUPID_ERR_ARGUMENT, "the mass pattern lacks the block of PD node %lld",
+                (long long)i);
+    for (int c = 0; c < 3; c++) blk[4 * c] += m;
+  }
+  if (lumped) return cupid_cuf_mass_lumped_weighted(beam, alpha_fn, (void *)&o->weight, lumped);
+  return cupid_cuf_mass_weighted_add(beam, alpha_fn, (void *)&o->weight, M);
+}
+
+cupid_status cupid_arlequin_gap(cupid_cuf_beam beam, cupid_pd_grid grid,
+                                const cupid_arlequin_options *o, const double *u, double *gap) {
+  CUPID_CALL(check_options(beam, grid, o));
+  tied_t t;
+  CUPID_CALL(tied_build(beam, grid, o, &t));
+  cupid_int off = 3 * cupid_pd_grid_num_nodes(grid);
+  int c0 = t.comps == 1 ? 1 : 0, c1 = t.comps == 1 ? 2 : 3;
+  *gap = 0.0;
+  for (cupid_int k = 0; k < t.n; k++)
+    for (int c = c0; c < c1; c++) {
+      double z = u[3 * t.node[k] + c];
+      for (cupid_int a = t.ptr[k]; a < t.ptr[k + 1]; a++) z -= t.w[a] * u[off + 3 * t.fe[a] + c];
+      if (fabs(z) > *gap) *gap = fabs(z);
+    }
+  tied_free(&t);
+  return CUPID_SUCCESS;
+}

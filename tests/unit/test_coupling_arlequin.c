@@ -1,0 +1,337 @@
+/* The Arlequin coupling (paper 004 section 3) on the truss of examples/truss/truss_arlequin.yaml:
+ * CUF TE0 rod on [0, 0.6] (39 B2), 1D bond-based PD on [0.4, 1] (h = 0.015, delta = 3h),
+ * overlap [0.4, 0.6], E = 1e9, A = 1, rho = 7800.
+ *  - alpha: the three weights at the edges and inside, mirrored when the FE side is above;
+ *  - weighted CUF stiffness and mass: weight 1 gives the unweighted matrices and 0.5 half of
+ *    them (1e-13 relative: the same products summed with another Gauss rule);
+ *  - the coupled K is symmetric (1e-14 relative asymmetry) and a rigid translation along the
+ *    axis gives zero force (1e-12 of |K|: the penalty forces cancel since sum N_a = 1 and the
+ *    weighted PD rows still sum to zero: momentum is conserved);
+ *  - the weighted mass of a translation is int alpha rho A dy + sum (1 - alpha_i) rho V
+ *    (1e-12 relative);
+ *  - static end load F at the PD end, clamp at y = 0: the reaction balances F (1e-9) and the
+ *    FE-only span [0, 0.4] carries exactly F, so u(y) = F y / (EA) there (1e-9 relative,
+ *    whatever the penalty);
+ *  - 3D: a bar 4 x 4 (h = 1), TE1 rod (nu = 0) on y in [0, 12] + 3D bond PD (delta = 1.5) on
+ *    [8, 20], overlap [8, 12]: K symmetric and free of all three rigid translations (1e-12),
+ *    end load: reaction (1e-9) and the FE-only span u_y = F y/(EA) (1e-9). */
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+
+#include "cupid/coupling.h"
+#include "test_cuf_common.h"
+
+#define E_MOD 1e9
+#define RHO 7800.0
+
+typedef struct {
+  tb_beam tb;
+  cupid_cuf_beam beam;
+  cupid_pd_grid grid;
+  cupid_pd_operator op;
+  cupid_pd_material mat;
+  cupid_int n_pd, ndof;
+  cupid_arlequin_options o;
+} truss;
+
+static void truss_build(truss *t, double kappa) {
+  memset(t, 0, sizeof *t);
+  tb_init(&t->tb, E_MOD, 0.0);
+  t->tb.mat[0].density = RHO;
+  t->tb.mat[0].has_density = 1;
+  tb_te(&t->tb, 0);
+  tb_rect(&t->tb, -0.5, 0.5, 1, -0.5, 0.5, 1, -1);
+  tb_axis(&t->tb, 0.0, 0.6, 39, 2);
+  t->beam = tb_create(&t->tb);
+  cupid_box region = {.lo = {0, 0.4, 0}, .hi = {0, 1.0, 0}, .has = {0, 1, 0}};
+  int rmat = 0;
+  cupid_pd_grid_options go = {.spacing = 0.015, .dimension = 1, .area = 1.0};
+  CUPID_ASSERT_OK(cupid_pd_grid_create(&go, 1, &region, &rmat, &t->grid));
+  t->mat = (cupid_pd_material){.E = E_MOD, .nu = 0.0};
+  cupid_pd_operator_options po = {.horizon = 0.045, .model = CUPID_PD_BOND,
+                                  .influence = CUPID_INFLUENCE_CONSTANT,
+                                  .partial_volume = CUPID_PARTIAL_NONE, .materials = &t->mat,
+                                  .n_materials = 1};
+  CUPID_ASSERT_OK(cupid_pd_operator_create(t->grid, &po, &t->op));
+  t->n_pd = cupid_pd_grid_num_nodes(t->grid);
+  assert_int_equal(t->n_pd, 40);
+  CUPID_ASSERT_OK(cupid_cuf_set_dof_offset(t->beam, 3 * t->n_pd));
+  t->ndof = 3 * t->n_pd + cupid_cuf_num_dofs(t->beam);
+  t->o = (cupid_arlequin_options){
+      .weight = {.lo = 0.4, .hi = 0.6, .fe_below = 1, .kind = CUPID_WEIGHT_LINEAR},
+      .penalty = kappa};
+}
+
+static void truss_free(truss *t) {
+  cupid_pd_operator_destroy(&t->op);
+  cupid_pd_grid_destroy(&t->grid);
+  cupid_cuf_beam_destroy(&t->beam);
+}
+
+static void test_alpha(void **state) {
+  (void)state;
+  cupid_arlequin_weight w = {.lo = 0.4, .hi = 0.6, .fe_below = 1, .kind = CUPID_WEIGHT_LINEAR};
+  ASSERT_NEAR(cupid_arlequin_alpha(&w, 0.1), 1.0, 0);
+  ASSERT_NEAR(cupid_arlequin_alpha(&w, 0.9), 0.0, 0);
+  ASSERT_NEAR(cupid_arlequin_alpha(&w, 0.45), 0.75, 1e-15);
+  w.kind = CUPID_WEIGHT_SMOOTH;
+  ASSERT_NEAR(cupid_arlequin_alpha(&w, 0.5), 0.5, 1e-15);
+  ASSERT_NEAR(cupid_arlequin_alpha(&w, 0.45), 1.0 - 3 * 0.0625 + 2 * 0.015625, 1e-15);
+  w.kind = CUPID_WEIGHT_CONSTANT;
+  ASSERT_NEAR(cupid_arlequin_alpha(&w, 0.41), 0.5, 0);
+  ASSERT_NEAR(cupid_arlequin_alpha(&w, 0.39), 1.0, 0);
+  w.fe_below = 0; /* FE above: alpha = 1 beyond hi */
+  w.kind = CUPID_WEIGHT_LINEAR;
+  ASSERT_NEAR(cupid_arlequin_alpha(&w, 0.7), 1.0, 0);
+  ASSERT_NEAR(cupid_arlequin_alpha(&w, 0.45), 0.25, 1e-15);
+}
+
+static double w_one(void *ctx, double y) { (void)ctx, (void)y; return 1.0; }
+static double w_half(void *ctx, double y) { (void)ctx, (void)y; return 0.5; }
+
+static double max_abs(const cupid_csr_t *A) {
+  double m = 0.0;
+  for (cupid_int q = 0; q < 9 * A->rowptr[A->nrows]; q++) m = fmax(m, fabs(A->val[q]));
+  return m;
+}
+
+/* max |A - s B| over A's pattern (B found block by block). */
+static double diff_scaled(const cupid_csr_t *A, const cupid_csr_t *B, double s) {
+  double d = 0.0;
+  for (cupid_int r = 0; r < A->nrows; r++)
+    for (cupid_int q = A->rowptr[r]; q < A->rowptr[r + 1]; q++) {
+      const double *b = cupid_csr_find(B, r, A->col[q]);
+      for (int e = 0; e < 9; e++) d = fmax(d, fabs(A->val[9 * q + e] - s * (b ? b[e] : 0.0)));
+    }
+  return d;
+}
+
+static void test_weighted_cuf(void **state) {
+  (void)state;
+  truss t;
+  truss_build(&t, 1e9);
+  CUPID_ASSERT_OK(cupid_cuf_set_dof_offset(t.beam, 0));
+  cupid_csr K = NULL, Kw = NULL, Kh = NULL, M = NULL, Mw = NULL;
+  CUPID_ASSERT_OK(cupid_cuf_assemble(t.beam, &K));
+  CUPID_ASSERT_OK(cupid_cuf_assemble_weighted(t.beam, w_one, NULL, &Kw));
+  CUPID_ASSERT_OK(cupid_cuf_assemble_weighted(t.beam, w_half, NULL, &Kh));
+  double s = max_abs(K);
+  assert_true(diff_scaled(Kw, K, 1.0) <= 1e-13 * s);
+  assert_true(diff_scaled(Kh, K, 0.5) <= 1e-13 * s);
+  CUPID_ASSERT_OK(cupid_cuf_mass_assemble(t.beam, &M));
+  CUPID_ASSERT_OK(cupid_csr_duplicate(M, &Mw));
+  cupid_csr_zero(Mw);
+  CUPID_ASSERT_OK(cupid_cuf_mass_weighted_add(t.beam, w_half, NULL, Mw));
+  assert_true(diff_scaled(Mw, M, 0.5) <= 1e-13 * max_abs(M));
+  cupid_csr_destroy(&K);
+  cupid_csr_destroy(&Kw);
+  cupid_csr_destroy(&Kh);
+  cupid_csr_destroy(&M);
+  cupid_csr_destroy(&Mw);
+  truss_free(&t);
+}
+
+/* The rigid translation along y: 1 on every PD y and on every FE y (TE0: u = u_y(y)). */
+static double *translation_y(const truss *t) {
+  double *v = NULL;
+  CUPID_ASSERT_OK(cupid_calloc((size_t)t->ndof, sizeof *v, "translation", &v));
+  for (cupid_int d = 1; d < t->ndof; d += 3) v[d] = 1.0;
+  return v;
+}
+
+static void test_coupled_matrix(void **state) {
+  (void)state;
+  truss t;
+  truss_build(&t, 1e11);
+  cupid_csr K = NULL, M = NULL;
+  cupid_arlequin_info info;
+  CUPID_ASSERT_OK(cupid_arlequin_assemble(t.beam, t.grid, t.op, &t.o, &K, &info));
+  assert_int_equal(info.n_tied, 13); /* PD nodes at 0.4075 + 0.015 k, k = 0..12 */
+  assert_int_equal(info.components, 1);
+  double asym = cupid_csr_asymmetry(K);
+  printf("Arlequin K: asymmetry %.2e, %lld tied nodes\n", asym, (long long)info.n_tied);
+  assert_true(asym <= 1e-14);
+  double *v = translation_y(&t), *f = NULL;
+  CUPID_ASSERT_OK(cupid_calloc((size_t)t.ndof, sizeof *f, "force", &f));
+  cupid_csr_matvec(K, v, f);
+  double fm = 0.0;
+  for (cupid_int d = 0; d < t.ndof; d++) fm = fmax(fm, fabs(f[d]));
+  printf("Arlequin K: max |K t| = %.2e (|K| = %.2e)\n", fm, max_abs(K));
+  assert_true(fm <= 1e-12 * max_abs(K));
+
+  /* weighted mass of the translation */
+  double *pd_mass = NULL;
+  CUPID_ASSERT_OK(cupid_calloc((size_t)t.n_pd, sizeof *pd_mass, "PD mass", &pd_mass));
+  double V = cupid_pd_grid_cell_volume(t.grid), expect = RHO * 0.5; /* int alpha rho A dy */
+  const double *x = cupid_pd_grid_coords(t.grid);
+  for (cupid_int i = 0; i < t.n_pd; i++) {
+    pd_mass[i] = RHO * V;
+    expect += (1.0 - cupid_arlequin_alpha(&t.o.weight, x[3 * i + 1])) * RHO * V;
+  }
+  CUPID_ASSERT_OK(cupid_csr_duplicate(K, &M));
+  cupid_csr_zero(M);
+  CUPID_ASSERT_OK(cupid_arlequin_mass(t.beam, t.grid, &t.o, pd_mass, M, NULL));
+  cupid_csr_matvec(M, v, f);
+  double mt = 0.0;
+  for (cupid_int d = 1; d < t.ndof; d += 3) mt += f[d];
+  printf("Arlequin mass of the bar: %.10g (expected %.10g, rho A L = %g)\n", mt, expect, RHO);
+  ASSERT_NEAR(mt, expect, 1e-12 * expect);
+  /* lumped: the same total */
+  memset(f, 0, sizeof *f * (size_t)t.ndof);
+  CUPID_ASSERT_OK(cupid_arlequin_mass(t.beam, t.grid, &t.o, pd_mass, NULL, f));
+  mt = 0.0;
+  for (cupid_int d = 1; d < t.ndof; d += 3) mt += f[d];
+  ASSERT_NEAR(mt, expect, 1e-12 * expect);
+  cupid_free(&pd_mass);
+  cupid_free(&v);
+  cupid_free(&f);
+  cupid_csr_destroy(&K);
+  cupid_csr_destroy(&M);
+  truss_free(&t);
+}
+
+static void static_case(double kappa) {
+  truss t;
+  truss_build(&t, kappa);
+  cupid_csr K = NULL;
+  CUPID_ASSERT_OK(cupid_arlequin_assemble(t.beam, t.grid, t.op, &t.o, &K, NULL));
+  cupid_dirichlet bc = NULL;
+  CUPID_ASSERT_OK(cupid_dirichlet_create(t.ndof, &bc));
+  for (cupid_int i = 0; i < t.n_pd; i++) { /* 1D PD: x, z carry nothing */
+    CUPID_ASSERT_OK(cupid_dirichlet_fix(bc, 3 * i, 0.0));
+    CUPID_ASSERT_OK(cupid_dirichlet_fix(bc, 3 * i + 2, 0.0));
+  }
+  CUPID_ASSERT_OK(cupid_cuf_clamp_node(t.beam, 0, bc));
+  CUPID_ASSERT_OK(cupid_dirichlet_finalize(bc));
+  double *f = NULL, *u = NULL, *r = NULL, F = 1e6;
+  CUPID_ASSERT_OK(cupid_calloc((size_t)t.ndof, sizeof *f, "f", &f));
+  CUPID_ASSERT_OK(cupid_calloc((size_t)t.ndof, sizeof *u, "u", &u));
+  CUPID_ASSERT_OK(cupid_calloc((size_t)t.ndof, sizeof *r, "r", &r));
+  f[3 * (t.n_pd - 1) + 1] = F; /* the PD end node */
+  cupid_solve_info si;
+  CUPID_ASSERT_OK(cupid_direct_solve(K, CUPID_MATRIX_SPD, f, bc, u, &si));
+  cupid_csr_matvec(K, u, r);
+  double reaction = 0.0;
+  for (cupid_int d = 1; d < t.ndof; d += 3)
+    if (bc->fixed[d]) reaction += r[d] - f[d];
+  ASSERT_NEAR(reaction, -F, 1e-9 * F);
+  double umax = 0.0;
+  for (cupid_int bn = 0; bn < 40; bn++) {
+    double y = cupid_cuf_beam_node_y(t.beam, bn), uy = u[3 * t.n_pd + 3 * bn + 1];
+    double ex = F * y / E_MOD;
+    if (y <= 0.4 + 1e-12) umax = fmax(umax, fabs(uy - ex));
+  }
+  double gap;
+  CUPID_ASSERT_OK(cupid_arlequin_gap(t.beam, t.grid, &t.o, u, &gap));
+  double tip = u[3 * (t.n_pd - 1) + 1], ytip = cupid_pd_grid_coords(t.grid)[3 * (t.n_pd - 1) + 1];
+  printf("kappa %.0e: pivot ratio %.2e, max |u - Fy/EA| on [0, 0.4] = %.2e, gap %.2e, tip "
+         "error %.3f%%\n",
+         kappa, si.pivot_ratio, umax, gap, 100 * (tip - F * ytip / E_MOD) / (F * ytip / E_MOD));
+  assert_true(umax <= 1e-9 * F * 0.4 / E_MOD);
+  cupid_free(&f);
+  cupid_free(&u);
+  cupid_free(&r);
+  cupid_dirichlet_destroy(&bc);
+  cupid_csr_destroy(&K);
+  truss_free(&t);
+}
+
+static void test_static(void **state) {
+  (void)state;
+  static_case(1e9);
+  static_case(1e11);
+  static_case(1e13);
+}
+
+static void test_3d(void **state) {
+  (void)state;
+  tb_beam tb;
+  tb_init(&tb, 1000.0, 0.0);
+  tb_te(&tb, 1);
+  tb_rect(&tb, 0, 4, 1, 0, 4, 1, -1);
+  tb_axis(&tb, 0.0, 12.0, 12, 2);
+  cupid_cuf_beam beam = tb_create(&tb);
+  cupid_box region = {.lo = {0, 8, 0}, .hi = {4, 20, 4}, .has = {1, 1, 1}};
+  int rmat = 0;
+  cupid_pd_grid grid = NULL;
+  cupid_pd_grid_options go = {.spacing = 1.0, .dimension = 3};
+  CUPID_ASSERT_OK(cupid_pd_grid_create(&go, 1, &region, &rmat, &grid));
+  cupid_pd_material mat = {.E = 1000.0, .nu = 0.25};
+  cupid_pd_operator_options po = {.horizon = 1.5, .model = CUPID_PD_BOND,
+                                  .influence = CUPID_INFLUENCE_CONSTANT,
+                                  .partial_volume = CUPID_PARTIAL_NONE, .materials = &mat,
+                                  .n_materials = 1};
+  cupid_pd_operator op = NULL;
+  CUPID_ASSERT_OK(cupid_pd_operator_create(grid, &po, &op));
+  cupid_int n_pd = cupid_pd_grid_num_nodes(grid), ndof;
+  CUPID_ASSERT_OK(cupid_cuf_set_dof_offset(beam, 3 * n_pd));
+  ndof = 3 * n_pd + cupid_cuf_num_dofs(beam);
+  cupid_arlequin_options o = {
+      .weight = {.lo = 8, .hi = 12, .fe_below = 1, .kind = CUPID_WEIGHT_SMOOTH}, .penalty = 1e5};
+  cupid_csr K = NULL;
+  cupid_arlequin_info info;
+  CUPID_ASSERT_OK(cupid_arlequin_assemble(beam, grid, op, &o, &K, &info));
+  assert_int_equal(info.n_tied, 4 * 4 * 4);
+  assert_int_equal(info.components, 3);
+  assert_true(cupid_csr_asymmetry(K) <= 1e-14);
+  double *v = NULL, *f = NULL, *u = NULL, *r = NULL, s = max_abs(K);
+  CUPID_ASSERT_OK(cupid_calloc((size_t)ndof, sizeof *v, "v", &v));
+  CUPID_ASSERT_OK(cupid_calloc((size_t)ndof, sizeof *f, "f", &f));
+  CUPID_ASSERT_OK(cupid_calloc((size_t)ndof, sizeof *u, "u", &u));
+  CUPID_ASSERT_OK(cupid_calloc((size_t)ndof, sizeof *r, "r", &r));
+  for (int k = 0; k < 3; k++) { /* rigid translations: PD 1, TE1 constant term 1 */
+    memset(v, 0, sizeof *v * (size_t)ndof);
+    for (cupid_int i = 0; i < n_pd; i++) v[3 * i + k] = 1.0;
+    for (cupid_int bn = 0; bn < 13; bn++) v[cupid_cuf_dof(beam, 0, bn, k)] = 1.0;
+    cupid_csr_matvec(K, v, r);
+    double fm = 0.0;
+    for (cupid_int d = 0; d < ndof; d++) fm = fmax(fm, fabs(r[d]));
+    assert_true(fm <= 1e-12 * s);
+  }
+  cupid_dirichlet bc = NULL;
+  CUPID_ASSERT_OK(cupid_dirichlet_create(ndof, &bc));
+  CUPID_ASSERT_OK(cupid_cuf_clamp_node(beam, 0, bc));
+  CUPID_ASSERT_OK(cupid_dirichlet_finalize(bc));
+  const double *x = cupid_pd_grid_coords(grid);
+  double F = 16.0;
+  for (cupid_int i = 0; i < n_pd; i++)
+    if (x[3 * i + 1] > 19.0) f[3 * i + 1] = F / 16.0; /* the end plane y = 19.5 */
+  cupid_solve_info si;
+  CUPID_ASSERT_OK(cupid_direct_solve(K, CUPID_MATRIX_SPD, f, bc, u, &si));
+  cupid_csr_matvec(K, u, r);
+  double reaction = 0.0;
+  for (cupid_int d = 1; d < ndof; d += 3)
+    if (bc->fixed[d]) reaction += r[d] - f[d];
+  ASSERT_NEAR(reaction, -F, 1e-9 * F);
+  double err = 0.0, ex8 = F * 8.0 / (1000.0 * 16.0);
+  for (cupid_int bn = 0; bn <= 8; bn++) {
+    double y = cupid_cuf_beam_node_y(beam, bn), uy = u[cupid_cuf_dof(beam, 0, bn, 1)];
+    err = fmax(err, fabs(uy - F * y / (1000.0 * 16.0)));
+  }
+  double gap;
+  CUPID_ASSERT_OK(cupid_arlequin_gap(beam, grid, &o, u, &gap));
+  printf("3D: max |u_y - F y/(EA)| on [0, 8] = %.2e (u(8) = %.3e), gap %.2e, pivot ratio %.2e\n",
+         err, ex8, gap, si.pivot_ratio);
+  assert_true(err <= 1e-9 * ex8);
+  cupid_free(&v);
+  cupid_free(&f);
+  cupid_free(&u);
+  cupid_free(&r);
+  cupid_dirichlet_destroy(&bc);
+  cupid_csr_destroy(&K);
+  cupid_pd_operator_destroy(&op);
+  cupid_pd_grid_destroy(&grid);
+  cupid_cuf_beam_destroy(&beam);
+}
+
+int main(void) {
+  const struct CMUnitTest tests[] = {
+      cmocka_unit_test(test_alpha),
+      cmocka_unit_test(test_weighted_cuf),
+      cmocka_unit_test(test_coupled_matrix),
+      cmocka_unit_test(test_static),
+      cmocka_unit_test(test_3d),
+  };
+  return cmocka_run_group_tests(tests, NULL, NULL);
+}
