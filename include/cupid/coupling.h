@@ -34,7 +34,9 @@
  * region is coupled as follows (src/coupling/partial.c):
  * - fictitious PD nodes at every lattice position within 2 delta of the region's box, on any
  *   side, that lies in an active part of the beam (Eq. 29; positions outside the section are
- *   free surface and get no node);
+ *   free surface and get no node). The layer is built from the section elements' bounding
+ *   boxes, so section elements are assumed rectangular (axis-aligned); a lattice position in
+ *   a box but outside a skewed element is reported as outside the beam's active part;
  * - the fictitious FE elements are the removed (beam element, section element) pairs
  *   themselves: their nodes still used by an active pair are the real FE nodes (Eq. 37: nodes
  *   on the surface of real elements take the real FE field; a node shared by several sections
