@@ -3,7 +3,9 @@
  * elements, beam FE [0,6] | [6,12] | [12,18] (y), the PD region (h = 1) replacing some section
  * elements over y in [6, 12]:
  *  - middle: x, z in [4, 8] (four parallel interfaces and their edges, no outer face);
- *  - corner: x, z in [0, 4] (two parallel interfaces meeting at an edge, two outer faces).
+ *  - corner: x, z in [0, 4] (two parallel interfaces meeting at an edge, two outer faces);
+ *  - strip: x in [0, 12], z in [4, 8] (two parallel interfaces, cut across the section);
+ *  - two corners: [0, 4]^2 and [8, 12]^2 (two regions, as the panel's two stringers).
  * Checks, for an affine field:
  *  - every real PD row equals the force of an all-PD block (the fictitious PD nodes carry the
  *    exact field), hence 0 on nodes with complete 2 delta families: no ghost forces;
@@ -30,6 +32,7 @@ typedef struct {
   cupid_pd_model_kind kind;
   double delta, nu;
   double lo[2], hi[2]; /* region x, z */
+  int two;             /* a second region: x, z in [8, 12] (as the panel's two stringers) */
 } par_case;
 
 typedef struct {
@@ -41,8 +44,8 @@ typedef struct {
   cupid_pd_operator_options pdo;
   cupid_coupling_h cpl;
   cupid_csr K, Kfe;
-  cupid_box region;
-  int region_mat;
+  cupid_box region[2];
+  int region_mat[2], n_regions;
   cupid_int n_pd, ndof;
 } par_model;
 
@@ -60,12 +63,15 @@ static void build(par_model *m, const par_case *pc) {
   m->full_beam = tb_create(&m->tb);
   CUPID_ASSERT_OK(cupid_cuf_assemble(m->full_beam, &m->Kfe));
 
-  m->region = (cupid_box){.lo = {pc->lo[0], 6, pc->lo[1]}, .hi = {pc->hi[0], 12, pc->hi[1]},
-                          .has = {1, 1, 1}};
+  m->region[0] = (cupid_box){.lo = {pc->lo[0], 6, pc->lo[1]},
+                             .hi = {pc->hi[0], 12, pc->hi[1]},
+                             .has = {1, 1, 1}};
+  m->region[1] = (cupid_box){.lo = {8, 6, 8}, .hi = {12, 12, 12}, .has = {1, 1, 1}};
+  m->n_regions = pc->two ? 2 : 1;
   cupid_pd_grid_options go = {.spacing = 1.0, .dimension = 3};
-  CUPID_ASSERT_OK(cupid_pd_grid_create(&go, 1, &m->region, &m->region_mat, &m->grid));
+  CUPID_ASSERT_OK(cupid_pd_grid_create(&go, m->n_regions, m->region, m->region_mat, &m->grid));
   m->n_pd = cupid_pd_grid_num_nodes(m->grid);
-  CUPID_ASSERT_OK(cupid_coupling_deactivate(m->beam, 1, &m->region));
+  CUPID_ASSERT_OK(cupid_coupling_deactivate(m->beam, m->n_regions, m->region));
   CUPID_ASSERT_OK(cupid_cuf_set_dof_offset(m->beam, 3 * m->n_pd));
   m->ndof = 3 * m->n_pd + cupid_cuf_num_dofs(m->beam);
 
@@ -79,9 +85,9 @@ static void build(par_model *m, const par_case *pc) {
   cupid_coupling_options co = {.beam_def = &m->tb.def,
                                .materials = m->tb.mat,
                                .n_materials = m->tb.n_mat,
-                               .n_regions = 1,
-                               .regions = &m->region,
-                               .region_materials = &m->region_mat,
+                               .n_regions = m->n_regions,
+                               .regions = m->region,
+                               .region_materials = m->region_mat,
                                .spacing = 1.0,
                                .pd = m->pdo};
   CUPID_ASSERT_OK(cupid_coupling_create(m->beam, m->grid, &co, &m->cpl, &m->K));
@@ -95,7 +101,7 @@ static void build(par_model *m, const par_case *pc) {
   assert_true(ci.n_fictitious_pd > 0 && ci.n_fictitious_fe > 0);
 
   cupid_box whole = {.lo = {0, 0, 0}, .hi = {XW, YL, XW}, .has = {1, 1, 1}};
-  CUPID_ASSERT_OK(cupid_pd_grid_create(&go, 1, &whole, &m->region_mat, &m->full));
+  CUPID_ASSERT_OK(cupid_pd_grid_create(&go, 1, &whole, m->region_mat, &m->full));
   CUPID_ASSERT_OK(cupid_pd_operator_create(m->full, &m->pdo, &m->full_op));
 }
 
@@ -288,12 +294,19 @@ static void strip_l9_lps(void **state) {
                          .lo = {0, 4}, .hi = {12, 8}});
 }
 
+static void two_corners_l9_b4_lps(void **state) {
+  (void)state;
+  check_case(&(par_case){.le_nodes = 9, .p = 4, .kind = CUPID_PD_LPS, .delta = 1.5, .nu = 0.0,
+                         .lo = {0, 0}, .hi = {4, 4}, .two = 1});
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(middle_l9_lps),
       cmocka_unit_test(middle_l9_b4_bond),
       cmocka_unit_test(corner_l4_b3_lps),
       cmocka_unit_test(strip_l9_lps),
+      cmocka_unit_test(two_corners_l9_b4_lps),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }
