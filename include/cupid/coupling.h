@@ -6,9 +6,9 @@
  * Geometry. One CUF beam (axis y) and PD regions (boxes). Where a region lies inside the beam,
  * the beam gives way: the (beam element, section element) pairs inside the region's box are
  * made inactive (cupid_coupling_deactivate()). Region y bounds must be beam-element ends.
- * This version supports regions that span the whole cross-section (interfaces normal to the
- * axis, e.g. the coupled bar); a region over part of the section (interfaces parallel to the
- * axis) is CUPID_ERR_UNSUPPORTED.
+ * A region may span the whole cross-section (interfaces normal to the axis only, e.g. the
+ * coupled bar) or part of it (LE only; interfaces parallel to the axis too, e.g. a C-beam web
+ * or a panel stringer: paper 000 section 4.4, see "Partial-section regions" below).
  *
  * Fictitious PD nodes (section 4.2). One PD grid holds the real nodes and, inside the beam,
  * fictitious nodes up to 2 delta (rounded up to whole spacings) beyond every interface: LPS
@@ -26,6 +26,31 @@
  * The fictitious element is B2 whatever the real elements are: its nodes must lie on the
  * interface and on a PD plane (h/2 away), and a B2 element is exact for the affine fields of
  * the patch test.
+ *
+ * Partial-section regions (section 4.4, Remarks 1-2, Eq. 37). The region's x/z bounds must be
+ * section-element edges (no element cut); the section elements inside its x/z box give way over
+ * its y range, the others stay active. A TE expansion spans the whole section and cannot lose
+ * a part: a partial region on a TE beam is CUPID_ERR_MODEL. When any region is partial, every
+ * region is coupled as follows (src/coupling/partial.c):
+ * - fictitious PD nodes at every lattice position within 2 delta of the region's box, on any
+ *   side, that lies in an active part of the beam (Eq. 29; positions outside the section are
+ *   free surface and get no node). The layer is built from the section elements' bounding
+ *   boxes, so section elements are assumed rectangular (axis-aligned); a lattice position in
+ *   a box but outside a skewed element is reported as outside the beam's active part;
+ * - the fictitious FE elements are the removed (beam element, section element) pairs
+ *   themselves: their nodes still used by an active pair are the real FE nodes (Eq. 37: nodes
+ *   on the surface of real elements take the real FE field; a node shared by several sections
+ *   has one value, Remark 1), their other nodes lie in the PD region and take the trilinear
+ *   interpolation of the 8 real PD nodes around the node's point (for LE the node value is the
+ *   displacement at that point: Eq. 31 solved node by node; a PD node feeds every fictitious
+ *   node around it, Remark 2). The rows of real FE nodes get the removed pairs' stiffness, real
+ *   columns on FE DOFs and fictitious ones through the interpolation (Eq. 38).
+ *   Deviation from the paper: the fictitious elements are the removed section elements (their
+ *   size) instead of h/2-thick elements ending on the nearest PD plane, and the section fit of
+ *   Eqs. 33-35 is replaced by the nodal interpolation, which is exact for affine fields (patch
+ *   test) and needs no [A I] inverse. A removed pair whose nodes are all real (B2 with one
+ *   beam element across the region and no section node inside) is plain FE: the FE side then
+ *   does not feel the PD region; use B3/B4 or several elements across the region.
  *
  * The coupled matrix (Eq. 38) is not symmetric; it is bs = 3 block CSR over
  * [3 DOFs per real PD node | FE DOFs], the FE DOFs starting at block n_pd (the beam's DOF
@@ -64,15 +89,18 @@ typedef struct {
 typedef struct {
   cupid_int n_real_pd;         /**< real PD nodes */
   cupid_int n_fictitious_pd;   /**< fictitious PD nodes (inside the beam) */
-  int n_interfaces;            /**< interface planes (one fictitious FE element each) */
-  cupid_int n_fictitious_fe;   /**< fictitious FE nodes (section DOF groups of those elements) */
+  int n_interfaces;            /**< interface planes (one fictitious FE element each); with
+                                    partial regions: region faces with fictitious PD nodes */
+  cupid_int n_fictitious_fe;   /**< fictitious FE nodes (section DOF groups of those elements;
+                                    with partial regions: removed-pair nodes inside PD) */
 } cupid_coupling_info;
 
 /**
  * Make inactive every (beam element, section element) pair inside a PD region. Errors
  * (CUPID_ERR_MODEL, message naming region index and the boundary to move): a y bound that is
- * not a beam-element end, a region outside the beam's y range. CUPID_ERR_UNSUPPORTED: a
- * region not covering the whole section.
+ * not a beam-element end, a region outside the beam's y range; for a region over part of the
+ * section: a TE beam, an x/z bound that is not a section-element edge, a box cutting a section
+ * element, a box holding no section element.
  */
 cupid_status cupid_coupling_deactivate(cupid_cuf_beam beam, int n_regions,
                                        const cupid_box *regions);
@@ -97,6 +125,7 @@ cupid_status cupid_coupling_create(cupid_cuf_beam beam, cupid_pd_grid grid,
  * the distortions paper 000 reports. *K has the layout of cupid_coupling_create(); the rows
  * and columns of tied PD nodes are empty but for a zero diagonal block: fix their DOFs
  * (cupid_coupling_tied()) and fill them after the solve with cupid_coupling_recover().
+ * Regions over part of the section: CUPID_ERR_UNSUPPORTED (not yet supported).
  */
 cupid_status cupid_coupling_lagrange_create(cupid_cuf_beam beam, cupid_pd_grid grid,
                                             const cupid_coupling_options *opts,

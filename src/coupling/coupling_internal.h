@@ -56,4 +56,27 @@ struct cupid_coupling_private {
 cupid_status cpl_find_interfaces(cupid_cuf_beam beam, const cupid_coupling_options *o,
                                  cupid_coupling_h c);
 
+/* For every node of an extended grid (real + fictitious PD nodes): its real node, or -1 and
+ * its interpolation from the FE field (Eqs. 29-30). */
+typedef struct {
+  cupid_int *real;                 /* ext node -> real node or -1 */
+  cupid_int *fptr;                 /* ext node -> first weight (n_ext + 1) */
+  cupid_int *fnode;                /* FE node (local) */
+  double *fw;                      /* weight N_i F_tau (Eq. 29) */
+} ext_map;
+
+void cpl_ext_map_free(ext_map *m);
+/** Map the nodes of @p ext onto the real grid or, through cupid_cuf_shape_at(), onto the FE
+ *  nodes of the beam's active part (*n_fict: fictitious nodes). */
+cupid_status cpl_map_extended(cupid_pd_grid ext, cupid_pd_grid grid, cupid_cuf_beam beam, int M,
+                              int p, ext_map *m, cupid_int *n_fict);
+/** Rows of real PD nodes: K^PD on real columns, K^{f-PD} I^{f-PD} on FE columns (Eq. 38). */
+cupid_status cpl_pd_rows(cpl_rowbuild *rb, const cupid_csr_t *Ke, const ext_map *m,
+                         cupid_int n_ext, cupid_int n_pd);
+/** 1 if region @p b spans the beam's whole cross-section (missing x/z bounds count as spanning). */
+int cpl_region_full(const cupid_cuf_beam beam, const cupid_box *b);
+/** The coupled matrix when some region covers part of the section (src/coupling/partial.c). */
+cupid_status cpl_partial_create(cupid_cuf_beam beam, cupid_pd_grid grid,
+                                const cupid_coupling_options *o, cupid_coupling_h c, cupid_csr *K);
+
 #endif

@@ -50,6 +50,89 @@ static cupid_int element_end_at(const cupid_cuf_beam beam, double y, double *bel
   return -1;
 }
 
+int cpl_region_full(const cupid_cuf_beam beam, const cupid_box *b) {
+  double bb[4];
+  section_bbox(beam, bb);
+  double stol = TOL * fmax(bb[1] - bb[0], bb[3] - bb[2]);
+  return (!b->has[0] || (b->lo[0] <= bb[0] + stol && b->hi[0] >= bb[1] - stol)) &&
+         (!b->has[2] || (b->lo[2] <= bb[2] + stol && b->hi[2] >= bb[3] - stol));
+}
+
+/* A region over part of the section (paper 000 section 4.4): the section elements inside its
+ * x/z box give way over its y range, the others stay. Its x/z bounds must be section-element
+ * edges and no element may straddle them (LE only: a TE expansion spans the whole section
+ * and cannot lose a part of it). */
+static cupid_status deactivate_partial(cupid_cuf_beam beam, int r, const cupid_box *b,
+                                       const double bb[4], double stol) {
+  cupid_cuf_info info;
+  cupid_cuf_get_info(beam, &info);
+  if (info.expansion == CUPID_EXPANSION_TE)
+    return CUPID_ERROR(CUPID_ERR_MODEL,
+                       "PD region %d covers part of the cross-section (x in [%g, %g], z in [%g, "
+                       "%g] of [%g, %g] x [%g, %g]); a TE expansion spans the whole section and "
+                       "cannot be removed in part: use an LE section (L4/L9/L16) whose element "
+                       "edges lie on the region's x/z bounds, or make the region span the section",
+                       r, b->lo[0], b->hi[0], b->lo[2], b->hi[2], bb[0], bb[1], bb[2], bb[3]);
+  double lo[2] = {b->has[0] ? b->lo[0] : bb[0], b->has[2] ? b->lo[2] : bb[2]};
+  double hi[2] = {b->has[0] ? b->hi[0] : bb[1], b->has[2] ? b->hi[2] : bb[3]};
+  static const char axis[2] = {'x', 'z'};
+  /* Every bound must be an edge of some section element. */
+  for (int a = 0; a < 2; a++)
+    for (int side = 0; side < 2; side++) {
+      double v = side ? hi[a] : lo[a], below = -INFINITY, above = INFINITY;
+      int found = 0;
+      for (cupid_int se = 0; se < info.n_section_elements && !found; se++) {
+        int npe, mat;
+        double box[4];
+        cupid_cuf_section_element(beam, se, &npe, NULL, &mat, box);
+        for (int k = 0; k < 2; k++) {
+          double edge = box[2 * a + k];
+          if (fabs(edge - v) <= stol) found = 1;
+          if (edge < v) below = fmax(below, edge);
+          if (edge > v) above = fmin(above, edge);
+        }
+      }
+      if (!found)
+        return CUPID_ERROR(CUPID_ERR_MODEL,
+                           "PD region %d: its bound %c = %g is not a section-element edge "
+                           "(nearest edges %g and %g); a region over part of the section must "
+                           "replace whole section elements: move the bound or the section "
+                           "breakpoints so that they coincide",
+                           r, axis[a], v, below, above);
+    }
+  cupid_int removed = 0;
+  for (cupid_int se = 0; se < info.n_section_elements; se++) {
+    int npe, mat;
+    double box[4];
+    cupid_cuf_section_element(beam, se, &npe, NULL, &mat, box);
+    int inside = 1, overlap = 1;
+    for (int a = 0; a < 2; a++) {
+      inside &= box[2 * a] >= lo[a] - stol && box[2 * a + 1] <= hi[a] + stol;
+      overlap &= box[2 * a] < hi[a] - stol && box[2 * a + 1] > lo[a] + stol;
+    }
+    if (overlap && !inside)
+      return CUPID_ERROR(CUPID_ERR_MODEL,
+                         "PD region %d: its x/z box [%g, %g] x [%g, %g] cuts the section element "
+                         "[%g, %g] x [%g, %g]; a region over part of the section must replace "
+                         "whole section elements",
+                         r, lo[0], hi[0], lo[1], hi[1], box[0], box[1], box[2], box[3]);
+    if (!inside) continue;
+    removed++;
+    for (cupid_int e = 0; e < info.n_beam_elements; e++) {
+      cupid_int first;
+      double y0, y1;
+      cupid_cuf_beam_element(beam, e, &first, &y0, &y1);
+      double len = info.y_max - info.y_min;
+      if (y0 < b->lo[1] - TOL * len || y1 > b->hi[1] + TOL * len) continue;
+      CUPID_CALL(cupid_cuf_set_active(beam, e, se, 0));
+    }
+  }
+  CUPID_CHECK(removed > 0, CUPID_ERR_MODEL,
+              "PD region %d: its x/z box [%g, %g] x [%g, %g] holds no section element", r, lo[0],
+              hi[0], lo[1], hi[1]);
+  return CUPID_SUCCESS;
+}
+
 cupid_status cupid_coupling_deactivate(cupid_cuf_beam beam, int n_regions,
                                        const cupid_box *regions) {
   cupid_cuf_info info;
@@ -74,22 +157,17 @@ cupid_status cupid_coupling_deactivate(cupid_cuf_beam beam, int n_regions,
                            "breakpoints so that they coincide",
                            r, y, below, above);
     }
-    int full = (!b->has[0] || (b->lo[0] <= bb[0] + stol && b->hi[0] >= bb[1] - stol)) &&
-               (!b->has[2] || (b->lo[2] <= bb[2] + stol && b->hi[2] >= bb[3] - stol));
-    if (!full)
-      return CUPID_ERROR(CUPID_ERR_UNSUPPORTED,
-                         "PD region %d covers part of the cross-section (x in [%g, %g], z in "
-                         "[%g, %g] of the section's [%g, %g] x [%g, %g]): interfaces parallel to "
-                         "the beam axis are not yet supported; make the region span the whole "
-                         "section",
-                         r, b->lo[0], b->hi[0], b->lo[2], b->hi[2], bb[0], bb[1], bb[2], bb[3]);
-    for (cupid_int e = 0; e < info.n_beam_elements; e++) {
-      cupid_int first;
-      double y0, y1;
-      cupid_cuf_beam_element(beam, e, &first, &y0, &y1);
-      if (y0 < ylo - TOL * len || y1 > yhi + TOL * len) continue;
-      for (cupid_int se = 0; se < info.n_section_elements; se++)
-        CUPID_CALL(cupid_cuf_set_active(beam, e, se, 0));
+    if (cpl_region_full(beam, b)) {
+      for (cupid_int e = 0; e < info.n_beam_elements; e++) {
+        cupid_int first;
+        double y0, y1;
+        cupid_cuf_beam_element(beam, e, &first, &y0, &y1);
+        if (y0 < ylo - TOL * len || y1 > yhi + TOL * len) continue;
+        for (cupid_int se = 0; se < info.n_section_elements; se++)
+          CUPID_CALL(cupid_cuf_set_active(beam, e, se, 0));
+      }
+    } else {
+      CUPID_CALL(deactivate_partial(beam, r, b, bb, stol));
     }
   }
   return CUPID_SUCCESS;
@@ -282,22 +360,14 @@ cleanup:
   return st;
 }
 
-/* For every extended node: its real node, or -1 and its interpolation from the FE field. */
-typedef struct {
-  cupid_int *real;                 /* ext node -> real node or -1 */
-  cupid_int *fptr;                 /* ext node -> first weight (n_ext + 1) */
-  cupid_int *fnode;                /* FE node (local) */
-  double *fw;                      /* weight N_i F_tau (Eq. 29) */
-} ext_map;
-
-static void ext_map_free(ext_map *m) {
+void cpl_ext_map_free(ext_map *m) {
   cupid_free(&m->real);
   cupid_free(&m->fptr);
   cupid_free(&m->fnode);
   cupid_free(&m->fw);
 }
 
-static cupid_status map_extended(cupid_pd_grid ext, cupid_pd_grid grid, cupid_cuf_beam beam,
+cupid_status cpl_map_extended(cupid_pd_grid ext, cupid_pd_grid grid, cupid_cuf_beam beam,
                                  int M, int p, ext_map *m, cupid_int *n_fict) {
   cupid_int n_ext = cupid_pd_grid_num_nodes(ext);
   const double *xe = cupid_pd_grid_coords(ext), *xr = cupid_pd_grid_coords(grid);
@@ -360,7 +430,7 @@ cleanup:
 /* ------------------------------------------------------------------------- assembly */
 
 /* Rows of real PD nodes: K^PD on real columns, K^{f-PD} I^{f-PD} on FE columns (Eq. 38). */
-static cupid_status pd_rows(cpl_rowbuild *rb, const cupid_csr_t *Ke, const ext_map *m,
+cupid_status cpl_pd_rows(cpl_rowbuild *rb, const cupid_csr_t *Ke, const ext_map *m,
                             cupid_int n_ext, cupid_int n_pd) {
   cupid_int *ext_of = NULL;
   CUPID_CALL(cupid_malloc((size_t)n_pd, sizeof *ext_of, "real -> extended", &ext_of));
@@ -457,12 +527,20 @@ cupid_status cupid_coupling_create(cupid_cuf_beam beam, cupid_pd_grid grid,
               "the beam's DOF offset (%lld) must be 3 x the real PD nodes (%lld)",
               (long long)info.dof_offset, (long long)(3 * n_pd));
   CUPID_CALL(cupid_calloc(1, sizeof *c, "coupling", &c));
+  int any_partial = 0;
+  for (int r = 0; r < o->n_regions; r++) any_partial |= !cpl_region_full(beam, &o->regions[r]);
+  if (any_partial) {
+    CUPID_TRY(cpl_partial_create(beam, grid, o, c, K));
+    *out = c;
+    c = NULL;
+    goto cleanup;
+  }
   CUPID_TRY(cpl_find_interfaces(beam, o, c));
   for (int f = 0; f < c->n_iface; f++) CUPID_TRY(build_interface(&c->iface[f], o, grid, M, 2));
 
   CUPID_TRY(extended_grid(o, c->iface, c->n_iface, info.y_min, info.y_max, &ext));
   cupid_int n_ext = cupid_pd_grid_num_nodes(ext), n_fict = 0;
-  CUPID_TRY(map_extended(ext, grid, beam, M, p, &map, &n_fict));
+  CUPID_TRY(cpl_map_extended(ext, grid, beam, M, p, &map, &n_fict));
   CUPID_TRY_CHECK(n_ext - n_fict == n_pd, CUPID_ERR_ARGUMENT,
                   "extended grid holds %lld real nodes, expected %lld", (long long)(n_ext - n_fict),
                   (long long)n_pd);
@@ -477,7 +555,7 @@ cupid_status cupid_coupling_create(cupid_cuf_beam beam, cupid_pd_grid grid,
 
   cupid_int N = n_pd + info.n_fe_nodes;
   CUPID_TRY(cpl_rowbuild_init(&rb, N, N));
-  CUPID_TRY(pd_rows(&rb, Ke, &map, n_ext, n_pd));
+  CUPID_TRY(cpl_pd_rows(&rb, Ke, &map, n_ext, n_pd));
   cupid_csr_destroy(&Ke);
   CUPID_TRY(fe_rows(&rb, Kb, c->iface, c->n_iface, n_pd, M, info.n_fe_nodes, Kaux));
   CUPID_TRY(cpl_rowbuild_finish(&rb, K));
@@ -495,7 +573,7 @@ cleanup:
   cupid_csr_destroy(&Kb);
   cupid_pd_operator_destroy(&op);
   cupid_pd_grid_destroy(&ext);
-  ext_map_free(&map);
+  cpl_ext_map_free(&map);
   cpl_rowbuild_free(&rb);
   cupid_coupling_destroy(&c);
   return st;

@@ -86,6 +86,11 @@ cupid_status cupid_coupling_lagrange_create(cupid_cuf_beam beam, cupid_pd_grid g
   cupid_cuf_get_info(beam, &info);
   int M = info.M, p = info.element_nodes;
   cupid_int n_pd = cupid_pd_grid_num_nodes(grid), nfe = info.n_fe_nodes;
+  for (int r = 0; r < o->n_regions; r++)
+    CUPID_CHECK(cpl_region_full(beam, &o->regions[r]), CUPID_ERR_UNSUPPORTED,
+                "PD region %d covers part of the cross-section: the Lagrange coupling supports "
+                "only regions spanning the whole section (not yet supported; use method "
+                "fictitious)", r);
   CUPID_CHECK(info.dof_offset == 3 * n_pd, CUPID_ERR_ARGUMENT,
               "the beam's DOF offset (%lld) must be 3 x the real PD nodes (%lld)",
               (long long)info.dof_offset, (long long)(3 * n_pd));

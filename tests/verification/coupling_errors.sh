@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Coupled models that cupid cannot run give a clear model error naming the file position and
 # what to change: a PD region bound that is not a beam-element end, a region over part of the
-# section (interfaces parallel to the axis: not yet supported), the arlequin method (not yet
+# section that cuts section elements or removes part of a TE expansion, the arlequin method (not yet
 # supported). Each case must fail (non-zero exit) with the expected phrase in the message.
 set -u
 CUPID=$(realpath "${CUPID:-build/cupid}")
@@ -43,7 +43,8 @@ check() { # $1 name, $2 expected phrase; model on stdin
   fi
 }
 check unaligned "bound y = 15 is not a beam-element end" < <(model "{x: [0, 8], y: [10, 15], z: [0, 8]}" "{method: fictitious}")
-check partial "not yet supported" < <(model "{x: [0, 4], y: [10, 20], z: [0, 8]}" "{method: fictitious}")
+check partial_edge "bound x = 3 is not a section-element edge" < <(model "{x: [0, 3], y: [10, 20], z: [0, 8]}" "{method: fictitious}")
+check partial_te "TE expansion spans the whole section" < <(model "{x: [0, 4], y: [10, 20], z: [0, 8]}" "{method: fictitious}" | sed 's/expansion: LE/expansion: TE2/; /element: L4/d')
 check arlequin "arlequin is not yet supported" < <(model "{x: [0, 8], y: [10, 20], z: [0, 8]}" "{method: arlequin, arlequin: {penalty: 1000, overlap: {y: [8, 12]}}}")
 
 echo "coupling_errors: $pass passed, $fail failed"
