@@ -24,8 +24,12 @@ cupid_status cupid_app_coupled_check(const cupid_job *job) {
                              "a coupled model needs a 3D peridynamic grid (dimension: 3)");
   if (m->analysis.type == CUPID_ANALYSIS_DYNAMIC)
     return cupid_model_error(m, &m->analysis.mark,
-                             "type dynamic is not yet supported for coupled models (allowed: "
-                             "static, evaluate)");
+                             "type dynamic is not supported with coupling method %s: its coupled "
+                             "operator (paper 000 Eq. 38) is a static, non-symmetric construction "
+                             "with massless fictitious nodes (see docs/dynamics.md); use "
+                             "`coupling: {method: arlequin}` for coupled dynamics, or type static "
+                             "or evaluate",
+                             m->coupling.method == CUPID_COUPLING_LAGRANGE ? "lagrange" : "fictitious");
   return CUPID_SUCCESS;
 }
 
