@@ -156,8 +156,10 @@ static void test_bar_1d(void **state) {
     ASSERT_NEAR(x[3 * j + 1], 2.25 + 0.5 * (double)j, 1e-14);
     ASSERT_NEAR(x[3 * j + 2], 0, 0);
   }
+  cupid_pd_grid_destroy(&g);
   o.area = 0;
   assert_int_equal(cupid_pd_grid_create(&o, 1, &b, &mat, &g), CUPID_ERR_MODEL);
+  assert_null(g);
 }
 
 /* Interior flags: in a 10^3 box, radius 3 leaves lattice positions 3..6 per axis. */
