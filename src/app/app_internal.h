@@ -78,5 +78,8 @@ cupid_status cupid_app_check_points(const cupid_job *job);
 
 /* check.c: `cupid check` and the memory guard of `cupid run`. */
 cupid_status cupid_app_estimate(const cupid_job *job, int print);
+/** Before the grid is built: refuse a model whose grid, neighbour lists (and, for a solve, matrix
+ *  and factor) cannot fit, from lower bounds computed from the regions alone (no allocation). */
+cupid_status cupid_app_guard_size(const cupid_job *job);
 
 #endif
