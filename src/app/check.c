@@ -116,7 +116,7 @@ cupid_status cupid_app_guard_size(const cupid_job *job) {
   double ratio = pd->horizon / h, reach = ceil(ratio - 1e-9);
   /* Bounding box (the dense cell index is 8 B per cell), the largest region (the union has at
    * least its nodes) and that region's nodes farther than a horizon from its faces. */
-  double cells = 1, nodes = 0, interior = 0;
+  double cells = 1, nodes = 0, interior = 0, visits = 0;
   for (int a = 0; a < 3; a++) {
     if (pd->dimension == 1 && a != 1) continue;
     double lo = INFINITY, hi = -INFINITY;
@@ -134,12 +134,21 @@ cupid_status cupid_app_guard_size(const cupid_job *job) {
       n *= na;
       inner *= fmax(0, na - 2 * reach);
     }
+    visits += n;
     if (n > nodes) {
       nodes = n;
       interior = inner;
     }
   }
   if (!isfinite(cells) || !isfinite(nodes)) return CUPID_SUCCESS; /* the grid reports it */
+  /* The grid builder visits every cell of every region: many overlapping copies of a region
+   * (e.g. one anchor aliased 75000 times) would keep it busy for hours in a few KB of file. */
+  if (visits > 1e9 && visits > 8 * cells)
+    return cupid_model_error(m, &pd->mark,
+                             "the %d PD regions overlap so much that building the grid would "
+                             "visit %.3g cells, %.3g times the %.0f cells of their bounding box; "
+                             "merge the overlapping regions",
+                             pd->n_regions, visits, visits / cells, cells);
   double bonds = interior * stencil_lower_bound(pd->dimension, ratio);
   /* Grid: cell index, coordinates, material, lattice position. Operator: a neighbour index and
    * a stencil entry per bond, offsets and per-node data (cupid_pd_operator_estimate). */
