@@ -108,9 +108,30 @@ static double span_cells(double lo, double hi, double h) {
   return n > 0 ? n : 0;
 }
 
+/* Output lines: every point is a CSV row (~100 B) sampled against every PD region. */
+static cupid_status guard_output(const cupid_model_t *m) {
+  const cupid_output *o = &m->output;
+  double points = o->n_points;
+  for (int k = 0; k < o->n_lines; k++) points += o->lines[k].points;
+  double regions = m->has_peridynamics && m->pd.n_regions > 0 ? m->pd.n_regions : 1;
+  if (points > 1e8)
+    return cupid_model_error(m, &o->mark,
+                             "the output lines hold %.0f points in all, more than 100000000 "
+                             "(about 10 GB of CSV); use fewer points per line",
+                             points);
+  if (points * regions > 1e10)
+    return cupid_model_error(m, &o->mark,
+                             "sampling the %.0f output points against the %.0f PD regions would "
+                             "take %.3g region tests (at most 1e10); merge regions or use fewer "
+                             "points",
+                             points, regions, points * regions);
+  return CUPID_SUCCESS;
+}
+
 cupid_status cupid_app_guard_size(const cupid_job *job) {
   const cupid_model_t *m = job->model;
   const cupid_peridynamics *pd = &m->pd;
+  CUPID_CALL(guard_output(m));
   double limit = memory_limit(job), h = pd->spacing;
   if (!m->has_peridynamics || pd->n_regions <= 0 || !(h > 0) || !(limit > 0)) return CUPID_SUCCESS;
   double ratio = pd->horizon / h, reach = ceil(ratio - 1e-9);
