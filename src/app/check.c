@@ -88,12 +88,12 @@ cupid_status cupid_app_estimate(const cupid_job *job, int print) {
 }
 
 /* Lattice offsets o != 0 with |o| <= r (a lower bound of the bonds of a node with a full
- * family, whatever the partial-volume rule): counted exactly up to r = 32, beyond that the
- * ball of radius r - sqrt(3)/2 (volume 4.18879 r^3), which the unit cubes of those offsets
- * cover. */
+ * family, whatever the partial-volume rule): counted exactly up to r = 64 (the largest ratio
+ * src/pd accepts), beyond that the ball of radius r - sqrt(3)/2 (volume 4.18879 r^3), which
+ * the unit cubes of those offsets cover. */
 static double stencil_lower_bound(int dimension, double r) {
   if (dimension == 1) return 2.0 * floor(r + 1e-9);
-  if (r > 32) return 4.18879020478639098 * pow(r - 0.8660254037844386, 3);
+  if (r > 64) return 4.18879020478639098 * pow(r - 0.8660254037844386, 3);
   int k = (int)floor(r + 1e-9);
   double count = 0, r2 = r * r * (1 + 1e-12);
   for (int a = -k; a <= k; a++)
@@ -137,7 +137,11 @@ cupid_status cupid_app_guard_size(const cupid_job *job) {
   double ratio = pd->horizon / h, reach = ceil(ratio - 1e-9);
   /* Bounding box (the dense cell index is 8 B per cell), the largest region (the union has at
    * least its nodes) and that region's nodes farther than a horizon from its faces. */
-  double cells = 1, nodes = 0, interior = 0, visits = 0;
+  double cells = 1, nodes = 0, bonds = 0, visits = 0;
+  double stencil = stencil_lower_bound(pd->dimension, ratio);
+  /* Neighbours of a corner node inside its region: at least the lattice cube of side
+   * r/sqrt(3) (or the whole region when smaller), which lies within the horizon. */
+  double cube = floor(ratio / (pd->dimension == 1 ? 1.0 : sqrt(3.0)) + 1e-9);
   for (int a = 0; a < 3; a++) {
     if (pd->dimension == 1 && a != 1) continue;
     double lo = INFINITY, hi = -INFINITY;
@@ -147,19 +151,21 @@ cupid_status cupid_app_guard_size(const cupid_job *job) {
     }
     cells *= span_cells(lo, hi, h);
   }
+  /* Each region alone: its nodes and the bonds among them are in the union too. Bonds: every
+   * node farther than a horizon from the region's faces has the full stencil, every node at
+   * least the corner cube. */
   for (int r = 0; r < pd->n_regions; r++) {
-    double n = 1, inner = 1;
+    double n = 1, inner = 1, corner = 1;
     for (int a = 0; a < 3; a++) {
       if (pd->dimension == 1 && a != 1) continue;
       double na = span_cells(pd->regions[r].box.lo[a], pd->regions[r].box.hi[a], h);
       n *= na;
       inner *= fmax(0, na - 2 * reach);
+      corner *= fmin(na - 1, cube) + 1;
     }
     visits += n;
-    if (n > nodes) {
-      nodes = n;
-      interior = inner;
-    }
+    nodes = fmax(nodes, n);
+    bonds = fmax(bonds, fmax(inner * stencil, n * (corner - 1)));
   }
   if (!isfinite(cells) || !isfinite(nodes)) return CUPID_SUCCESS; /* the grid reports it */
   /* The grid builder visits every cell of every region: many overlapping copies of a region
@@ -170,7 +176,15 @@ cupid_status cupid_app_guard_size(const cupid_job *job) {
                              "visit %.3g cells, %.3g times the %.0f cells of their bounding box; "
                              "merge the overlapping regions",
                              pd->n_regions, visits, visits / cells, cells);
-  double bonds = interior * stencil_lower_bound(pd->dimension, ratio);
+  /* The LPS matrix pattern pairs every two stencil offsets (pd_stencil_sum, O(stencil^2)):
+   * 18 s at horizon/spacing 30 on a 2-core machine, hours at 64 (the largest src/pd accepts);
+   * bounded to a few seconds. */
+  if (pd->model == CUPID_PD_LPS && pd->dimension == 3 && stencil * stencil > 4e9)
+    return cupid_model_error(m, &pd->mark,
+                             "horizon/spacing = %g gives an LPS stencil of %.3g offsets: pairing "
+                             "them for the matrix pattern would take %.3g steps (at most 4e9, "
+                             "about horizon/spacing 24); use a larger spacing",
+                             ratio, stencil, stencil * stencil);
   /* Grid: cell index, coordinates, material, lattice position. Operator: a neighbour index and
    * a stencil entry per bond, offsets and per-node data (cupid_pd_operator_estimate). */
   double grid_bytes = 8 * cells + 40 * nodes, op_bytes = 12 * bonds + 80 * nodes;
