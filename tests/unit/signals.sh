@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Interrupted runs (docs/hardening.md): SIGINT or SIGTERM at a random moment of a run that takes
-# about a second (mostly writing 50 MB of VTU and CSV, then gnuplot) must leave no temporary
+# about a second (mostly writing 30 MB of VTU and CSV, and gnuplot) must leave no temporary
 # file and no partial file: every output file that exists afterwards is complete (summary.json
 # parses, CSVs have every row, the VTU passes tests/tools/read_vtu.py, PNGs end with IEND).
 # Half of the trials start from the complete outputs of an earlier run (a final file is then
@@ -28,7 +28,7 @@ peridynamics:
   partial_volume: none
   material: m
   regions:
-    - {x: [0, 60], y: [0, 80], z: [0, 60]}
+    - {x: [0, 50], y: [0, 60], z: [0, 50]}
 analysis:
   type: evaluate
   field: ["1e-3*x*y", "1e-3*sin(z)", "1e-4*x*x"]
@@ -37,10 +37,10 @@ output:
   pd_nodes: true
   plots: true
   lines:
-    - {name: a, from: [0, 0, 0], to: [60, 80, 60], points: 2000}
-    - {name: b, from: [30, 0, 30], to: [30, 80, 30], points: 2000}
+    - {name: a, from: [0, 0, 0], to: [50, 60, 50], points: 2000}
+    - {name: b, from: [25, 0, 25], to: [25, 60, 25], points: 2000}
   points:
-    - {name: centre, at: [30, 40, 30], stress: true}
+    - {name: centre, at: [25, 30, 25], stress: true}
 EOF
 
 # check_outputs DIR: no temporary file; every file present is complete.
@@ -51,7 +51,7 @@ d, tools = sys.argv[1], sys.argv[2]
 sys.path.insert(0, tools)
 import read_vtu
 bad = []
-nodes = 60 * 80 * 60
+nodes = 50 * 60 * 50
 for f in sorted(os.listdir(d)) if os.path.isdir(d) else []:
     p = os.path.join(d, f)
     try:
@@ -94,12 +94,15 @@ EOF
 
 # Wait until no process of group $1 is left (gnuplot may outlive a cupid killed alone).
 wait_group() {
-  local pgid=$1 i p left
+  local pgid=$1 i p left line
   for i in $(seq 1 300); do
     left=0
     for p in /proc/[0-9]*/stat; do
-      # field 5 of /proc/PID/stat is the process group (after the ")" closing the name)
-      [ "$(sed -E 's/^.*\) [A-Za-z] [0-9]+ ([0-9]+) .*$/\1/' "$p" 2>/dev/null)" = "$pgid" ] && { left=1; break; }
+      # /proc/PID/stat: "pid (name) state ppid pgrp ...": the group follows the ")"
+      read -r line 2>/dev/null < "$p" || continue
+      line=${line##*) }
+      set -- $line
+      [ "${3:-}" = "$pgid" ] && { left=1; break; }
     done
     [ "$left" -eq 0 ] && return 0
     sleep 0.1
@@ -107,10 +110,15 @@ wait_group() {
   return 1
 }
 
-# A reference run: its length sets the window of the signals; its outputs seed half the trials.
-t0=$(date +%s%N)
-if ! "$CUPID" run model.yaml -o reference --quiet; then echo "FAIL: reference run"; exit 1; fi
-length_ms=$(( ($(date +%s%N) - t0) / 1000000 ))
+# Reference runs: the shorter (warm) one sets the window of the signals; the outputs seed half
+# the trials.
+length_ms=1000000
+for i in 1 2; do
+  t0=$(date +%s%N)
+  if ! "$CUPID" run model.yaml -o reference --quiet; then echo "FAIL: reference run"; exit 1; fi
+  t1=$(( ($(date +%s%N) - t0) / 1000000 ))
+  [ "$t1" -lt "$length_ms" ] && length_ms=$t1
+done
 if check_outputs reference; then pass=$((pass+1)); else echo "FAIL: reference outputs"; fail=$((fail+1)); fi
 echo "reference run: $length_ms ms"
 
@@ -121,7 +129,7 @@ for trial in $(seq 1 "$TRIALS"); do
   if [ $((i % 2)) -eq 0 ]; then cp -r reference "$dir"; fi
   sig=$([ $(((i / 2) % 2)) -eq 0 ] && echo INT || echo TERM)
   group=$([ $(((i / 4) % 2)) -eq 0 ] && echo group || echo pid)
-  delay_ms=$(( 20 + RANDOM % (length_ms + 100) ))
+  delay_ms=$(( 20 + RANDOM % (length_ms * 9 / 10 + 1) ))
   setsid "$CUPID" run model.yaml -o "$dir" --quiet &
   pid=$!
   sleep "$(printf '%d.%03d' $((delay_ms / 1000)) $((delay_ms % 1000)))"
@@ -160,8 +168,8 @@ with open(out, "wb") as f:
     f.write(b"IEND\xaeB`\x82")
 PY
 chmod +x fakebin/gnuplot
-sed -e 's/x: \[0, 60\], y: \[0, 80\], z: \[0, 60\]/x: [0, 6], y: [0, 8], z: [0, 6]/' \
-    -e '/name: b,/d' -e 's/points: 2000/points: 50/' -e 's/\[30, 40, 30\]/[3, 4, 3]/' model.yaml > small.yaml
+sed -e 's/x: \[0, 50\], y: \[0, 60\], z: \[0, 50\]/x: [0, 6], y: [0, 8], z: [0, 6]/' \
+    -e '/name: b,/d' -e 's/points: 2000/points: 50/' -e 's/\[25, 30, 25\]/[3, 4, 3]/' model.yaml > small.yaml
 for target in group pid; do
   for sig in INT TERM; do
     rm -rf fake_out mark
