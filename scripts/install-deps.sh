@@ -1,11 +1,20 @@
 #!/usr/bin/env bash
 # Install cupid's build and test dependencies from Debian 12 packages (idempotent).
-# Usage: scripts/install-deps.sh [--with-petsc]
+# Usage: scripts/install-deps.sh [--with-petsc] [--with-fuzz] [--with-valgrind]
+#   --with-fuzz      clang-14 with libFuzzer and its OpenMP runtime (CUPID_FUZZ, docs/hardening.md)
+#   --with-valgrind  valgrind (CUPID_VALGRIND_TESTS)
 # Only packages that are missing are installed, so a prepared machine pays nothing.
 set -euo pipefail
 
 pkgs=(cmake make gcc pkg-config libsuitesparse-dev libopenblas-dev libyaml-dev libcmocka-dev gnuplot-nox python3)
-if [ "${1:-}" = "--with-petsc" ]; then pkgs+=(petsc-dev); fi
+for arg in "$@"; do
+  case $arg in
+    --with-petsc) pkgs+=(petsc-dev) ;;
+    --with-fuzz) pkgs+=(clang-14 libclang-rt-14-dev libomp-14-dev) ;;
+    --with-valgrind) pkgs+=(valgrind) ;;
+    *) echo "install-deps.sh: unknown option '$arg'" >&2; exit 1 ;;
+  esac
+done
 
 missing=()
 for p in "${pkgs[@]}"; do

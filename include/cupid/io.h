@@ -42,9 +42,11 @@ cupid_status cupid_atomic_commit(cupid_atomic_file *file);
 /** Close and remove the temporary file, target untouched (NULL-safe; harmless after commit). */
 void cupid_atomic_abort(cupid_atomic_file *file);
 /**
- * Unlink the temporary file of every atomic file still open in this process. It is
- * async-signal-safe (it only calls unlink() on paths stored at open time), so a SIGINT/SIGTERM
- * handler can call it before re-raising the signal with the default action:
+ * Unlink the temporary file of every atomic file still open in this process, after killing
+ * and reaping a gnuplot still writing its PNG (which is unlinked too). It is
+ * async-signal-safe (only kill(), waitpid() and unlink() on pids and paths stored
+ * beforehand), so a SIGINT/SIGTERM handler can call it before re-raising the signal with the
+ * default action:
  * `static void on_signal(int s) { cupid_atomic_cleanup_all(); signal(s, SIG_DFL); raise(s); }`.
  * The handles stay valid: abort them as usual; committing one fails with CUPID_ERR_IO.
  * Up to 64 simultaneously open files are tracked (more still work, but are not cleaned here).

@@ -22,13 +22,11 @@ typedef struct {
   double total_bytes;
 } cupid_estimate;
 
-static cupid_status estimate(const cupid_job *job, cupid_estimate *e) {
-  const cupid_model_t *m = job->model;
-  double n = (double)job->n_pd, ndof = 3.0 * n;
+/* Matrix and factor sizes for n PD nodes and the given number of stored 3x3 blocks. */
+static void estimate_sizes(const cupid_model_t *m, double n, double blocks, cupid_estimate *e) {
+  double ndof = 3.0 * n;
   double ratio = m->pd.horizon / m->pd.spacing;
-  cupid_pd_estimate pe;
-  CUPID_CALL(cupid_pd_operator_estimate(job->grid, &job->pd_options, &pe));
-  e->matrix_blocks = (double)pe.blocks;
+  e->matrix_blocks = blocks;
   e->matrix_bytes = e->matrix_blocks * 80.0 + 8.0 * n;
   double fill = m->pd.model == CUPID_PD_LPS ? 3.0 : 1.0;
   if (m->pd.dimension == 1) {
@@ -45,6 +43,12 @@ static cupid_status estimate(const cupid_job *job, cupid_estimate *e) {
   /* K, its reduced one-triangle copy for CHOLMOD (about half of K at 12 B/entry), factor. */
   e->total_bytes = e->matrix_bytes + 0.5 * 9.0 * e->matrix_blocks * 12.0 + e->factor_bytes +
                    10.0 * ndof * 8.0;
+}
+
+static cupid_status estimate(const cupid_job *job, cupid_estimate *e) {
+  cupid_pd_estimate pe;
+  CUPID_CALL(cupid_pd_operator_estimate(job->grid, &job->pd_options, &pe));
+  estimate_sizes(job->model, (double)job->n_pd, (double)pe.blocks, e);
   return CUPID_SUCCESS;
 }
 
@@ -72,11 +76,15 @@ static cupid_status estimate_fe(const cupid_job *job, cupid_estimate *e) {
   return CUPID_SUCCESS;
 }
 
+static double memory_limit(const cupid_job *job) {
+  return job->opts->max_memory_gb > 0 ? job->opts->max_memory_gb * 1e9 : 0.9 * physical_memory();
+}
+
 cupid_status cupid_app_estimate(const cupid_job *job, int print) {
   cupid_estimate e = {0};
   if (job->grid) CUPID_CALL(estimate(job, &e));
   if (job->beam) CUPID_CALL(estimate_fe(job, &e));
-  double limit = job->opts->max_memory_gb > 0 ? job->opts->max_memory_gb * 1e9 : 0.9 * physical_memory();
+  double limit = memory_limit(job);
   if (print) {
     const cupid_model_t *m = job->model;
     printf("model: %s%s%s\n", m->file, m->title[0] ? " - " : "", m->title);
@@ -104,4 +112,126 @@ cupid_status cupid_app_estimate(const cupid_job *job, int print) {
                        job->model->file, e.total_bytes / 1e9, (long long)job->n_pd,
                        e.matrix_bytes / 1e9, e.factor_bytes / 1e9, limit / 1e9);
   return CUPID_SUCCESS;
+}
+
+/* Lattice offsets o != 0 with |o| <= r (a lower bound of the bonds of a node with a full
+ * family, whatever the partial-volume rule): counted exactly up to r = 64 (the largest ratio
+ * src/pd accepts), beyond that the ball of radius r - sqrt(3)/2 (volume 4.18879 r^3), which
+ * the unit cubes of those offsets cover. */
+static double stencil_lower_bound(int dimension, double r) {
+  if (dimension == 1) return 2.0 * floor(r + 1e-9);
+  if (r > 64) return 4.18879020478639098 * pow(r - 0.8660254037844386, 3);
+  int k = (int)floor(r + 1e-9);
+  double count = 0, r2 = r * r * (1 + 1e-12);
+  for (int a = -k; a <= k; a++)
+    for (int b = -k; b <= k; b++)
+      for (int c = -k; c <= k; c++) count += (double)(a * a + b * b + c * c) <= r2;
+  return count - 1;
+}
+
+/* Cells of [lo, hi] on a lattice of spacing h (rounded down: a lower bound). */
+static double span_cells(double lo, double hi, double h) {
+  double n = floor((hi - lo) / h + 1e-9);
+  return n > 0 ? n : 0;
+}
+
+/* Output lines: every point is a CSV row (~100 B) sampled against every PD region (each test
+ * ~5 ns: 2e8 of them take about a second, in `check` and again when the outputs are written). */
+static cupid_status guard_output(const cupid_model_t *m) {
+  const cupid_output *o = &m->output;
+  double points = o->n_points;
+  for (int k = 0; k < o->n_lines; k++) points += o->lines[k].points;
+  double regions = m->has_peridynamics && m->pd.n_regions > 0 ? m->pd.n_regions : 1;
+  if (points > 1e8)
+    return cupid_model_error(m, &o->mark,
+                             "the output lines hold %.0f points in all, more than 100000000 "
+                             "(about 10 GB of CSV); use fewer points per line",
+                             points);
+  if (points * regions > 2e8)
+    return cupid_model_error(m, &o->mark,
+                             "sampling the %.0f output points against the %.0f PD regions would "
+                             "take %.3g region tests (at most 2e8); merge regions or use fewer "
+                             "points",
+                             points, regions, points * regions);
+  return CUPID_SUCCESS;
+}
+
+cupid_status cupid_app_guard_size(const cupid_job *job) {
+  const cupid_model_t *m = job->model;
+  const cupid_peridynamics *pd = &m->pd;
+  CUPID_CALL(guard_output(m));
+  double limit = memory_limit(job), h = pd->spacing;
+  if (!m->has_peridynamics || pd->n_regions <= 0 || !(h > 0) || !(limit > 0)) return CUPID_SUCCESS;
+  double ratio = pd->horizon / h, reach = ceil(ratio - 1e-9);
+  /* Bounding box (the dense cell index is 8 B per cell), the largest region (the union has at
+   * least its nodes) and that region's nodes farther than a horizon from its faces. */
+  double cells = 1, nodes = 0, bonds = 0, visits = 0;
+  double stencil = stencil_lower_bound(pd->dimension, ratio);
+  /* Neighbours of a corner node inside its region: at least the lattice cube of side
+   * r/sqrt(3) (or the whole region when smaller), which lies within the horizon. */
+  double cube = floor(ratio / (pd->dimension == 1 ? 1.0 : sqrt(3.0)) + 1e-9);
+  for (int a = 0; a < 3; a++) {
+    if (pd->dimension == 1 && a != 1) continue;
+    double lo = INFINITY, hi = -INFINITY;
+    for (int r = 0; r < pd->n_regions; r++) {
+      lo = fmin(lo, pd->regions[r].box.lo[a]);
+      hi = fmax(hi, pd->regions[r].box.hi[a]);
+    }
+    cells *= span_cells(lo, hi, h);
+  }
+  /* Each region alone: its nodes and the bonds among them are in the union too. Bonds: every
+   * node farther than a horizon from the region's faces has the full stencil, every node at
+   * least the corner cube. */
+  for (int r = 0; r < pd->n_regions; r++) {
+    double n = 1, inner = 1, corner = 1;
+    for (int a = 0; a < 3; a++) {
+      if (pd->dimension == 1 && a != 1) continue;
+      double na = span_cells(pd->regions[r].box.lo[a], pd->regions[r].box.hi[a], h);
+      n *= na;
+      inner *= fmax(0, na - 2 * reach);
+      corner *= fmin(na - 1, cube) + 1;
+    }
+    visits += n;
+    nodes = fmax(nodes, n);
+    bonds = fmax(bonds, fmax(inner * stencil, n * (corner - 1)));
+  }
+  if (!isfinite(cells) || !isfinite(nodes)) return CUPID_SUCCESS; /* the grid reports it */
+  /* The grid builder visits every cell of every region: many overlapping copies of a region
+   * (e.g. one anchor aliased 75000 times) would keep it busy for hours in a few KB of file. */
+  if (visits > 1e9 && visits > 8 * cells)
+    return cupid_model_error(m, &pd->mark,
+                             "the %d PD regions overlap so much that building the grid would "
+                             "visit %.3g cells, %.3g times the %.0f cells of their bounding box; "
+                             "merge the overlapping regions",
+                             pd->n_regions, visits, visits / cells, cells);
+  /* The LPS matrix pattern pairs every two stencil offsets (pd_stencil_sum, O(stencil^2)):
+   * 18 s at horizon/spacing 30 on a 2-core machine, hours at 64 (the largest src/pd accepts);
+   * bounded to a few seconds. */
+  if (pd->model == CUPID_PD_LPS && pd->dimension == 3 && stencil * stencil > 4e9)
+    return cupid_model_error(m, &pd->mark,
+                             "horizon/spacing = %g gives an LPS stencil of %.3g offsets: pairing "
+                             "them for the matrix pattern would take %.3g steps (at most 4e9, "
+                             "about horizon/spacing 24); use a larger spacing",
+                             ratio, stencil, stencil * stencil);
+  /* Grid: cell index, coordinates, material, lattice position. Operator: a neighbour index and
+   * a stencil entry per bond, offsets and per-node data (cupid_pd_operator_estimate). */
+  double grid_bytes = 8 * cells + 40 * nodes, op_bytes = 12 * bonds + 80 * nodes;
+  double total = grid_bytes + op_bytes, solver_bytes = 0;
+  if (!job->opts->check_only && m->analysis.type != CUPID_ANALYSIS_EVALUATE) {
+    cupid_estimate e;
+    estimate_sizes(m, nodes, nodes + bonds, &e);
+    solver_bytes = e.total_bytes;
+  }
+  total += solver_bytes + 3 * 3 * 8 * nodes; /* u, loads, internal forces */
+  if (total <= limit) return CUPID_SUCCESS;
+  char solver[128] = "";
+  if (solver_bytes > 0)
+    snprintf(solver, sizeof solver, ", stiffness matrix and factor %.3g GB", solver_bytes / 1e9);
+  return cupid_model_error(m, &pd->mark,
+                           "the model has at least %.0f PD nodes and %.3g bonds and needs at "
+                           "least %.3g GB (grid %.3g GB, neighbour lists %.3g GB%s), more than "
+                           "the limit of %.3g GB; use --max-memory GB to raise the limit, or a "
+                           "coarser grid",
+                           nodes, bonds, total / 1e9, grid_bytes / 1e9, op_bytes / 1e9, solver,
+                           limit / 1e9);
 }

@@ -61,6 +61,7 @@ static cupid_status build_pd(cupid_job *job) {
   const cupid_model_t *m = job->model;
   double t0 = cupid_wtime();
 
+  CUPID_CALL(cupid_app_guard_size(job)); /* before anything that scales with the model */
   CUPID_CALL(cupid_pd_grid_create_from_model(m, &job->grid));
   job->n_pd = cupid_pd_grid_num_nodes(job->grid);
   CUPID_CALL(check_isotropic(m));

@@ -1,4 +1,5 @@
 /* Checked allocation, clocks, memory statistics, threads (see include/cupid/base.h). */
+#define _POSIX_C_SOURCE 200809L /* clock_gettime; gcc -fopenmp only gets it via -D_REENTRANT */
 #include "cupid/base.h"
 
 #include <stdio.h>

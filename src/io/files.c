@@ -12,12 +12,16 @@
 
 #include <errno.h>
 #include <fcntl.h>
+#include <signal.h>
 #include <stdatomic.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
 #include <sys/types.h>
+#include <sys/wait.h>
 #include <unistd.h>
+
+#include "io/io_internal.h"
 
 /* ---------------------------------------------------------------- directories */
 
@@ -90,8 +94,30 @@ static void registry_remove(int slot) {
   if (slot >= 0) atomic_store(&registry[slot].state, SLOT_FREE);
 }
 
+/* Helper processes writing a registered file, by slot (0: none). Killed and reaped before the
+ * files are unlinked, so that they cannot (re)create a file after the cleanup. */
+static atomic_int registry_child[REGISTRY_SLOTS];
+_Static_assert(sizeof(pid_t) <= sizeof(int), "a pid must fit an atomic int");
+
+int cupid_io_helper_begin(const char *path, pid_t child) {
+  int slot = registry_add(path);
+  if (slot >= 0) atomic_store(&registry_child[slot], (int)child);
+  return slot;
+}
+
+void cupid_io_helper_end(int slot) {
+  if (slot < 0) return;
+  atomic_store(&registry_child[slot], 0);
+  registry_remove(slot);
+}
+
 void cupid_atomic_cleanup_all(void) {
   int saved = errno; /* a signal handler must not change errno under the interrupted code */
+  for (int i = 0; i < REGISTRY_SLOTS; i++) {
+    pid_t child = (pid_t)atomic_load(&registry_child[i]);
+    if (child > 0 && kill(child, SIGKILL) == 0)
+      while (waitpid(child, NULL, 0) < 0 && errno == EINTR) continue;
+  }
   for (int i = 0; i < REGISTRY_SLOTS; i++)
     if (atomic_load(&registry[i].state) == SLOT_ACTIVE) unlink(registry[i].path);
   errno = saved;

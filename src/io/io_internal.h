@@ -3,11 +3,22 @@
 #define CUPID_IO_INTERNAL_H
 
 #include <stdio.h>
+#include <sys/types.h>
 
 /** Shortest of "%.15g" / "%.17g" that reads back to exactly @p v (finite v); buf >= 32 bytes. */
 void cupid_io_format_double(double v, char *buf, size_t size);
 
 /** Write @p s to @p out with the five XML special characters escaped (attribute-safe). */
 void cupid_io_xml_escape(FILE *out, const char *s);
+
+/**
+ * A file written by a helper process (gnuplot's PNG, written straight to its final name): while
+ * @p child runs, a signal handler calling cupid_atomic_cleanup_all() kills and reaps the child,
+ * then unlinks @p path, so an interrupted run leaves no half-written file. Returns a slot for
+ * cupid_io_helper_end() (-1 if none is free: the file is then not protected).
+ */
+int cupid_io_helper_begin(const char *path, pid_t child);
+/** The helper has exited: forget it (the file is complete or already removed). */
+void cupid_io_helper_end(int slot);
 
 #endif

@@ -220,9 +220,11 @@ static void log_append(char *log, size_t cap, size_t *len, const char *data, siz
   log[*len] = '\0';
 }
 
-/* Run `gnuplot ./<script>` in @p dir, its output captured into @p log; *status as from waitpid. */
+/* Run `gnuplot ./<script>` in @p dir, its output captured into @p log; *status as from waitpid.
+ * While it runs, @p png (which gnuplot writes in place) is registered with the signal cleanup:
+ * an interrupted run kills gnuplot and removes the half-made PNG. */
 static cupid_status spawn_gnuplot(const char *gnuplot, const char *dir, const char *script,
-                                  int *status, char *log, size_t cap) {
+                                  const char *png, int *status, char *log, size_t cap) {
   int fds[2] = {-1, -1};
   size_t len = 0;
   log[0] = '\0';
@@ -243,6 +245,7 @@ static cupid_status spawn_gnuplot(const char *gnuplot, const char *dir, const ch
     close(fds[1]);
     fds[1] = -1;
     if (rc == 0) {
+      int slot = cupid_io_helper_begin(png, pid);
       char chunk[4096];
       for (;;) {
         ssize_t n = read(fds[0], chunk, sizeof chunk);
@@ -252,6 +255,7 @@ static cupid_status spawn_gnuplot(const char *gnuplot, const char *dir, const ch
       pid_t w;
       while ((w = waitpid(pid, status, 0)) < 0 && errno == EINTR) continue;
       if (w < 0) rc = errno;
+      cupid_io_helper_end(slot);
     }
   }
   close(fds[0]);
@@ -269,7 +273,7 @@ static cupid_status run_gnuplot(const char *gnuplot, const char *dir, const char
   /* A stale PNG must not pass for a new one. */
   CUPID_CHECK(unlink(png) == 0 || errno == ENOENT, CUPID_ERR_IO, "cannot replace '%s': %s", png,
               strerror(errno));
-  CUPID_CALL(spawn_gnuplot(gnuplot, dir, script, &status, log, sizeof log));
+  CUPID_CALL(spawn_gnuplot(gnuplot, dir, script, png, &status, log, sizeof log));
   for (size_t n = strlen(log); n > 0 && strchr(" \t\r\n", log[n - 1]); n--) log[n - 1] = '\0';
   if (WIFSIGNALED(status))
     return CUPID_ERROR(CUPID_ERR_IO, "gnuplot was killed by signal %d making '%s': %s",
