@@ -89,6 +89,17 @@ void cupid_job_phase_end(cupid_job *job, cupid_phase phase, double t0);
 cupid_status cupid_app_pd_constraints(cupid_job *job);
 cupid_status cupid_app_pd_loads(cupid_job *job);
 
+/* split.c: which part (beam, PD grid) a constraint or load of a coupled model touches. */
+/** A used beam node lies on the plane y. */
+int cupid_app_fe_node_at(const cupid_job *job, double y);
+/** A used beam node lies in the box's y range. */
+int cupid_app_fe_node_in_box(const cupid_job *job, const cupid_box *b);
+/** A PD node lies in the box (only y counts on a 1D grid). */
+int cupid_app_pd_node_in_box(const cupid_job *job, const cupid_box *b);
+/** Run cupid_app_pd_constraints (constraints != 0) or cupid_app_pd_loads on these items only. */
+cupid_status cupid_app_pd_stage(cupid_job *job, cupid_constraint *cons, int nc,
+                                cupid_load *loads, int nl, int constraints);
+
 /* sample.c: displacement (and stress) at a point, by trilinear interpolation of the grid. */
 cupid_status cupid_app_sample(const cupid_job *job, const double p[3], double u[3],
                               double sigma[6], cupid_region_kind *region);

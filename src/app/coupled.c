@@ -10,7 +10,6 @@
 #include "coupled_arlequin.h"
 #include "cupid/coupling.h"
 
-#define LATTICE_TOL 1e-9
 
 int cupid_app_is_coupled(const cupid_job *job) {
   return job->model->has_beam && job->model->has_peridynamics;
@@ -59,50 +58,6 @@ cupid_status cupid_app_coupled_prepare(cupid_job *job) {
 
 /* ------------------------------------------------------------ constraints and loads */
 
-static int pd_node_in_box(const cupid_job *job, const cupid_box *b) {
-  const double *x = cupid_pd_grid_coords(job->grid);
-  double h = cupid_pd_grid_spacing(job->grid);
-  for (cupid_int i = 0; i < job->n_pd; i++)
-    if (cupid_box_contains(b, x + 3 * i, LATTICE_TOL * h)) return 1;
-  return 0;
-}
-
-/* A used beam node lies at y. */
-static int fe_node_at(const cupid_job *job, double y) {
-  cupid_int bn = cupid_cuf_beam_node_at(job->beam, y);
-  if (bn < 0) return 0;
-  for (int tau = 0; tau < job->fe_info.M; tau++)
-    if (cupid_cuf_node_used(job->beam, tau, bn)) return 1;
-  return 0;
-}
-
-/* A used beam node lies in the y range of the box. */
-static int fe_node_in_box(const cupid_job *job, const cupid_box *b) {
-  double tol = LATTICE_TOL * (job->fe_info.y_max - job->fe_info.y_min);
-  for (cupid_int bn = 0; bn < job->fe_info.n_beam_nodes; bn++) {
-    double y = cupid_cuf_beam_node_y(job->beam, bn);
-    if (b->has[1] && (y < b->lo[1] - tol || y > b->hi[1] + tol)) continue;
-    for (int tau = 0; tau < job->fe_info.M; tau++)
-      if (cupid_cuf_node_used(job->beam, tau, bn)) return 1;
-  }
-  return 0;
-}
-
-/* Run the PD-side stage on the model's PD items only (a shallow copy of the model). */
-static cupid_status pd_stage(cupid_job *job, cupid_constraint *cons, int nc, cupid_load *loads,
-                             int nl, int constraints) {
-  cupid_model_t part = *job->model;
-  part.constraints = cons;
-  part.n_constraints = nc;
-  part.loads = loads;
-  part.n_loads = nl;
-  const cupid_model_t *saved = job->model;
-  job->model = &part;
-  cupid_status st = constraints ? cupid_app_pd_constraints(job) : cupid_app_pd_loads(job);
-  job->model = saved;
-  return st;
-}
-
 static cupid_status apply_constraints(cupid_job *job) {
   const cupid_model_t *m = job->model;
   cupid_status st = CUPID_SUCCESS;
@@ -113,11 +68,11 @@ static cupid_status apply_constraints(cupid_job *job) {
     const cupid_constraint *c = &m->constraints[k];
     int on_fe, on_pd;
     if (c->kind == CUPID_CONSTRAINT_CLAMP) {
-      on_fe = fe_node_at(job, c->plane_y);
+      on_fe = cupid_app_fe_node_at(job, c->plane_y);
       on_pd = !on_fe;
     } else {
-      on_fe = fe_node_in_box(job, &c->box);
-      on_pd = pd_node_in_box(job, &c->box);
+      on_fe = cupid_app_fe_node_in_box(job, &c->box);
+      on_pd = cupid_app_pd_node_in_box(job, &c->box);
     }
     if (!on_fe && !on_pd) {
       st = cupid_model_error(m, &c->mark,
@@ -128,7 +83,7 @@ static cupid_status apply_constraints(cupid_job *job) {
     if (on_fe) CUPID_TRY(cupid_cuf_constraint_apply(job->beam, m, c, job->bc));
     if (on_pd) pd[npd++] = *c;
   }
-  CUPID_TRY(pd_stage(job, pd, npd, NULL, 0, 1));
+  CUPID_TRY(cupid_app_pd_stage(job, pd, npd, NULL, 0, 1));
   /* FE nodes inside the PD regions carry no stiffness: hold them at zero. */
   for (cupid_int n = 0; n < job->fe_info.n_fe_nodes; n++) {
     int tau = (int)(n % job->fe_info.M);
@@ -150,20 +105,20 @@ static cupid_status apply_loads(cupid_job *job) {
     const cupid_load *l = &m->loads[k];
     int on_fe = 0, on_pd = 0;
     switch (l->kind) {
-    case CUPID_LOAD_TRACTION: on_fe = fe_node_at(job, l->plane_y); on_pd = !on_fe; break;
+    case CUPID_LOAD_TRACTION: on_fe = cupid_app_fe_node_at(job, l->plane_y); on_pd = !on_fe; break;
     case CUPID_LOAD_POINT:
       on_fe = cupid_cuf_contains(job->beam, l->at[0], l->at[1], l->at[2]);
       on_pd = !on_fe;
       break;
     case CUPID_LOAD_BODY:
-      on_fe = fe_node_in_box(job, &l->box);
-      on_pd = pd_node_in_box(job, &l->box);
+      on_fe = cupid_app_fe_node_in_box(job, &l->box);
+      on_pd = cupid_app_pd_node_in_box(job, &l->box);
       break;
     }
     if (on_fe) CUPID_TRY(cupid_cuf_load_add(job->beam, m, l, job->f_ext));
     if (on_pd) pd[npd++] = *l;
   }
-  CUPID_TRY(pd_stage(job, NULL, 0, pd, npd, 0));
+  CUPID_TRY(cupid_app_pd_stage(job, NULL, 0, pd, npd, 0));
 cleanup:
   cupid_free(&pd);
   return st;

@@ -104,56 +104,11 @@ cupid_status cupid_app_arlequin_prepare(cupid_job *job) {
 
 /* --------------------------------------------------------------- constraints and loads */
 
-static int fe_used(const cupid_job *job, cupid_int bn) {
-  for (int tau = 0; tau < job->fe_info.M; tau++)
-    if (cupid_cuf_node_used(job->beam, tau, bn)) return 1;
-  return 0;
-}
-
-static int fe_node_at(const cupid_job *job, double y) {
-  cupid_int bn = cupid_cuf_beam_node_at(job->beam, y);
-  return bn >= 0 && fe_used(job, bn);
-}
-
-static int fe_node_in_box(const cupid_job *job, const cupid_box *b) {
-  double tol = ARL_TOL * (job->fe_info.y_max - job->fe_info.y_min);
-  for (cupid_int bn = 0; bn < job->fe_info.n_beam_nodes; bn++) {
-    double y = cupid_cuf_beam_node_y(job->beam, bn);
-    if ((!b->has[1] || (y >= b->lo[1] - tol && y <= b->hi[1] + tol)) && fe_used(job, bn)) return 1;
-  }
-  return 0;
-}
-
-static int pd_node_in_box(const cupid_job *job, const cupid_box *b) {
-  const double *x = cupid_pd_grid_coords(job->grid);
-  double h = cupid_pd_grid_spacing(job->grid);
-  cupid_box bb = *b;
-  if (cupid_pd_grid_dimension(job->grid) == 1) bb.has[0] = bb.has[2] = 0; /* a bar along y */
-  for (cupid_int i = 0; i < job->n_pd; i++)
-    if (cupid_box_contains(&bb, x + 3 * i, ARL_TOL * h)) return 1;
-  return 0;
-}
-
 static int pd_node_near(const cupid_job *job, double y, double layer) {
   const double *x = cupid_pd_grid_coords(job->grid);
   for (cupid_int i = 0; i < job->n_pd; i++)
     if (fabs(x[3 * i + 1] - y) < layer) return 1;
   return 0;
-}
-
-/* Run a PD-side stage of pd_bc.c on a subset of the model's items. */
-static cupid_status pd_stage(cupid_job *job, cupid_constraint *cons, int nc, cupid_load *loads,
-                             int nl, int constraints) {
-  cupid_model_t part = *job->model;
-  part.constraints = cons;
-  part.n_constraints = nc;
-  part.loads = loads;
-  part.n_loads = nl;
-  const cupid_model_t *saved = job->model;
-  job->model = &part;
-  cupid_status st = constraints ? cupid_app_pd_constraints(job) : cupid_app_pd_loads(job);
-  job->model = saved;
-  return st;
 }
 
 static cupid_status apply_constraints(cupid_job *job) {
@@ -166,11 +121,11 @@ static cupid_status apply_constraints(cupid_job *job) {
     const cupid_constraint *c = &m->constraints[k];
     int on_fe, on_pd;
     if (c->kind == CUPID_CONSTRAINT_CLAMP) {
-      on_fe = fe_node_at(job, c->plane_y);
+      on_fe = cupid_app_fe_node_at(job, c->plane_y);
       on_pd = pd_node_near(job, c->plane_y, c->layer > 0 ? c->layer : m->pd.horizon);
     } else {
-      on_fe = fe_node_in_box(job, &c->box);
-      on_pd = pd_node_in_box(job, &c->box);
+      on_fe = cupid_app_fe_node_in_box(job, &c->box);
+      on_pd = cupid_app_pd_node_in_box(job, &c->box);
     }
     if (!on_fe && !on_pd) {
       st = cupid_model_error(m, &c->mark, "the constraint touches neither the beam nor a PD node");
@@ -179,7 +134,7 @@ static cupid_status apply_constraints(cupid_job *job) {
     if (on_fe) CUPID_TRY(cupid_cuf_constraint_apply(job->beam, m, c, job->bc));
     if (on_pd) pd[npd++] = *c;
   }
-  CUPID_TRY(pd_stage(job, pd, npd, NULL, 0, 1)); /* also holds x, z of the 1D grid */
+  CUPID_TRY(cupid_app_pd_stage(job, pd, npd, NULL, 0, 1)); /* also holds x, z of the 1D grid */
   /* FE nodes where the beam gave way carry nothing: hold them at zero. */
   for (cupid_int n = 0; n < job->fe_info.n_fe_nodes; n++) {
     if (cupid_cuf_node_used(job->beam, (int)(n % job->fe_info.M), n / job->fe_info.M)) continue;
@@ -219,14 +174,14 @@ static cupid_status apply_loads(cupid_job *job) {
     }
     int on_fe = 0;
     switch (l->kind) {
-    case CUPID_LOAD_TRACTION: on_fe = fe_node_at(job, l->plane_y); break;
+    case CUPID_LOAD_TRACTION: on_fe = cupid_app_fe_node_at(job, l->plane_y); break;
     case CUPID_LOAD_POINT: on_fe = cupid_cuf_contains(job->beam, l->at[0], l->at[1], l->at[2]); break;
-    case CUPID_LOAD_BODY: on_fe = fe_node_in_box(job, &l->box); break;
+    case CUPID_LOAD_BODY: on_fe = cupid_app_fe_node_in_box(job, &l->box); break;
     }
     if (on_fe) CUPID_TRY(cupid_cuf_load_add(job->beam, m, l, job->f_ext));
-    if (!on_fe || (l->kind == CUPID_LOAD_BODY && pd_node_in_box(job, &l->box))) pd[npd++] = *l;
+    if (!on_fe || (l->kind == CUPID_LOAD_BODY && cupid_app_pd_node_in_box(job, &l->box))) pd[npd++] = *l;
   }
-  CUPID_TRY(pd_stage(job, NULL, 0, pd, npd, 0));
+  CUPID_TRY(cupid_app_pd_stage(job, NULL, 0, pd, npd, 0));
 cleanup:
   cupid_free(&pd);
   return st;
