@@ -4,7 +4,8 @@
 #   tests/fuzz/run.sh [SECONDS] [CORPUS_DIR]
 #
 # Builds build-fuzz/ with clang-14 (-DCUPID_FUZZ=ON: ASan + UBSan + coverage) if needed, seeds a
-# corpus with every example and test model (plus tests/fuzz/regressions/), and fuzzes for
+# corpus with every example and test model, tests/fuzz/regressions/ and the minimised corpus of
+# earlier runs (tests/fuzz/corpus/), and fuzzes for
 # SECONDS (default 60) with the model-format dictionary. CORPUS_DIR (default: a temporary
 # directory) keeps the inputs that found new coverage, so long runs can be resumed.
 # FUZZ_JOBS=N runs N fuzzing processes in parallel (default 1).
@@ -31,8 +32,9 @@ n=0
 while IFS= read -r -d '' f; do
   cp "$f" "$seeds/seed_$n.yaml"
   n=$((n + 1))
-done < <(find examples tests/models -type f -name '*.yaml' -print0; find tests/fuzz/regressions -type f -print0)
-echo "fuzz: $n seed models, $seconds s, $jobs job(s)"
+done < <(find examples tests/models -type f -name '*.yaml' -print0
+         find tests/fuzz/regressions tests/fuzz/corpus -type f -print0)
+echo "fuzz: $n seeds, $seconds s, $jobs job(s)"
 if [ -z "$corpus" ]; then tmp_corpus=$(mktemp -d); corpus=$tmp_corpus; fi
 mkdir -p "$corpus" "$build/artifacts"
 
