@@ -156,10 +156,40 @@ static cupid_status guard_output(const cupid_model_t *m) {
   return CUPID_SUCCESS;
 }
 
+/* The beam: DOFs = 3 x beam nodes x expansion terms M, and at least M coupled blocks per FE
+ * node for TE (every term couples with every term of its beam node) or le_nodes for LE. A lower
+ * bound from the model alone, so a beam that cannot fit is refused before it is built. */
+static cupid_status guard_beam(const cupid_job *job, double limit) {
+  const cupid_model_t *m = job->model;
+  const cupid_beam *b = &m->beam;
+  if (!m->has_beam || !(limit > 0)) return CUPID_SUCCESS;
+  double beam_nodes = 1, terms = 0;
+  for (int s = 0; s + 1 < b->n_axis; s++) beam_nodes += (double)b->axis_elements[s] * (b->element_nodes - 1);
+  if (b->expansion == CUPID_EXPANSION_TE) {
+    terms = 0.5 * (b->te_order + 1) * (b->te_order + 2);
+  } else if (b->n_section_nodes > 0) {
+    terms = b->n_section_nodes;
+  } else {
+    double p = b->le_nodes == 16 ? 3 : b->le_nodes == 9 ? 2 : 1; /* nodes per element edge - 1 */
+    for (int c = 0; c < b->n_components; c++) /* the largest component: a lower bound */
+      terms = fmax(terms, ((b->components[c].nx - 1) * p + 1) * ((b->components[c].nz - 1) * p + 1));
+  }
+  double dofs = 3 * beam_nodes * terms, fe_nodes = beam_nodes * terms;
+  double coupled = b->expansion == CUPID_EXPANSION_TE ? terms : fmin(terms, b->le_nodes);
+  double bytes = 40 * dofs + 80 * fe_nodes * coupled; /* vectors + stiffness blocks */
+  if (bytes <= limit) return CUPID_SUCCESS;
+  return cupid_model_error(m, &b->mark,
+                           "the beam has %.0f nodes x %.0f expansion terms = %.3g DOFs and needs "
+                           "at least %.3g GB, more than the limit of %.3g GB; use --max-memory GB "
+                           "to raise the limit, or fewer elements or a lower expansion order",
+                           beam_nodes, terms, dofs, bytes / 1e9, limit / 1e9);
+}
+
 cupid_status cupid_app_guard_size(const cupid_job *job) {
   const cupid_model_t *m = job->model;
   const cupid_peridynamics *pd = &m->pd;
   CUPID_CALL(guard_output(m));
+  CUPID_CALL(guard_beam(job, memory_limit(job)));
   double limit = memory_limit(job), h = pd->spacing;
   if (!m->has_peridynamics || pd->n_regions <= 0 || !(h > 0) || !(limit > 0)) return CUPID_SUCCESS;
   double ratio = pd->horizon / h, reach = ceil(ratio - 1e-9);

@@ -61,7 +61,6 @@ static cupid_status build_pd(cupid_job *job) {
   const cupid_model_t *m = job->model;
   double t0 = cupid_wtime();
 
-  CUPID_CALL(cupid_app_guard_size(job)); /* before anything that scales with the model */
   CUPID_CALL(cupid_pd_grid_create_from_model(m, &job->grid));
   job->n_pd = cupid_pd_grid_num_nodes(job->grid);
   CUPID_CALL(check_isotropic(m));
@@ -222,6 +221,7 @@ cupid_status cupid_run_model(const cupid_model_t *model, const cupid_run_options
 
   CUPID_TRY(check_supported(&job));
   CUPID_TRY(choose_solver(&job));
+  CUPID_TRY(cupid_app_guard_size(&job)); /* before anything that scales with the model */
   if (model->has_peridynamics) CUPID_TRY(build_pd(&job));
   if (model->has_beam) CUPID_TRY(cupid_app_fe_build(&job));
   if (cupid_app_is_coupled(&job)) CUPID_TRY(cupid_app_coupled_prepare(&job));
