@@ -79,8 +79,7 @@ cupid_status cupid_app_check_points(const cupid_job *job);
 /* check.c: `cupid check` and the memory guard of `cupid run`. */
 cupid_status cupid_app_estimate(const cupid_job *job, int print);
 /** Before the grid is built: refuse a model whose grid, neighbour lists (and, for a solve, matrix
- *  and factor) cannot fit, from lower bounds computed from the regions alone (no allocation),
- *  and likewise a CUF beam (call it before the beam is built too, also for beam-only models);
+ *  and factor) cannot fit, from lower bounds computed from the regions alone (no allocation);
  *  also grids whose overlapping regions would take hours to build, and output lines of more
  *  than 10^8 points (or 2x10^8 point-region tests) in all. */
 cupid_status cupid_app_guard_size(const cupid_job *job);

@@ -129,46 +129,11 @@ static cupid_status guard_output(const cupid_model_t *m) {
   return CUPID_SUCCESS;
 }
 
-/* The CUF beam, from its definition alone: beam nodes x expansion functions (FE nodes), each
- * coupled to at least the functions of one section element at the nodes of one beam element
- * (TE: every function). Check builds the block pattern (8 B per block), a solve also stores
- * the values (72 B) and a factor at least as large as the matrix's lower half. */
-static cupid_status guard_beam(const cupid_job *job, double limit) {
-  const cupid_model_t *m = job->model;
-  const cupid_beam *b = &m->beam;
-  if (!m->has_beam || !(limit > 0)) return CUPID_SUCCESS;
-  double elements = 0, terms = 0, coupled = 0;
-  for (int i = 0; i + 1 < b->n_axis; i++) elements += b->axis_elements[i];
-  double beam_nodes = elements * (b->element_nodes - 1) + 1;
-  if (b->expansion == CUPID_EXPANSION_TE) {
-    terms = coupled = (b->te_order + 1.0) * (b->te_order + 2.0) / 2;
-  } else {
-    int order = b->le_nodes == 16 ? 3 : b->le_nodes == 9 ? 2 : 1; /* nodes per element edge - 1 */
-    terms = b->n_section_nodes;
-    for (int c = 0; c < b->n_components; c++)
-      terms = fmax(terms, (order * (b->components[c].nx - 1.0) + 1) *
-                              (order * (b->components[c].nz - 1.0) + 1));
-    coupled = b->le_nodes;
-  }
-  double fe_nodes = beam_nodes * terms, blocks = fe_nodes * coupled * b->element_nodes;
-  double bytes = 8 * blocks + 3 * 3 * 8 * fe_nodes;
-  if (!job->opts->check_only && m->analysis.type != CUPID_ANALYSIS_EVALUATE)
-    bytes += 72 * blocks + 0.5 * 9 * blocks * 12;
-  if (bytes <= limit) return CUPID_SUCCESS;
-  return cupid_model_error(m, &b->mark,
-                           "the beam has at least %.0f DOFs (%.0f beam nodes x %.0f expansion "
-                           "functions) and %.3g stored 3x3 blocks and needs at least %.3g GB, "
-                           "more than the limit of %.3g GB; use --max-memory GB to raise the "
-                           "limit, or fewer elements or a lower expansion order",
-                           3 * fe_nodes, beam_nodes, terms, blocks, bytes / 1e9, limit / 1e9);
-}
-
 cupid_status cupid_app_guard_size(const cupid_job *job) {
   const cupid_model_t *m = job->model;
   const cupid_peridynamics *pd = &m->pd;
   CUPID_CALL(guard_output(m));
   double limit = memory_limit(job), h = pd->spacing;
-  CUPID_CALL(guard_beam(job, limit));
   if (!m->has_peridynamics || pd->n_regions <= 0 || !(h > 0) || !(limit > 0)) return CUPID_SUCCESS;
   double ratio = pd->horizon / h, reach = ceil(ratio - 1e-9);
   /* Bounding box (the dense cell index is 8 B per cell), the largest region (the union has at
