@@ -143,11 +143,19 @@ static cupid_status require_constraints(const cupid_job *job) {
   for (cupid_int d = 0; d < job->ndof; d++)
     if (job->bc->fixed[d]) fixed[d % 3] = 1;
   if (fixed[0] && fixed[1] && fixed[2]) return CUPID_SUCCESS;
+  char free_axes[8] = "";
+  for (int c = 0; c < 3; c++)
+    if (!fixed[c]) {
+      size_t n = strlen(free_axes);
+      if (n) free_axes[n++] = ' ';
+      free_axes[n] = "xyz"[c];
+      free_axes[n + 1] = '\0';
+    }
   return CUPID_ERROR(CUPID_ERR_NUMERIC,
-                     "the model is unconstrained: no constraint fixes the %s%s%s displacement "
+                     "the model is unconstrained: no constraint fixes the %s displacement "
                      "anywhere, so the stiffness matrix is singular (rigid-body motion); add "
                      "`fix`, `clamp` or `displacement` constraints",
-                     fixed[0] ? "" : "x ", fixed[1] ? "" : "y ", fixed[2] ? "" : "z ");
+                     free_axes);
 }
 
 /* `static`: assemble K, solve K u = f with the Dirichlet conditions, reactions. */

@@ -24,6 +24,13 @@ static int bound_index(double value, double origin, double h, int axis, const ch
              origin + ceil(t) * h);
     return 0;
   }
+  /* Converting a double beyond the int64 range is undefined behaviour: refuse it first (the
+   * grid itself refuses bounding boxes over 2^31 cells later, with the count). */
+  if (fabs(r) > 4.0e18) {
+    snprintf(msg, len, "%c %s bound %.15g lies %.3g spacings from the grid origin (at most 4e18)",
+             axis_name[axis], which, value, fabs(r));
+    return 0;
+  }
   *idx = (cupid_int)r;
   return 1;
 }

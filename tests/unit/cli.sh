@@ -38,7 +38,7 @@ expect 1 'no PETSc engine' -- "$CUPID" run "$M/good_small.yaml" --solver petsc -
 
 # Semantic errors found after reading: the file, line and key of the culprit.
 expect 2 'unconstrained' -- "$CUPID" run "$M/unconstrained.yaml" -o o1
-expect 2 'unconstrained: no constraint fixes the y z' -- "$CUPID" run "$M/fixed_only_x.yaml" -o o2
+expect 2 'unconstrained: no constraint fixes the y z displacement' -- "$CUPID" run "$M/fixed_only_x.yaml" -o o2
 expect 2 'singular|not positive definite' -- "$CUPID" run "$M/two_blocks_apart.yaml" -o o3
 expect 1 'constraint_empty.yaml:[0-9]+:[0-9]+: constraints\[0\].*no PD node' -- "$CUPID" run "$M/constraint_empty.yaml" -o o4
 expect 1 'point_outside.yaml:[0-9]+:[0-9]+: output.points\[0\].*outside' -- "$CUPID" run "$M/point_outside.yaml" -o o5
