@@ -35,3 +35,25 @@ int cupid_test_rmtree(const char *path) {
   snprintf(cmd, sizeof cmd, "rm -rf '%s'", path);
   return system(cmd);
 }
+
+void cupid_test_affine_eval(const cupid_test_affine *a, const double p[3], double out[3]) {
+  for (int k = 0; k < 3; k++) {
+    out[k] = a->c[k];
+    for (int d = 0; d < 3; d++) out[k] += a->B[k][d] * p[d];
+  }
+}
+
+void cupid_test_affine_fn(void *ctx, const double p[3], double density, double out[3]) {
+  (void)density;
+  cupid_test_affine_eval(ctx, p, out);
+}
+
+cupid_test_affine cupid_test_random_affine(uint64_t seed) {
+  cupid_test_affine a;
+  uint64_t s = seed;
+  for (int k = 0; k < 3; k++) {
+    a.c[k] = 1e-3 * cupid_test_random(&s);
+    for (int d = 0; d < 3; d++) a.B[k][d] = 1e-3 * cupid_test_random(&s);
+  }
+  return a;
+}

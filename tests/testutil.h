@@ -36,6 +36,20 @@ int cupid_test_mkdtemp(const char *tag, char *buf, size_t len);
 /** Remove a directory tree (rm -rf); 0 on success. */
 int cupid_test_rmtree(const char *path);
 
+/** An affine displacement field u(p) = c + B p (patch tests). */
+typedef struct {
+  double c[3], B[3][3];
+} cupid_test_affine;
+
+/** Evaluate an affine field at p. */
+void cupid_test_affine_eval(const cupid_test_affine *a, const double p[3], double out[3]);
+
+/** The same as a field callback (ctx: a cupid_test_affine); density is unused. */
+void cupid_test_affine_fn(void *ctx, const double p[3], double density, double out[3]);
+
+/** A deterministic random affine field with entries of size 1e-3. */
+cupid_test_affine cupid_test_random_affine(uint64_t seed);
+
 /** Absolute path of a file in the source tree (tests run from the build tree). */
 const char *cupid_test_source_path(const char *relative);
 

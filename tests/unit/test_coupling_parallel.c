@@ -116,37 +116,12 @@ static void destroy(par_model *m) {
   cupid_cuf_beam_destroy(&m->full_beam);
 }
 
-typedef struct {
-  double c[3], B[3][3];
-} affine;
 
-static void affine_eval(const affine *a, const double p[3], double out[3]) {
-  for (int k = 0; k < 3; k++) {
-    out[k] = a->c[k];
-    for (int d = 0; d < 3; d++) out[k] += a->B[k][d] * p[d];
-  }
-}
-
-static void affine_fn(void *ctx, const double p[3], double density, double out[3]) {
-  (void)density;
-  affine_eval(ctx, p, out);
-}
-
-static affine random_affine(uint64_t seed) {
-  affine a;
-  uint64_t s = seed;
-  for (int k = 0; k < 3; k++) {
-    a.c[k] = 1e-3 * cupid_test_random(&s);
-    for (int d = 0; d < 3; d++) a.B[k][d] = 1e-3 * cupid_test_random(&s);
-  }
-  return a;
-}
-
-static void field_vector(const par_model *m, const affine *a, double *u) {
+static void field_vector(const par_model *m, const cupid_test_affine *a, double *u) {
   memset(u, 0, (size_t)m->ndof * sizeof *u);
   const double *x = cupid_pd_grid_coords(m->grid);
-  for (cupid_int i = 0; i < m->n_pd; i++) affine_eval(a, x + 3 * i, u + 3 * i);
-  CUPID_ASSERT_OK(cupid_cuf_interpolate(m->beam, affine_fn, (void *)a, u));
+  for (cupid_int i = 0; i < m->n_pd; i++) cupid_test_affine_eval(a, x + 3 * i, u + 3 * i);
+  CUPID_ASSERT_OK(cupid_cuf_interpolate(m->beam, cupid_test_affine_fn, (void *)a, u));
 }
 
 static cupid_int full_node(const par_model *m, const double *x) {
@@ -158,7 +133,7 @@ static cupid_int full_node(const par_model *m, const double *x) {
 }
 
 /* Max |coupled row - reference row| over real PD nodes and real FE nodes for field a. */
-static void compare_rows(const par_model *m, const affine *a, double *worst_pd, double *worst_fe,
+static void compare_rows(const par_model *m, const cupid_test_affine *a, double *worst_pd, double *worst_fe,
                          double *worst_interior) {
   cupid_int nf = cupid_pd_grid_num_nodes(m->full);
   cupid_cuf_info info;
@@ -172,7 +147,7 @@ static void compare_rows(const par_model *m, const affine *a, double *worst_pd, 
   field_vector(m, a, u);
   cupid_csr_matvec(m->K, u, f);
   const double *xf = cupid_pd_grid_coords(m->full);
-  for (cupid_int i = 0; i < nf; i++) affine_eval(a, xf + 3 * i, uf + 3 * i);
+  for (cupid_int i = 0; i < nf; i++) cupid_test_affine_eval(a, xf + 3 * i, uf + 3 * i);
   CUPID_ASSERT_OK(cupid_pd_operator_apply(m->full_op, uf, ff));
   cupid_csr_matvec(m->Kfe, u + 3 * m->n_pd, fe);
   const double *x = cupid_pd_grid_coords(m->grid);
@@ -208,16 +183,16 @@ static void check_case(const par_case *pc) {
   cupid_cuf_info info;
   cupid_cuf_get_info(m.beam, &info);
   double wpd, wfe, wint;
-  affine a = random_affine(11);
+  cupid_test_affine a = cupid_test_random_affine(11);
   compare_rows(&m, &a, &wpd, &wfe, &wint);
-  printf("  affine: PD rows vs all-PD %.2e, FE rows vs full FE %.2e, interior FE |f| %.2e "
+  printf("  cupid_test_affine: PD rows vs all-PD %.2e, FE rows vs full FE %.2e, interior FE |f| %.2e "
          "(scale %.1e)\n", wpd, wfe, wint, FSCALE);
   assert_true(wpd <= 1e-10 * FSCALE);
   assert_true(wfe <= 1e-10 * FSCALE * XW * XW);
   assert_true(wint <= 1e-10 * FSCALE * XW * XW);
 
   /* Solve: nu = 0 uniaxial traction field u_y = e y (traction-free lateral faces). */
-  affine b;
+  cupid_test_affine b;
   memset(&b, 0, sizeof b);
   b.B[1][1] = 1e-3;
   b.c[1] = 2e-4;

@@ -111,37 +111,11 @@ static void destroy(patch_model *m) {
   cupid_cuf_beam_destroy(&m->beam);
 }
 
-/* Affine fields: u = c + B (x - x0). */
-typedef struct {
-  double c[3], B[3][3];
-} affine;
-
-static void affine_eval(const affine *a, const double p[3], double out[3]) {
-  for (int k = 0; k < 3; k++) {
-    out[k] = a->c[k];
-    for (int d = 0; d < 3; d++) out[k] += a->B[k][d] * p[d];
-  }
-}
-
-static void affine_fn(void *ctx, const double p[3], double density, double out[3]) {
-  (void)density;
-  affine_eval(ctx, p, out);
-}
-
-static affine random_affine(uint64_t seed) {
-  affine a;
-  uint64_t s = seed;
-  for (int k = 0; k < 3; k++) {
-    a.c[k] = 1e-3 * cupid_test_random(&s);
-    for (int d = 0; d < 3; d++) a.B[k][d] = 1e-3 * cupid_test_random(&s);
-  }
-  return a;
-}
 
 /* Uniaxial stress sigma_yy with Poisson contraction: an exact FE solution with free lateral
  * faces (no traction on x = const or z = const). */
-static affine uniaxial(double nu) {
-  affine a;
+static cupid_test_affine uniaxial(double nu) {
+  cupid_test_affine a;
   memset(&a, 0, sizeof a);
   double e = 1e-3;
   a.B[1][1] = e;
@@ -151,11 +125,11 @@ static affine uniaxial(double nu) {
   return a;
 }
 
-static void field_vector(const patch_model *m, const affine *a, double *u) {
+static void field_vector(const patch_model *m, const cupid_test_affine *a, double *u) {
   memset(u, 0, (size_t)m->ndof * sizeof *u);
   const double *x = cupid_pd_grid_coords(m->grid);
-  for (cupid_int i = 0; i < m->n_pd; i++) affine_eval(a, x + 3 * i, u + 3 * i);
-  CUPID_ASSERT_OK(cupid_cuf_interpolate(m->beam, affine_fn, (void *)a, u));
+  for (cupid_int i = 0; i < m->n_pd; i++) cupid_test_affine_eval(a, x + 3 * i, u + 3 * i);
+  CUPID_ASSERT_OK(cupid_cuf_interpolate(m->beam, cupid_test_affine_fn, (void *)a, u));
 }
 
 /* Force scale: E * strain * cell area. */
@@ -175,11 +149,11 @@ static void check_ghost_forces(const patch_case *pc) {
   CUPID_ASSERT_OK(cupid_pd_grid_interior(m.full, 2 * pc->delta, interior));
 
   /* PD rows under a general affine field (TE1 and up and LE hold every affine field). */
-  affine a = random_affine(7);
+  cupid_test_affine a = cupid_test_random_affine(7);
   field_vector(&m, &a, u);
   cupid_csr_matvec(m.K, u, f);
   const double *xf = cupid_pd_grid_coords(m.full);
-  for (cupid_int i = 0; i < nf; i++) affine_eval(&a, xf + 3 * i, uf + 3 * i);
+  for (cupid_int i = 0; i < nf; i++) cupid_test_affine_eval(&a, xf + 3 * i, uf + 3 * i);
   CUPID_ASSERT_OK(cupid_pd_operator_apply(m.full_op, uf, ff));
   const double *x = cupid_pd_grid_coords(m.grid);
   double worst = 0.0, worst_interior = 0.0;
@@ -201,7 +175,7 @@ static void check_ghost_forces(const patch_case *pc) {
   assert_true(worst_interior <= 1e-10 * FSCALE);
 
   /* FE rows under uniaxial stress: zero away from the loaded/clamped ends. */
-  affine b = uniaxial(pc->nu);
+  cupid_test_affine b = uniaxial(pc->nu);
   field_vector(&m, &b, u);
   cupid_csr_matvec(m.K, u, f);
   cupid_cuf_info info;
@@ -213,7 +187,7 @@ static void check_ghost_forces(const patch_case *pc) {
     if (y < 1e-9 || y > YL - 1e-9) continue;
     for (int c = 0; c < 3; c++) worst_fe = fmax(worst_fe, fabs(f[3 * m.n_pd + 3 * n + c]));
   }
-  for (cupid_int i = 0; i < nf; i++) affine_eval(&b, xf + 3 * i, uf + 3 * i);
+  for (cupid_int i = 0; i < nf; i++) cupid_test_affine_eval(&b, xf + 3 * i, uf + 3 * i);
   CUPID_ASSERT_OK(cupid_pd_operator_apply(m.full_op, uf, ff));
   for (cupid_int i = 0; i < m.n_pd; i++) {
     cupid_int ijk[3];
