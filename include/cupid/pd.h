@@ -132,6 +132,23 @@ cupid_int cupid_pd_operator_num_bonds(const cupid_pd_operator op);
 cupid_status cupid_pd_operator_apply(const cupid_pd_operator op, const double *u, double *f);
 
 /**
+ * Rows [first, last) of K u: f has 3 (last - first) entries, u is indexed by global node but
+ * only the nodes [lo, hi) of cupid_pd_operator_dependency_range() are read. The building block
+ * of a distributed (MPI) or blocked matrix-free product; first = 0, last = nodes equals
+ * cupid_pd_operator_apply().
+ */
+cupid_status cupid_pd_operator_apply_range(const cupid_pd_operator op, cupid_int first,
+                                           cupid_int last, const double *u, double *f);
+
+/**
+ * The node range [*lo, *hi) that rows [first, last) of K u depend on (bond-based: the
+ * families of the rows; LPS: two hops, since theta_j of every neighbour j is needed). Nodes
+ * are numbered z slowest, so a slab of z layers depends on a slab widened by the reach.
+ */
+cupid_status cupid_pd_operator_dependency_range(const cupid_pd_operator op, cupid_int first,
+                                                cupid_int last, cupid_int *lo, cupid_int *hi);
+
+/**
  * Assemble K analytically in 3x3-block CSR (LPS couples nodes up to 2 delta apart):
  * K = K_pair + sum_p c_p g_p g_p^T, c_p = V (3K_p - 5mu_p)/3, g_p = d theta_p/dU.
  * OpenMP row-wise gather, O(nodes). *K is a new matrix (struct and arrays from

@@ -3,10 +3,11 @@
 #include "pd/pd_internal.h"
 
 /* (K u)_i = -sum_j c_ij omega beta V^2 (e_ij / x_ij) n_ij. */
-void pd_bond_apply(const struct cupid_pd_operator_private *op, const double *u, double *f) {
+void pd_bond_apply(const struct cupid_pd_operator_private *op, cupid_int first, cupid_int last,
+                   const double *u, double *f) {
   const pd_stencil *S = &op->st;
-#pragma omp parallel for schedule(static) if (op->nnodes > PD_OMP_MIN_NODES)
-  for (cupid_int i = 0; i < op->nnodes; i++) {
+#pragma omp parallel for schedule(static) if (last - first > PD_OMP_MIN_NODES)
+  for (cupid_int i = first; i < last; i++) {
     double fi[3] = {0, 0, 0};
     for (cupid_int b = op->bptr[i]; b < op->bptr[i + 1]; b++) {
       const cupid_int j = op->bnbr[b];
@@ -15,7 +16,7 @@ void pd_bond_apply(const struct cupid_pd_operator_private *op, const double *u, 
       const double t = pd_pair_coefficient(op, i, j, s) * pd_extension(n, u, i, j);
       for (int c = 0; c < 3; c++) fi[c] += t * n[c];
     }
-    for (int c = 0; c < 3; c++) f[3 * i + c] = -fi[c];
+    for (int c = 0; c < 3; c++) f[3 * (i - first) + c] = -fi[c];
   }
 }
 

@@ -3,10 +3,11 @@
 #include "pd/pd_internal.h"
 
 /* theta_i = 3/m_i sum_j omega x e beta V (Eq. 19, e from Eq. 17). */
-void pd_lps_dilatation(const struct cupid_pd_operator_private *op, const double *u, double *theta) {
+void pd_lps_dilatation(const struct cupid_pd_operator_private *op, cupid_int first, cupid_int last,
+                       const double *u, double *theta) {
   const pd_stencil *S = &op->st;
-#pragma omp parallel for schedule(static) if (op->nnodes > PD_OMP_MIN_NODES)
-  for (cupid_int i = 0; i < op->nnodes; i++) {
+#pragma omp parallel for schedule(static) if (last - first > PD_OMP_MIN_NODES)
+  for (cupid_int i = first; i < last; i++) {
     double t = 0.0;
     for (cupid_int b = op->bptr[i]; b < op->bptr[i + 1]; b++) {
       const cupid_int j = op->bnbr[b];
@@ -20,12 +21,12 @@ void pd_lps_dilatation(const struct cupid_pd_operator_private *op, const double 
 /* (K u)_i = -sum_j beta V^2 omega [ kappa_i x theta_i/m_i + kappa_j x theta_j/m_j
  *                                   + 15 (mu_i/m_i + mu_j/m_j) e_ij ] n_ij,
  * i.e. -(T_ij - T_ji) beta V^2 of Eq. 21 with T of Eq. 20, kappa = 3K - 5mu. */
-void pd_lps_apply(const struct cupid_pd_operator_private *op, const double *u, const double *theta,
-                  double *f) {
+void pd_lps_apply(const struct cupid_pd_operator_private *op, cupid_int first, cupid_int last,
+                  const double *u, const double *theta, double *f) {
   const pd_stencil *S = &op->st;
   const double V2 = op->V * op->V;
-#pragma omp parallel for schedule(static) if (op->nnodes > PD_OMP_MIN_NODES)
-  for (cupid_int i = 0; i < op->nnodes; i++) {
+#pragma omp parallel for schedule(static) if (last - first > PD_OMP_MIN_NODES)
+  for (cupid_int i = first; i < last; i++) {
     const double ai = op->kappa[i] * theta[i] / op->m[i], bi = op->mu[i] / op->m[i];
     double fi[3] = {0, 0, 0};
     for (cupid_int b = op->bptr[i]; b < op->bptr[i + 1]; b++) {
@@ -36,7 +37,7 @@ void pd_lps_apply(const struct cupid_pd_operator_private *op, const double *u, c
       const double t = S->wb[s] * ((ai + aj) * S->x[s] + 15.0 * (bi + bj) * pd_extension(n, u, i, j));
       for (int c = 0; c < 3; c++) fi[c] += t * n[c];
     }
-    for (int c = 0; c < 3; c++) f[3 * i + c] = -V2 * fi[c];
+    for (int c = 0; c < 3; c++) f[3 * (i - first) + c] = -V2 * fi[c];
   }
 }
 

@@ -129,7 +129,7 @@ cupid_status cupid_pd_operator_dilatation(const cupid_pd_operator op, const doub
                                           double *theta) {
   CUPID_CHECK(op && u && theta, CUPID_ERR_ARGUMENT, "dilatation needs operator, u and theta");
   if (op->model == CUPID_PD_LPS)
-    pd_lps_dilatation(op, u, theta);
+    pd_lps_dilatation(op, 0, op->nnodes, u, theta);
   else
     memset(theta, 0, (size_t)op->nnodes * sizeof *theta);
   return CUPID_SUCCESS;
@@ -138,13 +138,63 @@ cupid_status cupid_pd_operator_dilatation(const cupid_pd_operator op, const doub
 cupid_status cupid_pd_operator_apply(const cupid_pd_operator op, const double *u, double *f) {
   CUPID_CHECK(op && u && f, CUPID_ERR_ARGUMENT, "apply needs operator, u and f");
   if (op->model == CUPID_PD_BOND) {
-    pd_bond_apply(op, u, f);
+    pd_bond_apply(op, 0, op->nnodes, u, f);
     return CUPID_SUCCESS;
   }
   double *theta = NULL;
   CUPID_CALL(cupid_malloc((size_t)op->nnodes, sizeof *theta, "PD dilatations", &theta));
-  pd_lps_dilatation(op, u, theta);
-  pd_lps_apply(op, u, theta, f);
+  pd_lps_dilatation(op, 0, op->nnodes, u, theta);
+  pd_lps_apply(op, 0, op->nnodes, u, theta, f);
+  cupid_free(&theta);
+  return CUPID_SUCCESS;
+}
+
+/* Smallest and largest neighbour index of the nodes [first, last) (the node itself included). */
+static void neighbour_span(const struct cupid_pd_operator_private *op, cupid_int first,
+                           cupid_int last, cupid_int *lo, cupid_int *hi) {
+  cupid_int a = first, b = last;
+  for (cupid_int i = first; i < last; i++)
+    for (cupid_int k = op->bptr[i]; k < op->bptr[i + 1]; k++) {
+      if (op->bnbr[k] < a) a = op->bnbr[k];
+      if (op->bnbr[k] + 1 > b) b = op->bnbr[k] + 1;
+    }
+  *lo = a;
+  *hi = b;
+}
+
+cupid_status cupid_pd_operator_dependency_range(const cupid_pd_operator op, cupid_int first,
+                                                cupid_int last, cupid_int *lo, cupid_int *hi) {
+  CUPID_CHECK(op && lo && hi, CUPID_ERR_ARGUMENT, "dependency range needs operator and outputs");
+  CUPID_CHECK(first >= 0 && first <= last && last <= op->nnodes, CUPID_ERR_ARGUMENT,
+              "node range [%lld, %lld) outside [0, %lld)", (long long)first, (long long)last,
+              (long long)op->nnodes);
+  if (first == last) {
+    *lo = *hi = first;
+    return CUPID_SUCCESS;
+  }
+  neighbour_span(op, first, last, lo, hi);
+  if (op->model == CUPID_PD_LPS) neighbour_span(op, *lo, *hi, lo, hi); /* theta_j needs j's family */
+  return CUPID_SUCCESS;
+}
+
+cupid_status cupid_pd_operator_apply_range(const cupid_pd_operator op, cupid_int first,
+                                           cupid_int last, const double *u, double *f) {
+  CUPID_CHECK(op && u && f, CUPID_ERR_ARGUMENT, "apply_range needs operator, u and f");
+  CUPID_CHECK(first >= 0 && first <= last && last <= op->nnodes, CUPID_ERR_ARGUMENT,
+              "node range [%lld, %lld) outside [0, %lld)", (long long)first, (long long)last,
+              (long long)op->nnodes);
+  if (first == last) return CUPID_SUCCESS;
+  if (op->model == CUPID_PD_BOND) {
+    pd_bond_apply(op, first, last, u, f);
+    return CUPID_SUCCESS;
+  }
+  cupid_int lo, hi;
+  neighbour_span(op, first, last, &lo, &hi);
+  double *theta = NULL;
+  /* theta is indexed by global node (8 bytes a node); only [lo, hi) is computed and read. */
+  CUPID_CALL(cupid_malloc((size_t)op->nnodes, sizeof *theta, "PD dilatations", &theta));
+  pd_lps_dilatation(op, lo, hi, u, theta);
+  pd_lps_apply(op, first, last, u, theta, f);
   cupid_free(&theta);
   return CUPID_SUCCESS;
 }
@@ -157,7 +207,7 @@ cupid_status cupid_pd_operator_energy(const cupid_pd_operator op, const double *
   }
   double *theta = NULL;
   CUPID_CALL(cupid_malloc((size_t)op->nnodes, sizeof *theta, "PD dilatations", &theta));
-  pd_lps_dilatation(op, u, theta);
+  pd_lps_dilatation(op, 0, op->nnodes, u, theta);
   *energy = pd_lps_energy(op, u, theta);
   cupid_free(&theta);
   return CUPID_SUCCESS;
@@ -171,7 +221,7 @@ cupid_status cupid_pd_operator_stress(const cupid_pd_operator op, const double *
   }
   double *theta = NULL;
   CUPID_CALL(cupid_malloc((size_t)op->nnodes, sizeof *theta, "PD dilatations", &theta));
-  pd_lps_dilatation(op, u, theta);
+  pd_lps_dilatation(op, 0, op->nnodes, u, theta);
   pd_lps_stress(op, u, theta, sigma);
   cupid_free(&theta);
   return CUPID_SUCCESS;

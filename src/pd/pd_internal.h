@@ -94,14 +94,17 @@ static inline double pd_pair_coefficient(const struct cupid_pd_operator_private 
 }
 
 /* Model kernels (lps.c, bond.c): u, f 3 per node, sigma 6 per node. */
-void pd_lps_dilatation(const struct cupid_pd_operator_private *op, const double *u, double *theta);
-void pd_lps_apply(const struct cupid_pd_operator_private *op, const double *u, const double *theta,
-                  double *f);
+/* Range kernels: nodes [first, last); theta is indexed by global node, f by i - first. */
+void pd_lps_dilatation(const struct cupid_pd_operator_private *op, cupid_int first, cupid_int last,
+                       const double *u, double *theta);
+void pd_lps_apply(const struct cupid_pd_operator_private *op, cupid_int first, cupid_int last,
+                  const double *u, const double *theta, double *f);
 double pd_lps_energy(const struct cupid_pd_operator_private *op, const double *u,
                      const double *theta);
 void pd_lps_stress(const struct cupid_pd_operator_private *op, const double *u, const double *theta,
                    double *sigma);
-void pd_bond_apply(const struct cupid_pd_operator_private *op, const double *u, double *f);
+void pd_bond_apply(const struct cupid_pd_operator_private *op, cupid_int first, cupid_int last,
+                   const double *u, double *f);
 double pd_bond_energy(const struct cupid_pd_operator_private *op, const double *u);
 void pd_bond_stress(const struct cupid_pd_operator_private *op, const double *u, double *sigma);
 
