@@ -527,6 +527,12 @@ static cupid_status read_peridynamics(model_reader *rd, yaml_node_t *node) {
   if (!(pd->horizon > pd->spacing))
     return mr_error(rd, horizon, "peridynamics.horizon", "must be larger than spacing (%g), got %g",
                     pd->spacing, pd->horizon);
+  /* The same bound as pd_stencil_build, reported here with the file position. */
+  if (pd->horizon / pd->spacing > 64)
+    return mr_error(rd, horizon, "peridynamics.horizon",
+                    "horizon/spacing = %g is beyond the supported 64 (m = 3 to 4 is usual; the "
+                    "stencil would hold ~%.3g offsets a node)",
+                    pd->horizon / pd->spacing, 4.19 * pow(pd->horizon / pd->spacing, 3));
   CUPID_CALL(read_pd_options(rd, &map, pd));
   if ((material = mr_get(&map, "material")))
     CUPID_CALL(mr_material(rd, material, "peridynamics.material", &pd->material));

@@ -57,7 +57,7 @@ run~nodes_5e8.yaml~1~1~at least 500000000 PD nodes.*more than the limit of 64 GB
 run~nodes_5e8.yaml~1~1~at least 500000000 PD nodes.*more than the limit of~
 check~wide_horizon_bond.yaml~1~1~at least 8000000 PD nodes and 4.63e\+11 bonds~
 run~wide_horizon_lps.yaml~1~1~horizon/spacing = 25 gives an LPS stencil of 6.53e\+04 offsets~
-check~horizon_ratio_100.yaml~1~1~horizon/spacing = 100 is beyond the supported 64~
+check~horizon_ratio_100.yaml~1~1~horizon_ratio_100.yaml:[0-9]+:[0-9]+: peridynamics.horizon: horizon/spacing = 100 is beyond the supported 64~
 check~overlapping_regions.yaml~1~1~overlapping_regions.yaml:5:3: peridynamics: the 1001 PD regions overlap so much that building the grid would visit 1e\+09 cells~
 run~line_points_total.yaml~1~1~line_points_total.yaml:13:3: output: the output lines hold 110000000 points in all, more than 100000000~
 run~sampling_work.yaml~1~1~sampling the 10000000 output points against the 2001 PD regions would take 2e\+10 region tests~
