@@ -5,7 +5,8 @@
  *  - its solve (ends clamped / pulled, CHOLMOD) gives tied PD nodes that follow the beam's
  *    interface section exactly after cupid_coupling_recover() (1e-12 relative);
  *  - global equilibrium holds: the reaction balances the applied end load to 1e-9 relative
- *    (a symmetric coupling conserves momentum; the fictitious-node method does not). */
+ *    (a symmetric coupling conserves momentum; the fictitious-node method does not);
+ *  - the mass of the eliminated system carries the whole bar's mass (check_mass). */
 #include <math.h>
 #include <stdio.h>
 #include <string.h>
@@ -13,9 +14,77 @@
 #include "cupid/coupling.h"
 #include "test_cuf_common.h"
 
+#define RHO 2.5 /* density of the mass checks */
+
+/* The mass of the eliminated system (dynamics): the FE mass, rho V on the untied PD nodes and
+ * the tied nodes' rho V carried by the beam (cupid_coupling_lagrange_mass()). A rigid
+ * translation along y (the translational functions: every LE node, the constant TE term; the
+ * untied PD nodes) must carry the whole bar's mass rho 8 x 8 x 18, consistent (t^T M t) and
+ * lumped (the sum of the translational diagonal) alike: 1e-12 relative (sums of ~1e3 positive
+ * terms). M is symmetric (1e-13) and a tied node's mass reaches the beam only (checked through
+ * the total: the tied PD entries are left at zero). */
+static void check_mass(cupid_cuf_beam beam, cupid_pd_grid grid, cupid_coupling_h c, cupid_csr K,
+                       int le) {
+  double rho = RHO, total = rho * 8.0 * 8.0 * 18.0;
+  cupid_int n_pd = cupid_pd_grid_num_nodes(grid), ndof = 3 * K->nrows;
+  cupid_cuf_info info;
+  cupid_cuf_get_info(beam, &info);
+  const cupid_int *tied;
+  cupid_int nt;
+  cupid_coupling_tied(c, &tied, &nt);
+  double *pd_mass = NULL, *lumped = NULL, *t = NULL, *Mt = NULL;
+  CUPID_ASSERT_OK(cupid_calloc((size_t)n_pd, sizeof *pd_mass, "pd mass", &pd_mass));
+  CUPID_ASSERT_OK(cupid_calloc((size_t)ndof, sizeof *lumped, "lumped", &lumped));
+  CUPID_ASSERT_OK(cupid_calloc((size_t)ndof, sizeof *t, "t", &t));
+  CUPID_ASSERT_OK(cupid_calloc((size_t)ndof, sizeof *Mt, "Mt", &Mt));
+  for (cupid_int i = 0; i < n_pd; i++) pd_mass[i] = rho * 1.0;
+  cupid_csr M = NULL;
+  CUPID_ASSERT_OK(cupid_csr_duplicate(K, &M));
+  cupid_csr_zero(M);
+  CUPID_ASSERT_OK(cupid_cuf_mass_add(beam, M));
+  CUPID_ASSERT_OK(cupid_coupling_lagrange_mass(c, pd_mass, M, NULL));
+  CUPID_ASSERT_OK(cupid_cuf_mass_lumped(beam, lumped));
+  CUPID_ASSERT_OK(cupid_coupling_lagrange_mass(c, pd_mass, NULL, lumped));
+  assert_int_equal(cupid_coupling_lagrange_mass(c, pd_mass, M, lumped), CUPID_ERR_ARGUMENT);
+  int *is_tied = NULL;
+  CUPID_ASSERT_OK(cupid_calloc((size_t)n_pd, sizeof *is_tied, "tied flags", &is_tied));
+  for (cupid_int k = 0; k < nt; k++) is_tied[tied[k]] = 1;
+  double lump_sum = 0.0;
+  for (cupid_int i = 0; i < n_pd; i++)
+    if (!is_tied[i]) {
+      double *blk = cupid_csr_find(M, i, i);
+      assert_non_null(blk);
+      blk[4] += pd_mass[i]; /* the y component is enough here */
+      t[3 * i + 1] = 1.0;
+      lump_sum += pd_mass[i];
+    }
+  for (cupid_int n = 0; n < info.n_fe_nodes; n++)
+    if ((le || n % info.M == 0) && cupid_cuf_node_used(beam, (int)(n % info.M), n / info.M)) {
+      t[3 * n_pd + 3 * n + 1] = 1.0;
+      lump_sum += lumped[3 * n_pd + 3 * n + 1];
+    }
+  cupid_csr_matvec(M, t, Mt);
+  double tmt = 0.0;
+  for (cupid_int d = 0; d < ndof; d++) tmt += t[d] * Mt[d];
+  double asym = cupid_csr_asymmetry(M);
+  printf("  %s mass: translation t^T M t = %.12g, lumped %.12g, exact %.12g, asymmetry %.2e\n",
+         le ? "L9" : "TE2", tmt, lump_sum, total, asym);
+  assert_true(fabs(tmt - total) <= 1e-12 * total);
+  assert_true(fabs(lump_sum - total) <= 1e-12 * total);
+  assert_true(asym <= 1e-13);
+  cupid_csr_destroy(&M);
+  cupid_free(&is_tied);
+  cupid_free(&pd_mass);
+  cupid_free(&lumped);
+  cupid_free(&t);
+  cupid_free(&Mt);
+}
+
 static void run_case(int le) {
   tb_beam tb;
   tb_init(&tb, 1000.0, 0.2);
+  tb.mat[0].density = RHO;
+  tb.mat[0].has_density = 1;
   if (le) {
     tb_le(&tb, 9);
     tb_rect(&tb, 0, 8, 1, 0, 8, 1, -1);
@@ -102,6 +171,7 @@ static void run_case(int le) {
   for (cupid_int d = 0; d < ndof; d++) reaction += t[d] * r[d];
   printf("  %s: asymmetry %.2e, tied-node misfit %.2e, reaction %.10g vs load %g\n",
          le ? "L9" : "TE2", asym, err / umax, reaction, P);
+  check_mass(beam, grid, c, K, le);
   assert_true(asym <= 1e-13);
   assert_true(err <= 1e-12 * umax);
   assert_true(fabs(reaction + P) <= 1e-9 * P);
