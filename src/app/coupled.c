@@ -19,9 +19,12 @@ int cupid_app_is_coupled(const cupid_job *job) {
 cupid_status cupid_app_coupled_check(const cupid_job *job) {
   const cupid_model_t *m = job->model;
   if (cupid_app_is_arlequin(job)) return cupid_app_arlequin_check(job); /* coupled_arlequin.c */
-  if (m->pd.dimension != 3)
+  /* Lagrange ties nodes to the beam field, whatever the grid's dimension (a 1D grid: a bar
+   * along the axis, its nodes on the axis); the fictitious nodes and elements need 3D. */
+  if (m->pd.dimension != 3 && m->coupling.method != CUPID_COUPLING_LAGRANGE)
     return cupid_model_error(m, &m->pd.mark,
-                             "a coupled model needs a 3D peridynamic grid (dimension: 3)");
+                             "a coupled model needs a 3D peridynamic grid (dimension: 3) with "
+                             "method fictitious (1D grids: methods lagrange and arlequin)");
   if (m->analysis.type == CUPID_ANALYSIS_DYNAMIC && m->coupling.method != CUPID_COUPLING_LAGRANGE)
     return cupid_model_error(m, &m->analysis.mark,
                              "type dynamic is not supported with coupling method fictitious: its "
