@@ -5,7 +5,9 @@
  *
  * FE-only and PD-only models. The global system uses the [3 per PD node | FE DOFs] layout of
  * the job, so a coupled model only needs its coupling terms in K (and, for Arlequin, the
- * weighted masses: coupled_arlequin.c) before cupid_dynamics_run(). */
+ * weighted masses: coupled_arlequin.c; for Lagrange, the tied PD nodes' mass moved onto the
+ * beam through the tie, and outputs that see the tied nodes recovered) before
+ * cupid_dynamics_run(). */
 #include <math.h>
 #include <stdio.h>
 #include <string.h>
