@@ -116,16 +116,23 @@ cupid_status cupid_coupling_create(cupid_cuf_beam beam, cupid_pd_grid grid,
 
 /**
  * The Lagrange-multiplier coupling (Pagani & Carrera 2020, the baseline of paper 000 section
- * 5.1; cuf.md section 7), solved by elimination: every real PD node q on the PD plane nearest
- * an interface y_I (y_I +- h/2) is tied to the CUF field of the interface section,
- * u_q = sum_tau F_tau(x_q, z_q) u_{tau, I}. Eliminating the constraints (u = T [u_m; u_FE])
- * gives the symmetric positive definite K = T^T diag(K_PD, K_FE) T, identical to the
- * saddle-point solution; the multipliers are the reactions of the tied nodes. The PD grid holds
- * the real nodes only (no fictitious nodes): the truncated families at the interfaces cause
- * the distortions paper 000 reports. *K has the layout of cupid_coupling_create(); the rows
- * and columns of tied PD nodes are empty but for a zero diagonal block: fix their DOFs
- * (cupid_coupling_tied()) and fill them after the solve with cupid_coupling_recover().
- * Regions over part of the section: CUPID_ERR_UNSUPPORTED (not yet supported).
+ * 5.1; cuf.md section 7), solved by elimination. Every real PD node q of the layer nearest a
+ * face of its region (h/2 inside) whose mirror image across the face lies in an active part of
+ * the beam is tied to the CUF field at its interface point p_q (q's coordinate normal to that
+ * face moved onto the face; a node in an edge or corner layer of two or three such faces lands
+ * on the edge or corner): u_q = sum_n w_n(p_q) u_n (cupid_cuf_shape_at()). Faces normal to the
+ * axis (y bounds: the full-section bar, p_q = (x_q, y_I, z_q)) and parallel to it (x/z bounds of
+ * a region over part of an LE section: the C-beam web, the panel's stringers) are treated
+ * alike; a face on the beam's outer surface or against another PD region ties nothing.
+ * Eliminating the constraints (u = T [u_m; u_FE]) gives the symmetric positive definite
+ * K = T^T diag(K_PD, K_FE) T, identical to the saddle-point solution; the multipliers are the
+ * reactions of the tied nodes. The PD grid holds the real nodes only (no fictitious nodes):
+ * the truncated families at the interfaces and the h/2 offset of the tied layer cause the
+ * distortions paper 000 reports. *K has the layout of cupid_coupling_create(); the rows and
+ * columns of tied PD nodes are empty but for a zero diagonal block: fix their DOFs
+ * (cupid_coupling_tied()) and fill them after the solve with cupid_coupling_recover(); loads on
+ * them go to the beam with cupid_coupling_lagrange_load(). info.n_interfaces counts the region
+ * faces with tied nodes. A region over part of the section of a TE beam: CUPID_ERR_MODEL.
  */
 cupid_status cupid_coupling_lagrange_create(cupid_cuf_beam beam, cupid_pd_grid grid,
                                             const cupid_coupling_options *opts,
@@ -136,6 +143,26 @@ void cupid_coupling_tied(const cupid_coupling_h c, const cupid_int **nodes, cupi
 
 /** Set the displacements of the tied PD nodes from the FE DOFs of u (Lagrange coupling). */
 void cupid_coupling_recover(const cupid_coupling_h c, double *u);
+
+/**
+ * Lagrange coupling: move the forces on tied PD DOFs of f to the beam, f_FE += T^T f_tied, and
+ * zero them (the load vector of the eliminated system; a load on a tied node acts on the beam).
+ */
+void cupid_coupling_lagrange_load(const cupid_coupling_h c, double *f);
+
+/**
+ * Lagrange coupling in dynamics: the tied PD nodes' masses carried by the beam through the
+ * tie, the mass of the eliminated system T^T diag(M_PD, M_FE) T restricted to the tied part:
+ * consistent (into @p M, a matrix with the pattern of the coupled K; adds m_q w_a w_b I3 to
+ * the FE blocks (a, b) of every tied node q) or HRZ-lumped (into the diagonal @p lumped:
+ * m_q w_a^2 / sum w_t^2 over the translational functions t, every LE node or the constant TE
+ * term, so that a translation carries m_q). Exactly one of M and lumped is non-NULL;
+ * @p pd_mass holds rho V per real PD node (the entries of tied nodes are read only here: the
+ * caller leaves them out of its own PD mass). The rest of the system's mass (FE, untied PD
+ * nodes) is the caller's.
+ */
+cupid_status cupid_coupling_lagrange_mass(const cupid_coupling_h c, const double *pd_mass,
+                                          cupid_csr M, double *lumped);
 
 /** Destroy and set *c to NULL (NULL-safe). */
 void cupid_coupling_destroy(cupid_coupling_h *c);

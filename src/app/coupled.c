@@ -1,7 +1,8 @@
 /* Coupled models (beam + peridynamics) inside a run: the beam gives way inside the PD regions,
  * constraints and loads go to the part they touch, the coupled matrix of paper 000 Eq. 38
  * (src/coupling) is solved by UMFPACK (it is not symmetric). Methods: fictitious (default) and
- * lagrange (eliminated, SPD, CHOLMOD); arlequin dispatches to coupled_arlequin.c. */
+ * lagrange (eliminated, SPD, CHOLMOD; also in dynamics: cupid_app_run_dynamic() with the tied
+ * PD masses carried by the beam); arlequin dispatches to coupled_arlequin.c. */
 #include <math.h>
 #include <stdio.h>
 #include <string.h>
@@ -18,17 +19,20 @@ int cupid_app_is_coupled(const cupid_job *job) {
 cupid_status cupid_app_coupled_check(const cupid_job *job) {
   const cupid_model_t *m = job->model;
   if (cupid_app_is_arlequin(job)) return cupid_app_arlequin_check(job); /* coupled_arlequin.c */
-  if (m->pd.dimension != 3)
+  /* Lagrange ties nodes to the beam field, whatever the grid's dimension (a 1D grid: a bar
+   * along the axis, its nodes on the axis); the fictitious nodes and elements need 3D. */
+  if (m->pd.dimension != 3 && m->coupling.method != CUPID_COUPLING_LAGRANGE)
     return cupid_model_error(m, &m->pd.mark,
-                             "a coupled model needs a 3D peridynamic grid (dimension: 3)");
-  if (m->analysis.type == CUPID_ANALYSIS_DYNAMIC)
+                             "a coupled model needs a 3D peridynamic grid (dimension: 3) with "
+                             "method fictitious (1D grids: methods lagrange and arlequin)");
+  if (m->analysis.type == CUPID_ANALYSIS_DYNAMIC && m->coupling.method != CUPID_COUPLING_LAGRANGE)
     return cupid_model_error(m, &m->analysis.mark,
-                             "type dynamic is not supported with coupling method %s: its coupled "
-                             "operator (paper 000 Eq. 38) is a static, non-symmetric construction "
-                             "with massless fictitious nodes (see docs/dynamics.md); use "
-                             "`coupling: {method: arlequin}` for coupled dynamics, or type static "
-                             "or evaluate",
-                             m->coupling.method == CUPID_COUPLING_LAGRANGE ? "lagrange" : "fictitious");
+                             "type dynamic is not supported with coupling method fictitious: its "
+                             "coupled operator (paper 000 Eq. 38) is a static, non-symmetric "
+                             "construction with massless fictitious nodes (see docs/dynamics.md); "
+                             "use `coupling: {method: lagrange}` or `{method: arlequin}` for "
+                             "coupled dynamics, or type static or evaluate");
+  if (m->analysis.type == CUPID_ANALYSIS_DYNAMIC) return cupid_app_dynamic_check(job);
   return CUPID_SUCCESS;
 }
 
@@ -57,6 +61,10 @@ cupid_status cupid_app_coupled_prepare(cupid_job *job) {
 }
 
 /* ------------------------------------------------------------ constraints and loads */
+
+static int is_lagrange(const cupid_job *job) {
+  return job->model->coupling.method == CUPID_COUPLING_LAGRANGE;
+}
 
 static cupid_status apply_constraints(cupid_job *job) {
   const cupid_model_t *m = job->model;
@@ -119,16 +127,14 @@ static cupid_status apply_loads(cupid_job *job) {
     if (on_pd) pd[npd++] = *l;
   }
   CUPID_TRY(cupid_app_pd_stage(job, NULL, 0, pd, npd, 0));
+  /* Lagrange: a load on a tied PD node acts on the beam through the tie (T^T f). */
+  if (is_lagrange(job)) cupid_coupling_lagrange_load(job->coupling, job->f_ext);
 cleanup:
   cupid_free(&pd);
   return st;
 }
 
 /* ----------------------------------------------------------------------- assembly */
-
-static int is_lagrange(const cupid_job *job) {
-  return job->model->coupling.method == CUPID_COUPLING_LAGRANGE;
-}
 
 static cupid_status assemble(cupid_job *job) {
   const cupid_model_t *m = job->model;
@@ -256,5 +262,11 @@ cupid_status cupid_app_coupled_run(cupid_job *job) {
   }
   CUPID_CALL(cupid_dirichlet_finalize(job->bc));
   CUPID_CALL(apply_loads(job));
+  if (job->model->analysis.type == CUPID_ANALYSIS_DYNAMIC) { /* Lagrange only (checked) */
+    CUPID_CALL(cupid_app_run_dynamic(job));
+    cupid_coupling_recover(job->coupling, job->u);
+    cupid_csr_matvec(job->K, job->u, job->f_int);
+    return CUPID_SUCCESS;
+  }
   return solve(job);
 }

@@ -5,7 +5,9 @@
  *
  * FE-only and PD-only models. The global system uses the [3 per PD node | FE DOFs] layout of
  * the job, so a coupled model only needs its coupling terms in K (and, for Arlequin, the
- * weighted masses: coupled_arlequin.c) before cupid_dynamics_run(). */
+ * weighted masses: coupled_arlequin.c; for Lagrange, the tied PD nodes' mass moved onto the
+ * beam through the tie, and outputs that see the tied nodes recovered) before
+ * cupid_dynamics_run(). */
 #include <math.h>
 #include <stdio.h>
 #include <string.h>
@@ -24,6 +26,7 @@ typedef struct {
   int n_files, cap_files;
   cupid_int out_count;
   double *velocity; /* for the PD VTU */
+  double *u_view;   /* Lagrange: u with the tied PD nodes recovered from the beam (outputs) */
 } dyn_output;
 
 static cupid_status out_path(const cupid_job *job, const char *name, char *path, size_t len) {
@@ -95,18 +98,47 @@ static cupid_status check_time_independent(const cupid_model_t *m) {
 
 cupid_status cupid_app_dynamic_check(const cupid_job *job) {
   const cupid_model_t *m = job->model;
-  if (m->has_beam && m->has_peridynamics && !cupid_app_is_arlequin(job))
+  if (m->has_beam && m->has_peridynamics && !cupid_app_is_arlequin(job) &&
+      m->coupling.method != CUPID_COUPLING_LAGRANGE)
     return cupid_model_error(m, &m->analysis.dynamic.mark,
                              "type dynamic of coupled beam + peridynamics models is not yet "
-                             "supported by cupid %s (FE-only, PD-only and Arlequin models are)",
+                             "supported by cupid %s with the fictitious-node method (FE-only, "
+                             "PD-only, Lagrange and Arlequin models are)",
                              cupid_version());
   CUPID_CALL(check_time_independent(m));
   return check_density(job);
 }
 
+/* 1 if the model is beam + PD coupled by Lagrange multipliers (eliminated: the tied PD nodes
+ * are fixed in the system and follow the beam). */
+static int is_lagrange(const cupid_job *job) {
+  return job->beam && job->grid && job->coupling && !cupid_app_is_arlequin(job) &&
+         job->model->coupling.method == CUPID_COUPLING_LAGRANGE;
+}
+
+/* Lagrange: the tied PD nodes' rho V leaves the PD diagonal and goes to the beam DOFs through
+ * the tie (T^T M T, cupid_coupling_lagrange_mass()), so that the eliminated system's mass is
+ * consistent with its stiffness T^T K T. */
+static cupid_status lagrange_mass(cupid_job *job, cupid_csr M, double *m_lumped) {
+  cupid_status st = CUPID_SUCCESS;
+  double *pd_mass = NULL;
+  const cupid_int *tied;
+  cupid_int nt;
+  CUPID_TRY(cupid_malloc((size_t)job->n_pd + 1, sizeof *pd_mass, "PD masses", &pd_mass));
+  for (cupid_int i = 0; i < job->n_pd; i++) pd_mass[i] = m_lumped[3 * i];
+  cupid_coupling_tied(job->coupling, &tied, &nt);
+  for (cupid_int t = 0; t < nt; t++)
+    for (int c = 0; c < 3; c++) m_lumped[3 * tied[t] + c] = 0.0;
+  CUPID_TRY(cupid_coupling_lagrange_mass(job->coupling, pd_mass, M, M ? NULL : m_lumped));
+cleanup:
+  cupid_free(&pd_mass);
+  return st;
+}
+
 /* PD nodal mass rho V (every component), FE consistent matrix or HRZ diagonal. With both PD
  * and FE (a coupled layout) and a consistent FE mass, M takes K's global pattern: the beam's
- * mass at its DOF offset and rho V on the PD diagonal (Arlequin weights are the coupling's). */
+ * mass at its DOF offset and rho V on the PD diagonal (Arlequin weights are the coupling's;
+ * Lagrange moves the tied nodes' mass onto the beam). */
 static cupid_status build_mass(cupid_job *job, cupid_csr *M, double **m_lumped) {
   const cupid_model_t *m = job->model;
   if (cupid_app_is_arlequin(job)) return cupid_app_arlequin_mass(job, M, m_lumped); /* Eq. 14 */
@@ -120,6 +152,21 @@ static cupid_status build_mass(cupid_job *job, cupid_csr *M, double **m_lumped) 
   }
   if (lumped) {
     if (job->beam) CUPID_CALL(cupid_cuf_mass_lumped(job->beam, *m_lumped));
+    if (is_lagrange(job)) CUPID_CALL(lagrange_mass(job, NULL, *m_lumped));
+    return CUPID_SUCCESS;
+  }
+  if (is_lagrange(job)) { /* before the PD diagonal goes in: the tied entries are zeroed */
+    CUPID_CALL(cupid_csr_duplicate(job->K, M));
+    cupid_csr_zero(*M);
+    CUPID_CALL(cupid_cuf_mass_add(job->beam, *M));
+    CUPID_CALL(lagrange_mass(job, *M, *m_lumped));
+    for (cupid_int i = 0; i < job->n_pd; i++) {
+      double *blk = cupid_csr_find(*M, i, i);
+      CUPID_CHECK(blk, CUPID_ERR_INTERNAL, "the stiffness lacks the diagonal block of PD node %lld",
+                  (long long)i);
+      for (int c = 0; c < 3; c++) blk[4 * c] += (*m_lumped)[3 * i + c];
+    }
+    cupid_free(m_lumped);
     return CUPID_SUCCESS;
   }
   if (!job->grid) {
@@ -235,9 +282,26 @@ static cupid_status history_row(dyn_output *o, double t) {
   return CUPID_SUCCESS;
 }
 
+static cupid_status monitor_outputs(dyn_output *o, cupid_int step, double t, int output,
+                                    const double *v, const cupid_dynamics_energy *e);
+
 static cupid_status monitor(void *ctx, cupid_int step, double t, int output, const double *u,
                             const double *v, const double *a, const cupid_dynamics_energy *e) {
+  (void)a;
   dyn_output *o = ctx;
+  double *u_run = o->job->u;
+  if (o->u_view) { /* outputs see the tied nodes following the beam (they are fixed in u) */
+    memcpy(o->u_view, u, sizeof *u * (size_t)o->job->ndof);
+    cupid_coupling_recover(o->job->coupling, o->u_view);
+    o->job->u = o->u_view;
+  }
+  cupid_status st = monitor_outputs(o, step, t, output, v, e);
+  o->job->u = u_run;
+  return st;
+}
+
+static cupid_status monitor_outputs(dyn_output *o, cupid_int step, double t, int output,
+                                    const double *v, const cupid_dynamics_energy *e) {
   if (o->history) CUPID_CALL(history_row(o, t));
   if (!output) return CUPID_SUCCESS;
   o->out_count++;
@@ -348,6 +412,9 @@ cupid_status cupid_app_run_dynamic(cupid_job *job) {
   job->dyn.lumped = m_lumped != NULL;
   cupid_dynamics_system sys = {.K = job->K, .M = M, .m_lumped = m_lumped, .bc = job->bc,
                                .f = job->f_ext};
+  if (is_lagrange(job))
+    CUPID_TRY(cupid_malloc((size_t)job->ndof, sizeof *o.u_view, "recovered displacements",
+                           &o.u_view));
   CUPID_TRY(open_outputs(&o));
   cupid_job_progress(job, "dynamics: %s, %lld steps of %g, %s mass",
                      d->integrator == CUPID_INTEGRATOR_NEWMARK ? "newmark" : "central",
@@ -376,6 +443,7 @@ cleanup:
   cupid_atomic_abort(&o.history);
   cupid_atomic_abort(&o.energies);
   cupid_free(&o.files);
+  cupid_free(&o.u_view);
   cupid_free(&o.times);
   cupid_csr_destroy(&M);
   cupid_free(&m_lumped);

@@ -49,6 +49,7 @@ struct cupid_coupling_private {
   cupid_int n_tied, *tied, *tptr, *tnode;
   double *tw;
   cupid_int fe_block; /* first FE block (= real PD nodes) */
+  int tie_M, tie_te;  /* expansion functions per beam node; 1 for a TE expansion (lumping) */
 };
 
 /** The interfaces: region y bounds whose beam node is still used by an active pair

@@ -1,6 +1,7 @@
 /* The Lagrange-multiplier PD-CUF coupling (the baseline of paper 000, section 5.1; cuf.md
- * section 7), by elimination of the constraints u_q = sum_tau F_tau(x_q, z_q) u_{tau,I} for the
- * real PD nodes q of the plane nearest each interface (see coupling.h). */
+ * section 7), by elimination of the constraints u_q = sum_n w_n(p_q) u_n for the real PD nodes
+ * q of the layer nearest every interface face (normal and parallel to the axis), p_q their
+ * point on the face (see coupling.h); the tie also carries loads and, in dynamics, masses. */
 #include <math.h>
 #include <string.h>
 
@@ -8,7 +9,40 @@
 
 #define TOL 1e-9
 
-/* The tied nodes and their weights (the CUF expansion of the interface section). */
+/* The region of node x (the first box holding it), or -1. */
+static int region_of(const cupid_coupling_options *o, const double *x, double tol) {
+  for (int r = 0; r < o->n_regions; r++)
+    if (cupid_box_contains(&o->regions[r], x, tol)) return r;
+  return -1;
+}
+
+/* The interface point of node x of region r: every coordinate whose node layer is the one
+ * nearest a face of the box (h/2 inside) and whose mirror image across that face lies in an
+ * active part of the beam is moved onto the face (normal faces: y; parallel faces: x, z; a node
+ * in an edge or corner layer lands on the edge or corner). Returns the faces crossed as bits
+ * 2 * axis + side (0: not tied). */
+static int interface_point(cupid_cuf_beam beam, const cupid_box *b, const double *x, double h,
+                           double pt[3]) {
+  int faces = 0;
+  for (int a = 0; a < 3; a++) pt[a] = x[a];
+  for (int a = 0; a < 3; a++) {
+    if (!b->has[a]) continue;
+    for (int side = 0; side < 2; side++) {
+      double bound = side ? b->hi[a] : b->lo[a];
+      double layer = side ? bound - 0.5 * h : bound + 0.5 * h;
+      if (fabs(x[a] - layer) > TOL * h) continue;
+      double mirror[3] = {x[0], x[1], x[2]};
+      mirror[a] = 2.0 * bound - x[a];
+      if (!cupid_cuf_contains(beam, mirror[0], mirror[1], mirror[2])) continue;
+      pt[a] = bound;
+      faces |= 1 << (2 * a + side);
+    }
+  }
+  return faces;
+}
+
+/* The tied nodes and their weights (the CUF expansion at the interface point); counts the
+ * interfaces (region faces with tied nodes) into c->info.n_interfaces. */
 static cupid_status tie_nodes(cupid_coupling_h c, cupid_cuf_beam beam, cupid_pd_grid grid,
                               const cupid_coupling_options *o, int M, int p) {
   cupid_int n = cupid_pd_grid_num_nodes(grid);
@@ -17,25 +51,26 @@ static cupid_status tie_nodes(cupid_coupling_h c, cupid_cuf_beam beam, cupid_pd_
   cupid_int cap = 1024, nw = 0;
   cupid_int *node = NULL;
   double *w = NULL;
+  int *faces_seen = NULL;
   cupid_status st = CUPID_SUCCESS;
-  CUPID_TRY(cupid_malloc((size_t)n, sizeof *c->tied, "tied nodes", &c->tied));
+  CUPID_TRY(cupid_malloc((size_t)n + 1, sizeof *c->tied, "tied nodes", &c->tied));
   CUPID_TRY(cupid_calloc((size_t)n + 1, sizeof *c->tptr, "tied pointers", &c->tptr));
   CUPID_TRY(cupid_malloc((size_t)cap, sizeof *c->tnode, "tied weights", &c->tnode));
   CUPID_TRY(cupid_malloc((size_t)cap, sizeof *c->tw, "tied weights", &c->tw));
   CUPID_TRY(cupid_malloc((size_t)(M * p), sizeof *node, "shape nodes", &node));
   CUPID_TRY(cupid_malloc((size_t)(M * p), sizeof *w, "shape weights", &w));
+  CUPID_TRY(cupid_calloc((size_t)o->n_regions + 1, sizeof *faces_seen, "interface faces",
+                         &faces_seen));
   for (cupid_int i = 0; i < n; i++) {
     const double *xi = x + 3 * i;
-    int f = 0;
-    for (; f < c->n_iface; f++) {
-      const interface_t *it = &c->iface[f];
-      double pt[3] = {xi[0], it->y_s, xi[2]};
-      if (fabs(xi[1] - it->y_s) <= TOL * h && cupid_box_contains(&o->regions[it->region], pt, TOL * h))
-        break;
-    }
-    if (f == c->n_iface) continue;
+    int r = region_of(o, xi, TOL * h);
+    if (r < 0) continue;
+    double pt[3];
+    int faces = interface_point(beam, &o->regions[r], xi, h, pt);
+    if (!faces) continue;
+    faces_seen[r] |= faces;
     int count;
-    CUPID_TRY(cupid_cuf_shape_at(beam, xi[0], c->iface[f].y_i, xi[2], node, w, &count));
+    CUPID_TRY(cupid_cuf_shape_at(beam, pt[0], pt[1], pt[2], node, w, &count));
     for (int k = 0; k < count; k++) {
       if (w[k] == 0.0) continue;
       if (nw == cap) {
@@ -49,9 +84,13 @@ static cupid_status tie_nodes(cupid_coupling_h c, cupid_cuf_beam beam, cupid_pd_
     c->tied[c->n_tied++] = i;
     c->tptr[c->n_tied] = nw;
   }
+  c->info.n_interfaces = 0;
+  for (int r = 0; r < o->n_regions; r++)
+    for (int f = 0; f < 6; f++) c->info.n_interfaces += (faces_seen[r] >> f) & 1;
 cleanup:
   cupid_free(&node);
   cupid_free(&w);
+  cupid_free(&faces_seen);
   return st;
 }
 
@@ -87,16 +126,18 @@ cupid_status cupid_coupling_lagrange_create(cupid_cuf_beam beam, cupid_pd_grid g
   int M = info.M, p = info.element_nodes;
   cupid_int n_pd = cupid_pd_grid_num_nodes(grid), nfe = info.n_fe_nodes;
   for (int r = 0; r < o->n_regions; r++)
-    CUPID_CHECK(cpl_region_full(beam, &o->regions[r]), CUPID_ERR_UNSUPPORTED,
-                "PD region %d covers part of the cross-section: the Lagrange coupling supports "
-                "only regions spanning the whole section (not yet supported; use method "
-                "fictitious)", r);
+    CUPID_CHECK(info.expansion != CUPID_EXPANSION_TE || cpl_region_full(beam, &o->regions[r]),
+                CUPID_ERR_MODEL,
+                "PD region %d covers part of the cross-section: a TE expansion spans the whole "
+                "section and cannot be tied in part (use an LE section or a full-section region)",
+                r);
   CUPID_CHECK(info.dof_offset == 3 * n_pd, CUPID_ERR_ARGUMENT,
               "the beam's DOF offset (%lld) must be 3 x the real PD nodes (%lld)",
               (long long)info.dof_offset, (long long)(3 * n_pd));
   CUPID_CALL(cupid_calloc(1, sizeof *c, "coupling", &c));
   c->fe_block = n_pd;
-  CUPID_TRY(cpl_find_interfaces(beam, o, c));
+  c->tie_M = M;
+  c->tie_te = info.expansion == CUPID_EXPANSION_TE;
   CUPID_TRY(tie_nodes(c, beam, grid, o, M, p));
 
   /* Transpose of the tie map: for each FE node, the tied nodes and weights. */
@@ -137,7 +178,7 @@ cupid_status cupid_coupling_lagrange_create(cupid_cuf_beam beam, cupid_pd_grid g
     CUPID_TRY(cpl_rowbuild_end_row(&rb, n_pd + a));
   }
   CUPID_TRY(cpl_rowbuild_finish(&rb, K));
-  c->info = (cupid_coupling_info){.n_real_pd = n_pd, .n_interfaces = c->n_iface};
+  c->info.n_real_pd = n_pd;
   *out = c;
   c = NULL;
 cleanup:
@@ -167,4 +208,50 @@ void cupid_coupling_recover(const cupid_coupling_h c, double *u) {
       for (int a = 0; a < 3; a++) ui[a] += c->tw[k] * v[a];
     }
   }
+}
+
+void cupid_coupling_lagrange_load(const cupid_coupling_h c, double *f) {
+  for (cupid_int t = 0; t < c->n_tied; t++) {
+    double *ft = f + 3 * c->tied[t];
+    for (cupid_int k = c->tptr[t]; k < c->tptr[t + 1]; k++) {
+      double *fa = f + 3 * (c->fe_block + c->tnode[k]);
+      for (int a = 0; a < 3; a++) fa[a] += c->tw[k] * ft[a];
+    }
+    ft[0] = ft[1] = ft[2] = 0.0;
+  }
+}
+
+/* HRZ factor of one tied node: 1 / sum of w^2 over its translational functions (every LE node;
+ * the constant TE term, tau = 0), so that those carry its mass in each direction. */
+static double hrz_scale(const cupid_coupling_h c, cupid_int t) {
+  double s = 0.0;
+  for (cupid_int k = c->tptr[t]; k < c->tptr[t + 1]; k++)
+    if (!c->tie_te || c->tnode[k] % c->tie_M == 0) s += c->tw[k] * c->tw[k];
+  return s > 0.0 ? 1.0 / s : 0.0;
+}
+
+cupid_status cupid_coupling_lagrange_mass(const cupid_coupling_h c, const double *pd_mass,
+                                          cupid_csr M, double *lumped) {
+  CUPID_CHECK((M == NULL) != (lumped == NULL), CUPID_ERR_ARGUMENT,
+              "the Lagrange tied mass goes into exactly one of M and lumped");
+  for (cupid_int t = 0; t < c->n_tied; t++) {
+    double m = pd_mass[c->tied[t]];
+    if (lumped) {
+      double s = m * hrz_scale(c, t);
+      for (cupid_int k = c->tptr[t]; k < c->tptr[t + 1]; k++)
+        for (int a = 0; a < 3; a++)
+          lumped[3 * (c->fe_block + c->tnode[k]) + a] += s * c->tw[k] * c->tw[k];
+      continue;
+    }
+    for (cupid_int k = c->tptr[t]; k < c->tptr[t + 1]; k++)
+      for (cupid_int l = c->tptr[t]; l < c->tptr[t + 1]; l++) {
+        double *blk = cupid_csr_find(M, c->fe_block + c->tnode[k], c->fe_block + c->tnode[l]);
+        CUPID_CHECK(blk, CUPID_ERR_INTERNAL,
+                    "the mass pattern lacks the block of FE nodes %lld, %lld (tied PD node %lld)",
+                    (long long)c->tnode[k], (long long)c->tnode[l], (long long)c->tied[t]);
+        double v = m * c->tw[k] * c->tw[l];
+        for (int a = 0; a < 3; a++) blk[4 * a] += v;
+      }
+  }
+  return CUPID_SUCCESS;
 }
