@@ -91,6 +91,7 @@ typedef struct {
   cupid_partial_volume partial_volume;
   const cupid_pd_material *materials;   /**< indexed by the grid's material indices */
   int n_materials;
+  cupid_surface_correction surface_correction; /**< 0 = none (see create) */
 } cupid_pd_operator_options;
 
 /**
