@@ -122,11 +122,11 @@ typedef struct {
  * beta V e_ij^2 / x_ij.
  *
  * Surface correction (surface_correction = CUPID_SURFACE_ENERGY, src/pd/surface.c): per-bond
- * factors D_ij = sum_k d_ik n_k^2 in theta_i and G_ij = sum_k g_ik n_k^2 on bond j of node i's
- * deviatoric sum (LPS: E = sum_i V [kappa_i/6 theta_i^2 + 15 mu_i/(2 m_i) sum_j omega G_ij e^2
- * beta V], theta_i = 3/m_i sum_j omega D_ij x e beta V) or on the pair energy (bond-based:
- * c_ij times (G_ij + G_ji)/2), with each node's d and g fitted so that theta_i is exact under
- * uniaxial strain and the energy exact under uniaxial stress along x, y, z. Every operation
+ * factors D_ij = sum_k d_ik n_k^2 in theta_i and G_ij = sum_k (g_ik n_k^2 + q_ik n_k^4) on bond
+ * j of node i's deviatoric sum (LPS: E = sum_i V [kappa_i/6 theta_i^2 + 15 mu_i/(2 m_i)
+ * sum_j omega G_ij e^2 beta V], theta_i = 3/m_i sum_j omega D_ij x e beta V) or on the pair
+ * energy (bond-based: c_ij times (G_ij + G_ji)/2), with each node's d, g, q fitted so that
+ * theta_i and the node's energy are the continuum ones under every normal strain. Every operation
  * (apply, ranges, energy, stress, assembly, diagonal) uses the corrected energy: K stays
  * symmetric with the rigid modes in its null space. A factor that is not positive (a family
  * too truncated to fit) is CUPID_ERR_MODEL.

@@ -7,31 +7,37 @@
  * energy of node i (the operator is its gradient, lps.c) is
  *   W_i = kappa_i/6 theta_i^2 + 15 mu_i/(2 m_i) sum_j omega G_ij e_ij^2 beta V,
  *   theta_i = 3/m_i sum_j omega D_ij x e_ij beta V,
- * with per-bond factors from per-node factor vectors d_i, g_i by the quadratic form
- *   D_ij = sum_k d_ik n_k^2,   G_ij = sum_k g_ik n_k^2      (n = the bond direction).
- * Each node's own factors are fitted (a 3x3 solve per part) so that
- *  - theta_i is exact under the three uniaxial strains along x, y, z (hence, by linearity,
- *    under every normal strain):  sum_l d_l sum_j omega beta V x^2 n_l^2 n_k^2 = m_i/3;
- *  - the deviatoric energy is exact under the three uniaxial *stress* states along x, y, z
- *    (strain 1 along k and -nu_i across), whose continuum value for the isotropic fourth
- *    moment m_i/15 (dd + dd + dd) is m_i/15 ((tr eps)^2 + 2 eps:eps):
- *      sum_l g_l sum_j omega beta V x^2 n_l^2 (n.eps_k n)^2 = m_i ((1-2nu)^2 + 2(1+2nu^2))/15.
- * Together every node's energy is the continuum one under uniaxial stress along an axis
- * (the state of bars and beams). The targets are the continuum values, not the full discrete
- * stencil's, so the fit also removes the bulk quadrature error of that state (PDLAMMPS with
- * Gaussian influence is ~7% soft in the bulk for it). In the bulk d = 1 exactly for every
- * partial-volume rule (cubic symmetry makes sum omega beta x^2 n n^T = m/3 I), and g = 1 to
- * the quadrature error of the rule (EXACT: ~1e-4).
+ * with per-bond factors from each node's own factors (n = the bond direction)
+ *   D_ij = sum_k d_ik n_k^2,   G_ij = sum_k (g_ik n_k^2 + q_ik n_k^4),
+ * fitted per node (c_j = omega beta V x^2):
+ *  - d (3x3 solve): theta_i exact under the uniaxial strains along x, y, z, hence under every
+ *    normal strain: sum_j c_j D_ij n_k^2 = m_i/3;
+ *  - g, q (6x6 solve): the deviatoric energy is the isotropic continuum one,
+ *    15 mu/(2 m_i) m_i/15 ((tr eps)^2 + 2 eps:eps), under every normal strain:
+ *    sum_j c_j G_ij n_k^2 n_l^2 = m_i (1 + 2 delta_kl)/15 for the six pairs k <= l.
+ * So every node has the continuum energy under any normal strain (uniaxial stress along an
+ * axis with the right lateral contraction included: the state of bars and beams). Where the
+ * 6x6 fit is singular or gives G <= 0 on a bond, g alone (q = 0, 3x3 solve) is fitted to the
+ * uniaxial stress states along x, y, z with the node's nu. The targets are the continuum
+ * values, not the full discrete stencil's, so the fit also removes the bulk quadrature error
+ * of normal strains (PDLAMMPS with Gaussian influence is ~7% soft in the bulk for uniaxial
+ * stress); shear energies are not fitted. In the bulk d = 1 exactly for every partial-volume
+ * rule (cubic symmetry: sum c n n^T = m/3 I), G = 1 to the quadrature error of the rule
+ * (EXACT, m = 3: deep rows change by 1e-4).
  *
- * Measured on the 10 x 10 PD bar (examples/pd_bar, nu = 0.2, axial strain against F/(EA)):
- * no correction -5.5% (PDLAMMPS) / -12.3% (EXACT); this fit +0.47% / +0.38%; the same fit on
- * uniaxial strain states +2.7% / -0.09%; Madenci-Oterkus ratios d_k = target/sum with the
- * ellipsoid rule on the mean of the two nodes' vectors -1.1% / -3.8% (uniaxial strain) and
- * -2.6% / -2.7% (uniaxial stress). See docs/coupling.md.
+ * Measured on the 10 x 10 PD bar (examples/pd_bar, tests/verification/test_pd_surface.c;
+ * axial strain against F/(EA), lateral contraction nu_eff for nu = 0.2), PDLAMMPS / EXACT:
+ *  - none: -5.5% / -12.3%, nu_eff 0.225 / 0.204;
+ *  - this fit: +0.52% / +0.68%, nu_eff 0.194 / 0.192 (nu = 0: +0.50%, nu_eff -0.005);
+ *  - g only, on the uniaxial stress states: +0.47% / +0.38%, nu_eff 0.218 / 0.193;
+ *  - g only, on the uniaxial strain states: +2.7% / -0.09% (misses the PDLAMMPS anisotropy);
+ *  - Madenci-Oterkus ratios (target / sum on each axis) with the ellipsoid rule on the mean of
+ *    the two nodes' vectors: -1.1% / -3.8% (uniaxial strain), -2.6% / -2.7% (uniaxial stress).
  *
- * Bond-based: one factor vector g (d = 1) fitted the same way on the pair energy
- * sum_j omega beta V x (n.eps n)^2 against its calibrated value S ((1-2nu)^2 + 2(1+2nu^2))/15
- * with nu = 1/4 (3D; S = the full-stencil sum of operator.c) or S (1D, the y axis only).
+ * Bond-based: d = 1 and G fitted the same way on the pair energy (c_j = omega beta V x)
+ * against the calibrated value S (1 + 2 delta_kl)/15 (3D; S = the full-stencil sum of
+ * operator.c, fallback: uniaxial stress with nu = 1/4) or S (1D, the y axis only). The pair
+ * coefficient takes c_ij (G_ij + G_ji)/2.
  *
  * K stays symmetric (it is the Hessian of an energy) and rigid motions stay force-free (e_ij
  * vanishes for them whatever the factors). */
@@ -100,10 +106,77 @@ static void node_sums(const struct cupid_pd_operator_private *op, cupid_int i, i
   }
 }
 
+/* Solve the n x n system A x = b (row-major, overwritten) by Gaussian elimination with
+ * partial pivoting; 0 when a pivot is below 1e-12 of the largest entry (singular). */
+static int solve_n(int n, double *A, double *b) {
+  double scale = 0.0;
+  for (int q = 0; q < n * n; q++) scale = fmax(scale, fabs(A[q]));
+  for (int c = 0; c < n; c++) {
+    int p = c;
+    for (int r = c + 1; r < n; r++)
+      if (fabs(A[r * n + c]) > fabs(A[p * n + c])) p = r;
+    if (!(fabs(A[p * n + c]) > 1e-12 * scale)) return 0;
+    if (p != c) {
+      for (int k = 0; k < n; k++) {
+        const double t = A[c * n + k];
+        A[c * n + k] = A[p * n + k];
+        A[p * n + k] = t;
+      }
+      const double t = b[c];
+      b[c] = b[p];
+      b[p] = t;
+    }
+    for (int r = c + 1; r < n; r++) {
+      const double f = A[r * n + c] / A[c * n + c];
+      for (int k = c; k < n; k++) A[r * n + k] -= f * A[c * n + k];
+      b[r] -= f * b[c];
+    }
+  }
+  for (int c = n - 1; c >= 0; c--) {
+    double t = b[c];
+    for (int k = c + 1; k < n; k++) t -= A[c * n + k] * b[k];
+    b[c] = t / A[c * n + c];
+  }
+  return 1;
+}
+
+/* The six-parameter energy fit of node i: G(n) = sum_k g_k n_k^2 + q_k n_k^4 such that
+ * sum_j c G n_k^2 n_l^2 = scale (1 + 2 delta_kl)/15 for the six pairs k <= l, i.e. the energy
+ * is the isotropic one under every normal strain (uniaxial stress along any axis with any
+ * Poisson ratio included). 0 (f untouched) when singular or when G would not be positive on
+ * every bond of the node (the energy must stay positive). */
+static int fit6(const struct cupid_pd_operator_private *op, cupid_int i, int p, double scale,
+                double f[6]) {
+  const pd_stencil *S = &op->st;
+  static const int pk[6] = {0, 1, 2, 0, 0, 1}, pl[6] = {0, 1, 2, 1, 2, 2};
+  double A[36] = {0}, b[6];
+  for (cupid_int bb = op->bptr[i]; bb < op->bptr[i + 1]; bb++) {
+    const int s = op->bst[bb];
+    const double *n = S->nrm + 3 * s;
+    const double c = S->wb[s] * (p == 2 ? S->x[s] * S->x[s] : S->x[s]) * op->V;
+    const double n2[3] = {n[0] * n[0], n[1] * n[1], n[2] * n[2]};
+    const double phi[6] = {n2[0], n2[1], n2[2], n2[0] * n2[0], n2[1] * n2[1], n2[2] * n2[2]};
+    for (int e = 0; e < 6; e++) {
+      const double w = c * n2[pk[e]] * n2[pl[e]];
+      for (int u = 0; u < 6; u++) A[6 * e + u] += w * phi[u];
+    }
+  }
+  for (int e = 0; e < 6; e++) b[e] = scale * (pk[e] == pl[e] ? 3.0 : 1.0) / 15.0;
+  if (!solve_n(6, A, b)) return 0;
+  for (cupid_int bb = op->bptr[i]; bb < op->bptr[i + 1]; bb++) {
+    const double *n = S->nrm + 3 * op->bst[bb];
+    double G = 0.0;
+    for (int k = 0; k < 3; k++) G += (b[k] + b[3 + k] * n[k] * n[k]) * n[k] * n[k];
+    if (!(G > 0)) return 0;
+  }
+  memcpy(f, b, sizeof b);
+  return 1;
+}
+
 cupid_status pd_surface_factors(struct cupid_pd_operator_private *op) {
   const pd_stencil *S = &op->st;
   const cupid_int nn = op->nnodes;
-  CUPID_CALL(cupid_malloc(6 * (size_t)nn, sizeof *op->sf, "PD surface factors", &op->sf));
+  CUPID_CALL(cupid_malloc(PD_SF * (size_t)nn, sizeof *op->sf, "PD surface factors", &op->sf));
   double Sfull = 0.0;
   for (int s = 0; s < S->n; s++) Sfull += S->wb[s] * S->x[s] * op->V;
   const int lps = op->model == CUPID_PD_LPS;
@@ -111,27 +184,32 @@ cupid_status pd_surface_factors(struct cupid_pd_operator_private *op) {
   cupid_int bad = -1;
 #pragma omp parallel for schedule(static) if (nn > PD_OMP_MIN_NODES)
   for (cupid_int i = 0; i < nn; i++) {
-    double M2[9], M4[9], *f = op->sf + 6 * i;
+    double M2[9], M4[9], *f = op->sf + PD_SF * i;
+    f[6] = f[7] = f[8] = 0.0;
     if (lps) {
       const double K = (op->kappa[i] + 5.0 * op->mu[i]) / 3.0, mu = op->mu[i];
       const double nu = (3.0 * K - 2.0 * mu) / (2.0 * (3.0 * K + mu));
       node_sums(op, i, 2, nu, M2, M4);
       part_factors(M2, op->m[i] / 3.0, axes, f);
-      part_factors(M4, op->m[i] * stress_target(nu), axes, f + 3);
+      if (!(op->dim == 3 && fit6(op, i, 2, op->m[i], f + 3)))
+        part_factors(M4, op->m[i] * stress_target(nu), axes, f + 3);
     } else {
       const double nu = op->dim == 3 ? 0.25 : 0.0; /* 1D: only the y state, n_y = +-1 */
       node_sums(op, i, 1, nu, M2, M4);
       f[0] = f[1] = f[2] = 1.0;
-      part_factors(M4, op->dim == 3 ? Sfull * stress_target(nu) : Sfull, axes, f + 3);
+      if (!(op->dim == 3 && fit6(op, i, 1, Sfull, f + 3)))
+        part_factors(M4, op->dim == 3 ? Sfull * stress_target(nu) : Sfull, axes, f + 3);
     }
-    for (int k = 0; k < 6; k++)
+    /* With q = 0 the factors must be positive; fit6 checked G > 0 on every bond itself. */
+    const int nchk = f[6] == 0.0 && f[7] == 0.0 && f[8] == 0.0 ? 6 : 3;
+    for (int k = 0; k < nchk; k++)
       if (!(isfinite(f[k]) && f[k] > 0)) {
 #pragma omp critical(pd_surface_bad)
         bad = i;
       }
   }
   if (bad >= 0) {
-    const double *x = op->grid->coords + 3 * bad, *f = op->sf + 6 * bad;
+    const double *x = op->grid->coords + 3 * bad, *f = op->sf + PD_SF * bad;
     return CUPID_ERROR(CUPID_ERR_MODEL,
                        "PD node %lld at (%g, %g, %g): the surface correction gives a factor "
                        "that is not positive (%g %g %g %g %g %g): its family is too truncated",
