@@ -18,7 +18,8 @@
  * So every node has the continuum energy under any normal strain (uniaxial stress along an
  * axis with the right lateral contraction included: the state of bars and beams). Where the
  * 6x6 fit is singular or gives G <= 0 on a bond, g alone (q = 0, 3x3 solve) is fitted to the
- * uniaxial stress states along x, y, z with the node's nu. The targets are the continuum
+ * uniaxial stress states along x, y, z with the node's nu; where a 3x3 fit is singular or not
+ * positive, the per-axis ratios target / sum (Madenci & Oterkus). The targets are the continuum
  * values, not the full discrete stencil's, so the fit also removes the bulk quadrature error
  * of normal strains (PDLAMMPS with Gaussian influence is ~7% soft in the bulk for uniaxial
  * stress); shear energies are not fitted. In the bulk d = 1 exactly for every partial-volume
@@ -66,12 +67,13 @@ static int solve3(const double A[9], const double t[3], double f[3]) {
 
 /* Factors of one part: the fit sum_l f_l M_kl = target (M_kl the node's sum for state k and
  * weight n_l^2). Where the family does not reach every axis (a body one cell thin, or 1D),
- * or the fit is singular, the ratio target / sum_l M_kl on each axis the family reaches
- * (exact for states whose bonds all lie along one axis), 1 elsewhere. */
+ * or the fit is singular or not positive (a very truncated family, e.g. a fictitious node of a
+ * thin coupled skin), the ratio target / sum_l M_kl on each axis the family reaches (the
+ * Madenci-Oterkus factor, positive), 1 elsewhere. */
 static void part_factors(const double M[9], double target, const int axes[3], double f[3]) {
   if (axes[0] && axes[1] && axes[2]) {
     const double t[3] = {target, target, target};
-    if (solve3(M, t, f)) return;
+    if (solve3(M, t, f) && f[0] > 0 && f[1] > 0 && f[2] > 0) return;
   }
   for (int k = 0; k < 3; k++) {
     const double r = M[3 * k] + M[3 * k + 1] + M[3 * k + 2];
