@@ -115,7 +115,7 @@ typedef struct {
   cupid_pd_model_kind model;
   cupid_influence influence;
   cupid_partial_volume partial_volume;
-  cupid_surface_correction surface_correction;
+  cupid_surface_correction surface_correction; /**< default none */
   int dimension;   /**< 3 or 1 */
   double area;     /**< cross-section area, dimension 1 only */
   int material;    /**< default region material, -1 if not given */

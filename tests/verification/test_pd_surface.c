@@ -116,7 +116,7 @@ static bar_result solve_bar(cupid_pd_model_kind model, cupid_partial_volume pvr,
   fixed[3 * a] = fixed[3 * a + 2] = 1; /* translations x, z */
   fixed[3 * c2] = 1;                   /* rotation about y */
   bar_result res;
-  res.iterations = pcg(op, n, fixed, diag, b, u, 1e-10, 20000);
+  res.iterations = pcg(op, n, fixed, diag, b, u, 1e-8, 20000);
   const int j1 = 12, j2 = 27;
   double s = 0;
   for (int k = 0; k < W; k++)
