@@ -58,6 +58,7 @@ static void check_consistency(cupid_pd_grid g, cupid_pd_operator op, const char 
     e[c] = 0.0;
     for (cupid_int r = 0; r < n; r++) worst = fmax(worst, fabs(f[r] - D[r * n + c]));
   }
+  printf("%s: K vs apply columns %.2g of max K\n", label, worst / kmax);
   if (worst > 1e-10 * kmax) fail_msg("%s: K differs from the columns of apply by %.3g (|K| %.3g)", label, worst, kmax);
   /* Symmetry (the Hessian of an energy), same tolerance. */
   for (cupid_int r = 0; r < n; r++)
@@ -92,6 +93,25 @@ static void check_consistency(cupid_pd_grid g, cupid_pd_operator op, const char 
   for (cupid_int i = 0; i < n; i++) uKu += e[i] * f[i];
   CUPID_ASSERT_OK(cupid_pd_operator_energy(op, e, &En));
   ASSERT_NEAR(En, 0.5 * uKu, 1e-12 * fabs(uKu)); /* same sums in another order */
+  /* Finite differences of the energy along a random v against v.f: the force is the gradient
+   * of the corrected energy (central differences are exact for a quadratic up to round-off;
+   * 1e-9 of the energy scale). */
+  {
+    double *v = malloc((size_t)n * sizeof *v), *w = malloc((size_t)n * sizeof *w);
+    assert_true(v && w);
+    for (cupid_int i = 0; i < n; i++) v[i] = cupid_test_random(&seed) - 0.5;
+    const double eps = 1e-3;
+    double Ep, Em, vf = 0;
+    for (cupid_int i = 0; i < n; i++) w[i] = e[i] + eps * v[i];
+    CUPID_ASSERT_OK(cupid_pd_operator_energy(op, w, &Ep));
+    for (cupid_int i = 0; i < n; i++) w[i] = e[i] - eps * v[i];
+    CUPID_ASSERT_OK(cupid_pd_operator_energy(op, w, &Em));
+    for (cupid_int i = 0; i < n; i++) vf += v[i] * f[i];
+    if (fabs((Ep - Em) / (2 * eps) - vf) > 1e-9 * fabs(En) / eps)
+      fail_msg("%s: FD gradient %.15g vs v.f %.15g", label, (Ep - Em) / (2 * eps), vf);
+    free(v);
+    free(w);
+  }
   double *blk = malloc(9 * (size_t)nn * sizeof *blk);
   assert_non_null(blk);
   CUPID_ASSERT_OK(cupid_pd_operator_diagonal(op, blk));
