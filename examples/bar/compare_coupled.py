@@ -1,7 +1,8 @@
 #!/usr/bin/env python3
 """Coupled bar against the full-FE bar (paper 000, section 5.1, Figs. 13-14).
 
-usage: examples/bar/compare_coupled.py [--cupid build/cupid] [EXPANSION ...]
+usage: examples/bar/compare_coupled.py [--cupid build/cupid] [--surface-correction energy]
+                                      [EXPANSION ...]
 
 Runs bar_fe_<e>.yaml and bar_coupled_<e>.yaml for each expansion (default te1 te2 te3 l4 l9,
 and lagrange_l9: the Lagrange-multiplier coupling against the L9 full-FE bar),
@@ -9,33 +10,51 @@ then prints, per expansion: the largest relative error of u_y along the axis
 (|u_c - u_fe| / |u_fe| over y > 0), the largest error relative to the tip displacement, the
 tip values, and the equilibrium imbalance |reaction + load| / |load| of the coupled run.
 Writes out/bar/coupled_comparison.md, out/bar/coupled_uy.png and coupled_error.png (gnuplot).
+With --surface-correction energy the coupled models run with peridynamics.surface_correction
+set (temporary copies; results in out/bar/coupled_<e>_energy, table
+out/bar/coupled_comparison_energy.md).
 """
-import argparse, csv, json, os, subprocess, sys
+import argparse, csv, json, os, subprocess, sys, tempfile
 
 ap = argparse.ArgumentParser()
 ap.add_argument("--cupid", default="build/cupid")
+ap.add_argument("--surface-correction", default="none", choices=["none", "energy"])
 ap.add_argument("expansions", nargs="*", default=["te1", "te2", "te3", "l4", "l9", "lagrange_l9"])
 a = ap.parse_args()
 here = os.path.dirname(os.path.abspath(__file__))
 
-def run(model):
-    subprocess.run([a.cupid, "run", model, "--quiet"], check=True)
+def run(model, correction="none"):
     d = None
     for line in open(model):
         s = line.strip()
         if s.startswith("directory:"):
             d = s.split(":", 1)[1].split("#")[0].strip()
+    if correction == "none":
+        subprocess.run([a.cupid, "run", model, "--quiet"], check=True)
+        return d
+    # A copy with the key after partial_volume, in its own output directory.
+    text = open(model).read().replace("  partial_volume: pdlammps\n",
+                                      f"  partial_volume: pdlammps\n  surface_correction: {correction}\n")
+    assert "surface_correction" in text, model
+    d = f"{d}_{correction}"
+    with tempfile.NamedTemporaryFile("w", suffix=".yaml", delete=False) as fh:
+        fh.write(text)
+    try:
+        subprocess.run([a.cupid, "run", fh.name, "-o", d, "--quiet"], check=True)
+    finally:
+        os.unlink(fh.name)
     return d
 
 def axis(d):
     return [(float(r["y"]), float(r["uy"]), r["region"]) for r in csv.DictReader(open(os.path.join(d, "line_axis.csv")))]
 
+sfx = "" if a.surface_correction == "none" else "_" + a.surface_correction
 rows = []
 curves = []
 for e in a.expansions:
     # "lagrange_l9": the Lagrange-multiplier model against the L9 full-FE bar.
     dfe = run(os.path.join(here, f"bar_fe_{e.split('_')[-1]}.yaml"))
-    dc = run(os.path.join(here, f"bar_coupled_{e}.yaml"))
+    dc = run(os.path.join(here, f"bar_coupled_{e}.yaml"), a.surface_correction)
     fe, c = axis(dfe), axis(dc)
     tip = abs(fe[-1][1])
     rel = max(abs(u - v) / abs(v) for (y, u, _), (_, v, _) in zip(c, fe) if y > 0)
@@ -48,7 +67,7 @@ for e in a.expansions:
     curves.append((e, os.path.relpath(os.path.join(dc, "line_axis.csv"), "out/bar"),
                    os.path.relpath(os.path.join(dfe, "line_axis.csv"), "out/bar")))
     os.makedirs("out/bar", exist_ok=True)
-    with open(f"out/bar/coupled_error_{e}.csv", "w") as fh:   # paper Fig. 14C
+    with open(f"out/bar/coupled_error_{e}{sfx}.csv", "w") as fh:   # paper Fig. 14C
         fh.write("y,rel_error_percent\n")
         for (y, u, _), (_, v, _) in zip(c, fe):
             if y > 0:
@@ -61,17 +80,17 @@ for r in rows:
     lines.append(f"| {r[0]} | {r[1]:.6f} | {r[2]:.6f} | {100*r[3]:.2f}% | {100*r[4]:.2f}% | {100*r[5]:.2f}% | {100*r[6]:.2f}% | {r[7]:.1f} |")
 txt = "\n".join(lines)
 print(txt)
-open("out/bar/coupled_comparison.md", "w").write(txt + "\n")
+open(f"out/bar/coupled_comparison{sfx}.md", "w").write(txt + "\n")
 try:
-    plot = ["set terminal pngcairo noenhanced size 1000,600", "set output 'coupled_uy.png'", "set datafile separator ','",
+    plot = ["set terminal pngcairo noenhanced size 1000,600", f"set output 'coupled_uy{sfx}.png'", "set datafile separator ','",
             "set key left top", "set xlabel 'y [mm]'", "set ylabel 'u_y [mm]'", "set grid"]
     parts = []
     for e, c, f in curves:
         parts.append(f"'{c}' every ::1 using 3:6 with points pt 7 ps 0.5 title 'coupled {e}'")
         parts.append(f"'{f}' every ::1 using 3:6 with lines title 'FE {e}'")
     plot.append("plot " + ", ".join(parts))
-    plot += ["set output 'coupled_error.png'", "set ylabel 'relative error of u_y [%]'",
-             "plot " + ", ".join(f"'coupled_error_{e}.csv' every ::1 using 1:2 with linespoints pt 7 ps 0.4 title '{e}'" for e, _, _ in curves)]
+    plot += [f"set output 'coupled_error{sfx}.png'", "set ylabel 'relative error of u_y [%]'",
+             "plot " + ", ".join(f"'coupled_error_{e}{sfx}.csv' every ::1 using 1:2 with linespoints pt 7 ps 0.4 title '{e}'" for e, _, _ in curves)]
     subprocess.run(["gnuplot"], input="\n".join(plot), text=True, cwd="out/bar", check=True)
 except Exception as ex:
     print("plot skipped:", ex, file=sys.stderr)

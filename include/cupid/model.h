@@ -97,6 +97,11 @@ typedef enum {
   CUPID_PARTIAL_PDLAMMPS = 1, /**< Parks et al. linear rule */
   CUPID_PARTIAL_EXACT = 2     /**< volume of cell inside the sphere */
 } cupid_partial_volume;
+/** Correction of the PD surface effect (peridynamics.surface_correction; src/pd/surface.c). */
+typedef enum {
+  CUPID_SURFACE_NONE = 0,  /**< none (paper 000) */
+  CUPID_SURFACE_ENERGY = 1 /**< energy method: per-node directional factors (Le & Bobaru 2018) */
+} cupid_surface_correction;
 
 typedef struct {
   cupid_box box; /**< lo < hi on every axis given; for dimension 1 only y is set */
@@ -110,6 +115,7 @@ typedef struct {
   cupid_pd_model_kind model;
   cupid_influence influence;
   cupid_partial_volume partial_volume;
+  cupid_surface_correction surface_correction; /**< default none */
   int dimension;   /**< 3 or 1 */
   double area;     /**< cross-section area, dimension 1 only */
   int material;    /**< default region material, -1 if not given */

@@ -91,6 +91,7 @@ typedef struct {
   cupid_partial_volume partial_volume;
   const cupid_pd_material *materials;   /**< indexed by the grid's material indices */
   int n_materials;
+  cupid_surface_correction surface_correction; /**< 0 = none (see create) */
 } cupid_pd_operator_options;
 
 /**
@@ -119,6 +120,16 @@ typedef struct {
  * Bond-based PD has nu = 1/4 in 3D; other nu are accepted, K is taken from E and nu as
  * given (the shear response is then 3K/5, not mu). Energy: E = sum_i V/4 sum_j c_ij omega
  * beta V e_ij^2 / x_ij.
+ *
+ * Surface correction (surface_correction = CUPID_SURFACE_ENERGY, src/pd/surface.c): per-bond
+ * factors D_ij = sum_k d_ik n_k^2 in theta_i and G_ij = sum_k (g_ik n_k^2 + q_ik n_k^4) on bond
+ * j of node i's deviatoric sum (LPS: E = sum_i V [kappa_i/6 theta_i^2 + 15 mu_i/(2 m_i)
+ * sum_j omega G_ij e^2 beta V], theta_i = 3/m_i sum_j omega D_ij x e beta V) or on the pair
+ * energy (bond-based: c_ij times (G_ij + G_ji)/2), with each node's d, g, q fitted so that
+ * theta_i and the node's energy are the continuum ones under every normal strain. Every operation
+ * (apply, ranges, energy, stress, assembly, diagonal) uses the corrected energy: K stays
+ * symmetric with the rigid modes in its null space. A factor that is not positive (a family
+ * too truncated to fit) is CUPID_ERR_MODEL.
  */
 cupid_status cupid_pd_operator_create(const cupid_pd_grid grid,
                                       const cupid_pd_operator_options *opts,

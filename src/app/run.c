@@ -72,6 +72,7 @@ static cupid_status build_pd(cupid_job *job) {
                                                 .model = m->pd.model,
                                                 .influence = m->pd.influence,
                                                 .partial_volume = m->pd.partial_volume,
+                                                .surface_correction = m->pd.surface_correction,
                                                 .materials = job->pd_materials,
                                                 .n_materials = m->n_materials};
   CUPID_CALL(cupid_pd_operator_create(job->grid, &job->pd_options, &job->op));

@@ -466,6 +466,7 @@ static cupid_status read_pd_options(model_reader *rd, const mr_map *map, cupid_p
   static const char *const models[] = {"lps", "bond"};
   static const char *const influences[] = {"gaussian", "inverse", "constant"};
   static const char *const partials[] = {"none", "pdlammps", "exact"};
+  static const char *const corrections[] = {"none", "energy"};
   yaml_node_t *v;
   pd->dimension = 3;
   if ((v = mr_get(map, "dimension"))) {
@@ -496,6 +497,13 @@ static cupid_status read_pd_options(model_reader *rd, const mr_map *map, cupid_p
     CUPID_CALL(mr_enum(rd, v, "peridynamics.partial_volume", partials, COUNT(partials), &k));
     pd->partial_volume = (cupid_partial_volume)k;
   }
+  pd->surface_correction = CUPID_SURFACE_NONE;
+  if ((v = mr_get(map, "surface_correction"))) {
+    int k;
+    CUPID_CALL(mr_enum(rd, v, "peridynamics.surface_correction", corrections, COUNT(corrections),
+                       &k));
+    pd->surface_correction = (cupid_surface_correction)k;
+  }
   v = mr_get(map, "area");
   if (pd->dimension == 1) {
     if (!v)
@@ -511,8 +519,8 @@ static cupid_status read_pd_options(model_reader *rd, const mr_map *map, cupid_p
 
 static cupid_status read_peridynamics(model_reader *rd, yaml_node_t *node) {
   static const char *const keys[] = {"spacing",   "horizon",   "model",    "influence",
-                                     "partial_volume", "dimension", "area", "material",
-                                     "regions"};
+                                     "partial_volume", "surface_correction", "dimension",
+                                     "area", "material", "regions"};
   cupid_peridynamics *pd = &rd->model->pd;
   mr_map map;
   yaml_node_t *spacing, *horizon, *regions, *material;

@@ -4,8 +4,9 @@
  *  - K_pair: each bond i-j is a spring along n_ij with stiffness w_ij
  *    (pd_pair_coefficient): blocks (i,i) += w n n^T, (i,j) -= w n n^T;
  *  - LPS dilatation term: c_p = V (3K_p - 5mu_p)/3 and g_p = d theta_p / dU, non-zero on
- *    p (g_p[p] = -3V/m_p sum_j omega beta x n_pj) and on its neighbours
- *    (g_p[j] = 3V/m_p omega beta x n_pj). It couples nodes up to 2 delta apart.
+ *    p (g_p[p] = -3V/m_p sum_j omega beta x D_pj n_pj) and on its neighbours
+ *    (g_p[j] = 3V/m_p omega beta x D_pj n_pj; D the surface factor, 1 without a
+ *    correction). It couples nodes up to 2 delta apart.
  *
  * Row-wise gather, no atomics: row r collects block(r,k) += c_p g_p[r] (x) g_p[k] for
  * p in H_r + {r}, k in H_p + {p}. On the uniform grid every column k of row r sits at a
@@ -121,8 +122,14 @@ static void gather_row(const struct cupid_pd_operator_private *op, const offset_
     }
     const double Gp = 3.0 * op->V / op->m[p], cp = op->V * op->kappa[p] / 3.0;
     const double *dir = self ? op->gself + 3 * r : S->wxn + 3 * op->bst[b];
-    double v[3]; /* c_p g_p[r] Gp, with g_p[r] = -Gp gself_r, or -Gp wxn(r->p) */
-    for (int c = 0; c < 3; c++) v[c] = -cp * Gp * Gp * dir[c];
+    double Dpr = 1.0; /* surface factor of bond p -> r in theta_p */
+    if (!self && op->sf) {
+      double F[4];
+      pd_surface_bond(op, r, p, S->nrm + 3 * op->bst[b], F);
+      Dpr = F[1];
+    }
+    double v[3]; /* c_p g_p[r] Gp, with g_p[r] = -Gp gself_r, or -Gp D_pr wxn(r->p) */
+    for (int c = 0; c < 3; c++) v[c] = -cp * Gp * Gp * Dpr * dir[c];
     double mgs[3]; /* g_p[p] / Gp = -gself_p */
     for (int c = 0; c < 3; c++) mgs[c] = -op->gself[3 * p + c];
     hit[dp[0]] = 1;
@@ -130,6 +137,17 @@ static void gather_row(const struct cupid_pd_operator_private *op, const offset_
     const cupid_int *lin = t->lin;
     const int32_t *bst = op->bst;
     const double *wxn = S->wxn;
+    if (op->sf) { /* g_p[k] = Gp D_pk wxn(p->k) */
+      for (cupid_int bb = op->bptr[p]; bb < op->bptr[p + 1]; bb++) {
+        const int s2 = bst[bb];
+        const int32_t d = dp[lin[s2]];
+        double F[4];
+        pd_surface_bond(op, p, op->bnbr[bb], S->nrm + 3 * s2, F);
+        hit[d] = 1;
+        add_vb(acc + 9 * (size_t)d, F[0] * v[0], F[0] * v[1], F[0] * v[2], wxn + 3 * s2);
+      }
+      continue;
+    }
     for (cupid_int bb = op->bptr[p]; bb < op->bptr[p + 1]; bb++) {
       const int s2 = bst[bb];
       const int32_t d = dp[lin[s2]];
@@ -247,7 +265,13 @@ cupid_status cupid_pd_operator_diagonal(const cupid_pd_operator op, double *bloc
       const cupid_int p = b < op->bptr[r] ? r : op->bnbr[b];
       const double Gp = 3.0 * op->V / op->m[p], cp = op->V * op->kappa[p] / 3.0;
       const double *dir = p == r ? op->gself + 3 * r : S->wxn + 3 * op->bst[b];
-      add_outer(blk, cp * Gp * Gp, dir, dir); /* c_p g_p[r] g_p[r]^T, sign squared away */
+      double Dpr = 1.0; /* surface factor of bond p -> r in theta_p */
+      if (p != r && op->sf) {
+        double F[4];
+        pd_surface_bond(op, r, p, S->nrm + 3 * op->bst[b], F);
+        Dpr = F[1];
+      }
+      add_outer(blk, cp * Gp * Gp * Dpr * Dpr, dir, dir); /* c_p g_p[r] g_p[r]^T, sign squared away */
     }
   }
   return CUPID_SUCCESS;

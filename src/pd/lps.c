@@ -2,9 +2,11 @@
  * force (a gather over each node's bonds, so no atomics), energy and nodal stress. */
 #include "pd/pd_internal.h"
 
-/* theta_i = 3/m_i sum_j omega x e beta V (Eq. 19, e from Eq. 17). */
-void pd_lps_dilatation(const struct cupid_pd_operator_private *op, cupid_int first, cupid_int last,
-                       const double *u, double *theta) {
+/* theta_i = 3/m_i sum_j omega x D_ij e beta V (Eq. 19, e from Eq. 17; D_ij the surface factor,
+ * 1 without a correction). The kernel is instantiated with corr = 0 and 1 so that the
+ * uncorrected loop carries no factor work. */
+static inline void lps_dilatation(const struct cupid_pd_operator_private *op, cupid_int first,
+                                  cupid_int last, const double *u, double *theta, const int corr) {
   const pd_stencil *S = &op->st;
 #pragma omp parallel for schedule(static) if (last - first > PD_OMP_MIN_NODES)
   for (cupid_int i = first; i < last; i++) {
@@ -12,17 +14,30 @@ void pd_lps_dilatation(const struct cupid_pd_operator_private *op, cupid_int fir
     for (cupid_int b = op->bptr[i]; b < op->bptr[i + 1]; b++) {
       const cupid_int j = op->bnbr[b];
       const int s = op->bst[b];
-      t += S->wb[s] * S->x[s] * pd_extension(S->nrm + 3 * s, u, i, j);
+      double F[4] = {1.0, 1.0, 1.0, 1.0};
+      if (corr) pd_surface_bond(op, i, j, S->nrm + 3 * s, F);
+      t += S->wb[s] * S->x[s] * F[0] * pd_extension(S->nrm + 3 * s, u, i, j);
     }
     theta[i] = 3.0 * op->V * t / op->m[i];
   }
 }
 
+void pd_lps_dilatation(const struct cupid_pd_operator_private *op, cupid_int first, cupid_int last,
+                       const double *u, double *theta) {
+  if (op->sf)
+    lps_dilatation(op, first, last, u, theta, 1);
+  else
+    lps_dilatation(op, first, last, u, theta, 0);
+}
+
 /* (K u)_i = -sum_j beta V^2 omega [ kappa_i x theta_i/m_i + kappa_j x theta_j/m_j
  *                                   + 15 (mu_i/m_i + mu_j/m_j) e_ij ] n_ij,
- * i.e. -(T_ij - T_ji) beta V^2 of Eq. 21 with T of Eq. 20, kappa = 3K - 5mu. */
-void pd_lps_apply(const struct cupid_pd_operator_private *op, cupid_int first, cupid_int last,
-                  const double *u, const double *theta, double *f) {
+ * i.e. -(T_ij - T_ji) beta V^2 of Eq. 21 with T of Eq. 20, kappa = 3K - 5mu. With a surface
+ * correction the i terms carry D_ij, G_ij and the j terms D_ji, G_ji (the gradient of the
+ * corrected energy). */
+static inline void lps_apply(const struct cupid_pd_operator_private *op, cupid_int first,
+                             cupid_int last, const double *u, const double *theta, double *f,
+                             const int corr) {
   const pd_stencil *S = &op->st;
   const double V2 = op->V * op->V;
 #pragma omp parallel for schedule(static) if (last - first > PD_OMP_MIN_NODES)
@@ -34,14 +49,25 @@ void pd_lps_apply(const struct cupid_pd_operator_private *op, cupid_int first, c
       const int s = op->bst[b];
       const double *n = S->nrm + 3 * s;
       const double aj = op->kappa[j] * theta[j] / op->m[j], bj = op->mu[j] / op->m[j];
-      const double t = S->wb[s] * ((ai + aj) * S->x[s] + 15.0 * (bi + bj) * pd_extension(n, u, i, j));
+      double F[4] = {1.0, 1.0, 1.0, 1.0};
+      if (corr) pd_surface_bond(op, i, j, n, F);
+      const double t = S->wb[s] * ((ai * F[0] + aj * F[1]) * S->x[s] +
+                                   15.0 * (bi * F[2] + bj * F[3]) * pd_extension(n, u, i, j));
       for (int c = 0; c < 3; c++) fi[c] += t * n[c];
     }
     for (int c = 0; c < 3; c++) f[3 * (i - first) + c] = -V2 * fi[c];
   }
 }
 
-/* E = sum_i V [ kappa_i/6 theta_i^2 + 15 mu_i/(2 m_i) sum_j omega e^2 beta V ]. */
+void pd_lps_apply(const struct cupid_pd_operator_private *op, cupid_int first, cupid_int last,
+                  const double *u, const double *theta, double *f) {
+  if (op->sf)
+    lps_apply(op, first, last, u, theta, f, 1);
+  else
+    lps_apply(op, first, last, u, theta, f, 0);
+}
+
+/* E = sum_i V [ kappa_i/6 theta_i^2 + 15 mu_i/(2 m_i) sum_j omega G_ij e^2 beta V ]. */
 double pd_lps_energy(const struct cupid_pd_operator_private *op, const double *u,
                      const double *theta) {
   const pd_stencil *S = &op->st;
@@ -52,7 +78,9 @@ double pd_lps_energy(const struct cupid_pd_operator_private *op, const double *u
     for (cupid_int b = op->bptr[i]; b < op->bptr[i + 1]; b++) {
       const int s = op->bst[b];
       const double e = pd_extension(S->nrm + 3 * s, u, i, op->bnbr[b]);
-      q += S->wb[s] * e * e;
+      double F[4];
+      pd_surface_bond(op, i, op->bnbr[b], S->nrm + 3 * s, F);
+      q += S->wb[s] * F[2] * e * e;
     }
     E += op->V * (op->kappa[i] / 6.0 * theta[i] * theta[i] + 7.5 * op->mu[i] / op->m[i] * q * op->V);
   }
@@ -60,7 +88,9 @@ double pd_lps_energy(const struct cupid_pd_operator_private *op, const double *u
 }
 
 /* sigma_i = sum_j T_ij (x) xi_ij beta V with T_ij = omega/m_i (kappa_i theta_i x + 15 mu_i e) n
- * (Eq. 20); T is along n and xi = x n, so sigma is symmetric. Order xx yy zz yz xz xy. */
+ * (Eq. 20; with a surface correction D_ij on the first term and G_ij on the second: the
+ * derivative of node i's corrected energy by e_ij); T is along n and xi = x n, so sigma is
+ * symmetric. Order xx yy zz yz xz xy. */
 void pd_lps_stress(const struct cupid_pd_operator_private *op, const double *u, const double *theta,
                    double *sigma) {
   const pd_stencil *S = &op->st;
@@ -72,7 +102,9 @@ void pd_lps_stress(const struct cupid_pd_operator_private *op, const double *u, 
       const double *n = S->nrm + 3 * s;
       const double x = S->x[s];
       const double e = pd_extension(n, u, i, op->bnbr[b]);
-      const double t = S->wb[s] * x * (op->kappa[i] * theta[i] * x + 15.0 * op->mu[i] * e);
+      double F[4];
+      pd_surface_bond(op, i, op->bnbr[b], n, F);
+      const double t = S->wb[s] * x * (op->kappa[i] * theta[i] * x * F[0] + 15.0 * op->mu[i] * e * F[2]);
       sg[0] += t * n[0] * n[0];
       sg[1] += t * n[1] * n[1];
       sg[2] += t * n[2] * n[2];

@@ -204,7 +204,8 @@ cupid_status cupid_pd_operator_estimate(const cupid_pd_grid grid,
   est->blocks = count_present(grid, nsum, sum);
   /* Operator: neighbour + stencil index per bond, offsets, ~9 doubles per node. */
   est->bytes_operator = est->bonds * (int64_t)(sizeof(cupid_int) + sizeof(int32_t)) +
-                        (est->nodes + 1) * (int64_t)sizeof(cupid_int) + est->nodes * 9 * 8;
+                        (est->nodes + 1) * (int64_t)sizeof(cupid_int) + est->nodes * 9 * 8 +
+                        (opts->surface_correction != CUPID_SURFACE_NONE ? est->nodes * PD_SF * 8 : 0);
   est->bytes_matrix = (est->nodes + 1) * (int64_t)sizeof(cupid_int) +
                       est->blocks * (int64_t)(sizeof(cupid_int) + 9 * sizeof(double));
 cleanup:

@@ -17,6 +17,7 @@ void cupid_pd_operator_destroy(cupid_pd_operator *op) {
   cupid_free(&o->mu);
   cupid_free(&o->c);
   cupid_free(&o->gself);
+  cupid_free(&o->sf);
   cupid_free(op);
 }
 
@@ -100,6 +101,9 @@ cupid_status cupid_pd_operator_create(const cupid_pd_grid grid,
               CUPID_ERR_ARGUMENT, "unknown influence function %d", (int)opts->influence);
   CUPID_CHECK(opts->partial_volume >= CUPID_PARTIAL_NONE && opts->partial_volume <= CUPID_PARTIAL_EXACT,
               CUPID_ERR_ARGUMENT, "unknown partial-volume rule %d", (int)opts->partial_volume);
+  CUPID_CHECK(opts->surface_correction == CUPID_SURFACE_NONE ||
+                  opts->surface_correction == CUPID_SURFACE_ENERGY,
+              CUPID_ERR_ARGUMENT, "unknown surface correction %d", (int)opts->surface_correction);
   CUPID_CALL(check_materials(grid, opts));
   CUPID_TRY(cupid_calloc(1, sizeof *o, "the PD operator", &o));
   o->grid = grid;
@@ -114,6 +118,8 @@ cupid_status cupid_pd_operator_create(const cupid_pd_grid grid,
   CUPID_TRY(pd_stencil_build(o->dim, o->h, o->delta, o->rule, o->influence, &o->st));
   CUPID_TRY(pd_neighbors_build(grid, &o->st, &o->bptr, &o->bnbr, &o->bst));
   CUPID_TRY(node_data(o, opts));
+  o->surface = opts->surface_correction;
+  if (o->surface != CUPID_SURFACE_NONE) CUPID_TRY(pd_surface_factors(o));
   *op = o;
   o = NULL;
 cleanup:

@@ -80,14 +80,48 @@ struct cupid_pd_operator_private {
   double *kappa;          /* 3K - 5mu per node (LPS) */
   double *mu;             /* shear modulus per node */
   double *c;              /* micromodulus per node (bond-based) */
-  double *gself;          /* sum_j omega beta x n_ij, 3 per node (LPS: -dtheta_i/du_i m_i/(3V)) */
+  double *gself;          /* sum_j omega beta x D_ij n_ij, 3 per node (LPS: -dtheta_i/du_i m_i/(3V)) */
+  cupid_surface_correction surface;
+  double *sf;             /* surface factors, PD_SF per node (d[3], g[3], q[3]), or NULL */
 };
+
+/* Surface factors per node: d (dilatation), g and q (deviatoric or pair energy). */
+#define PD_SF 9
+
+/* Surface factors (surface.c): fills op->sf (and, for LPS, rebuilds op->gself with them). */
+cupid_status pd_surface_factors(struct cupid_pd_operator_private *op);
+
+/* Factors of bond i -> j along n (surface.c): D_ij multiplies the bond in theta_i, G_ij in
+ * node i's deviatoric (bond-based: pair) energy; each node's own factors as the forms
+ * D_ij = sum_k d_ik n_k^2, G_ij = sum_k (g_ik n_k^2 + q_ik n_k^4). F = {D_ij, D_ji, G_ij, G_ji},
+ * all 1 without a correction. */
+static inline void pd_surface_bond(const struct cupid_pd_operator_private *op, cupid_int i,
+                                   cupid_int j, const double *n, double F[4]) {
+  if (!op->sf) {
+    F[0] = F[1] = F[2] = F[3] = 1.0;
+    return;
+  }
+  const double *a = op->sf + PD_SF * i, *b = op->sf + PD_SF * j;
+  const double n0 = n[0] * n[0], n1 = n[1] * n[1], n2 = n[2] * n[2];
+  const double q0 = n0 * n0, q1 = n1 * n1, q2 = n2 * n2;
+  F[0] = a[0] * n0 + a[1] * n1 + a[2] * n2;
+  F[1] = b[0] * n0 + b[1] * n1 + b[2] * n2;
+  F[2] = a[3] * n0 + a[4] * n1 + a[5] * n2 + a[6] * q0 + a[7] * q1 + a[8] * q2;
+  F[3] = b[3] * n0 + b[4] * n1 + b[5] * n2 + b[6] * q0 + b[7] * q1 + b[8] * q2;
+}
 
 /* Bond-based pair coefficient c_ij omega beta V^2 / |xi| and LPS pair coefficient
  * 15 (mu_i/m_i + mu_j/m_j) omega beta V^2: the stiffness of the bond spring along n. */
 static inline double pd_pair_coefficient(const struct cupid_pd_operator_private *op,
                                          cupid_int i, cupid_int j, int s) {
   const double V2 = op->V * op->V;
+  if (op->sf) { /* the surface factors G_ij, G_ji weigh the two nodes' energies */
+    double F[4];
+    pd_surface_bond(op, i, j, op->st.nrm + 3 * s, F);
+    if (op->model == CUPID_PD_BOND)
+      return 0.25 * (op->c[i] + op->c[j]) * (F[2] + F[3]) * op->st.wb[s] * V2 / op->st.x[s];
+    return 15.0 * (op->mu[i] / op->m[i] * F[2] + op->mu[j] / op->m[j] * F[3]) * op->st.wb[s] * V2;
+  }
   if (op->model == CUPID_PD_BOND)
     return 0.5 * (op->c[i] + op->c[j]) * op->st.wb[s] * V2 / op->st.x[s];
   return 15.0 * (op->mu[i] / op->m[i] + op->mu[j] / op->m[j]) * op->st.wb[s] * V2;
