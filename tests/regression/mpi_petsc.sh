@@ -4,7 +4,8 @@
 #  2. a small PD-only LPS block (matrix-free MATSHELL + halo exchange, CG + GAMG), with a
 #     prescribed non-zero displacement (lifted right-hand side),
 #  3. the model key `analysis.solver: petsc` on one process, PETSc options passed through,
-#  4. a forced divergence: exit 2 with PETSc's reason, printed once.
+#  4. solver auto: direct for the small block, PETSc when --max-memory makes it large,
+#  5. a forced divergence: exit 2 with PETSc's reason, printed once.
 # Every displacement (PD nodes, line and point samples) must match the direct solve to 1e-8
 # relative to the largest displacement: the Krylov solves stop at a relative residual of 1e-12
 # and the preconditioned systems are well conditioned, so ~1e-10 is expected; 1e-8 is the
@@ -72,6 +73,21 @@ sed 's/solver: direct/solver: petsc/' "$models/pd_block.yaml" > "$tmp/pd_key.yam
 "$CUPID" run "$tmp/pd_key.yaml" -o "$tmp/pd_key" --quiet -ksp_type gmres -ksp_rtol 1e-13
 compare "$tmp/pd_direct" "$tmp/pd_key" "PD block, model key, -ksp_type gmres"
 python3 -c "import json,sys; s=json.load(open(sys.argv[1]))['solver']; assert s['ranks']==1 and s['ksp_type']=='gmres', s" "$tmp/pd_key/summary.json"
+
+echo "== solver auto: direct for a small model, PETSc once the direct estimate passes the limit"
+sed 's/solver: direct/solver: auto/' "$models/pd_block.yaml" > "$tmp/pd_auto.yaml"
+"$CUPID" run "$tmp/pd_auto.yaml" -o "$tmp/pd_auto_small" --quiet
+# The direct path needs ~0.15 GB (cupid check): a 0.2 GB limit leaves it above a quarter.
+"$CUPID" run "$tmp/pd_auto.yaml" -o "$tmp/pd_auto_large" --quiet --max-memory 0.2
+python3 - "$tmp/pd_auto_small/summary.json" "$tmp/pd_auto_large/summary.json" <<'PY'
+import json, sys
+small, large = (json.load(open(p))["solver"] for p in sys.argv[1:3])
+print("auto, small:", small["method"], "-", small["choice"])
+print("auto, 0.2 GB limit:", large["method"], "-", large["choice"])
+assert small["method"] == "cholmod" and small["choice"].startswith("auto"), small
+assert large["method"] == "petsc" and large["choice"].startswith("auto"), large
+PY
+compare "$tmp/pd_direct" "$tmp/pd_auto_large" "PD block, auto -> petsc"
 
 echo "== a forced divergence fails cleanly (exit 2, one message)"
 set +e
