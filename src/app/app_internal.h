@@ -155,6 +155,11 @@ cupid_status cupid_app_choose_solver(cupid_job *job);
  *  peak bytes and factorisation seconds of the direct path (the grid and beam built). */
 double cupid_app_memory_limit(const cupid_job *job);
 cupid_status cupid_app_direct_cost(const cupid_job *job, double *bytes, double *seconds);
+/** `solver: auto` keeps the direct solver while its estimated peak memory stays below this share
+ *  of the memory limit and its factorisation below these seconds. */
+#define CUPID_AUTO_DIRECT_MEMORY_SHARE 0.25
+#define CUPID_AUTO_DIRECT_SECONDS 120.0
+int cupid_app_auto_picks_direct(const cupid_job *job, double bytes, double seconds);
 /** Solve job->K u = f_ext with job->bc by the chosen engine into job->u and job->solve. */
 cupid_status cupid_app_linear_solve(cupid_job *job, cupid_matrix_kind kind);
 

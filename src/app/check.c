@@ -116,6 +116,11 @@ static void estimate_iterative(const cupid_job *job, cupid_estimate *e) {
   }
 }
 
+int cupid_app_auto_picks_direct(const cupid_job *job, double bytes, double seconds) {
+  return bytes <= CUPID_AUTO_DIRECT_MEMORY_SHARE * memory_limit(job) &&
+         seconds <= CUPID_AUTO_DIRECT_SECONDS;
+}
+
 cupid_status cupid_app_direct_cost(const cupid_job *job, double *bytes, double *seconds) {
   cupid_estimate e = {0};
   if (job->grid) CUPID_CALL(estimate(job, &e));
@@ -166,6 +171,15 @@ cupid_status cupid_app_estimate(const cupid_job *job, int print) {
            e.iterative_matrix_free ? "matrix-free CG + GAMG" : "Krylov + AMG/ILU, assembled",
            e.iterative_bytes / 1e9, e.iterative_seconds,
            cupid_petsc_available() ? "" : " (this build has no PETSc)");
+    if (m->analysis.type == CUPID_ANALYSIS_STATIC) {
+      int direct = cupid_app_auto_picks_direct(job, e.total_bytes, e.factor_seconds);
+      printf("solver auto would pick: %s\n",
+             direct ? "direct (below a quarter of the memory limit and 120 s)"
+             : cupid_petsc_available() ? "petsc (the direct estimate exceeds a quarter of the "
+                                         "memory limit or 120 s)"
+                                       : "direct (PETSc would fit better: rebuild with "
+                                         "scripts/build.sh --with-petsc)");
+    }
     printf("the model is valid%s\n", limit > 0 && e.total_bytes > limit
                                           ? ", but too large for the direct solver on this machine"
                                           : "");

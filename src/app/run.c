@@ -27,11 +27,9 @@ void cupid_job_phase_end(cupid_job *job, cupid_phase phase, double t0) {
 
 /* ------------------------------------------------------------- the solver engine (issue 6)
  * The command line wins over the model file. auto: the direct solver while its estimated peak
- * memory stays below a quarter of the memory limit and its factorisation below two minutes,
- * PETSc above (when cupid was built with it): Krylov + AMG costs O(n) memory where the factor
- * grows like n^(4/3) (docs/scale.md). */
-#define CUPID_AUTO_DIRECT_MEMORY_SHARE 0.25
-#define CUPID_AUTO_DIRECT_SECONDS 120.0
+ * memory stays below a quarter of the memory limit and its factorisation below two minutes
+ * (cupid_app_auto_picks_direct, check.c), PETSc above (when cupid was built with it): Krylov +
+ * AMG costs O(n) memory where the factor grows like n^(4/3) (docs/scale.md). */
 
 static cupid_solver_kind requested_solver(const cupid_job *job) {
   return job->opts->solver >= 0 ? (cupid_solver_kind)job->opts->solver : job->model->analysis.solver;
@@ -81,7 +79,7 @@ cupid_status cupid_app_choose_solver(cupid_job *job) {
   }
   double bytes, seconds, limit = cupid_app_memory_limit(job);
   CUPID_CALL(cupid_app_direct_cost(job, &bytes, &seconds));
-  int small = bytes <= CUPID_AUTO_DIRECT_MEMORY_SHARE * limit && seconds <= CUPID_AUTO_DIRECT_SECONDS;
+  int small = cupid_app_auto_picks_direct(job, bytes, seconds);
   if (small || !cupid_petsc_available()) {
     snprintf(job->solver_reason, sizeof job->solver_reason,
              "auto: direct estimate %.3g GB, %.3g s%s", bytes / 1e9, seconds,
