@@ -98,8 +98,9 @@ static int is_fictitious_coupled(const cupid_job *job) {
  * entry) and ~50% more for the preconditioner (GAMG hierarchy or ILU factors); per iteration
  * about one pass over the matrix at ~2 GB/s; 40 CG or 150 GMRES iterations. Matrix-free PD:
  * no K, a 19-block bond-based preconditioner matrix (x2.5 with its GAMG hierarchy and PETSc
- * copies), ~40 CG iterations of one operator product at ~1.5e7 bonds per second per pass (LPS:
- * two passes). Calibrated on the runs in docs/scale.md; an estimate, not a promise. */
+ * copies), setup + ~32 CG iterations worth 25 operator products at ~1.5e7 bonds per second per
+ * pass (LPS: two passes). Calibrated on the LPS cubes of docs/scale.md (100^3: 6.3 GB and 439 s
+ * measured, 6.0 GB and 435 s estimated); an estimate, not a promise. */
 static void estimate_iterative(const cupid_job *job, cupid_estimate *e) {
   double ndof = (double)job->ndof;
   int free3d = job->grid && !job->beam && cupid_pd_grid_dimension(job->grid) == 3;
@@ -107,7 +108,7 @@ static void estimate_iterative(const cupid_job *job, cupid_estimate *e) {
   if (free3d) {
     double n = (double)job->n_pd, passes = job->model->pd.model == CUPID_PD_LPS ? 2.0 : 1.0;
     e->iterative_bytes = 2.5 * 19.0 * 9.0 * 12.0 * n + 30.0 * ndof * 8.0;
-    e->iterative_seconds = 2.0 + 45.0 * passes * (double)job->n_bonds / 1.5e7 + 2e-5 * n;
+    e->iterative_seconds = 2.0 + 25.0 * passes * (double)job->n_bonds / 1.5e7 + 2e-5 * n;
   } else {
     double entries = 9.0 * e->matrix_blocks;
     int general = is_fictitious_coupled(job);
