@@ -349,9 +349,11 @@ cupid_status cupid_app_guard_size(const cupid_job *job) {
   }
   total += solver_bytes + 3 * 3 * 8 * nodes; /* u, loads, internal forces */
   if (total <= limit) return CUPID_SUCCESS;
-  char solver[128] = "";
-  if (solver_bytes > 0)
-    snprintf(solver, sizeof solver, ", stiffness matrix and factor %.3g GB", solver_bytes / 1e9);
+  char solver[192] = "";
+  if (solver_bytes > 0) /* the direct solver counted: PETSc would need far less */
+    snprintf(solver, sizeof solver, ", stiffness matrix and factor %.3g GB: the iterative PETSc "
+             "engine needs neither (scripts/build.sh --with-petsc, --solver petsc)",
+             solver_bytes / 1e9);
   return cupid_model_error(m, &pd->mark,
                            "the model has at least %.0f PD nodes and %.3g bonds and needs at "
                            "least %.3g GB (grid %.3g GB, neighbour lists %.3g GB%s), more than "
