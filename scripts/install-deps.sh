@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Install cupid's build and test dependencies from Debian 12 packages (idempotent).
 # Usage: scripts/install-deps.sh [--with-petsc] [--with-fuzz] [--with-valgrind]
+#   --with-petsc     PETSc 3.18 + OpenMPI (petsc-dev; CUPID_WITH_PETSC, scripts/build.sh --with-petsc)
 #   --with-fuzz      clang-14 with libFuzzer and its OpenMP runtime (CUPID_FUZZ, docs/hardening.md)
 #   --with-valgrind  valgrind (CUPID_VALGRIND_TESTS)
 # Only packages that are missing are installed, so a prepared machine pays nothing.

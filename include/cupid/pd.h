@@ -224,6 +224,38 @@ double cupid_pd_partial_volume_1d(cupid_partial_volume rule, double d, double h,
 /** Influence omega(|xi|). */
 double cupid_pd_influence(cupid_influence kind, double r, double delta);
 
+
+/* ---- Distributed solves (issue 6): owned-row assembly of a preconditioner, matrix-free PETSc
+ * solve. Appended by the PETSc engine (src/pd/assemble_rows.c, src/solvers/petsc.c). ---- */
+
+/**
+ * Rows [first, last) (nodes) of a short-range bond-based stiffness on the grid's lattice: bonds
+ * to every node at lattice offset |o| h <= radius (radius in length units, e.g. 1.5 h: faces and
+ * edges), K_ij = -c_ij (V^2 / |xi|) n n^T, K_ii = -sum_j K_ij, c_ij = (E_i + E_j)/2. Not the
+ * model's operator: an SPD (once constrained) spectrally close approximation of it, cheap to
+ * assemble (19 blocks per row at 1.5 h), used as the matrix GAMG coarsens for the matrix-free
+ * solve. *K: nrows = last - first, ncols = nodes, bs = 3; materials gives E per material index.
+ * Dimension 3 only (CUPID_ERR_UNSUPPORTED otherwise).
+ */
+cupid_status cupid_pd_assemble_rows_bond(const cupid_pd_grid grid, const cupid_pd_material *materials,
+                                         double radius, cupid_int first, cupid_int last,
+                                         cupid_csr *K);
+
+/**
+ * Matrix-free PD solve K u = f with PETSc (K the operator's stiffness, never assembled): a
+ * MATSHELL whose product computes the owned z-slab of rows with cupid_pd_operator_apply_range()
+ * after a VecScatter of their dependency range (halo exchange); Dirichlet DOFs as scaled identity
+ * rows with the right-hand side lifted. CG preconditioned by GAMG on
+ * cupid_pd_assemble_rows_bond() of the owned rows (radius 1.5 h, option -cupid_pc_radius R in
+ * units of h) with the rigid-body near null space; -ksp_* / -pc_* options apply. Same checks and
+ * outputs as cupid_petsc_solve() (info->matrix_free = 1). Collective; dimension 3 only.
+ * Stub returning CUPID_ERR_UNSUPPORTED without PETSc.
+ */
+cupid_status cupid_petsc_solve_pd(const cupid_pd_operator op, const cupid_pd_grid grid,
+                                  const cupid_pd_material *materials, const double *f,
+                                  const cupid_dirichlet_t *bc, double *u, cupid_solve_info *info);
+/* ---- end of the distributed-solve block ---- */
+
 #ifdef __cplusplus
 }
 #endif

@@ -125,6 +125,12 @@ typedef struct {
   int refinements;         /**< iterative refinement steps done by cupid (0 or 1) */
   double backward_error;   /**< |r|_inf / (|K_ff|_inf |u_f|_inf + |b_f|_inf): the failure test
                                 (the solve fails above 1e-10) */
+  /* Iterative (PETSc) solves only (issue 6); zero for the direct solvers. */
+  int iterations;          /**< Krylov iterations */
+  int ranks;               /**< MPI ranks that took part */
+  int matrix_free;         /**< 1: PD operator applied matrix-free (MATSHELL) */
+  char ksp_type[32], pc_type[32]; /**< PETSc KSP and PC types actually used */
+  char converged_reason[48];      /**< PETSc's KSPConvergedReason name */
 } cupid_solve_info;
 
 /**
@@ -171,6 +177,69 @@ cupid_status cupid_direct_factor_solve(cupid_direct_factor F, const double *b, d
 /** Destroy and set *F to NULL (NULL-safe). */
 void cupid_direct_factor_destroy(cupid_direct_factor *F);
 /* ---- end of the reusable factorisation block ---- */
+
+
+/* ---- PETSc/MPI engine (src/solvers/petsc.c; issue 6) ----
+ * Optional: with CUPID_HAVE_PETSC == 0 (cupid_config.h) every function below is a stub and the
+ * solves return CUPID_ERR_UNSUPPORTED. Every rank holds the whole (replicated) model; the
+ * solves are collective over PETSC_COMM_WORLD and leave the full solution on every rank. */
+
+/** 1 when cupid was built with PETSc (CMake option CUPID_WITH_PETSC). */
+int cupid_petsc_available(void);
+
+/** 1 when the process was started by an MPI launcher with more than one rank (environment). */
+int cupid_petsc_launched_parallel(void);
+
+/**
+ * Initialise PETSc (and MPI) once; later calls do nothing. argv[0] is the program name, the rest
+ * PETSc run-time options (-ksp_type, -pc_type, -log_view, ...): they reach every KSP through
+ * KSPSetFromOptions. argv must stay valid until cupid_petsc_finalize(). argv NULL: the arguments
+ * given to cupid_petsc_set_args() (none if never called). PETSc's own error printing is replaced
+ * by cupid's messages.
+ */
+/** Remember the PETSc options for a later (lazy) cupid_petsc_initialize(0, NULL). */
+void cupid_petsc_set_args(int argc, char **argv);
+
+cupid_status cupid_petsc_initialize(int argc, char **argv);
+/** 1 between cupid_petsc_initialize() and cupid_petsc_finalize(). */
+int cupid_petsc_initialized(void);
+/** Finalise PETSc (and MPI) if it was initialised here. */
+void cupid_petsc_finalize(void);
+/** This process's rank in PETSC_COMM_WORLD (0 when PETSc is not initialised). */
+int cupid_petsc_rank(void);
+/** Number of ranks (1 when PETSc is not initialised). */
+int cupid_petsc_size(void);
+/** The largest of @p v over all ranks (collective; @p v itself when not initialised). */
+int cupid_petsc_max_int(int v);
+/** Abort every rank with exit status @p code (MPI_Abort; plain exit when not initialised). */
+void cupid_petsc_abort(int code);
+
+/** Options of the PETSc solves (zero-initialise; every field optional). */
+typedef struct {
+  /** Node coordinates, 3 per node, for DOFs 3i..3i+2, i < n_coord_nodes; when they cover every
+   *  DOF (3 n_coord_nodes = K->nrows * bs) GAMG gets the rigid-body near null space. */
+  const double *coords;
+  cupid_int n_coord_nodes;
+} cupid_petsc_options;
+
+/**
+ * The contract of cupid_direct_solve() with PETSc KSP: K is replicated (every rank passes the
+ * same K, f, bc); each rank inserts its block of rows into an MPIAIJ matrix (block size 3 when
+ * the DOFs come in threes) with the Dirichlet DOFs as scaled identity rows, columns eliminated
+ * into the right-hand side (symmetry kept). Defaults: SPD -> CG + GAMG (rigid-body near null
+ * space when opts->coords covers every DOF), GENERAL -> GMRES(200), right-preconditioned,
+ * + block Jacobi/ILU(0) (measured in docs/scale.md);
+ * rtol 1e-12 on the unpreconditioned residual; every -ksp_* / -pc_* option overrides them.
+ * CUPID_ERR_NUMERIC when the KSP diverges (reason and iterations in the message) or the true
+ * relative residual exceeds max(100 rtol, 1e-10). u (full length) holds the solution on every rank.
+ * info->method is "petsc"; iterations, ranks, ksp_type, pc_type, converged_reason are set.
+ */
+cupid_status cupid_petsc_solve(const cupid_csr_t *K, cupid_matrix_kind kind, const double *f,
+                               const cupid_dirichlet_t *bc, double *u,
+                               const cupid_petsc_options *opts, cupid_solve_info *info);
+
+/* The matrix-free PD solve cupid_petsc_solve_pd() is declared at the end of pd.h. */
+/* ---- end of the PETSc block ---- */
 
 #ifdef __cplusplus
 }

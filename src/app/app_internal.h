@@ -78,6 +78,10 @@ typedef struct {
   double load_sum[3], reaction_sum[3];
   cupid_phase_record phases[CUPID_PHASE_COUNT];
   double t_start;
+
+  /* Solver engine (issue 6): DIRECT or PETSC once chosen (AUTO until then), and why. */
+  cupid_solver_kind solver;
+  char solver_reason[160];
 } cupid_job;
 
 /* run.c */
@@ -142,5 +146,21 @@ cupid_status cupid_app_estimate(const cupid_job *job, int print);
  *  also grids whose overlapping regions would take hours to build, and output lines of more
  *  than 10^8 points (or 2x10^8 point-region tests) in all. */
 cupid_status cupid_app_guard_size(const cupid_job *job);
+
+/* run.c (issue 6): the engine of this run and the linear solve through it. */
+/** Resolve --solver / analysis.solver (auto: direct below the size limit, PETSc above when
+ *  built with it) into job->solver and job->solver_reason; initialises PETSc when it is picked. */
+cupid_status cupid_app_choose_solver(cupid_job *job);
+/** check.c: the memory limit (--max-memory, else 90% of the physical memory) and the estimated
+ *  peak bytes and factorisation seconds of the direct path (the grid and beam built). */
+double cupid_app_memory_limit(const cupid_job *job);
+cupid_status cupid_app_direct_cost(const cupid_job *job, double *bytes, double *seconds);
+/** `solver: auto` keeps the direct solver while its estimated peak memory stays below this share
+ *  of the memory limit and its factorisation below these seconds. */
+#define CUPID_AUTO_DIRECT_MEMORY_SHARE 0.25
+#define CUPID_AUTO_DIRECT_SECONDS 120.0
+int cupid_app_auto_picks_direct(const cupid_job *job, double bytes, double seconds);
+/** Solve job->K u = f_ext with job->bc by the chosen engine into job->u and job->solve. */
+cupid_status cupid_app_linear_solve(cupid_job *job, cupid_matrix_kind kind);
 
 #endif

@@ -20,7 +20,16 @@ typedef struct {
   double matrix_blocks, matrix_bytes;
   double factor_nnz, factor_bytes, factor_seconds;
   double total_bytes;
+  /* The PETSc path (docs/scale.md): bytes per rank with one rank, seconds of setup + solve. */
+  int iterative_matrix_free;
+  double iterative_bytes, iterative_seconds;
 } cupid_estimate;
+
+/* UMFPACK's LU of the non-symmetric coupled matrix (paper 000 Eq. 38) against the CHOLMOD fit:
+ * the coupled bar (examples/bar/bar.yaml, 12,072 DOFs) peaked at 3.5 GB and 25-45 s where the
+ * CHOLMOD-style estimate said 0.76 GB of factor (1.02 GB in all) and 6.9 s. */
+#define CUPID_UMFPACK_FILL_FACTOR 4.2
+#define CUPID_UMFPACK_TIME_FACTOR 5.0
 
 /* Matrix and factor sizes for n PD nodes and the given number of stored 3x3 blocks. */
 static void estimate_sizes(const cupid_model_t *m, double n, double blocks, cupid_estimate *e) {
@@ -76,15 +85,73 @@ static cupid_status estimate_fe(const cupid_job *job, cupid_estimate *e) {
   return CUPID_SUCCESS;
 }
 
-static double memory_limit(const cupid_job *job) {
+double cupid_app_memory_limit(const cupid_job *job) {
   return job->opts->max_memory_gb > 0 ? job->opts->max_memory_gb * 1e9 : 0.9 * physical_memory();
+}
+#define memory_limit cupid_app_memory_limit
+
+static int is_fictitious_coupled(const cupid_job *job) {
+  return cupid_app_is_coupled(job) && job->model->coupling.method == CUPID_COUPLING_FICTITIOUS;
+}
+
+/* The iterative path. Assembled (beam, coupled, 1D): cupid's K, PETSc's AIJ copy (12 B per
+ * entry) and ~50% more for the preconditioner (GAMG hierarchy or ILU factors); per iteration
+ * about one pass over the matrix at ~2 GB/s; 40 CG or 150 GMRES iterations. Matrix-free PD:
+ * no K, a 19-block bond-based preconditioner matrix (x2.5 with its GAMG hierarchy and PETSc
+ * copies), setup + ~32 CG iterations worth 25 operator products at ~1.5e7 bonds per second per
+ * pass (LPS: two passes). Calibrated on the LPS cubes of docs/scale.md (100^3: 6.3 GB and 439 s
+ * measured, 6.0 GB and 435 s estimated); an estimate, not a promise. */
+static void estimate_iterative(const cupid_job *job, cupid_estimate *e) {
+  double ndof = (double)job->ndof;
+  int free3d = job->grid && !job->beam && cupid_pd_grid_dimension(job->grid) == 3;
+  e->iterative_matrix_free = free3d;
+  if (free3d) {
+    double n = (double)job->n_pd, passes = job->model->pd.model == CUPID_PD_LPS ? 2.0 : 1.0;
+    e->iterative_bytes = 2.5 * 19.0 * 9.0 * 12.0 * n + 30.0 * ndof * 8.0;
+    e->iterative_seconds = 2.0 + 25.0 * passes * (double)job->n_bonds / 1.5e7 + 2e-5 * n;
+  } else {
+    double entries = 9.0 * e->matrix_blocks;
+    int general = is_fictitious_coupled(job);
+    e->iterative_bytes = e->matrix_bytes + 1.5 * 12.0 * entries + 30.0 * ndof * 8.0;
+    e->iterative_seconds = 1.0 + (general ? 150.0 : 40.0) * 12.0 * entries / 2e9 + 3.0 * 12.0 * entries / 2e9;
+  }
+}
+
+int cupid_app_auto_picks_direct(const cupid_job *job, double bytes, double seconds) {
+  return bytes <= CUPID_AUTO_DIRECT_MEMORY_SHARE * memory_limit(job) &&
+         seconds <= CUPID_AUTO_DIRECT_SECONDS;
+}
+
+cupid_status cupid_app_direct_cost(const cupid_job *job, double *bytes, double *seconds) {
+  cupid_estimate e = {0};
+  if (job->grid) CUPID_CALL(estimate(job, &e));
+  if (job->beam) CUPID_CALL(estimate_fe(job, &e));
+  if (is_fictitious_coupled(job)) {
+    e.total_bytes += (CUPID_UMFPACK_FILL_FACTOR - 1.0) * e.factor_bytes;
+    e.factor_seconds *= CUPID_UMFPACK_TIME_FACTOR;
+  }
+  *bytes = e.total_bytes;
+  *seconds = e.factor_seconds;
+  return CUPID_SUCCESS;
 }
 
 cupid_status cupid_app_estimate(const cupid_job *job, int print) {
   cupid_estimate e = {0};
   if (job->grid) CUPID_CALL(estimate(job, &e));
   if (job->beam) CUPID_CALL(estimate_fe(job, &e));
+  const char *direct_name = "CHOLMOD";
+  if (is_fictitious_coupled(job)) { /* UMFPACK LU, measured above the CHOLMOD fit */
+    e.total_bytes += (CUPID_UMFPACK_FILL_FACTOR - 1.0) * e.factor_bytes;
+    e.factor_bytes *= CUPID_UMFPACK_FILL_FACTOR;
+    e.factor_nnz *= CUPID_UMFPACK_FILL_FACTOR;
+    e.factor_seconds *= CUPID_UMFPACK_TIME_FACTOR;
+    direct_name = "UMFPACK";
+  }
+  estimate_iterative(job, &e);
   double limit = memory_limit(job);
+  int iterative = job->solver == CUPID_SOLVER_PETSC;
+  if (print && cupid_petsc_rank() != 0) print = 0, iterative = -1; /* rank 0 prints */
+  if (iterative < 0) return CUPID_SUCCESS;
   if (print) {
     const cupid_model_t *m = job->model;
     printf("model: %s%s%s\n", m->file, m->title[0] ? " - " : "", m->title);
@@ -97,12 +164,36 @@ cupid_status cupid_app_estimate(const cupid_job *job, int print) {
     printf("DOFs: %lld\n", (long long)job->ndof);
     printf("stiffness matrix: about %.3g stored 3x3 blocks, %.3g GB\n", e.matrix_blocks,
            e.matrix_bytes / 1e9);
-    printf("direct solver (CHOLMOD): about %.3g factor entries, %.3g GB, %.3g s\n", e.factor_nnz,
-           e.factor_bytes / 1e9, e.factor_seconds);
-    printf("estimated peak memory: %.3g GB (limit %.3g GB)\n", e.total_bytes / 1e9, limit / 1e9);
+    printf("direct solver (%s): about %.3g factor entries, %.3g GB, %.3g s\n", direct_name,
+           e.factor_nnz, e.factor_bytes / 1e9, e.factor_seconds);
+    printf("estimated peak memory, direct path: %.3g GB (limit %.3g GB)\n", e.total_bytes / 1e9,
+           limit / 1e9);
+    printf("iterative path (PETSc %s): about %.3g GB per rank on one rank, %.3g s%s\n",
+           e.iterative_matrix_free ? "matrix-free CG + GAMG" : "Krylov + AMG/ILU, assembled",
+           e.iterative_bytes / 1e9, e.iterative_seconds,
+           cupid_petsc_available() ? "" : " (this build has no PETSc)");
+    if (m->analysis.type == CUPID_ANALYSIS_STATIC) {
+      int direct = cupid_app_auto_picks_direct(job, e.total_bytes, e.factor_seconds);
+      printf("solver auto would pick: %s\n",
+             direct ? "direct (below a quarter of the memory limit and 120 s)"
+             : cupid_petsc_available() ? "petsc (the direct estimate exceeds a quarter of the "
+                                         "memory limit or 120 s)"
+                                       : "direct (PETSc would fit better: rebuild with "
+                                         "scripts/build.sh --with-petsc)");
+    }
     printf("the model is valid%s\n", limit > 0 && e.total_bytes > limit
                                           ? ", but too large for the direct solver on this machine"
                                           : "");
+  }
+  if (!print && iterative) {
+    if (limit > 0 && e.iterative_bytes > limit)
+      return CUPID_ERROR(CUPID_ERR_MODEL,
+                         "%s: the PETSc path needs about %.3g GB (%lld PD nodes), more than the "
+                         "limit of %.3g GB; use --max-memory GB to raise the limit, more ranks "
+                         "on more machines, or a coarser grid",
+                         job->model->file, e.iterative_bytes / 1e9, (long long)job->n_pd,
+                         limit / 1e9);
+    return CUPID_SUCCESS;
   }
   if (!print && limit > 0 && e.total_bytes > limit)
     return CUPID_ERROR(CUPID_ERR_MODEL,
@@ -247,16 +338,22 @@ cupid_status cupid_app_guard_size(const cupid_job *job) {
    * a stencil entry per bond, offsets and per-node data (cupid_pd_operator_estimate). */
   double grid_bytes = 8 * cells + 40 * nodes, op_bytes = 12 * bonds + 80 * nodes;
   double total = grid_bytes + op_bytes, solver_bytes = 0;
-  if (!job->opts->check_only && m->analysis.type != CUPID_ANALYSIS_EVALUATE) {
+  /* The direct solver's matrix and factor count unless PETSc may take the solve (requested, or
+   * auto in a build with PETSc: auto then picks it for a model this large). */
+  cupid_solver_kind req = job->opts->solver >= 0 ? (cupid_solver_kind)job->opts->solver : m->analysis.solver;
+  int petsc_may_solve = req == CUPID_SOLVER_PETSC || (req == CUPID_SOLVER_AUTO && cupid_petsc_available());
+  if (!job->opts->check_only && m->analysis.type != CUPID_ANALYSIS_EVALUATE && !petsc_may_solve) {
     cupid_estimate e;
     estimate_sizes(m, nodes, nodes + bonds, &e);
     solver_bytes = e.total_bytes;
   }
   total += solver_bytes + 3 * 3 * 8 * nodes; /* u, loads, internal forces */
   if (total <= limit) return CUPID_SUCCESS;
-  char solver[128] = "";
-  if (solver_bytes > 0)
-    snprintf(solver, sizeof solver, ", stiffness matrix and factor %.3g GB", solver_bytes / 1e9);
+  char solver[192] = "";
+  if (solver_bytes > 0) /* the direct solver counted: PETSc would need far less */
+    snprintf(solver, sizeof solver, ", stiffness matrix and factor %.3g GB: the iterative PETSc "
+             "engine needs neither (scripts/build.sh --with-petsc, --solver petsc)",
+             solver_bytes / 1e9);
   return cupid_model_error(m, &pd->mark,
                            "the model has at least %.0f PD nodes and %.3g bonds and needs at "
                            "least %.3g GB (grid %.3g GB, neighbour lists %.3g GB%s), more than "

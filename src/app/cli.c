@@ -1,6 +1,7 @@
 /* The `cupid` command line (model-format.md, "Command line"):
  *   cupid run MODEL.yaml [-o DIR] [--solver auto|direct|petsc] [--threads N]
- *                        [--max-memory GB] [--quiet]
+ *                        [--max-memory GB] [--quiet] [-PETSC_OPTION [VALUE]]...
+ *   mpirun -n N cupid run MODEL.yaml --solver petsc [...]   (every rank runs, rank 0 writes)
  *   cupid check MODEL.yaml
  *   cupid --version | --help
  * Exit status: 0 success, 1 model error, 2 numerical failure, 3 I/O failure, 4 internal. */
@@ -13,10 +14,12 @@
 #include "cupid/app.h"
 #include "cupid/io.h"
 #include "cupid/model.h"
+#include "cupid/solvers.h"
 
 static const char usage_text[] =
     "usage: cupid run MODEL.yaml [-o DIR] [--solver auto|direct|petsc] [--threads N]\n"
-    "                            [--max-memory GB] [--quiet]\n"
+    "                            [--max-memory GB] [--quiet] [-petsc_option [value]]...\n"
+    "       mpirun -n N cupid run MODEL.yaml --solver petsc [...]\n"
     "       cupid check MODEL.yaml\n"
     "       cupid --version | --help\n";
 
@@ -30,11 +33,14 @@ static const char help_text[] =
     "\n"
     "Options of run:\n"
     "  -o, --output DIR   write the outputs to DIR (overrides output.directory)\n"
-    "  --solver NAME      auto (default), direct (SuiteSparse) or petsc\n"
+    "  --solver NAME      auto (default: direct for small models, PETSc for large\n"
+    "                     ones when built with it), direct (SuiteSparse) or petsc\n"
     "  --threads N        number of OpenMP threads (default: OMP_NUM_THREADS or all cores)\n"
     "  --max-memory GB    refuse models whose estimated memory exceeds GB\n"
     "                     (default: 90% of the physical memory)\n"
     "  -q, --quiet        no progress messages on stderr\n"
+    "  -ksp_*, -pc_*, -log_view, ... (one dash) go to PETSc (--solver petsc; builds\n"
+    "                     with PETSc only), e.g. -ksp_monitor -pc_type hypre\n"
     "\n"
     "Exit status: 0 success, 1 model error, 2 numerical failure (singular or\n"
     "unconstrained system), 3 I/O failure, 4 internal error or out of memory.\n"
@@ -69,12 +75,35 @@ static int parse_positive(const char *s, double *out) {
   return 1;
 }
 
-/* Parse the options that follow `run MODEL` / `check MODEL`. Returns 0 or an exit code. */
+static int ends_with(const char *s, const char *tail) {
+  size_t n = strlen(s), m = strlen(tail);
+  return n >= m && !strcmp(s + n - m, tail);
+}
+
+/* A PETSc run-time option: one dash and a letter (cupid's own short options are -o, -q). */
+static int is_petsc_option(const char *a) {
+  return a[0] == '-' && ((a[1] >= 'a' && a[1] <= 'z') || (a[1] >= 'A' && a[1] <= 'Z')) &&
+         strcmp(a, "-o") && strcmp(a, "-q");
+}
+
+/* Parse the options that follow `run MODEL` / `check MODEL`. PETSc options (and their values:
+ * the next argument unless it is an option or, before the model, a .yaml/.yml file) are
+ * appended to petsc_argv / *petsc_argc. Returns 0 or an exit code. */
 static int parse_options(int argc, char **argv, int first, cupid_run_options *opts,
-                         const char **model_path) {
+                         const char **model_path, char **petsc_argv, int *petsc_argc) {
   for (int i = first; i < argc; i++) {
     const char *a = argv[i];
     int has_value = i + 1 < argc;
+    if (is_petsc_option(a)) {
+      if (!cupid_petsc_available())
+        return usage_error("%s: a PETSc option, but cupid was built without PETSc: rebuild "
+                           "with scripts/build.sh --with-petsc", a);
+      petsc_argv[(*petsc_argc)++] = argv[i];
+      const char *v = has_value ? argv[i + 1] : NULL;
+      if (v && v[0] != '-' && !(!*model_path && (ends_with(v, ".yaml") || ends_with(v, ".yml"))))
+        petsc_argv[(*petsc_argc)++] = argv[++i];
+      continue;
+    }
     if (!strcmp(a, "-o") || !strcmp(a, "--output")) {
       if (!has_value) return usage_error("option %s needs a directory", a);
       opts->output_dir = argv[++i];
@@ -109,9 +138,23 @@ static int parse_options(int argc, char **argv, int first, cupid_run_options *op
 
 static int report_error(cupid_status st) {
   const char *msg = cupid_error_message();
-  fprintf(stderr, "cupid: %s: %s\n", cupid_status_name(st), msg[0] ? msg : "(no message)");
+  char where[32] = "";
+  if (cupid_petsc_size() > 1) snprintf(where, sizeof where, "rank %d: ", cupid_petsc_rank());
+  fprintf(stderr, "cupid: %s%s: %s\n", where, cupid_status_name(st), msg[0] ? msg : "(no message)");
   if (getenv("CUPID_DEBUG")) fprintf(stderr, "cupid: raised in %s\n", cupid_error_origin());
   return cupid_status_exit_code(st);
+}
+
+/* Under MPI every rank ran the same replicated pipeline: the lowest failing rank prints its
+ * message once (rank 0 when all failed alike), every rank exits with the worst status. */
+static int finish_parallel(cupid_status st) {
+  int size = cupid_petsc_size(), rank = cupid_petsc_rank();
+  int code = st == CUPID_SUCCESS ? 0 : cupid_status_exit_code(st);
+  int worst = cupid_petsc_max_int(code);
+  int lowest = size - cupid_petsc_max_int(code ? size - rank : 0);
+  if (code && rank == lowest) report_error(st);
+  cupid_petsc_finalize();
+  return worst;
 }
 
 int cupid_cli_main(int argc, char **argv) {
@@ -135,17 +178,31 @@ int cupid_cli_main(int argc, char **argv) {
 
   cupid_run_options opts = {.solver = -1};
   const char *path = NULL;
-  int rc = parse_options(argc, argv, 2, &opts, &path);
+  /* argv[0] and the PETSc options: kept until PetscFinalize (PETSc holds the pointers). */
+  static char *petsc_argv[4096];
+  int petsc_argc = 1;
+  petsc_argv[0] = argv[0];
+  if (argc >= (int)(sizeof petsc_argv / sizeof *petsc_argv) - 1)
+    return usage_error("%s", "too many arguments");
+  int rc = parse_options(argc, argv, 2, &opts, &path, petsc_argv, &petsc_argc);
   if (rc) return rc;
   opts.check_only = is_check;
+  petsc_argv[petsc_argc] = NULL;
+  cupid_petsc_set_args(petsc_argc, petsc_argv);
 
   signal(SIGINT, on_signal);
   signal(SIGTERM, on_signal);
 
+  /* PETSc (and MPI) start here when launched by mpirun or asked for explicitly; `auto` starts it
+   * later, only if it picks PETSc (src/app/run.c). */
+  cupid_status st = CUPID_SUCCESS;
+  if (cupid_petsc_available() && (cupid_petsc_launched_parallel() || opts.solver == CUPID_SOLVER_PETSC))
+    st = cupid_petsc_initialize(petsc_argc, petsc_argv);
   cupid_model model = NULL;
-  cupid_status st = cupid_model_read(path, &model);
+  if (st == CUPID_SUCCESS) st = cupid_model_read(path, &model);
   if (st == CUPID_SUCCESS) st = cupid_run_model(model, &opts);
   cupid_model_destroy(&model);
+  if (cupid_petsc_initialized()) return finish_parallel(st);
   if (st != CUPID_SUCCESS) return report_error(st);
   return 0;
 }

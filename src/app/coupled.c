@@ -231,8 +231,8 @@ static cupid_status print_equilibrium(const cupid_job *job) {
 
 static cupid_status solve(cupid_job *job) {
   /* Eq. 38 is not symmetric (UMFPACK); the eliminated Lagrange system is SPD (CHOLMOD). */
-  cupid_status st = cupid_direct_solve(job->K, is_lagrange(job) ? CUPID_MATRIX_SPD : CUPID_MATRIX_GENERAL,
-                                       job->f_ext, job->bc, job->u, &job->solve);
+  cupid_status st =
+      cupid_app_linear_solve(job, is_lagrange(job) ? CUPID_MATRIX_SPD : CUPID_MATRIX_GENERAL);
   job->phases[CUPID_PHASE_FACTORISATION] =
       (cupid_phase_record){job->solve.time_factor, cupid_peak_memory(), 1};
   job->phases[CUPID_PHASE_SOLVE] =

@@ -195,6 +195,15 @@ static void json_solver(cupid_json js, const cupid_job *job) {
     cupid_json_number(js, "factor_nonzeros", job->solve.nnz_factor);
     cupid_json_number(js, "residual", job->solve.residual);
     cupid_json_number(js, "backward_error", job->solve.backward_error);
+    if (job->solver_reason[0]) cupid_json_string(js, "choice", job->solver_reason);
+    if (job->solver == CUPID_SOLVER_PETSC) { /* issue 6: what the Krylov solve did */
+      cupid_json_integer(js, "ranks", job->solve.ranks);
+      cupid_json_integer(js, "iterations", job->solve.iterations);
+      cupid_json_string(js, "ksp_type", job->solve.ksp_type);
+      cupid_json_string(js, "pc_type", job->solve.pc_type);
+      cupid_json_string(js, "converged_reason", job->solve.converged_reason);
+      cupid_json_string(js, "operator", job->solve.matrix_free ? "matrix-free" : "assembled");
+    }
   } else {
     cupid_json_string(js, "method", "none");
     cupid_json_null(js, "residual");

@@ -25,15 +25,95 @@ void cupid_job_phase_end(cupid_job *job, cupid_phase phase, double t0) {
   job->phases[phase].used = 1;
 }
 
-/* Solver choice: the command line wins over the model file. PETSc arrives with issue 6. */
-static cupid_status choose_solver(const cupid_job *job) {
+/* ------------------------------------------------------------- the solver engine (issue 6)
+ * The command line wins over the model file. auto: the direct solver while its estimated peak
+ * memory stays below a quarter of the memory limit and its factorisation below two minutes
+ * (cupid_app_auto_picks_direct, check.c), PETSc above (when cupid was built with it): Krylov +
+ * AMG costs O(n) memory where the factor grows like n^(4/3) (docs/scale.md). */
+
+static cupid_solver_kind requested_solver(const cupid_job *job) {
+  return job->opts->solver >= 0 ? (cupid_solver_kind)job->opts->solver : job->model->analysis.solver;
+}
+
+/* Only static solves go through PETSc: refuse an explicit request elsewhere. */
+static cupid_status check_petsc_request(const cupid_job *job) {
   const cupid_model_t *m = job->model;
-  int solver = job->opts->solver >= 0 ? job->opts->solver : (int)m->analysis.solver;
-  if (solver == CUPID_SOLVER_PETSC)
+  if (requested_solver(job) != CUPID_SOLVER_PETSC) return CUPID_SUCCESS;
+  if (!cupid_petsc_available())
     return CUPID_ERROR(CUPID_ERR_UNSUPPORTED,
-                       "solver petsc: this build of cupid has no PETSc engine; use 'direct' or "
-                       "'auto' (the embedded SuiteSparse solver)");
+                       "solver petsc: this build of cupid has no PETSc engine: rebuild with "
+                       "scripts/build.sh --with-petsc, or use 'direct' or 'auto'");
+  if (m->analysis.type == CUPID_ANALYSIS_DYNAMIC)
+    return cupid_model_error(m, &m->analysis.mark,
+                             "solver petsc serves static analyses; type dynamic uses its own "
+                             "integrators (use solver auto or direct)");
+  if (cupid_app_is_coupled(job) && m->coupling.method == CUPID_COUPLING_ARLEQUIN)
+    return cupid_model_error(m, &m->analysis.mark,
+                             "solver petsc is not available for coupling method arlequin yet "
+                             "(use solver auto or direct)");
   return CUPID_SUCCESS;
+}
+
+static cupid_status use_petsc(cupid_job *job) {
+  job->solver = CUPID_SOLVER_PETSC;
+  return cupid_petsc_initialize(0, NULL); /* no-op when the CLI did it (mpirun) */
+}
+
+cupid_status cupid_app_choose_solver(cupid_job *job) {
+  const cupid_model_t *m = job->model;
+  cupid_solver_kind req = requested_solver(job);
+  job->solver = CUPID_SOLVER_DIRECT;
+  if (req == CUPID_SOLVER_DIRECT) {
+    snprintf(job->solver_reason, sizeof job->solver_reason, "requested");
+    return CUPID_SUCCESS;
+  }
+  if (req == CUPID_SOLVER_PETSC) {
+    snprintf(job->solver_reason, sizeof job->solver_reason, "requested");
+    return use_petsc(job);
+  }
+  /* auto */
+  if (m->analysis.type != CUPID_ANALYSIS_STATIC ||
+      (cupid_app_is_coupled(job) && m->coupling.method == CUPID_COUPLING_ARLEQUIN)) {
+    snprintf(job->solver_reason, sizeof job->solver_reason, "auto: the only engine for this analysis");
+    return CUPID_SUCCESS;
+  }
+  double bytes, seconds, limit = cupid_app_memory_limit(job);
+  CUPID_CALL(cupid_app_direct_cost(job, &bytes, &seconds));
+  int small = cupid_app_auto_picks_direct(job, bytes, seconds);
+  if (small || !cupid_petsc_available()) {
+    snprintf(job->solver_reason, sizeof job->solver_reason,
+             "auto: direct estimate %.3g GB, %.3g s%s", bytes / 1e9, seconds,
+             small ? " (below the limits)" : "; PETSc would fit better but this build has none");
+    return CUPID_SUCCESS;
+  }
+  snprintf(job->solver_reason, sizeof job->solver_reason,
+           "auto: the direct solver would need %.3g GB and %.3g s (limits %.3g GB, %.0f s)",
+           bytes / 1e9, seconds, CUPID_AUTO_DIRECT_MEMORY_SHARE * limit / 1e9,
+           CUPID_AUTO_DIRECT_SECONDS);
+  return use_petsc(job);
+}
+
+/* PD-only 3D models go matrix-free: the 2-delta LPS matrix is never formed. */
+static int matrix_free(const cupid_job *job) {
+  return job->solver == CUPID_SOLVER_PETSC && job->grid && !job->beam &&
+         cupid_pd_grid_dimension(job->grid) == 3;
+}
+
+cupid_status cupid_app_linear_solve(cupid_job *job, cupid_matrix_kind kind) {
+  if (job->solver != CUPID_SOLVER_PETSC)
+    return cupid_direct_solve(job->K, kind, job->f_ext, job->bc, job->u, &job->solve);
+  /* Coordinates give GAMG the rigid-body modes when every DOF is a PD node's. */
+  cupid_petsc_options po = {0};
+  if (job->grid && !job->beam) {
+    po.coords = cupid_pd_grid_coords(job->grid);
+    po.n_coord_nodes = job->n_pd;
+  }
+  cupid_status st = cupid_petsc_solve(job->K, kind, job->f_ext, job->bc, job->u, &po, &job->solve);
+  if (st == CUPID_SUCCESS)
+    cupid_job_progress(job, "PETSc: %s + %s, %d iterations on %d rank%s, %s", job->solve.ksp_type,
+                       job->solve.pc_type, job->solve.iterations, job->solve.ranks,
+                       job->solve.ranks == 1 ? "" : "s", job->solve.converged_reason);
+  return st;
 }
 
 /* What this version can run; everything else is parsed and validated but refused plainly. */
@@ -159,10 +239,28 @@ static cupid_status require_constraints(const cupid_job *job) {
                      free_axes);
 }
 
+/* `static` on a 3D PD-only model with PETSc: K is never assembled (cupid_petsc_solve_pd). */
+static cupid_status run_static_matrix_free(cupid_job *job) {
+  cupid_status st = cupid_petsc_solve_pd(job->op, job->grid, job->pd_materials, job->f_ext,
+                                         job->bc, job->u, &job->solve);
+  job->phases[CUPID_PHASE_FACTORISATION] =
+      (cupid_phase_record){job->solve.time_factor, cupid_peak_memory(), 1};
+  job->phases[CUPID_PHASE_SOLVE] = (cupid_phase_record){job->solve.time_solve, cupid_peak_memory(), 1};
+  CUPID_CALL(st);
+  job->solved = 1;
+  CUPID_CALL(cupid_pd_operator_apply(job->op, job->u, job->f_int));
+  cupid_job_progress(job, "solve: PETSc matrix-free, %s + %s, %d iterations on %d rank%s, "
+                     "%lld equations, residual %.2e", job->solve.ksp_type, job->solve.pc_type,
+                     job->solve.iterations, job->solve.ranks, job->solve.ranks == 1 ? "" : "s",
+                     (long long)job->solve.n, job->solve.residual);
+  return CUPID_SUCCESS;
+}
+
 /* `static`: assemble K, solve K u = f with the Dirichlet conditions, reactions. */
 static cupid_status run_static(cupid_job *job) {
   double t0 = cupid_wtime();
   CUPID_CALL(require_constraints(job));
+  if (matrix_free(job)) return run_static_matrix_free(job);
   CUPID_CALL(cupid_app_estimate(job, 0));
   if (job->grid)
     CUPID_CALL(cupid_pd_operator_assemble(job->op, &job->K));
@@ -172,8 +270,7 @@ static cupid_status run_static(cupid_job *job) {
   cupid_job_progress(job, "assembly: %lld non-zeros (%.1f MB)", (long long)cupid_csr_nnz(job->K),
                      (double)cupid_csr_bytes(job->K) / 1e6);
 
-  cupid_status st = cupid_direct_solve(job->K, CUPID_MATRIX_SPD, job->f_ext, job->bc, job->u,
-                                       &job->solve);
+  cupid_status st = cupid_app_linear_solve(job, CUPID_MATRIX_SPD);
   job->phases[CUPID_PHASE_FACTORISATION] =
       (cupid_phase_record){job->solve.time_factor, cupid_peak_memory(), 1};
   job->phases[CUPID_PHASE_SOLVE] = (cupid_phase_record){job->solve.time_solve, cupid_peak_memory(), 1};
@@ -222,14 +319,16 @@ static void job_destroy(cupid_job *job) {
 }
 
 cupid_status cupid_run_model(const cupid_model_t *model, const cupid_run_options *opts) {
-  cupid_job job = {.model = model, .opts = opts, .quiet = opts->quiet || !isatty(2)};
+  /* Under MPI every rank runs the pipeline on the replicated model; rank 0 speaks and writes. */
+  int rank = cupid_petsc_rank();
+  cupid_job job = {.model = model, .opts = opts, .quiet = opts->quiet || !isatty(2) || rank != 0};
   cupid_status st = CUPID_SUCCESS;
   job.t_start = cupid_wtime();
   job.outdir = opts->output_dir ? opts->output_dir : model->output.directory;
   cupid_set_num_threads(opts->threads);
 
   CUPID_TRY(check_supported(&job));
-  CUPID_TRY(choose_solver(&job));
+  CUPID_TRY(check_petsc_request(&job));
   CUPID_TRY(cupid_app_guard_size(&job)); /* before anything that scales with the model */
   if (model->has_peridynamics) CUPID_TRY(build_pd(&job));
   if (model->has_beam) CUPID_TRY(cupid_app_fe_build(&job));
@@ -237,6 +336,11 @@ cupid_status cupid_run_model(const cupid_model_t *model, const cupid_run_options
   job.fe_offset = 3 * job.n_pd;
   job.ndof = job.fe_offset + job.n_fe_dofs;
   CUPID_TRY(cupid_app_check_points(&job));
+  if (!opts->check_only) {
+    CUPID_TRY(cupid_app_choose_solver(&job));
+    cupid_job_progress(&job, "solver: %s (%s)", job.solver == CUPID_SOLVER_PETSC ? "petsc" : "direct",
+                       job.solver_reason);
+  }
   if (opts->check_only) {
     st = cupid_app_estimate(&job, 1);
     goto cleanup;
@@ -256,7 +360,7 @@ cupid_status cupid_run_model(const cupid_model_t *model, const cupid_run_options
     else CUPID_TRY(run_static(&job));
   }
   CUPID_TRY(sum_forces(&job));
-  CUPID_TRY(cupid_app_write_outputs(&job));
+  if (rank == 0) CUPID_TRY(cupid_app_write_outputs(&job));
   cupid_job_progress(&job, "done: results in %s", job.outdir);
 cleanup:
   job_destroy(&job);

@@ -1,0 +1,683 @@
+/* The PETSc/MPI engine (issue 6): Krylov solves of replicated cupid systems, assembled (MPIAIJ)
+ * or matrix-free for PD (MATSHELL over cupid_pd_operator_apply_range). The only file that
+ * includes petsc.h; without PETSc (CUPID_HAVE_PETSC 0) every entry point is a stub.
+ *
+ * Layout: every rank holds the whole model. The unknowns are all DOFs (fixed ones as scaled
+ * identity rows, their columns moved to the right-hand side), split in contiguous blocks of
+ * whole nodes: for a PD grid numbered z slowest, each rank owns a z-slab. */
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "cupid/pd.h"
+#include "cupid/solvers.h"
+#include "cupid_config.h"
+
+int cupid_petsc_available(void) { return CUPID_HAVE_PETSC; }
+
+int cupid_petsc_launched_parallel(void) {
+  static const char *const vars[] = {"OMPI_COMM_WORLD_SIZE", "PMI_SIZE", "PMIX_SIZE"};
+  for (size_t k = 0; k < sizeof vars / sizeof *vars; k++) {
+    const char *v = getenv(vars[k]);
+    if (v && atoi(v) > 1) return 1;
+  }
+  return 0;
+}
+
+static int g_argc = 0;
+static char **g_argv = NULL;
+
+void cupid_petsc_set_args(int argc, char **argv) {
+  g_argc = argc;
+  g_argv = argv;
+}
+
+#if CUPID_HAVE_PETSC
+#include <math.h>
+#include <petscksp.h>
+
+static int g_initialized = 0;
+
+/* A PETSc call inside a function with `st` and `cleanup:`: PETSc's message becomes cupid's. */
+#define PTRY(expr)                                                                             \
+  do {                                                                                         \
+    PetscErrorCode ierr_ = (expr);                                                             \
+    if (ierr_) {                                                                               \
+      st = petsc_error(ierr_, #expr);                                                          \
+      goto cleanup;                                                                            \
+    }                                                                                          \
+  } while (0)
+
+static cupid_status petsc_error(PetscErrorCode ierr, const char *what) {
+  const char *text = NULL;
+  PetscErrorMessage(ierr, &text, NULL);
+  cupid_status code = ierr == PETSC_ERR_MEM ? CUPID_ERR_MEMORY : CUPID_ERR_NUMERIC;
+  return CUPID_ERROR(code, "PETSc error %d (%s) in %s", (int)ierr, text ? text : "unknown", what);
+}
+
+cupid_status cupid_petsc_initialize(int argc, char **argv) {
+  if (g_initialized) return CUPID_SUCCESS;
+  static int s_argc;
+  static char **s_argv;
+  s_argc = argv ? argc : g_argc;
+  s_argv = argv ? argv : g_argv;
+  PetscErrorCode ierr = s_argv ? PetscInitialize(&s_argc, &s_argv, NULL, NULL)
+                               : PetscInitializeNoArguments();
+  if (ierr) return CUPID_ERROR(CUPID_ERR_INTERNAL, "PetscInitialize failed (error %d)", (int)ierr);
+  /* Errors come back as codes; cupid prints one message (rank 0) instead of PETSc's trace. */
+  PetscPushErrorHandler(PetscReturnErrorHandler, NULL);
+  g_initialized = 1;
+  return CUPID_SUCCESS;
+}
+
+int cupid_petsc_initialized(void) { return g_initialized; }
+
+void cupid_petsc_finalize(void) {
+  if (!g_initialized) return;
+  PetscPopErrorHandler();
+  PetscFinalize();
+  g_initialized = 0;
+}
+
+int cupid_petsc_rank(void) {
+  if (!g_initialized) return 0;
+  PetscMPIInt r = 0;
+  MPI_Comm_rank(PETSC_COMM_WORLD, &r);
+  return r;
+}
+
+int cupid_petsc_size(void) {
+  if (!g_initialized) return 1;
+  PetscMPIInt n = 1;
+  MPI_Comm_size(PETSC_COMM_WORLD, &n);
+  return n;
+}
+
+int cupid_petsc_max_int(int v) {
+  if (!g_initialized) return v;
+  int out = v;
+  MPI_Allreduce(&v, &out, 1, MPI_INT, MPI_MAX, PETSC_COMM_WORLD);
+  return out;
+}
+
+void cupid_petsc_abort(int code) {
+  if (g_initialized) MPI_Abort(PETSC_COMM_WORLD, code);
+  exit(code);
+}
+
+/* ------------------------------------------------------------------ the distributed layout */
+
+/* Rows [*first, *last) of n DOFs owned by this rank: whole blocks of bs, split evenly. */
+static void owned_rows(cupid_int n, int bs, cupid_int *first, cupid_int *last) {
+  PetscMPIInt rank, size;
+  MPI_Comm_rank(PETSC_COMM_WORLD, &rank);
+  MPI_Comm_size(PETSC_COMM_WORLD, &size);
+  cupid_int nb = n / bs, q = nb / size, r = nb % size;
+  cupid_int b0 = rank * q + (rank < r ? rank : r);
+  cupid_int b1 = b0 + q + (rank < r ? 1 : 0);
+  *first = b0 * bs;
+  *last = b1 * bs;
+}
+
+/* The scale of the identity rows of fixed DOFs: the mean |diagonal| of the free DOFs, so the
+ * fixed block neither dominates nor vanishes in the AMG strength tests. */
+static double identity_scale(const double *diag, cupid_int n, const cupid_dirichlet_t *bc) {
+  double sum = 0.0;
+  cupid_int count = 0;
+  for (cupid_int d = 0; d < n; d++)
+    if (!(bc && bc->fixed[d]) && diag[d] != 0.0) sum += fabs(diag[d]), count++;
+  return count ? sum / (double)count : 1.0;
+}
+
+/* Rigid-body near null space from node coordinates (3 per owned node), for GAMG. */
+static cupid_status set_rigid_body(Mat A, const double *coords, cupid_int first, cupid_int last) {
+  cupid_status st = CUPID_SUCCESS;
+  Vec xc = NULL;
+  MatNullSpace ns = NULL;
+  PTRY(VecCreateMPI(PETSC_COMM_WORLD, (PetscInt)(last - first), PETSC_DETERMINE, &xc));
+  PTRY(VecSetBlockSize(xc, 3));
+  PetscScalar *a;
+  PTRY(VecGetArray(xc, &a));
+  memcpy(a, coords + first, (size_t)(last - first) * sizeof *a);
+  PTRY(VecRestoreArray(xc, &a));
+  PTRY(MatNullSpaceCreateRigidBody(xc, &ns));
+  PTRY(MatSetNearNullSpace(A, ns));
+cleanup:
+  MatNullSpaceDestroy(&ns);
+  VecDestroy(&xc);
+  return st;
+}
+
+/* --------------------------------------------------------------------- the Krylov solve */
+
+typedef struct {
+  KSPType ksp;
+  PCType pc;
+  int gmres_restart;
+} solver_defaults;
+
+#define CUPID_PETSC_REFINEMENTS 3
+
+/* r = b - A x; info->residual = ||r|| / ||b||, info->backward_error (|A|_inf known only when A
+ * is assembled: A == P). */
+static cupid_status true_residual(Mat A, Mat P, Vec b, Vec x, Vec r, cupid_solve_info *info) {
+  cupid_status st = CUPID_SUCCESS;
+  PetscReal rn, bn, an = 0.0, xn, rin, bin;
+  PTRY(MatMult(A, x, r));
+  PTRY(VecAYPX(r, -1.0, b));
+  PTRY(VecNorm(r, NORM_2, &rn));
+  PTRY(VecNorm(b, NORM_2, &bn));
+  PTRY(VecNorm(r, NORM_INFINITY, &rin));
+  PTRY(VecNorm(b, NORM_INFINITY, &bin));
+  PTRY(VecNorm(x, NORM_INFINITY, &xn));
+  if (A == P) PTRY(MatNorm(A, NORM_INFINITY, &an));
+  info->residual = bn > 0 ? rn / bn : rn;
+  info->backward_error = (an * xn + bin) > 0 ? rin / (an * xn + bin) : 0.0;
+cleanup:
+  return st;
+}
+
+/* KSP on A (operator) and P (preconditioner matrix) with cupid's defaults, then the user's
+ * -ksp_* / -pc_* options; solve, check the reason and the true residual, fill info. */
+static cupid_status krylov_solve(Mat A, Mat P, Vec b, Vec x, const solver_defaults *def,
+                                 cupid_solve_info *info) {
+  cupid_status st = CUPID_SUCCESS;
+  KSP ksp = NULL;
+  PC pc;
+  Vec r = NULL;
+  double t0 = cupid_wtime();
+  PTRY(KSPCreate(PETSC_COMM_WORLD, &ksp));
+  PTRY(KSPSetOperators(ksp, A, P));
+  PTRY(KSPSetType(ksp, def->ksp));
+  PTRY(KSPGetPC(ksp, &pc));
+  PTRY(PCSetType(pc, def->pc));
+  /* Unpreconditioned residual: rtol then bounds ||b - A x|| / ||b||, the figure compared with
+   * the direct solve (1e-12 keeps the solution within ~1e-10 relative at condition ~1e2-1e4 of
+   * the preconditioned system; 1e-8 is what the MPI test demands). */
+  if (!strcmp(def->ksp, KSPGMRES)) {
+    PTRY(KSPSetPCSide(ksp, PC_RIGHT));
+    PTRY(KSPGMRESSetRestart(ksp, def->gmres_restart));
+    PTRY(KSPGMRESSetOrthogonalization(ksp, KSPGMRESModifiedGramSchmidtOrthogonalization));
+  } else {
+    PTRY(KSPSetNormType(ksp, KSP_NORM_UNPRECONDITIONED));
+  }
+  PTRY(KSPSetTolerances(ksp, 1e-12, 0.0, PETSC_DEFAULT, 10000));
+  PTRY(KSPSetFromOptions(ksp));
+  PTRY(KSPSetUp(ksp));
+  PTRY(KSPSetUpOnBlocks(ksp));
+  double t1 = cupid_wtime();
+  PTRY(KSPSolve(ksp, b, x));
+  double t2 = cupid_wtime();
+
+  KSPConvergedReason reason;
+  PetscInt its;
+  PTRY(KSPGetConvergedReason(ksp, &reason));
+  PTRY(KSPGetIterationNumber(ksp, &its));
+  KSPType kt;
+  PCType pt;
+  PTRY(KSPGetType(ksp, &kt));
+  PTRY(PCGetType(pc, &pt));
+  snprintf(info->ksp_type, sizeof info->ksp_type, "%s", kt ? kt : "?");
+  snprintf(info->pc_type, sizeof info->pc_type, "%s", pt ? pt : "?");
+  snprintf(info->converged_reason, sizeof info->converged_reason, "%s", KSPConvergedReasons[reason]);
+  info->iterations = (int)its;
+  info->time_factor = t1 - t0;
+  info->time_solve = t2 - t1;
+  if (reason < 0) {
+    st = CUPID_ERROR(CUPID_ERR_NUMERIC,
+                     "the PETSc solve did not converge: %s after %d iterations (KSP %s, PC %s); "
+                     "try other -ksp_type / -pc_type options, or --solver direct",
+                     KSPConvergedReasons[reason], (int)its, info->ksp_type, info->pc_type);
+    goto cleanup;
+  }
+  /* The true residual: a recurrence residual can drift from it (CG on ill-conditioned systems).
+   * Up to CUPID_PETSC_REFINEMENTS restarts from x recompute r = b - A x exactly (iterative
+   * refinement); a residual still above the limit is accepted only at a normwise backward error
+   * below 1e-12 (assembled operators: as good as the matrix allows, cf. the direct solve's 1e-10). */
+  PetscReal rtol, atol, dtol;
+  PetscInt maxit;
+  PTRY(KSPGetTolerances(ksp, &rtol, &atol, &dtol, &maxit));
+  double limit = fmax(100.0 * rtol, 1e-10);
+  PTRY(VecDuplicate(b, &r));
+  for (int pass = 0;; pass++) {
+    CUPID_TRY(true_residual(A, P, b, x, r, info));
+    if (info->residual <= limit || pass == CUPID_PETSC_REFINEMENTS) break;
+    if (!strcmp(info->ksp_type, KSPPREONLY)) break; /* a direct solve: no restart from x */
+    /* From x, KSP's rtol would be relative to the (small) residual of x: aim at the same
+     * absolute target as the first solve instead. */
+    PetscReal bnorm;
+    PTRY(VecNorm(b, NORM_2, &bnorm));
+    PTRY(KSPSetTolerances(ksp, 0.0, fmax(atol, 0.5 * rtol * bnorm), dtol, maxit));
+    PTRY(KSPSetInitialGuessNonzero(ksp, PETSC_TRUE));
+    PTRY(KSPSolve(ksp, b, x));
+    PTRY(KSPGetConvergedReason(ksp, &reason));
+    PTRY(KSPGetIterationNumber(ksp, &its));
+    info->iterations += (int)its;
+    if (reason < 0) break;
+  }
+  info->time_solve = cupid_wtime() - t1;
+  if (info->residual > limit && !(A == P && info->backward_error <= 1e-12)) {
+    st = CUPID_ERROR(CUPID_ERR_NUMERIC,
+                     "the PETSc solve stopped (%s, %d iterations, %d restarts) but the true "
+                     "relative residual is %.3e > %.1e (backward error %.1e): the system is "
+                     "singular or badly conditioned (check the constraints; thin-walled beams "
+                     "solve better with --solver direct), or the tolerance too loose",
+                     KSPConvergedReasons[reason], info->iterations, CUPID_PETSC_REFINEMENTS,
+                     info->residual, limit, info->backward_error);
+    goto cleanup;
+  }
+cleanup:
+  VecDestroy(&r);
+  KSPDestroy(&ksp);
+  return st;
+}
+
+/* The full solution on every rank. */
+static cupid_status gather(Vec x, cupid_int n, double *u) {
+  cupid_status st = CUPID_SUCCESS;
+  VecScatter sc = NULL;
+  Vec all = NULL;
+  const PetscScalar *a;
+  PTRY(VecScatterCreateToAll(x, &sc, &all));
+  PTRY(VecScatterBegin(sc, x, all, INSERT_VALUES, SCATTER_FORWARD));
+  PTRY(VecScatterEnd(sc, x, all, INSERT_VALUES, SCATTER_FORWARD));
+  PTRY(VecGetArrayRead(all, &a));
+  memcpy(u, a, (size_t)n * sizeof *u);
+  PTRY(VecRestoreArrayRead(all, &a));
+cleanup:
+  VecScatterDestroy(&sc);
+  VecDestroy(&all);
+  return st;
+}
+
+static cupid_status check_sizes(cupid_int n) {
+  CUPID_CHECK(n < (cupid_int)PETSC_MAX_INT / 4, CUPID_ERR_UNSUPPORTED,
+              "%lld equations exceed this PETSc's 32-bit indices (PetscInt); use a PETSc built "
+              "with 64-bit indices (Debian libpetsc64-real-dev)", (long long)n);
+  CUPID_CHECK(g_initialized, CUPID_ERR_INTERNAL, "PETSc is not initialised");
+  return CUPID_SUCCESS;
+}
+
+static void info_begin(cupid_solve_info *info, cupid_int n_free) {
+  memset(info, 0, sizeof *info);
+  info->method = "petsc";
+  info->n = n_free;
+  info->failed_dof = -1;
+  info->ranks = cupid_petsc_size();
+}
+
+/* ------------------------------------------------------------------- the assembled path */
+
+/* Insert the owned rows of K (Dirichlet rows -> s * identity, fixed columns -> b) into A. */
+static cupid_status fill_rows(const cupid_csr_t *K, const cupid_dirichlet_t *bc, double s,
+                              const double *f, cupid_int first, cupid_int last, Mat A, Vec b) {
+  cupid_status st = CUPID_SUCCESS;
+  int bs = K->bs;
+  cupid_int maxlen = 0;
+  for (cupid_int br = first / bs; br < (last + bs - 1) / bs; br++)
+    if (K->rowptr[br + 1] - K->rowptr[br] > maxlen) maxlen = K->rowptr[br + 1] - K->rowptr[br];
+  PetscInt *cols = NULL;
+  PetscScalar *vals = NULL;
+  CUPID_TRY(cupid_malloc((size_t)(maxlen * bs + 1), sizeof *cols, "PETSc row columns", &cols));
+  CUPID_TRY(cupid_malloc((size_t)(maxlen * bs + 1), sizeof *vals, "PETSc row values", &vals));
+  for (cupid_int row = first; row < last; row++) {
+    PetscInt prow = (PetscInt)row;
+    double rhs = f ? f[row] : 0.0;
+    if (bc && bc->fixed[row]) {
+      PetscScalar v = s;
+      PTRY(MatSetValues(A, 1, &prow, 1, &prow, &v, INSERT_VALUES));
+      PTRY(VecSetValue(b, prow, s * bc->value[row], INSERT_VALUES));
+      continue;
+    }
+    cupid_int br = row / bs, a = row % bs;
+    PetscInt n = 0;
+    for (cupid_int k = K->rowptr[br]; k < K->rowptr[br + 1]; k++)
+      for (int c = 0; c < bs; c++) {
+        cupid_int col = K->col[k] * bs + c;
+        double v = K->val[k * bs * bs + a * bs + c];
+        if (bc && bc->fixed[col]) {
+          rhs -= v * bc->value[col];
+        } else {
+          cols[n] = (PetscInt)col;
+          vals[n++] = v;
+        }
+      }
+    PTRY(MatSetValues(A, 1, &prow, n, cols, vals, INSERT_VALUES));
+    PTRY(VecSetValue(b, prow, rhs, INSERT_VALUES));
+  }
+cleanup:
+  cupid_free(&cols);
+  cupid_free(&vals);
+  return st;
+}
+
+/* Non-zeros per owned row, split into the diagonal and off-diagonal blocks of MPIAIJ. */
+static cupid_status count_rows(const cupid_csr_t *K, const cupid_dirichlet_t *bc, cupid_int first,
+                               cupid_int last, PetscInt *dnz, PetscInt *onz) {
+  int bs = K->bs;
+  for (cupid_int row = first; row < last; row++) {
+    PetscInt d = 0, o = 0;
+    if (bc && bc->fixed[row]) {
+      d = 1;
+    } else {
+      cupid_int br = row / bs;
+      for (cupid_int k = K->rowptr[br]; k < K->rowptr[br + 1]; k++)
+        for (int c = 0; c < bs; c++) {
+          cupid_int col = K->col[k] * bs + c;
+          if (bc && bc->fixed[col]) continue;
+          if (col >= first && col < last) d++;
+          else o++;
+        }
+    }
+    dnz[row - first] = d;
+    onz[row - first] = o;
+  }
+  return CUPID_SUCCESS;
+}
+
+cupid_status cupid_petsc_solve(const cupid_csr_t *K, cupid_matrix_kind kind, const double *f,
+                               const cupid_dirichlet_t *bc, double *u,
+                               const cupid_petsc_options *opts, cupid_solve_info *info) {
+  cupid_solve_info local;
+  if (!info) info = &local;
+  CUPID_CHECK(K && u && K->nrows == K->ncols, CUPID_ERR_ARGUMENT, "square matrix and u required");
+  cupid_int n = K->nrows * K->bs;
+  CUPID_CALL(check_sizes(n));
+  info_begin(info, bc ? bc->n_free : n);
+  cupid_status st = CUPID_SUCCESS;
+  int bs = n % 3 == 0 ? 3 : 1;
+  cupid_int first, last;
+  owned_rows(n, bs, &first, &last);
+  cupid_int nloc = last - first;
+  Mat A = NULL;
+  Vec b = NULL, x = NULL;
+  PetscInt *dnz = NULL, *onz = NULL;
+  double *diag = NULL;
+  CUPID_TRY(cupid_calloc((size_t)nloc + 1, sizeof *dnz, "PETSc preallocation", &dnz));
+  CUPID_TRY(cupid_calloc((size_t)nloc + 1, sizeof *onz, "PETSc preallocation", &onz));
+  CUPID_TRY(cupid_malloc((size_t)n, sizeof *diag, "diagonal", &diag));
+  CUPID_TRY(cupid_csr_diagonal(K, diag));
+  double s = identity_scale(diag, n, bc);
+  CUPID_TRY(count_rows(K, bc, first, last, dnz, onz));
+
+  double t0 = cupid_wtime();
+  PTRY(MatCreate(PETSC_COMM_WORLD, &A));
+  PTRY(MatSetSizes(A, (PetscInt)nloc, (PetscInt)nloc, (PetscInt)n, (PetscInt)n));
+  PTRY(MatSetType(A, MATAIJ)); /* AIJ + block size, not BAIJ: GAMG in 3.18 (dependencies.md) */
+  PTRY(MatSetBlockSize(A, bs));
+  PTRY(MatSeqAIJSetPreallocation(A, 0, dnz));
+  PTRY(MatMPIAIJSetPreallocation(A, 0, dnz, 0, onz));
+  PTRY(MatSetOption(A, MAT_NEW_NONZERO_ALLOCATION_ERR, PETSC_TRUE));
+  if (kind == CUPID_MATRIX_SPD) PTRY(MatSetOption(A, MAT_SYMMETRIC, PETSC_TRUE));
+  PTRY(MatCreateVecs(A, &x, &b));
+  CUPID_TRY(fill_rows(K, bc, s, f, first, last, A, b));
+  PTRY(MatAssemblyBegin(A, MAT_FINAL_ASSEMBLY));
+  PTRY(MatAssemblyEnd(A, MAT_FINAL_ASSEMBLY));
+  PTRY(VecAssemblyBegin(b));
+  PTRY(VecAssemblyEnd(b));
+  if (opts && opts->coords && 3 * opts->n_coord_nodes == n && bs == 3)
+    CUPID_TRY(set_rigid_body(A, opts->coords, first, last));
+  MatInfo mi;
+  PTRY(MatGetInfo(A, MAT_GLOBAL_SUM, &mi));
+  info->nnz_matrix = (cupid_int)mi.nz_used;
+  double t_assemble = cupid_wtime() - t0;
+
+  /* SPD: CG + GAMG. Eq. 38 (fictitious nodes) is non-symmetric and its fictitious rows are
+   * interpolation constraints, not elliptic: GMRES + block Jacobi/ILU(0) (docs/scale.md). */
+  solver_defaults def = kind == CUPID_MATRIX_SPD
+                            ? (solver_defaults){KSPCG, PCGAMG, 0}
+                            : (solver_defaults){KSPGMRES, PCBJACOBI, 200};
+  CUPID_TRY(krylov_solve(A, A, b, x, &def, info));
+  info->time_factor += t_assemble;
+  CUPID_TRY(gather(x, n, u));
+cleanup:
+  MatDestroy(&A);
+  VecDestroy(&b);
+  VecDestroy(&x);
+  cupid_free(&dnz);
+  cupid_free(&onz);
+  cupid_free(&diag);
+  return st;
+}
+
+/* ------------------------------------------------------------------ the matrix-free path */
+
+typedef struct {
+  cupid_pd_operator op;
+  const cupid_dirichlet_t *bc;
+  double s;               /* identity-row scale */
+  cupid_int first, last;  /* owned DOFs (3 per node) */
+  cupid_int lo, hi;       /* dependency range (nodes) */
+  VecScatter halo;        /* global x -> the dependency range */
+  Vec xdep;               /* sequential, 3 (hi - lo) */
+  double *work;           /* 3 nodes: x with the dependency range filled, fixed DOFs zero */
+} shell_ctx;
+
+/* y = K x on the owned rows, fixed rows and columns replaced by s * identity (symmetric). */
+static PetscErrorCode shell_mult(Mat A, Vec x, Vec y) {
+  shell_ctx *c;
+  PetscFunctionBeginUser;
+  PetscCall(MatShellGetContext(A, &c));
+  PetscCall(VecScatterBegin(c->halo, x, c->xdep, INSERT_VALUES, SCATTER_FORWARD));
+  PetscCall(VecScatterEnd(c->halo, x, c->xdep, INSERT_VALUES, SCATTER_FORWARD));
+  const PetscScalar *xd, *xl;
+  PetscScalar *yl;
+  PetscCall(VecGetArrayRead(c->xdep, &xd));
+  cupid_int d0 = 3 * c->lo, nd = 3 * (c->hi - c->lo);
+  const unsigned char *fixed = c->bc ? c->bc->fixed : NULL;
+#pragma omp parallel for schedule(static)
+  for (cupid_int k = 0; k < nd; k++) c->work[d0 + k] = (fixed && fixed[d0 + k]) ? 0.0 : xd[k];
+  PetscCall(VecRestoreArrayRead(c->xdep, &xd));
+  PetscCall(VecGetArray(y, &yl));
+  if (cupid_pd_operator_apply_range(c->op, c->first / 3, c->last / 3, c->work, yl) != CUPID_SUCCESS)
+    SETERRQ(PETSC_COMM_SELF, PETSC_ERR_LIB, "cupid_pd_operator_apply_range failed");
+  if (fixed) {
+    PetscCall(VecGetArrayRead(x, &xl));
+    for (cupid_int d = c->first; d < c->last; d++)
+      if (fixed[d]) yl[d - c->first] = c->s * xl[d - c->first];
+    PetscCall(VecRestoreArrayRead(x, &xl));
+  }
+  PetscCall(VecRestoreArray(y, &yl));
+  PetscFunctionReturn(0);
+}
+
+/* Halo exchange: a scatter of the global DOFs [3 lo, 3 hi) into a sequential vector. */
+static cupid_status make_halo(Vec x, shell_ctx *c) {
+  cupid_status st = CUPID_SUCCESS;
+  IS from = NULL;
+  PetscInt nd = (PetscInt)(3 * (c->hi - c->lo));
+  PTRY(VecCreateSeq(PETSC_COMM_SELF, nd, &c->xdep));
+  PTRY(ISCreateStride(PETSC_COMM_SELF, nd, (PetscInt)(3 * c->lo), 1, &from));
+  PTRY(VecScatterCreate(x, from, c->xdep, NULL, &c->halo));
+cleanup:
+  ISDestroy(&from);
+  return st;
+}
+
+/* The preconditioner matrix: owned rows of the short-range bond-based stiffness (Dirichlet
+ * rows and columns eliminated as in the operator). */
+static cupid_status pc_matrix(const cupid_pd_grid grid, const cupid_pd_material *materials,
+                              double radius, const shell_ctx *c, Mat *P) {
+  cupid_status st = CUPID_SUCCESS;
+  cupid_csr Kr = NULL;
+  PetscInt *dnz = NULL, *onz = NULL, *cols = NULL;
+  PetscScalar *vals = NULL;
+  cupid_int nodes0 = c->first / 3, nodes1 = c->last / 3, nloc = c->last - c->first;
+  cupid_int n = 3 * cupid_pd_grid_num_nodes(grid);
+  const unsigned char *fixed = c->bc ? c->bc->fixed : NULL;
+  CUPID_TRY(cupid_pd_assemble_rows_bond(grid, materials, radius, nodes0, nodes1, &Kr));
+  double dmean = 0.0; /* scale the identity rows like the operator's: same ratio to the diagonal */
+  cupid_int nd = 0;
+  CUPID_TRY(cupid_calloc((size_t)nloc + 1, sizeof *dnz, "PETSc preallocation", &dnz));
+  CUPID_TRY(cupid_calloc((size_t)nloc + 1, sizeof *onz, "PETSc preallocation", &onz));
+  cupid_int maxlen = 0;
+  for (cupid_int r = 0; r < Kr->nrows; r++) {
+    cupid_int len = Kr->rowptr[r + 1] - Kr->rowptr[r];
+    if (len > maxlen) maxlen = len;
+    for (int a = 0; a < 3; a++) {
+      cupid_int row = c->first + 3 * r + a;
+      if (fixed && fixed[row]) { dnz[3 * r + a] = 1; continue; }
+      for (cupid_int k = Kr->rowptr[r]; k < Kr->rowptr[r + 1]; k++)
+        for (int b = 0; b < 3; b++) {
+          cupid_int col = 3 * Kr->col[k] + b;
+          if (fixed && fixed[col]) continue;
+          if (col >= c->first && col < c->last) dnz[3 * r + a]++;
+          else onz[3 * r + a]++;
+          if (col == row) dmean += Kr->val[9 * k + 3 * a + b], nd++;
+        }
+    }
+  }
+  dmean = nd ? dmean / (double)nd : 1.0;
+  MPI_Allreduce(MPI_IN_PLACE, &dmean, 1, MPI_DOUBLE, MPI_MAX, PETSC_COMM_WORLD);
+  CUPID_TRY(cupid_malloc((size_t)(3 * maxlen + 1), sizeof *cols, "PETSc row columns", &cols));
+  CUPID_TRY(cupid_malloc((size_t)(3 * maxlen + 1), sizeof *vals, "PETSc row values", &vals));
+  PTRY(MatCreate(PETSC_COMM_WORLD, P));
+  PTRY(MatSetSizes(*P, (PetscInt)nloc, (PetscInt)nloc, (PetscInt)n, (PetscInt)n));
+  PTRY(MatSetType(*P, MATAIJ));
+  PTRY(MatSetBlockSize(*P, 3));
+  PTRY(MatSeqAIJSetPreallocation(*P, 0, dnz));
+  PTRY(MatMPIAIJSetPreallocation(*P, 0, dnz, 0, onz));
+  PTRY(MatSetOption(*P, MAT_SYMMETRIC, PETSC_TRUE));
+  for (cupid_int r = 0; r < Kr->nrows; r++)
+    for (int a = 0; a < 3; a++) {
+      PetscInt row = (PetscInt)(c->first + 3 * r + a), m = 0;
+      if (fixed && fixed[row]) {
+        PetscScalar v = dmean;
+        PTRY(MatSetValues(*P, 1, &row, 1, &row, &v, INSERT_VALUES));
+        continue;
+      }
+      for (cupid_int k = Kr->rowptr[r]; k < Kr->rowptr[r + 1]; k++)
+        for (int b = 0; b < 3; b++) {
+          cupid_int col = 3 * Kr->col[k] + b;
+          if (fixed && fixed[col]) continue;
+          cols[m] = (PetscInt)col;
+          vals[m++] = Kr->val[9 * k + 3 * a + b];
+        }
+      PTRY(MatSetValues(*P, 1, &row, m, cols, vals, INSERT_VALUES));
+    }
+  PTRY(MatAssemblyBegin(*P, MAT_FINAL_ASSEMBLY));
+  PTRY(MatAssemblyEnd(*P, MAT_FINAL_ASSEMBLY));
+cleanup:
+  cupid_csr_destroy(&Kr);
+  cupid_free(&dnz);
+  cupid_free(&onz);
+  cupid_free(&cols);
+  cupid_free(&vals);
+  return st;
+}
+
+/* The mean |diagonal| of the operator's free DOFs (all ranks agree: replicated model). */
+static cupid_status operator_scale(const cupid_pd_operator op, cupid_int nodes,
+                                   const cupid_dirichlet_t *bc, double *s) {
+  double *blocks = NULL, *diag = NULL;
+  cupid_status st = CUPID_SUCCESS;
+  CUPID_TRY(cupid_malloc((size_t)(9 * nodes), sizeof *blocks, "operator diagonal", &blocks));
+  CUPID_TRY(cupid_malloc((size_t)(3 * nodes), sizeof *diag, "operator diagonal", &diag));
+  CUPID_TRY(cupid_pd_operator_diagonal(op, blocks));
+  for (cupid_int i = 0; i < nodes; i++)
+    for (int a = 0; a < 3; a++) diag[3 * i + a] = blocks[9 * i + 4 * a];
+  *s = identity_scale(diag, 3 * nodes, bc);
+cleanup:
+  cupid_free(&blocks);
+  cupid_free(&diag);
+  return st;
+}
+
+cupid_status cupid_petsc_solve_pd(const cupid_pd_operator op, const cupid_pd_grid grid,
+                                  const cupid_pd_material *materials, const double *f,
+                                  const cupid_dirichlet_t *bc, double *u, cupid_solve_info *info) {
+  cupid_solve_info local;
+  if (!info) info = &local;
+  cupid_int nodes = cupid_pd_grid_num_nodes(grid), n = 3 * nodes;
+  CUPID_CHECK(cupid_pd_grid_dimension(grid) == 3, CUPID_ERR_UNSUPPORTED,
+              "the matrix-free PETSc path needs a 3D grid");
+  CUPID_CALL(check_sizes(n));
+  info_begin(info, bc ? bc->n_free : n);
+  info->matrix_free = 1;
+  cupid_status st = CUPID_SUCCESS;
+  shell_ctx c = {.op = op, .bc = bc};
+  Mat A = NULL, P = NULL;
+  Vec b = NULL, x = NULL;
+  double *uc = NULL, *kuc = NULL;
+  double t0 = cupid_wtime();
+  owned_rows(n, 3, &c.first, &c.last);
+  CUPID_TRY(cupid_pd_operator_dependency_range(op, c.first / 3, c.last / 3, &c.lo, &c.hi));
+  CUPID_TRY(cupid_calloc((size_t)n, sizeof *c.work, "matrix-free work vector", &c.work));
+  CUPID_TRY(operator_scale(op, nodes, bc, &c.s));
+
+  PTRY(MatCreateShell(PETSC_COMM_WORLD, (PetscInt)(c.last - c.first), (PetscInt)(c.last - c.first),
+                      (PetscInt)n, (PetscInt)n, &c, &A));
+  PTRY(MatShellSetOperation(A, MATOP_MULT, (void (*)(void))shell_mult));
+  PTRY(MatSetBlockSize(A, 3));
+  PTRY(MatSetOption(A, MAT_SYMMETRIC, PETSC_TRUE));
+  PTRY(MatCreateVecs(A, &x, &b));
+  CUPID_TRY(make_halo(x, &c));
+
+  /* Right-hand side: f - K u_c on free DOFs (u_c the prescribed values), s * value on fixed. */
+  CUPID_TRY(cupid_calloc((size_t)n, sizeof *uc, "prescribed displacements", &uc));
+  CUPID_TRY(cupid_calloc((size_t)(c.last - c.first + 1), sizeof *kuc, "lifted load", &kuc));
+  int lifted = 0;
+  if (bc)
+    for (cupid_int d = 0; d < n; d++)
+      if (bc->fixed[d] && bc->value[d] != 0.0) uc[d] = bc->value[d], lifted = 1;
+  if (lifted) CUPID_TRY(cupid_pd_operator_apply_range(op, c.first / 3, c.last / 3, uc, kuc));
+  PetscScalar *bl;
+  PTRY(VecGetArray(b, &bl));
+  for (cupid_int d = c.first; d < c.last; d++)
+    bl[d - c.first] = (bc && bc->fixed[d]) ? c.s * bc->value[d] : (f ? f[d] : 0.0) - kuc[d - c.first];
+  PTRY(VecRestoreArray(b, &bl));
+
+  PetscReal radius = 1.5;
+  PetscBool set;
+  PTRY(PetscOptionsGetReal(NULL, NULL, "-cupid_pc_radius", &radius, &set));
+  CUPID_TRY(pc_matrix(grid, materials, radius * cupid_pd_grid_spacing(grid), &c, &P));
+  CUPID_TRY(set_rigid_body(P, cupid_pd_grid_coords(grid), c.first, c.last));
+  double t_setup = cupid_wtime() - t0;
+
+  solver_defaults def = {KSPCG, PCGAMG, 0};
+  CUPID_TRY(krylov_solve(A, P, b, x, &def, info));
+  info->time_factor += t_setup;
+  MatInfo mi;
+  PTRY(MatGetInfo(P, MAT_GLOBAL_SUM, &mi));
+  info->nnz_matrix = (cupid_int)mi.nz_used; /* of the preconditioner matrix */
+  CUPID_TRY(gather(x, n, u));
+cleanup:
+  MatDestroy(&A);
+  MatDestroy(&P);
+  VecDestroy(&b);
+  VecDestroy(&x);
+  VecScatterDestroy(&c.halo);
+  VecDestroy(&c.xdep);
+  cupid_free(&c.work);
+  cupid_free(&uc);
+  cupid_free(&kuc);
+  return st;
+}
+
+#else /* !CUPID_HAVE_PETSC */
+
+#define NO_PETSC                                                                               \
+  CUPID_ERROR(CUPID_ERR_UNSUPPORTED,                                                           \
+              "cupid was built without PETSc: rebuild with scripts/build.sh --with-petsc")
+
+cupid_status cupid_petsc_initialize(int argc, char **argv) { return NO_PETSC; }
+int cupid_petsc_initialized(void) { return 0; }
+void cupid_petsc_finalize(void) {}
+int cupid_petsc_rank(void) { return 0; }
+int cupid_petsc_size(void) { return 1; }
+int cupid_petsc_max_int(int v) { return v; }
+void cupid_petsc_abort(int code) { exit(code); }
+
+cupid_status cupid_petsc_solve(const cupid_csr_t *K, cupid_matrix_kind kind, const double *f,
+                               const cupid_dirichlet_t *bc, double *u,
+                               const cupid_petsc_options *opts, cupid_solve_info *info) {
+  return NO_PETSC;
+}
+
+cupid_status cupid_petsc_solve_pd(const cupid_pd_operator op, const cupid_pd_grid grid,
+                                  const cupid_pd_material *materials, const double *f,
+                                  const cupid_dirichlet_t *bc, double *u, cupid_solve_info *info) {
+  return NO_PETSC;
+}
+
+#endif

@@ -1,0 +1,102 @@
+#!/usr/bin/env bash
+# The PETSc/MPI engine (issue 6) against the direct solver, on 2 MPI ranks:
+#  1. a small coupled bar (fictitious nodes, non-symmetric Eq. 38: GMRES, assembled MPIAIJ),
+#  2. a small PD-only LPS block (matrix-free MATSHELL + halo exchange, CG + GAMG), with a
+#     prescribed non-zero displacement (lifted right-hand side),
+#  3. the model key `analysis.solver: petsc` on one process, PETSc options passed through,
+#  4. solver auto: direct for the small block, PETSc when --max-memory makes it large,
+#  5. a forced divergence: exit 2 with PETSc's reason, printed once.
+# Every displacement (PD nodes, line and point samples) must match the direct solve to 1e-8
+# relative to the largest displacement: the Krylov solves stop at a relative residual of 1e-12
+# and the preconditioned systems are well conditioned, so ~1e-10 is expected; 1e-8 is the
+# issue's contract. Skipped (exit 77) when cupid is built without PETSc.
+set -euo pipefail
+: "${CUPID:?path to the cupid binary}" "${CUPID_SOURCE_DIR:?source directory}"
+if [ "${CUPID_HAVE_PETSC:-0}" != 1 ]; then
+  echo "SKIP: cupid was built without PETSc (configure with -DCUPID_WITH_PETSC=ON, or"
+  echo "      scripts/build.sh --with-petsc, which builds build-petsc/)"
+  exit 77
+fi
+MPIEXEC=${CUPID_MPIEXEC:-mpiexec}
+# OpenMPI refuses root unless told (CI containers run as root); one OpenMP thread per rank on
+# the 2-core machines.
+export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMP_NUM_THREADS=1
+export OMPI_MCA_rmaps_base_oversubscribe=1
+models=$CUPID_SOURCE_DIR/tests/models/mpi
+tmp=$(mktemp -d)
+trap 'rm -rf "$tmp"' EXIT
+
+compare() { # direct-dir petsc-dir label
+  python3 - "$1" "$2" "$3" <<'PY'
+import csv, glob, json, os, sys
+d, p, label = sys.argv[1:4]
+def columns(path):
+    with open(path) as f:
+        rows = list(csv.DictReader(f))
+    return [float(r[k]) for r in rows for k in ("ux", "uy", "uz") if k in r]
+ref, got = [], []
+files = sorted(os.path.basename(f) for f in glob.glob(os.path.join(d, "*.csv")))
+assert files, "no CSV outputs in " + d
+for name in files:
+    a, b = columns(os.path.join(d, name)), columns(os.path.join(p, name))
+    assert len(a) == len(b), (name, len(a), len(b))
+    ref += a; got += b
+sd, sp = (json.load(open(os.path.join(x, "summary.json"))) for x in (d, p))
+for a, b in zip(sd["points"], sp["points"]):
+    for k in ("ux", "uy", "uz"):
+        ref.append(a[k]); got.append(b[k])
+scale = max(abs(v) for v in ref)
+err = max(abs(a - b) for a, b in zip(ref, got)) / scale
+s = sp["solver"]
+print(f"{label}: {len(ref)} displacements, max |u_petsc - u_direct| / max |u| = {err:.2e} "
+      f"({s['ksp_type']} + {s['pc_type']}, {s['iterations']} iterations, {s['ranks']} ranks, "
+      f"{s['operator']}, residual {s['residual']:.1e})")
+assert s["method"] == "petsc" and s["converged_reason"].startswith("CONVERGED"), s
+assert err <= 1e-8, f"{label}: PETSc and direct solutions differ by {err:.3e} > 1e-8"
+PY
+}
+
+echo "== coupled bar (fictitious nodes), 2 ranks"
+"$CUPID" run "$models/coupled_bar.yaml" -o "$tmp/bar_direct" --solver direct --quiet
+"$MPIEXEC" -n 2 "$CUPID" run "$models/coupled_bar.yaml" -o "$tmp/bar_petsc" --solver petsc --quiet
+compare "$tmp/bar_direct" "$tmp/bar_petsc" "coupled bar"
+python3 -c "import json,sys; s=json.load(open(sys.argv[1]))['solver']; assert s['ranks']==2 and s['operator']=='assembled' and s['ksp_type']=='gmres', s" "$tmp/bar_petsc/summary.json"
+
+echo "== PD-only LPS block, matrix-free, 2 ranks"
+"$CUPID" run "$models/pd_block.yaml" -o "$tmp/pd_direct" --solver direct --quiet
+"$MPIEXEC" -n 2 "$CUPID" run "$models/pd_block.yaml" -o "$tmp/pd_petsc" --solver petsc --quiet
+compare "$tmp/pd_direct" "$tmp/pd_petsc" "PD block"
+python3 -c "import json,sys; s=json.load(open(sys.argv[1]))['solver']; assert s['ranks']==2 and s['operator']=='matrix-free' and s['ksp_type']=='cg', s" "$tmp/pd_petsc/summary.json"
+
+echo "== analysis.solver: petsc on one process, PETSc options passed through"
+sed 's/solver: direct/solver: petsc/' "$models/pd_block.yaml" > "$tmp/pd_key.yaml"
+"$CUPID" run "$tmp/pd_key.yaml" -o "$tmp/pd_key" --quiet -ksp_type gmres -ksp_rtol 1e-13
+compare "$tmp/pd_direct" "$tmp/pd_key" "PD block, model key, -ksp_type gmres"
+python3 -c "import json,sys; s=json.load(open(sys.argv[1]))['solver']; assert s['ranks']==1 and s['ksp_type']=='gmres', s" "$tmp/pd_key/summary.json"
+
+echo "== solver auto: direct for a small model, PETSc once the direct estimate passes the limit"
+sed 's/solver: direct/solver: auto/' "$models/pd_block.yaml" > "$tmp/pd_auto.yaml"
+"$CUPID" run "$tmp/pd_auto.yaml" -o "$tmp/pd_auto_small" --quiet
+# The direct path needs ~0.15 GB (cupid check): a 0.2 GB limit leaves it above a quarter.
+"$CUPID" run "$tmp/pd_auto.yaml" -o "$tmp/pd_auto_large" --quiet --max-memory 0.2
+python3 - "$tmp/pd_auto_small/summary.json" "$tmp/pd_auto_large/summary.json" <<'PY'
+import json, sys
+small, large = (json.load(open(p))["solver"] for p in sys.argv[1:3])
+print("auto, small:", small["method"], "-", small["choice"])
+print("auto, 0.2 GB limit:", large["method"], "-", large["choice"])
+assert small["method"] == "cholmod" and small["choice"].startswith("auto"), small
+assert large["method"] == "petsc" and large["choice"].startswith("auto"), large
+PY
+compare "$tmp/pd_direct" "$tmp/pd_auto_large" "PD block, auto -> petsc"
+
+echo "== a forced divergence fails cleanly (exit 2, one message)"
+set +e
+"$MPIEXEC" -n 2 "$CUPID" run "$models/coupled_bar.yaml" -o "$tmp/bar_fail" --solver petsc \
+  -ksp_max_it 3 > "$tmp/fail.out" 2>&1
+rc=$?
+set -e
+cat "$tmp/fail.out"
+[ "$rc" -eq 2 ] || { echo "FAIL: exit status $rc, expected 2"; exit 1; }
+[ "$(grep -c 'DIVERGED_ITS' "$tmp/fail.out")" -eq 1 ] || { echo "FAIL: expected one DIVERGED_ITS message"; exit 1; }
+[ ! -e "$tmp/bar_fail/summary.json" ] || { echo "FAIL: a failed run wrote outputs"; exit 1; }
+echo "PASS"
