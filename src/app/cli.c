@@ -164,7 +164,9 @@ int cupid_cli_main(int argc, char **argv) {
   }
   const char *cmd = argv[1];
   if (!strcmp(cmd, "--version") || !strcmp(cmd, "-V") || !strcmp(cmd, "version")) {
-    printf("cupid %s\n", cupid_version());
+    /* The optional engine is named so that scripts (and the tests) can tell the builds apart. */
+    printf("cupid %s (%s)\n", cupid_version(),
+           cupid_petsc_available() ? "solvers: direct, petsc" : "solvers: direct");
     return 0;
   }
   if (!strcmp(cmd, "--help") || !strcmp(cmd, "-h") || !strcmp(cmd, "help")) {

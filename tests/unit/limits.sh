@@ -51,7 +51,7 @@ done <<'EOF'
 check~huge_cells.yaml~1~1~huge_cells.yaml:[0-9]+:[0-9]+: peridynamics: the model has at least 100000000000000 PD nodes.*more than the limit of~
 run~huge_cells.yaml~1~1~at least 100000000000000 PD nodes.*more than the limit of [0-9.e+]+ GB; use --max-memory~
 check~huge_nodes.yaml~1~1~at least 2000000000 PD nodes and .* bonds and needs at least [0-9.e+]+ GB \(grid 96 GB~
-run~huge_nodes.yaml~1~1~at least 2000000000 PD nodes.*stiffness matrix and factor~
+run~huge_nodes.yaml~1~1~at least 2000000000 PD nodes.*stiffness matrix and factor~--solver direct
 check~nodes_5e8.yaml~1~1~at least 500000000 PD nodes.*needs at least 815 GB \(grid 24 GB, neighbour lists 755 GB\), more than the limit of 64 GB~--max-memory 64
 run~nodes_5e8.yaml~1~1~at least 500000000 PD nodes.*more than the limit of 64 GB~--max-memory 64
 run~nodes_5e8.yaml~1~1~at least 500000000 PD nodes.*more than the limit of~
