@@ -65,6 +65,18 @@ cupid_status pd_stencil_sum(const pd_stencil *st, int only_first, int *n, int32_
 cupid_status pd_neighbors_build(const struct cupid_pd_grid_private *g, const pd_stencil *st,
                                 cupid_int **ptr, cupid_int **nbr, int32_t **sidx);
 
+/* A run of consecutive full-family nodes in one x row of the lattice: nodes i0 .. i0+len-1
+ * at cells c0 .. c0+len-1. For every stencil entry s their neighbours are consecutive
+ * nodes too (the cells c + clin[s] all exist and nothing lies between them in cell order),
+ * so the stencil kernels sweep a run with contiguous, branch-free, vectorisable loads. */
+typedef struct {
+  cupid_int i0, c0;
+  int len;
+} pd_run;
+
+/* Longest run: the kernels keep a run's accumulators on the stack. */
+#define PD_RUN_MAX 256
+
 struct cupid_pd_operator_private {
   const struct cupid_pd_grid_private *grid; /* borrowed: must outlive the operator */
   cupid_pd_model_kind model;
@@ -74,14 +86,87 @@ struct cupid_pd_operator_private {
   int dim;
   cupid_int nnodes;
   pd_stencil st;
-  cupid_int *bptr, *bnbr; /* bonds, CSR */
-  int32_t *bst;           /* stencil entry of each bond */
+  cupid_int *clin;        /* dense-cell offset of each stencil entry (the lattice neighbour) */
+  cupid_int nbonds;       /* bonds (ordered pairs) */
+  /* Families without per-bond storage for the bulk: a node whose whole stencil lies in the
+   * grid ("full", the interior) stores nothing, the others (near the surface) the stencil
+   * entries present, fidx[fptr[i] .. fptr[i+1]) (empty for full nodes). A neighbour is
+   * dense[cell(i) + clin[s]] (pd_family_*). */
+  unsigned char *full;
+  cupid_int *fptr;
+  int32_t *fidx;
+  pd_run *runs;           /* full nodes in runs of at most PD_RUN_MAX, ascending */
+  cupid_int nruns;
+  cupid_int *edge;        /* the non-full nodes, ascending */
+  cupid_int nedge;
+  /* Hook: when set, apply/apply_range use the bond-list kernels (pd_lps_*, pd_bond_apply)
+   * on the explicit bond lists below, e.g. for per-bond modifications of the pair terms
+   * that the uniform stencil cannot express. Set it through pd_operator_use_bond_lists(). */
+  int stencil_off;
+  /* Explicit bond lists in CSR (neighbour and stencil entry per bond, 12 bytes a bond):
+   * NULL unless pd_operator_use_bond_lists() built them (or the grid is 1D). */
+  cupid_int *bptr, *bnbr;
+  int32_t *bst;
   double *m;              /* weighted volume (Eq. 18) */
   double *kappa;          /* 3K - 5mu per node (LPS) */
   double *mu;             /* shear modulus per node */
   double *c;              /* micromodulus per node (bond-based) */
   double *gself;          /* sum_j omega beta x n_ij, 3 per node (LPS: -dtheta_i/du_i m_i/(3V)) */
 };
+
+/* Dense cell index of node i. */
+static inline cupid_int pd_node_cell(const struct cupid_pd_grid_private *g, cupid_int i) {
+  const int32_t *q = g->ijk + 3 * i;
+  return q[0] + g->n[0] * (q[1] + g->n[1] * (cupid_int)q[2]);
+}
+
+/* The family of a node: its stencil entries (all of them for a full node) and its cell.
+ *   pd_family F = pd_family_of(op, i);
+ *   for (int q = 0; q < F.n; q++) { int s = pd_family_entry(&F, q);
+ *                                   cupid_int j = pd_family_node(op, &F, s); ... }
+ * Entries come in stencil order, i.e. neighbours ascending by node index. */
+typedef struct {
+  const int32_t *s; /* NULL for a full family */
+  int n;
+  cupid_int cell;
+} pd_family;
+
+static inline pd_family pd_family_of(const struct cupid_pd_operator_private *op, cupid_int i) {
+  pd_family F;
+  F.cell = pd_node_cell(op->grid, i);
+  if (op->full[i]) {
+    F.s = NULL;
+    F.n = op->st.n;
+  } else {
+    F.s = op->fidx + op->fptr[i];
+    F.n = (int)(op->fptr[i + 1] - op->fptr[i]);
+  }
+  return F;
+}
+
+static inline int pd_family_entry(const pd_family *F, int q) { return F->s ? F->s[q] : q; }
+
+static inline cupid_int pd_family_node(const struct cupid_pd_operator_private *op,
+                                       const pd_family *F, int s) {
+  return op->grid->dense[F->cell + op->clin[s]];
+}
+
+/* Build the families (full flags, near-surface lists, runs, edge nodes) of the operator. */
+cupid_status pd_families_build(struct cupid_pd_operator_private *op);
+
+/* Build the explicit bond lists (if not there yet) and switch apply to the bond-list
+ * kernels (stencil_off = 1). Not thread-safe: call before sharing the operator. */
+cupid_status pd_operator_use_bond_lists(struct cupid_pd_operator_private *op);
+
+/* Stencil path (stencil.c): rows [first, last) of f = K u (f indexed by i - first), u read
+ * on the dependency range only; theta (indexed by node, may be NULL) receives the LPS
+ * dilatations computed on the way (the rows' neighbours). */
+cupid_status pd_stencil_apply(const struct cupid_pd_operator_private *op, cupid_int first,
+                              cupid_int last, const double *u, double *f, double *theta);
+
+/* Smallest and largest+1 neighbour index over the nodes [first, last) (themselves included). */
+void pd_neighbour_span(const struct cupid_pd_operator_private *op, cupid_int first, cupid_int last,
+                       cupid_int *lo, cupid_int *hi);
 
 /* Bond-based pair coefficient c_ij omega beta V^2 / |xi| and LPS pair coefficient
  * 15 (mu_i/m_i + mu_j/m_j) omega beta V^2: the stiffness of the bond spring along n. */
@@ -93,8 +178,10 @@ static inline double pd_pair_coefficient(const struct cupid_pd_operator_private 
   return 15.0 * (op->mu[i] / op->m[i] + op->mu[j] / op->m[j]) * op->st.wb[s] * V2;
 }
 
-/* Model kernels (lps.c, bond.c): u, f 3 per node, sigma 6 per node. */
-/* Range kernels: nodes [first, last); theta is indexed by global node, f by i - first. */
+/* Model kernels (lps.c, bond.c): u, f 3 per node, sigma 6 per node.
+ * Bond-list range kernels (need op->bptr, see pd_operator_use_bond_lists): nodes
+ * [first, last); theta is indexed by global node, f by i - first. Energy and stress walk
+ * the families (any storage). */
 void pd_lps_dilatation(const struct cupid_pd_operator_private *op, cupid_int first, cupid_int last,
                        const double *u, double *theta);
 void pd_lps_apply(const struct cupid_pd_operator_private *op, cupid_int first, cupid_int last,
