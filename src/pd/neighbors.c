@@ -223,8 +223,8 @@ cleanup:
 }
 
 /* Families without per-bond storage for the bulk (pd_internal.h): cell offsets of the
- * stencil, full flags, the stencil entries of near-surface nodes, runs of full nodes, the
- * list of near-surface ("edge") nodes. Two passes over nodes x stencil, O(nodes). */
+ * stencil, full flags, the stencil entries of near-surface nodes, the padded lattice and
+ * the runs. Two passes over nodes x stencil, O(nodes). */
 cupid_status pd_families_build(struct cupid_pd_operator_private *op) {
   const struct cupid_pd_grid_private *g = op->grid;
   const pd_stencil *S = &op->st;
@@ -262,39 +262,55 @@ cupid_status pd_families_build(struct cupid_pd_operator_private *op) {
                          q[2] + S->off[3 * s + 2]) >= 0)
         op->fidx[b++] = s;
   }
-  /* Runs: consecutive full nodes at consecutive cells (then their neighbours at any entry
-   * are consecutive nodes as well), at most PD_RUN_MAX long. */
-  cupid_int nruns = 0, nedge = 0;
+  /* Padded lattice: reach per axis, padded sizes, padded cell offsets. */
+  int32_t r[3] = {0, 0, 0};
+  for (int s = 0; s < S->n; s++)
+    for (int k = 0; k < 3; k++) {
+      const int32_t o = S->off[3 * s + k] < 0 ? -S->off[3 * s + k] : S->off[3 * s + k];
+      if (o > r[k]) r[k] = o;
+    }
+  double pcells = 1.0;
+  for (int k = 0; k < 3; k++) {
+    op->pr[k] = r[k];
+    op->pn[k] = g->n[k] + 2 * (cupid_int)r[k];
+    pcells *= (double)op->pn[k];
+  }
+  op->padded = pcells <= PD_PAD_RATIO * (double)nn + 4096.0;
+  CUPID_CALL(cupid_malloc((size_t)S->n, sizeof *op->pclin, "PD stencil cell offsets", &op->pclin));
+  for (int s = 0; s < S->n; s++) {
+    const int32_t *o = S->off + 3 * s;
+    op->pclin[s] = o[0] + op->pn[0] * (o[1] + op->pn[1] * (cupid_int)o[2]);
+  }
+  /* Runs: consecutive nodes at consecutive cells of one row, at most PD_RUN_MAX long (a new
+   * run wherever the padded cell index jumps); full = every node of the run is full. */
+  cupid_int nruns = 0;
   for (int pass = 0; pass < 2; pass++) {
-    nruns = nedge = 0;
+    nruns = 0;
+    cupid_int prev = -2;
     for (cupid_int i = 0; i < nn; i++) {
-      if (!op->full[i]) {
-        if (pass) op->edge[nedge] = i;
-        nedge++;
-        continue;
-      }
-      const cupid_int c = pd_node_cell(g, i);
+      const cupid_int cp = pd_node_pcell(op, i);
       pd_run *R = pass && nruns ? &op->runs[nruns - 1] : NULL;
-      if (pass && R && R->i0 + R->len == i && R->c0 + R->len == c && R->len < PD_RUN_MAX) {
-        R->len++;
+      /* Padded, a row is one run (masked where not full: fewer, longer vector loops beat
+       * splitting off the few near-surface nodes); else full and partial nodes split. */
+      const int joins = i > 0 && cp == prev + 1 && (op->padded || op->full[i] == op->full[i - 1]);
+      prev = cp;
+      if (joins && (!pass || R->len < PD_RUN_MAX)) {
+        if (pass) {
+          R->len++;
+          R->full &= op->full[i];
+        }
         continue;
       }
-      if (!pass) {
-        /* Count: a new run unless it extends the previous one (same test, node-local). */
-        const int extends = i > 0 && op->full[i - 1] && pd_node_cell(g, i - 1) == c - 1;
-        if (extends) continue;
-      } else {
-        op->runs[nruns] = (pd_run){.i0 = i, .c0 = c, .len = 1};
-      }
+      if (pass)
+        op->runs[nruns] = (pd_run){.i0 = i, .c0 = pd_node_cell(g, i), .cp0 = cp, .len = 1,
+                                   .full = op->full[i]};
       nruns++;
     }
-    if (pass) break;
-    /* Split runs may add up to nn / PD_RUN_MAX more. */
-    CUPID_CALL(cupid_malloc((size_t)(nruns + nn / PD_RUN_MAX + 1), sizeof *op->runs, "PD runs", &op->runs));
-    CUPID_CALL(cupid_malloc((size_t)nedge + 1, sizeof *op->edge, "PD near-surface nodes", &op->edge));
+    /* Runs split at PD_RUN_MAX add at most nn / PD_RUN_MAX. */
+    if (!pass)
+      CUPID_CALL(cupid_malloc((size_t)(nruns + nn / PD_RUN_MAX + 1), sizeof *op->runs, "PD runs", &op->runs));
   }
   op->nruns = nruns;
-  op->nedge = nedge;
   return CUPID_SUCCESS;
 }
 

@@ -15,7 +15,8 @@ void cupid_pd_operator_destroy(cupid_pd_operator *op) {
   cupid_free(&o->fptr);
   cupid_free(&o->fidx);
   cupid_free(&o->runs);
-  cupid_free(&o->edge);
+  cupid_free(&o->pclin);
+  pd_stencil_work_free(o);
   cupid_free(&o->bptr);
   cupid_free(&o->bnbr);
   cupid_free(&o->bst);

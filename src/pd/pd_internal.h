@@ -2,6 +2,7 @@
 #ifndef CUPID_PD_INTERNAL_H
 #define CUPID_PD_INTERNAL_H
 
+#include <stdatomic.h>
 #include <stdint.h>
 
 #include "cupid/pd.h"
@@ -65,13 +66,15 @@ cupid_status pd_stencil_sum(const pd_stencil *st, int only_first, int *n, int32_
 cupid_status pd_neighbors_build(const struct cupid_pd_grid_private *g, const pd_stencil *st,
                                 cupid_int **ptr, cupid_int **nbr, int32_t **sidx);
 
-/* A run of consecutive full-family nodes in one x row of the lattice: nodes i0 .. i0+len-1
- * at cells c0 .. c0+len-1. For every stencil entry s their neighbours are consecutive
- * nodes too (the cells c + clin[s] all exist and nothing lies between them in cell order),
- * so the stencil kernels sweep a run with contiguous, branch-free, vectorisable loads. */
+/* A run of consecutive nodes at consecutive cells of one x row (with the padded lattice a
+ * whole row, else all with full families or all without; full = 1 if all are): nodes i0 .. i0+len-1 at cells c0 .. c0+len-1 (cp0 .. in the padded lattice,
+ * see pd_internal's pad). For every stencil entry s the neighbours of a full run are
+ * consecutive nodes too (the cells c + clin[s] all exist and nothing lies between them in
+ * cell order), and in the padded lattice the neighbour cells of any run are consecutive, so
+ * the stencil kernels sweep a run with contiguous, vectorisable loads. */
 typedef struct {
-  cupid_int i0, c0;
-  int len;
+  cupid_int i0, c0, cp0;
+  int len, full;
 } pd_run;
 
 /* Longest run: the kernels keep a run's accumulators on the stack. */
@@ -95,10 +98,22 @@ struct cupid_pd_operator_private {
   unsigned char *full;
   cupid_int *fptr;
   int32_t *fidx;
-  pd_run *runs;           /* full nodes in runs of at most PD_RUN_MAX, ascending */
+  pd_run *runs;           /* every node, in runs of at most PD_RUN_MAX, ascending */
   cupid_int nruns;
-  cupid_int *edge;        /* the non-full nodes, ascending */
-  cupid_int nedge;
+  /* Padded lattice: the bounding box grown by the stencil reach r[a] on each side, so that
+   * every stencil neighbour of every node has a cell index (pclin[s] its offset). With
+   * padded = 1 the stencil kernels work on cell-indexed copies of the data in which absent
+   * cells are masked out; else (a sparse union, whose padded box would hold more than
+   * PD_PAD_RATIO cells a node) near-surface nodes walk their families. */
+  int padded;
+  cupid_int pn[3];        /* padded cells per axis */
+  int32_t pr[3];          /* reach per axis */
+  cupid_int *pclin;
+  /* Work arrays of the stencil path, kept between applies (a fresh allocation per apply
+   * costs page faults comparable to the apply); one apply at a time takes them, a
+   * concurrent one allocates its own. */
+  void *work;
+  atomic_int work_busy;
   /* Hook: when set, apply/apply_range use the bond-list kernels (pd_lps_*, pd_bond_apply)
    * on the explicit bond lists below, e.g. for per-bond modifications of the pair terms
    * that the uniform stencil cannot express. Set it through pd_operator_use_bond_lists(). */
@@ -151,7 +166,15 @@ static inline cupid_int pd_family_node(const struct cupid_pd_operator_private *o
   return op->grid->dense[F->cell + op->clin[s]];
 }
 
-/* Build the families (full flags, near-surface lists, runs, edge nodes) of the operator. */
+#define PD_PAD_RATIO 8
+
+/* Padded cell index of node i. */
+static inline cupid_int pd_node_pcell(const struct cupid_pd_operator_private *op, cupid_int i) {
+  const int32_t *q = op->grid->ijk + 3 * i;
+  return (q[0] + op->pr[0]) + op->pn[0] * ((q[1] + op->pr[1]) + op->pn[1] * (cupid_int)(q[2] + op->pr[2]));
+}
+
+/* Build the families (full flags, near-surface lists, runs, padding) of the operator. */
 cupid_status pd_families_build(struct cupid_pd_operator_private *op);
 
 /* Build the explicit bond lists (if not there yet) and switch apply to the bond-list
@@ -163,6 +186,8 @@ cupid_status pd_operator_use_bond_lists(struct cupid_pd_operator_private *op);
  * dilatations computed on the way (the rows' neighbours). */
 cupid_status pd_stencil_apply(const struct cupid_pd_operator_private *op, cupid_int first,
                               cupid_int last, const double *u, double *f, double *theta);
+/* Free the kept work arrays (operator destroy). */
+void pd_stencil_work_free(struct cupid_pd_operator_private *op);
 
 /* Smallest and largest+1 neighbour index over the nodes [first, last) (themselves included). */
 void pd_neighbour_span(const struct cupid_pd_operator_private *op, cupid_int first, cupid_int last,

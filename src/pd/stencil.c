@@ -28,12 +28,16 @@
 #define PD_CLONES
 #endif
 
-/* Structure-of-arrays copies of the data the rows depend on, indexed by node - lo. */
+/* Structure-of-arrays copies of the data the rows depend on. Padded: indexed by padded
+ * cell - base, absent cells zero with mask p = 0; else by node - base, p unused. */
 typedef struct {
-  cupid_int lo, hi;
+  int padded;
+  cupid_int base, n, cap;
   double *x, *y, *z; /* displacement components */
   double *a;         /* LPS: kappa theta / m; bond-based: micromodulus c */
-  double *b;         /* LPS: mu / m */
+  double *b;         /* LPS: mu / m; NULL for bond-based */
+  double *p;         /* padded: 1 at a node, 0 at an absent cell */
+  double *b_store;   /* the b array (b is NULL for bond-based) */
 } pd_work;
 
 static void work_free(pd_work *w) {
@@ -41,63 +45,132 @@ static void work_free(pd_work *w) {
   cupid_free(&w->y);
   cupid_free(&w->z);
   cupid_free(&w->a);
-  cupid_free(&w->b);
+  cupid_free(&w->b_store);
+  cupid_free(&w->p);
+  w->b = NULL;
+  w->cap = 0;
 }
 
-/* Separate arrays of 8 bytes a node (not one block): each stays below the allocator's
- * mmap threshold for longer, so repeated applies reuse heap pages instead of faulting. */
-static cupid_status work_alloc(pd_work *w, cupid_int lo, cupid_int hi, int with_b) {
-  memset(w, 0, sizeof *w);
-  w->lo = lo;
-  w->hi = hi;
-  const size_t n = (size_t)(hi - lo);
-  cupid_status st = CUPID_SUCCESS;
-  CUPID_TRY(cupid_malloc(n, sizeof *w->x, "PD stencil work arrays", &w->x));
-  CUPID_TRY(cupid_malloc(n, sizeof *w->y, "PD stencil work arrays", &w->y));
-  CUPID_TRY(cupid_malloc(n, sizeof *w->z, "PD stencil work arrays", &w->z));
-  CUPID_TRY(cupid_malloc(n, sizeof *w->a, "PD stencil work arrays", &w->a));
-  if (with_b) CUPID_TRY(cupid_malloc(n, sizeof *w->b, "PD stencil work arrays", &w->b));
-cleanup:
-  if (st != CUPID_SUCCESS) work_free(w);
-  return st;
+void pd_stencil_work_free(struct cupid_pd_operator_private *op) {
+  pd_work *w = op->work;
+  if (w) work_free(w);
+  cupid_free(&op->work);
 }
 
-/* Split u into components over [lo, hi); b = mu/m (LPS) or a = c (bond-based). */
-static void work_fill(const struct cupid_pd_operator_private *op, pd_work *w, const double *u) {
-  const cupid_int lo = w->lo, n = w->hi - w->lo;
-#pragma omp parallel for schedule(static) if (n > PD_OMP_MIN_NODES)
-  for (cupid_int q = 0; q < n; q++) {
-    const cupid_int i = lo + q;
+/* Arrays for n entries (grown as needed; separate arrays, 8 bytes an entry each). */
+static cupid_status work_reserve(pd_work *w, int padded, cupid_int base, cupid_int n, int lps) {
+  if (w->cap < n) {
+    work_free(w);
+    cupid_status st = CUPID_SUCCESS;
+    double **arrays[6] = {&w->x, &w->y, &w->z, &w->a, &w->b_store, &w->p};
+    for (int k = 0; k < 6; k++)
+      CUPID_TRY(cupid_malloc((size_t)n, sizeof(double), "PD stencil work arrays", arrays[k]));
+    w->cap = n;
+  cleanup:
+    if (st != CUPID_SUCCESS) {
+      work_free(w);
+      return st;
+    }
+  }
+  w->padded = padded;
+  w->base = base;
+  w->n = n;
+  w->b = lps ? w->b_store : NULL;
+  return CUPID_SUCCESS;
+}
+
+/* Copy u on the nodes [lo, hi) (b = mu/m for LPS, a = c for bond-based); padded: zero the
+ * whole window first, then mark the nodes. */
+static void work_fill(const struct cupid_pd_operator_private *op, pd_work *w, cupid_int lo,
+                      cupid_int hi, const double *u) {
+  const int lps = w->b != NULL;
+  if (w->padded) {
+    double *arrays[6] = {w->x, w->y, w->z, w->a, w->b, w->p};
+#pragma omp parallel for schedule(static) if (w->n > 8 * PD_OMP_MIN_NODES)
+    for (int k = 0; k < 6; k++)
+      if (arrays[k]) memset(arrays[k], 0, (size_t)w->n * sizeof(double));
+  }
+#pragma omp parallel for schedule(static) if (hi - lo > PD_OMP_MIN_NODES)
+  for (cupid_int i = lo; i < hi; i++) {
+    const cupid_int q = (w->padded ? pd_node_pcell(op, i) : i) - w->base;
     w->x[q] = u[3 * i];
     w->y[q] = u[3 * i + 1];
     w->z[q] = u[3 * i + 2];
-    if (w->b)
+    if (lps)
       w->b[q] = op->mu[i] / op->m[i];
     else
       w->a[q] = op->c[i];
+    if (w->padded) w->p[q] = 1.0;
   }
 }
 
-/* ---- The run kernels: nodes i .. i+len-1 at cells c .. c+len-1, all full. ---- */
+/* Position in the work arrays of node i (run R, t = i - R->i0) and of its neighbour at
+ * stencil entry s (for t = 0: consecutive along the run). */
+static inline cupid_int work_index(const pd_work *w, const pd_run *R, cupid_int i) {
+  return (w->padded ? R->cp0 : R->i0) + (i - R->i0) - w->base;
+}
+
+static inline cupid_int work_neighbour(const struct cupid_pd_operator_private *op,
+                                       const pd_work *w, const pd_run *R, cupid_int i, int s) {
+  if (w->padded) return R->cp0 + (i - R->i0) + op->pclin[s] - w->base;
+  return op->grid->dense[R->c0 + (i - R->i0) + op->clin[s]] - w->base;
+}
+
+/* ---- The run kernels: nodes i .. i+len-1 of run R; all full, or (padded) masked. ----
+ *
+ * The inner loops are bound by loads, so stencil entries go four at a time: the node's own
+ * data and its accumulators are loaded once per four bonds. Per node the bonds are still
+ * summed in stencil order (partial sums of four), as on the bond lists. */
+
+/* Entry k of a block of four: its neighbour offset and constants. */
+#define PD_ENTRY(k)                                                                          \
+  const cupid_int j##k = work_neighbour(op, w, R, i, s + k);                                \
+  const double n0##k = S->nrm[3 * (s + k)], n1##k = S->nrm[3 * (s + k) + 1],                \
+               n2##k = S->nrm[3 * (s + k) + 2];                                              \
+  (void)n0##k, (void)n1##k, (void)n2##k
+#define PD_EXT(k) (n0##k * (X[j##k + t] - xt) + n1##k * (Y[j##k + t] - yt) + n2##k * (Z[j##k + t] - zt))
+#define PD_MASK(k) (masked ? P[j##k + t] : 1.0)
 
 /* a = kappa theta / m with theta = 3V/m sum_s omega beta xi_s . (u_j - u_i) (Eq. 19). */
 PD_CLONES
 static void run_dilatation(const struct cupid_pd_operator_private *op, const pd_work *w,
-                           cupid_int i, cupid_int c, int len, double *restrict theta) {
+                           const pd_run *R, cupid_int i, int len, double *restrict theta) {
   const pd_stencil *S = &op->st;
-  const cupid_int *restrict dense = op->grid->dense;
-  const cupid_int li = i - w->lo;
-  const double *restrict xi = w->x + li, *restrict yi = w->y + li, *restrict zi = w->z + li;
+  const cupid_int li = work_index(w, R, i);
+  const double *restrict X = w->x, *restrict Y = w->y, *restrict Z = w->z, *restrict P = w->p;
+  const int masked = !R->full;
   double acc[PD_RUN_MAX];
   for (int t = 0; t < len; t++) acc[t] = 0.0;
-  for (int s = 0; s < S->n; s++) {
-    const cupid_int lj = dense[c + op->clin[s]] - w->lo;
-    const double *restrict xj = w->x + lj, *restrict yj = w->y + lj, *restrict zj = w->z + lj;
-    const double g0 = S->wxn[3 * s], g1 = S->wxn[3 * s + 1], g2 = S->wxn[3 * s + 2];
-#pragma omp simd
-    for (int t = 0; t < len; t++)
-      acc[t] += g0 * (xj[t] - xi[t]) + g1 * (yj[t] - yi[t]) + g2 * (zj[t] - zi[t]);
+  int s = 0;
+#define PD_DIL_TERM(k) (PD_MASK(k) * (g0##k * (X[j##k + t] - xt) + g1##k * (Y[j##k + t] - yt) + g2##k * (Z[j##k + t] - zt)))
+#define PD_DIL_ENTRY(k)                                                                      \
+  const cupid_int j##k = work_neighbour(op, w, R, i, s + k);                                \
+  const double g0##k = S->wxn[3 * (s + k)], g1##k = S->wxn[3 * (s + k) + 1],                 \
+               g2##k = S->wxn[3 * (s + k) + 2]
+#define PD_DIL_LOOP(body)                                                                    \
+  _Pragma("omp simd") for (int t = 0; t < len; t++) {                                        \
+    const cupid_int q = li + t;                                                              \
+    const double xt = X[q], yt = Y[q], zt = Z[q];                                            \
+    acc[t] += body;                                                                          \
   }
+  for (; s + 4 <= S->n; s += 4) {
+    PD_DIL_ENTRY(0);
+    PD_DIL_ENTRY(1);
+    PD_DIL_ENTRY(2);
+    PD_DIL_ENTRY(3);
+    if (masked) {
+      PD_DIL_LOOP(((PD_DIL_TERM(0) + PD_DIL_TERM(1)) + PD_DIL_TERM(2)) + PD_DIL_TERM(3))
+    } else {
+      PD_DIL_LOOP(((PD_DIL_TERM(0) + PD_DIL_TERM(1)) + PD_DIL_TERM(2)) + PD_DIL_TERM(3))
+    }
+  }
+  for (; s < S->n; s++) {
+    PD_DIL_ENTRY(0);
+    PD_DIL_LOOP(PD_DIL_TERM(0))
+  }
+#undef PD_DIL_TERM
+#undef PD_DIL_ENTRY
+#undef PD_DIL_LOOP
   double *restrict a = w->a + li;
   for (int t = 0; t < len; t++) {
     const double th = 3.0 * op->V * acc[t] / op->m[i + t];
@@ -106,75 +179,108 @@ static void run_dilatation(const struct cupid_pd_operator_private *op, const pd_
   }
 }
 
-/* f = -V^2 sum_s omega beta [ (a_i + a_j) x_s + 15 (b_i + b_j) e ] n_s (LPS, Eq. 21). */
-PD_CLONES
-static void run_lps_force(const struct cupid_pd_operator_private *op, const pd_work *w,
-                          cupid_int i, cupid_int c, int len, double *restrict f) {
-  const pd_stencil *S = &op->st;
-  const cupid_int *restrict dense = op->grid->dense;
-  const cupid_int li = i - w->lo;
-  const double *restrict xi = w->x + li, *restrict yi = w->y + li, *restrict zi = w->z + li;
-  const double *restrict ai = w->a + li, *restrict bi = w->b + li;
-  double fx[PD_RUN_MAX], fy[PD_RUN_MAX], fz[PD_RUN_MAX];
-  for (int t = 0; t < len; t++) fx[t] = fy[t] = fz[t] = 0.0;
-  for (int s = 0; s < S->n; s++) {
-    const cupid_int lj = dense[c + op->clin[s]] - w->lo;
-    const double *restrict xj = w->x + lj, *restrict yj = w->y + lj, *restrict zj = w->z + lj;
-    const double *restrict aj = w->a + lj, *restrict bj = w->b + lj;
-    const double n0 = S->nrm[3 * s], n1 = S->nrm[3 * s + 1], n2 = S->nrm[3 * s + 2];
-    const double wx = S->wb[s] * S->x[s], w15 = 15.0 * S->wb[s];
-#pragma omp simd
-    for (int t = 0; t < len; t++) {
-      const double e = n0 * (xj[t] - xi[t]) + n1 * (yj[t] - yi[t]) + n2 * (zj[t] - zi[t]);
-      const double q = wx * (ai[t] + aj[t]) + w15 * (bi[t] + bj[t]) * e;
-      fx[t] += q * n0;
-      fy[t] += q * n1;
-      fz[t] += q * n2;
-    }
+/* Accumulate q_k n_k of the entries of a block into (gx, gy, gz), then into f[t]. */
+#define PD_FORCE_LOOP(NK, TERMS)                                                             \
+  _Pragma("omp simd") for (int t = 0; t < len; t++) {                                        \
+    const cupid_int q = li + t;                                                              \
+    const double xt = X[q], yt = Y[q], zt = Z[q];                                            \
+    PD_NODE_LOAD                                                                             \
+    double gx = 0.0, gy = 0.0, gz = 0.0;                                                     \
+    TERMS                                                                                    \
+    fx[t] += gx;                                                                             \
+    fy[t] += gy;                                                                             \
+    fz[t] += gz;                                                                             \
   }
-  const double V2 = op->V * op->V;
+#define PD_ADD(k)                                                                            \
+  {                                                                                          \
+    const double qk = PD_MASK(k) * PD_PAIR(k);                                               \
+    gx += qk * n0##k;                                                                        \
+    gy += qk * n1##k;                                                                        \
+    gz += qk * n2##k;                                                                        \
+  }
+#define PD_FORCE_BLOCKS(ENTRY_CONSTS)                                                        \
+  int s = 0;                                                                                 \
+  for (; s + 4 <= S->n; s += 4) {                                                            \
+    PD_ENTRY(0);                                                                             \
+    PD_ENTRY(1);                                                                             \
+    PD_ENTRY(2);                                                                             \
+    PD_ENTRY(3);                                                                             \
+    ENTRY_CONSTS(0);                                                                         \
+    ENTRY_CONSTS(1);                                                                         \
+    ENTRY_CONSTS(2);                                                                         \
+    ENTRY_CONSTS(3);                                                                         \
+    if (masked) {                                                                            \
+      PD_FORCE_LOOP(4, PD_ADD(0) PD_ADD(1) PD_ADD(2) PD_ADD(3))                             \
+    } else {                                                                                 \
+      PD_FORCE_LOOP(4, PD_ADD(0) PD_ADD(1) PD_ADD(2) PD_ADD(3))                             \
+    }                                                                                        \
+  }                                                                                          \
+  for (; s < S->n; s++) {                                                                    \
+    PD_ENTRY(0);                                                                             \
+    ENTRY_CONSTS(0);                                                                         \
+    PD_FORCE_LOOP(1, PD_ADD(0))                                                              \
+  }
+
+static inline void run_store(double V2, int len, const double *fx, const double *fy,
+                             const double *fz, double *restrict f) {
   for (int t = 0; t < len; t++) {
     f[3 * t] = -V2 * fx[t];
     f[3 * t + 1] = -V2 * fy[t];
     f[3 * t + 2] = -V2 * fz[t];
   }
+}
+
+/* f = -V^2 sum_s omega beta [ (a_i + a_j) x_s + 15 (b_i + b_j) e ] n_s (LPS, Eq. 21). */
+PD_CLONES
+static void run_lps_force(const struct cupid_pd_operator_private *op, const pd_work *w,
+                          const pd_run *R, cupid_int i, int len, double *restrict f) {
+  const pd_stencil *S = &op->st;
+  const cupid_int li = work_index(w, R, i);
+  const double *restrict X = w->x, *restrict Y = w->y, *restrict Z = w->z, *restrict P = w->p;
+  const double *restrict A = w->a, *restrict B = w->b;
+  const int masked = !R->full;
+  double fx[PD_RUN_MAX], fy[PD_RUN_MAX], fz[PD_RUN_MAX];
+  for (int t = 0; t < len; t++) fx[t] = fy[t] = fz[t] = 0.0;
+#define PD_NODE_LOAD const double at = A[q], bt = B[q];
+#define PD_CONSTS(k) const double wx##k = S->wb[s + k] * S->x[s + k], w15##k = 15.0 * S->wb[s + k]
+#define PD_PAIR(k) (wx##k * (at + A[j##k + t]) + w15##k * (bt + B[j##k + t]) * PD_EXT(k))
+  PD_FORCE_BLOCKS(PD_CONSTS)
+#undef PD_NODE_LOAD
+#undef PD_CONSTS
+#undef PD_PAIR
+  run_store(op->V * op->V, len, fx, fy, fz, f);
 }
 
 /* f = -V^2 sum_s omega beta / x_s (c_i + c_j)/2 e n_s (bond-based). */
 PD_CLONES
 static void run_bond_force(const struct cupid_pd_operator_private *op, const pd_work *w,
-                           cupid_int i, cupid_int c, int len, double *restrict f) {
+                           const pd_run *R, cupid_int i, int len, double *restrict f) {
   const pd_stencil *S = &op->st;
-  const cupid_int *restrict dense = op->grid->dense;
-  const cupid_int li = i - w->lo;
-  const double *restrict xi = w->x + li, *restrict yi = w->y + li, *restrict zi = w->z + li;
-  const double *restrict ci = w->a + li;
+  const cupid_int li = work_index(w, R, i);
+  const double *restrict X = w->x, *restrict Y = w->y, *restrict Z = w->z, *restrict P = w->p;
+  const double *restrict A = w->a;
+  const int masked = !R->full;
   double fx[PD_RUN_MAX], fy[PD_RUN_MAX], fz[PD_RUN_MAX];
   for (int t = 0; t < len; t++) fx[t] = fy[t] = fz[t] = 0.0;
-  for (int s = 0; s < S->n; s++) {
-    const cupid_int lj = dense[c + op->clin[s]] - w->lo;
-    const double *restrict xj = w->x + lj, *restrict yj = w->y + lj, *restrict zj = w->z + lj;
-    const double *restrict cj = w->a + lj;
-    const double n0 = S->nrm[3 * s], n1 = S->nrm[3 * s + 1], n2 = S->nrm[3 * s + 2];
-    const double wc = 0.5 * S->wb[s] / S->x[s];
-#pragma omp simd
-    for (int t = 0; t < len; t++) {
-      const double e = n0 * (xj[t] - xi[t]) + n1 * (yj[t] - yi[t]) + n2 * (zj[t] - zi[t]);
-      const double q = wc * (ci[t] + cj[t]) * e;
-      fx[t] += q * n0;
-      fy[t] += q * n1;
-      fz[t] += q * n2;
-    }
-  }
-  const double V2 = op->V * op->V;
-  for (int t = 0; t < len; t++) {
-    f[3 * t] = -V2 * fx[t];
-    f[3 * t + 1] = -V2 * fy[t];
-    f[3 * t + 2] = -V2 * fz[t];
-  }
+#define PD_NODE_LOAD const double ct = A[q];
+#define PD_CONSTS(k) const double wc##k = 0.5 * S->wb[s + k] / S->x[s + k]
+#define PD_PAIR(k) (wc##k * (ct + A[j##k + t]) * PD_EXT(k))
+  PD_FORCE_BLOCKS(PD_CONSTS)
+#undef PD_NODE_LOAD
+#undef PD_CONSTS
+#undef PD_PAIR
+  run_store(op->V * op->V, len, fx, fy, fz, f);
 }
 
-/* ---- Near-surface nodes: their stored stencil entries, same formulas and order. ---- */
+#undef PD_ENTRY
+#undef PD_EXT
+#undef PD_MASK
+#undef PD_FORCE_LOOP
+#undef PD_ADD
+#undef PD_FORCE_BLOCKS
+
+/* ---- Near-surface nodes without padding: their stored stencil entries, same formulas
+ * and order (work arrays indexed by node). ---- */
 
 static inline double work_extension(const pd_work *w, const double *n, cupid_int li,
                                     cupid_int lj) {
@@ -186,11 +292,11 @@ static void edge_dilatation(const struct cupid_pd_operator_private *op, const pd
                             cupid_int i, double *theta) {
   const pd_stencil *S = &op->st;
   const pd_family F = pd_family_of(op, i);
-  const cupid_int li = i - w->lo;
+  const cupid_int li = i - w->base;
   double acc = 0.0;
   for (int q = 0; q < F.n; q++) {
     const int s = pd_family_entry(&F, q);
-    const cupid_int lj = pd_family_node(op, &F, s) - w->lo;
+    const cupid_int lj = pd_family_node(op, &F, s) - w->base;
     acc += work_extension(w, S->wxn + 3 * s, li, lj);
   }
   const double th = 3.0 * op->V * acc / op->m[i];
@@ -202,12 +308,12 @@ static void edge_force(const struct cupid_pd_operator_private *op, const pd_work
                        cupid_int i, double *f) {
   const pd_stencil *S = &op->st;
   const pd_family F = pd_family_of(op, i);
-  const cupid_int li = i - w->lo;
+  const cupid_int li = i - w->base;
   const int lps = op->model == CUPID_PD_LPS;
   double fi[3] = {0, 0, 0};
   for (int q = 0; q < F.n; q++) {
     const int s = pd_family_entry(&F, q);
-    const cupid_int lj = pd_family_node(op, &F, s) - w->lo;
+    const cupid_int lj = pd_family_node(op, &F, s) - w->base;
     const double *n = S->nrm + 3 * s;
     const double e = work_extension(w, n, li, lj);
     const double t = lps ? S->wb[s] * ((w->a[li] + w->a[lj]) * S->x[s] +
@@ -219,26 +325,15 @@ static void edge_force(const struct cupid_pd_operator_private *op, const pd_work
   for (int k = 0; k < 3; k++) f[k] = -V2 * fi[k];
 }
 
-/* ---- Sweeps over a node range: the runs (clipped) and the edge nodes inside it. ---- */
+/* ---- Sweeps over a node range: the runs, clipped to it. ---- */
 
-/* First run that ends after node p (end = 1) or starts at p or later (end = 0), first edge
- * node >= p (binary searches; runs and edge nodes are ascending). */
-static cupid_int first_run(const struct cupid_pd_operator_private *op, cupid_int p, int end) {
+/* First run whose last node is >= p (binary search; runs are ascending and cover every
+ * node, so run r ends where run r + 1 starts). */
+static cupid_int first_run(const struct cupid_pd_operator_private *op, cupid_int p) {
   cupid_int a = 0, b = op->nruns;
   while (a < b) {
     const cupid_int m = a + (b - a) / 2;
-    const pd_run *R = &op->runs[m];
-    if (end ? R->i0 + R->len <= p : R->i0 < p) a = m + 1;
-    else b = m;
-  }
-  return a;
-}
-
-static cupid_int first_edge(const struct cupid_pd_operator_private *op, cupid_int p) {
-  cupid_int a = 0, b = op->nedge;
-  while (a < b) {
-    const cupid_int m = a + (b - a) / 2;
-    if (op->edge[m] < p) a = m + 1;
+    if (op->runs[m].i0 + op->runs[m].len <= p) a = m + 1;
     else b = m;
   }
   return a;
@@ -247,27 +342,26 @@ static cupid_int first_edge(const struct cupid_pd_operator_private *op, cupid_in
 typedef enum { PASS_DILATATION, PASS_LPS_FORCE, PASS_BOND_FORCE } pd_pass;
 
 /* One pass over the nodes [p, q) (out: f indexed by i - fbase, or theta by node). Inside a
- * parallel region: work-shared, the caller's barrier separates the passes. */
+ * parallel region: work-shared; the implicit barrier at the end separates the passes.
+ * Dynamic schedule: runs differ in length and in cost (masked, or family walks). */
 static void sweep(const struct cupid_pd_operator_private *op, const pd_work *w, pd_pass pass,
                   cupid_int p, cupid_int q, double *out, cupid_int fbase) {
-  const cupid_int r0 = first_run(op, p, 1), r1 = first_run(op, q, 0);
-  const cupid_int e0 = first_edge(op, p), e1 = first_edge(op, q);
-#pragma omp for schedule(static) nowait
-  for (cupid_int r = r0; r < r1; r++) {
+  const cupid_int r0 = first_run(op, p), r1 = first_run(op, q);
+#pragma omp for schedule(dynamic, 16)
+  for (cupid_int r = r0; r < r1 + (r1 < op->nruns && op->runs[r1].i0 < q); r++) {
     const pd_run *R = &op->runs[r];
     const cupid_int a = R->i0 > p ? R->i0 : p, b = R->i0 + R->len < q ? R->i0 + R->len : q;
-    if (a >= b) continue;
-    const cupid_int c = R->c0 + (a - R->i0);
     const int len = (int)(b - a);
-    if (pass == PASS_DILATATION) run_dilatation(op, w, a, c, len, out);
-    else if (pass == PASS_LPS_FORCE) run_lps_force(op, w, a, c, len, out + 3 * (a - fbase));
-    else run_bond_force(op, w, a, c, len, out + 3 * (a - fbase));
-  }
-#pragma omp for schedule(dynamic, 64)
-  for (cupid_int k = e0; k < e1; k++) {
-    const cupid_int i = op->edge[k];
-    if (pass == PASS_DILATATION) edge_dilatation(op, w, i, out);
-    else edge_force(op, w, i, out + 3 * (i - fbase));
+    if (R->full || w->padded) {
+      if (pass == PASS_DILATATION) run_dilatation(op, w, R, a, len, out);
+      else if (pass == PASS_LPS_FORCE) run_lps_force(op, w, R, a, len, out + 3 * (a - fbase));
+      else run_bond_force(op, w, R, a, len, out + 3 * (a - fbase));
+      continue;
+    }
+    for (cupid_int i = a; i < b; i++) {
+      if (pass == PASS_DILATATION) edge_dilatation(op, w, i, out);
+      else edge_force(op, w, i, out + 3 * (i - fbase));
+    }
   }
 }
 
@@ -282,19 +376,42 @@ cupid_status pd_stencil_apply(const struct cupid_pd_operator_private *op, cupid_
     lo = lo1, hi = hi1;
     if (lps) pd_neighbour_span(op, lo1, hi1, &lo, &hi);
   }
-  pd_work w;
-  CUPID_CALL(work_alloc(&w, lo, hi, lps));
-  work_fill(op, &w, u);
-#pragma omp parallel if (last - first > PD_OMP_MIN_NODES)
+  /* The window of the work arrays: padded, every stencil cell of the nodes swept
+   * ([lo1, hi1) for LPS, [first, last) else; they hold the nodes [lo, hi)). */
+  cupid_int base = lo, len = hi - lo;
+  if (op->padded) {
+    cupid_int mn = 0, mx = 0;
+    for (int s = 0; s < op->st.n; s++) {
+      if (op->pclin[s] < mn) mn = op->pclin[s];
+      if (op->pclin[s] > mx) mx = op->pclin[s];
+    }
+    const cupid_int s0 = lps ? lo1 : first, s1 = lps ? hi1 : last;
+    base = pd_node_pcell(op, s0) + mn;
+    len = pd_node_pcell(op, s1 - 1) + mx + 1 - base;
+  }
+  /* The kept arrays if free, else (a concurrent apply) our own. The operator object is
+   * not const (only the handle's users see it so): the cache is its private state. */
+  struct cupid_pd_operator_private *mop = (struct cupid_pd_operator_private *)op;
+  pd_work local = {0}, *w = &local;
+  const int kept = !atomic_exchange(&mop->work_busy, 1);
+  cupid_status st = CUPID_SUCCESS;
+  if (kept) {
+    if (!mop->work) CUPID_TRY(cupid_calloc(1, sizeof(pd_work), "PD stencil work", &mop->work));
+    w = mop->work;
+  }
+  CUPID_TRY(work_reserve(w, op->padded, base, len, lps));
+  work_fill(op, w, lo, hi, u);
+#pragma omp parallel if (hi - lo > PD_OMP_MIN_NODES)
   {
     if (lps) {
-      sweep(op, &w, PASS_DILATATION, lo1, hi1, theta, 0);
-      /* the implicit barrier of sweep's last loop: every a is ready */
-      sweep(op, &w, PASS_LPS_FORCE, first, last, f, first);
+      sweep(op, w, PASS_DILATATION, lo1, hi1, theta, 0);
+      sweep(op, w, PASS_LPS_FORCE, first, last, f, first);
     } else {
-      sweep(op, &w, PASS_BOND_FORCE, first, last, f, first);
+      sweep(op, w, PASS_BOND_FORCE, first, last, f, first);
     }
   }
-  work_free(&w);
-  return CUPID_SUCCESS;
+cleanup:
+  work_free(&local);
+  if (kept) atomic_store(&mop->work_busy, 0);
+  return st;
 }

@@ -92,6 +92,8 @@ static const grid_case cases[] = {
     {"long", 1, {BOX(0, 0, 0, 150, 3.5, 3.5)}, {0}, 3, 3.015},
     /* Too thin for a full family anywhere: everything on the near-surface path. */
     {"thin", 1, {BOX(0, 0, 0, 5, 5, 1.5)}, {0}, 3, 3.015},
+    /* Sparse union (two blocks far apart): no padded lattice, families walked instead. */
+    {"sparse", 2, {BOX(0, 0, 0, 5, 4, 4), BOX(40, 30, 20, 44, 34, 24)}, {0, 1}, 3, 3.015},
 };
 
 static void test_lps(void **state) {
@@ -116,38 +118,44 @@ static void test_bar(void **state) {
   compare(&bar, CUPID_PD_BOND, CUPID_INFLUENCE_CONSTANT, CUPID_PARTIAL_EXACT);
 }
 
-/* The runs and edge lists cover every node once, in order. */
+/* The runs cover every node once, in order, at consecutive (padded) cells with one full
+ * flag each; the union is dense enough for the padded lattice, a sparse one is not. */
 static void test_partition(void **state) {
   (void)state;
   cupid_pd_grid_options go = {.spacing = 0.5, .dimension = 3};
-  cupid_pd_grid grid = NULL;
-  CUPID_ASSERT_OK(cupid_pd_grid_create(&go, cases[1].n_boxes, cases[1].boxes, cases[1].mats, &grid));
   const cupid_pd_material pm[2] = {{.E = 1.0, .nu = 0.25}, {.E = 2.0, .nu = 0.25}};
   cupid_pd_operator_options oo = {.horizon = 1.5, .model = CUPID_PD_LPS,
                                   .influence = CUPID_INFLUENCE_INVERSE,
                                   .partial_volume = CUPID_PARTIAL_PDLAMMPS, .materials = pm,
                                   .n_materials = 2};
-  cupid_pd_operator op = NULL;
-  CUPID_ASSERT_OK(cupid_pd_operator_create(grid, &oo, &op));
-  const cupid_int n = cupid_pd_grid_num_nodes(grid);
-  cupid_int covered = 0, e = 0;
-  assert_true(op->nruns > 0 && op->nedge > 0);
-  for (cupid_int r = 0; r < op->nruns; r++) {
-    const pd_run *R = &op->runs[r];
-    assert_true(R->len >= 1 && R->len <= PD_RUN_MAX);
-    for (int t = 0; t < R->len; t++) {
-      assert_true(op->full[R->i0 + t]);
-      assert_int_equal(pd_node_cell(op->grid, R->i0 + t), R->c0 + t);
+  for (int c = 1; c < 5; c += 3) {
+    cupid_pd_grid grid = NULL;
+    CUPID_ASSERT_OK(cupid_pd_grid_create(&go, cases[c].n_boxes, cases[c].boxes, cases[c].mats, &grid));
+    cupid_pd_operator op = NULL;
+    CUPID_ASSERT_OK(cupid_pd_operator_create(grid, &oo, &op));
+    assert_int_equal(op->padded, c == 1);
+    const cupid_int n = cupid_pd_grid_num_nodes(grid);
+    cupid_int next = 0, nfull = 0;
+    for (cupid_int r = 0; r < op->nruns; r++) {
+      const pd_run *R = &op->runs[r];
+      assert_true(R->len >= 1 && R->len <= PD_RUN_MAX);
+      assert_int_equal(R->i0, next);
+      int all = 1;
+      for (int t = 0; t < R->len; t++) {
+        all &= op->full[R->i0 + t];
+        if (!op->padded) assert_int_equal(op->full[R->i0 + t], R->full);
+        assert_int_equal(pd_node_cell(op->grid, R->i0 + t), R->c0 + t);
+        assert_int_equal(pd_node_pcell(op, R->i0 + t), R->cp0 + t);
+      }
+      assert_int_equal(all, R->full);
+      next += R->len;
+      nfull += R->full ? R->len : 0;
     }
-    if (r) assert_true(R->i0 >= op->runs[r - 1].i0 + op->runs[r - 1].len);
-    covered += R->len;
+    assert_int_equal(next, n);
+    assert_true(nfull < n);
+    cupid_pd_operator_destroy(&op);
+    cupid_pd_grid_destroy(&grid);
   }
-  for (cupid_int i = 0; i < n; i++)
-    if (!op->full[i]) assert_int_equal(op->edge[e++], i);
-  assert_int_equal(e, op->nedge);
-  assert_int_equal(covered + op->nedge, n);
-  cupid_pd_operator_destroy(&op);
-  cupid_pd_grid_destroy(&grid);
 }
 
 int main(void) {
