@@ -33,6 +33,7 @@
 typedef struct {
   int padded;
   cupid_int base, n, cap;
+  cupid_int filled[4];  /* padded: base, n, lo, hi of the last fill (its zeros still hold) */
   double *x, *y, *z; /* displacement components */
   double *a;         /* LPS: kappa theta / m; bond-based: micromodulus c */
   double *b;         /* LPS: mu / m; NULL for bond-based */
@@ -61,6 +62,7 @@ void pd_stencil_work_free(struct cupid_pd_operator_private *op) {
 static cupid_status work_reserve(pd_work *w, int padded, cupid_int base, cupid_int n, int lps) {
   if (w->cap < n) {
     work_free(w);
+    w->filled[1] = -1;
     cupid_status st = CUPID_SUCCESS;
     double **arrays[6] = {&w->x, &w->y, &w->z, &w->a, &w->b_store, &w->p};
     for (int k = 0; k < 6; k++)
@@ -84,11 +86,16 @@ static cupid_status work_reserve(pd_work *w, int padded, cupid_int base, cupid_i
 static void work_fill(const struct cupid_pd_operator_private *op, pd_work *w, cupid_int lo,
                       cupid_int hi, const double *u) {
   const int lps = w->b != NULL;
-  if (w->padded) {
+  /* Padded: zero the window (absent cells must read 0, a finite value, with mask 0) unless
+   * the last fill had the same window and nodes: the kernels write node cells only, so its
+   * zeros still hold (every apply of a time loop). */
+  const cupid_int key[4] = {w->base, w->n, lo, hi};
+  if (w->padded && memcmp(key, w->filled, sizeof key) != 0) {
     double *arrays[6] = {w->x, w->y, w->z, w->a, w->b, w->p};
 #pragma omp parallel for schedule(static) if (w->n > 8 * PD_OMP_MIN_NODES)
     for (int k = 0; k < 6; k++)
       if (arrays[k]) memset(arrays[k], 0, (size_t)w->n * sizeof(double));
+    memcpy(w->filled, key, sizeof key);
   }
 #pragma omp parallel for schedule(static) if (hi - lo > PD_OMP_MIN_NODES)
   for (cupid_int i = lo; i < hi; i++) {

@@ -72,6 +72,12 @@ static void compare(const grid_case *gc, cupid_pd_model_kind model, cupid_influe
     /* The same arithmetic as the whole product: 1e-14 of max |f|. */
     for (cupid_int i = 0; i < 3 * (b - a); i++) ASSERT_NEAR(g[i], f[3 * a + i], 1e-14 * fmax);
   }
+  /* The kept work arrays after the poisoned ranges: the whole product again, twice (the
+   * second reuses the zeroed window). */
+  for (int rep = 0; rep < 2; rep++) {
+    CUPID_ASSERT_OK(cupid_pd_operator_apply(op, u, g));
+    for (cupid_int i = 0; i < 3 * n; i++) ASSERT_NEAR(g[i], f[i], 1e-14 * fmax);
+  }
   cupid_free(&u);
   cupid_free(&f);
   cupid_free(&g);
