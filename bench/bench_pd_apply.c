@@ -2,7 +2,8 @@
  * default, src/pd/stencil.c) against the bond-list path (explicit bonds, lps.c / bond.c).
  * Lattice as the LAMMPS comparison (bench/run_lammps.sh): h = 1, delta = 3.015 h, influence
  * 1/|xi|, PDLAMMPS partial volumes, E = 1e4, nu = 0.25 (LPS; --bond for bond-based).
- * For each n: operator creation, operator bytes per node (stencil storage; bond lists),
+ * For each n: operator creation, operator bytes per node (stencil storage; bond lists; the
+ * apply's kept work arrays), peak memory before and after building the bond lists,
  * best-of-reps apply time of each path, force evaluations per second, and the time of
  * `--steps` explicit central-difference steps (velocity Verlet, lumped mass rho V,
  * cupid_pd_operator_apply per step), peak resident memory. Prints a markdown table.
@@ -111,9 +112,10 @@ int main(int argc, char **argv) {
          reps, steps);
   printf("| n | nodes | bonds/node | full nodes | create s | stencil B/node | bond-list B/node "
          "| apply stencil ms (CPU) | apply bond-list ms (CPU) | %d steps stencil s (CPU) "
-         "| %d steps bond-list s (CPU) | evals/s stencil | evals/s bond-list | peak MB |\n",
+         "| %d steps bond-list s (CPU) | evals/s stencil | evals/s bond-list | work B/node "
+         "| peak MB stencil | peak MB |\n",
          steps, steps);
-  printf("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
+  printf("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
   for (int k = 0; k < ns; k++) {
     const int n = sizes[k];
     cupid_box box = {{0, 0, 0}, {n, n, n}, {1, 1, 1}};
@@ -144,6 +146,9 @@ int main(int argc, char **argv) {
     const double t_st = best_apply(op, u, f, reps, &c_st);
     double cs_st = 0, cs_bl = 0;
     const double t_st_steps = explicit_steps(op, nn, steps, u, v, f, &cs_st, &c_st_steps);
+    const double peak_stencil = (double)cupid_peak_memory() / 1e6;
+    /* The kept work arrays: 6 doubles a cell of the padded window. */
+    const double wb = op->padded ? 48.0 * (double)(op->pn[0] * op->pn[1] * op->pn[2]) : 40.0 * (double)nn;
     double t_bl = NAN, t_bl_steps = NAN, bb = NAN, diff = NAN;
     if (bond_lists) {
       for (cupid_int i = 0; i < 3 * nn; i++) {
@@ -166,11 +171,11 @@ int main(int argc, char **argv) {
     cupid_int full = 0;
     for (cupid_int i = 0; i < nn; i++) full += op->full[i];
     printf("| %d | %lld | %.1f | %lld | %.3f | %.0f | %.0f | %.2f (%.2f) | %.2f (%.2f) | %.3f (%.3f) "
-           "| %.3f (%.3f) | %.1f | %.1f | %.0f |\n",
+           "| %.3f (%.3f) | %.1f | %.1f | %.0f | %.0f | %.0f |\n",
            n, (long long)nn, (double)cupid_pd_operator_num_bonds(op) / (double)nn, (long long)full,
            t_create, sb / (double)nn, bb / (double)nn, 1e3 * t_st, 1e3 * c_st, 1e3 * t_bl,
            1e3 * c_bl, t_st_steps, c_st_steps, t_bl_steps, c_bl_steps, steps / t_st_steps,
-           steps / t_bl_steps, (double)cupid_peak_memory() / 1e6);
+           steps / t_bl_steps, wb / (double)nn, peak_stencil, (double)cupid_peak_memory() / 1e6);
     fprintf(stderr, "n = %d: max |f_stencil - f_bondlist| / max|f| = %.2e, explicit checksums %.12e %.12e\n",
             n, diff, cs_st, cs_bl);
     fflush(stdout);
