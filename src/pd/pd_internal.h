@@ -106,6 +106,11 @@ struct cupid_pd_operator_private {
    * cells are masked out; else (a sparse union, whose padded box would hold more than
    * PD_PAD_RATIO cells a node) near-surface nodes walk their families. */
   int padded;
+  /* Ghost-bond corrections of the padded kernels (stencil.c) for non-full nodes: rank among
+   * them (-1 for full nodes) and sum over the absent entries of w n n^T (6 per node: xx yy
+   * zz yz xz xy; w = 15 omega beta for LPS, omega beta / (2|xi|) bond-based). */
+  int32_t *crank;
+  double *ncorr;
   cupid_int pn[3];        /* padded cells per axis */
   int32_t pr[3];          /* reach per axis */
   cupid_int *pclin;
