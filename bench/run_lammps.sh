@@ -9,7 +9,8 @@
 # lammps; its build has no OPENMP package, so LAMMPS runs `procs` MPI ranks of 1 thread)
 # and a Release build of cupid in build/ (bench_pd_apply). cupid runs OMP_NUM_THREADS=procs
 # threads, and for the per-core figures both run once more on 1 core.
-# Prints LAMMPS's loop time, its CPU share, the Pair share, and cupid's table.
+# Prints LAMMPS's loop time, its CPU share, the Pair share, cupid's table, and a summary of
+# milliseconds per step (CPU time of all cores, and wall time) with the ratios.
 set -euo pipefail
 n=${1:-40}
 np=${2:-2}
@@ -60,9 +61,32 @@ run_lammps() { # procs
   grep -E "^(LAMMPS \(|Total # of neighbors|Ave neighs/atom)" "$work/log.$p" || true
 }
 
-echo "== n = $n, $(nproc) cores, load average before: $(cut -d' ' -f1-3 /proc/loadavg)"
-run_lammps "$np"
-[ "$np" = 1 ] || run_lammps 1
+# Repeats (REPEAT, default 3) alternate the codes; the summary takes each figure's best
+# (minimum) over them: on a shared machine the minimum is the least disturbed run.
+repeat=${REPEAT:-3}
+: >"$work/summary"
+for r in $(seq 1 "$repeat"); do
+  echo "== repeat $r/$repeat, n = $n, $(nproc) cores, load average: $(cut -d' ' -f1-3 /proc/loadavg)"
+  for p in $(printf "%s\n" "$np" 1 | sort -u); do
+    line=$(run_lammps "$p")
+    echo "$line"
+    echo "$line" | awk -v p="$p" '/^LAMMPS peri/ { for (k = 1; k <= NF; k++) if ($k == "CPU" && $(k+1) == "per") print "lammps", p, $(k-2), 1e3 * $7 / 110 }' >>"$work/summary"
+    OMP_NUM_THREADS=$p "$build/bench/bench_pd_apply" "$n" 2>/dev/null | tee "$work/cupid.$p" | grep "^| $n "
+    # columns: 110 steps stencil s (CPU) = field 11, bond-list = field 12 ("wall (cpu)")
+    awk -F'|' -v p="$p" -v n="$n" '$2 == " " n " " {
+      split($11, a, /[ ()]+/); split($12, b, /[ ()]+/)
+      print "stencil", p, 1e3 * a[3] / 110, 1e3 * a[2] / 110
+      print "bondlist", p, 1e3 * b[3] / 110, 1e3 * b[2] / 110 }' "$work/cupid.$p" >>"$work/summary"
+  done
+done
 echo
-OMP_NUM_THREADS=$np "$build/bench/bench_pd_apply" "$n"
-[ "$np" = 1 ] || OMP_NUM_THREADS=1 "$build/bench/bench_pd_apply" "$n"
+echo "Best of $repeat (ms per step of 110: CPU time of all cores / wall time):"
+sort -k1,1 -k2,2n -k3,3g "$work/summary" | awk '!seen[$1 " " $2]++ { cpu[$1, $2] = $3; wall[$1, $2] = $4;
+    printf "  %-8s %d core(s): %8.2f ms CPU, %8.2f ms wall\n", $1, $2, $3, $4; cores[$2] = 1 }
+  END { for (p in cores) {
+    printf "  %d core(s): stencil vs LAMMPS %.1fx (CPU), %.1fx (wall); bond lists vs LAMMPS %.1fx (CPU); stencil vs bond lists %.1fx (CPU)\n",
+      p, cpu["lammps", p] / cpu["stencil", p], wall["lammps", p] / wall["stencil", p],
+      cpu["lammps", p] / cpu["bondlist", p], cpu["bondlist", p] / cpu["stencil", p] } }'
+echo
+echo "Last cupid tables:"
+for p in $(printf "%s\n" "$np" 1 | sort -u); do cat "$work/cupid.$p"; echo; done
