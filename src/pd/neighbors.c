@@ -328,7 +328,7 @@ cupid_status pd_families_build(struct cupid_pd_operator_private *op) {
     for (cupid_int i = 0; i < nn; i++) {
       const cupid_int cp = pd_node_pcell(op, i);
       pd_run *R = pass && nruns ? &op->runs[nruns - 1] : NULL;
-      /* Padded, a row is one run (masked where not full: fewer, longer vector loops beat
+      /* Padded, a row is one run (ghost bonds corrected per node: fewer, longer vector loops beat
        * splitting off the few near-surface nodes); else full and partial nodes split. */
       const int joins = i > 0 && cp == prev + 1 && (op->padded || op->full[i] == op->full[i - 1]);
       prev = cp;

@@ -67,11 +67,12 @@ cupid_status pd_neighbors_build(const struct cupid_pd_grid_private *g, const pd_
                                 cupid_int **ptr, cupid_int **nbr, int32_t **sidx);
 
 /* A run of consecutive nodes at consecutive cells of one x row (with the padded lattice a
- * whole row, else all with full families or all without; full = 1 if all are): nodes i0 .. i0+len-1 at cells c0 .. c0+len-1 (cp0 .. in the padded lattice,
- * see pd_internal's pad). For every stencil entry s the neighbours of a full run are
- * consecutive nodes too (the cells c + clin[s] all exist and nothing lies between them in
- * cell order), and in the padded lattice the neighbour cells of any run are consecutive, so
- * the stencil kernels sweep a run with contiguous, vectorisable loads. */
+ * whole row, else all with full families or all without; full = 1 if all are): nodes
+ * i0 .. i0+len-1 at cells c0 .. c0+len-1 (cp0 .. in the padded lattice, see padded below).
+ * For every stencil entry s the neighbours of a full run are consecutive nodes too (the
+ * cells c + clin[s] all exist and nothing lies between them in cell order), and in the
+ * padded lattice the neighbour cells of any run are consecutive, so the stencil kernels
+ * sweep a run with contiguous, vectorisable loads. */
 typedef struct {
   cupid_int i0, c0, cp0;
   int len, full;
@@ -103,8 +104,8 @@ struct cupid_pd_operator_private {
   /* Padded lattice: the bounding box grown by the stencil reach r[a] on each side, so that
    * every stencil neighbour of every node has a cell index (pclin[s] its offset). With
    * padded = 1 the stencil kernels work on cell-indexed copies of the data in which absent
-   * cells are masked out; else (a sparse union, whose padded box would hold more than
-   * PD_PAD_RATIO cells a node) near-surface nodes walk their families. */
+   * cells read 0 (their bonds corrected per node); else (a sparse union, whose padded box
+   * would hold more than PD_PAD_RATIO cells a node) near-surface nodes walk their families. */
   int padded;
   /* Ghost-bond corrections of the padded kernels (stencil.c) for non-full nodes: rank among
    * them (-1 for full nodes) and sum over the absent entries of w n n^T (6 per node: xx yy

@@ -2,15 +2,23 @@
  *
  * On the uniform grid every node with a full family (all stencil offsets inside the grid)
  * has the same bonds: the stencil entry s gives the unit vector n_s, |xi_s| and omega beta
- * (pd_stencil), and the neighbour is the node of cell c + clin[s]. Consecutive full nodes
- * with consecutive cells form runs (pd_run, operator.c builds them); along a run the
- * neighbours at entry s are consecutive nodes too. So the kernels sweep, for each run and
- * each stencil entry, a contiguous, branch-free inner loop over the run (SIMD over nodes,
- * the run's accumulators in L1), on structure-of-arrays copies of u and of the per-node
- * factors. Nodes near the surface (partial families) walk their stored stencil entries.
+ * (pd_stencil), and the neighbour is the node of cell c + clin[s]. Consecutive nodes at
+ * consecutive cells of a row form runs (pd_run, built by pd_families_build); along a run
+ * the neighbours at entry s are consecutive too. So the kernels sweep, for each run and
+ * each pair of opposite stencil entries, a contiguous, branch-free loop over the run (SIMD
+ * over nodes, the run's accumulators in L1) on structure-of-arrays copies of u and of the
+ * per-node factors.
  *
- * Both sum each node's bonds in stencil order, as the bond-list kernels of lps.c and
- * bond.c do, so the two paths agree to round-off (tests/unit/test_pd_stencil.c).
+ * Padded lattice (the usual case): the copies live on the bounding box grown by the
+ * stencil reach, absent cells read 0, and every run, near the surface or not, takes the
+ * same loop; the ghost bonds of non-full nodes are removed per node afterwards (see the
+ * run kernels). Sparse unions (pd_internal.h, PD_PAD_RATIO): copies by node, full runs as
+ * above with neighbours through the dense cell map, near-surface nodes walk their stored
+ * stencil entries.
+ *
+ * Each node's bonds are summed in stencil order (pairs of opposites, four pairs at a time),
+ * as the bond-list kernels of lps.c and bond.c do bond by bond, so the two paths agree to
+ * round-off (tests/unit/test_pd_stencil.c).
  *
  * LPS (paper 000 Eqs. 17-21), two passes: a_j = kappa_j theta_j / m_j on the nodes the rows
  * need, then (K u)_i = -V^2 sum_s omega beta [ (a_i + a_j) x_s + 15 (b_i + b_j) e_ij ] n_s,
@@ -388,7 +396,7 @@ typedef enum { PASS_DILATATION, PASS_LPS_FORCE, PASS_BOND_FORCE } pd_pass;
 
 /* One pass over the nodes [p, q) (out: f indexed by i - fbase, or theta by node). Inside a
  * parallel region: work-shared; the implicit barrier at the end separates the passes.
- * Dynamic schedule: runs differ in length and in cost (masked, or family walks). */
+ * Dynamic schedule: runs differ in length and in cost (corrections, or family walks). */
 static void sweep(const struct cupid_pd_operator_private *op, const pd_work *w, pd_pass pass,
                   cupid_int p, cupid_int q, double *out, cupid_int fbase) {
   const cupid_int r0 = first_run(op, p), r1 = first_run(op, q);
