@@ -147,8 +147,8 @@ int main(int argc, char **argv) {
     double cs_st = 0, cs_bl = 0;
     const double t_st_steps = explicit_steps(op, nn, steps, u, v, f, &cs_st, &c_st_steps);
     const double peak_stencil = (double)cupid_peak_memory() / 1e6;
-    /* The kept work arrays: 6 doubles a cell of the padded window. */
-    const double wb = op->padded ? 48.0 * (double)(op->pn[0] * op->pn[1] * op->pn[2]) : 40.0 * (double)nn;
+    /* The kept work arrays: 5 doubles a cell of the padded window. */
+    const double wb = 40.0 * (op->padded ? (double)(op->pn[0] * op->pn[1] * op->pn[2]) : (double)nn);
     double t_bl = NAN, t_bl_steps = NAN, bb = NAN, diff = NAN;
     if (bond_lists) {
       for (cupid_int i = 0; i < 3 * nn; i++) {

@@ -134,7 +134,7 @@ cupid_int cupid_pd_operator_num_bonds(const cupid_pd_operator op);
 /**
  * Matrix-free f = K u (3 entries per node; in 1D too, with x and z decoupled and zero). On the
  * stencil: runs of consecutive nodes sweep each stencil offset with contiguous SIMD loops
- * (src/pd/stencil.c; LPS two passes, dilatation then force). Keeps work arrays of ~48 bytes
+ * (src/pd/stencil.c; LPS two passes, dilatation then force). Keeps work arrays of 40 bytes
  * per cell of the padded bounding box between calls (one call at a time uses them; a
  * concurrent call allocates its own).
  */
