@@ -31,11 +31,10 @@ static double cpu_time(void) {
 static double assembly_pairs(const struct cupid_pd_operator_private *op) {
   double w = 0;
   for (cupid_int r = 0; r < op->nnodes; r++) {
-    w += (double)(op->bptr[r + 1] - op->bptr[r] + 1);
-    for (cupid_int b = op->bptr[r]; b < op->bptr[r + 1]; b++) {
-      const cupid_int p = op->bnbr[b];
-      w += (double)(op->bptr[p + 1] - op->bptr[p] + 1);
-    }
+    const pd_family F = pd_family_of(op, r);
+    w += (double)(F.n + 1);
+    for (int q = 0; q < F.n; q++)
+      w += (double)(pd_family_of(op, pd_family_node(op, &F, pd_family_entry(&F, q))).n + 1);
   }
   return w;
 }

@@ -98,6 +98,33 @@ cupid_status cupid_dynamics_run(const cupid_dynamics_system *sys, const cupid_dy
                                 double *u, double *v, cupid_dynamics_monitor monitor, void *ctx,
                                 cupid_dynamics_info *info);
 
+/** A matrix-free stiffness: y = K x (n entries each), e.g. cupid_pd_operator_apply. */
+typedef cupid_status (*cupid_dynamics_stiffness_fn)(void *ctx, const double *x, double *y);
+
+/** The system of an explicit run with a matrix-free K and a lumped mass. */
+typedef struct {
+  cupid_int n;                        /**< scalar DOFs */
+  cupid_dynamics_stiffness_fn apply;  /**< y = K x, symmetric positive semi-definite */
+  void *ctx;                          /**< passed to apply */
+  const double *m_lumped;             /**< diagonal mass (n entries) */
+  const cupid_dirichlet_t *bc;        /**< finalized conditions, or NULL */
+  const double *f;                    /**< constant external force (n entries), or NULL */
+} cupid_dynamics_explicit_system;
+
+/**
+ * Central differences (opts->integrator must be CUPID_INTEGRATOR_CENTRAL) as in
+ * cupid_dynamics_run(), with K only through products: no assembly, memory O(n) besides what
+ * apply needs. Same steps, energies, damping (b K v through apply), monitor and stable-step
+ * check, with two differences: the critical step comes from the power iteration alone and
+ * info->dt_bound is 0 (the Gershgorin bound needs the entries of K). With apply the product
+ * of an assembled K, the results equal cupid_dynamics_run()'s to round-off. An apply failure
+ * stops the run with its status.
+ */
+cupid_status cupid_dynamics_run_explicit(const cupid_dynamics_explicit_system *sys,
+                                         const cupid_dynamics_options *opts, double *u, double *v,
+                                         cupid_dynamics_monitor monitor, void *ctx,
+                                         cupid_dynamics_info *info);
+
 /**
  * Largest eigenvalue lambda of M^-1 K on the free DOFs, for a lumped mass: power iteration
  * (*estimate, a lower bound converging from below; @p iterations steps) and the Gershgorin

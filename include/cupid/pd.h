@@ -95,8 +95,11 @@ typedef struct {
 } cupid_pd_operator_options;
 
 /**
- * Neighbour lists (cell-list / integer-stencil search, OpenMP), quadrature coefficients
- * beta, influence omega, weighted volumes m_i (Eq. 18) and material constants.
+ * Families on the integer stencil (OpenMP), quadrature coefficients beta, influence omega,
+ * weighted volumes m_i (Eq. 18) and material constants. No per-bond storage for nodes with a
+ * full family (the bulk): their bonds are the stencil's; near-surface nodes store their
+ * stencil entries (4 bytes a bond). About 60 bytes a node plus 4 per near-surface bond
+ * (100^3 nodes at delta = 3.015 h: ~125 bytes a node).
  * LPS requires dimension 3 (CUPID_ERR_UNSUPPORTED otherwise); the 1D grid supports the
  * bond-based model (micromodulus below). A node without neighbours (horizon below the
  * spacing) or a material with E <= 0 or nu outside (-1, 0.5) is CUPID_ERR_MODEL.
@@ -136,10 +139,16 @@ cupid_status cupid_pd_operator_create(const cupid_pd_grid grid,
                                       cupid_pd_operator *op);
 void cupid_pd_operator_destroy(cupid_pd_operator *op);
 
-/** Total bonds stored (each ordered pair i->j counted once per direction). */
+/** Total bonds (each ordered pair i->j counted once per direction), stored or not. */
 cupid_int cupid_pd_operator_num_bonds(const cupid_pd_operator op);
 
-/** Matrix-free f = K u (3 entries per node; in 1D too, with x and z decoupled and zero). */
+/**
+ * Matrix-free f = K u (3 entries per node; in 1D too, with x and z decoupled and zero). On the
+ * stencil: runs of consecutive nodes sweep each stencil offset with contiguous SIMD loops
+ * (src/pd/stencil.c; LPS two passes, dilatation then force). Keeps work arrays of 40 bytes
+ * per cell of the padded bounding box between calls (one call at a time uses them; a
+ * concurrent call allocates its own).
+ */
 cupid_status cupid_pd_operator_apply(const cupid_pd_operator op, const double *u, double *f);
 
 /**
@@ -195,7 +204,7 @@ typedef struct {
   cupid_int blocks;       /**< 3x3 blocks of the assembled K: exact for bond-based, an
                                upper bound for LPS (lattice points within two stencil hops;
                                equal on boxes) */
-  int64_t bytes_operator; /**< bonds + per-node data of the operator */
+  int64_t bytes_operator; /**< near-surface bonds + per-node data of the operator */
   int64_t bytes_matrix;   /**< rowptr + col + val of the assembled K */
 } cupid_pd_estimate;
 

@@ -382,6 +382,17 @@ static cupid_status finish_outputs(dyn_output *o) {
   return CUPID_SUCCESS;
 }
 
+/* PD-only central differences run on the matrix-free operator (issue 6): no assembled K,
+ * no factor, memory O(nodes), so the direct-solver memory estimate does not apply. */
+static int pd_matrix_free(const cupid_job *job) {
+  return job->grid && !job->beam && !job->K &&
+         job->model->analysis.dynamic.integrator == CUPID_INTEGRATOR_CENTRAL;
+}
+
+static cupid_status pd_apply(void *op, const double *x, double *y) {
+  return cupid_pd_operator_apply(op, x, y);
+}
+
 cupid_status cupid_app_run_dynamic(cupid_job *job) {
   const cupid_model_t *m = job->model;
   const cupid_dynamic *d = &m->analysis.dynamic;
@@ -389,10 +400,11 @@ cupid_status cupid_app_run_dynamic(cupid_job *job) {
   cupid_csr M = NULL;
   double *m_lumped = NULL, *v = NULL, t0 = cupid_wtime();
   dyn_output o = {.job = job};
-  CUPID_TRY(cupid_app_estimate(job, 0));
+  const int mf = pd_matrix_free(job);
+  if (!mf) CUPID_TRY(cupid_app_estimate(job, 0));
   /* A coupled pipeline assembles its global K (with the coupling terms) before calling. */
-  if (!job->K && job->grid) CUPID_TRY(cupid_pd_operator_assemble(job->op, &job->K));
-  else if (!job->K) CUPID_TRY(cupid_cuf_assemble(job->beam, &job->K));
+  if (!job->K && job->grid && !mf) CUPID_TRY(cupid_pd_operator_assemble(job->op, &job->K));
+  else if (!job->K && !mf) CUPID_TRY(cupid_cuf_assemble(job->beam, &job->K));
   CUPID_TRY(build_mass(job, &M, &m_lumped));
   cupid_job_phase_end(job, CUPID_PHASE_ASSEMBLY, t0);
   CUPID_TRY(cupid_calloc((size_t)job->ndof, sizeof *v, "velocities", &v));
@@ -420,7 +432,10 @@ cupid_status cupid_app_run_dynamic(cupid_job *job) {
                      d->integrator == CUPID_INTEGRATOR_NEWMARK ? "newmark" : "central",
                      (long long)opt.steps, opt.dt, m_lumped ? "lumped" : "consistent");
   t0 = cupid_wtime();
-  st = cupid_dynamics_run(&sys, &opt, job->u, v, monitor, &o, &job->dyn.info);
+  cupid_dynamics_explicit_system esys = {.n = job->ndof, .apply = pd_apply, .ctx = job->op,
+                                         .m_lumped = m_lumped, .bc = job->bc, .f = job->f_ext};
+  st = mf ? cupid_dynamics_run_explicit(&esys, &opt, job->u, v, monitor, &o, &job->dyn.info)
+          : cupid_dynamics_run(&sys, &opt, job->u, v, monitor, &o, &job->dyn.info);
   if (st == CUPID_ERR_ARGUMENT && d->integrator == CUPID_INTEGRATOR_CENTRAL &&
       job->dyn.info.dt_critical > 0 && d->dt > job->dyn.info.dt_critical)
     st = cupid_model_error(m, &d->mark, "%s", cupid_error_message());
@@ -432,7 +447,8 @@ cupid_status cupid_app_run_dynamic(cupid_job *job) {
     job->solve = job->dyn.info.factor;
     job->solved = 1;
   }
-  cupid_csr_matvec(job->K, job->u, job->f_int);
+  if (mf) CUPID_TRY(cupid_pd_operator_apply(job->op, job->u, job->f_int));
+  else cupid_csr_matvec(job->K, job->u, job->f_int);
   t0 = cupid_wtime();
   CUPID_TRY(finish_outputs(&o));
   cupid_job_phase_end(job, CUPID_PHASE_OUTPUT, t0);

@@ -9,8 +9,13 @@ static inline int dyn_fixed(const cupid_dirichlet_t *bc, cupid_int d) {
   return bc && bc->fixed[d];
 }
 
-/* y = M x (consistent or lumped). */
-void dyn_mass_apply(const cupid_dynamics_system *sys, const double *x, double *y);
+/* y = M x (consistent or lumped), n entries. */
+void dyn_mass_apply(const cupid_dynamics_system *sys, cupid_int n, const double *x, double *y);
+
+/* The power-iteration estimate of cupid_dynamics_lambda_max() for a matrix-free K. */
+cupid_status dyn_lambda_max_fn(cupid_dynamics_stiffness_fn apply, void *ctx, cupid_int n,
+                               const double *m, const cupid_dirichlet_t *bc, int iterations,
+                               double *estimate);
 
 /* x . y over all n entries. */
 double dyn_dot(cupid_int n, const double *x, const double *y);

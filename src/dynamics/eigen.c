@@ -25,13 +25,15 @@ static double gershgorin(const cupid_csr_t *K, const double *m, const cupid_diri
   return best;
 }
 
-cupid_status cupid_dynamics_lambda_max(const cupid_csr_t *K, const double *m,
-                                       const cupid_dirichlet_t *bc, int iterations,
-                                       double *estimate, double *bound) {
-  CUPID_CHECK(K && m, CUPID_ERR_ARGUMENT, "cupid_dynamics_lambda_max: NULL argument");
-  cupid_int n = K->nrows * K->bs;
-  if (bound) *bound = gershgorin(K, m, bc);
-  if (!estimate) return CUPID_SUCCESS;
+/* y = K x for the assembled K (the callback form of the power iteration). */
+static cupid_status csr_apply(void *ctx, const double *x, double *y) {
+  cupid_csr_matvec(ctx, x, y);
+  return CUPID_SUCCESS;
+}
+
+cupid_status dyn_lambda_max_fn(cupid_dynamics_stiffness_fn apply, void *ctx, cupid_int n,
+                               const double *m, const cupid_dirichlet_t *bc, int iterations,
+                               double *estimate) {
   double *z = NULL, *y = NULL, *w = NULL;
   cupid_status st = CUPID_SUCCESS;
   CUPID_TRY(cupid_calloc((size_t)n, sizeof *z, "power iteration", &z));
@@ -55,7 +57,7 @@ cupid_status cupid_dynamics_lambda_max(const cupid_csr_t *K, const double *m,
       z[d] /= nz;
       y[d] = z[d] != 0.0 ? z[d] / sqrt(m[d]) : 0.0;
     }
-    cupid_csr_matvec(K, y, w);
+    CUPID_TRY(apply(ctx, y, w));
     double rq = 0.0;
     for (cupid_int d = 0; d < n; d++) {
       double az = dyn_fixed(bc, d) || !(m[d] > 0.0) ? 0.0 : w[d] / sqrt(m[d]);
@@ -70,6 +72,16 @@ cleanup:
   cupid_free(&y);
   cupid_free(&w);
   return st;
+}
+
+cupid_status cupid_dynamics_lambda_max(const cupid_csr_t *K, const double *m,
+                                       const cupid_dirichlet_t *bc, int iterations,
+                                       double *estimate, double *bound) {
+  CUPID_CHECK(K && m, CUPID_ERR_ARGUMENT, "cupid_dynamics_lambda_max: NULL argument");
+  cupid_int n = K->nrows * K->bs;
+  if (bound) *bound = gershgorin(K, m, bc);
+  if (!estimate) return CUPID_SUCCESS;
+  return dyn_lambda_max_fn(csr_apply, (void *)K, n, m, bc, iterations, estimate);
 }
 
 /* Dense free-DOF matrix of a CSR (n_free x n_free, row-major). */

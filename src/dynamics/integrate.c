@@ -1,6 +1,7 @@
 /* Time integration of M a + C v + K u = f (include/cupid/dynamics.h): Newmark with one
  * factorisation of the effective matrix, and explicit central differences (velocity-Verlet
- * form) with a lumped mass. Energies by the midpoint rule, for which the Newmark
+ * form) with a lumped mass, on an assembled K or a matrix-free one (a callback: every K
+ * product goes through dyn_stiffness). Energies by the midpoint rule, for which the Newmark
  * average-acceleration balance is exact (it is the trapezoidal rule). */
 #include <math.h>
 #include <string.h>
@@ -16,8 +17,7 @@ double cupid_dynamics_rayleigh_zeta(double a, double b, double omega) {
   return a / (2.0 * omega) + 0.5 * b * omega;
 }
 
-void dyn_mass_apply(const cupid_dynamics_system *sys, const double *x, double *y) {
-  cupid_int n = sys->K->nrows * sys->K->bs;
+void dyn_mass_apply(const cupid_dynamics_system *sys, cupid_int n, const double *x, double *y) {
   if (sys->M) {
     cupid_csr_matvec(sys->M, x, y);
     return;
@@ -37,6 +37,9 @@ double dyn_dot(cupid_int n, const double *x, const double *y) {
 typedef struct {
   cupid_int n;
   const cupid_dynamics_system *sys;
+  cupid_dynamics_stiffness_fn kfn; /* matrix-free K (sys->K is NULL), else NULL */
+  void *kctx;
+  cupid_status kst;                /* first failure of kfn (checked after each step) */
   const cupid_dynamics_options *opt;
   double *a, *un, *vn, *an, *w1, *w2, *t1, *t2, *g;
   cupid_dynamics_energy e;
@@ -55,25 +58,35 @@ static cupid_status state_alloc(dyn_state *s) {
   return CUPID_SUCCESS;
 }
 
+/* y = K x, assembled or matrix-free. */
+static void dyn_stiffness(dyn_state *s, const double *x, double *y) {
+  if (!s->kfn) {
+    cupid_csr_matvec(s->sys->K, x, y);
+    return;
+  }
+  cupid_status st = s->kfn(s->kctx, x, y);
+  if (st != CUPID_SUCCESS && s->kst == CUPID_SUCCESS) s->kst = st;
+}
+
 /* y = C x = a M x + b K x (t is scratch). */
-static void damping_apply(const dyn_state *s, const double *x, double *y, double *t) {
+static void damping_apply(dyn_state *s, const double *x, double *y, double *t) {
   double a = s->opt->rayleigh_mass, b = s->opt->rayleigh_stiffness;
   memset(y, 0, sizeof *y * (size_t)s->n);
   if (a != 0.0) {
-    dyn_mass_apply(s->sys, x, t);
+    dyn_mass_apply(s->sys, s->n, x, t);
     for (cupid_int d = 0; d < s->n; d++) y[d] += a * t[d];
   }
   if (b != 0.0) {
-    cupid_csr_matvec(s->sys->K, x, t);
+    dyn_stiffness(s, x, t);
     for (cupid_int d = 0; d < s->n; d++) y[d] += b * t[d];
   }
 }
 
 /* Kinetic and strain energy of (u, v); damping and external are accumulated by the steppers. */
 static void energies(dyn_state *s, const double *u, const double *v) {
-  dyn_mass_apply(s->sys, v, s->t1);
+  dyn_mass_apply(s->sys, s->n, v, s->t1);
   s->e.kinetic = 0.5 * dyn_dot(s->n, v, s->t1);
-  cupid_csr_matvec(s->sys->K, u, s->t1);
+  dyn_stiffness(s, u, s->t1);
   s->e.strain = 0.5 * dyn_dot(s->n, u, s->t1);
   s->e.balance = s->e.kinetic + s->e.strain + s->e.damping - s->e.external - s->e0;
   double level = fmax(s->e.kinetic + s->e.strain, fmax(s->e.damping, fabs(s->e.external)));
@@ -95,7 +108,7 @@ static void accumulate(dyn_state *s, const double *u0, const double *u1, const d
 /* r = f - K u - C v on free DOFs, 0 on fixed ones. */
 static void residual_force(dyn_state *s, const double *u, const double *v, double *r) {
   const cupid_dirichlet_t *bc = s->sys->bc;
-  cupid_csr_matvec(s->sys->K, u, r);
+  dyn_stiffness(s, u, r);
   damping_apply(s, v, s->w1, s->t2);
   for (cupid_int d = 0; d < s->n; d++)
     r[d] = dyn_fixed(bc, d) ? 0.0 : (s->sys->f ? s->sys->f[d] : 0.0) - r[d] - s->w1[d];
@@ -170,7 +183,7 @@ static cupid_status run_newmark(dyn_state *s, double *u, double *v, cupid_dynami
       s->w2[d] = a1 * u[d] + a4 * v[d] + a5 * s->a[d];
       s->w1[d] = a0 * u[d] + a2 * v[d] + a3 * s->a[d] + ra * s->w2[d];
     }
-    dyn_mass_apply(s->sys, s->w1, s->t1);
+    dyn_mass_apply(s->sys, s->n, s->w1, s->t1);
     if (rb != 0.0) {
       cupid_csr_matvec(s->sys->K, s->w2, s->t2);
       for (cupid_int d = 0; d < s->n; d++) s->t1[d] += rb * s->t2[d];
@@ -210,10 +223,13 @@ static double critical_step(double lambda, double a, double b) {
 static cupid_status check_stable(dyn_state *s, cupid_dynamics_info *info) {
   const cupid_dynamics_options *o = s->opt;
   double est = 0.0, bound = 0.0;
-  CUPID_CALL(cupid_dynamics_lambda_max(s->sys->K, s->sys->m_lumped, s->sys->bc, 200, &est, &bound));
+  if (s->kfn) /* matrix-free: power iteration only, no Gershgorin bound (dt_bound = 0) */
+    CUPID_CALL(dyn_lambda_max_fn(s->kfn, s->kctx, s->n, s->sys->m_lumped, s->sys->bc, 200, &est));
+  else
+    CUPID_CALL(cupid_dynamics_lambda_max(s->sys->K, s->sys->m_lumped, s->sys->bc, 200, &est, &bound));
   info->omega_max = sqrt(est);
   info->dt_critical = critical_step(est, o->rayleigh_mass, o->rayleigh_stiffness);
-  info->dt_bound = critical_step(bound, o->rayleigh_mass, o->rayleigh_stiffness);
+  info->dt_bound = s->kfn ? 0.0 : critical_step(bound, o->rayleigh_mass, o->rayleigh_stiffness);
   CUPID_CHECK(o->dt <= info->dt_critical, CUPID_ERR_ARGUMENT,
               "central differences are unstable with dt = %g: the critical step is about %g "
               "(omega_max = %g by power iteration; guaranteed stable below %g); use a smaller "
@@ -235,6 +251,7 @@ static cupid_status run_central(dyn_state *s, double *u, double *v, cupid_dynami
                 (long long)d);
   CUPID_CALL(check_stable(s, info));
   CUPID_CALL(initial_acceleration(s, u, v));
+  CUPID_CALL(s->kst);
   CUPID_CALL(notify(s, fn, ctx, 0, u, v));
   double t0 = cupid_wtime();
   for (cupid_int step = 1; step <= o->steps; step++) {
@@ -250,19 +267,19 @@ static cupid_status run_central(dyn_state *s, double *u, double *v, cupid_dynami
       s->a[d] = dyn_fixed(bc, d) ? 0.0 : s->t1[d] / s->sys->m_lumped[d];
       v[d] = dyn_fixed(bc, d) ? 0.0 : vh[d] + 0.5 * dt * s->a[d];
     }
+    CUPID_CALL(s->kst);
     CUPID_CALL(notify(s, fn, ctx, step, u, v));
+    CUPID_CALL(s->kst);
   }
   info->time_step_s = cupid_wtime() - t0;
   return CUPID_SUCCESS;
 }
 
-cupid_status cupid_dynamics_run(const cupid_dynamics_system *sys, const cupid_dynamics_options *opts,
-                                double *u, double *v, cupid_dynamics_monitor monitor, void *ctx,
-                                cupid_dynamics_info *info) {
-  CUPID_CHECK(sys && sys->K && opts && u && v, CUPID_ERR_ARGUMENT,
-              "cupid_dynamics_run: NULL argument");
-  CUPID_CHECK(!sys->M != !sys->m_lumped, CUPID_ERR_ARGUMENT,
-              "cupid_dynamics_run: give exactly one of a consistent and a lumped mass");
+/* The common part of both entries: options, fixed DOFs, E0, the integrator. */
+static cupid_status run(dyn_state *s, double *u, double *v, cupid_dynamics_monitor monitor,
+                        void *ctx, cupid_dynamics_info *info) {
+  const cupid_dynamics_options *opts = s->opt;
+  const cupid_dynamics_system *sys = s->sys;
   CUPID_CHECK(opts->dt > 0.0 && isfinite(opts->dt) && opts->steps >= 0 && opts->every >= 1,
               CUPID_ERR_ARGUMENT, "cupid_dynamics_run: need dt > 0, steps >= 0, every >= 1");
   CUPID_CHECK(opts->integrator != CUPID_INTEGRATOR_NEWMARK ||
@@ -274,23 +291,48 @@ cupid_status cupid_dynamics_run(const cupid_dynamics_system *sys, const cupid_dy
   memset(info, 0, sizeof *info);
   info->dt = opts->dt;
   info->steps = opts->steps;
-  dyn_state s = {.n = sys->K->nrows * sys->K->bs, .sys = sys, .opt = opts};
   cupid_status st = CUPID_SUCCESS;
-  CUPID_TRY(state_alloc(&s));
+  CUPID_TRY(state_alloc(s));
   const cupid_dirichlet_t *bc = sys->bc;
-  for (cupid_int d = 0; d < s.n; d++)
+  for (cupid_int d = 0; d < s->n; d++)
     if (dyn_fixed(bc, d)) u[d] = bc->value[d], v[d] = 0.0;
   /* E0: the energy at t = 0, the reference of the balance. */
-  dyn_mass_apply(sys, v, s.t1);
-  s.e0 = 0.5 * dyn_dot(s.n, v, s.t1);
-  cupid_csr_matvec(sys->K, u, s.t1);
-  s.e0 += 0.5 * dyn_dot(s.n, u, s.t1);
+  dyn_mass_apply(sys, s->n, v, s->t1);
+  s->e0 = 0.5 * dyn_dot(s->n, v, s->t1);
+  dyn_stiffness(s, u, s->t1);
+  CUPID_TRY(s->kst);
+  s->e0 += 0.5 * dyn_dot(s->n, u, s->t1);
   if (opts->integrator == CUPID_INTEGRATOR_NEWMARK)
-    CUPID_TRY(run_newmark(&s, u, v, monitor, ctx, info));
+    CUPID_TRY(run_newmark(s, u, v, monitor, ctx, info));
   else
-    CUPID_TRY(run_central(&s, u, v, monitor, ctx, info));
-  info->max_balance = s.scale > 0.0 ? s.max_balance / s.scale : 0.0;
+    CUPID_TRY(run_central(s, u, v, monitor, ctx, info));
+  info->max_balance = s->scale > 0.0 ? s->max_balance / s->scale : 0.0;
 cleanup:
-  state_free(&s);
+  state_free(s);
   return st;
+}
+
+cupid_status cupid_dynamics_run(const cupid_dynamics_system *sys, const cupid_dynamics_options *opts,
+                                double *u, double *v, cupid_dynamics_monitor monitor, void *ctx,
+                                cupid_dynamics_info *info) {
+  CUPID_CHECK(sys && sys->K && opts && u && v, CUPID_ERR_ARGUMENT,
+              "cupid_dynamics_run: NULL argument");
+  CUPID_CHECK(!sys->M != !sys->m_lumped, CUPID_ERR_ARGUMENT,
+              "cupid_dynamics_run: give exactly one of a consistent and a lumped mass");
+  dyn_state s = {.n = sys->K->nrows * sys->K->bs, .sys = sys, .opt = opts};
+  return run(&s, u, v, monitor, ctx, info);
+}
+
+cupid_status cupid_dynamics_run_explicit(const cupid_dynamics_explicit_system *sys,
+                                         const cupid_dynamics_options *opts, double *u, double *v,
+                                         cupid_dynamics_monitor monitor, void *ctx,
+                                         cupid_dynamics_info *info) {
+  CUPID_CHECK(sys && sys->apply && sys->m_lumped && sys->n > 0 && opts && u && v,
+              CUPID_ERR_ARGUMENT, "cupid_dynamics_run_explicit: NULL argument or no DOF");
+  CUPID_CHECK(opts->integrator == CUPID_INTEGRATOR_CENTRAL, CUPID_ERR_ARGUMENT,
+              "a matrix-free stiffness needs the central-difference integrator (Newmark "
+              "factors K)");
+  const cupid_dynamics_system full = {.m_lumped = sys->m_lumped, .bc = sys->bc, .f = sys->f};
+  dyn_state s = {.n = sys->n, .sys = &full, .opt = opts, .kfn = sys->apply, .kctx = sys->ctx};
+  return run(&s, u, v, monitor, ctx, info);
 }

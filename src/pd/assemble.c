@@ -91,6 +91,40 @@ typedef struct {
   unsigned char *hit;
 } row_buffer;
 
+/* acc[d(s2)] += v (x) wxn_s2 over the family of p (d relative to row r through dp): the
+ * hot loop, split so that full families run without an index list. */
+static void add_family(const struct cupid_pd_operator_private *op, const offset_table *t,
+                       cupid_int p, const pd_family *Fp, const int32_t *dp, const double v[3],
+                       unsigned char *hit, double *acc) {
+  const cupid_int *lin = t->lin;
+  const double *wxn = op->st.wxn;
+  if (op->sf) { /* surface correction: g_p[k] = Gp D_pk wxn(p->k) */
+    for (int q = 0; q < Fp->n; q++) {
+      const int s2 = pd_family_entry(Fp, q);
+      const int32_t d = dp[lin[s2]];
+      double sfb[4];
+      pd_surface_bond(op, p, pd_family_node(op, Fp, s2), op->st.nrm + 3 * s2, sfb);
+      hit[d] = 1;
+      add_vb(acc + 9 * (size_t)d, sfb[0] * v[0], sfb[0] * v[1], sfb[0] * v[2], wxn + 3 * s2);
+    }
+    return;
+  }
+  if (!Fp->s) {
+    for (int s2 = 0; s2 < Fp->n; s2++) {
+      const int32_t d = dp[lin[s2]];
+      hit[d] = 1;
+      add_vb(acc + 9 * (size_t)d, v[0], v[1], v[2], wxn + 3 * s2);
+    }
+    return;
+  }
+  for (int q = 0; q < Fp->n; q++) {
+    const int s2 = Fp->s[q];
+    const int32_t d = dp[lin[s2]];
+    hit[d] = 1;
+    add_vb(acc + 9 * (size_t)d, v[0], v[1], v[2], wxn + 3 * s2);
+  }
+}
+
 /* Mark (and with acc, accumulate) row r in the D-indexed buffer. */
 static void gather_row(const struct cupid_pd_operator_private *op, const offset_table *t,
                        cupid_int r, row_buffer *buf, int values) {
@@ -98,35 +132,38 @@ static void gather_row(const struct cupid_pd_operator_private *op, const offset_
   const int32_t *dx = t->dindex + t->center;
   unsigned char *hit = buf->hit;
   double *acc = buf->acc;
+  const pd_family Fr = pd_family_of(op, r);
   hit[dx[0]] = 1;
-  for (cupid_int b = op->bptr[r]; b < op->bptr[r + 1]; b++) {
-    const int s = op->bst[b];
+  for (int q = 0; q < Fr.n; q++) {
+    const int s = pd_family_entry(&Fr, q);
     const int32_t d = dx[t->lin[s]];
     hit[d] = 1;
     if (!values) continue;
     const double *n = S->nrm + 3 * s;
-    const double w = pd_pair_coefficient(op, r, op->bnbr[b], s);
+    const double w = pd_pair_coefficient(op, r, pd_family_node(op, &Fr, s), s);
     add_outer(acc + 9 * (size_t)dx[0], w, n, n);
     add_outer(acc + 9 * (size_t)d, -w, n, n);
   }
   if (op->model == CUPID_PD_BOND) return;
   /* p = r itself, then p over the neighbours of r. */
-  for (cupid_int b = op->bptr[r] - 1; b < op->bptr[r + 1]; b++) {
-    const int self = b < op->bptr[r];
-    const cupid_int p = self ? r : op->bnbr[b];
-    const int32_t *dp = dx + (self ? 0 : t->lin[op->bst[b]]); /* offsets relative to p - r */
+  for (int q = -1; q < Fr.n; q++) {
+    const int self = q < 0;
+    const int sr = self ? 0 : pd_family_entry(&Fr, q);
+    const cupid_int p = self ? r : pd_family_node(op, &Fr, sr);
+    const int32_t *dp = dx + (self ? 0 : t->lin[sr]); /* offsets relative to p - r */
+    const pd_family Fp = pd_family_of(op, p);
     if (!values) {
       hit[dp[0]] = 1;
-      for (cupid_int bb = op->bptr[p]; bb < op->bptr[p + 1]; bb++) hit[dp[t->lin[op->bst[bb]]]] = 1;
+      for (int qq = 0; qq < Fp.n; qq++) hit[dp[t->lin[pd_family_entry(&Fp, qq)]]] = 1;
       continue;
     }
     const double Gp = 3.0 * op->V / op->m[p], cp = op->V * op->kappa[p] / 3.0;
-    const double *dir = self ? op->gself + 3 * r : S->wxn + 3 * op->bst[b];
+    const double *dir = self ? op->gself + 3 * r : S->wxn + 3 * sr;
     double Dpr = 1.0; /* surface factor of bond p -> r in theta_p */
     if (!self && op->sf) {
-      double F[4];
-      pd_surface_bond(op, r, p, S->nrm + 3 * op->bst[b], F);
-      Dpr = F[1];
+      double sfb[4];
+      pd_surface_bond(op, r, p, S->nrm + 3 * sr, sfb);
+      Dpr = sfb[1];
     }
     double v[3]; /* c_p g_p[r] Gp, with g_p[r] = -Gp gself_r, or -Gp D_pr wxn(r->p) */
     for (int c = 0; c < 3; c++) v[c] = -cp * Gp * Gp * Dpr * dir[c];
@@ -134,26 +171,7 @@ static void gather_row(const struct cupid_pd_operator_private *op, const offset_
     for (int c = 0; c < 3; c++) mgs[c] = -op->gself[3 * p + c];
     hit[dp[0]] = 1;
     add_outer(acc + 9 * (size_t)dp[0], 1.0, v, mgs);
-    const cupid_int *lin = t->lin;
-    const int32_t *bst = op->bst;
-    const double *wxn = S->wxn;
-    if (op->sf) { /* g_p[k] = Gp D_pk wxn(p->k) */
-      for (cupid_int bb = op->bptr[p]; bb < op->bptr[p + 1]; bb++) {
-        const int s2 = bst[bb];
-        const int32_t d = dp[lin[s2]];
-        double F[4];
-        pd_surface_bond(op, p, op->bnbr[bb], S->nrm + 3 * s2, F);
-        hit[d] = 1;
-        add_vb(acc + 9 * (size_t)d, F[0] * v[0], F[0] * v[1], F[0] * v[2], wxn + 3 * s2);
-      }
-      continue;
-    }
-    for (cupid_int bb = op->bptr[p]; bb < op->bptr[p + 1]; bb++) {
-      const int s2 = bst[bb];
-      const int32_t d = dp[lin[s2]];
-      hit[d] = 1;
-      add_vb(acc + 9 * (size_t)d, v[0], v[1], v[2], wxn + 3 * s2);
-    }
+    add_family(op, t, p, &Fp, dp, v, hit, acc);
   }
 }
 
@@ -256,20 +274,23 @@ cupid_status cupid_pd_operator_diagonal(const cupid_pd_operator op, double *bloc
   for (cupid_int r = 0; r < op->nnodes; r++) {
     double *blk = blocks + 9 * (size_t)r;
     memset(blk, 0, 9 * sizeof *blk);
-    for (cupid_int b = op->bptr[r]; b < op->bptr[r + 1]; b++) {
-      const double *n = S->nrm + 3 * op->bst[b];
-      add_outer(blk, pd_pair_coefficient(op, r, op->bnbr[b], op->bst[b]), n, n);
+    const pd_family F = pd_family_of(op, r);
+    for (int q = 0; q < F.n; q++) {
+      const int s = pd_family_entry(&F, q);
+      const double *n = S->nrm + 3 * s;
+      add_outer(blk, pd_pair_coefficient(op, r, pd_family_node(op, &F, s), s), n, n);
     }
     if (op->model == CUPID_PD_BOND) continue;
-    for (cupid_int b = op->bptr[r] - 1; b < op->bptr[r + 1]; b++) {
-      const cupid_int p = b < op->bptr[r] ? r : op->bnbr[b];
+    for (int q = -1; q < F.n; q++) {
+      const int s = q < 0 ? 0 : pd_family_entry(&F, q);
+      const cupid_int p = q < 0 ? r : pd_family_node(op, &F, s);
       const double Gp = 3.0 * op->V / op->m[p], cp = op->V * op->kappa[p] / 3.0;
-      const double *dir = p == r ? op->gself + 3 * r : S->wxn + 3 * op->bst[b];
+      const double *dir = q < 0 ? op->gself + 3 * r : S->wxn + 3 * s;
       double Dpr = 1.0; /* surface factor of bond p -> r in theta_p */
-      if (p != r && op->sf) {
-        double F[4];
-        pd_surface_bond(op, r, p, S->nrm + 3 * op->bst[b], F);
-        Dpr = F[1];
+      if (q >= 0 && op->sf) {
+        double sfb[4];
+        pd_surface_bond(op, r, p, S->nrm + 3 * s, sfb);
+        Dpr = sfb[1];
       }
       add_outer(blk, cp * Gp * Gp * Dpr * Dpr, dir, dir); /* c_p g_p[r] g_p[r]^T, sign squared away */
     }

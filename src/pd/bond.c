@@ -26,13 +26,15 @@ double pd_bond_energy(const struct cupid_pd_operator_private *op, const double *
   const pd_stencil *S = &op->st;
   double E = 0.0;
 #pragma omp parallel for schedule(static) if (op->nnodes > PD_OMP_MIN_NODES) reduction(+ : E)
-  for (cupid_int i = 0; i < op->nnodes; i++)
-    for (cupid_int b = op->bptr[i]; b < op->bptr[i + 1]; b++) {
-      const cupid_int j = op->bnbr[b];
-      const int s = op->bst[b];
+  for (cupid_int i = 0; i < op->nnodes; i++) {
+    const pd_family F = pd_family_of(op, i);
+    for (int q = 0; q < F.n; q++) {
+      const int s = pd_family_entry(&F, q);
+      const cupid_int j = pd_family_node(op, &F, s);
       const double e = pd_extension(S->nrm + 3 * s, u, i, j);
       E += 0.25 * pd_pair_coefficient(op, i, j, s) * e * e;
     }
+  }
   return E;
 }
 
@@ -43,13 +45,14 @@ void pd_bond_stress(const struct cupid_pd_operator_private *op, const double *u,
 #pragma omp parallel for schedule(static) if (op->nnodes > PD_OMP_MIN_NODES)
   for (cupid_int i = 0; i < op->nnodes; i++) {
     double sg[6] = {0, 0, 0, 0, 0, 0};
-    for (cupid_int b = op->bptr[i]; b < op->bptr[i + 1]; b++) {
-      const cupid_int j = op->bnbr[b];
-      const int s = op->bst[b];
+    const pd_family F = pd_family_of(op, i);
+    for (int q = 0; q < F.n; q++) {
+      const int s = pd_family_entry(&F, q);
+      const cupid_int j = pd_family_node(op, &F, s);
       const double *n = S->nrm + 3 * s;
-      double F[4];
-      pd_surface_bond(op, i, j, n, F);
-      const double t = 0.25 * (op->c[i] + op->c[j]) * (F[2] + F[3]) * S->wb[s] * pd_extension(n, u, i, j);
+      double sfb[4];
+      pd_surface_bond(op, i, j, n, sfb);
+      const double t = 0.25 * (op->c[i] + op->c[j]) * (sfb[2] + sfb[3]) * S->wb[s] * pd_extension(n, u, i, j);
       sg[0] += t * n[0] * n[0];
       sg[1] += t * n[1] * n[1];
       sg[2] += t * n[2] * n[2];

@@ -1,13 +1,29 @@
 /* Linearised LPS (paper 000 Eqs. 16-21) with per-node constants: dilatation, matrix-free
- * force (a gather over each node's bonds, so no atomics), energy and nodal stress. */
+ * force on explicit bond lists (a gather over each node's bonds, so no atomics; the
+ * reference and fallback of the stencil kernels in stencil.c), energy and nodal stress
+ * (over the families, any storage). */
 #include "pd/pd_internal.h"
 
 /* theta_i = 3/m_i sum_j omega x D_ij e beta V (Eq. 19, e from Eq. 17; D_ij the surface factor,
- * 1 without a correction). The kernel is instantiated with corr = 0 and 1 so that the
- * uncorrected loop carries no factor work. */
+ * 1 without a correction), on the bond lists when they exist (the bond-list path; always with
+ * a correction), else on the families. The kernel is instantiated with corr = 0 and 1 so that
+ * the uncorrected loop carries no factor work. */
 static inline void lps_dilatation(const struct cupid_pd_operator_private *op, cupid_int first,
                                   cupid_int last, const double *u, double *theta, const int corr) {
   const pd_stencil *S = &op->st;
+  if (!op->bptr) { /* no correction here: operator_create builds bond lists for one */
+#pragma omp parallel for schedule(static) if (last - first > PD_OMP_MIN_NODES)
+    for (cupid_int i = first; i < last; i++) {
+      const pd_family F = pd_family_of(op, i);
+      double t = 0.0;
+      for (int q = 0; q < F.n; q++) {
+        const int s = pd_family_entry(&F, q);
+        t += S->wb[s] * S->x[s] * pd_extension(S->nrm + 3 * s, u, i, pd_family_node(op, &F, s));
+      }
+      theta[i] = 3.0 * op->V * t / op->m[i];
+    }
+    return;
+  }
 #pragma omp parallel for schedule(static) if (last - first > PD_OMP_MIN_NODES)
   for (cupid_int i = first; i < last; i++) {
     double t = 0.0;
@@ -75,12 +91,14 @@ double pd_lps_energy(const struct cupid_pd_operator_private *op, const double *u
 #pragma omp parallel for schedule(static) reduction(+ : E) if (op->nnodes > PD_OMP_MIN_NODES)
   for (cupid_int i = 0; i < op->nnodes; i++) {
     double q = 0.0;
-    for (cupid_int b = op->bptr[i]; b < op->bptr[i + 1]; b++) {
-      const int s = op->bst[b];
-      const double e = pd_extension(S->nrm + 3 * s, u, i, op->bnbr[b]);
-      double F[4];
-      pd_surface_bond(op, i, op->bnbr[b], S->nrm + 3 * s, F);
-      q += S->wb[s] * F[2] * e * e;
+    const pd_family F = pd_family_of(op, i);
+    for (int k = 0; k < F.n; k++) {
+      const int s = pd_family_entry(&F, k);
+      const cupid_int j = pd_family_node(op, &F, s);
+      const double e = pd_extension(S->nrm + 3 * s, u, i, j);
+      double sfb[4];
+      pd_surface_bond(op, i, j, S->nrm + 3 * s, sfb);
+      q += S->wb[s] * sfb[2] * e * e;
     }
     E += op->V * (op->kappa[i] / 6.0 * theta[i] * theta[i] + 7.5 * op->mu[i] / op->m[i] * q * op->V);
   }
@@ -97,14 +115,16 @@ void pd_lps_stress(const struct cupid_pd_operator_private *op, const double *u, 
 #pragma omp parallel for schedule(static) if (op->nnodes > PD_OMP_MIN_NODES)
   for (cupid_int i = 0; i < op->nnodes; i++) {
     double sg[6] = {0, 0, 0, 0, 0, 0};
-    for (cupid_int b = op->bptr[i]; b < op->bptr[i + 1]; b++) {
-      const int s = op->bst[b];
+    const pd_family F = pd_family_of(op, i);
+    for (int k = 0; k < F.n; k++) {
+      const int s = pd_family_entry(&F, k);
       const double *n = S->nrm + 3 * s;
       const double x = S->x[s];
-      const double e = pd_extension(n, u, i, op->bnbr[b]);
-      double F[4];
-      pd_surface_bond(op, i, op->bnbr[b], n, F);
-      const double t = S->wb[s] * x * (op->kappa[i] * theta[i] * x * F[0] + 15.0 * op->mu[i] * e * F[2]);
+      const cupid_int j = pd_family_node(op, &F, s);
+      const double e = pd_extension(n, u, i, j);
+      double sfb[4];
+      pd_surface_bond(op, i, j, n, sfb);
+      const double t = S->wb[s] * x * (op->kappa[i] * theta[i] * x * sfb[0] + 15.0 * op->mu[i] * e * sfb[2]);
       sg[0] += t * n[0] * n[0];
       sg[1] += t * n[1] * n[1];
       sg[2] += t * n[2] * n[2];

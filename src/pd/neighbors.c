@@ -175,15 +175,21 @@ cleanup:
   return st;
 }
 
-/* Nodes reachable from every node through a list of offsets, summed. */
-static cupid_int count_present(const struct cupid_pd_grid_private *g, int n, const int32_t *off) {
-  cupid_int total = 0;
-#pragma omp parallel for schedule(static) reduction(+ : total) if (g->nnodes > PD_OMP_MIN_NODES)
+/* Nodes reachable from every node through a list of offsets, summed; with partial, also
+ * the sum over the nodes that miss some offset (near-surface families) and their count. */
+static cupid_int count_present(const struct cupid_pd_grid_private *g, int n, const int32_t *off,
+                               cupid_int *partial, cupid_int *npartial) {
+  cupid_int total = 0, part = 0, np = 0;
+#pragma omp parallel for schedule(static) reduction(+ : total, part, np) if (g->nnodes > PD_OMP_MIN_NODES)
   for (cupid_int i = 0; i < g->nnodes; i++) {
     const int32_t *q = g->ijk + 3 * i;
+    cupid_int c = 0;
     for (int s = 0; s < n; s++)
-      total += pd_grid_lookup(g, q[0] + off[3 * s], q[1] + off[3 * s + 1], q[2] + off[3 * s + 2]) >= 0;
+      c += pd_grid_lookup(g, q[0] + off[3 * s], q[1] + off[3 * s + 1], q[2] + off[3 * s + 2]) >= 0;
+    total += c;
+    if (c < n) part += c, np++;
   }
+  if (partial) *partial = part, *npartial = np;
   return total;
 }
 
@@ -200,16 +206,181 @@ cupid_status cupid_pd_operator_estimate(const cupid_pd_grid grid,
                               opts->influence, &S));
   CUPID_TRY(pd_stencil_sum(&S, opts->model == CUPID_PD_BOND, &nsum, &sum));
   est->nodes = grid->nnodes;
-  est->bonds = count_present(grid, S.n, S.off);
-  est->blocks = count_present(grid, nsum, sum);
-  /* Operator: neighbour + stencil index per bond, offsets, ~9 doubles per node. */
-  est->bytes_operator = est->bonds * (int64_t)(sizeof(cupid_int) + sizeof(int32_t)) +
-                        (est->nodes + 1) * (int64_t)sizeof(cupid_int) + est->nodes * 9 * 8 +
-                        (opts->surface_correction != CUPID_SURFACE_NONE ? est->nodes * PD_SF * 8 : 0);
+  cupid_int edge_bonds = 0, edge_nodes = 0;
+  est->bonds = count_present(grid, S.n, S.off, &edge_bonds, &edge_nodes);
+  est->blocks = count_present(grid, nsum, sum, NULL, NULL);
+  /* Operator (pd_families_build): a stencil entry per bond of the near-surface nodes and
+   * their list, a flag and a family offset per node, ~6 doubles per node (m, constants,
+   * dilatation self-weights); bulk bonds cost nothing. A surface correction keeps explicit
+   * bond lists (neighbour + stencil index per bond) and PD_SF factors per node. */
+  est->bytes_operator = edge_bonds * (int64_t)sizeof(int32_t) + edge_nodes * (int64_t)sizeof(cupid_int) +
+                        (est->nodes + 1) * (int64_t)(sizeof(cupid_int) + 1) + est->nodes * 6 * 8;
+  if (opts->surface_correction != CUPID_SURFACE_NONE)
+    est->bytes_operator += est->bonds * (int64_t)(sizeof(cupid_int) + sizeof(int32_t)) +
+                           (est->nodes + 1) * (int64_t)sizeof(cupid_int) + est->nodes * PD_SF * 8;
   est->bytes_matrix = (est->nodes + 1) * (int64_t)sizeof(cupid_int) +
                       est->blocks * (int64_t)(sizeof(cupid_int) + 9 * sizeof(double));
 cleanup:
   cupid_free(&sum);
   pd_stencil_free(&S);
   return st;
+}
+
+/* The stencil kernels pair entry s with entry n-1-s, its opposite (the offset set is
+ * symmetric and sorted), and remove the bonds to absent cells of non-full nodes with
+ * crank / ncorr (pd_internal.h). */
+static cupid_status ghost_corrections(struct cupid_pd_operator_private *op) {
+  const pd_stencil *S = &op->st;
+  const cupid_int nn = op->nnodes;
+  for (int s = 0; s < S->n; s++)
+    for (int k = 0; k < 3; k++)
+      CUPID_CHECK(S->off[3 * (S->n - 1 - s) + k] == -S->off[3 * s + k], CUPID_ERR_INTERNAL,
+                  "the PD stencil is not symmetric at entry %d", s);
+  CUPID_CALL(cupid_malloc((size_t)nn, sizeof *op->crank, "PD ghost corrections", &op->crank));
+  int32_t ne = 0;
+  for (cupid_int i = 0; i < nn; i++) op->crank[i] = op->full[i] ? -1 : ne++;
+  CUPID_CALL(cupid_calloc(6 * (size_t)ne + 1, sizeof *op->ncorr, "PD ghost corrections", &op->ncorr));
+#pragma omp parallel for schedule(dynamic, 64) if (nn > PD_OMP_MIN_NODES)
+  for (cupid_int i = 0; i < nn; i++) {
+    if (op->full[i]) continue;
+    const pd_family F = pd_family_of(op, i);
+    double *C = op->ncorr + 6 * (size_t)op->crank[i];
+    int q = 0; /* present entries come in stencil order: walk them alongside */
+    for (int s = 0; s < S->n; s++) {
+      if (q < F.n && F.s[q] == s) {
+        q++;
+        continue;
+      }
+      const double *n = S->nrm + 3 * s;
+      const double w = op->model == CUPID_PD_LPS ? 15.0 * S->wb[s] : 0.5 * S->wb[s] / S->x[s];
+      C[0] += w * n[0] * n[0];
+      C[1] += w * n[1] * n[1];
+      C[2] += w * n[2] * n[2];
+      C[3] += w * n[1] * n[2];
+      C[4] += w * n[0] * n[2];
+      C[5] += w * n[0] * n[1];
+    }
+  }
+  return CUPID_SUCCESS;
+}
+
+/* Families without per-bond storage for the bulk (pd_internal.h): cell offsets of the
+ * stencil, full flags, the stencil entries of near-surface nodes, the padded lattice and
+ * the runs. Two passes over nodes x stencil, O(nodes). */
+cupid_status pd_families_build(struct cupid_pd_operator_private *op) {
+  const struct cupid_pd_grid_private *g = op->grid;
+  const pd_stencil *S = &op->st;
+  const cupid_int nn = g->nnodes;
+  CUPID_CALL(cupid_malloc((size_t)S->n, sizeof *op->clin, "PD stencil cell offsets", &op->clin));
+  for (int s = 0; s < S->n; s++) {
+    const int32_t *o = S->off + 3 * s;
+    op->clin[s] = o[0] + g->n[0] * (o[1] + g->n[1] * (cupid_int)o[2]);
+  }
+  CUPID_CALL(cupid_malloc((size_t)nn, sizeof *op->full, "PD full-family flags", &op->full));
+  CUPID_CALL(cupid_malloc((size_t)nn + 1, sizeof *op->fptr, "PD family offsets", &op->fptr));
+  cupid_int *p = op->fptr, total = 0;
+  p[0] = 0;
+#pragma omp parallel for schedule(static) reduction(+ : total) if (nn > PD_OMP_MIN_NODES)
+  for (cupid_int i = 0; i < nn; i++) {
+    const int32_t *q = g->ijk + 3 * i;
+    cupid_int c = 0;
+    for (int s = 0; s < S->n; s++)
+      c += pd_grid_lookup(g, q[0] + S->off[3 * s], q[1] + S->off[3 * s + 1],
+                          q[2] + S->off[3 * s + 2]) >= 0;
+    op->full[i] = c == S->n;
+    p[i + 1] = op->full[i] ? 0 : c;
+    total += c;
+  }
+  op->nbonds = total;
+  for (cupid_int i = 0; i < nn; i++) p[i + 1] += p[i];
+  CUPID_CALL(cupid_malloc((size_t)p[nn] + 1, sizeof *op->fidx, "PD near-surface families", &op->fidx));
+#pragma omp parallel for schedule(static) if (nn > PD_OMP_MIN_NODES)
+  for (cupid_int i = 0; i < nn; i++) {
+    if (op->full[i]) continue;
+    const int32_t *q = g->ijk + 3 * i;
+    cupid_int b = p[i];
+    for (int s = 0; s < S->n; s++)
+      if (pd_grid_lookup(g, q[0] + S->off[3 * s], q[1] + S->off[3 * s + 1],
+                         q[2] + S->off[3 * s + 2]) >= 0)
+        op->fidx[b++] = s;
+  }
+  /* Padded lattice: reach per axis, padded sizes, padded cell offsets. */
+  int32_t r[3] = {0, 0, 0};
+  for (int s = 0; s < S->n; s++)
+    for (int k = 0; k < 3; k++) {
+      const int32_t o = S->off[3 * s + k] < 0 ? -S->off[3 * s + k] : S->off[3 * s + k];
+      if (o > r[k]) r[k] = o;
+    }
+  double pcells = 1.0;
+  for (int k = 0; k < 3; k++) {
+    op->pr[k] = r[k];
+    op->pn[k] = g->n[k] + 2 * (cupid_int)r[k];
+    pcells *= (double)op->pn[k];
+  }
+  op->padded = pcells <= PD_PAD_RATIO * (double)nn + 4096.0;
+  CUPID_CALL(cupid_malloc((size_t)S->n, sizeof *op->pclin, "PD stencil cell offsets", &op->pclin));
+  for (int s = 0; s < S->n; s++) {
+    const int32_t *o = S->off + 3 * s;
+    op->pclin[s] = o[0] + op->pn[0] * (o[1] + op->pn[1] * (cupid_int)o[2]);
+  }
+  /* Runs: consecutive nodes at consecutive cells of one row, at most PD_RUN_MAX long (a new
+   * run wherever the padded cell index jumps); full = every node of the run is full. */
+  cupid_int nruns = 0;
+  for (int pass = 0; pass < 2; pass++) {
+    nruns = 0;
+    cupid_int prev = -2;
+    for (cupid_int i = 0; i < nn; i++) {
+      const cupid_int cp = pd_node_pcell(op, i);
+      pd_run *R = pass && nruns ? &op->runs[nruns - 1] : NULL;
+      /* Padded, a row is one run (ghost bonds corrected per node: fewer, longer vector loops beat
+       * splitting off the few near-surface nodes); else full and partial nodes split. */
+      const int joins = i > 0 && cp == prev + 1 && (op->padded || op->full[i] == op->full[i - 1]);
+      prev = cp;
+      if (joins && (!pass || R->len < PD_RUN_MAX)) {
+        if (pass) {
+          R->len++;
+          R->full &= op->full[i];
+        }
+        continue;
+      }
+      if (pass)
+        op->runs[nruns] = (pd_run){.i0 = i, .c0 = pd_node_cell(g, i), .cp0 = cp, .len = 1,
+                                   .full = op->full[i]};
+      nruns++;
+    }
+    /* Runs split at PD_RUN_MAX add at most nn / PD_RUN_MAX. */
+    if (!pass)
+      CUPID_CALL(cupid_malloc((size_t)(nruns + nn / PD_RUN_MAX + 1), sizeof *op->runs, "PD runs", &op->runs));
+  }
+  op->nruns = nruns;
+  return ghost_corrections(op);
+}
+
+/* Full nodes: every neighbour exists and node order follows cell order, so the extremes
+ * are at the stencil entries of smallest and largest cell offset. */
+void pd_neighbour_span(const struct cupid_pd_operator_private *op, cupid_int first, cupid_int last,
+                       cupid_int *lo, cupid_int *hi) {
+  const pd_stencil *S = &op->st;
+  int smin = 0, smax = 0;
+  for (int s = 1; s < S->n; s++) {
+    if (op->clin[s] < op->clin[smin]) smin = s;
+    if (op->clin[s] > op->clin[smax]) smax = s;
+  }
+  cupid_int a = first, b = last;
+  for (cupid_int i = first; i < last; i++) {
+    const pd_family F = pd_family_of(op, i);
+    if (F.n == 0) continue;
+    cupid_int jmin, jmax;
+    if (!F.s) {
+      jmin = pd_family_node(op, &F, smin);
+      jmax = pd_family_node(op, &F, smax);
+    } else { /* entries in stencil order = neighbours ascending */
+      jmin = pd_family_node(op, &F, F.s[0]);
+      jmax = pd_family_node(op, &F, F.s[F.n - 1]);
+    }
+    if (jmin < a) a = jmin;
+    if (jmax + 1 > b) b = jmax + 1;
+  }
+  *lo = a;
+  *hi = b;
 }

@@ -1,5 +1,6 @@
-/* The PD operator: bonds, weighted volumes, material constants, and the dispatch of the
- * matrix-free operations to the LPS (lps.c) and bond-based (bond.c) kernels. */
+/* The PD operator: families, weighted volumes, material constants, and the dispatch of the
+ * matrix-free operations to the stencil kernels (stencil.c; the default) or the bond-list
+ * kernels (lps.c, bond.c; with stencil_off), and of energy and stress (lps.c, bond.c). */
 #include <math.h>
 #include <string.h>
 
@@ -9,6 +10,15 @@ void cupid_pd_operator_destroy(cupid_pd_operator *op) {
   if (!op || !*op) return;
   struct cupid_pd_operator_private *o = *op;
   pd_stencil_free(&o->st);
+  cupid_free(&o->clin);
+  cupid_free(&o->full);
+  cupid_free(&o->fptr);
+  cupid_free(&o->fidx);
+  cupid_free(&o->runs);
+  cupid_free(&o->pclin);
+  cupid_free(&o->crank);
+  cupid_free(&o->ncorr);
+  pd_stencil_work_free(o);
   cupid_free(&o->bptr);
   cupid_free(&o->bnbr);
   cupid_free(&o->bst);
@@ -59,8 +69,9 @@ static cupid_status node_data(struct cupid_pd_operator_private *op,
 #pragma omp parallel for schedule(static) if (nn > PD_OMP_MIN_NODES)
   for (cupid_int i = 0; i < nn; i++) {
     double m = 0.0, gs[3] = {0, 0, 0};
-    for (cupid_int b = op->bptr[i]; b < op->bptr[i + 1]; b++) {
-      int s = op->bst[b];
+    const pd_family F = pd_family_of(op, i);
+    for (int q = 0; q < F.n; q++) {
+      const int s = pd_family_entry(&F, q);
       m += S->wb[s] * S->x[s] * S->x[s] * op->V;
       for (int c = 0; c < 3; c++) gs[c] += S->wxn[3 * s + c];
     }
@@ -116,10 +127,15 @@ cupid_status cupid_pd_operator_create(const cupid_pd_grid grid,
   o->dim = grid->dim;
   o->nnodes = grid->nnodes;
   CUPID_TRY(pd_stencil_build(o->dim, o->h, o->delta, o->rule, o->influence, &o->st));
-  CUPID_TRY(pd_neighbors_build(grid, &o->st, &o->bptr, &o->bnbr, &o->bst));
+  CUPID_TRY(pd_families_build(o));
   CUPID_TRY(node_data(o, opts));
   o->surface = opts->surface_correction;
-  if (o->surface != CUPID_SURFACE_NONE) CUPID_TRY(pd_surface_factors(o));
+  /* The corrected kernels carry per-bond factors: they run on explicit bond lists (the
+   * stencil path assumes every full family is the same). */
+  if (o->surface != CUPID_SURFACE_NONE) {
+    CUPID_TRY(pd_operator_use_bond_lists(o));
+    CUPID_TRY(pd_surface_factors(o));
+  }
   *op = o;
   o = NULL;
 cleanup:
@@ -127,7 +143,13 @@ cleanup:
   return st;
 }
 
-cupid_int cupid_pd_operator_num_bonds(const cupid_pd_operator op) { return op->bptr[op->nnodes]; }
+cupid_status pd_operator_use_bond_lists(struct cupid_pd_operator_private *op) {
+  if (!op->bptr) CUPID_CALL(pd_neighbors_build(op->grid, &op->st, &op->bptr, &op->bnbr, &op->bst));
+  op->stencil_off = 1;
+  return CUPID_SUCCESS;
+}
+
+cupid_int cupid_pd_operator_num_bonds(const cupid_pd_operator op) { return op->nbonds; }
 
 const double *cupid_pd_operator_weighted_volume(const cupid_pd_operator op) { return op->m; }
 
@@ -141,31 +163,27 @@ cupid_status cupid_pd_operator_dilatation(const cupid_pd_operator op, const doub
   return CUPID_SUCCESS;
 }
 
-cupid_status cupid_pd_operator_apply(const cupid_pd_operator op, const double *u, double *f) {
-  CUPID_CHECK(op && u && f, CUPID_ERR_ARGUMENT, "apply needs operator, u and f");
+/* The bond-list path (stencil_off): rows [first, last) from the explicit bonds. */
+static cupid_status apply_bond_lists(const struct cupid_pd_operator_private *op, cupid_int first,
+                                     cupid_int last, const double *u, double *f) {
   if (op->model == CUPID_PD_BOND) {
-    pd_bond_apply(op, 0, op->nnodes, u, f);
+    pd_bond_apply(op, first, last, u, f);
     return CUPID_SUCCESS;
   }
+  cupid_int lo = 0, hi = op->nnodes;
+  if (first > 0 || last < op->nnodes) pd_neighbour_span(op, first, last, &lo, &hi);
   double *theta = NULL;
+  /* theta is indexed by global node (8 bytes a node); only [lo, hi) is computed and read. */
   CUPID_CALL(cupid_malloc((size_t)op->nnodes, sizeof *theta, "PD dilatations", &theta));
-  pd_lps_dilatation(op, 0, op->nnodes, u, theta);
-  pd_lps_apply(op, 0, op->nnodes, u, theta, f);
+  pd_lps_dilatation(op, lo, hi, u, theta);
+  pd_lps_apply(op, first, last, u, theta, f);
   cupid_free(&theta);
   return CUPID_SUCCESS;
 }
 
-/* Smallest and largest neighbour index of the nodes [first, last) (the node itself included). */
-static void neighbour_span(const struct cupid_pd_operator_private *op, cupid_int first,
-                           cupid_int last, cupid_int *lo, cupid_int *hi) {
-  cupid_int a = first, b = last;
-  for (cupid_int i = first; i < last; i++)
-    for (cupid_int k = op->bptr[i]; k < op->bptr[i + 1]; k++) {
-      if (op->bnbr[k] < a) a = op->bnbr[k];
-      if (op->bnbr[k] + 1 > b) b = op->bnbr[k] + 1;
-    }
-  *lo = a;
-  *hi = b;
+cupid_status cupid_pd_operator_apply(const cupid_pd_operator op, const double *u, double *f) {
+  CUPID_CHECK(op && u && f, CUPID_ERR_ARGUMENT, "apply needs operator, u and f");
+  return cupid_pd_operator_apply_range(op, 0, op->nnodes, u, f);
 }
 
 cupid_status cupid_pd_operator_dependency_range(const cupid_pd_operator op, cupid_int first,
@@ -178,8 +196,8 @@ cupid_status cupid_pd_operator_dependency_range(const cupid_pd_operator op, cupi
     *lo = *hi = first;
     return CUPID_SUCCESS;
   }
-  neighbour_span(op, first, last, lo, hi);
-  if (op->model == CUPID_PD_LPS) neighbour_span(op, *lo, *hi, lo, hi); /* theta_j needs j's family */
+  pd_neighbour_span(op, first, last, lo, hi);
+  if (op->model == CUPID_PD_LPS) pd_neighbour_span(op, *lo, *hi, lo, hi); /* theta_j needs j's family */
   return CUPID_SUCCESS;
 }
 
@@ -190,19 +208,8 @@ cupid_status cupid_pd_operator_apply_range(const cupid_pd_operator op, cupid_int
               "node range [%lld, %lld) outside [0, %lld)", (long long)first, (long long)last,
               (long long)op->nnodes);
   if (first == last) return CUPID_SUCCESS;
-  if (op->model == CUPID_PD_BOND) {
-    pd_bond_apply(op, first, last, u, f);
-    return CUPID_SUCCESS;
-  }
-  cupid_int lo, hi;
-  neighbour_span(op, first, last, &lo, &hi);
-  double *theta = NULL;
-  /* theta is indexed by global node (8 bytes a node); only [lo, hi) is computed and read. */
-  CUPID_CALL(cupid_malloc((size_t)op->nnodes, sizeof *theta, "PD dilatations", &theta));
-  pd_lps_dilatation(op, lo, hi, u, theta);
-  pd_lps_apply(op, first, last, u, theta, f);
-  cupid_free(&theta);
-  return CUPID_SUCCESS;
+  if (op->stencil_off) return apply_bond_lists(op, first, last, u, f);
+  return pd_stencil_apply(op, first, last, u, f, NULL);
 }
 
 cupid_status cupid_pd_operator_energy(const cupid_pd_operator op, const double *u, double *energy) {

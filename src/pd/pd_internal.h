@@ -2,6 +2,7 @@
 #ifndef CUPID_PD_INTERNAL_H
 #define CUPID_PD_INTERNAL_H
 
+#include <stdatomic.h>
 #include <stdint.h>
 
 #include "cupid/pd.h"
@@ -65,6 +66,21 @@ cupid_status pd_stencil_sum(const pd_stencil *st, int only_first, int *n, int32_
 cupid_status pd_neighbors_build(const struct cupid_pd_grid_private *g, const pd_stencil *st,
                                 cupid_int **ptr, cupid_int **nbr, int32_t **sidx);
 
+/* A run of consecutive nodes at consecutive cells of one x row (with the padded lattice a
+ * whole row, else all with full families or all without; full = 1 if all are): nodes
+ * i0 .. i0+len-1 at cells c0 .. c0+len-1 (cp0 .. in the padded lattice, see padded below).
+ * For every stencil entry s the neighbours of a full run are consecutive nodes too (the
+ * cells c + clin[s] all exist and nothing lies between them in cell order), and in the
+ * padded lattice the neighbour cells of any run are consecutive, so the stencil kernels
+ * sweep a run with contiguous, vectorisable loads. */
+typedef struct {
+  cupid_int i0, c0, cp0;
+  int len, full;
+} pd_run;
+
+/* Longest run: the kernels keep a run's accumulators on the stack. */
+#define PD_RUN_MAX 256
+
 struct cupid_pd_operator_private {
   const struct cupid_pd_grid_private *grid; /* borrowed: must outlive the operator */
   cupid_pd_model_kind model;
@@ -74,8 +90,44 @@ struct cupid_pd_operator_private {
   int dim;
   cupid_int nnodes;
   pd_stencil st;
-  cupid_int *bptr, *bnbr; /* bonds, CSR */
-  int32_t *bst;           /* stencil entry of each bond */
+  cupid_int *clin;        /* dense-cell offset of each stencil entry (the lattice neighbour) */
+  cupid_int nbonds;       /* bonds (ordered pairs) */
+  /* Families without per-bond storage for the bulk: a node whose whole stencil lies in the
+   * grid ("full", the interior) stores nothing, the others (near the surface) the stencil
+   * entries present, fidx[fptr[i] .. fptr[i+1]) (empty for full nodes). A neighbour is
+   * dense[cell(i) + clin[s]] (pd_family_*). */
+  unsigned char *full;
+  cupid_int *fptr;
+  int32_t *fidx;
+  pd_run *runs;           /* every node, in runs of at most PD_RUN_MAX, ascending */
+  cupid_int nruns;
+  /* Padded lattice: the bounding box grown by the stencil reach r[a] on each side, so that
+   * every stencil neighbour of every node has a cell index (pclin[s] its offset). With
+   * padded = 1 the stencil kernels work on cell-indexed copies of the data in which absent
+   * cells read 0 (their bonds corrected per node); else (a sparse union, whose padded box
+   * would hold more than PD_PAD_RATIO cells a node) near-surface nodes walk their families. */
+  int padded;
+  /* Ghost-bond corrections of the padded kernels (stencil.c) for non-full nodes: rank among
+   * them (-1 for full nodes) and sum over the absent entries of w n n^T (6 per node: xx yy
+   * zz yz xz xy; w = 15 omega beta for LPS, omega beta / (2|xi|) bond-based). */
+  int32_t *crank;
+  double *ncorr;
+  cupid_int pn[3];        /* padded cells per axis */
+  int32_t pr[3];          /* reach per axis */
+  cupid_int *pclin;
+  /* Work arrays of the stencil path, kept between applies (a fresh allocation per apply
+   * costs page faults comparable to the apply); one apply at a time takes them, a
+   * concurrent one allocates its own. */
+  void *work;
+  atomic_int work_busy;
+  /* Hook: when set, apply/apply_range use the bond-list kernels (pd_lps_*, pd_bond_apply)
+   * on the explicit bond lists below, e.g. for per-bond modifications of the pair terms
+   * that the uniform stencil cannot express. Set it through pd_operator_use_bond_lists(). */
+  int stencil_off;
+  /* Explicit bond lists in CSR (neighbour and stencil entry per bond, 12 bytes a bond):
+   * NULL unless pd_operator_use_bond_lists() built them (or the grid is 1D). */
+  cupid_int *bptr, *bnbr;
+  int32_t *bst;
   double *m;              /* weighted volume (Eq. 18) */
   double *kappa;          /* 3K - 5mu per node (LPS) */
   double *mu;             /* shear modulus per node */
@@ -110,6 +162,70 @@ static inline void pd_surface_bond(const struct cupid_pd_operator_private *op, c
   F[3] = b[3] * n0 + b[4] * n1 + b[5] * n2 + b[6] * q0 + b[7] * q1 + b[8] * q2;
 }
 
+/* Dense cell index of node i. */
+static inline cupid_int pd_node_cell(const struct cupid_pd_grid_private *g, cupid_int i) {
+  const int32_t *q = g->ijk + 3 * i;
+  return q[0] + g->n[0] * (q[1] + g->n[1] * (cupid_int)q[2]);
+}
+
+/* The family of a node: its stencil entries (all of them for a full node) and its cell.
+ *   pd_family F = pd_family_of(op, i);
+ *   for (int q = 0; q < F.n; q++) { int s = pd_family_entry(&F, q);
+ *                                   cupid_int j = pd_family_node(op, &F, s); ... }
+ * Entries come in stencil order, i.e. neighbours ascending by node index. */
+typedef struct {
+  const int32_t *s; /* NULL for a full family */
+  int n;
+  cupid_int cell;
+} pd_family;
+
+static inline pd_family pd_family_of(const struct cupid_pd_operator_private *op, cupid_int i) {
+  pd_family F;
+  F.cell = pd_node_cell(op->grid, i);
+  if (op->full[i]) {
+    F.s = NULL;
+    F.n = op->st.n;
+  } else {
+    F.s = op->fidx + op->fptr[i];
+    F.n = (int)(op->fptr[i + 1] - op->fptr[i]);
+  }
+  return F;
+}
+
+static inline int pd_family_entry(const pd_family *F, int q) { return F->s ? F->s[q] : q; }
+
+static inline cupid_int pd_family_node(const struct cupid_pd_operator_private *op,
+                                       const pd_family *F, int s) {
+  return op->grid->dense[F->cell + op->clin[s]];
+}
+
+#define PD_PAD_RATIO 8
+
+/* Padded cell index of node i. */
+static inline cupid_int pd_node_pcell(const struct cupid_pd_operator_private *op, cupid_int i) {
+  const int32_t *q = op->grid->ijk + 3 * i;
+  return (q[0] + op->pr[0]) + op->pn[0] * ((q[1] + op->pr[1]) + op->pn[1] * (cupid_int)(q[2] + op->pr[2]));
+}
+
+/* Build the families (full flags, near-surface lists, runs, padding) of the operator. */
+cupid_status pd_families_build(struct cupid_pd_operator_private *op);
+
+/* Build the explicit bond lists (if not there yet) and switch apply to the bond-list
+ * kernels (stencil_off = 1). Not thread-safe: call before sharing the operator. */
+cupid_status pd_operator_use_bond_lists(struct cupid_pd_operator_private *op);
+
+/* Stencil path (stencil.c): rows [first, last) of f = K u (f indexed by i - first), u read
+ * on the dependency range only; theta (indexed by node, may be NULL) receives the LPS
+ * dilatations computed on the way (the rows' neighbours). */
+cupid_status pd_stencil_apply(const struct cupid_pd_operator_private *op, cupid_int first,
+                              cupid_int last, const double *u, double *f, double *theta);
+/* Free the kept work arrays (operator destroy). */
+void pd_stencil_work_free(struct cupid_pd_operator_private *op);
+
+/* Smallest and largest+1 neighbour index over the nodes [first, last) (themselves included). */
+void pd_neighbour_span(const struct cupid_pd_operator_private *op, cupid_int first, cupid_int last,
+                       cupid_int *lo, cupid_int *hi);
+
 /* Bond-based pair coefficient c_ij omega beta V^2 / |xi| and LPS pair coefficient
  * 15 (mu_i/m_i + mu_j/m_j) omega beta V^2: the stiffness of the bond spring along n. */
 static inline double pd_pair_coefficient(const struct cupid_pd_operator_private *op,
@@ -127,8 +243,10 @@ static inline double pd_pair_coefficient(const struct cupid_pd_operator_private 
   return 15.0 * (op->mu[i] / op->m[i] + op->mu[j] / op->m[j]) * op->st.wb[s] * V2;
 }
 
-/* Model kernels (lps.c, bond.c): u, f 3 per node, sigma 6 per node. */
-/* Range kernels: nodes [first, last); theta is indexed by global node, f by i - first. */
+/* Model kernels (lps.c, bond.c): u, f 3 per node, sigma 6 per node.
+ * Bond-list range kernels (need op->bptr, see pd_operator_use_bond_lists): nodes
+ * [first, last); theta is indexed by global node, f by i - first. Energy and stress walk
+ * the families (any storage). */
 void pd_lps_dilatation(const struct cupid_pd_operator_private *op, cupid_int first, cupid_int last,
                        const double *u, double *theta);
 void pd_lps_apply(const struct cupid_pd_operator_private *op, cupid_int first, cupid_int last,

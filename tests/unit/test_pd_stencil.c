@@ -1,0 +1,185 @@
+/* The stencil kernels of the matrix-free PD operator (src/pd/stencil.c, the default path)
+ * against the bond-list kernels (lps.c, bond.c on explicit bond lists, the former path) on
+ * random fields: boxes, a union of boxes with a re-entrant corner and a hole, two
+ * materials, a row longer than one run, a grid too thin for any full family, a 1D bar;
+ * LPS and bond-based, three influence / partial-volume combinations; whole products and
+ * row ranges. Also the storage: no bond stored for full families. */
+#include <math.h>
+#include <string.h>
+
+#include "pd/pd_internal.h"
+#include "testutil.h"
+
+typedef struct {
+  const char *name;
+  int n_boxes;
+  cupid_box boxes[3];
+  int mats[3];
+  int dim;
+  double horizon;
+} grid_case;
+
+static double max_abs(cupid_int n, const double *x) {
+  double m = 0.0;
+  for (cupid_int i = 0; i < n; i++) m = fmax(m, fabs(x[i]));
+  return m;
+}
+
+/* Stencil f against bond-list f of the same operator, whole and by ranges. */
+static void compare(const grid_case *gc, cupid_pd_model_kind model, cupid_influence infl,
+                    cupid_partial_volume pv) {
+  cupid_pd_grid_options go = {.spacing = 0.5, .dimension = gc->dim, .area = 0.3};
+  cupid_pd_grid grid = NULL;
+  CUPID_ASSERT_OK(cupid_pd_grid_create(&go, gc->n_boxes, gc->boxes, gc->mats, &grid));
+  const cupid_pd_material pm[2] = {{.E = 1000.0, .nu = 0.3}, {.E = 270.0, .nu = 0.22}};
+  cupid_pd_operator_options oo = {.horizon = gc->horizon * go.spacing, .model = model,
+                                  .influence = infl, .partial_volume = pv, .materials = pm,
+                                  .n_materials = 2};
+  cupid_pd_operator op = NULL;
+  CUPID_ASSERT_OK(cupid_pd_operator_create(grid, &oo, &op));
+  const cupid_int n = cupid_pd_grid_num_nodes(grid);
+  /* No per-bond storage for full families: only the near-surface ones are listed. */
+  cupid_int listed = op->fptr[n], full_bonds = 0;
+  for (cupid_int i = 0; i < n; i++) full_bonds += op->full[i] ? op->st.n : 0;
+  assert_int_equal(listed + full_bonds, cupid_pd_operator_num_bonds(op));
+  double *u = NULL, *f = NULL, *g = NULL;
+  CUPID_ASSERT_OK(cupid_malloc(3 * (size_t)n, sizeof *u, "u", &u));
+  CUPID_ASSERT_OK(cupid_malloc(3 * (size_t)n, sizeof *f, "f", &f));
+  CUPID_ASSERT_OK(cupid_malloc(3 * (size_t)n, sizeof *g, "g", &g));
+  uint64_t seed = 11 + (uint64_t)model;
+  for (cupid_int i = 0; i < 3 * n; i++) u[i] = cupid_test_random(&seed) - 0.5;
+  CUPID_ASSERT_OK(cupid_pd_operator_apply(op, u, f)); /* stencil (default) */
+  assert_int_equal(op->stencil_off, 0);
+  CUPID_ASSERT_OK(pd_operator_use_bond_lists(op));
+  assert_int_equal(op->bptr[n], cupid_pd_operator_num_bonds(op));
+  CUPID_ASSERT_OK(cupid_pd_operator_apply(op, u, g)); /* bond lists */
+  /* Same sums in the same bond order, other rounding (precomputed omega beta xi, FMA):
+   * round-off, 1e-13 of max |f| (the terms are O(max |f| / family)). */
+  const double fmax = max_abs(3 * n, g);
+  assert_true(fmax > 0);
+  for (cupid_int i = 0; i < 3 * n; i++) ASSERT_NEAR(f[i], g[i], 1e-13 * fmax);
+  /* Row ranges on the stencil path, u poisoned outside the dependency range. */
+  op->stencil_off = 0;
+  const cupid_int ranges[3][2] = {{0, n / 3}, {n / 3 + 1, n}, {n / 5, n / 5 + n / 4 + 3}};
+  double *v = NULL;
+  CUPID_ASSERT_OK(cupid_malloc(3 * (size_t)n, sizeof *v, "v", &v));
+  for (int r = 0; r < 3; r++) {
+    const cupid_int a = ranges[r][0], b = ranges[r][1];
+    cupid_int lo, hi;
+    CUPID_ASSERT_OK(cupid_pd_operator_dependency_range(op, a, b, &lo, &hi));
+    for (cupid_int i = 0; i < 3 * n; i++) v[i] = (i >= 3 * lo && i < 3 * hi) ? u[i] : NAN;
+    CUPID_ASSERT_OK(cupid_pd_operator_apply_range(op, a, b, v, g));
+    /* The same arithmetic as the whole product: 1e-14 of max |f|. */
+    for (cupid_int i = 0; i < 3 * (b - a); i++) ASSERT_NEAR(g[i], f[3 * a + i], 1e-14 * fmax);
+  }
+  /* A large rigid translation plus a small strain: K ignores the translation, and both
+   * paths must too (the stencil path corrects its ghost bonds with terms of size |u|;
+   * it shifts u first, so the result stays within round-off of the small forces). */
+  const double *x = cupid_pd_grid_coords(grid);
+  for (cupid_int i = 0; i < n; i++)
+    for (int c = 0; c < 3; c++)
+      v[3 * i + c] = 1e4 * (c + 1) + 1e-3 * (1 + c) * x[3 * i + c] + 1e-4 * sin(x[3 * i] + 2 * c);
+  op->stencil_off = 1;
+  CUPID_ASSERT_OK(cupid_pd_operator_apply(op, v, g));
+  op->stencil_off = 0;
+  CUPID_ASSERT_OK(cupid_pd_operator_apply(op, v, f));
+  const double gmax = max_abs(3 * n, g);
+  for (cupid_int i = 0; i < 3 * n; i++) ASSERT_NEAR(f[i], g[i], 1e-13 * gmax);
+  CUPID_ASSERT_OK(cupid_pd_operator_apply(op, u, f));
+  /* The kept work arrays after the poisoned ranges: the whole product again, twice (the
+   * second reuses the zeroed window). */
+  for (int rep = 0; rep < 2; rep++) {
+    CUPID_ASSERT_OK(cupid_pd_operator_apply(op, u, g));
+    for (cupid_int i = 0; i < 3 * n; i++) ASSERT_NEAR(g[i], f[i], 1e-14 * fmax);
+  }
+  cupid_free(&u);
+  cupid_free(&f);
+  cupid_free(&g);
+  cupid_free(&v);
+  cupid_pd_operator_destroy(&op);
+  cupid_pd_grid_destroy(&grid);
+}
+
+#define BOX(x0, y0, z0, x1, y1, z1) {{x0, y0, z0}, {x1, y1, z1}, {1, 1, 1}}
+
+static const grid_case cases[] = {
+    /* 14 x 12 x 16 nodes: a bulk of 8 x 6 x 10 full nodes at m = 3. */
+    {"box", 1, {BOX(0, 0, 0, 7, 6, 8)}, {0}, 3, 3.015},
+    /* L-shaped union with a second material, plus a detached block (its own runs). */
+    {"union", 3, {BOX(0, 0, 0, 8, 4, 4), BOX(0, 4, 0, 4, 8, 4), BOX(5.5, 5, 0, 8, 8, 3)},
+     {0, 1, 0}, 3, 2.5},
+    /* 300-node rows: interior rows longer than PD_RUN_MAX are split. */
+    {"long", 1, {BOX(0, 0, 0, 150, 3.5, 3.5)}, {0}, 3, 3.015},
+    /* Too thin for a full family anywhere: everything on the near-surface path. */
+    {"thin", 1, {BOX(0, 0, 0, 5, 5, 1.5)}, {0}, 3, 3.015},
+    /* Sparse union (two blocks far apart): no padded lattice, families walked instead. */
+    {"sparse", 2, {BOX(0, 0, 0, 5, 4, 4), BOX(40, 30, 20, 44, 34, 24)}, {0, 1}, 3, 3.015},
+};
+
+static void test_lps(void **state) {
+  (void)state;
+  for (size_t c = 0; c < sizeof cases / sizeof *cases; c++) {
+    compare(&cases[c], CUPID_PD_LPS, CUPID_INFLUENCE_INVERSE, CUPID_PARTIAL_PDLAMMPS);
+    compare(&cases[c], CUPID_PD_LPS, CUPID_INFLUENCE_GAUSSIAN, CUPID_PARTIAL_EXACT);
+  }
+}
+
+static void test_bond(void **state) {
+  (void)state;
+  for (size_t c = 0; c < sizeof cases / sizeof *cases; c++) {
+    compare(&cases[c], CUPID_PD_BOND, CUPID_INFLUENCE_CONSTANT, CUPID_PARTIAL_NONE);
+    compare(&cases[c], CUPID_PD_BOND, CUPID_INFLUENCE_GAUSSIAN, CUPID_PARTIAL_PDLAMMPS);
+  }
+}
+
+static void test_bar(void **state) {
+  (void)state;
+  const grid_case bar = {"bar", 2, {BOX(0, 0, 0, 0, 40, 0), BOX(0, 40, 0, 0, 90, 0)}, {0, 1}, 1, 3.015};
+  compare(&bar, CUPID_PD_BOND, CUPID_INFLUENCE_CONSTANT, CUPID_PARTIAL_EXACT);
+}
+
+/* The runs cover every node once, in order, at consecutive (padded) cells with one full
+ * flag each; the union is dense enough for the padded lattice, a sparse one is not. */
+static void test_partition(void **state) {
+  (void)state;
+  cupid_pd_grid_options go = {.spacing = 0.5, .dimension = 3};
+  const cupid_pd_material pm[2] = {{.E = 1.0, .nu = 0.25}, {.E = 2.0, .nu = 0.25}};
+  cupid_pd_operator_options oo = {.horizon = 1.5, .model = CUPID_PD_LPS,
+                                  .influence = CUPID_INFLUENCE_INVERSE,
+                                  .partial_volume = CUPID_PARTIAL_PDLAMMPS, .materials = pm,
+                                  .n_materials = 2};
+  for (int c = 1; c < 5; c += 3) {
+    cupid_pd_grid grid = NULL;
+    CUPID_ASSERT_OK(cupid_pd_grid_create(&go, cases[c].n_boxes, cases[c].boxes, cases[c].mats, &grid));
+    cupid_pd_operator op = NULL;
+    CUPID_ASSERT_OK(cupid_pd_operator_create(grid, &oo, &op));
+    assert_int_equal(op->padded, c == 1);
+    const cupid_int n = cupid_pd_grid_num_nodes(grid);
+    cupid_int next = 0, nfull = 0;
+    for (cupid_int r = 0; r < op->nruns; r++) {
+      const pd_run *R = &op->runs[r];
+      assert_true(R->len >= 1 && R->len <= PD_RUN_MAX);
+      assert_int_equal(R->i0, next);
+      int all = 1;
+      for (int t = 0; t < R->len; t++) {
+        all &= op->full[R->i0 + t];
+        if (!op->padded) assert_int_equal(op->full[R->i0 + t], R->full);
+        assert_int_equal(pd_node_cell(op->grid, R->i0 + t), R->c0 + t);
+        assert_int_equal(pd_node_pcell(op, R->i0 + t), R->cp0 + t);
+      }
+      assert_int_equal(all, R->full);
+      next += R->len;
+      nfull += R->full ? R->len : 0;
+    }
+    assert_int_equal(next, n);
+    assert_true(nfull < n);
+    cupid_pd_operator_destroy(&op);
+    cupid_pd_grid_destroy(&grid);
+  }
+}
+
+int main(void) {
+  const struct CMUnitTest tests[] = {cmocka_unit_test(test_lps), cmocka_unit_test(test_bond),
+                                     cmocka_unit_test(test_bar), cmocka_unit_test(test_partition)};
+  return cmocka_run_group_tests(tests, NULL, NULL);
+}
