@@ -87,6 +87,12 @@ static cupid_status free_block_aij(const cupid_csr_t *P, const cupid_dirichlet_t
       PetscInt row = (PetscInt)fi;
       PCALL(MatSetValues(M, 1, &row, len, cols, vals, INSERT_VALUES));
     }
+  /* Block size 3 (GAMG's default near null space: the translations) when every node is
+   * free or fixed as a whole. */
+  int whole = 1;
+  for (cupid_int d = 0; d < bc->n && whole; d += 3)
+    whole = bc->fixed[d] == bc->fixed[d + 1] && bc->fixed[d] == bc->fixed[d + 2];
+  if (whole && bs == 3) PCALL(MatSetBlockSize(M, 3));
   PCALL(MatAssemblyBegin(M, MAT_FINAL_ASSEMBLY));
   PCALL(MatAssemblyEnd(M, MAT_FINAL_ASSEMBLY));
   *out = M;
