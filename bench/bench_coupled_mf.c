@@ -118,6 +118,26 @@ int main(int argc, char **argv) {
 #if CUPID_HAVE_PETSC
   printf("%s: %d iterations, relative residual %.2e (horizon %.2f h, rtol %.0e)\n", ki.method,
          ki.iterations, ki.residual, horizon, rtol);
+  /* Equilibrium |R + P| / |P| (R: reactions A u - f on fixed DOFs), as `cupid run` prints it:
+   * the fictitious-node method does not conserve momentum (docs/coupling.md). */
+  double *t = NULL, load[3], reac[3];
+  check(cupid_coupling_operator_apply(A, job->u, job->f_int), "apply");
+  check(cupid_calloc((size_t)(3 * n), sizeof *t, "translations", &t), "alloc");
+  check(cupid_app_translations(job, t), "translations");
+  double pn = 0.0, rn = 0.0;
+  for (int k = 0; k < 3; k++) {
+    load[k] = reac[k] = 0.0;
+    for (cupid_int d = 0; d < n; d++) {
+      load[k] += job->f_ext[d] * t[(size_t)k * (size_t)n + (size_t)d];
+      if (job->bc->fixed[d])
+        reac[k] += (job->f_int[d] - job->f_ext[d]) * t[(size_t)k * (size_t)n + (size_t)d];
+    }
+    pn += load[k] * load[k];
+    rn += (load[k] + reac[k]) * (load[k] + reac[k]);
+  }
+  printf("equilibrium: load (%.6g, %.6g, %.6g), reaction (%.6g, %.6g, %.6g), |R + P| / |P| = "
+         "%.3e\n", load[0], load[1], load[2], reac[0], reac[1], reac[2], sqrt(rn / pn));
+  cupid_free(&t);
   for (int k = 0; k < model->output.n_points; k++) {
     const cupid_output_point *p = &model->output.points[k];
     double u[3];
