@@ -7,7 +7,8 @@
  * matrix, solves it with UMFPACK and requires max |u - u_direct| <= 1e-8 max |u_direct|.
  *
  * Usage: bench_coupled_mf MODEL [--threads N] [--pc lu|ilu|gamg|hypre|...] [--pkg umfpack|
- *        mumps|petsc] [--horizon F] [--rtol R] [--restart M] [--check] [PETSc options]
+ *        mumps|petsc] [--horizon F] [--rtol R] [--restart M] [--check] [--app] [PETSc options]
+ * --app solves through cupid_app_coupled_solve_mf() (the call `--solver petsc` is to make).
  * Without PETSc (default build) it builds the operator and the preconditioner matrix, times
  * the products and stops before the solve. */
 #include <math.h>
@@ -43,7 +44,7 @@ int main(int argc, char **argv) {
   PetscInitialize(&argc, &argv, NULL, NULL);
 #endif
   const char *path = NULL, *pc = "lu", *pkg = NULL;
-  int threads = 0, do_check = 0, restart = 200;
+  int threads = 0, do_check = 0, restart = 200, app = 0;
   double horizon = 1.5, rtol = 1e-10;
   for (int i = 1; i < argc; i++) {
     if (!strcmp(argv[i], "--threads") && i + 1 < argc) threads = atoi(argv[++i]);
@@ -53,6 +54,7 @@ int main(int argc, char **argv) {
     else if (!strcmp(argv[i], "--rtol") && i + 1 < argc) rtol = atof(argv[++i]);
     else if (!strcmp(argv[i], "--restart") && i + 1 < argc) restart = atoi(argv[++i]);
     else if (!strcmp(argv[i], "--check")) do_check = 1;
+    else if (!strcmp(argv[i], "--app")) app = 1;
     else if (argv[i][0] != '-' && !path) path = argv[i];
     else if (argv[i][0] == '-' && argv[i][1] != '-' && i + 1 < argc && argv[i + 1][0] != '-') i++;
   }
@@ -74,6 +76,28 @@ int main(int argc, char **argv) {
   cupid_job *job = &s.job;
   phase("grid, beam, conditions, loads");
 
+#if CUPID_HAVE_PETSC
+  if (app) { /* the one-call path for `--solver petsc` (coupled_setup.c) */
+    cupid_coupling_krylov_options ko0 = {.rtol = rtol, .restart = restart, .pc = pc,
+                                         .factor_package = pkg};
+    check(cupid_app_coupled_solve_mf(job, &s.co, &ko0), "cupid_app_coupled_solve_mf");
+    phase("cupid_app_coupled_solve_mf");
+    printf("\n%s: %lld equations, residual %.2e, %lld fictitious PD nodes\n", job->solve.method,
+           (long long)job->solve.n, job->solve.residual, (long long)job->n_fictitious);
+    for (int k = 0; k < model->output.n_points; k++) {
+      double u[3];
+      cupid_region_kind where;
+      check(cupid_app_sample(job, model->output.points[k].at, u, NULL, &where), "sample");
+      printf("point %s: u = (%.9e, %.9e, %.9e)\n", model->output.points[k].name, u[0], u[1], u[2]);
+    }
+    cupid_app_coupled_setup_free(&s);
+    cupid_model_destroy(&model);
+    PetscFinalize();
+    return 0;
+  }
+#else
+  (void)app;
+#endif
   cupid_coupling_operator A = NULL;
   check(cupid_coupling_operator_create(job->beam, job->grid, &s.co, &A), "operator");
   phase("fictitious nodes + PD operator");

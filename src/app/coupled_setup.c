@@ -156,3 +156,43 @@ void cupid_app_coupled_setup_free(cupid_coupled_setup *s) {
   cupid_free(&s->boxes);
   cupid_free(&s->mats);
 }
+
+cupid_status cupid_app_coupled_solve_mf(cupid_job *job, const cupid_coupling_options *co,
+                                        const cupid_coupling_krylov_options *ko) {
+  cupid_status st = CUPID_SUCCESS;
+  cupid_coupling_operator A = NULL;
+  cupid_csr P = NULL;
+  double t0 = cupid_wtime();
+  CUPID_TRY(cupid_coupling_operator_create(job->beam, job->grid, co, &A));
+  cupid_coupling_info ci;
+  cupid_coupling_operator_get_info(A, &ci);
+  job->n_fictitious = ci.n_fictitious_pd;
+  CUPID_TRY(cupid_coupling_preconditioner(A, 1.5, &P));
+  cupid_job_phase_end(job, CUPID_PHASE_COUPLING, t0);
+  cupid_job_progress(job,
+                     "coupling (fictitious nodes, matrix-free): %d interfaces, %lld fictitious PD "
+                     "nodes, %lld fictitious FE nodes; operator %.1f MB, preconditioner matrix "
+                     "%.1f MB",
+                     ci.n_interfaces, (long long)ci.n_fictitious_pd, (long long)ci.n_fictitious_fe,
+                     (double)cupid_coupling_operator_bytes(A) / 1e6, (double)cupid_csr_bytes(P) / 1e6);
+  cupid_coupling_krylov_info ki;
+  st = cupid_coupling_krylov_solve(A, P, job->bc, job->f_ext, job->u, ko, &ki);
+  job->phases[CUPID_PHASE_FACTORISATION] =
+      (cupid_phase_record){ki.time_setup, cupid_peak_memory(), 1};
+  job->phases[CUPID_PHASE_SOLVE] = (cupid_phase_record){ki.time_solve, cupid_peak_memory(), 1};
+  job->solve.method = "petsc-gmres";
+  job->solve.n = job->bc->n_free;
+  job->solve.residual = ki.residual;
+  job->solve.time_factor = ki.time_setup;
+  job->solve.time_solve = ki.time_solve;
+  job->solve.failed_dof = -1;
+  CUPID_TRY(st);
+  job->solved = 1;
+  CUPID_TRY(cupid_coupling_operator_apply(A, job->u, job->f_int));
+  cupid_job_progress(job, "solve: %s, %lld equations, %d iterations, residual %.2e", ki.method,
+                     (long long)job->solve.n, ki.iterations, ki.residual);
+cleanup:
+  cupid_csr_destroy(&P);
+  cupid_coupling_operator_destroy(&A);
+  return st;
+}

@@ -24,4 +24,16 @@ cupid_status cupid_app_coupled_setup(const cupid_model_t *model, const cupid_run
                                      cupid_coupled_setup *s);
 void cupid_app_coupled_setup_free(cupid_coupled_setup *s);
 
+/**
+ * The fictitious-node static solve without the PD matrix, for `--solver petsc`: on a job set up
+ * as coupled.c does up to its loads (beam deactivated, bc finalized, f_ext filled; no
+ * assemble()), build the matrix-free operator (cupid_coupling_operator_create()) and the cheap
+ * preconditioner matrix, solve by GMRES (cupid_coupling_krylov_solve(), @p ko may be NULL) and
+ * fill job->u, job->f_int (= A u), job->n_fictitious, job->solve (method "petsc-gmres", n,
+ * residual, times), the coupling / factorisation / solve phases and job->solved. job->K stays
+ * NULL. Builds without PETSc: CUPID_ERR_UNSUPPORTED.
+ */
+cupid_status cupid_app_coupled_solve_mf(cupid_job *job, const cupid_coupling_options *co,
+                                        const cupid_coupling_krylov_options *ko);
+
 #endif
