@@ -125,6 +125,7 @@ cupid_status cupid_coupling_krylov_solve(const cupid_coupling_operator A, const 
   Mat S = NULL, Pm = NULL;
   Vec x = NULL, b = NULL;
   KSP ksp = NULL;
+  IS is_pd = NULL, is_fe = NULL;
   PC pc;
   cupid_int n_free = bc->n_free;
   CUPID_TRY(cupid_malloc((size_t)n_free + 1, sizeof *gidx, "free DOFs", &gidx));
@@ -165,6 +166,23 @@ cupid_status cupid_coupling_krylov_solve(const cupid_coupling_operator A, const 
     const char *pkg = opts && opts->factor_package ? opts->factor_package
                                                    : (!strcmp(pct, "lu") ? "umfpack" : "petsc");
     PCALL(PCFactorSetMatSolverType(pc, pkg));
+  }
+  if (!strcmp(pct, "fieldsplit")) {
+    /* Two fields: PD DOFs and FE DOFs (sub-solvers from -fieldsplit_pd_* / -fieldsplit_fe_*). */
+    cupid_coupling_info ci;
+    cupid_coupling_operator_get_info(A, &ci);
+    cupid_int n_pd_free = 0;
+    while (n_pd_free < n_free && gidx[n_pd_free] < 3 * ci.n_real_pd) n_pd_free++;
+    PetscInt *idx = NULL;
+    CUPID_TRY(cupid_malloc((size_t)n_free + 1, sizeof *idx, "field indices", &idx));
+    for (cupid_int k = 0; k < n_free; k++) idx[k] = (PetscInt)k;
+    PCALL(ISCreateGeneral(PETSC_COMM_SELF, (PetscInt)n_pd_free, idx, PETSC_COPY_VALUES, &is_pd));
+    PCALL(ISCreateGeneral(PETSC_COMM_SELF, (PetscInt)(n_free - n_pd_free), idx + n_pd_free,
+                          PETSC_COPY_VALUES, &is_fe));
+    cupid_free(&idx);
+    if (n_pd_free % 3 == 0) PCALL(ISSetBlockSize(is_pd, 3));
+    PCALL(PCFieldSplitSetIS(pc, "pd", is_pd));
+    PCALL(PCFieldSplitSetIS(pc, "fe", is_fe));
   }
   PCALL(KSPSetFromOptions(ksp));
   PCALL(KSPSetUp(ksp));
@@ -207,6 +225,8 @@ cupid_status cupid_coupling_krylov_solve(const cupid_coupling_operator A, const 
 cleanup:
   if (info) *info = inf;
   if (ksp) KSPDestroy(&ksp);
+  if (is_pd) ISDestroy(&is_pd);
+  if (is_fe) ISDestroy(&is_fe);
   if (S) MatDestroy(&S);
   if (Pm) MatDestroy(&Pm);
   if (x) VecDestroy(&x);
