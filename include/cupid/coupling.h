@@ -291,7 +291,9 @@ typedef struct {
   int max_it;             /**< <= 0: 2000 */
   int restart;            /**< GMRES restart; <= 0: 200 */
   const char *pc;         /**< PETSc PC type for the cheap matrix ("lu", "ilu", "gamg",
-                               "hypre"; NULL: "lu"); run-time options (-ksp_*, -pc_*) override */
+                               "hypre"; "fieldsplit": two fields "pd" and "fe", sub-solvers
+                               from -fieldsplit_pd_* / -fieldsplit_fe_*; NULL: "lu");
+                               run-time options (-ksp_*, -pc_*) override */
   const char *factor_package; /**< for lu/ilu: "umfpack", "mumps", "petsc" (NULL: umfpack) */
 } cupid_coupling_krylov_options;
 
