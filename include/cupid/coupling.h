@@ -230,6 +230,97 @@ cupid_status cupid_arlequin_gap(cupid_cuf_beam beam, cupid_pd_grid grid,
                                 const cupid_arlequin_options *o, const double *u, double *gap);
 /* ---- end of the Arlequin block ---- */
 
+/* ---- Matrix-free fictitious-node coupling (issue 6; src/coupling/operator.c, krylov.c) ----
+ * y = A x for the coupled matrix of Eq. 38 (layout of cupid_coupling_create(): [3 DOFs per real
+ * PD node | FE DOFs]) without forming the PD stiffness: the PD operator of opts->pd is applied
+ * matrix-free on the extended grid (real + fictitious PD nodes) to [x_PD ; I^{f-PD} x_FE] and
+ * the rows of the real nodes are kept; the FE rows (real and fictitious FE elements, with their
+ * I^{f-FE} columns) are assembled. Full-section and partial regions alike. Memory: the PD
+ * operator's bonds (~12 bytes each) instead of the ~2,700 scalar non-zeros a row of the
+ * assembled LPS matrix. For Krylov solves, preconditioned by the same Eq. 38 with a cheap
+ * bond-based PD operator (cupid_coupling_preconditioner()). */
+
+/** The matrix-free coupled operator (opaque). */
+typedef struct cupid_coupling_operator_private *cupid_coupling_operator;
+
+/**
+ * Build the fictitious nodes and elements as cupid_coupling_create() does, and the PD operator
+ * of opts->pd on the extended grid, but no PD matrix. The beam must have been deactivated and
+ * its DOF offset set to 3 * (real PD nodes); @p grid is borrowed for the call only.
+ */
+cupid_status cupid_coupling_operator_create(cupid_cuf_beam beam, cupid_pd_grid grid,
+                                            const cupid_coupling_options *opts,
+                                            cupid_coupling_operator *A);
+/** Destroy and set *A to NULL (NULL-safe). */
+void cupid_coupling_operator_destroy(cupid_coupling_operator *A);
+/** Scalar DOFs of the operator (3 * (real PD nodes + FE nodes)). */
+cupid_int cupid_coupling_operator_size(const cupid_coupling_operator A);
+/** Counts, as cupid_coupling_get_info(). */
+void cupid_coupling_operator_get_info(const cupid_coupling_operator A, cupid_coupling_info *info);
+/** Approximate bytes held by the operator (bonds, per-node data, FE rows). */
+int64_t cupid_coupling_operator_bytes(const cupid_coupling_operator A);
+/**
+ * y = A x (x, y of cupid_coupling_operator_size() entries; not thread-safe: A holds work
+ * vectors). Equals cupid_csr_matvec() with the matrix of cupid_coupling_create() up to
+ * round-off (the fictitious columns are summed in another order).
+ */
+cupid_status cupid_coupling_operator_apply(const cupid_coupling_operator A, const double *x,
+                                           double *y);
+/**
+ * The assembled coupled matrix of Eq. 38 with the PD operator @p pd on the same extended grid
+ * (NULL: the operator's own, giving the matrix of cupid_coupling_create()).
+ */
+cupid_status cupid_coupling_operator_assemble(const cupid_coupling_operator A,
+                                              const cupid_pd_operator_options *pd, cupid_csr *K);
+/**
+ * The cheap PD operator of the preconditioner: @p fine (materials kept) turned bond-based with
+ * horizon horizon_factor * spacing (<= 0: 1.5, the 18 face and edge neighbours), constant
+ * influence, whole cells (partial volume NONE); its micromodulus matches each material's bulk
+ * modulus (pd.h). It couples nodes one short horizon apart only.
+ */
+void cupid_coupling_cheap_options(const cupid_pd_operator_options *fine, double spacing,
+                                  double horizon_factor, cupid_pd_operator_options *cheap);
+/** The preconditioner matrix: Eq. 38 with cupid_coupling_cheap_options() (never the LPS matrix). */
+cupid_status cupid_coupling_preconditioner(const cupid_coupling_operator A, double horizon_factor,
+                                           cupid_csr *P);
+
+/** Options of the Krylov solve of the coupled system. */
+typedef struct {
+  double rtol;            /**< |b - A u| / |b| on the free DOFs (right preconditioning, so the
+                               true residual); <= 0: 1e-10 */
+  int max_it;             /**< <= 0: 2000 */
+  int restart;            /**< GMRES restart; <= 0: 200 */
+  const char *pc;         /**< PETSc PC type for the cheap matrix ("lu", "ilu", "gamg",
+                               "hypre"; "fieldsplit": two fields "pd" and "fe", sub-solvers
+                               from -fieldsplit_pd_* / -fieldsplit_fe_*; NULL: "lu");
+                               run-time options (-ksp_*, -pc_*) override */
+  const char *factor_package; /**< for lu/ilu: "umfpack", "mumps", "petsc" (NULL: umfpack) */
+} cupid_coupling_krylov_options;
+
+/** What the Krylov solve did. */
+typedef struct {
+  int iterations;
+  double residual;        /**< final |b - A u| / |b| on the free DOFs, recomputed */
+  double time_setup;      /**< seconds: PETSc matrix of the cheap operator + PC set-up */
+  double time_solve;      /**< seconds: the Krylov iterations */
+  int converged;          /**< PETSc's reason > 0 */
+  char method[64];        /**< "gmres+<pc>" */
+} cupid_coupling_krylov_info;
+
+/**
+ * Solve A u = f with the Dirichlet conditions @p bc (finalized; fixed DOFs take bc->value) by
+ * GMRES on the free DOFs, A matrix-free (a PETSc MATSHELL), preconditioned by @p P (the
+ * cheap matrix, e.g. from cupid_coupling_preconditioner(); its free-free block is given to
+ * the PC). PETSc is initialised here when needed (PETSC_COMM_SELF; one rank). Builds without
+ * PETSc: CUPID_ERR_UNSUPPORTED. Not converged in max_it: CUPID_ERR_NUMERIC (u holds the last
+ * iterate).
+ */
+cupid_status cupid_coupling_krylov_solve(const cupid_coupling_operator A, const cupid_csr_t *P,
+                                         const cupid_dirichlet_t *bc, const double *f, double *u,
+                                         const cupid_coupling_krylov_options *opts,
+                                         cupid_coupling_krylov_info *info);
+/* ---- end of the matrix-free coupling block ---- */
+
 #ifdef __cplusplus
 }
 #endif

@@ -76,8 +76,27 @@ cupid_status cpl_pd_rows(cpl_rowbuild *rb, const cupid_csr_t *Ke, const ext_map 
                          cupid_int n_ext, cupid_int n_pd);
 /** 1 if region @p b spans the beam's whole cross-section (missing x/z bounds count as spanning). */
 int cpl_region_full(const cupid_cuf_beam beam, const cupid_box *b);
-/** The coupled matrix when some region covers part of the section (src/coupling/partial.c). */
-cupid_status cpl_partial_create(cupid_cuf_beam beam, cupid_pd_grid grid,
-                                const cupid_coupling_options *o, cupid_coupling_h c, cupid_csr *K);
+/* The pieces of Eq. 38 that do not depend on the PD operator: the extended grid (real +
+ * fictitious PD nodes) with its map, and the rows of the real FE nodes, assembled (n_fe_nodes
+ * block rows over all n_pd + n_fe_nodes block columns). The coupled matrix is the PD rows of
+ * any PD operator on ext (cpl_pd_rows) stacked on Kfe; the matrix-free operator
+ * (src/coupling/operator.c) applies the PD operator instead. */
+typedef struct {
+  cupid_pd_grid ext;
+  ext_map map;
+  cupid_int n_ext, n_fict, n_pd;
+  cupid_csr Kfe;
+} cpl_parts;
+
+/** Build the parts (either kind of region; fills c's interfaces and info). */
+cupid_status cpl_parts_build(cupid_cuf_beam beam, cupid_pd_grid grid,
+                             const cupid_coupling_options *o, cupid_coupling_h c, cpl_parts *p);
+/** The coupled matrix of Eq. 38 with the PD operator of @p pd on the extended grid. */
+cupid_status cpl_parts_assemble(const cpl_parts *p, const cupid_pd_operator_options *pd,
+                                cupid_csr *K);
+void cpl_parts_free(cpl_parts *p);
+/** The parts when some region covers part of the section (src/coupling/partial.c). */
+cupid_status cpl_partial_parts(cupid_cuf_beam beam, cupid_pd_grid grid,
+                               const cupid_coupling_options *o, cupid_coupling_h c, cpl_parts *p);
 
 #endif

@@ -508,73 +508,112 @@ cupid_status cpl_find_interfaces(cupid_cuf_beam beam, const cupid_coupling_optio
   return CUPID_SUCCESS;
 }
 
-cupid_status cupid_coupling_create(cupid_cuf_beam beam, cupid_pd_grid grid,
-                                   const cupid_coupling_options *o, cupid_coupling_h *out,
-                                   cupid_csr *K) {
+/* The parts of a coupling whose regions all span the section: interfaces normal to the axis,
+ * one fictitious B2 element each, fictitious PD slabs. */
+static cupid_status full_parts(cupid_cuf_beam beam, cupid_pd_grid grid,
+                               const cupid_coupling_options *o, cupid_coupling_h c, cpl_parts *p) {
   cupid_status st = CUPID_SUCCESS;
-  cupid_coupling_h c = NULL;
-  cupid_pd_grid ext = NULL;
-  cupid_pd_operator op = NULL;
-  cupid_csr Ke = NULL, Kb = NULL, *Kaux = NULL;
+  cupid_csr Kb = NULL, *Kaux = NULL;
   int n_aux = 0;
-  ext_map map = {0};
   cpl_rowbuild rb = {0};
   cupid_cuf_info info;
   cupid_cuf_get_info(beam, &info);
-  int M = info.M, p = info.element_nodes;
-  cupid_int n_pd = cupid_pd_grid_num_nodes(grid);
-  CUPID_CHECK(info.dof_offset == 3 * n_pd, CUPID_ERR_ARGUMENT,
-              "the beam's DOF offset (%lld) must be 3 x the real PD nodes (%lld)",
-              (long long)info.dof_offset, (long long)(3 * n_pd));
-  CUPID_CALL(cupid_calloc(1, sizeof *c, "coupling", &c));
-  int any_partial = 0;
-  for (int r = 0; r < o->n_regions; r++) any_partial |= !cpl_region_full(beam, &o->regions[r]);
-  if (any_partial) {
-    CUPID_TRY(cpl_partial_create(beam, grid, o, c, K));
-    *out = c;
-    c = NULL;
-    goto cleanup;
-  }
+  int M = info.M, pe = info.element_nodes;
+  cupid_int n_pd = p->n_pd;
   CUPID_TRY(cpl_find_interfaces(beam, o, c));
   for (int f = 0; f < c->n_iface; f++) CUPID_TRY(build_interface(&c->iface[f], o, grid, M, 2));
 
-  CUPID_TRY(extended_grid(o, c->iface, c->n_iface, info.y_min, info.y_max, &ext));
-  cupid_int n_ext = cupid_pd_grid_num_nodes(ext), n_fict = 0;
-  CUPID_TRY(cpl_map_extended(ext, grid, beam, M, p, &map, &n_fict));
-  CUPID_TRY_CHECK(n_ext - n_fict == n_pd, CUPID_ERR_ARGUMENT,
-                  "extended grid holds %lld real nodes, expected %lld", (long long)(n_ext - n_fict),
-                  (long long)n_pd);
-  CUPID_TRY(cupid_pd_operator_create(ext, &o->pd, &op));
-  CUPID_TRY(cupid_pd_operator_assemble(op, &Ke));
-  cupid_pd_operator_destroy(&op);
+  CUPID_TRY(extended_grid(o, c->iface, c->n_iface, info.y_min, info.y_max, &p->ext));
+  p->n_ext = cupid_pd_grid_num_nodes(p->ext);
+  CUPID_TRY(cpl_map_extended(p->ext, grid, beam, M, pe, &p->map, &p->n_fict));
+  CUPID_TRY_CHECK(p->n_ext - p->n_fict == n_pd, CUPID_ERR_ARGUMENT,
+                  "extended grid holds %lld real nodes, expected %lld",
+                  (long long)(p->n_ext - p->n_fict), (long long)n_pd);
 
   CUPID_TRY(cupid_cuf_assemble(beam, &Kb));
   CUPID_TRY(cupid_calloc((size_t)(c->n_iface + 1), sizeof *Kaux, "fictitious elements", &Kaux));
   n_aux = c->n_iface;
   for (int f = 0; f < n_aux; f++) CUPID_TRY(cupid_cuf_assemble(c->iface[f].aux, &Kaux[f]));
-
   cupid_int N = n_pd + info.n_fe_nodes;
-  CUPID_TRY(cpl_rowbuild_init(&rb, N, N));
-  CUPID_TRY(cpl_pd_rows(&rb, Ke, &map, n_ext, n_pd));
-  cupid_csr_destroy(&Ke);
+  CUPID_TRY(cpl_rowbuild_init(&rb, info.n_fe_nodes, N));
   CUPID_TRY(fe_rows(&rb, Kb, c->iface, c->n_iface, n_pd, M, info.n_fe_nodes, Kaux));
-  CUPID_TRY(cpl_rowbuild_finish(&rb, K));
+  CUPID_TRY(cpl_rowbuild_finish(&rb, &p->Kfe));
 
   c->info = (cupid_coupling_info){.n_real_pd = n_pd,
-                                  .n_fictitious_pd = n_fict,
+                                  .n_fictitious_pd = p->n_fict,
                                   .n_interfaces = c->n_iface,
                                   .n_fictitious_fe = (cupid_int)c->n_iface * M};
-  *out = c;
-  c = NULL;
 cleanup:
   for (int f = 0; f < n_aux; f++) cupid_csr_destroy(&Kaux[f]);
   cupid_free(&Kaux);
-  cupid_csr_destroy(&Ke);
   cupid_csr_destroy(&Kb);
-  cupid_pd_operator_destroy(&op);
-  cupid_pd_grid_destroy(&ext);
-  cpl_ext_map_free(&map);
   cpl_rowbuild_free(&rb);
+  return st;
+}
+
+cupid_status cpl_parts_build(cupid_cuf_beam beam, cupid_pd_grid grid,
+                             const cupid_coupling_options *o, cupid_coupling_h c, cpl_parts *p) {
+  cupid_cuf_info info;
+  cupid_cuf_get_info(beam, &info);
+  memset(p, 0, sizeof *p);
+  p->n_pd = cupid_pd_grid_num_nodes(grid);
+  CUPID_CHECK(info.dof_offset == 3 * p->n_pd, CUPID_ERR_ARGUMENT,
+              "the beam's DOF offset (%lld) must be 3 x the real PD nodes (%lld)",
+              (long long)info.dof_offset, (long long)(3 * p->n_pd));
+  int any_partial = 0;
+  for (int r = 0; r < o->n_regions; r++) any_partial |= !cpl_region_full(beam, &o->regions[r]);
+  cupid_status st = any_partial ? cpl_partial_parts(beam, grid, o, c, p)
+                                : full_parts(beam, grid, o, c, p);
+  if (st != CUPID_SUCCESS) cpl_parts_free(p);
+  return st;
+}
+
+void cpl_parts_free(cpl_parts *p) {
+  cupid_pd_grid_destroy(&p->ext);
+  cpl_ext_map_free(&p->map);
+  cupid_csr_destroy(&p->Kfe);
+}
+
+cupid_status cpl_parts_assemble(const cpl_parts *p, const cupid_pd_operator_options *pd,
+                                cupid_csr *K) {
+  cupid_status st = CUPID_SUCCESS;
+  cupid_pd_operator op = NULL;
+  cupid_csr Ke = NULL;
+  cpl_rowbuild rb = {0};
+  cupid_int n_pd = p->n_pd, N = n_pd + p->Kfe->nrows;
+  CUPID_TRY(cupid_pd_operator_create(p->ext, pd, &op));
+  CUPID_TRY(cupid_pd_operator_assemble(op, &Ke));
+  cupid_pd_operator_destroy(&op);
+  CUPID_TRY(cpl_rowbuild_init(&rb, N, N));
+  CUPID_TRY(cpl_pd_rows(&rb, Ke, &p->map, p->n_ext, n_pd));
+  cupid_csr_destroy(&Ke);
+  const cupid_csr_t *F = p->Kfe;
+  for (cupid_int a = 0; a < F->nrows; a++) {
+    for (cupid_int k = F->rowptr[a]; k < F->rowptr[a + 1]; k++)
+      CUPID_TRY(cpl_rowbuild_add(&rb, F->col[k], 1.0, F->val + 9 * k));
+    CUPID_TRY(cpl_rowbuild_end_row(&rb, n_pd + a));
+  }
+  CUPID_TRY(cpl_rowbuild_finish(&rb, K));
+cleanup:
+  cupid_csr_destroy(&Ke);
+  cupid_pd_operator_destroy(&op);
+  cpl_rowbuild_free(&rb);
+  return st;
+}
+
+cupid_status cupid_coupling_create(cupid_cuf_beam beam, cupid_pd_grid grid,
+                                   const cupid_coupling_options *o, cupid_coupling_h *out,
+                                   cupid_csr *K) {
+  cupid_status st = CUPID_SUCCESS;
+  cupid_coupling_h c = NULL;
+  cpl_parts parts = {0};
+  CUPID_CALL(cupid_calloc(1, sizeof *c, "coupling", &c));
+  CUPID_TRY(cpl_parts_build(beam, grid, o, c, &parts));
+  CUPID_TRY(cpl_parts_assemble(&parts, &o->pd, K));
+  *out = c;
+  c = NULL;
+cleanup:
+  cpl_parts_free(&parts);
   cupid_coupling_destroy(&c);
   return st;
 }

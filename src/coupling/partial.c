@@ -231,55 +231,42 @@ static int count_interfaces(cupid_pd_grid ext, const ext_map *m, const cupid_cou
   return count;
 }
 
-cupid_status cpl_partial_create(cupid_cuf_beam beam, cupid_pd_grid grid,
-                                const cupid_coupling_options *o, cupid_coupling_h c,
-                                cupid_csr *K) {
+cupid_status cpl_partial_parts(cupid_cuf_beam beam, cupid_pd_grid grid,
+                               const cupid_coupling_options *o, cupid_coupling_h c, cpl_parts *p) {
   cupid_status st = CUPID_SUCCESS;
-  cupid_pd_grid ext = NULL;
-  cupid_pd_operator op = NULL;
-  cupid_csr Ke = NULL, Kb = NULL, Kr = NULL;
+  cupid_csr Kb = NULL, Kr = NULL;
   cupid_cuf_beam twin = NULL;
-  ext_map map = {0};
   fe_interp fi = {0};
   cpl_rowbuild rb = {0};
   cupid_cuf_info info;
   cupid_cuf_get_info(beam, &info);
   CUPID_CHECK(info.expansion == CUPID_EXPANSION_LE, CUPID_ERR_MODEL,
               "a PD region over part of the section needs an LE section expansion");
-  cupid_int n_pd = cupid_pd_grid_num_nodes(grid);
+  cupid_int n_pd = p->n_pd;
 
-  CUPID_TRY(partial_extended_grid(beam, o, &ext));
-  cupid_int n_ext = cupid_pd_grid_num_nodes(ext), n_fict = 0;
-  CUPID_TRY(cpl_map_extended(ext, grid, beam, info.M, info.element_nodes, &map, &n_fict));
-  CUPID_TRY_CHECK(n_ext - n_fict == n_pd, CUPID_ERR_ARGUMENT,
-                  "extended grid holds %lld real nodes, expected %lld", (long long)(n_ext - n_fict),
-                  (long long)n_pd);
-  CUPID_TRY(cupid_pd_operator_create(ext, &o->pd, &op));
-  CUPID_TRY(cupid_pd_operator_assemble(op, &Ke));
-  cupid_pd_operator_destroy(&op);
+  CUPID_TRY(partial_extended_grid(beam, o, &p->ext));
+  p->n_ext = cupid_pd_grid_num_nodes(p->ext);
+  CUPID_TRY(cpl_map_extended(p->ext, grid, beam, info.M, info.element_nodes, &p->map, &p->n_fict));
+  CUPID_TRY_CHECK(p->n_ext - p->n_fict == n_pd, CUPID_ERR_ARGUMENT,
+                  "extended grid holds %lld real nodes, expected %lld",
+                  (long long)(p->n_ext - p->n_fict), (long long)n_pd);
 
   CUPID_TRY(cupid_cuf_assemble(beam, &Kb));
   CUPID_TRY(removed_stiffness(beam, o, &twin, &Kr));
   CUPID_TRY(fictitious_fe(beam, twin, grid, &fi));
 
   cupid_int N = n_pd + info.n_fe_nodes;
-  CUPID_TRY(cpl_rowbuild_init(&rb, N, N));
-  CUPID_TRY(cpl_pd_rows(&rb, Ke, &map, n_ext, n_pd));
-  cupid_csr_destroy(&Ke);
+  CUPID_TRY(cpl_rowbuild_init(&rb, info.n_fe_nodes, N));
   CUPID_TRY(partial_fe_rows(&rb, beam, Kb, Kr, &fi, n_pd));
-  CUPID_TRY(cpl_rowbuild_finish(&rb, K));
+  CUPID_TRY(cpl_rowbuild_finish(&rb, &p->Kfe));
   c->info = (cupid_coupling_info){.n_real_pd = n_pd,
-                                  .n_fictitious_pd = n_fict,
-                                  .n_interfaces = count_interfaces(ext, &map, o),
+                                  .n_fictitious_pd = p->n_fict,
+                                  .n_interfaces = count_interfaces(p->ext, &p->map, o),
                                   .n_fictitious_fe = fi.n_fict};
 cleanup:
-  cupid_csr_destroy(&Ke);
   cupid_csr_destroy(&Kb);
   cupid_csr_destroy(&Kr);
   cupid_cuf_beam_destroy(&twin);
-  cupid_pd_operator_destroy(&op);
-  cupid_pd_grid_destroy(&ext);
-  cpl_ext_map_free(&map);
   fe_interp_free(&fi);
   cpl_rowbuild_free(&rb);
   return st;

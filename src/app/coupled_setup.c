@@ -1,0 +1,198 @@
+/* A fictitious-node coupled model set up to its linear system for the matrix-free solve
+ * (coupled_setup.h): the stages of `cupid run` (run.c, coupled.c) that do not assemble. The
+ * constraint and load split repeats coupled.c's (static there). */
+#include <string.h>
+
+#include "coupled_setup.h"
+
+static cupid_status setup_pd(cupid_job *job) {
+  const cupid_model_t *m = job->model;
+  double t0 = cupid_wtime();
+  CUPID_CALL(cupid_pd_grid_create_from_model(m, &job->grid));
+  job->n_pd = cupid_pd_grid_num_nodes(job->grid);
+  CUPID_CALL(cupid_calloc((size_t)m->n_materials, sizeof *job->pd_materials, "PD materials",
+                          &job->pd_materials));
+  for (int r = 0; r < m->pd.n_regions; r++)
+    CUPID_CHECK(!m->materials[m->pd.regions[r].material].orthotropic, CUPID_ERR_MODEL,
+                "PD region %d: an orthotropic material; peridynamics needs {E, nu}", r);
+  for (int i = 0; i < m->n_materials; i++)
+    job->pd_materials[i] = (cupid_pd_material){.E = m->materials[i].E, .nu = m->materials[i].nu};
+  job->pd_options = (cupid_pd_operator_options){.horizon = m->pd.horizon,
+                                                .model = m->pd.model,
+                                                .influence = m->pd.influence,
+                                                .partial_volume = m->pd.partial_volume,
+                                                .materials = job->pd_materials,
+                                                .n_materials = m->n_materials};
+  cupid_job_phase_end(job, CUPID_PHASE_GRID, t0);
+  return CUPID_SUCCESS;
+}
+
+static cupid_status setup_constraints(cupid_job *job) {
+  const cupid_model_t *m = job->model;
+  cupid_status st = CUPID_SUCCESS;
+  cupid_constraint *pd = NULL;
+  int npd = 0;
+  CUPID_CALL(cupid_calloc((size_t)m->n_constraints + 1, sizeof *pd, "PD constraints", &pd));
+  for (int k = 0; k < m->n_constraints; k++) {
+    const cupid_constraint *c = &m->constraints[k];
+    int on_fe, on_pd;
+    if (c->kind == CUPID_CONSTRAINT_CLAMP) {
+      on_fe = cupid_app_fe_node_at(job, c->plane_y);
+      on_pd = !on_fe;
+    } else {
+      on_fe = cupid_app_fe_node_in_box(job, &c->box);
+      on_pd = cupid_app_pd_node_in_box(job, &c->box);
+    }
+    if (!on_fe && !on_pd) {
+      st = cupid_model_error(m, &c->mark, "the constraint touches neither the beam nor a PD node");
+      goto cleanup;
+    }
+    if (on_fe) CUPID_TRY(cupid_cuf_constraint_apply(job->beam, m, c, job->bc));
+    if (on_pd) pd[npd++] = *c;
+  }
+  CUPID_TRY(cupid_app_pd_stage(job, pd, npd, NULL, 0, 1));
+  /* FE nodes inside the PD regions carry no stiffness: hold them at zero. */
+  for (cupid_int n = 0; n < job->fe_info.n_fe_nodes; n++) {
+    if (cupid_cuf_node_used(job->beam, (int)(n % job->fe_info.M), n / job->fe_info.M)) continue;
+    for (int c = 0; c < 3; c++)
+      CUPID_TRY(cupid_dirichlet_fix(job->bc, job->fe_offset + 3 * n + c, 0.0));
+  }
+  CUPID_TRY(cupid_dirichlet_finalize(job->bc));
+cleanup:
+  cupid_free(&pd);
+  return st;
+}
+
+static cupid_status setup_loads(cupid_job *job) {
+  const cupid_model_t *m = job->model;
+  cupid_status st = CUPID_SUCCESS;
+  cupid_load *pd = NULL;
+  int npd = 0;
+  CUPID_CALL(cupid_calloc((size_t)m->n_loads + 1, sizeof *pd, "PD loads", &pd));
+  for (int k = 0; k < m->n_loads; k++) {
+    const cupid_load *l = &m->loads[k];
+    int on_fe = 0, on_pd = 0;
+    switch (l->kind) {
+    case CUPID_LOAD_TRACTION:
+      on_fe = cupid_app_fe_node_at(job, l->plane_y);
+      on_pd = !on_fe;
+      break;
+    case CUPID_LOAD_POINT:
+      on_fe = cupid_cuf_contains(job->beam, l->at[0], l->at[1], l->at[2]);
+      on_pd = !on_fe;
+      break;
+    case CUPID_LOAD_BODY:
+      on_fe = cupid_app_fe_node_in_box(job, &l->box);
+      on_pd = cupid_app_pd_node_in_box(job, &l->box);
+      break;
+    }
+    if (on_fe) CUPID_TRY(cupid_cuf_load_add(job->beam, m, l, job->f_ext));
+    if (on_pd) pd[npd++] = *l;
+  }
+  CUPID_TRY(cupid_app_pd_stage(job, NULL, 0, pd, npd, 0));
+cleanup:
+  cupid_free(&pd);
+  return st;
+}
+
+cupid_status cupid_app_coupled_setup(const cupid_model_t *model, const cupid_run_options *opts,
+                                     cupid_coupled_setup *s) {
+  memset(s, 0, sizeof *s);
+  cupid_job *job = &s->job;
+  job->model = model;
+  job->opts = opts;
+  job->quiet = 1;
+  job->t_start = cupid_wtime();
+  job->outdir = opts->output_dir ? opts->output_dir : model->output.directory;
+  CUPID_CHECK(cupid_app_is_coupled(job) && model->coupling.method == CUPID_COUPLING_FICTITIOUS &&
+                  model->analysis.type == CUPID_ANALYSIS_STATIC && model->pd.dimension == 3,
+              CUPID_ERR_UNSUPPORTED,
+              "the matrix-free coupled solve takes static beam + 3D peridynamics models with "
+              "coupling method fictitious");
+  CUPID_CALL(setup_pd(job));
+  CUPID_CALL(cupid_app_fe_build(job));
+  CUPID_CALL(cupid_app_coupled_prepare(job));
+  job->fe_offset = 3 * job->n_pd;
+  job->ndof = job->fe_offset + job->n_fe_dofs;
+  CUPID_CALL(cupid_app_check_points(job));
+  size_t n = (size_t)job->ndof;
+  CUPID_CALL(cupid_calloc(n, sizeof(double), "displacements", &job->u));
+  CUPID_CALL(cupid_calloc(n, sizeof(double), "applied loads", &job->f_ext));
+  CUPID_CALL(cupid_calloc(n, sizeof(double), "internal forces", &job->f_int));
+  CUPID_CALL(cupid_dirichlet_create(job->ndof, &job->bc));
+  CUPID_CALL(setup_constraints(job));
+  CUPID_CALL(setup_loads(job));
+  int nr = model->pd.n_regions;
+  CUPID_CALL(cupid_calloc((size_t)nr, sizeof *s->boxes, "region boxes", &s->boxes));
+  CUPID_CALL(cupid_calloc((size_t)nr, sizeof *s->mats, "region materials", &s->mats));
+  for (int r = 0; r < nr; r++) {
+    s->boxes[r] = model->pd.regions[r].box;
+    s->mats[r] = model->pd.regions[r].material;
+  }
+  s->co = (cupid_coupling_options){.beam_def = &model->beam,
+                                   .materials = model->materials,
+                                   .n_materials = model->n_materials,
+                                   .n_regions = nr,
+                                   .regions = s->boxes,
+                                   .region_materials = s->mats,
+                                   .spacing = model->pd.spacing,
+                                   .pd = job->pd_options};
+  return CUPID_SUCCESS;
+}
+
+void cupid_app_coupled_setup_free(cupid_coupled_setup *s) {
+  cupid_job *job = &s->job;
+  cupid_coupling_destroy(&job->coupling);
+  cupid_pd_operator_destroy(&job->op);
+  cupid_pd_grid_destroy(&job->grid);
+  cupid_cuf_beam_destroy(&job->beam);
+  cupid_csr_destroy(&job->K);
+  cupid_dirichlet_destroy(&job->bc);
+  cupid_free(&job->u);
+  cupid_free(&job->f_ext);
+  cupid_free(&job->f_int);
+  cupid_free(&job->pd_stress);
+  cupid_free(&job->pd_materials);
+  cupid_free(&s->boxes);
+  cupid_free(&s->mats);
+}
+
+cupid_status cupid_app_coupled_solve_mf(cupid_job *job, const cupid_coupling_options *co,
+                                        const cupid_coupling_krylov_options *ko) {
+  cupid_status st = CUPID_SUCCESS;
+  cupid_coupling_operator A = NULL;
+  cupid_csr P = NULL;
+  double t0 = cupid_wtime();
+  CUPID_TRY(cupid_coupling_operator_create(job->beam, job->grid, co, &A));
+  cupid_coupling_info ci;
+  cupid_coupling_operator_get_info(A, &ci);
+  job->n_fictitious = ci.n_fictitious_pd;
+  CUPID_TRY(cupid_coupling_preconditioner(A, 1.5, &P));
+  cupid_job_phase_end(job, CUPID_PHASE_COUPLING, t0);
+  cupid_job_progress(job,
+                     "coupling (fictitious nodes, matrix-free): %d interfaces, %lld fictitious PD "
+                     "nodes, %lld fictitious FE nodes; operator %.1f MB, preconditioner matrix "
+                     "%.1f MB",
+                     ci.n_interfaces, (long long)ci.n_fictitious_pd, (long long)ci.n_fictitious_fe,
+                     (double)cupid_coupling_operator_bytes(A) / 1e6, (double)cupid_csr_bytes(P) / 1e6);
+  cupid_coupling_krylov_info ki;
+  st = cupid_coupling_krylov_solve(A, P, job->bc, job->f_ext, job->u, ko, &ki);
+  job->phases[CUPID_PHASE_FACTORISATION] =
+      (cupid_phase_record){ki.time_setup, cupid_peak_memory(), 1};
+  job->phases[CUPID_PHASE_SOLVE] = (cupid_phase_record){ki.time_solve, cupid_peak_memory(), 1};
+  job->solve.method = "petsc-gmres";
+  job->solve.n = job->bc->n_free;
+  job->solve.residual = ki.residual;
+  job->solve.time_factor = ki.time_setup;
+  job->solve.time_solve = ki.time_solve;
+  job->solve.failed_dof = -1;
+  CUPID_TRY(st);
+  job->solved = 1;
+  CUPID_TRY(cupid_coupling_operator_apply(A, job->u, job->f_int));
+  cupid_job_progress(job, "solve: %s, %lld equations, %d iterations, residual %.2e", ki.method,
+                     (long long)job->solve.n, ki.iterations, ki.residual);
+cleanup:
+  cupid_csr_destroy(&P);
+  cupid_coupling_operator_destroy(&A);
+  return st;
+}
