@@ -151,6 +151,10 @@ cupid_status cupid_app_guard_size(const cupid_job *job);
 /** Resolve --solver / analysis.solver (auto: direct below the size limit, PETSc above when
  *  built with it) into job->solver and job->solver_reason; initialises PETSc when it is picked. */
 cupid_status cupid_app_choose_solver(cupid_job *job);
+
+/** 1 when a coupled model is solved matrix-free (--solver petsc on one rank, fictitious nodes,
+ *  static, 3D PD): coupled.c; the estimate (check.c) follows it. */
+int cupid_app_coupled_matrix_free(const cupid_job *job);
 /** check.c: the memory limit (--max-memory, else 90% of the physical memory) and the estimated
  *  peak bytes and factorisation seconds of the direct path (the grid and beam built). */
 double cupid_app_memory_limit(const cupid_job *job);

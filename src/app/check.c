@@ -109,6 +109,14 @@ static void estimate_iterative(const cupid_job *job, cupid_estimate *e) {
     double n = (double)job->n_pd, passes = job->model->pd.model == CUPID_PD_LPS ? 2.0 : 1.0;
     e->iterative_bytes = 2.5 * 19.0 * 9.0 * 12.0 * n + 30.0 * ndof * 8.0;
     e->iterative_seconds = 2.0 + 25.0 * passes * (double)job->n_bonds / 1.5e7 + 2e-5 * n;
+  } else if (is_fictitious_coupled(job) && job->model->analysis.type == CUPID_ANALYSIS_STATIC &&
+             cupid_petsc_size() == 1 && job->grid && cupid_pd_grid_dimension(job->grid) == 3) {
+    /* Matrix-free Eq. 38 + MUMPS LU of the cheap twin, measured on cbeam_web200 (10^5 PD
+     * nodes: 4.3 GB, 115 s on a loaded machine; bench/README_coupled.md): ~1.6 kB a PD node
+     * for the operator and the cheap matrix, ~40 kB for its factor. */
+    e->iterative_matrix_free = 1;
+    e->iterative_bytes = 42e3 * (double)job->n_pd + 30.0 * ndof * 8.0;
+    e->iterative_seconds = 2.0 + 1.2e-3 * (double)job->n_pd;
   } else {
     double entries = 9.0 * e->matrix_blocks;
     int general = is_fictitious_coupled(job);
@@ -169,7 +177,9 @@ cupid_status cupid_app_estimate(const cupid_job *job, int print) {
     printf("estimated peak memory, direct path: %.3g GB (limit %.3g GB)\n", e.total_bytes / 1e9,
            limit / 1e9);
     printf("iterative path (PETSc %s): about %.3g GB per rank on one rank, %.3g s%s\n",
-           e.iterative_matrix_free ? "matrix-free CG + GAMG" : "Krylov + AMG/ILU, assembled",
+           e.iterative_matrix_free ? (job->beam ? "matrix-free GMRES + LU of a bond-based twin"
+                                                : "matrix-free CG + GAMG")
+                                   : "Krylov + AMG/ILU, assembled",
            e.iterative_bytes / 1e9, e.iterative_seconds,
            cupid_petsc_available() ? "" : " (this build has no PETSc)");
     if (m->analysis.type == CUPID_ANALYSIS_STATIC) {

@@ -8,6 +8,7 @@
 #include <string.h>
 
 #include "app_internal.h"
+#include "coupled_setup.h"
 #include "coupled_arlequin.h"
 #include "cupid/coupling.h"
 
@@ -247,10 +248,56 @@ static cupid_status solve(cupid_job *job) {
   return CUPID_SUCCESS;
 }
 
+/* --solver petsc on one rank: the fictitious-node system (Eq. 38) without the PD matrix,
+ * GMRES preconditioned by the LU of a cheap bond-based twin (src/coupling/operator.c,
+ * krylov.c; issue 6). Several ranks take the assembled, distributed path (solve()). */
+int cupid_app_coupled_matrix_free(const cupid_job *job) {
+  return job->solver == CUPID_SOLVER_PETSC && !cupid_app_is_arlequin(job) && !is_lagrange(job) &&
+         job->model->analysis.type == CUPID_ANALYSIS_STATIC && cupid_petsc_size() == 1 &&
+         job->grid && cupid_pd_grid_dimension(job->grid) == 3;
+}
+
+static cupid_status solve_matrix_free(cupid_job *job) {
+  const cupid_model_t *m = job->model;
+  cupid_status st = CUPID_SUCCESS;
+  cupid_box *boxes = NULL;
+  int *mats = NULL;
+  const int nr = m->pd.n_regions;
+  CUPID_TRY(cupid_calloc((size_t)nr, sizeof *boxes, "region boxes", &boxes));
+  CUPID_TRY(cupid_calloc((size_t)nr, sizeof *mats, "region materials", &mats));
+  for (int r = 0; r < nr; r++) {
+    boxes[r] = m->pd.regions[r].box;
+    mats[r] = m->pd.regions[r].material;
+  }
+  cupid_coupling_options co = {.beam_def = &m->beam,
+                               .materials = m->materials,
+                               .n_materials = m->n_materials,
+                               .n_regions = nr,
+                               .regions = boxes,
+                               .region_materials = mats,
+                               .spacing = m->pd.spacing,
+                               .pd = job->pd_options};
+  /* MUMPS: PETSc's UMFPACK interface has 32-bit indices and ran out of them at 10^5 PD
+   * nodes (bench/README_coupled.md); -pc_factor_mat_solver_type overrides it. */
+  cupid_coupling_krylov_options ko = {.factor_package = "mumps"};
+  CUPID_TRY(cupid_app_coupled_solve_mf(job, &co, &ko));
+  if (!job->quiet) CUPID_TRY(print_equilibrium(job));
+cleanup:
+  cupid_free(&boxes);
+  cupid_free(&mats);
+  return st;
+}
+
 cupid_status cupid_app_coupled_run(cupid_job *job) {
   if (cupid_app_is_arlequin(job)) return cupid_app_arlequin_run(job);
   if (job->model->analysis.type == CUPID_ANALYSIS_EVALUATE) return evaluate(job);
   CUPID_CALL(cupid_app_estimate(job, 0));
+  if (cupid_app_coupled_matrix_free(job)) {
+    CUPID_CALL(apply_constraints(job));
+    CUPID_CALL(cupid_dirichlet_finalize(job->bc));
+    CUPID_CALL(apply_loads(job));
+    return solve_matrix_free(job);
+  }
   CUPID_CALL(assemble(job));
   CUPID_CALL(apply_constraints(job));
   if (is_lagrange(job)) { /* tied PD nodes follow the beam: eliminated, recovered after */

@@ -1,6 +1,7 @@
 /* A fictitious-node coupled model set up to its linear system for the matrix-free solve
  * (coupled_setup.h): the stages of `cupid run` (run.c, coupled.c) that do not assemble. The
  * constraint and load split repeats coupled.c's (static there). */
+#include <stdio.h>
 #include <string.h>
 
 #include "coupled_setup.h"
@@ -21,6 +22,7 @@ static cupid_status setup_pd(cupid_job *job) {
                                                 .model = m->pd.model,
                                                 .influence = m->pd.influence,
                                                 .partial_volume = m->pd.partial_volume,
+                                                .surface_correction = m->pd.surface_correction,
                                                 .materials = job->pd_materials,
                                                 .n_materials = m->n_materials};
   cupid_job_phase_end(job, CUPID_PHASE_GRID, t0);
@@ -180,12 +182,20 @@ cupid_status cupid_app_coupled_solve_mf(cupid_job *job, const cupid_coupling_opt
   job->phases[CUPID_PHASE_FACTORISATION] =
       (cupid_phase_record){ki.time_setup, cupid_peak_memory(), 1};
   job->phases[CUPID_PHASE_SOLVE] = (cupid_phase_record){ki.time_solve, cupid_peak_memory(), 1};
-  job->solve.method = "petsc-gmres";
+  job->solve.method = "petsc"; /* matrix_free, ksp_type and pc_type tell the path */
   job->solve.n = job->bc->n_free;
   job->solve.residual = ki.residual;
   job->solve.time_factor = ki.time_setup;
   job->solve.time_solve = ki.time_solve;
   job->solve.failed_dof = -1;
+  job->solve.iterations = ki.iterations;
+  job->solve.ranks = 1;
+  job->solve.matrix_free = 1;
+  snprintf(job->solve.ksp_type, sizeof job->solve.ksp_type, "gmres");
+  const char *pc = strchr(ki.method, '+'); /* ki.method is "gmres+<pc>" */
+  snprintf(job->solve.pc_type, sizeof job->solve.pc_type, "%.31s", pc ? pc + 1 : ki.method);
+  snprintf(job->solve.converged_reason, sizeof job->solve.converged_reason, "%s",
+           ki.converged ? "CONVERGED" : "DIVERGED");
   CUPID_TRY(st);
   job->solved = 1;
   CUPID_TRY(cupid_coupling_operator_apply(A, job->u, job->f_int));

@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # The PETSc/MPI engine (issue 6) against the direct solver, on 2 MPI ranks:
 #  1. a small coupled bar (fictitious nodes, non-symmetric Eq. 38: GMRES, assembled MPIAIJ),
+#  1b. the same bar on one process: matrix-free Eq. 38 (src/coupling/operator.c, krylov.c),
 #  2. a small PD-only LPS block (matrix-free MATSHELL + halo exchange, CG + GAMG), with a
 #     prescribed non-zero displacement (lifted right-hand side),
 #  3. the model key `analysis.solver: petsc` on one process, PETSc options passed through,
@@ -61,6 +62,11 @@ echo "== coupled bar (fictitious nodes), 2 ranks"
 "$MPIEXEC" -n 2 "$CUPID" run "$models/coupled_bar.yaml" -o "$tmp/bar_petsc" --solver petsc --quiet
 compare "$tmp/bar_direct" "$tmp/bar_petsc" "coupled bar"
 python3 -c "import json,sys; s=json.load(open(sys.argv[1]))['solver']; assert s['ranks']==2 and s['operator']=='assembled' and s['ksp_type']=='gmres', s" "$tmp/bar_petsc/summary.json"
+
+echo "== coupled bar, one process: matrix-free Eq. 38 (GMRES + LU of the bond-based twin)"
+"$CUPID" run "$models/coupled_bar.yaml" -o "$tmp/bar_mf" --solver petsc --quiet
+compare "$tmp/bar_direct" "$tmp/bar_mf" "coupled bar, matrix-free"
+python3 -c "import json,sys; s=json.load(open(sys.argv[1]))['solver']; assert s['ranks']==1 and s['operator']=='matrix-free' and s['ksp_type']=='gmres', s" "$tmp/bar_mf/summary.json"
 
 echo "== PD-only LPS block, matrix-free, 2 ranks"
 "$CUPID" run "$models/pd_block.yaml" -o "$tmp/pd_direct" --solver direct --quiet
