@@ -29,7 +29,7 @@ void cupid_app_coupled_setup_free(cupid_coupled_setup *s);
  * as coupled.c does up to its loads (beam deactivated, bc finalized, f_ext filled; no
  * assemble()), build the matrix-free operator (cupid_coupling_operator_create()) and the cheap
  * preconditioner matrix, solve by GMRES (cupid_coupling_krylov_solve(), @p ko may be NULL) and
- * fill job->u, job->f_int (= A u), job->n_fictitious, job->solve (method "petsc-gmres", n,
+ * fill job->u, job->f_int (= A u), job->n_fictitious, job->solve (method "petsc", matrix_free 1, ksp_type gmres, n,
  * residual, times), the coupling / factorisation / solve phases and job->solved. job->K stays
  * NULL. Builds without PETSc: CUPID_ERR_UNSUPPORTED.
  */
