@@ -155,6 +155,12 @@ cupid_status cupid_app_choose_solver(cupid_job *job);
 /** 1 when a coupled model is solved matrix-free (--solver petsc on one rank, fictitious nodes,
  *  static, 3D PD): coupled.c; the estimate (check.c) follows it. */
 int cupid_app_coupled_matrix_free(const cupid_job *job);
+
+/** The coupled model's constraints (beam / PD split, FE nodes inside the regions fixed at 0;
+ *  not finalized) and loads (split likewise; Lagrange: loads on tied nodes through the tie):
+ *  coupled.c, shared with the matrix-free setup (coupled_setup.c). */
+cupid_status cupid_app_coupled_apply_constraints(cupid_job *job);
+cupid_status cupid_app_coupled_apply_loads(cupid_job *job);
 /** check.c: the memory limit (--max-memory, else 90% of the physical memory) and the estimated
  *  peak bytes and factorisation seconds of the direct path (the grid and beam built). */
 double cupid_app_memory_limit(const cupid_job *job);

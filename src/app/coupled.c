@@ -67,7 +67,7 @@ static int is_lagrange(const cupid_job *job) {
   return job->model->coupling.method == CUPID_COUPLING_LAGRANGE;
 }
 
-static cupid_status apply_constraints(cupid_job *job) {
+cupid_status cupid_app_coupled_apply_constraints(cupid_job *job) {
   const cupid_model_t *m = job->model;
   cupid_status st = CUPID_SUCCESS;
   cupid_constraint *pd = NULL;
@@ -104,7 +104,7 @@ cleanup:
   return st;
 }
 
-static cupid_status apply_loads(cupid_job *job) {
+cupid_status cupid_app_coupled_apply_loads(cupid_job *job) {
   const cupid_model_t *m = job->model;
   cupid_status st = CUPID_SUCCESS;
   cupid_load *pd = NULL;
@@ -137,27 +137,36 @@ cleanup:
 
 /* ----------------------------------------------------------------------- assembly */
 
-static cupid_status assemble(cupid_job *job) {
+/* The coupling's options from the model; *boxes and *mats (one per region) are the caller's
+ * to free, also after a failure. */
+static cupid_status coupling_options(const cupid_job *job, cupid_coupling_options *co,
+                                     cupid_box **boxes, int **mats) {
   const cupid_model_t *m = job->model;
+  const int nr = m->pd.n_regions;
+  CUPID_CALL(cupid_calloc((size_t)nr, sizeof **boxes, "region boxes", boxes));
+  CUPID_CALL(cupid_calloc((size_t)nr, sizeof **mats, "region materials", mats));
+  for (int r = 0; r < nr; r++) {
+    (*boxes)[r] = m->pd.regions[r].box;
+    (*mats)[r] = m->pd.regions[r].material;
+  }
+  *co = (cupid_coupling_options){.beam_def = &m->beam,
+                                 .materials = m->materials,
+                                 .n_materials = m->n_materials,
+                                 .n_regions = nr,
+                                 .regions = *boxes,
+                                 .region_materials = *mats,
+                                 .spacing = m->pd.spacing,
+                                 .pd = job->pd_options};
+  return CUPID_SUCCESS;
+}
+
+static cupid_status assemble(cupid_job *job) {
   double t0 = cupid_wtime();
   cupid_status st = CUPID_SUCCESS;
   cupid_box *boxes = NULL;
   int *mats = NULL;
-  int nr = m->pd.n_regions;
-  CUPID_TRY(cupid_calloc((size_t)nr, sizeof *boxes, "region boxes", &boxes));
-  CUPID_TRY(cupid_calloc((size_t)nr, sizeof *mats, "region materials", &mats));
-  for (int r = 0; r < nr; r++) {
-    boxes[r] = m->pd.regions[r].box;
-    mats[r] = m->pd.regions[r].material;
-  }
-  cupid_coupling_options co = {.beam_def = &m->beam,
-                               .materials = m->materials,
-                               .n_materials = m->n_materials,
-                               .n_regions = nr,
-                               .regions = boxes,
-                               .region_materials = mats,
-                               .spacing = m->pd.spacing,
-                               .pd = job->pd_options};
+  cupid_coupling_options co;
+  CUPID_TRY(coupling_options(job, &co, &boxes, &mats));
   if (is_lagrange(job))
     CUPID_TRY(cupid_coupling_lagrange_create(job->beam, job->grid, &co, &job->coupling, &job->K));
   else
@@ -258,25 +267,11 @@ int cupid_app_coupled_matrix_free(const cupid_job *job) {
 }
 
 static cupid_status solve_matrix_free(cupid_job *job) {
-  const cupid_model_t *m = job->model;
   cupid_status st = CUPID_SUCCESS;
   cupid_box *boxes = NULL;
   int *mats = NULL;
-  const int nr = m->pd.n_regions;
-  CUPID_TRY(cupid_calloc((size_t)nr, sizeof *boxes, "region boxes", &boxes));
-  CUPID_TRY(cupid_calloc((size_t)nr, sizeof *mats, "region materials", &mats));
-  for (int r = 0; r < nr; r++) {
-    boxes[r] = m->pd.regions[r].box;
-    mats[r] = m->pd.regions[r].material;
-  }
-  cupid_coupling_options co = {.beam_def = &m->beam,
-                               .materials = m->materials,
-                               .n_materials = m->n_materials,
-                               .n_regions = nr,
-                               .regions = boxes,
-                               .region_materials = mats,
-                               .spacing = m->pd.spacing,
-                               .pd = job->pd_options};
+  cupid_coupling_options co;
+  CUPID_TRY(coupling_options(job, &co, &boxes, &mats));
   /* MUMPS: PETSc's UMFPACK interface has 32-bit indices and ran out of them at 10^5 PD
    * nodes (bench/README_coupled.md); -pc_factor_mat_solver_type overrides it. */
   cupid_coupling_krylov_options ko = {.factor_package = "mumps"};
@@ -293,13 +288,13 @@ cupid_status cupid_app_coupled_run(cupid_job *job) {
   if (job->model->analysis.type == CUPID_ANALYSIS_EVALUATE) return evaluate(job);
   CUPID_CALL(cupid_app_estimate(job, 0));
   if (cupid_app_coupled_matrix_free(job)) {
-    CUPID_CALL(apply_constraints(job));
+    CUPID_CALL(cupid_app_coupled_apply_constraints(job));
     CUPID_CALL(cupid_dirichlet_finalize(job->bc));
-    CUPID_CALL(apply_loads(job));
+    CUPID_CALL(cupid_app_coupled_apply_loads(job));
     return solve_matrix_free(job);
   }
   CUPID_CALL(assemble(job));
-  CUPID_CALL(apply_constraints(job));
+  CUPID_CALL(cupid_app_coupled_apply_constraints(job));
   if (is_lagrange(job)) { /* tied PD nodes follow the beam: eliminated, recovered after */
     const cupid_int *tied;
     cupid_int nt;
@@ -308,7 +303,7 @@ cupid_status cupid_app_coupled_run(cupid_job *job) {
       for (int c = 0; c < 3; c++) CUPID_CALL(cupid_dirichlet_fix(job->bc, 3 * tied[t] + c, 0.0));
   }
   CUPID_CALL(cupid_dirichlet_finalize(job->bc));
-  CUPID_CALL(apply_loads(job));
+  CUPID_CALL(cupid_app_coupled_apply_loads(job));
   if (job->model->analysis.type == CUPID_ANALYSIS_DYNAMIC) { /* Lagrange only (checked) */
     CUPID_CALL(cupid_app_run_dynamic(job));
     cupid_coupling_recover(job->coupling, job->u);

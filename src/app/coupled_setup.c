@@ -30,71 +30,8 @@ static cupid_status setup_pd(cupid_job *job) {
 }
 
 static cupid_status setup_constraints(cupid_job *job) {
-  const cupid_model_t *m = job->model;
-  cupid_status st = CUPID_SUCCESS;
-  cupid_constraint *pd = NULL;
-  int npd = 0;
-  CUPID_CALL(cupid_calloc((size_t)m->n_constraints + 1, sizeof *pd, "PD constraints", &pd));
-  for (int k = 0; k < m->n_constraints; k++) {
-    const cupid_constraint *c = &m->constraints[k];
-    int on_fe, on_pd;
-    if (c->kind == CUPID_CONSTRAINT_CLAMP) {
-      on_fe = cupid_app_fe_node_at(job, c->plane_y);
-      on_pd = !on_fe;
-    } else {
-      on_fe = cupid_app_fe_node_in_box(job, &c->box);
-      on_pd = cupid_app_pd_node_in_box(job, &c->box);
-    }
-    if (!on_fe && !on_pd) {
-      st = cupid_model_error(m, &c->mark, "the constraint touches neither the beam nor a PD node");
-      goto cleanup;
-    }
-    if (on_fe) CUPID_TRY(cupid_cuf_constraint_apply(job->beam, m, c, job->bc));
-    if (on_pd) pd[npd++] = *c;
-  }
-  CUPID_TRY(cupid_app_pd_stage(job, pd, npd, NULL, 0, 1));
-  /* FE nodes inside the PD regions carry no stiffness: hold them at zero. */
-  for (cupid_int n = 0; n < job->fe_info.n_fe_nodes; n++) {
-    if (cupid_cuf_node_used(job->beam, (int)(n % job->fe_info.M), n / job->fe_info.M)) continue;
-    for (int c = 0; c < 3; c++)
-      CUPID_TRY(cupid_dirichlet_fix(job->bc, job->fe_offset + 3 * n + c, 0.0));
-  }
-  CUPID_TRY(cupid_dirichlet_finalize(job->bc));
-cleanup:
-  cupid_free(&pd);
-  return st;
-}
-
-static cupid_status setup_loads(cupid_job *job) {
-  const cupid_model_t *m = job->model;
-  cupid_status st = CUPID_SUCCESS;
-  cupid_load *pd = NULL;
-  int npd = 0;
-  CUPID_CALL(cupid_calloc((size_t)m->n_loads + 1, sizeof *pd, "PD loads", &pd));
-  for (int k = 0; k < m->n_loads; k++) {
-    const cupid_load *l = &m->loads[k];
-    int on_fe = 0, on_pd = 0;
-    switch (l->kind) {
-    case CUPID_LOAD_TRACTION:
-      on_fe = cupid_app_fe_node_at(job, l->plane_y);
-      on_pd = !on_fe;
-      break;
-    case CUPID_LOAD_POINT:
-      on_fe = cupid_cuf_contains(job->beam, l->at[0], l->at[1], l->at[2]);
-      on_pd = !on_fe;
-      break;
-    case CUPID_LOAD_BODY:
-      on_fe = cupid_app_fe_node_in_box(job, &l->box);
-      on_pd = cupid_app_pd_node_in_box(job, &l->box);
-      break;
-    }
-    if (on_fe) CUPID_TRY(cupid_cuf_load_add(job->beam, m, l, job->f_ext));
-    if (on_pd) pd[npd++] = *l;
-  }
-  CUPID_TRY(cupid_app_pd_stage(job, NULL, 0, pd, npd, 0));
-cleanup:
-  cupid_free(&pd);
-  return st;
+  CUPID_CALL(cupid_app_coupled_apply_constraints(job));
+  return cupid_dirichlet_finalize(job->bc);
 }
 
 cupid_status cupid_app_coupled_setup(const cupid_model_t *model, const cupid_run_options *opts,
@@ -123,7 +60,7 @@ cupid_status cupid_app_coupled_setup(const cupid_model_t *model, const cupid_run
   CUPID_CALL(cupid_calloc(n, sizeof(double), "internal forces", &job->f_int));
   CUPID_CALL(cupid_dirichlet_create(job->ndof, &job->bc));
   CUPID_CALL(setup_constraints(job));
-  CUPID_CALL(setup_loads(job));
+  CUPID_CALL(cupid_app_coupled_apply_loads(job));
   int nr = model->pd.n_regions;
   CUPID_CALL(cupid_calloc((size_t)nr, sizeof *s->boxes, "region boxes", &s->boxes));
   CUPID_CALL(cupid_calloc((size_t)nr, sizeof *s->mats, "region materials", &s->mats));
