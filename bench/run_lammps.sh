@@ -18,7 +18,8 @@ here=$(cd "$(dirname "$0")/.." && pwd)
 build=${BUILD:-$here/build}
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
-command -v lmp >/dev/null || { echo "lmp not found: apt-get install -y lammps" >&2; exit 1; }
+command -v lmp >/dev/null || "$(dirname "$0")/../scripts/install-deps.sh" --with-lammps
+command -v lmp >/dev/null || { echo "lmp not found: scripts/install-deps.sh --with-lammps" >&2; exit 1; }
 [ -x "$build/bench/bench_pd_apply" ] || { echo "build cupid first (cmake --build build)" >&2; exit 1; }
 
 # Atoms at integer points 0 .. n-1: the region's bounds sit half a spacing outside.

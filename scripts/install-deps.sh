@@ -1,9 +1,10 @@
 #!/usr/bin/env bash
 # Install cupid's build and test dependencies from Debian 12 packages (idempotent).
-# Usage: scripts/install-deps.sh [--with-petsc] [--with-fuzz] [--with-valgrind]
+# Usage: scripts/install-deps.sh [--with-petsc] [--with-fuzz] [--with-valgrind] [--with-lammps]
 #   --with-petsc     PETSc 3.18 + OpenMPI (petsc-dev; CUPID_WITH_PETSC, scripts/build.sh --with-petsc)
 #   --with-fuzz      clang-14 with libFuzzer and its OpenMP runtime (CUPID_FUZZ, docs/hardening.md)
 #   --with-valgrind  valgrind (CUPID_VALGRIND_TESTS)
+#   --with-lammps    LAMMPS (`lmp`), the reference of bench/run_lammps.sh (not needed to build or test)
 # Only packages that are missing are installed, so a prepared machine pays nothing.
 set -euo pipefail
 
@@ -13,6 +14,7 @@ for arg in "$@"; do
     --with-petsc) pkgs+=(petsc-dev) ;;
     --with-fuzz) pkgs+=(clang-14 libclang-rt-14-dev libomp-14-dev) ;;
     --with-valgrind) pkgs+=(valgrind) ;;
+    --with-lammps) pkgs+=(lammps) ;;
     *) echo "install-deps.sh: unknown option '$arg'" >&2; exit 1 ;;
   esac
 done
