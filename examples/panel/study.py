@@ -110,8 +110,8 @@ output:
 
 
 def run(cupid, path, outdir):
-    r = subprocess.run(["/usr/bin/time", "-f", "%M", cupid, "run", path, "--quiet"],
-                       capture_output=True, text=True)
+    timer = ["/usr/bin/time", "-f", "%M"] if os.path.exists("/usr/bin/time") else []
+    r = subprocess.run(timer + [cupid, "run", path, "--quiet"], capture_output=True, text=True)
     if r.returncode:
         sys.exit(f"{path}: cupid failed\n{r.stdout}{r.stderr}")
     s = json.load(open(os.path.join(outdir, "summary.json")))
