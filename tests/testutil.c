@@ -1,6 +1,7 @@
 #define _POSIX_C_SOURCE 200809L /* mkdtemp */
 #include "testutil.h"
 
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -57,3 +58,55 @@ cupid_test_affine cupid_test_random_affine(uint64_t seed) {
   }
   return a;
 }
+
+/* Shared by the PD bar verification tests (test_pd_bar.c, test_pd_surface.c). */
+int cupid_test_pd_pcg(cupid_pd_operator op, cupid_int n, const unsigned char *fixed,
+                      const double *diag, const double *b, double *x, double rtol, int maxit) {
+  double *r = calloc((size_t)n, sizeof *r), *z = calloc((size_t)n, sizeof *z);
+  double *p = calloc((size_t)n, sizeof *p), *q = calloc((size_t)n, sizeof *q);
+  memset(x, 0, (size_t)n * sizeof *x);
+  double bn = 0, rz = 0;
+  for (cupid_int i = 0; i < n; i++) {
+    r[i] = fixed[i] ? 0.0 : b[i];
+    z[i] = fixed[i] ? 0.0 : r[i] / diag[i];
+    p[i] = z[i];
+    bn += r[i] * r[i];
+    rz += r[i] * z[i];
+  }
+  bn = sqrt(bn);
+  int it = 0;
+  for (; it < maxit; it++) {
+    CUPID_ASSERT_OK(cupid_pd_operator_apply(op, p, q));
+    double pq = 0;
+    for (cupid_int i = 0; i < n; i++) {
+      if (fixed[i]) q[i] = 0.0;
+      pq += p[i] * q[i];
+    }
+    assert_true(pq > 0); /* K_ff is SPD once the rigid modes are removed */
+    const double alpha = rz / pq;
+    double rn = 0, rz1 = 0;
+    for (cupid_int i = 0; i < n; i++) {
+      x[i] += alpha * p[i];
+      r[i] -= alpha * q[i];
+      z[i] = fixed[i] ? 0.0 : r[i] / diag[i];
+      rn += r[i] * r[i];
+      rz1 += r[i] * z[i];
+    }
+    if (sqrt(rn) <= rtol * bn) break;
+    const double beta = rz1 / rz;
+    rz = rz1;
+    for (cupid_int i = 0; i < n; i++) p[i] = z[i] + beta * p[i];
+  }
+  /* True residual check. */
+  CUPID_ASSERT_OK(cupid_pd_operator_apply(op, x, q));
+  double res = 0;
+  for (cupid_int i = 0; i < n; i++)
+    if (!fixed[i]) res += (q[i] - b[i]) * (q[i] - b[i]);
+  assert_true(sqrt(res) <= 10 * rtol * bn);
+  free(r);
+  free(z);
+  free(p);
+  free(q);
+  return it;
+}
+

@@ -50,6 +50,14 @@ void cupid_test_affine_fn(void *ctx, const double p[3], double density, double o
 /** A deterministic random affine field with entries of size 1e-3. */
 cupid_test_affine cupid_test_random_affine(uint64_t seed);
 
+/**
+ * Jacobi-preconditioned CG on the free DOFs of a PD operator (fixed DOFs held at zero): x
+ * solves K_ff x_f = b_f to a relative residual @p rtol; the true residual is asserted (10 rtol).
+ * Returns the iterations. For verification tests of PD-only bars.
+ */
+int cupid_test_pd_pcg(cupid_pd_operator op, cupid_int n, const unsigned char *fixed,
+                      const double *diag, const double *b, double *x, double rtol, int maxit);
+
 /** Absolute path of a file in the source tree (tests run from the build tree). */
 const char *cupid_test_source_path(const char *relative);
 
