@@ -50,13 +50,21 @@ void cupid_test_affine_fn(void *ctx, const double p[3], double density, double o
 /** A deterministic random affine field with entries of size 1e-3. */
 cupid_test_affine cupid_test_random_affine(uint64_t seed);
 
+/** A PD-only bar in uniaxial traction (cupid_test_pd_bar). */
+typedef struct {
+  double strain; /**< interior axial strain / (sigma/E) */
+  double nu;     /**< measured -eps_xx/eps_yy at the middle section */
+  int iterations;
+} cupid_test_bar_result;
+
 /**
- * Jacobi-preconditioned CG on the free DOFs of a PD operator (fixed DOFs held at zero): x
- * solves K_ff x_f = b_f to a relative residual @p rtol; the true residual is asserted (10 rtol).
- * Returns the iterations. For verification tests of PD-only bars.
+ * The W x NY x W bar (h = 1, delta = 3, Gaussian influence, E = 1e4, sigma = 1 on y = NY; u_y
+ * held on the first layer, rigid modes removed), solved by Jacobi CG to relative residual
+ * @p rtol (true residual asserted). Shared by the PD bar verification tests.
  */
-int cupid_test_pd_pcg(cupid_pd_operator op, cupid_int n, const unsigned char *fixed,
-                      const double *diag, const double *b, double *x, double rtol, int maxit);
+cupid_test_bar_result cupid_test_pd_bar(int W, int NY, cupid_pd_model_kind model,
+                                        cupid_partial_volume pvr, double nu,
+                                        cupid_surface_correction sc, double rtol);
 
 /** Absolute path of a file in the source tree (tests run from the build tree). */
 const char *cupid_test_source_path(const char *relative);

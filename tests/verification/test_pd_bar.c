@@ -25,67 +25,10 @@
 
 enum { NY = 40 };
 
-typedef struct {
-  double strain;  /* interior axial strain / (sigma/E) */
-  double nu;      /* measured -eps_xx/eps_yy at the middle section */
-  int iterations;
-} bar_result;
+typedef cupid_test_bar_result bar_result;
 
 static bar_result solve_bar(int W, cupid_pd_model_kind model, cupid_partial_volume pvr, double nu) {
-  const int NX = W, NZ = W;
-  cupid_box box = {.lo = {0, 0, 0}, .hi = {NX, NY, NZ}, .has = {1, 1, 1}};
-  int mzero = 0;
-  cupid_pd_grid_options go = {.spacing = 1.0, .dimension = 3};
-  cupid_pd_grid g = NULL;
-  CUPID_ASSERT_OK(cupid_pd_grid_create(&go, 1, &box, &mzero, &g));
-  const double E = 1.0e4, sigma = 1.0, delta = 3.0;
-  cupid_pd_material mat = {E, nu};
-  cupid_pd_operator_options o = {.horizon = delta, .model = model, .influence = CUPID_INFLUENCE_GAUSSIAN,
-                                 .partial_volume = pvr, .materials = &mat, .n_materials = 1};
-  cupid_pd_operator op = NULL;
-  CUPID_ASSERT_OK(cupid_pd_operator_create(g, &o, &op));
-  const cupid_int nn = cupid_pd_grid_num_nodes(g), n = 3 * nn;
-  unsigned char *fixed = calloc((size_t)n, 1);
-  double *b = calloc((size_t)n, sizeof *b), *u = calloc((size_t)n, sizeof *u);
-  double *diag = malloc((size_t)n * sizeof *diag), *blk = malloc(9 * (size_t)nn * sizeof *blk);
-  CUPID_ASSERT_OK(cupid_pd_operator_diagonal(op, blk));
-  for (cupid_int p = 0; p < nn; p++)
-    for (int c = 0; c < 3; c++) diag[3 * p + c] = blk[9 * p + 4 * c];
-  for (int k = 0; k < NZ; k++)
-    for (int i = 0; i < NX; i++) {
-      fixed[3 * cupid_pd_grid_node_at(g, i, 0, k) + 1] = 1;              /* u_y = 0 at y = 0 */
-      b[3 * cupid_pd_grid_node_at(g, i, NY - 1, k) + 1] = sigma * 1.0;    /* sigma h^2 */
-    }
-  const cupid_int a = cupid_pd_grid_node_at(g, NX / 2, 0, NZ / 2), c2 = cupid_pd_grid_node_at(g, NX / 2, 0, 0);
-  fixed[3 * a] = fixed[3 * a + 2] = 1; /* translations x, z */
-  fixed[3 * c2] = 1;                   /* rotation about y */
-  bar_result res;
-  res.iterations = cupid_test_pd_pcg(op, n, fixed, diag, b, u, 1e-10, 20000);
-  /* Axial strain between sections j1 and j2 (15 h from either end), section-averaged. */
-  const int j1 = 12, j2 = 27;
-  double s = 0;
-  for (int k = 0; k < NZ; k++)
-    for (int i = 0; i < NX; i++)
-      s += u[3 * cupid_pd_grid_node_at(g, i, j2, k) + 1] - u[3 * cupid_pd_grid_node_at(g, i, j1, k) + 1];
-  const double eyy = s / (NX * NZ) / (j2 - j1);
-  res.strain = eyy / (sigma / E);
-  /* Lateral strain at the middle section: least-squares slope of u_x in x. */
-  const int jm = (j1 + j2) / 2;
-  double sxx = 0, sxu = 0, xm = (NX - 1) / 2.0;
-  for (int k = 0; k < NZ; k++)
-    for (int i = 0; i < NX; i++) {
-      sxx += (i - xm) * (i - xm);
-      sxu += (i - xm) * u[3 * cupid_pd_grid_node_at(g, i, jm, k)];
-    }
-  res.nu = -(sxu / sxx) / eyy;
-  free(fixed);
-  free(b);
-  free(u);
-  free(diag);
-  free(blk);
-  cupid_pd_operator_destroy(&op);
-  cupid_pd_grid_destroy(&g);
-  return res;
+  return cupid_test_pd_bar(W, NY, model, pvr, nu, CUPID_SURFACE_NONE, 1e-10);
 }
 
 /* E / E_axis of the bulk discrete material along a cube axis: mu_d/mu from the stencil

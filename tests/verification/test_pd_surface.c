@@ -28,67 +28,11 @@
 
 enum { NY = 40, W = 10 };
 
-typedef struct {
-  double strain; /* interior axial strain / (sigma/E) */
-  double nu;     /* measured -eps_xx/eps_yy at the middle section */
-  int iterations;
-} bar_result;
+typedef cupid_test_bar_result bar_result;
 
 static bar_result solve_bar(cupid_pd_model_kind model, cupid_partial_volume pvr, double nu,
                             cupid_surface_correction sc) {
-  cupid_box box = {.lo = {0, 0, 0}, .hi = {W, NY, W}, .has = {1, 1, 1}};
-  int mzero = 0;
-  cupid_pd_grid_options go = {.spacing = 1.0, .dimension = 3};
-  cupid_pd_grid g = NULL;
-  CUPID_ASSERT_OK(cupid_pd_grid_create(&go, 1, &box, &mzero, &g));
-  const double E = 1.0e4, sigma = 1.0, delta = 3.0;
-  cupid_pd_material mat = {E, nu};
-  cupid_pd_operator_options o = {.horizon = delta, .model = model, .influence = CUPID_INFLUENCE_GAUSSIAN,
-                                 .partial_volume = pvr, .materials = &mat, .n_materials = 1,
-                                 .surface_correction = sc};
-  cupid_pd_operator op = NULL;
-  CUPID_ASSERT_OK(cupid_pd_operator_create(g, &o, &op));
-  const cupid_int nn = cupid_pd_grid_num_nodes(g), n = 3 * nn;
-  unsigned char *fixed = calloc((size_t)n, 1);
-  double *b = calloc((size_t)n, sizeof *b), *u = calloc((size_t)n, sizeof *u);
-  double *diag = malloc((size_t)n * sizeof *diag), *blk = malloc(9 * (size_t)nn * sizeof *blk);
-  assert_true(fixed && b && u && diag && blk);
-  CUPID_ASSERT_OK(cupid_pd_operator_diagonal(op, blk));
-  for (cupid_int p = 0; p < nn; p++)
-    for (int c = 0; c < 3; c++) diag[3 * p + c] = blk[9 * p + 4 * c];
-  for (int k = 0; k < W; k++)
-    for (int i = 0; i < W; i++) {
-      fixed[3 * cupid_pd_grid_node_at(g, i, 0, k) + 1] = 1;           /* u_y = 0 at y = 0 */
-      b[3 * cupid_pd_grid_node_at(g, i, NY - 1, k) + 1] = sigma * 1.0; /* sigma h^2 */
-    }
-  const cupid_int a = cupid_pd_grid_node_at(g, W / 2, 0, W / 2), c2 = cupid_pd_grid_node_at(g, W / 2, 0, 0);
-  fixed[3 * a] = fixed[3 * a + 2] = 1; /* translations x, z */
-  fixed[3 * c2] = 1;                   /* rotation about y */
-  bar_result res;
-  res.iterations = cupid_test_pd_pcg(op, n, fixed, diag, b, u, 1e-8, 20000);
-  const int j1 = 12, j2 = 27;
-  double s = 0;
-  for (int k = 0; k < W; k++)
-    for (int i = 0; i < W; i++)
-      s += u[3 * cupid_pd_grid_node_at(g, i, j2, k) + 1] - u[3 * cupid_pd_grid_node_at(g, i, j1, k) + 1];
-  const double eyy = s / (W * W) / (j2 - j1);
-  res.strain = eyy / (sigma / E);
-  const int jm = (j1 + j2) / 2;
-  double sxx = 0, sxu = 0, xm = (W - 1) / 2.0;
-  for (int k = 0; k < W; k++)
-    for (int i = 0; i < W; i++) {
-      sxx += (i - xm) * (i - xm);
-      sxu += (i - xm) * u[3 * cupid_pd_grid_node_at(g, i, jm, k)];
-    }
-  res.nu = -(sxu / sxx) / eyy;
-  free(fixed);
-  free(b);
-  free(u);
-  free(diag);
-  free(blk);
-  cupid_pd_operator_destroy(&op);
-  cupid_pd_grid_destroy(&g);
-  return res;
+  return cupid_test_pd_bar(W, NY, model, pvr, nu, sc, 1e-8);
 }
 
 static void test_corrected_bar(void **state) {
