@@ -152,6 +152,9 @@ cupid_status cupid_app_guard_size(const cupid_job *job);
  *  built with it) into job->solver and job->solver_reason; initialises PETSc when it is picked. */
 cupid_status cupid_app_choose_solver(cupid_job *job);
 
+/** Free everything a job owns (run.c); the job's struct itself is the caller's. */
+void cupid_app_job_destroy(cupid_job *job);
+
 /** 1 when a coupled model is solved matrix-free (--solver petsc on one rank, fictitious nodes,
  *  static, 3D PD): coupled.c; the estimate (check.c) follows it. */
 int cupid_app_coupled_matrix_free(const cupid_job *job);

@@ -80,18 +80,7 @@ cupid_status cupid_app_coupled_setup(const cupid_model_t *model, const cupid_run
 }
 
 void cupid_app_coupled_setup_free(cupid_coupled_setup *s) {
-  cupid_job *job = &s->job;
-  cupid_coupling_destroy(&job->coupling);
-  cupid_pd_operator_destroy(&job->op);
-  cupid_pd_grid_destroy(&job->grid);
-  cupid_cuf_beam_destroy(&job->beam);
-  cupid_csr_destroy(&job->K);
-  cupid_dirichlet_destroy(&job->bc);
-  cupid_free(&job->u);
-  cupid_free(&job->f_ext);
-  cupid_free(&job->f_int);
-  cupid_free(&job->pd_stress);
-  cupid_free(&job->pd_materials);
+  cupid_app_job_destroy(&s->job);
   cupid_free(&s->boxes);
   cupid_free(&s->mats);
 }

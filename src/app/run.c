@@ -304,7 +304,7 @@ static cupid_status sum_forces(cupid_job *job) {
   return st;
 }
 
-static void job_destroy(cupid_job *job) {
+void cupid_app_job_destroy(cupid_job *job) {
   cupid_coupling_destroy(&job->coupling);
   cupid_pd_operator_destroy(&job->op);
   cupid_pd_grid_destroy(&job->grid);
@@ -363,6 +363,6 @@ cupid_status cupid_run_model(const cupid_model_t *model, const cupid_run_options
   if (rank == 0) CUPID_TRY(cupid_app_write_outputs(&job));
   cupid_job_progress(&job, "done: results in %s", job.outdir);
 cleanup:
-  job_destroy(&job);
+  cupid_app_job_destroy(&job);
   return st;
 }
