@@ -27,10 +27,31 @@ typedef struct {
   double spacing;   /**< h */
   int dimension;    /**< 3 or 1 (a bar along y) */
   double area;      /**< dimension 1: cross-section area (cell volume = area * h) */
+  /* A slab of a distributed grid (issue 6; dimension 3 only). parts <= 1: the whole union. */
+  int parts;        /**< number of slabs (MPI ranks) the z layers are split into */
+  int part;         /**< the slab this grid holds, 0 <= part < parts */
+  int halo_layers;  /**< z layers kept on each side of the owned ones (see
+                         cupid_pd_operator_halo_layers) */
 } cupid_pd_grid_options;
 
 /**
- * Build the grid of a union of boxes: the lattice is anchored at the lowest corner of all
+ * Where a grid sits in the whole union (issue 6). A slab grid (options.parts > 1) holds the
+ * z layers [k0 - halo, k1 + halo) of the union, where part p owns the layers [k0, k1): the
+ * z layers are split into parts contiguous slabs of nearly equal node counts (each at least
+ * one layer). Nodes are numbered x fastest and z slowest in the union and in the slab alike,
+ * so local node l is global node first_global + l, and the owned nodes are the local range
+ * [owned_first, owned_last). A whole grid has first_global 0 and owns all its nodes.
+ */
+typedef struct {
+  cupid_int global_nodes;  /**< nodes of the whole union */
+  cupid_int first_global;  /**< global index of local node 0 */
+  cupid_int owned_first, owned_last; /**< owned local nodes */
+  int parts, part;
+} cupid_pd_grid_partition;
+
+/**
+ * Build the grid of a union of boxes (or, with opts->parts > 1, one slab of it plus its halo:
+ * cupid_pd_grid_partition; more parts than z layers is CUPID_ERR_MODEL): the lattice is anchored at the lowest corner of all
  * boxes, nodes sit at cell centres, a cell belongs to the union when its centre lies in
  * some box (first box wins for the material). Box bounds must lie on the lattice (error
  * names the box and bound otherwise). @p materials gives one material index per box.
@@ -53,6 +74,14 @@ cupid_status cupid_pd_grid_create_from_model(const cupid_model_t *model, cupid_p
 void cupid_pd_grid_destroy(cupid_pd_grid *grid);
 
 cupid_int cupid_pd_grid_num_nodes(const cupid_pd_grid grid);
+/** The grid's place in the whole union (a whole grid: itself). */
+void cupid_pd_grid_get_partition(const cupid_pd_grid grid, cupid_pd_grid_partition *part);
+/**
+ * The slab of the model's grid for one MPI rank (see cupid_pd_grid_create and
+ * cupid_pd_grid_partition); parts <= 1 gives the whole grid.
+ */
+cupid_status cupid_pd_grid_create_part_from_model(const cupid_model_t *model, int parts, int part,
+                                                  int halo_layers, cupid_pd_grid *grid);
 /** Node coordinates, 3 per node (x, y, z); for dimension 1, x = z = 0. */
 const double *cupid_pd_grid_coords(const cupid_pd_grid grid);
 /** Material index of each node. */
@@ -141,6 +170,18 @@ void cupid_pd_operator_destroy(cupid_pd_operator *op);
 
 /** Total bonds (each ordered pair i->j counted once per direction), stored or not. */
 cupid_int cupid_pd_operator_num_bonds(const cupid_pd_operator op);
+/** Bonds of the nodes [first, last) (e.g. the owned nodes of a slab grid). */
+cupid_int cupid_pd_operator_num_bonds_range(const cupid_pd_operator op, cupid_int first,
+                                            cupid_int last);
+/**
+ * The z layers a slab of rows depends on beyond its own (issue 6): twice the stencil's reach
+ * in z (LPS reads theta and m of every neighbour, each from the neighbour's family; the
+ * surface factors likewise), for both models. A slab grid built with this halo
+ * (cupid_pd_grid_options.halo_layers) gives, on its owned rows, exactly the operator of the
+ * whole grid: apply_range, stress and diagonal of the owned nodes agree to round-off.
+ */
+cupid_status cupid_pd_operator_halo_layers(const cupid_pd_operator_options *opts, double h,
+                                           int *layers);
 
 /**
  * Matrix-free f = K u (3 entries per node; in 1D too, with x and z decoupled and zero). On the

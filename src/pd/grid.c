@@ -35,6 +35,94 @@ static int bound_index(double value, double origin, double h, int axis, const ch
   return 1;
 }
 
+/* Nodes of the union in each z layer [0, nk) of the bounding box (a cell is a node when some
+ * box holds it), for splitting the layers into slabs. O(cells x boxes), no per-cell memory. */
+static cupid_status layer_counts(int n_boxes, const cupid_int *range, const cupid_int n[3],
+                                 cupid_int **counts) {
+  CUPID_CALL(cupid_calloc((size_t)n[2] + 1, sizeof **counts, "PD layer counts", counts));
+  cupid_int *cnt = *counts;
+#pragma omp parallel for schedule(dynamic, 1)
+  for (cupid_int k = 0; k < n[2]; k++) {
+    cupid_int c = 0;
+    for (cupid_int j = 0; j < n[1]; j++)
+      for (cupid_int i = 0; i < n[0]; i++)
+        for (int b = 0; b < n_boxes; b++) {
+          const cupid_int *r = range + 6 * b;
+          if (i >= r[0] && i < r[1] && j >= r[2] && j < r[3] && k >= r[4] && k < r[5]) {
+            c++;
+            break;
+          }
+        }
+    cnt[k] = c;
+  }
+  return CUPID_SUCCESS;
+}
+
+/* A slab grid (opts->parts > 1, issue 6): part p owns the z layers [k0, k1) that split the
+ * union's nodes into parts nearly equal slabs, and keeps halo_layers more on each side. The
+ * bounding box and the box ranges are cut to the window [w0, w1) and shifted to start at 0
+ * (a box outside it gets an empty z range); g->part gets the global counts, with owned_first
+ * already local and owned_last holding the nodes of the layers [k1, w1), which the caller
+ * subtracts from the slab's node count. */
+static cupid_status apply_partition(const cupid_pd_grid_options *opts, int n_boxes,
+                                    cupid_int *range, struct cupid_pd_grid_private *g) {
+  if (opts->parts <= 1) return CUPID_SUCCESS;
+  CUPID_CHECK(g->dim == 3, CUPID_ERR_UNSUPPORTED, "only 3D grids are split into slabs");
+  CUPID_CHECK(opts->part >= 0 && opts->part < opts->parts && opts->halo_layers >= 0,
+              CUPID_ERR_ARGUMENT, "slab %d of %d with %d halo layers", opts->part, opts->parts,
+              opts->halo_layers);
+  const cupid_int nk = g->n[2];
+  if (opts->parts > nk)
+    return CUPID_ERROR(CUPID_ERR_MODEL,
+                       "%d MPI ranks for a PD grid of %lld z layers: each rank needs at least one "
+                       "layer (use fewer ranks)",
+                       opts->parts, (long long)nk);
+  cupid_int *cnt = NULL;
+  CUPID_CALL(layer_counts(n_boxes, range, g->n, &cnt));
+  /* prefix: cnt[k] becomes the nodes of the layers below k */
+  cupid_int total = 0;
+  for (cupid_int k = 0; k <= nk; k++) {
+    cupid_int c = k < nk ? cnt[k] : 0;
+    cnt[k] = total;
+    total += c;
+  }
+  /* Slab boundaries: the first layer whose prefix reaches p total / parts, kept increasing so
+   * that every part owns at least one layer. */
+  cupid_int bound[2];
+  for (int e = 0; e < 2; e++) {
+    int p = opts->part + e;
+    cupid_int k = 0;
+    if (p >= opts->parts) {
+      k = nk;
+    } else if (p > 0) {
+      cupid_int target = (cupid_int)((double)total * p / opts->parts + 0.5);
+      while (k < nk && cnt[k] < target) k++;
+      if (k < p) k = p;                                  /* parts below own >= 1 layer each */
+      if (k > nk - (opts->parts - p)) k = nk - (opts->parts - p); /* and those above */
+    }
+    bound[e] = k;
+  }
+  cupid_int w0 = bound[0] - opts->halo_layers, w1 = bound[1] + opts->halo_layers;
+  if (w0 < 0) w0 = 0;
+  if (w1 > nk) w1 = nk;
+  g->part = (cupid_pd_grid_partition){.global_nodes = total,
+                                      .first_global = cnt[w0],
+                                      .owned_first = cnt[bound[0]] - cnt[w0],
+                                      .owned_last = cnt[w1] - cnt[bound[1]],
+                                      .parts = opts->parts,
+                                      .part = opts->part};
+  cupid_free(&cnt);
+  g->origin[2] += (double)w0 * g->h;
+  g->n[2] = w1 - w0;
+  for (int b = 0; b < n_boxes; b++) {
+    cupid_int *r = range + 6 * b;
+    cupid_int lo = r[4] > w0 ? r[4] : w0, hi = r[5] < w1 ? r[5] : w1;
+    r[4] = lo - w0;
+    r[5] = hi > lo ? hi - w0 : lo - w0;
+  }
+  return CUPID_SUCCESS;
+}
+
 void cupid_pd_grid_destroy(cupid_pd_grid *grid) {
   if (!grid || !*grid) return;
   struct cupid_pd_grid_private *g = *grid;
@@ -119,6 +207,7 @@ cupid_status pd_grid_build(const cupid_pd_grid_options *opts, int n_boxes, const
       if (hi > g->n[a]) g->n[a] = hi;
     }
   }
+  CUPID_TRY(apply_partition(opts, n_boxes, range, g));
   double cells = (double)g->n[0] * (double)g->n[1] * (double)g->n[2];
   if (cells > (double)PD_MAX_CELLS) {
     st = CUPID_ERROR(CUPID_ERR_MODEL,
@@ -136,6 +225,7 @@ cupid_status pd_grid_build(const cupid_pd_grid_options *opts, int n_boxes, const
    * that earlier boxes overwrite later ones). dense holds the box index for now. */
   for (int b = n_boxes - 1; b >= 0; b--) {
     const cupid_int *r = range + 6 * b;
+    if (r[5] <= r[4]) continue; /* outside this slab */
 #pragma omp parallel for collapse(2) schedule(static) if ((r[5] - r[4]) * (r[3] - r[2]) * (r[1] - r[0]) > PD_OMP_MIN_NODES)
     for (cupid_int k = r[4]; k < r[5]; k++)
       for (cupid_int j = r[2]; j < r[3]; j++)
@@ -145,6 +235,12 @@ cupid_status pd_grid_build(const cupid_pd_grid_options *opts, int n_boxes, const
   for (cupid_int c = 0; c < ncell; c++)
     if (g->dense[c] >= 0) nn++;
   g->nnodes = nn;
+  if (opts->parts <= 1) {
+    g->part = (cupid_pd_grid_partition){.global_nodes = nn, .owned_last = nn, .parts = 1};
+  } else {
+    /* apply_partition left the global counts; the owned range ends where the owned layers do */
+    g->part.owned_last = nn - g->part.owned_last;
+  }
   CUPID_TRY(cupid_malloc(3 * (size_t)nn, sizeof *g->coords, "PD node coordinates", &g->coords));
   CUPID_TRY(cupid_malloc((size_t)nn, sizeof *g->material, "PD node materials", &g->material));
   CUPID_TRY(cupid_malloc(3 * (size_t)nn, sizeof *g->ijk, "PD lattice positions", &g->ijk));
@@ -184,6 +280,9 @@ cupid_status cupid_pd_grid_create(const cupid_pd_grid_options *opts, int n_boxes
 }
 
 cupid_int cupid_pd_grid_num_nodes(const cupid_pd_grid grid) { return grid->nnodes; }
+void cupid_pd_grid_get_partition(const cupid_pd_grid grid, cupid_pd_grid_partition *part) {
+  *part = grid->part;
+}
 const double *cupid_pd_grid_coords(const cupid_pd_grid grid) { return grid->coords; }
 const int *cupid_pd_grid_materials(const cupid_pd_grid grid) { return grid->material; }
 double cupid_pd_grid_cell_volume(const cupid_pd_grid grid) { return grid->volume; }

@@ -5,7 +5,8 @@
 
 #include "pd/pd_internal.h"
 
-cupid_status cupid_pd_grid_create_from_model(const cupid_model_t *model, cupid_pd_grid *grid) {
+cupid_status cupid_pd_grid_create_part_from_model(const cupid_model_t *model, int parts, int part,
+                                                  int halo_layers, cupid_pd_grid *grid) {
   cupid_status st = CUPID_SUCCESS;
   cupid_box *boxes = NULL;
   int *mats = NULL;
@@ -27,7 +28,8 @@ cupid_status cupid_pd_grid_create_from_model(const cupid_model_t *model, cupid_p
     }
   }
   cupid_pd_grid_options opts = {.spacing = pd->spacing, .dimension = pd->dimension,
-                                .area = pd->area};
+                                .area = pd->area, .parts = parts, .part = part,
+                                .halo_layers = halo_layers};
   char msg[512];
   int bad = -1;
   st = pd_grid_build(&opts, pd->n_regions, boxes, mats, &bad, msg, sizeof msg, grid);
@@ -40,4 +42,8 @@ cleanup:
   cupid_free(&boxes);
   cupid_free(&mats);
   return st;
+}
+
+cupid_status cupid_pd_grid_create_from_model(const cupid_model_t *model, cupid_pd_grid *grid) {
+  return cupid_pd_grid_create_part_from_model(model, 1, 0, 0, grid);
 }

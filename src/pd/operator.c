@@ -151,6 +151,31 @@ cupid_status pd_operator_use_bond_lists(struct cupid_pd_operator_private *op) {
 
 cupid_int cupid_pd_operator_num_bonds(const cupid_pd_operator op) { return op->nbonds; }
 
+cupid_int cupid_pd_operator_num_bonds_range(const cupid_pd_operator op, cupid_int first,
+                                            cupid_int last) {
+  cupid_int n = 0;
+  for (cupid_int i = first; i < last; i++) n += pd_family_of(op, i).n;
+  return n;
+}
+
+cupid_status cupid_pd_operator_halo_layers(const cupid_pd_operator_options *opts, double h,
+                                           int *layers) {
+  CUPID_CHECK(opts && layers, CUPID_ERR_ARGUMENT, "halo layers need options");
+  pd_stencil S = {0};
+  CUPID_CALL(pd_stencil_build(3, h, opts->horizon, opts->partial_volume, opts->influence, &S));
+  int reach = 0;
+  for (int s = 0; s < S.n; s++) {
+    int dk = S.off[3 * s + 2] < 0 ? -S.off[3 * s + 2] : S.off[3 * s + 2];
+    if (dk > reach) reach = dk;
+  }
+  pd_stencil_free(&S);
+  /* Row i reads theta_j, m_j and the surface factors of every neighbour j, each of which
+   * reads j's own family: two hops, for both models (bond-based with the surface correction
+   * reads G_ji of the neighbour). */
+  *layers = 2 * reach;
+  return CUPID_SUCCESS;
+}
+
 const double *cupid_pd_operator_weighted_volume(const cupid_pd_operator op) { return op->m; }
 
 cupid_status cupid_pd_operator_dilatation(const cupid_pd_operator op, const double *u,

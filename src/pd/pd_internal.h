@@ -23,6 +23,7 @@ struct cupid_pd_grid_private {
   int *material;     /* per node */
   int32_t *ijk;      /* lattice position, 3 per node */
   cupid_int *dense;  /* n[0]*n[1]*n[2]: node index of a cell or -1 */
+  cupid_pd_grid_partition part; /* place in the whole union (issue 6: slabs for MPI) */
 };
 
 /* Loops over fewer nodes run on one thread (thread start-up and barriers cost more). */
