@@ -181,8 +181,10 @@ void cupid_direct_factor_destroy(cupid_direct_factor *F);
 
 /* ---- PETSc/MPI engine (src/solvers/petsc.c; issue 6) ----
  * Optional: with CUPID_HAVE_PETSC == 0 (cupid_config.h) every function below is a stub and the
- * solves return CUPID_ERR_UNSUPPORTED. Every rank holds the whole (replicated) model; the
- * solves are collective over PETSC_COMM_WORLD and leave the full solution on every rank. */
+ * solves return CUPID_ERR_UNSUPPORTED. Every rank holds the whole (replicated) model, except for
+ * PD-only 3D static models on several ranks, where each rank holds one slab of the PD grid
+ * (cupid_pd_grid_partition; cupid_petsc_solve_pd). The solves are collective over
+ * PETSC_COMM_WORLD. */
 
 /** 1 when cupid was built with PETSc (CMake option CUPID_WITH_PETSC). */
 int cupid_petsc_available(void);
@@ -211,6 +213,14 @@ int cupid_petsc_rank(void);
 int cupid_petsc_size(void);
 /** The largest of @p v over all ranks (collective; @p v itself when not initialised). */
 int cupid_petsc_max_int(int v);
+/** Sums over all ranks of @p n doubles, in place (collective; nothing when not initialised). */
+void cupid_petsc_sum_doubles(double *v, int n);
+/**
+ * Concatenate every rank's @p count doubles on rank 0, in rank order (MPI_Gatherv; collective):
+ * rank 0 passes @p root with room for the total, the others NULL. Without PETSc (or one rank)
+ * a copy. CUPID_ERR_UNSUPPORTED when a rank's count exceeds 2^31 - 1 (MPI's int counts).
+ */
+cupid_status cupid_petsc_gather_root(const double *local, cupid_int count, double *root);
 /** Abort every rank with exit status @p code (MPI_Abort; plain exit when not initialised). */
 void cupid_petsc_abort(int code);
 

@@ -82,6 +82,13 @@ typedef struct {
   /* Solver engine (issue 6): DIRECT or PETSC once chosen (AUTO until then), and why. */
   cupid_solver_kind solver;
   char solver_reason[160];
+
+  /* Distributed PD (issue 6, slab.c): this rank holds one z slab of the grid (slab = 1 until
+   * rank 0 gathers the results); the grid's n_pd, u, f_ext, f_int, bc are then the slab's. */
+  int slab;
+  cupid_pd_grid_partition part;  /**< of job->grid */
+  int slab_ranks;                /**< > 1: the run was split into this many slabs */
+  int slab_nodes_max;            /**< the largest slab (nodes incl. halo) */
 } cupid_job;
 
 /* run.c */
@@ -108,7 +115,22 @@ cupid_status cupid_app_pd_stage(cupid_job *job, cupid_constraint *cons, int nc,
 cupid_status cupid_app_sample(const cupid_job *job, const double p[3], double u[3],
                               double sigma[6], cupid_region_kind *region);
 
+/* slab.c (issue 6): PD-only static models split into z slabs over the MPI ranks. */
+/** Several ranks, PD only, 3D, static, solver petsc or auto: split the grid. */
+int cupid_app_slab_wanted(const cupid_job *job);
+/** Node i counts on this rank (always, unless a slab does not own it). */
+int cupid_app_pd_owned(const cupid_job *job, cupid_int node);
+/** A count of owned nodes summed over the ranks of a slab run (collective there). */
+cupid_int cupid_app_global_count(const cupid_job *job, cupid_int count);
+/** cupid_app_check_points against the whole grid, built on rank 0 for the check (collective). */
+cupid_status cupid_app_slab_check_points(cupid_job *job);
+/** After the solve: stresses of the slab, every owned field gathered on rank 0, which then
+ *  holds the whole grid and fields (job->slab = 0 there) for the outputs (collective). */
+cupid_status cupid_app_slab_collect(cupid_job *job);
+
 /* report.c: every file of output: (summary.json, lines, pd_nodes.csv, VTU, plots). */
+/** The outputs need nodal PD stresses (VTU, or a point with stress). */
+int cupid_app_needs_stress(const cupid_job *job);
 cupid_status cupid_app_write_outputs(cupid_job *job);
 /** Every output point must lie inside the model (checked before solving). */
 cupid_status cupid_app_check_points(const cupid_job *job);

@@ -38,7 +38,7 @@ static cupid_status constraint_on_nodes(cupid_job *job, const cupid_constraint *
     int in = c->kind == CUPID_CONSTRAINT_CLAMP ? fabs(p[1] - c->plane_y) < layer
                                                : cupid_box_contains(&c->box, p, CUPID_LATTICE_TOL * h);
     if (!in) continue;
-    (*count)++;
+    *count += cupid_app_pd_owned(job, i);
     for (int a = 0; a < 3; a++) {
       cupid_int d = 3 * i + a;
       if (c->kind == CUPID_CONSTRAINT_DISPLACEMENT) {
@@ -72,7 +72,7 @@ cupid_status cupid_app_pd_constraints(cupid_job *job) {
     const cupid_constraint *c = &m->constraints[k];
     cupid_int count;
     CUPID_CALL(constraint_on_nodes(job, c, &count));
-    if (count == 0) {
+    if (cupid_app_global_count(job, count) == 0) {
       if (c->kind == CUPID_CONSTRAINT_CLAMP)
         return cupid_model_error(m, &c->mark,
                                  "no PD node lies within %g of the plane y = %g (the clamp fixes "
@@ -85,7 +85,8 @@ cupid_status cupid_app_pd_constraints(cupid_job *job) {
   }
   /* A clamp layer of zero nodes is caught above; report what was fixed for the log. */
   cupid_int nfixed = 0;
-  for (cupid_int d = 0; d < job->ndof; d++) nfixed += job->bc->fixed[d];
+  for (cupid_int d = 0; d < job->ndof; d++) nfixed += job->bc->fixed[d] && cupid_app_pd_owned(job, d / 3);
+  nfixed = cupid_app_global_count(job, nfixed);
   cupid_job_progress(job, "constraints: %lld DOFs prescribed", (long long)nfixed);
   return CUPID_SUCCESS;
 }
@@ -131,12 +132,12 @@ static cupid_status traction_load(cupid_job *job, const cupid_load *l) {
     const double *p = x + 3 * i;
     double a = face_area(l, p, h, dim, m->pd.area);
     if (a <= 0) continue;
-    count++;
+    count += cupid_app_pd_owned(job, i);
     for (int c = 0; c < 3; c++)
       job->f_ext[3 * i + c] +=
           a * cupid_value_eval(&l->value[c], p[0], l->plane_y, p[2], 0.0, m->materials[mat[i]].density);
   }
-  if (count == 0)
+  if (cupid_app_global_count(job, count) == 0)
     return cupid_model_error(m, &l->mark,
                              "no free PD surface lies on the plane y = %g%s (a traction acts on "
                              "an end face of a PD region)",
@@ -163,9 +164,11 @@ static cupid_status point_load(cupid_job *job, const cupid_load *l) {
       node = cupid_pd_grid_node_at(job->grid, q[0], q[1], q[2]);
     }
   }
-  if (node < 0)
+  /* a slab: the rank that owns the node counts it (others may hold it in their halo) */
+  if (cupid_app_global_count(job, node >= 0 && cupid_app_pd_owned(job, node)) == 0)
     return cupid_model_error(m, &l->mark, "the point (%g, %g, %g) lies outside every PD region",
                              l->at[0], l->at[1], l->at[2]);
+  if (node < 0) return CUPID_SUCCESS; /* on another rank's slab */
   const int *mat = cupid_pd_grid_materials(job->grid);
   for (int c = 0; c < 3; c++)
     job->f_ext[3 * node + c] += cupid_value_eval(&l->value[c], l->at[0], l->at[1], l->at[2], 0.0,
@@ -182,12 +185,13 @@ static cupid_status body_load(cupid_job *job, const cupid_load *l) {
   for (cupid_int i = 0; i < job->n_pd; i++) {
     const double *p = x + 3 * i;
     if (!cupid_box_contains(&l->box, p, CUPID_LATTICE_TOL * h)) continue;
-    count++;
+    count += cupid_app_pd_owned(job, i);
     double rho = m->materials[mat[i]].density;
     for (int c = 0; c < 3; c++)
       job->f_ext[3 * i + c] += vol * cupid_value_eval(&l->value[c], p[0], p[1], p[2], 0.0, rho);
   }
-  if (count == 0) return cupid_model_error(m, &l->mark, "the box contains no PD node");
+  if (cupid_app_global_count(job, count) == 0)
+    return cupid_model_error(m, &l->mark, "the box contains no PD node");
   return CUPID_SUCCESS;
 }
 

@@ -203,6 +203,12 @@ static void json_solver(cupid_json js, const cupid_job *job) {
       cupid_json_string(js, "pc_type", job->solve.pc_type);
       cupid_json_string(js, "converged_reason", job->solve.converged_reason);
       cupid_json_string(js, "operator", job->solve.matrix_free ? "matrix-free" : "assembled");
+      if (job->slab_ranks > 1) { /* the PD grid was split into z slabs, one per rank */
+        cupid_json_begin_object(js, "pd_slabs");
+        cupid_json_integer(js, "ranks", job->slab_ranks);
+        cupid_json_integer(js, "largest_slab_nodes", job->slab_nodes_max);
+        cupid_json_end_object(js);
+      }
     }
   } else {
     cupid_json_string(js, "method", "none");
@@ -276,7 +282,7 @@ cleanup:
   return st;
 }
 
-static int needs_stress(const cupid_job *job) {
+int cupid_app_needs_stress(const cupid_job *job) {
   const cupid_output *o = &job->model->output;
   if (o->vtu) return 1;
   for (int k = 0; k < o->n_points; k++)
@@ -288,7 +294,7 @@ cupid_status cupid_app_write_outputs(cupid_job *job) {
   const cupid_output *o = &job->model->output;
   double t0 = cupid_wtime();
   CUPID_CALL(cupid_mkdir_p(job->outdir));
-  if (job->grid && needs_stress(job)) {
+  if (job->grid && !job->pd_stress && cupid_app_needs_stress(job)) {
     CUPID_CALL(cupid_calloc((size_t)(6 * job->n_pd), sizeof(double), "PD stresses", &job->pd_stress));
     CUPID_CALL(cupid_pd_operator_stress(job->op, job->u, job->pd_stress));
   }

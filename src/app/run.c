@@ -63,6 +63,12 @@ cupid_status cupid_app_choose_solver(cupid_job *job) {
   const cupid_model_t *m = job->model;
   cupid_solver_kind req = requested_solver(job);
   job->solver = CUPID_SOLVER_DIRECT;
+  if (job->slab) {
+    snprintf(job->solver_reason, sizeof job->solver_reason,
+             "%s: %d MPI ranks, each holding one z slab of the PD grid",
+             req == CUPID_SOLVER_PETSC ? "requested" : "auto", job->part.parts);
+    return use_petsc(job);
+  }
   if (req == CUPID_SOLVER_DIRECT) {
     snprintf(job->solver_reason, sizeof job->solver_reason, "requested");
     return CUPID_SUCCESS;
@@ -141,8 +147,6 @@ static cupid_status build_pd(cupid_job *job) {
   const cupid_model_t *m = job->model;
   double t0 = cupid_wtime();
 
-  CUPID_CALL(cupid_pd_grid_create_from_model(m, &job->grid));
-  job->n_pd = cupid_pd_grid_num_nodes(job->grid);
   CUPID_CALL(check_isotropic(m));
   CUPID_CALL(cupid_calloc((size_t)m->n_materials, sizeof *job->pd_materials, "PD materials",
                           &job->pd_materials));
@@ -155,11 +159,26 @@ static cupid_status build_pd(cupid_job *job) {
                                                 .surface_correction = m->pd.surface_correction,
                                                 .materials = job->pd_materials,
                                                 .n_materials = m->n_materials};
+  if (job->slab) { /* this rank's z layers and the halo its rows read (slab.c) */
+    int halo = 0;
+    CUPID_CALL(cupid_pd_operator_halo_layers(&job->pd_options, m->pd.spacing, &halo));
+    CUPID_CALL(cupid_pd_grid_create_part_from_model(m, cupid_petsc_size(), cupid_petsc_rank(),
+                                                    halo, &job->grid));
+  } else {
+    CUPID_CALL(cupid_pd_grid_create_from_model(m, &job->grid));
+  }
+  cupid_pd_grid_get_partition(job->grid, &job->part);
+  job->n_pd = cupid_pd_grid_num_nodes(job->grid);
   CUPID_CALL(cupid_pd_operator_create(job->grid, &job->pd_options, &job->op));
   job->n_bonds = cupid_pd_operator_num_bonds(job->op);
   cupid_job_phase_end(job, CUPID_PHASE_GRID, t0);
-  cupid_job_progress(job, "grid: %lld PD nodes, %lld bonds", (long long)job->n_pd,
-                     (long long)job->n_bonds);
+  if (job->slab)
+    cupid_job_progress(job, "grid: %lld PD nodes in %d z slabs; rank 0 holds %lld (%lld owned)",
+                       (long long)job->part.global_nodes, job->part.parts, (long long)job->n_pd,
+                       (long long)(job->part.owned_last - job->part.owned_first));
+  else
+    cupid_job_progress(job, "grid: %lld PD nodes, %lld bonds", (long long)job->n_pd,
+                       (long long)job->n_bonds);
   return CUPID_SUCCESS;
 }
 
@@ -223,6 +242,8 @@ static cupid_status require_constraints(const cupid_job *job) {
   int fixed[3] = {0, 0, 0};
   for (cupid_int d = 0; d < job->ndof; d++)
     if (job->bc->fixed[d]) fixed[d % 3] = 1;
+  if (job->slab)
+    for (int c = 0; c < 3; c++) fixed[c] = cupid_petsc_max_int(fixed[c]);
   if (fixed[0] && fixed[1] && fixed[2]) return CUPID_SUCCESS;
   char free_axes[8] = "";
   for (int c = 0; c < 3; c++)
@@ -248,12 +269,15 @@ static cupid_status run_static_matrix_free(cupid_job *job) {
   job->phases[CUPID_PHASE_SOLVE] = (cupid_phase_record){job->solve.time_solve, cupid_peak_memory(), 1};
   CUPID_CALL(st);
   job->solved = 1;
-  CUPID_CALL(cupid_pd_operator_apply(job->op, job->u, job->f_int));
   cupid_job_progress(job, "solve: PETSc matrix-free, %s + %s, %d iterations on %d rank%s, "
                      "%lld equations, residual %.2e", job->solve.ksp_type, job->solve.pc_type,
                      job->solve.iterations, job->solve.ranks, job->solve.ranks == 1 ? "" : "s",
                      (long long)job->solve.n, job->solve.residual);
-  return CUPID_SUCCESS;
+  if (!job->slab) return cupid_pd_operator_apply(job->op, job->u, job->f_int);
+  /* A slab: K u of its owned rows (u holds their dependency range), then rank 0 gathers. */
+  const cupid_int a = job->part.owned_first, b = job->part.owned_last;
+  CUPID_CALL(cupid_pd_operator_apply_range(job->op, a, b, job->u, job->f_int + 3 * a));
+  return cupid_app_slab_collect(job);
 }
 
 /* `static`: assemble K, solve K u = f with the Dirichlet conditions, reactions. */
@@ -330,12 +354,13 @@ cupid_status cupid_run_model(const cupid_model_t *model, const cupid_run_options
   CUPID_TRY(check_supported(&job));
   CUPID_TRY(check_petsc_request(&job));
   CUPID_TRY(cupid_app_guard_size(&job)); /* before anything that scales with the model */
+  job.slab = cupid_app_slab_wanted(&job);
   if (model->has_peridynamics) CUPID_TRY(build_pd(&job));
   if (model->has_beam) CUPID_TRY(cupid_app_fe_build(&job));
   if (cupid_app_is_coupled(&job)) CUPID_TRY(cupid_app_coupled_prepare(&job));
   job.fe_offset = 3 * job.n_pd;
   job.ndof = job.fe_offset + job.n_fe_dofs;
-  CUPID_TRY(cupid_app_check_points(&job));
+  CUPID_TRY(job.slab ? cupid_app_slab_check_points(&job) : cupid_app_check_points(&job));
   if (!opts->check_only) {
     CUPID_TRY(cupid_app_choose_solver(&job));
     cupid_job_progress(&job, "solver: %s (%s)", job.solver == CUPID_SOLVER_PETSC ? "petsc" : "direct",
@@ -359,6 +384,7 @@ cupid_status cupid_run_model(const cupid_model_t *model, const cupid_run_options
     if (model->analysis.type == CUPID_ANALYSIS_DYNAMIC) CUPID_TRY(cupid_app_run_dynamic(&job));
     else CUPID_TRY(run_static(&job));
   }
+  if (job.slab) goto cleanup; /* a slab rank other than 0: rank 0 writes (slab.c) */
   CUPID_TRY(sum_forces(&job));
   if (rank == 0) CUPID_TRY(cupid_app_write_outputs(&job));
   cupid_job_progress(&job, "done: results in %s", job.outdir);

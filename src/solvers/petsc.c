@@ -33,6 +33,7 @@ void cupid_petsc_set_args(int argc, char **argv) {
 }
 
 #if CUPID_HAVE_PETSC
+#include <limits.h>
 #include <math.h>
 #include <petscksp.h>
 
@@ -98,6 +99,41 @@ int cupid_petsc_max_int(int v) {
   int out = v;
   MPI_Allreduce(&v, &out, 1, MPI_INT, MPI_MAX, PETSC_COMM_WORLD);
   return out;
+}
+
+void cupid_petsc_sum_doubles(double *v, int n) {
+  if (g_initialized && n > 0) MPI_Allreduce(MPI_IN_PLACE, v, n, MPI_DOUBLE, MPI_SUM, PETSC_COMM_WORLD);
+}
+
+cupid_status cupid_petsc_gather_root(const double *local, cupid_int count, double *root) {
+  int size = cupid_petsc_size(), rank = cupid_petsc_rank();
+  if (size == 1) {
+    if (count > 0) memcpy(root, local, (size_t)count * sizeof *root);
+    return CUPID_SUCCESS;
+  }
+  /* Every check is agreed by all ranks before the collective, so that none waits alone. */
+  double total = (double)count;
+  cupid_petsc_sum_doubles(&total, 1);
+  CUPID_CHECK(total <= (double)INT_MAX, CUPID_ERR_UNSUPPORTED,
+              "gathering %.0f values on rank 0: more than MPI's 2^31 - 1", total);
+  int n = (int)count, *counts = NULL, *displs = NULL;
+  cupid_status st = CUPID_SUCCESS;
+  if (rank == 0) {
+    st = cupid_malloc((size_t)size, sizeof *counts, "gather counts", &counts);
+    if (st == CUPID_SUCCESS) st = cupid_malloc((size_t)size, sizeof *displs, "gather offsets", &displs);
+  }
+  if (cupid_petsc_max_int(st != CUPID_SUCCESS)) {
+    if (st == CUPID_SUCCESS) st = CUPID_ERROR(CUPID_ERR_MEMORY, "rank 0 could not gather the results");
+    goto cleanup;
+  }
+  MPI_Gather(&n, 1, MPI_INT, counts, 1, MPI_INT, 0, PETSC_COMM_WORLD);
+  if (rank == 0)
+    for (int r = 0, off = 0; r < size; r++) displs[r] = off, off += counts[r];
+  MPI_Gatherv(local, n, MPI_DOUBLE, root, counts, displs, MPI_DOUBLE, 0, PETSC_COMM_WORLD);
+cleanup:
+  cupid_free(&counts);
+  cupid_free(&displs);
+  return st;
 }
 
 void cupid_petsc_abort(int code) {
@@ -440,17 +476,22 @@ cleanup:
   return st;
 }
 
-/* ------------------------------------------------------------------ the matrix-free path */
+/* ------------------------------------------------------------------ the matrix-free path
+ *
+ * Arrays are local to the grid: a whole grid on every rank (replicated model) or one slab of
+ * z layers and its halo per rank (issue 6; cupid_pd_grid_partition). Local DOF d is global DOF
+ * goff + d; this rank owns the local DOFs [first, last) (a whole grid: an even split). */
 
 typedef struct {
   cupid_pd_operator op;
-  const cupid_dirichlet_t *bc;
+  const cupid_dirichlet_t *bc; /* local DOFs */
   double s;               /* identity-row scale */
-  cupid_int first, last;  /* owned DOFs (3 per node) */
-  cupid_int lo, hi;       /* dependency range (nodes) */
+  cupid_int goff;         /* global DOF of local DOF 0 */
+  cupid_int first, last;  /* owned local DOFs (3 per node) */
+  cupid_int lo, hi;       /* dependency range (local nodes) */
   VecScatter halo;        /* global x -> the dependency range */
   Vec xdep;               /* sequential, 3 (hi - lo) */
-  double *work;           /* 3 nodes: x with the dependency range filled, fixed DOFs zero */
+  double *work;           /* local DOFs: x with the dependency range filled, fixed DOFs zero */
 } shell_ctx;
 
 /* y = K x on the owned rows, fixed rows and columns replaced by s * identity (symmetric). */
@@ -481,56 +522,101 @@ static PetscErrorCode shell_mult(Mat A, Vec x, Vec y) {
   PetscFunctionReturn(0);
 }
 
-/* Halo exchange: a scatter of the global DOFs [3 lo, 3 hi) into a sequential vector. */
+/* Halo exchange: a scatter of the global DOFs of the dependency range into a sequential
+ * vector. */
 static cupid_status make_halo(Vec x, shell_ctx *c) {
   cupid_status st = CUPID_SUCCESS;
   IS from = NULL;
   PetscInt nd = (PetscInt)(3 * (c->hi - c->lo));
   PTRY(VecCreateSeq(PETSC_COMM_SELF, nd, &c->xdep));
-  PTRY(ISCreateStride(PETSC_COMM_SELF, nd, (PetscInt)(3 * c->lo), 1, &from));
+  PTRY(ISCreateStride(PETSC_COMM_SELF, nd, (PetscInt)(c->goff + 3 * c->lo), 1, &from));
   PTRY(VecScatterCreate(x, from, c->xdep, NULL, &c->halo));
 cleanup:
   ISDestroy(&from);
   return st;
 }
 
-/* The preconditioner matrix: owned rows of the short-range bond-based stiffness (Dirichlet
- * rows and columns eliminated as in the operator). */
-static cupid_status pc_matrix(const cupid_pd_grid grid, const cupid_pd_material *materials,
-                              double radius, const shell_ctx *c, Mat *P) {
+/* Rows per chunk of the preconditioner assembly: the bond-based rows are built and copied into
+ * PETSc a chunk at a time, so cupid's CSR never coexists whole with PETSc's matrix (at 10^6
+ * nodes each is ~2 GB). */
+#define PC_CHUNK_NODES 32768
+
+/* One pass over the owned rows of the bond-based stiffness, chunk by chunk: count the
+ * non-zeros of each local row into dnz/onz and sum the free diagonal into diag (P NULL), or
+ * insert them into P. Dirichlet rows and columns eliminated as in the operator (rows:
+ * s * identity). */
+static cupid_status pc_pass(const cupid_pd_grid grid, const cupid_pd_material *materials,
+                            double radius, const shell_ctx *c, double s, PetscInt *dnz,
+                            PetscInt *onz, double diag[2], Mat P) {
   cupid_status st = CUPID_SUCCESS;
   cupid_csr Kr = NULL;
-  PetscInt *dnz = NULL, *onz = NULL, *cols = NULL;
+  PetscInt *cols = NULL;
   PetscScalar *vals = NULL;
-  cupid_int nodes0 = c->first / 3, nodes1 = c->last / 3, nloc = c->last - c->first;
-  cupid_int n = 3 * cupid_pd_grid_num_nodes(grid);
   const unsigned char *fixed = c->bc ? c->bc->fixed : NULL;
-  CUPID_TRY(cupid_pd_assemble_rows_bond(grid, materials, radius, nodes0, nodes1, &Kr));
-  double dmean = 0.0; /* scale the identity rows like the operator's: same ratio to the diagonal */
-  cupid_int nd = 0;
+  cupid_int cap = 0;
+  for (cupid_int n0 = c->first / 3; n0 < c->last / 3; n0 += PC_CHUNK_NODES) {
+    cupid_int n1 = n0 + PC_CHUNK_NODES < c->last / 3 ? n0 + PC_CHUNK_NODES : c->last / 3;
+    CUPID_TRY(cupid_pd_assemble_rows_bond(grid, materials, radius, n0, n1, &Kr));
+    for (cupid_int r = 0; r < Kr->nrows; r++) {
+      cupid_int len = 3 * (Kr->rowptr[r + 1] - Kr->rowptr[r]) + 1;
+      if (P && len > cap) {
+        cupid_free(&cols);
+        cupid_free(&vals);
+        CUPID_TRY(cupid_malloc((size_t)len, sizeof *cols, "PETSc row columns", &cols));
+        CUPID_TRY(cupid_malloc((size_t)len, sizeof *vals, "PETSc row values", &vals));
+        cap = len;
+      }
+      for (int a = 0; a < 3; a++) {
+        cupid_int row = 3 * (n0 + r) + a; /* local */
+        PetscInt grow = (PetscInt)(c->goff + row), m = 0;
+        if (fixed && fixed[row]) {
+          if (P) {
+            PetscScalar v = s;
+            PTRY(MatSetValues(P, 1, &grow, 1, &grow, &v, INSERT_VALUES));
+          } else {
+            dnz[row - c->first] = 1;
+          }
+          continue;
+        }
+        for (cupid_int k = Kr->rowptr[r]; k < Kr->rowptr[r + 1]; k++)
+          for (int b = 0; b < 3; b++) {
+            cupid_int col = 3 * Kr->col[k] + b;
+            if (fixed && fixed[col]) continue;
+            if (P) {
+              cols[m] = (PetscInt)(c->goff + col);
+              vals[m++] = Kr->val[9 * k + 3 * a + b];
+            } else if (col >= c->first && col < c->last) {
+              dnz[row - c->first]++;
+              if (col == row) diag[0] += fabs(Kr->val[9 * k + 3 * a + b]), diag[1] += 1;
+            } else {
+              onz[row - c->first]++;
+            }
+          }
+        if (P) PTRY(MatSetValues(P, 1, &grow, m, cols, vals, INSERT_VALUES));
+      }
+    }
+    cupid_csr_destroy(&Kr);
+  }
+cleanup:
+  cupid_csr_destroy(&Kr);
+  cupid_free(&cols);
+  cupid_free(&vals);
+  return st;
+}
+
+/* The preconditioner matrix: owned rows of the short-range bond-based stiffness, its identity
+ * rows scaled like the operator's (same ratio to the diagonal: the mean free diagonal of the
+ * bond-based matrix over all ranks). */
+static cupid_status pc_matrix(const cupid_pd_grid grid, const cupid_pd_material *materials,
+                              double radius, const shell_ctx *c, cupid_int n, Mat *P) {
+  cupid_status st = CUPID_SUCCESS;
+  PetscInt *dnz = NULL, *onz = NULL;
+  cupid_int nloc = c->last - c->first;
+  double diag[2] = {0.0, 0.0};
   CUPID_TRY(cupid_calloc((size_t)nloc + 1, sizeof *dnz, "PETSc preallocation", &dnz));
   CUPID_TRY(cupid_calloc((size_t)nloc + 1, sizeof *onz, "PETSc preallocation", &onz));
-  cupid_int maxlen = 0;
-  for (cupid_int r = 0; r < Kr->nrows; r++) {
-    cupid_int len = Kr->rowptr[r + 1] - Kr->rowptr[r];
-    if (len > maxlen) maxlen = len;
-    for (int a = 0; a < 3; a++) {
-      cupid_int row = c->first + 3 * r + a;
-      if (fixed && fixed[row]) { dnz[3 * r + a] = 1; continue; }
-      for (cupid_int k = Kr->rowptr[r]; k < Kr->rowptr[r + 1]; k++)
-        for (int b = 0; b < 3; b++) {
-          cupid_int col = 3 * Kr->col[k] + b;
-          if (fixed && fixed[col]) continue;
-          if (col >= c->first && col < c->last) dnz[3 * r + a]++;
-          else onz[3 * r + a]++;
-          if (col == row) dmean += Kr->val[9 * k + 3 * a + b], nd++;
-        }
-    }
-  }
-  dmean = nd ? dmean / (double)nd : 1.0;
-  MPI_Allreduce(MPI_IN_PLACE, &dmean, 1, MPI_DOUBLE, MPI_MAX, PETSC_COMM_WORLD);
-  CUPID_TRY(cupid_malloc((size_t)(3 * maxlen + 1), sizeof *cols, "PETSc row columns", &cols));
-  CUPID_TRY(cupid_malloc((size_t)(3 * maxlen + 1), sizeof *vals, "PETSc row values", &vals));
+  CUPID_TRY(pc_pass(grid, materials, radius, c, 0.0, dnz, onz, diag, NULL));
+  MPI_Allreduce(MPI_IN_PLACE, diag, 2, MPI_DOUBLE, MPI_SUM, PETSC_COMM_WORLD);
   PTRY(MatCreate(PETSC_COMM_WORLD, P));
   PTRY(MatSetSizes(*P, (PetscInt)nloc, (PetscInt)nloc, (PetscInt)n, (PetscInt)n));
   PTRY(MatSetType(*P, MATAIJ));
@@ -538,48 +624,47 @@ static cupid_status pc_matrix(const cupid_pd_grid grid, const cupid_pd_material 
   PTRY(MatSeqAIJSetPreallocation(*P, 0, dnz));
   PTRY(MatMPIAIJSetPreallocation(*P, 0, dnz, 0, onz));
   PTRY(MatSetOption(*P, MAT_SYMMETRIC, PETSC_TRUE));
-  for (cupid_int r = 0; r < Kr->nrows; r++)
-    for (int a = 0; a < 3; a++) {
-      PetscInt row = (PetscInt)(c->first + 3 * r + a), m = 0;
-      if (fixed && fixed[row]) {
-        PetscScalar v = dmean;
-        PTRY(MatSetValues(*P, 1, &row, 1, &row, &v, INSERT_VALUES));
-        continue;
-      }
-      for (cupid_int k = Kr->rowptr[r]; k < Kr->rowptr[r + 1]; k++)
-        for (int b = 0; b < 3; b++) {
-          cupid_int col = 3 * Kr->col[k] + b;
-          if (fixed && fixed[col]) continue;
-          cols[m] = (PetscInt)col;
-          vals[m++] = Kr->val[9 * k + 3 * a + b];
-        }
-      PTRY(MatSetValues(*P, 1, &row, m, cols, vals, INSERT_VALUES));
-    }
+  CUPID_TRY(pc_pass(grid, materials, radius, c, diag[1] > 0 ? diag[0] / diag[1] : 1.0, NULL, NULL,
+                    NULL, *P));
   PTRY(MatAssemblyBegin(*P, MAT_FINAL_ASSEMBLY));
   PTRY(MatAssemblyEnd(*P, MAT_FINAL_ASSEMBLY));
 cleanup:
-  cupid_csr_destroy(&Kr);
   cupid_free(&dnz);
   cupid_free(&onz);
-  cupid_free(&cols);
-  cupid_free(&vals);
   return st;
 }
 
-/* The mean |diagonal| of the operator's free DOFs (all ranks agree: replicated model). */
-static cupid_status operator_scale(const cupid_pd_operator op, cupid_int nodes,
-                                   const cupid_dirichlet_t *bc, double *s) {
-  double *blocks = NULL, *diag = NULL;
+/* The mean |diagonal| of the operator over the free owned DOFs of all ranks. */
+static cupid_status operator_scale(const cupid_pd_operator op, cupid_int nodes, const shell_ctx *c,
+                                   double *s) {
+  double *blocks = NULL;
   cupid_status st = CUPID_SUCCESS;
   CUPID_TRY(cupid_malloc((size_t)(9 * nodes), sizeof *blocks, "operator diagonal", &blocks));
-  CUPID_TRY(cupid_malloc((size_t)(3 * nodes), sizeof *diag, "operator diagonal", &diag));
   CUPID_TRY(cupid_pd_operator_diagonal(op, blocks));
-  for (cupid_int i = 0; i < nodes; i++)
-    for (int a = 0; a < 3; a++) diag[3 * i + a] = blocks[9 * i + 4 * a];
-  *s = identity_scale(diag, 3 * nodes, bc);
+  double sc[2] = {0.0, 0.0};
+  for (cupid_int d = c->first; d < c->last; d++) {
+    double v = blocks[9 * (d / 3) + 4 * (d % 3)];
+    if (!(c->bc && c->bc->fixed[d]) && v != 0.0) sc[0] += fabs(v), sc[1] += 1;
+  }
+  MPI_Allreduce(MPI_IN_PLACE, sc, 2, MPI_DOUBLE, MPI_SUM, PETSC_COMM_WORLD);
+  *s = sc[1] > 0 ? sc[0] / sc[1] : 1.0;
 cleanup:
   cupid_free(&blocks);
-  cupid_free(&diag);
+  return st;
+}
+
+/* The solution on the grid's local DOFs: a whole grid gets every DOF; a slab its owned DOFs
+ * and the dependency range (what K u and the stress of the owned nodes read). */
+static cupid_status local_solution(Vec x, const shell_ctx *c, int slab, cupid_int n, double *u) {
+  cupid_status st = CUPID_SUCCESS;
+  if (!slab) return gather(x, n, u);
+  const PetscScalar *a;
+  PTRY(VecScatterBegin(c->halo, x, c->xdep, INSERT_VALUES, SCATTER_FORWARD));
+  PTRY(VecScatterEnd(c->halo, x, c->xdep, INSERT_VALUES, SCATTER_FORWARD));
+  PTRY(VecGetArrayRead(c->xdep, &a));
+  memcpy(u + 3 * c->lo, a, (size_t)(3 * (c->hi - c->lo)) * sizeof *u);
+  PTRY(VecRestoreArrayRead(c->xdep, &a));
+cleanup:
   return st;
 }
 
@@ -588,22 +673,36 @@ cupid_status cupid_petsc_solve_pd(const cupid_pd_operator op, const cupid_pd_gri
                                   const cupid_dirichlet_t *bc, double *u, cupid_solve_info *info) {
   cupid_solve_info local;
   if (!info) info = &local;
-  cupid_int nodes = cupid_pd_grid_num_nodes(grid), n = 3 * nodes;
+  cupid_pd_grid_partition part;
+  cupid_pd_grid_get_partition(grid, &part);
+  const int slab = part.parts > 1;
+  cupid_int nodes = cupid_pd_grid_num_nodes(grid), nl = 3 * nodes, n = 3 * part.global_nodes;
   CUPID_CHECK(cupid_pd_grid_dimension(grid) == 3, CUPID_ERR_UNSUPPORTED,
               "the matrix-free PETSc path needs a 3D grid");
+  CUPID_CHECK(!slab || part.parts == cupid_petsc_size(), CUPID_ERR_ARGUMENT,
+              "a grid of %d slabs on %d MPI ranks", part.parts, cupid_petsc_size());
   CUPID_CALL(check_sizes(n));
-  info_begin(info, bc ? bc->n_free : n);
+  shell_ctx c = {.op = op, .bc = bc};
+  if (slab) {
+    c.goff = 3 * part.first_global;
+    c.first = 3 * part.owned_first;
+    c.last = 3 * part.owned_last;
+  } else {
+    owned_rows(n, 3, &c.first, &c.last);
+  }
+  double n_free = 0.0;
+  for (cupid_int d = c.first; d < c.last; d++) n_free += !(bc && bc->fixed[d]);
+  MPI_Allreduce(MPI_IN_PLACE, &n_free, 1, MPI_DOUBLE, MPI_SUM, PETSC_COMM_WORLD);
+  info_begin(info, (cupid_int)n_free);
   info->matrix_free = 1;
   cupid_status st = CUPID_SUCCESS;
-  shell_ctx c = {.op = op, .bc = bc};
   Mat A = NULL, P = NULL;
   Vec b = NULL, x = NULL;
   double *uc = NULL, *kuc = NULL;
   double t0 = cupid_wtime();
-  owned_rows(n, 3, &c.first, &c.last);
   CUPID_TRY(cupid_pd_operator_dependency_range(op, c.first / 3, c.last / 3, &c.lo, &c.hi));
-  CUPID_TRY(cupid_calloc((size_t)n, sizeof *c.work, "matrix-free work vector", &c.work));
-  CUPID_TRY(operator_scale(op, nodes, bc, &c.s));
+  CUPID_TRY(cupid_calloc((size_t)nl, sizeof *c.work, "matrix-free work vector", &c.work));
+  CUPID_TRY(operator_scale(op, nodes, &c, &c.s));
 
   PTRY(MatCreateShell(PETSC_COMM_WORLD, (PetscInt)(c.last - c.first), (PetscInt)(c.last - c.first),
                       (PetscInt)n, (PetscInt)n, &c, &A));
@@ -614,23 +713,26 @@ cupid_status cupid_petsc_solve_pd(const cupid_pd_operator op, const cupid_pd_gri
   CUPID_TRY(make_halo(x, &c));
 
   /* Right-hand side: f - K u_c on free DOFs (u_c the prescribed values), s * value on fixed. */
-  CUPID_TRY(cupid_calloc((size_t)n, sizeof *uc, "prescribed displacements", &uc));
+  CUPID_TRY(cupid_calloc((size_t)nl, sizeof *uc, "prescribed displacements", &uc));
   CUPID_TRY(cupid_calloc((size_t)(c.last - c.first + 1), sizeof *kuc, "lifted load", &kuc));
   int lifted = 0;
   if (bc)
-    for (cupid_int d = 0; d < n; d++)
+    for (cupid_int d = 0; d < nl; d++)
       if (bc->fixed[d] && bc->value[d] != 0.0) uc[d] = bc->value[d], lifted = 1;
+  lifted = cupid_petsc_max_int(lifted);
   if (lifted) CUPID_TRY(cupid_pd_operator_apply_range(op, c.first / 3, c.last / 3, uc, kuc));
   PetscScalar *bl;
   PTRY(VecGetArray(b, &bl));
   for (cupid_int d = c.first; d < c.last; d++)
     bl[d - c.first] = (bc && bc->fixed[d]) ? c.s * bc->value[d] : (f ? f[d] : 0.0) - kuc[d - c.first];
   PTRY(VecRestoreArray(b, &bl));
+  cupid_free(&uc);
+  cupid_free(&kuc);
 
   PetscReal radius = 1.5;
   PetscBool set;
   PTRY(PetscOptionsGetReal(NULL, NULL, "-cupid_pc_radius", &radius, &set));
-  CUPID_TRY(pc_matrix(grid, materials, radius * cupid_pd_grid_spacing(grid), &c, &P));
+  CUPID_TRY(pc_matrix(grid, materials, radius * cupid_pd_grid_spacing(grid), &c, n, &P));
   CUPID_TRY(set_rigid_body(P, cupid_pd_grid_coords(grid), c.first, c.last));
   double t_setup = cupid_wtime() - t0;
 
@@ -640,7 +742,7 @@ cupid_status cupid_petsc_solve_pd(const cupid_pd_operator op, const cupid_pd_gri
   MatInfo mi;
   PTRY(MatGetInfo(P, MAT_GLOBAL_SUM, &mi));
   info->nnz_matrix = (cupid_int)mi.nz_used; /* of the preconditioner matrix */
-  CUPID_TRY(gather(x, n, u));
+  CUPID_TRY(local_solution(x, &c, slab, n, u));
 cleanup:
   MatDestroy(&A);
   MatDestroy(&P);
@@ -666,6 +768,14 @@ void cupid_petsc_finalize(void) {}
 int cupid_petsc_rank(void) { return 0; }
 int cupid_petsc_size(void) { return 1; }
 int cupid_petsc_max_int(int v) { return v; }
+void cupid_petsc_sum_doubles(double *v, int n) {
+  (void)v;
+  (void)n;
+}
+cupid_status cupid_petsc_gather_root(const double *local, cupid_int count, double *root) {
+  if (count > 0) memcpy(root, local, (size_t)count * sizeof *root);
+  return CUPID_SUCCESS;
+}
 void cupid_petsc_abort(int code) { exit(code); }
 
 cupid_status cupid_petsc_solve(const cupid_csr_t *K, cupid_matrix_kind kind, const double *f,
