@@ -118,6 +118,9 @@ cupid_status cupid_app_sample(const cupid_job *job, const double p[3], double u[
 /* slab.c (issue 6): PD-only static models split into z slabs over the MPI ranks. */
 /** Several ranks, PD only, 3D, static, solver petsc or auto: split the grid. */
 int cupid_app_slab_wanted(const cupid_job *job);
+/** The status of every rank agreed (collective): an error on any rank is an error on all, so
+ *  that none waits alone in the next collective call (the failing rank keeps its message). */
+cupid_status cupid_app_slab_agree(cupid_status st);
 /** Node i counts on this rank (always, unless a slab does not own it). */
 int cupid_app_pd_owned(const cupid_job *job, cupid_int node);
 /** A count of owned nodes summed over the ranks of a slab run (collective there). */

@@ -355,7 +355,10 @@ cupid_status cupid_run_model(const cupid_model_t *model, const cupid_run_options
   CUPID_TRY(check_petsc_request(&job));
   CUPID_TRY(cupid_app_guard_size(&job)); /* before anything that scales with the model */
   job.slab = cupid_app_slab_wanted(&job);
-  if (model->has_peridynamics) CUPID_TRY(build_pd(&job));
+  if (model->has_peridynamics) {
+    st = build_pd(&job);
+    CUPID_TRY(job.slab ? cupid_app_slab_agree(st) : st);
+  }
   if (model->has_beam) CUPID_TRY(cupid_app_fe_build(&job));
   if (cupid_app_is_coupled(&job)) CUPID_TRY(cupid_app_coupled_prepare(&job));
   job.fe_offset = 3 * job.n_pd;
@@ -379,7 +382,10 @@ cupid_status cupid_run_model(const cupid_model_t *model, const cupid_run_options
     if (job.grid) CUPID_TRY(cupid_app_pd_constraints(&job));
     if (job.beam) CUPID_TRY(cupid_app_fe_constraints(&job));
     CUPID_TRY(cupid_dirichlet_finalize(job.bc));
-    if (job.grid) CUPID_TRY(cupid_app_pd_loads(&job));
+    if (job.grid) {
+      st = cupid_app_pd_loads(&job);
+      CUPID_TRY(job.slab ? cupid_app_slab_agree(st) : st);
+    }
     if (job.beam) CUPID_TRY(cupid_app_fe_loads(&job));
     if (model->analysis.type == CUPID_ANALYSIS_DYNAMIC) CUPID_TRY(cupid_app_run_dynamic(&job));
     else CUPID_TRY(run_static(&job));

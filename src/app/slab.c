@@ -31,8 +31,7 @@ cupid_int cupid_app_global_count(const cupid_job *job, cupid_int count) {
   return (cupid_int)c;
 }
 
-/* The status of every rank agreed: an error anywhere is an error everywhere. */
-static cupid_status agree(cupid_status st) {
+cupid_status cupid_app_slab_agree(cupid_status st) {
   if (!cupid_petsc_max_int(st != CUPID_SUCCESS)) return CUPID_SUCCESS;
   if (st != CUPID_SUCCESS) return st;
   return CUPID_ERROR(CUPID_ERR_MODEL, "another MPI rank reported an error");
@@ -52,7 +51,7 @@ cupid_status cupid_app_slab_check_points(cupid_job *job) {
     }
     cupid_pd_grid_destroy(&whole);
   }
-  return agree(st);
+  return cupid_app_slab_agree(st);
 }
 
 /* Gather n_per_node values of every owned node of every rank on rank 0 (into *whole, which
@@ -64,7 +63,7 @@ static cupid_status gather_nodes(const cupid_job *job, const double *local, int 
   if (cupid_petsc_rank() == 0)
     st = cupid_calloc((size_t)(n_per_node * job->part.global_nodes), sizeof **whole,
                       "gathered PD fields", whole);
-  CUPID_CALL(agree(st));
+  CUPID_CALL(cupid_app_slab_agree(st));
   return cupid_petsc_gather_root(local + (size_t)n_per_node * (size_t)first, n_per_node * owned,
                                  *whole);
 }
@@ -119,9 +118,9 @@ cupid_status cupid_app_slab_collect(cupid_job *job) {
   if (cupid_app_needs_stress(job)) {
     st = cupid_calloc((size_t)(6 * job->n_pd), sizeof(double), "PD stresses", &job->pd_stress);
     if (st == CUPID_SUCCESS) st = cupid_pd_operator_stress(job->op, job->u, job->pd_stress);
-    CUPID_TRY(agree(st));
+    CUPID_TRY(cupid_app_slab_agree(st));
   }
-  CUPID_TRY(agree(bc_as_doubles(job, &flags, &values)));
+  CUPID_TRY(cupid_app_slab_agree(bc_as_doubles(job, &flags, &values)));
   CUPID_TRY(gather_nodes(job, job->u, 3, &g[0]));
   CUPID_TRY(gather_nodes(job, job->f_ext, 3, &g[1]));
   CUPID_TRY(gather_nodes(job, job->f_int, 3, &g[2]));
