@@ -5,7 +5,9 @@ usage: examples/bar/compare_coupled.py [--cupid build/cupid] [--surface-correcti
                                       [--clamp-elements N] [EXPANSION ...]
 
 Runs bar_fe_<e>.yaml and bar_coupled_<e>.yaml for each expansion (default te1 te2 te3 l4 l9,
-and lagrange_l9: the Lagrange-multiplier coupling against the L9 full-FE bar),
+lagrange_l9: the Lagrange-multiplier coupling, and arlequin_l9: the Arlequin penalty coupling
+with two overlaps, both against the L9 full-FE bar: the three methods of paper 000 Fig. 14 side
+by side with l9),
 then prints, per expansion: the largest relative error of u_y along the axis
 (|u_c - u_fe| / |u_fe| over y > 0), the largest error relative to the tip displacement, the
 tip values, and the equilibrium imbalance |reaction + load| / |load| of the coupled run.
@@ -25,7 +27,8 @@ ap = argparse.ArgumentParser()
 ap.add_argument("--cupid", default="build/cupid")
 ap.add_argument("--surface-correction", default="none", choices=["none", "energy"])
 ap.add_argument("--clamp-elements", type=int, default=1)
-ap.add_argument("expansions", nargs="*", default=["te1", "te2", "te3", "l4", "l9", "lagrange_l9"])
+ap.add_argument("expansions", nargs="*",
+                default=["te1", "te2", "te3", "l4", "l9", "lagrange_l9", "arlequin_l9"])
 a = ap.parse_args()
 here = os.path.dirname(os.path.abspath(__file__))
 
@@ -46,9 +49,13 @@ def run(model, correction="none"):
         assert "surface_correction" in text, model
         d = f"{d}_{correction}"
     if a.clamp_elements != 1:
-        old = "elements: [1, 1, 1]"
-        assert old in text, model
-        text = text.replace(old, f"elements: [{a.clamp_elements}, 1, 1]")
+        # the clamped span is the first entry (Arlequin models have five spans)
+        n = a.clamp_elements
+        if "elements: [1, 1, 1, 1, 1]" in text:
+            text = text.replace("elements: [1, 1, 1, 1, 1]", f"elements: [{n}, 1, 1, 1, 1]")
+        else:
+            assert "elements: [1, 1, 1]" in text, model
+            text = text.replace("elements: [1, 1, 1]", f"elements: [{n}, 1, 1]")
         d = f"{d}_c{a.clamp_elements}"
     with tempfile.NamedTemporaryFile("w", suffix=".yaml", delete=False) as fh:
         fh.write(text)

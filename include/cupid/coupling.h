@@ -178,12 +178,16 @@ void cupid_coupling_get_info(const cupid_coupling_h c, cupid_coupling_info *info
  * C1 cubic 1 - 3s^2 + 2s^3). The FE stiffness and mass are integrated with alpha at the axis
  * Gauss points (cupid_cuf_assemble_weighted_add(), Eqs. 12, 14); every PD bond is weighted by
  * the mean of its end weights (1 - alpha_i + 1 - alpha_j)/2 and every PD mass by 1 - alpha_i
- * (Eqs. 12, 14). Every PD node q in the overlap is tied to the beam by a penalty (Eqs. 15-19):
+ * (Eqs. 12, 14; for LPS node p's whole energy by 1 - alpha_p, see below). Every PD node q in
+ * an overlap is tied to the beam by a penalty (Eqs. 15-19):
  * energy kappa/2 |d_q - N(x_q) u_FE|^2, one spring of stiffness kappa (N/m) per tied node and
  * component (the node-by-node form of Eq. 16-17; the volumetric penalty of Eq. 16 is
  * kappa_v = kappa / V_q). The coupled K is symmetric (CHOLMOD), layout [3 per PD node | FE].
- * 1D grids tie the axial component only; 3D grids all three. The PD operator must be
- * pairwise (bond-based): the weighting scales each bond, which LPS has not. */
+ * 1D grids tie the axial component only; 3D grids all three. The PD energy is weighted node
+ * by node (cupid_pd_operator_assemble_weighted: node p's energy times 1 - alpha(y_p)), which
+ * for bond-based PD with one material is the bond weight (w_i + w_j)/2 and for LPS weights each
+ * node's dilatation and deviatoric energy. A PD region between two beam parts has two overlaps
+ * (n_overlaps = 2): FE-only below the first and above the second, PD-only between them. */
 
 /** The Arlequin weight alpha(y) of the FE model. */
 typedef struct {
@@ -196,9 +200,15 @@ typedef struct {
 double cupid_arlequin_alpha(const cupid_arlequin_weight *w, double y);
 
 typedef struct {
-  cupid_arlequin_weight weight;
+  cupid_arlequin_weight weight; /**< the overlap (the lower one when there are two) */
   double penalty;       /**< kappa, N/m per tied node and component */
+  int n_overlaps;       /**< 0 or 1: one overlap; 2: also @p second */
+  cupid_arlequin_weight second; /**< the upper overlap (above weight; FE-only above it) */
 } cupid_arlequin_options;
+
+/** alpha(y) of the options: the one ramp, or with two overlaps the larger of the two ramps
+ *  (1 below the first and above the second, 0 between them). */
+double cupid_arlequin_alpha_of(const cupid_arlequin_options *o, double y);
 
 typedef struct {
   cupid_int n_tied;     /**< PD nodes tied to the beam (those in the overlap) */
@@ -207,10 +217,10 @@ typedef struct {
 } cupid_arlequin_info;
 
 /**
- * The coupled stiffness: weighted PD (@p op on @p grid, pairwise) + weighted beam + the
+ * The coupled stiffness: weighted PD (@p op on @p grid, LPS or bond-based) + weighted beam + the
  * penalty K_z = kappa [I, -N; -N^T, N^T N] (Eq. 18, sign as coupling.md 7.2). The beam's DOF
- * offset must be 3 * nodes of the grid. CUPID_ERR_UNSUPPORTED if the PD operator is not
- * pairwise; CUPID_ERR_MODEL if a PD node of the overlap lies outside the beam.
+ * offset must be 3 * nodes of the grid. CUPID_ERR_MODEL if a PD node of an overlap lies
+ * outside the beam.
  */
 cupid_status cupid_arlequin_assemble(cupid_cuf_beam beam, cupid_pd_grid grid,
                                      cupid_pd_operator op, const cupid_arlequin_options *o,

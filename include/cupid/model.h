@@ -134,7 +134,9 @@ typedef enum { CUPID_WEIGHT_LINEAR = 0, CUPID_WEIGHT_CONSTANT = 1, CUPID_WEIGHT_
 typedef struct {
   cupid_coupling_method method;
   double penalty;        /**< arlequin */
-  cupid_box overlap;     /**< arlequin */
+  cupid_box overlap;     /**< arlequin: the overlap (the first of a list) */
+  cupid_box overlap2;    /**< arlequin: the second overlap when n_overlaps == 2 */
+  int n_overlaps;        /**< arlequin: 1, or 2 (`overlap:` as a list of two boxes) */
   cupid_weight weight;   /**< arlequin */
   int has_arlequin;
   cupid_mark mark;

@@ -217,6 +217,18 @@ cupid_status cupid_pd_operator_dependency_range(const cupid_pd_operator op, cupi
  */
 cupid_status cupid_pd_operator_assemble(const cupid_pd_operator op, cupid_csr *K);
 
+/**
+ * K of the node-weighted energy E_w = sum_p w_p E_p (E_p node p's share of the energy in
+ * cupid_pd_operator_create: LPS its dilatation and deviatoric terms; bond-based half of each
+ * of its bonds), i.e. the operator with node p's moduli scaled by w_p: the Arlequin weighting
+ * of the PD energy (paper 004 Eq. 12) for state-based PD, where a bond-by-bond weighting does
+ * not apply. Bond-based with one material: bond ij weighted by (w_i + w_j)/2. Symmetric, with
+ * the rigid modes in its null space, for any w >= 0. The operator is modified during the call
+ * and restored bit-exactly (not concurrently with other uses of @p op).
+ */
+cupid_status cupid_pd_operator_assemble_weighted(cupid_pd_operator op, const double *w,
+                                                 cupid_csr *K);
+
 /** Dilatation theta_i (Eq. 19) of a displacement field (LPS; 0 for bond-based). */
 cupid_status cupid_pd_operator_dilatation(const cupid_pd_operator op, const double *u,
                                           double *theta);

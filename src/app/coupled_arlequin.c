@@ -1,7 +1,9 @@
 /* Coupled models with `coupling: {method: arlequin}` inside a run (paper 004 section 3;
- * src/coupling/arlequin.c for the method). Layout supported: the beam and one bond-based PD
- * region (1D or 3D) overlap on [lo, hi] = the `overlap` box's y range (its x/z bounds are not
- * used: every PD node of that y range is tied and must lie in the beam). The PD region starts
+ * src/coupling/arlequin.c for the method). Layouts supported: the beam and one PD region (LPS
+ * or bond-based, 1D or 3D) overlap on [lo, hi] = the `overlap` box's y range (its x/z bounds
+ * are not used: every PD node of that y range is tied and must lie in the beam); or, with
+ * `overlap` a list of two boxes, the PD region sits inside the beam with one overlap at each
+ * end and the beam gives way between them (the coupled bar). The PD region starts
  * on one edge of the overlap and extends beyond the other; the beam extends beyond the first
  * edge and either ends on the second (beam [0, 0.6], PD [0.4, 1], overlap [0.4, 0.6]: nothing
  * is deactivated) or runs on inside the PD region, where it gives way (beam [0, 1]: the pairs
@@ -29,11 +31,7 @@ cupid_status cupid_app_arlequin_check(const cupid_job *job) {
     return cupid_model_error(m, &m->pd.mark,
                              "method arlequin supports one PD region (this model has %d)",
                              m->pd.n_regions);
-  if (m->pd.model != CUPID_PD_BOND)
-    return cupid_model_error(m, &m->pd.mark,
-                             "method arlequin is not yet supported with LPS peridynamics: the "
-                             "energy weights scale bonds one by one (use model: bond)");
-  if (!c->overlap.has[1])
+  if (!c->overlap.has[1] || (c->n_overlaps == 2 && !c->overlap2.has[1]))
     return cupid_model_error(m, &c->mark, "coupling.arlequin.overlap needs a y range");
   if (m->beam.integration == CUPID_CUF_MITC)
     return cupid_model_error(m, &c->mark,
@@ -43,23 +41,76 @@ cupid_status cupid_app_arlequin_check(const cupid_job *job) {
   return CUPID_SUCCESS;
 }
 
-/* The options of the run: the overlap, which side is FE-only, the weight and the penalty. */
+/* The overlaps of the model in ascending y (two: one at each end of the PD region). */
+static int overlaps(const cupid_coupling *c, const cupid_box *ov[2]) {
+  ov[0] = &c->overlap;
+  ov[1] = &c->overlap2;
+  if (c->n_overlaps != 2) return 1;
+  if (c->overlap2.lo[1] < c->overlap.lo[1]) ov[0] = &c->overlap2, ov[1] = &c->overlap;
+  return 2;
+}
+
+/* The options of the run: the overlaps, which side is FE-only, the weight and the penalty. */
 static cupid_arlequin_options options(const cupid_job *job) {
   const cupid_coupling *c = &job->model->coupling;
-  cupid_arlequin_options o = {.weight = {.lo = c->overlap.lo[1], .hi = c->overlap.hi[1],
-                                         .kind = c->weight},
-                              .penalty = c->penalty};
+  const cupid_box *ov[2];
+  int n = overlaps(c, ov);
+  cupid_arlequin_options o = {.weight = {.lo = ov[0]->lo[1], .hi = ov[0]->hi[1], .kind = c->weight},
+                              .penalty = c->penalty,
+                              .n_overlaps = n};
   /* the PD region starts on the overlap's lower edge: the FE-only side is below */
   double tol = ARL_TOL * (job->fe_info.y_max - job->fe_info.y_min);
   o.weight.fe_below = job->model->pd.regions[0].box.lo[1] >= o.weight.lo - tol;
+  if (n == 2) /* the PD region between the two: FE-only below the first, above the second */
+    o.weight.fe_below = 1,
+    o.second = (cupid_arlequin_weight){.lo = ov[1]->lo[1], .hi = ov[1]->hi[1], .fe_below = 0,
+                                       .kind = c->weight};
   return o;
 }
 
 static int close_to(double a, double b, double scale) { return fabs(a - b) <= ARL_TOL * scale; }
 
+/* Two overlaps: the PD region spans from the lower edge of the first to the upper edge of the
+ * second, the beam reaches beyond both, and gives way between them. */
+static cupid_status prepare_two(cupid_job *job) {
+  const cupid_model_t *m = job->model;
+  const cupid_mark *mk = &m->coupling.mark;
+  const cupid_box *ov[2];
+  overlaps(&m->coupling, ov);
+  double lo1 = ov[0]->lo[1], hi1 = ov[0]->hi[1], lo2 = ov[1]->lo[1], hi2 = ov[1]->hi[1];
+  double b0 = job->fe_info.y_min, b1 = job->fe_info.y_max, L = b1 - b0, tol = ARL_TOL * L;
+  const cupid_box *r = &m->pd.regions[0].box;
+  if (hi1 > lo2 + tol)
+    return cupid_model_error(m, mk, "the two overlaps y in [%g, %g] and [%g, %g] overlap each other",
+                             lo1, hi1, lo2, hi2);
+  if (!close_to(r->lo[1], lo1, L) || !close_to(r->hi[1], hi2, L) || b0 > lo1 - tol || b1 < hi2 + tol)
+    return cupid_model_error(m, &m->pd.regions[0].mark,
+                             "with two overlaps [%g, %g] and [%g, %g] the PD region y in [%g, %g] "
+                             "must span from the lower edge of the first to the upper edge of "
+                             "the second, and the beam [%g, %g] must extend beyond both",
+                             lo1, hi1, lo2, hi2, r->lo[1], r->hi[1], b0, b1);
+  const double ends[4] = {lo1, hi1, lo2, hi2};
+  for (int k = 0; k < 4; k++)
+    if (cupid_cuf_beam_node_at(job->beam, ends[k]) < 0)
+      return cupid_model_error(m, mk,
+                               "the overlap bound y = %g is not a beam-node position: move it "
+                               "to an element end (the weight's kinks must fall between "
+                               "elements)",
+                               ends[k]);
+  if (lo2 - hi1 <= tol) return CUPID_SUCCESS; /* no PD-only part between the overlaps */
+  cupid_box give = {.lo = {0, hi1, 0}, .hi = {0, lo2, 0}, .has = {0, 1, 0}};
+  cupid_status st = cupid_coupling_deactivate(job->beam, 1, &give);
+  if (st != CUPID_SUCCESS)
+    return cupid_model_error(m, mk, "the beam cannot give way between the overlaps: %s",
+                             cupid_error_message());
+  cupid_job_progress(job, "Arlequin: the beam gives way on y in [%g, %g] (PD only there)", hi1, lo2);
+  return CUPID_SUCCESS;
+}
+
 cupid_status cupid_app_arlequin_prepare(cupid_job *job) {
   const cupid_model_t *m = job->model;
   const cupid_mark *mk = &m->coupling.mark;
+  if (m->coupling.n_overlaps == 2) return prepare_two(job);
   double lo = m->coupling.overlap.lo[1], hi = m->coupling.overlap.hi[1];
   double b0 = job->fe_info.y_min, b1 = job->fe_info.y_max, L = b1 - b0, tol = ARL_TOL * L;
   const cupid_box *r = &m->pd.regions[0].box;
@@ -91,7 +142,8 @@ cupid_status cupid_app_arlequin_prepare(cupid_job *job) {
   if ((below && b1 > r->hi[1] + tol) || (above && b0 < r->lo[1] - tol))
     return cupid_model_error(m, mk,
                              "the beam [%g, %g] runs through the PD region [%g, %g] and out of "
-                             "it: a second interface is not yet supported with method arlequin",
+                             "it: give the second interface its own overlap (overlap: [{y: "
+                             "[..]}, {y: [..]}])",
                              b0, b1, r->lo[1], r->hi[1]);
   cupid_status st = cupid_coupling_deactivate(job->beam, 1, &give);
   if (st != CUPID_SUCCESS)
@@ -161,12 +213,15 @@ static cupid_status apply_loads(cupid_job *job) {
   cupid_status st = CUPID_SUCCESS;
   cupid_load *pd = NULL;
   int npd = 0;
-  double lo = m->coupling.overlap.lo[1], hi = m->coupling.overlap.hi[1];
+  const cupid_box *ov[2];
+  int nov = overlaps(&m->coupling, ov);
   double tol = ARL_TOL * (job->fe_info.y_max - job->fe_info.y_min);
   CUPID_CALL(cupid_calloc((size_t)m->n_loads + 1, sizeof *pd, "PD loads", &pd));
   for (int k = 0; k < m->n_loads; k++) {
     const cupid_load *l = &m->loads[k];
-    if (load_in_overlap(l, lo, hi, tol)) {
+    for (int v = 0; v < nov; v++) {
+      double lo = ov[v]->lo[1], hi = ov[v]->hi[1];
+      if (!load_in_overlap(l, lo, hi, tol)) continue;
       st = cupid_model_error(m, &l->mark,
                              "a load inside the Arlequin overlap [%g, %g] is not yet supported "
                              "(both models carry it there, each with its weight)", lo, hi);
@@ -196,11 +251,13 @@ static cupid_status assemble(cupid_job *job) {
   CUPID_CALL(cupid_arlequin_assemble(job->beam, job->grid, job->op, &o, &job->K, &info));
   cupid_job_phase_end(job, CUPID_PHASE_COUPLING, t0);
   static const char *wn[] = {"linear", "constant", "smooth"};
+  char second[64] = "";
+  if (o.n_overlaps == 2) snprintf(second, sizeof second, " and [%g, %g]", o.second.lo, o.second.hi);
   cupid_job_progress(job,
-                     "coupling (Arlequin, penalty): overlap y in [%g, %g], %s weight, kappa = %g "
-                     "N/m, %lld tied PD nodes (%d components), min PD weight %.3g; %lld "
+                     "coupling (Arlequin, penalty): overlap y in [%g, %g]%s, %s weight, kappa = "
+                     "%g N/m, %lld tied PD nodes (%d components), min PD weight %.3g; %lld "
                      "non-zeros",
-                     o.weight.lo, o.weight.hi, wn[o.weight.kind], o.penalty,
+                     o.weight.lo, o.weight.hi, second, wn[o.weight.kind], o.penalty,
                      (long long)info.n_tied, info.components, info.pd_weight_min,
                      (long long)cupid_csr_nnz(job->K));
   return CUPID_SUCCESS;

@@ -1,5 +1,6 @@
-/* Arlequin coupling of a CUF beam and a bond-based PD region with a penalty (paper 004,
- * section 3; coupling.md section 7). The two models overlap on [lo, hi] along the axis. The
+/* Arlequin coupling of a CUF beam and a PD region (LPS or bond-based) with a penalty (paper
+ * 004, section 3; coupling.md section 7). The two models overlap on [lo, hi] along the axis
+ * (or on two such ranges, one at each end of a PD region inside the beam). The
  * coupled Hamiltonian is alpha H_FE + (1 - alpha) H_PD (Eq. 8) plus the penalty energy
  * kappa/2 sum_q |d_q - N(x_q) u|^2 over the PD nodes q of the overlap (Eqs. 16-17, node by
  * node), so the stiffness is K = K_FE(alpha) + K_PD(1 - alpha) + K_z (Eq. 18) and the mass
@@ -28,7 +29,19 @@ double cupid_arlequin_alpha(const cupid_arlequin_weight *w, double y) {
   }
 }
 
-static double alpha_fn(void *ctx, double y) { return cupid_arlequin_alpha(ctx, y); }
+double cupid_arlequin_alpha_of(const cupid_arlequin_options *o, double y) {
+  double a = cupid_arlequin_alpha(&o->weight, y);
+  if (o->n_overlaps == 2) a = fmax(a, cupid_arlequin_alpha(&o->second, y));
+  return a;
+}
+
+static double alpha_fn(void *ctx, double y) { return cupid_arlequin_alpha_of(ctx, y); }
+
+/* y lies in an overlap (lattice tolerance tol). */
+static int in_overlap(const cupid_arlequin_options *o, double y, double tol) {
+  if (y >= o->weight.lo - tol && y <= o->weight.hi + tol) return 1;
+  return o->n_overlaps == 2 && y >= o->second.lo - tol && y <= o->second.hi + tol;
+}
 
 /* The PD nodes of the overlap and their beam weights: CSR over tied nodes (tptr, tnode, tw). */
 typedef struct {
@@ -57,7 +70,7 @@ static cupid_status tied_build(cupid_cuf_beam beam, cupid_pd_grid grid,
   CUPID_TRY(cupid_malloc((size_t)n_pd, sizeof *t->node, "tied PD nodes", &t->node));
   for (cupid_int i = 0; i < n_pd; i++) {
     double y = x[3 * i + 1];
-    if (y >= o->weight.lo - tol && y <= o->weight.hi + tol) t->node[t->n++] = i;
+    if (in_overlap(o, y, tol)) t->node[t->n++] = i;
   }
   CUPID_TRY(cupid_calloc((size_t)t->n + 1, sizeof *t->ptr, "tied rows", &t->ptr));
   CUPID_TRY(cupid_malloc((size_t)(t->n * per + 1), sizeof *t->fe, "tied FE nodes", &t->fe));
@@ -134,37 +147,14 @@ cleanup:
   return st;
 }
 
-/* Copy the PD matrix with every bond weighted by the mean of its end weights; the diagonal
- * block is rebuilt as minus the sum of the row's weighted bonds (a pairwise operator's rows
- * sum to zero: translation invariance; checked, since LPS's do too but are not pairwise -
- * LPS is refused by the caller through the model kind). */
-static cupid_status add_weighted_pd(const cupid_csr_t *Kpd, const double *wn, cupid_csr K) {
-  for (cupid_int r = 0; r < Kpd->nrows; r++) {
-    double diag[9] = {0}, rowsum[9] = {0}, scale = 0.0;
+/* Add the (weighted) PD matrix into the coupled pattern. */
+static cupid_status add_pd(const cupid_csr_t *Kpd, cupid_csr K) {
+  for (cupid_int r = 0; r < Kpd->nrows; r++)
     for (cupid_int q = Kpd->rowptr[r]; q < Kpd->rowptr[r + 1]; q++) {
-      cupid_int c = Kpd->col[q];
-      const double *src = Kpd->val + 9 * q;
-      for (int e = 0; e < 9; e++) {
-        rowsum[e] += src[e];
-        if (fabs(src[e]) > scale) scale = fabs(src[e]);
-      }
-      if (c == r) continue;
-      double w = 0.5 * (wn[r] + wn[c]), *dst = cupid_csr_find(K, r, c);
+      double *dst = cupid_csr_find(K, r, Kpd->col[q]);
       CUPID_CHECK(dst, CUPID_ERR_INTERNAL, "Arlequin pattern lacks a PD block");
-      for (int e = 0; e < 9; e++) {
-        dst[e] += w * src[e];
-        diag[e] -= w * src[e];
-      }
+      for (int e = 0; e < 9; e++) dst[e] += Kpd->val[9 * q + e];
     }
-    for (int e = 0; e < 9; e++)
-      CUPID_CHECK(fabs(rowsum[e]) <= 1e-10 * scale, CUPID_ERR_UNSUPPORTED,
-                  "Arlequin: the PD operator is not pairwise (row %lld does not sum to zero); "
-                  "only bond-based peridynamics can be weighted bond by bond",
-                  (long long)r);
-    double *dst = cupid_csr_find(K, r, r);
-    CUPID_CHECK(dst, CUPID_ERR_INTERNAL, "Arlequin pattern lacks a PD diagonal block");
-    for (int e = 0; e < 9; e++) dst[e] += diag[e];
-  }
   return CUPID_SUCCESS;
 }
 
@@ -200,6 +190,15 @@ static cupid_status check_options(cupid_cuf_beam beam, cupid_pd_grid grid,
   CUPID_CHECK(o->weight.hi > o->weight.lo, CUPID_ERR_ARGUMENT,
               "Arlequin: empty overlap [%g, %g]", o->weight.lo, o->weight.hi);
   CUPID_CHECK(o->penalty > 0, CUPID_ERR_ARGUMENT, "Arlequin: the penalty must be positive");
+  CUPID_CHECK(o->n_overlaps >= 0 && o->n_overlaps <= 2, CUPID_ERR_ARGUMENT,
+              "Arlequin: one or two overlaps, not %d", o->n_overlaps);
+  if (o->n_overlaps == 2)
+    CUPID_CHECK(o->second.hi > o->second.lo && o->second.lo >= o->weight.hi && o->weight.fe_below &&
+                    !o->second.fe_below,
+                CUPID_ERR_ARGUMENT,
+                "Arlequin: the second overlap [%g, %g] must lie above the first [%g, %g], with "
+                "the FE-only parts below the first and above the second",
+                o->second.lo, o->second.hi, o->weight.lo, o->weight.hi);
   cupid_cuf_info fi;
   cupid_cuf_get_info(beam, &fi);
   CUPID_CHECK(fi.dof_offset == 3 * cupid_pd_grid_num_nodes(grid), CUPID_ERR_ARGUMENT,
@@ -208,14 +207,14 @@ static cupid_status check_options(cupid_cuf_beam beam, cupid_pd_grid grid,
 }
 
 /* PD nodal weights 1 - alpha(y_i). */
-static cupid_status pd_weights(cupid_pd_grid grid, const cupid_arlequin_weight *w, double **wn,
+static cupid_status pd_weights(cupid_pd_grid grid, const cupid_arlequin_options *w, double **wn,
                                double *wmin) {
   cupid_int n = cupid_pd_grid_num_nodes(grid);
   const double *x = cupid_pd_grid_coords(grid);
   CUPID_CALL(cupid_malloc((size_t)n + 1, sizeof **wn, "PD weights", wn));
   *wmin = 1.0;
   for (cupid_int i = 0; i < n; i++) {
-    (*wn)[i] = 1.0 - cupid_arlequin_alpha(w, x[3 * i + 1]);
+    (*wn)[i] = 1.0 - cupid_arlequin_alpha_of(w, x[3 * i + 1]);
     if ((*wn)[i] < *wmin) *wmin = (*wn)[i];
   }
   return CUPID_SUCCESS;
@@ -231,13 +230,13 @@ cupid_status cupid_arlequin_assemble(cupid_cuf_beam beam, cupid_pd_grid grid, cu
   CUPID_CALL(check_options(beam, grid, o));
   *K = NULL;
   cupid_int n_pd = cupid_pd_grid_num_nodes(grid), n_fe = cupid_cuf_num_dofs(beam) / 3;
-  CUPID_TRY(cupid_pd_operator_assemble(op, &Kpd));
+  double wmin;
+  CUPID_TRY(pd_weights(grid, o, &wn, &wmin));
+  CUPID_TRY(cupid_pd_operator_assemble_weighted(op, wn, &Kpd)); /* Eq. 12, node by node */
   CUPID_TRY(tied_build(beam, grid, o, &t));
   CUPID_TRY(build_pattern(beam, Kpd, &t, n_pd, n_fe, K));
-  double wmin;
-  CUPID_TRY(pd_weights(grid, &o->weight, &wn, &wmin));
-  CUPID_TRY(add_weighted_pd(Kpd, wn, *K));
-  CUPID_TRY(cupid_cuf_assemble_weighted_add(beam, alpha_fn, (void *)&o->weight, *K));
+  CUPID_TRY(add_pd(Kpd, *K));
+  CUPID_TRY(cupid_cuf_assemble_weighted_add(beam, alpha_fn, (void *)o, *K));
   CUPID_TRY(add_penalty(&t, o->penalty, n_pd, *K));
   if (info) *info = (cupid_arlequin_info){.n_tied = t.n, .components = t.comps, .pd_weight_min = wmin};
 cleanup:
@@ -257,7 +256,7 @@ cupid_status cupid_arlequin_mass(cupid_cuf_beam beam, cupid_pd_grid grid,
   cupid_int n = cupid_pd_grid_num_nodes(grid);
   const double *x = cupid_pd_grid_coords(grid);
   for (cupid_int i = 0; i < n; i++) {
-    double m = (1.0 - cupid_arlequin_alpha(&o->weight, x[3 * i + 1])) * pd_mass[i]; /* Eq. 14 */
+    double m = (1.0 - cupid_arlequin_alpha_of(o, x[3 * i + 1])) * pd_mass[i]; /* Eq. 14 */
     if (lumped) {
       for (int c = 0; c < 3; c++) lumped[3 * i + c] += m;
       continue;
@@ -267,8 +266,8 @@ cupid_status cupid_arlequin_mass(cupid_cuf_beam beam, cupid_pd_grid grid,
                 (long long)i);
     for (int c = 0; c < 3; c++) blk[4 * c] += m;
   }
-  if (lumped) return cupid_cuf_mass_lumped_weighted(beam, alpha_fn, (void *)&o->weight, lumped);
-  return cupid_cuf_mass_weighted_add(beam, alpha_fn, (void *)&o->weight, M);
+  if (lumped) return cupid_cuf_mass_lumped_weighted(beam, alpha_fn, (void *)o, lumped);
+  return cupid_cuf_mass_weighted_add(beam, alpha_fn, (void *)o, M);
 }
 
 cupid_status cupid_arlequin_gap(cupid_cuf_beam beam, cupid_pd_grid grid,

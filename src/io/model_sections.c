@@ -570,7 +570,24 @@ static cupid_status read_arlequin(model_reader *rd, yaml_node_t *node, cupid_cou
   CUPID_CALL(mr_require(rd, &map, "penalty", &penalty));
   CUPID_CALL(mr_positive(rd, penalty, "coupling.arlequin.penalty", &c->penalty));
   CUPID_CALL(mr_require(rd, &map, "overlap", &overlap));
-  CUPID_CALL(mr_box(rd, overlap, "coupling.arlequin.overlap", &c->overlap));
+  if (overlap->type == YAML_SEQUENCE_NODE) { /* one overlap at each end of the PD region */
+    int n;
+    CUPID_CALL(mr_list(rd, overlap, "coupling.arlequin.overlap", 0, "boxes {y: [..]}", &n));
+    if (n < 1 || n > 2)
+      return mr_error(rd, overlap, "coupling.arlequin.overlap",
+                      "lists %d boxes; give one overlap, or two (one at each end of a PD region "
+                      "inside the beam)", n);
+    cupid_box *dst[2] = {&c->overlap, &c->overlap2};
+    for (int i = 0; i < n; i++) {
+      char p[PATH_SIZE];
+      mr_path_index(p, "coupling.arlequin.overlap", i);
+      CUPID_CALL(mr_box(rd, mr_item(rd, overlap, i), p, dst[i]));
+    }
+    c->n_overlaps = n;
+  } else {
+    CUPID_CALL(mr_box(rd, overlap, "coupling.arlequin.overlap", &c->overlap));
+    c->n_overlaps = 1;
+  }
   c->weight = CUPID_WEIGHT_LINEAR;
   if ((weight = mr_get(&map, "weight"))) {
     int k;

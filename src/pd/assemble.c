@@ -15,6 +15,7 @@
  * (found with one table look-up per pair, all in cache), then copies the touched entries
  * out in D order: the columns come out sorted. A first pass counts the touched entries to
  * size the rows. Work and memory are O(nodes). */
+#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 #ifdef _OPENMP
@@ -264,6 +265,34 @@ cleanup:
   offset_table_free(&t);
   cupid_free(&acc);
   cupid_free(&hit);
+  return st;
+}
+
+/* The moduli enter every node's energy linearly (E_p = V [kappa_p/6 theta_p^2 + 15 mu_p /
+ * (2 m_p) sum omega e^2 beta V], bond-based c_p), and theta_p, m_p and the surface factors do
+ * not depend on them: scaling node p's moduli by w_p is weighting node p's energy by w_p. The
+ * moduli are scaled in place for the assembly and restored from copies (bit-exact). */
+cupid_status cupid_pd_operator_assemble_weighted(cupid_pd_operator op, const double *w,
+                                                 cupid_csr *K) {
+  CUPID_CHECK(op && w && K, CUPID_ERR_ARGUMENT, "weighted assembly needs operator, weights, output");
+  const cupid_int n = op->nnodes;
+  for (cupid_int i = 0; i < n; i++)
+    CUPID_CHECK(w[i] >= 0.0 && isfinite(w[i]), CUPID_ERR_ARGUMENT,
+                "energy weight %g of PD node %lld: weights must be finite and >= 0", w[i],
+                (long long)i);
+  double *moduli[3] = {op->kappa, op->mu, op->c}, *saved[3] = {NULL, NULL, NULL};
+  cupid_status st = CUPID_SUCCESS;
+  for (int k = 0; k < 3; k++) {
+    if (!moduli[k]) continue;
+    CUPID_TRY(cupid_malloc((size_t)n, sizeof *saved[k], "saved PD moduli", &saved[k]));
+    memcpy(saved[k], moduli[k], (size_t)n * sizeof *saved[k]);
+    for (cupid_int i = 0; i < n; i++) moduli[k][i] *= w[i];
+  }
+  st = cupid_pd_operator_assemble(op, K);
+cleanup:
+  for (int k = 0; k < 3; k++)
+    if (saved[k]) memcpy(moduli[k], saved[k], (size_t)n * sizeof *saved[k]);
+  for (int k = 0; k < 3; k++) cupid_free(&saved[k]);
   return st;
 }
 

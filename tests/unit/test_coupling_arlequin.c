@@ -12,9 +12,12 @@
  *  - static end load F at the PD end, clamp at y = 0: the reaction balances F (1e-9) and the
  *    FE-only span [0, 0.4] carries exactly F, so u(y) = F y / (EA) there (1e-9 relative,
  *    whatever the penalty);
- *  - 3D: a bar 4 x 4 (h = 1), TE1 rod (nu = 0) on y in [0, 12] + 3D bond PD (delta = 1.5) on
- *    [8, 20], overlap [8, 12]: K symmetric and free of all three rigid translations (1e-12),
- *    end load: reaction (1e-9) and the FE-only span u_y = F y/(EA) (1e-9). */
+ *  - 3D: a bar 4 x 4 (h = 1), TE1 rod (nu = 0) + 3D PD (delta = 1.5, bond-based and LPS) on
+ *    [8, 20], one overlap [8, 12] or two ([8, 12], [16, 20], the beam through and beyond the
+ *    region): K symmetric and free of all three rigid translations (1e-12), end load: reaction
+ *    (1e-9) and the FE-only spans carry exactly F (1e-9);
+ *  - the node-weighted PD stiffness: w = 1 is K, linear in w, symmetric, translation-free,
+ *    bond-based (w_i + w_j)/2 per bond, the operator left unchanged. */
 #include <math.h>
 #include <stdio.h>
 #include <string.h>
@@ -244,35 +247,49 @@ static void test_static(void **state) {
   static_case(1e13);
 }
 
-static void test_3d(void **state) {
-  (void)state;
+/* A 4 x 4 bar (h = 1), TE1 rod (nu = 0) with 2-node B2 elements of length 1 and a 3D PD region
+ * (delta = 1.5, nu = 0): one overlap (beam [0, 12], PD [8, 20], overlap [8, 12]) or two (beam
+ * [0, 28], PD [8, 20], overlaps [8, 12] and [16, 20], the beam giving way on [12, 16]). End
+ * load F at the free end (the PD end plane, or the beam's last node). Checks: K symmetric and
+ * free of the three rigid translations (1e-12 of |K|: momentum conserved); the reaction
+ * balances F (1e-9); every FE-only span carries exactly F: u_y = F y / (EA) + const there
+ * (1e-9 of u(8)). */
+static void case_3d(cupid_pd_model_kind model, int two) {
   tb_beam tb;
   tb_init(&tb, 1000.0, 0.0);
   tb_te(&tb, 1);
   tb_rect(&tb, 0, 4, 1, 0, 4, 1, -1);
-  tb_axis(&tb, 0.0, 12.0, 12, 2);
+  const double L = two ? 28.0 : 12.0;
+  tb_axis(&tb, 0.0, L, (int)L, 2);
   cupid_cuf_beam beam = tb_create(&tb);
   cupid_box region = {.lo = {0, 8, 0}, .hi = {4, 20, 4}, .has = {1, 1, 1}};
   int rmat = 0;
   cupid_pd_grid grid = NULL;
   cupid_pd_grid_options go = {.spacing = 1.0, .dimension = 3};
   CUPID_ASSERT_OK(cupid_pd_grid_create(&go, 1, &region, &rmat, &grid));
-  cupid_pd_material mat = {.E = 1000.0, .nu = 0.25};
-  cupid_pd_operator_options po = {.horizon = 1.5, .model = CUPID_PD_BOND,
+  cupid_pd_material mat = {.E = 1000.0, .nu = model == CUPID_PD_BOND ? 0.25 : 0.0};
+  cupid_pd_operator_options po = {.horizon = 1.5, .model = model,
                                   .influence = CUPID_INFLUENCE_CONSTANT,
                                   .partial_volume = CUPID_PARTIAL_NONE, .materials = &mat,
                                   .n_materials = 1};
   cupid_pd_operator op = NULL;
   CUPID_ASSERT_OK(cupid_pd_operator_create(grid, &po, &op));
-  cupid_int n_pd = cupid_pd_grid_num_nodes(grid), ndof;
+  if (two) {
+    cupid_box give = {.lo = {0, 12, 0}, .hi = {0, 16, 0}, .has = {0, 1, 0}};
+    CUPID_ASSERT_OK(cupid_coupling_deactivate(beam, 1, &give));
+  }
+  cupid_int n_pd = cupid_pd_grid_num_nodes(grid), ndof, nbn = (cupid_int)L + 1; /* B2: 2-node */
   CUPID_ASSERT_OK(cupid_cuf_set_dof_offset(beam, 3 * n_pd));
   ndof = 3 * n_pd + cupid_cuf_num_dofs(beam);
   cupid_arlequin_options o = {
       .weight = {.lo = 8, .hi = 12, .fe_below = 1, .kind = CUPID_WEIGHT_SMOOTH}, .penalty = 1e5};
+  if (two)
+    o.n_overlaps = 2,
+    o.second = (cupid_arlequin_weight){.lo = 16, .hi = 20, .fe_below = 0, .kind = CUPID_WEIGHT_SMOOTH};
   cupid_csr K = NULL;
   cupid_arlequin_info info;
   CUPID_ASSERT_OK(cupid_arlequin_assemble(beam, grid, op, &o, &K, &info));
-  assert_int_equal(info.n_tied, 4 * 4 * 4);
+  assert_int_equal(info.n_tied, (two ? 2 : 1) * 4 * 4 * 4);
   assert_int_equal(info.components, 3);
   assert_true(cupid_csr_asymmetry(K) <= 1e-14);
   double *v = NULL, *f = NULL, *u = NULL, *r = NULL, s = max_abs(K);
@@ -283,7 +300,7 @@ static void test_3d(void **state) {
   for (int k = 0; k < 3; k++) { /* rigid translations: PD 1, TE1 constant term 1 */
     memset(v, 0, sizeof *v * (size_t)ndof);
     for (cupid_int i = 0; i < n_pd; i++) v[3 * i + k] = 1.0;
-    for (cupid_int bn = 0; bn < 13; bn++) v[cupid_cuf_dof(beam, 0, bn, k)] = 1.0;
+    for (cupid_int bn = 0; bn < nbn; bn++) v[cupid_cuf_dof(beam, 0, bn, k)] = 1.0;
     cupid_csr_matvec(K, v, r);
     double fm = 0.0;
     for (cupid_int d = 0; d < ndof; d++) fm = fmax(fm, fabs(r[d]));
@@ -292,11 +309,19 @@ static void test_3d(void **state) {
   cupid_dirichlet bc = NULL;
   CUPID_ASSERT_OK(cupid_dirichlet_create(ndof, &bc));
   CUPID_ASSERT_OK(cupid_cuf_clamp_node(beam, 0, bc));
+  for (cupid_int bn = 0; bn < nbn; bn++) /* beam nodes where the beam gave way */
+    for (int tau = 0; tau < 3; tau++)
+      if (!cupid_cuf_node_used(beam, tau, bn))
+        for (int k = 0; k < 3; k++)
+          CUPID_ASSERT_OK(cupid_dirichlet_fix(bc, cupid_cuf_dof(beam, tau, bn, k), 0.0));
   CUPID_ASSERT_OK(cupid_dirichlet_finalize(bc));
   const double *x = cupid_pd_grid_coords(grid);
-  double F = 16.0;
-  for (cupid_int i = 0; i < n_pd; i++)
-    if (x[3 * i + 1] > 19.0) f[3 * i + 1] = F / 16.0; /* the end plane y = 19.5 */
+  double F = 16.0, EA = 1000.0 * 16.0;
+  if (two)
+    f[cupid_cuf_dof(beam, 0, nbn - 1, 1)] = F; /* TE1 constant term of the end node */
+  else
+    for (cupid_int i = 0; i < n_pd; i++)
+      if (x[3 * i + 1] > 19.0) f[3 * i + 1] = F / 16.0; /* the end plane y = 19.5 */
   cupid_solve_info si;
   CUPID_ASSERT_OK(cupid_direct_solve(K, CUPID_MATRIX_SPD, f, bc, u, &si));
   cupid_csr_matvec(K, u, r);
@@ -304,15 +329,25 @@ static void test_3d(void **state) {
   for (cupid_int d = 1; d < ndof; d += 3)
     if (bc->fixed[d]) reaction += r[d] - f[d];
   ASSERT_NEAR(reaction, -F, 1e-9 * F);
-  double err = 0.0, ex8 = F * 8.0 / (1000.0 * 16.0);
-  for (cupid_int bn = 0; bn <= 8; bn++) {
+  double err = 0.0, ex8 = F * 8.0 / EA;
+  for (cupid_int bn = 0; bn <= 8; bn++) { /* [0, 8] */
     double y = cupid_cuf_beam_node_y(beam, bn), uy = u[cupid_cuf_dof(beam, 0, bn, 1)];
-    err = fmax(err, fabs(uy - F * y / (1000.0 * 16.0)));
+    err = fmax(err, fabs(uy - F * y / EA));
+  }
+  if (two) { /* [20, 28]: the same strain */
+    cupid_int b20 = 20;
+    double u20 = u[cupid_cuf_dof(beam, 0, b20, 1)];
+    for (cupid_int bn = b20; bn < nbn; bn++) {
+      double y = cupid_cuf_beam_node_y(beam, bn), uy = u[cupid_cuf_dof(beam, 0, bn, 1)];
+      err = fmax(err, fabs(uy - u20 - F * (y - 20.0) / EA));
+    }
   }
   double gap;
   CUPID_ASSERT_OK(cupid_arlequin_gap(beam, grid, &o, u, &gap));
-  printf("3D: max |u_y - F y/(EA)| on [0, 8] = %.2e (u(8) = %.3e), gap %.2e, pivot ratio %.2e\n",
-         err, ex8, gap, si.pivot_ratio);
+  printf("3D %s, %d overlap%s: max FE-only error vs F/(EA) %.2e (u(8) = %.3e), gap %.2e, "
+         "pivot ratio %.2e\n",
+         model == CUPID_PD_LPS ? "LPS" : "bond-based", two ? 2 : 1, two ? "s" : "", err, ex8, gap,
+         si.pivot_ratio);
   assert_true(err <= 1e-9 * ex8);
   cupid_free(&v);
   cupid_free(&f);
@@ -325,6 +360,111 @@ static void test_3d(void **state) {
   cupid_cuf_beam_destroy(&beam);
 }
 
+static void test_3d(void **state) {
+  (void)state;
+  case_3d(CUPID_PD_BOND, 0);
+  case_3d(CUPID_PD_LPS, 0);
+  case_3d(CUPID_PD_LPS, 1);
+  case_3d(CUPID_PD_BOND, 1);
+}
+
+/* The node-weighted PD stiffness (cupid_pd_operator_assemble_weighted) on an LPS block with
+ * the surface correction: w = 1 gives K (bit for bit: the same arithmetic), K(w) is linear in
+ * w (K(a + b) = K(a) + K(b) to 1e-13 of |K|), symmetric and free of translations for any
+ * w >= 0, and the operator is left as it was (K assembled again is bit-identical). For
+ * bond-based with one material, block ij of K(w) is (w_i + w_j)/2 times that of K (1e-13). */
+static void check_weighted(cupid_pd_model_kind model) {
+  cupid_box region = {.lo = {0, 0, 0}, .hi = {5, 6, 5}, .has = {1, 1, 1}};
+  int rmat = 0;
+  cupid_pd_grid grid = NULL;
+  cupid_pd_grid_options go = {.spacing = 1.0, .dimension = 3};
+  CUPID_ASSERT_OK(cupid_pd_grid_create(&go, 1, &region, &rmat, &grid));
+  cupid_pd_material mat = {.E = 1000.0, .nu = 0.3};
+  cupid_pd_operator_options po = {.horizon = 2.0, .model = model,
+                                  .influence = CUPID_INFLUENCE_GAUSSIAN,
+                                  .partial_volume = CUPID_PARTIAL_PDLAMMPS, .materials = &mat,
+                                  .n_materials = 1,
+                                  .surface_correction = model == CUPID_PD_LPS ? CUPID_SURFACE_ENERGY
+                                                                              : CUPID_SURFACE_NONE};
+  cupid_pd_operator op = NULL;
+  CUPID_ASSERT_OK(cupid_pd_operator_create(grid, &po, &op));
+  cupid_int n = cupid_pd_grid_num_nodes(grid);
+  double *one = NULL, *a = NULL, *b = NULL, *ab = NULL;
+  CUPID_ASSERT_OK(cupid_malloc((size_t)n, sizeof *one, "w", &one));
+  CUPID_ASSERT_OK(cupid_malloc((size_t)n, sizeof *a, "w", &a));
+  CUPID_ASSERT_OK(cupid_malloc((size_t)n, sizeof *b, "w", &b));
+  CUPID_ASSERT_OK(cupid_malloc((size_t)n, sizeof *ab, "w", &ab));
+  uint64_t seed = 5;
+  for (cupid_int i = 0; i < n; i++) {
+    one[i] = 1.0;
+    a[i] = fabs(cupid_test_random(&seed));
+    b[i] = i % 3 == 0 ? 0.0 : fabs(cupid_test_random(&seed)); /* zero weights too */
+    ab[i] = a[i] + b[i];
+  }
+  cupid_csr K = NULL, K1 = NULL, Ka = NULL, Kb = NULL, Kab = NULL, K2 = NULL;
+  CUPID_ASSERT_OK(cupid_pd_operator_assemble(op, &K));
+  CUPID_ASSERT_OK(cupid_pd_operator_assemble_weighted(op, one, &K1));
+  CUPID_ASSERT_OK(cupid_pd_operator_assemble_weighted(op, a, &Ka));
+  CUPID_ASSERT_OK(cupid_pd_operator_assemble_weighted(op, b, &Kb));
+  CUPID_ASSERT_OK(cupid_pd_operator_assemble_weighted(op, ab, &Kab));
+  CUPID_ASSERT_OK(cupid_pd_operator_assemble(op, &K2));
+  double s = max_abs(K);
+  assert_true(diff_scaled(K1, K, 1.0) == 0.0);
+  assert_true(diff_scaled(K2, K, 1.0) == 0.0);
+  double lin = 0.0;
+  for (cupid_int r = 0; r < n; r++)
+    for (cupid_int q = Kab->rowptr[r]; q < Kab->rowptr[r + 1]; q++) {
+      const double *pa = cupid_csr_find(Ka, r, Kab->col[q]), *pb = cupid_csr_find(Kb, r, Kab->col[q]);
+      for (int e = 0; e < 9; e++)
+        lin = fmax(lin, fabs(Kab->val[9 * q + e] - (pa ? pa[e] : 0) - (pb ? pb[e] : 0)));
+    }
+  assert_true(lin <= 1e-13 * s);
+  assert_true(cupid_csr_asymmetry(Ka) <= 1e-14);
+  assert_true(cupid_csr_asymmetry(Kb) <= 1e-14);
+  double *v = NULL, *r = NULL;
+  CUPID_ASSERT_OK(cupid_calloc(3 * (size_t)n, sizeof *v, "v", &v));
+  CUPID_ASSERT_OK(cupid_calloc(3 * (size_t)n, sizeof *r, "r", &r));
+  for (int k = 0; k < 3; k++) {
+    for (cupid_int d = 0; d < 3 * n; d++) v[d] = d % 3 == k;
+    cupid_csr_matvec(Kb, v, r);
+    for (cupid_int d = 0; d < 3 * n; d++) assert_true(fabs(r[d]) <= 1e-12 * s);
+  }
+  if (model == CUPID_PD_BOND) {
+    double e = 0.0;
+    for (cupid_int i = 0; i < n; i++)
+      for (cupid_int q = K->rowptr[i]; q < K->rowptr[i + 1]; q++) {
+        cupid_int j = K->col[q];
+        if (j == i) continue;
+        const double *w = cupid_csr_find(Ka, i, j);
+        for (int c = 0; c < 9; c++) e = fmax(e, fabs(w[c] - 0.5 * (a[i] + a[j]) * K->val[9 * q + c]));
+      }
+    assert_true(e <= 1e-13 * s);
+  }
+  printf("weighted PD stiffness (%s): linearity %.1e of |K|\n",
+         model == CUPID_PD_LPS ? "LPS, surface correction" : "bond-based", lin / s);
+  /* a negative weight is refused */
+  a[3] = -0.5;
+  cupid_csr Kbad = NULL;
+  assert_int_equal(cupid_pd_operator_assemble_weighted(op, a, &Kbad), CUPID_ERR_ARGUMENT);
+  assert_null(Kbad);
+  cupid_csr *all[] = {&K, &K1, &Ka, &Kb, &Kab, &K2};
+  for (int k = 0; k < 6; k++) cupid_csr_destroy(all[k]);
+  cupid_free(&one);
+  cupid_free(&a);
+  cupid_free(&b);
+  cupid_free(&ab);
+  cupid_free(&v);
+  cupid_free(&r);
+  cupid_pd_operator_destroy(&op);
+  cupid_pd_grid_destroy(&grid);
+}
+
+static void test_weighted_pd(void **state) {
+  (void)state;
+  check_weighted(CUPID_PD_LPS);
+  check_weighted(CUPID_PD_BOND);
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_alpha),
@@ -332,6 +472,7 @@ int main(void) {
       cmocka_unit_test(test_coupled_matrix),
       cmocka_unit_test(test_static),
       cmocka_unit_test(test_3d),
+      cmocka_unit_test(test_weighted_pd),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -1,8 +1,9 @@
 #!/usr/bin/env bash
 # Coupled models that cupid cannot run give a clear model error naming the file position and
 # what to change: a PD region bound that is not a beam-element end, a region over part of the
-# section that cuts section elements or removes part of a TE expansion, the arlequin method (not yet
-# supported). Each case must fail (non-zero exit) with the expected phrase in the message.
+# section that cuts section elements or removes part of a TE expansion, Arlequin layouts it does not
+# take (an overlap the region does not start on; two overlaps that overlap; three overlaps).
+# Each case must fail (non-zero exit) with the expected phrase in the message.
 set -u
 CUPID=$(realpath "${CUPID:-build/cupid}")
 work=$(mktemp -d)
@@ -45,7 +46,9 @@ check() { # $1 name, $2 expected phrase; model on stdin
 check unaligned "bound y = 15 is not a beam-element end" < <(model "{x: [0, 8], y: [10, 15], z: [0, 8]}" "{method: fictitious}")
 check partial_edge "bound x = 3 is not a section-element edge" < <(model "{x: [0, 3], y: [10, 20], z: [0, 8]}" "{method: fictitious}")
 check partial_te "TE expansion spans the whole section" < <(model "{x: [0, 4], y: [10, 20], z: [0, 8]}" "{method: fictitious}" | sed 's/expansion: LE/expansion: TE2/; /element: L4/d')
-check arlequin "arlequin is not yet supported" < <(model "{x: [0, 8], y: [10, 20], z: [0, 8]}" "{method: arlequin, arlequin: {penalty: 1000, overlap: {y: [8, 12]}}}")
+check arlequin "must start on one edge of the overlap" < <(model "{x: [0, 8], y: [10, 20], z: [0, 8]}" "{method: arlequin, arlequin: {penalty: 1000, overlap: {y: [8, 12]}}}")
+check arlequin_two "overlap each other" < <(model "{x: [0, 8], y: [10, 20], z: [0, 8]}" "{method: arlequin, arlequin: {penalty: 1000, overlap: [{y: [10, 20]}, {y: [10, 20]}]}}")
+check arlequin_three "lists 3 boxes" < <(model "{x: [0, 8], y: [10, 20], z: [0, 8]}" "{method: arlequin, arlequin: {penalty: 1000, overlap: [{y: [10, 12]}, {y: [12, 14]}, {y: [18, 20]}]}}")
 
 echo "coupling_errors: $pass passed, $fail failed"
 [ "$fail" -eq 0 ]
