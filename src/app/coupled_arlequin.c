@@ -9,7 +9,7 @@
  * is deactivated) or runs on inside the PD region, where it gives way (beam [0, 1]: the pairs
  * on [0.6, 1] are made inactive, their FE nodes held at zero). Constraints and loads go to the part they touch; loads
  * inside the overlap (which both models would carry, each with its weight) are not yet
- * supported. Static (CHOLMOD: the system is symmetric), evaluate, and dynamic runs (through
+ * supported. Static (CHOLMOD, or PETSc CG + GAMG: the system is symmetric), evaluate, and dynamic runs (through
  * cupid_app_run_dynamic() with the weighted masses of cupid_app_arlequin_mass()). */
 #include <math.h>
 #include <stdio.h>
@@ -292,8 +292,8 @@ static cupid_status evaluate(cupid_job *job) {
 }
 
 static cupid_status solve(cupid_job *job) {
-  cupid_status st = cupid_direct_solve(job->K, CUPID_MATRIX_SPD, job->f_ext, job->bc, job->u,
-                                       &job->solve);
+  /* symmetric positive definite once held: CHOLMOD, or CG + GAMG through PETSc (run.c) */
+  cupid_status st = cupid_app_linear_solve(job, CUPID_MATRIX_SPD);
   job->phases[CUPID_PHASE_FACTORISATION] =
       (cupid_phase_record){job->solve.time_factor, cupid_peak_memory(), 1};
   job->phases[CUPID_PHASE_SOLVE] =

@@ -47,10 +47,6 @@ static cupid_status check_petsc_request(const cupid_job *job) {
     return cupid_model_error(m, &m->analysis.mark,
                              "solver petsc serves static analyses; type dynamic uses its own "
                              "integrators (use solver auto or direct)");
-  if (cupid_app_is_coupled(job) && m->coupling.method == CUPID_COUPLING_ARLEQUIN)
-    return cupid_model_error(m, &m->analysis.mark,
-                             "solver petsc is not available for coupling method arlequin yet "
-                             "(use solver auto or direct)");
   return CUPID_SUCCESS;
 }
 
@@ -78,8 +74,7 @@ cupid_status cupid_app_choose_solver(cupid_job *job) {
     return use_petsc(job);
   }
   /* auto */
-  if (m->analysis.type != CUPID_ANALYSIS_STATIC ||
-      (cupid_app_is_coupled(job) && m->coupling.method == CUPID_COUPLING_ARLEQUIN)) {
+  if (m->analysis.type != CUPID_ANALYSIS_STATIC) {
     snprintf(job->solver_reason, sizeof job->solver_reason, "auto: the only engine for this analysis");
     return CUPID_SUCCESS;
   }

@@ -2,6 +2,7 @@
 # The PETSc/MPI engine (issue 6) against the direct solver, on 2 MPI ranks:
 #  1. a small coupled bar (fictitious nodes, non-symmetric Eq. 38: GMRES, assembled MPIAIJ),
 #  1b. the same bar on one process: matrix-free Eq. 38 (src/coupling/operator.c, krylov.c),
+#  1c. the coupled bar with Arlequin (symmetric: CG + GAMG on the assembled system), 2 ranks,
 #  2. a small PD-only LPS block (matrix-free MATSHELL + halo exchange, CG + GAMG), with a
 #     prescribed non-zero displacement (lifted right-hand side),
 #  2b. a PD-only column long in z, split into slabs: each rank builds only its z layers and the
@@ -69,6 +70,13 @@ echo "== coupled bar, one process: matrix-free Eq. 38 (GMRES + LU of the bond-ba
 "$CUPID" run "$models/coupled_bar.yaml" -o "$tmp/bar_mf" --solver petsc --quiet
 compare "$tmp/bar_direct" "$tmp/bar_mf" "coupled bar, matrix-free"
 python3 -c "import json,sys; s=json.load(open(sys.argv[1]))['solver']; assert s['ranks']==1 and s['operator']=='matrix-free' and s['ksp_type']=='gmres', s" "$tmp/bar_mf/summary.json"
+
+echo "== coupled bar, Arlequin (two overlaps, LPS weighted node by node: symmetric, CG + GAMG), 2 ranks"
+sed 's/horizon: 3.0/horizon: 1.5/' "$CUPID_SOURCE_DIR/examples/bar/bar_coupled_arlequin_l9.yaml" > "$tmp/arl.yaml"
+"$CUPID" run "$tmp/arl.yaml" -o "$tmp/arl_direct" --solver direct --quiet
+"$MPIEXEC" -n 2 "$CUPID" run "$tmp/arl.yaml" -o "$tmp/arl_petsc" --solver petsc --quiet
+compare "$tmp/arl_direct" "$tmp/arl_petsc" "coupled bar, Arlequin"
+python3 -c "import json,sys; s=json.load(open(sys.argv[1]))['solver']; assert s['ranks']==2 and s['ksp_type']=='cg', s" "$tmp/arl_petsc/summary.json"
 
 echo "== PD-only LPS block, matrix-free, 2 ranks"
 "$CUPID" run "$models/pd_block.yaml" -o "$tmp/pd_direct" --solver direct --quiet
