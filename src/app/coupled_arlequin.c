@@ -70,6 +70,19 @@ static cupid_arlequin_options options(const cupid_job *job) {
 
 static int close_to(double a, double b, double scale) { return fabs(a - b) <= ARL_TOL * scale; }
 
+/* The weight has kinks at the overlap bounds: they must be beam nodes (element ends) for the
+ * axis quadrature to be exact. */
+static cupid_status bounds_on_nodes(const cupid_job *job, const double *ends, int n) {
+  for (int k = 0; k < n; k++)
+    if (cupid_cuf_beam_node_at(job->beam, ends[k]) < 0)
+      return cupid_model_error(job->model, &job->model->coupling.mark,
+                               "the overlap bound y = %g is not a beam-node position: move it "
+                               "to an element end (the weight's kinks must fall between "
+                               "elements)",
+                               ends[k]);
+  return CUPID_SUCCESS;
+}
+
 /* Two overlaps: the PD region spans from the lower edge of the first to the upper edge of the
  * second, the beam reaches beyond both, and gives way between them. */
 static cupid_status prepare_two(cupid_job *job) {
@@ -90,13 +103,7 @@ static cupid_status prepare_two(cupid_job *job) {
                              "the second, and the beam [%g, %g] must extend beyond both",
                              lo1, hi1, lo2, hi2, r->lo[1], r->hi[1], b0, b1);
   const double ends[4] = {lo1, hi1, lo2, hi2};
-  for (int k = 0; k < 4; k++)
-    if (cupid_cuf_beam_node_at(job->beam, ends[k]) < 0)
-      return cupid_model_error(m, mk,
-                               "the overlap bound y = %g is not a beam-node position: move it "
-                               "to an element end (the weight's kinks must fall between "
-                               "elements)",
-                               ends[k]);
+  CUPID_CALL(bounds_on_nodes(job, ends, 4));
   if (lo2 - hi1 <= tol) return CUPID_SUCCESS; /* no PD-only part between the overlaps */
   cupid_box give = {.lo = {0, hi1, 0}, .hi = {0, lo2, 0}, .has = {0, 1, 0}};
   cupid_status st = cupid_coupling_deactivate(job->beam, 1, &give);
@@ -128,14 +135,8 @@ cupid_status cupid_app_arlequin_prepare(cupid_job *job) {
                              "extend beyond the first edge",
                              r->lo[1], r->hi[1], lo, hi, b0, b1);
   /* The weight has kinks at lo and hi: they must be element ends for exact integration. */
-  double ends[2] = {lo, hi};
-  for (int k = 0; k < 2; k++)
-    if (cupid_cuf_beam_node_at(job->beam, ends[k]) < 0)
-      return cupid_model_error(m, mk,
-                               "the overlap bound y = %g is not a beam-node position: move it "
-                               "to an element end (the weight's kinks must fall between "
-                               "elements)",
-                               ends[k]);
+  const double ends[2] = {lo, hi};
+  CUPID_CALL(bounds_on_nodes(job, ends, 2));
   /* Beyond the overlap, inside the PD region, the beam gives way (alpha = 0 there). */
   cupid_box give = {.lo = {0, below ? hi : b0, 0}, .hi = {0, below ? b1 : lo, 0}, .has = {0, 1, 0}};
   if (give.hi[1] - give.lo[1] <= tol) return CUPID_SUCCESS; /* the beam ends on the overlap */
