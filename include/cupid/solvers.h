@@ -213,6 +213,9 @@ int cupid_petsc_rank(void);
 int cupid_petsc_size(void);
 /** The largest of @p v over all ranks (collective; @p v itself when not initialised). */
 int cupid_petsc_max_int(int v);
+/** 1 when the PETSc run-time option @p name (e.g. "-cupid_coupled_assembled") was given
+ *  (0 when PETSc is not initialised or absent). */
+int cupid_petsc_has_option(const char *name);
 /** Sums over all ranks of @p n doubles, in place (collective; nothing when not initialised). */
 void cupid_petsc_sum_doubles(double *v, int n);
 /**

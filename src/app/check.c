@@ -110,7 +110,7 @@ static void estimate_iterative(const cupid_job *job, cupid_estimate *e) {
     e->iterative_bytes = 2.5 * 19.0 * 9.0 * 12.0 * n + 30.0 * ndof * 8.0;
     e->iterative_seconds = 2.0 + 25.0 * passes * (double)job->n_bonds / 1.5e7 + 2e-5 * n;
   } else if (is_fictitious_coupled(job) && job->model->analysis.type == CUPID_ANALYSIS_STATIC &&
-             cupid_petsc_size() == 1 && job->grid && cupid_pd_grid_dimension(job->grid) == 3) {
+             job->grid && cupid_pd_grid_dimension(job->grid) == 3) {
     /* Matrix-free Eq. 38 + MUMPS LU of the cheap twin, measured on cbeam_web200 (10^5 PD
      * nodes: 4.3 GB, 115 s on a loaded machine; bench/README_coupled.md): ~1.6 kB a PD node
      * for the operator and the cheap matrix, ~40 kB for its factor. */

@@ -257,13 +257,16 @@ static cupid_status solve(cupid_job *job) {
   return CUPID_SUCCESS;
 }
 
-/* --solver petsc on one rank: the fictitious-node system (Eq. 38) without the PD matrix,
- * GMRES preconditioned by the LU of a cheap bond-based twin (src/coupling/operator.c,
- * krylov.c; issue 6). Several ranks take the assembled, distributed path (solve()). */
+/* --solver petsc: the fictitious-node system (Eq. 38) without the PD matrix, GMRES
+ * preconditioned by the LU of a cheap bond-based twin (src/coupling/operator.c, krylov.c;
+ * issue 6), on one rank or several (replicated model, MUMPS's parallel LU). The PETSc option
+ * -cupid_coupled_assembled takes the assembled path instead (solve(): Eq. 38 assembled, its
+ * rows split over the ranks, GMRES + block Jacobi/ILU). */
 int cupid_app_coupled_matrix_free(const cupid_job *job) {
   return job->solver == CUPID_SOLVER_PETSC && !cupid_app_is_arlequin(job) && !is_lagrange(job) &&
-         job->model->analysis.type == CUPID_ANALYSIS_STATIC && cupid_petsc_size() == 1 &&
-         job->grid && cupid_pd_grid_dimension(job->grid) == 3;
+         job->model->analysis.type == CUPID_ANALYSIS_STATIC && job->grid &&
+         cupid_pd_grid_dimension(job->grid) == 3 &&
+         !cupid_petsc_has_option("-cupid_coupled_assembled");
 }
 
 static cupid_status solve_matrix_free(cupid_job *job) {

@@ -115,7 +115,7 @@ cupid_status cupid_app_coupled_solve_mf(cupid_job *job, const cupid_coupling_opt
   job->solve.time_solve = ki.time_solve;
   job->solve.failed_dof = -1;
   job->solve.iterations = ki.iterations;
-  job->solve.ranks = 1;
+  job->solve.ranks = cupid_petsc_size();
   job->solve.matrix_free = 1;
   snprintf(job->solve.ksp_type, sizeof job->solve.ksp_type, "gmres");
   const char *pc = strchr(ki.method, '+'); /* ki.method is "gmres+<pc>" */

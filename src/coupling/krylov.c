@@ -4,7 +4,9 @@
  * short bond-based PD operator) by a PETSc PC: LU through UMFPACK by default (the cheap matrix
  * has ~19 blocks a PD row, so its factor is ~1/50 of the LPS one), ILU, GAMG or hypre on
  * request. Right preconditioning: GMRES minimises the true residual, so rtol is what the
- * caller gets. Dirichlet DOFs are eliminated: A_ff u_f = f_f - A_fc u_c. */
+ * caller gets. Dirichlet DOFs are eliminated: A_ff u_f = f_f - A_fc u_c. On several MPI ranks
+ * (replicated model) the vectors and the preconditioner's rows are split over the ranks and
+ * the LU is MUMPS's (parallel); every rank gets the whole solution. */
 #include <math.h>
 #include <stdio.h>
 #include <string.h>
@@ -25,57 +27,75 @@
     }                                                                                         \
   } while (0)
 
+/* On several MPI ranks the model is replicated and every rank applies the whole operator to
+ * the gathered x (the product is cheap next to the preconditioner's factorisation, which MUMPS
+ * distributes); each rank owns the free DOFs [f0, f1) of the PETSc vectors. */
 typedef struct {
   cupid_coupling_operator A;
-  cupid_int n, n_free;
+  cupid_int n, n_free, f0, f1;
   const cupid_int *gidx; /* free -> global DOF */
   double *xf, *yf;       /* full-length work vectors */
+  VecScatter toall;      /* x -> xall, every free DOF on every rank */
+  Vec xall;
 } shell_ctx;
 
-/* y_f = (A [x_f ; 0])_f. */
+/* y_f = (A [x_f ; 0])_f on the owned rows. */
 static PetscErrorCode shell_mult(Mat M, Vec x, Vec y) {
   shell_ctx *s;
   const PetscScalar *xa;
   PetscScalar *ya;
   PetscCall(MatShellGetContext(M, &s));
-  PetscCall(VecGetArrayRead(x, &xa));
+  PetscCall(VecScatterBegin(s->toall, x, s->xall, INSERT_VALUES, SCATTER_FORWARD));
+  PetscCall(VecScatterEnd(s->toall, x, s->xall, INSERT_VALUES, SCATTER_FORWARD));
+  PetscCall(VecGetArrayRead(s->xall, &xa));
   memset(s->xf, 0, (size_t)s->n * sizeof *s->xf);
   for (cupid_int k = 0; k < s->n_free; k++) s->xf[s->gidx[k]] = xa[k];
-  PetscCall(VecRestoreArrayRead(x, &xa));
+  PetscCall(VecRestoreArrayRead(s->xall, &xa));
   if (cupid_coupling_operator_apply(s->A, s->xf, s->yf) != CUPID_SUCCESS)
     SETERRQ(PETSC_COMM_SELF, PETSC_ERR_LIB, "coupled operator: %s", cupid_error_message());
   PetscCall(VecGetArray(y, &ya));
-  for (cupid_int k = 0; k < s->n_free; k++) ya[k] = s->yf[s->gidx[k]];
+  for (cupid_int k = s->f0; k < s->f1; k++) ya[k - s->f0] = s->yf[s->gidx[k]];
   PetscCall(VecRestoreArray(y, &ya));
   return 0;
 }
 
-/* The free-free block of the block-CSR P as a PETSc AIJ matrix (scalar rows). */
-static cupid_status free_block_aij(const cupid_csr_t *P, const cupid_dirichlet_t *bc, Mat *out) {
+/* The free-free block of the block-CSR P as a PETSc AIJ matrix (scalar rows), the owned rows
+ * [f0, f1) of it on each rank. */
+static cupid_status free_block_aij(const cupid_csr_t *P, const cupid_dirichlet_t *bc,
+                                   cupid_int f0, cupid_int f1, Mat *out) {
   cupid_status st = CUPID_SUCCESS;
-  PetscInt *nnz = NULL, *cols = NULL;
+  PetscInt *dnz = NULL, *onz = NULL, *cols = NULL;
   PetscScalar *vals = NULL;
   Mat M = NULL;
   const int bs = P->bs;
-  cupid_int n_free = bc->n_free, maxrow = 0;
-  CUPID_TRY(cupid_calloc((size_t)n_free + 1, sizeof *nnz, "preconditioner row counts", &nnz));
+  cupid_int n_free = bc->n_free, nloc = f1 - f0, maxrow = 0;
+  CUPID_TRY(cupid_calloc((size_t)nloc + 1, sizeof *dnz, "preconditioner row counts", &dnz));
+  CUPID_TRY(cupid_calloc((size_t)nloc + 1, sizeof *onz, "preconditioner row counts", &onz));
   for (cupid_int R = 0; R < P->nrows; R++) {
-    cupid_int len = 0;
+    cupid_int len = 0, din = 0;
     for (cupid_int k = P->rowptr[R]; k < P->rowptr[R + 1]; k++)
-      for (int b = 0; b < bs; b++) len += bc->free_index[P->col[k] * bs + b] >= 0;
+      for (int b = 0; b < bs; b++) {
+        cupid_int fc = bc->free_index[P->col[k] * bs + b];
+        len += fc >= 0;
+        din += fc >= f0 && fc < f1;
+      }
     for (int a = 0; a < bs; a++) {
       cupid_int fi = bc->free_index[R * bs + a];
-      if (fi >= 0) nnz[fi] = (PetscInt)len;
+      if (fi >= f0 && fi < f1) dnz[fi - f0] = (PetscInt)din, onz[fi - f0] = (PetscInt)(len - din);
     }
     if (len > maxrow) maxrow = len;
   }
   CUPID_TRY(cupid_malloc((size_t)maxrow + 1, sizeof *cols, "preconditioner row", &cols));
   CUPID_TRY(cupid_malloc((size_t)maxrow + 1, sizeof *vals, "preconditioner row", &vals));
-  PCALL(MatCreateSeqAIJ(PETSC_COMM_SELF, (PetscInt)n_free, (PetscInt)n_free, 0, nnz, &M));
+  PCALL(MatCreate(PETSC_COMM_WORLD, &M));
+  PCALL(MatSetSizes(M, (PetscInt)nloc, (PetscInt)nloc, (PetscInt)n_free, (PetscInt)n_free));
+  PCALL(MatSetType(M, MATAIJ));
+  PCALL(MatSeqAIJSetPreallocation(M, 0, dnz));
+  PCALL(MatMPIAIJSetPreallocation(M, 0, dnz, 0, onz));
   for (cupid_int R = 0; R < P->nrows; R++)
     for (int a = 0; a < bs; a++) {
       cupid_int fi = bc->free_index[R * bs + a];
-      if (fi < 0) continue;
+      if (fi < f0 || fi >= f1) continue;
       PetscInt len = 0;
       for (cupid_int k = P->rowptr[R]; k < P->rowptr[R + 1]; k++)
         for (int b = 0; b < bs; b++) {
@@ -89,7 +109,7 @@ static cupid_status free_block_aij(const cupid_csr_t *P, const cupid_dirichlet_t
     }
   /* Block size 3 (GAMG's default near null space: the translations) when every node is
    * free or fixed as a whole. */
-  int whole = 1;
+  int whole = f0 == 0 && f1 == n_free; /* one rank (local sizes need not be multiples of 3) */
   for (cupid_int d = 0; d < bc->n && whole; d += 3)
     whole = bc->fixed[d] == bc->fixed[d + 1] && bc->fixed[d] == bc->fixed[d + 2];
   if (whole && bs == 3) PCALL(MatSetBlockSize(M, 3));
@@ -99,7 +119,8 @@ static cupid_status free_block_aij(const cupid_csr_t *P, const cupid_dirichlet_t
   M = NULL;
 cleanup:
   if (M) MatDestroy(&M);
-  cupid_free(&nnz);
+  cupid_free(&dnz);
+  cupid_free(&onz);
   cupid_free(&cols);
   cupid_free(&vals);
   return st;
@@ -128,31 +149,38 @@ cupid_status cupid_coupling_krylov_solve(const cupid_coupling_operator A, const 
   IS is_pd = NULL, is_fe = NULL;
   PC pc;
   cupid_int n_free = bc->n_free;
+  shell_ctx ctx = {0}; /* complete once the work vectors exist */
+  PetscMPIInt rank = 0, size = 1;
+  MPI_Comm_rank(PETSC_COMM_WORLD, &rank);
+  MPI_Comm_size(PETSC_COMM_WORLD, &size);
+  const cupid_int f0 = n_free * rank / size, f1 = n_free * (rank + 1) / size;
   CUPID_TRY(cupid_malloc((size_t)n_free + 1, sizeof *gidx, "free DOFs", &gidx));
   CUPID_TRY(cupid_calloc((size_t)n, sizeof *xf, "work vector", &xf));
   CUPID_TRY(cupid_calloc((size_t)n, sizeof *yf, "work vector", &yf));
   for (cupid_int d = 0; d < n; d++)
     if (bc->free_index[d] >= 0) gidx[bc->free_index[d]] = d;
-  shell_ctx ctx = {.A = A, .n = n, .n_free = n_free, .gidx = gidx, .xf = xf, .yf = yf};
+  ctx = (shell_ctx){.A = A, .n = n, .n_free = n_free, .f0 = f0, .f1 = f1, .gidx = gidx,
+                    .xf = xf, .yf = yf};
 
   /* b_f = f_f - (A u_c)_f */
   for (cupid_int d = 0; d < n; d++) xf[d] = bc->fixed[d] ? bc->value[d] : 0.0;
   CUPID_TRY(cupid_coupling_operator_apply(A, xf, yf));
-  PCALL(VecCreateSeq(PETSC_COMM_SELF, (PetscInt)n_free, &b));
+  PCALL(VecCreateMPI(PETSC_COMM_WORLD, (PetscInt)(f1 - f0), (PetscInt)n_free, &b));
   PCALL(VecDuplicate(b, &x));
+  PCALL(VecScatterCreateToAll(x, &ctx.toall, &ctx.xall));
   PetscScalar *ba;
   PCALL(VecGetArray(b, &ba));
-  for (cupid_int k = 0; k < n_free; k++) ba[k] = f[gidx[k]] - yf[gidx[k]];
+  for (cupid_int k = f0; k < f1; k++) ba[k - f0] = f[gidx[k]] - yf[gidx[k]];
   PCALL(VecRestoreArray(b, &ba));
   PetscReal bnorm;
   PCALL(VecNorm(b, NORM_2, &bnorm));
 
   double t0 = cupid_wtime();
-  PCALL(MatCreateShell(PETSC_COMM_SELF, (PetscInt)n_free, (PetscInt)n_free, (PetscInt)n_free,
-                       (PetscInt)n_free, &ctx, &S));
+  PCALL(MatCreateShell(PETSC_COMM_WORLD, (PetscInt)(f1 - f0), (PetscInt)(f1 - f0),
+                       (PetscInt)n_free, (PetscInt)n_free, &ctx, &S));
   PCALL(MatShellSetOperation(S, MATOP_MULT, (void (*)(void))shell_mult));
-  CUPID_TRY(free_block_aij(P, bc, &Pm));
-  PCALL(KSPCreate(PETSC_COMM_SELF, &ksp));
+  CUPID_TRY(free_block_aij(P, bc, f0, f1, &Pm));
+  PCALL(KSPCreate(PETSC_COMM_WORLD, &ksp));
   PCALL(KSPSetOperators(ksp, S, Pm));
   PCALL(KSPSetType(ksp, KSPGMRES));
   PCALL(KSPGMRESSetRestart(ksp, opts && opts->restart > 0 ? opts->restart : 200));
@@ -163,7 +191,9 @@ cupid_status cupid_coupling_krylov_solve(const cupid_coupling_operator A, const 
   const char *pct = opts && opts->pc ? opts->pc : "lu";
   PCALL(PCSetType(pc, pct));
   if (!strcmp(pct, "lu") || !strcmp(pct, "ilu")) {
+    /* UMFPACK and PETSc's own LU are sequential: MUMPS on several ranks */
     const char *pkg = opts && opts->factor_package ? opts->factor_package
+                      : size > 1                   ? "mumps"
                                                    : (!strcmp(pct, "lu") ? "umfpack" : "petsc");
     PCALL(PCFactorSetMatSolverType(pc, pkg));
   }
@@ -173,14 +203,17 @@ cupid_status cupid_coupling_krylov_solve(const cupid_coupling_operator A, const 
     cupid_coupling_operator_get_info(A, &ci);
     cupid_int n_pd_free = 0;
     while (n_pd_free < n_free && gidx[n_pd_free] < 3 * ci.n_real_pd) n_pd_free++;
+    /* the owned part of each field (PD DOFs come first) */
+    cupid_int p0 = f0 < n_pd_free ? f0 : n_pd_free, p1 = f1 < n_pd_free ? f1 : n_pd_free;
     PetscInt *idx = NULL;
-    CUPID_TRY(cupid_malloc((size_t)n_free + 1, sizeof *idx, "field indices", &idx));
-    for (cupid_int k = 0; k < n_free; k++) idx[k] = (PetscInt)k;
-    PCALL(ISCreateGeneral(PETSC_COMM_SELF, (PetscInt)n_pd_free, idx, PETSC_COPY_VALUES, &is_pd));
-    PCALL(ISCreateGeneral(PETSC_COMM_SELF, (PetscInt)(n_free - n_pd_free), idx + n_pd_free,
+    CUPID_TRY(cupid_malloc((size_t)(f1 - f0) + 1, sizeof *idx, "field indices", &idx));
+    for (cupid_int k = f0; k < f1; k++) idx[k - f0] = (PetscInt)k;
+    PCALL(ISCreateGeneral(PETSC_COMM_WORLD, (PetscInt)(p1 - p0), idx + (p0 - f0),
+                          PETSC_COPY_VALUES, &is_pd));
+    PCALL(ISCreateGeneral(PETSC_COMM_WORLD, (PetscInt)(f1 - p1), idx + (p1 - f0),
                           PETSC_COPY_VALUES, &is_fe));
     cupid_free(&idx);
-    if (n_pd_free % 3 == 0) PCALL(ISSetBlockSize(is_pd, 3));
+    if (size == 1 && n_pd_free % 3 == 0) PCALL(ISSetBlockSize(is_pd, 3));
     PCALL(PCFieldSplitSetIS(pc, "pd", is_pd));
     PCALL(PCFieldSplitSetIS(pc, "fe", is_fe));
   }
@@ -204,10 +237,12 @@ cupid_status cupid_coupling_krylov_solve(const cupid_coupling_operator A, const 
 
   /* u = [x_f ; u_c]; the true residual, recomputed. */
   const PetscScalar *xa;
-  PCALL(VecGetArrayRead(x, &xa));
+  PCALL(VecScatterBegin(ctx.toall, x, ctx.xall, INSERT_VALUES, SCATTER_FORWARD));
+  PCALL(VecScatterEnd(ctx.toall, x, ctx.xall, INSERT_VALUES, SCATTER_FORWARD));
+  PCALL(VecGetArrayRead(ctx.xall, &xa));
   for (cupid_int d = 0; d < n; d++) u[d] = bc->fixed[d] ? bc->value[d] : 0.0;
   for (cupid_int k = 0; k < n_free; k++) u[gidx[k]] = xa[k];
-  PCALL(VecRestoreArrayRead(x, &xa));
+  PCALL(VecRestoreArrayRead(ctx.xall, &xa));
   CUPID_TRY(cupid_coupling_operator_apply(A, u, yf));
   double r2 = 0.0, f2 = 0.0;
   for (cupid_int k = 0; k < n_free; k++) {
@@ -219,9 +254,9 @@ cupid_status cupid_coupling_krylov_solve(const cupid_coupling_operator A, const 
   inf.residual = scale > 0 ? sqrt(r2) / scale : sqrt(r2);
   if (!inf.converged)
     st = CUPID_ERROR(CUPID_ERR_NUMERIC,
-                     "GMRES (%s) did not converge: reason %d after %d iterations, relative "
-                     "residual %.2e",
-                     inf.method, (int)reason, inf.iterations, inf.residual);
+                     "GMRES (%s) did not converge: %s after %d iterations, relative residual "
+                     "%.2e; try other -ksp_type / -pc_type options, or --solver direct",
+                     inf.method, KSPConvergedReasons[reason], inf.iterations, inf.residual);
 cleanup:
   if (info) *info = inf;
   if (ksp) KSPDestroy(&ksp);
@@ -231,6 +266,8 @@ cleanup:
   if (Pm) MatDestroy(&Pm);
   if (x) VecDestroy(&x);
   if (b) VecDestroy(&b);
+  if (ctx.toall) VecScatterDestroy(&ctx.toall);
+  if (ctx.xall) VecDestroy(&ctx.xall);
   cupid_free(&gidx);
   cupid_free(&xf);
   cupid_free(&yf);

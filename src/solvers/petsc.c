@@ -101,6 +101,12 @@ int cupid_petsc_max_int(int v) {
   return out;
 }
 
+int cupid_petsc_has_option(const char *name) {
+  PetscBool set = PETSC_FALSE;
+  if (!g_initialized || PetscOptionsHasName(NULL, NULL, name, &set)) return 0;
+  return set == PETSC_TRUE;
+}
+
 void cupid_petsc_sum_doubles(double *v, int n) {
   if (g_initialized && n > 0) MPI_Allreduce(MPI_IN_PLACE, v, n, MPI_DOUBLE, MPI_SUM, PETSC_COMM_WORLD);
 }
@@ -768,6 +774,10 @@ void cupid_petsc_finalize(void) {}
 int cupid_petsc_rank(void) { return 0; }
 int cupid_petsc_size(void) { return 1; }
 int cupid_petsc_max_int(int v) { return v; }
+int cupid_petsc_has_option(const char *name) {
+  (void)name;
+  return 0;
+}
 void cupid_petsc_sum_doubles(double *v, int n) {
   (void)v;
   (void)n;

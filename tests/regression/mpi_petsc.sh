@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # The PETSc/MPI engine (issue 6) against the direct solver, on 2 MPI ranks:
-#  1. a small coupled bar (fictitious nodes, non-symmetric Eq. 38: GMRES, assembled MPIAIJ),
+#  1. a small coupled bar (fictitious nodes, non-symmetric Eq. 38: GMRES), assembled MPIAIJ
+#     (-cupid_coupled_assembled) and matrix-free (the default) on 2 ranks,
 #  1b. the same bar on one process: matrix-free Eq. 38 (src/coupling/operator.c, krylov.c),
 #  1c. the coupled bar with Arlequin (symmetric: CG + GAMG on the assembled system), 2 ranks,
 #  2. a small PD-only LPS block (matrix-free MATSHELL + halo exchange, CG + GAMG), with a
@@ -60,11 +61,17 @@ assert err <= 1e-8, f"{label}: PETSc and direct solutions differ by {err:.3e} > 
 PY
 }
 
-echo "== coupled bar (fictitious nodes), 2 ranks"
+echo "== coupled bar (fictitious nodes), 2 ranks, assembled Eq. 38 (-cupid_coupled_assembled)"
 "$CUPID" run "$models/coupled_bar.yaml" -o "$tmp/bar_direct" --solver direct --quiet
-"$MPIEXEC" -n 2 "$CUPID" run "$models/coupled_bar.yaml" -o "$tmp/bar_petsc" --solver petsc --quiet
+"$MPIEXEC" -n 2 "$CUPID" run "$models/coupled_bar.yaml" -o "$tmp/bar_petsc" --solver petsc --quiet \
+  -cupid_coupled_assembled
 compare "$tmp/bar_direct" "$tmp/bar_petsc" "coupled bar"
 python3 -c "import json,sys; s=json.load(open(sys.argv[1]))['solver']; assert s['ranks']==2 and s['operator']=='assembled' and s['ksp_type']=='gmres', s" "$tmp/bar_petsc/summary.json"
+
+echo "== coupled bar, 2 ranks, matrix-free Eq. 38 (the default: GMRES + MUMPS LU of the twin)"
+"$MPIEXEC" -n 2 "$CUPID" run "$models/coupled_bar.yaml" -o "$tmp/bar_mf2" --solver petsc --quiet
+compare "$tmp/bar_direct" "$tmp/bar_mf2" "coupled bar, matrix-free, 2 ranks"
+python3 -c "import json,sys; s=json.load(open(sys.argv[1]))['solver']; assert s['ranks']==2 and s['operator']=='matrix-free' and s['ksp_type']=='gmres', s" "$tmp/bar_mf2/summary.json"
 
 echo "== coupled bar, one process: matrix-free Eq. 38 (GMRES + LU of the bond-based twin)"
 "$CUPID" run "$models/coupled_bar.yaml" -o "$tmp/bar_mf" --solver petsc --quiet
