@@ -102,6 +102,13 @@ static cupid_status apply_partition(const cupid_pd_grid_options *opts, int n_box
     }
     bound[e] = k;
   }
+  if (cnt[bound[1]] == cnt[bound[0]]) {
+    cupid_free(&cnt);
+    return CUPID_ERROR(CUPID_ERR_MODEL,
+                       "MPI rank %d of %d would own only empty z layers of the PD grid (the "
+                       "regions leave a gap along z): use fewer ranks",
+                       opts->part, opts->parts);
+  }
   cupid_int w0 = bound[0] - opts->halo_layers, w1 = bound[1] + opts->halo_layers;
   if (w0 < 0) w0 = 0;
   if (w1 > nk) w1 = nk;
