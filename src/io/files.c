@@ -105,6 +105,10 @@ int cupid_io_helper_begin(const char *path, pid_t child) {
   return slot;
 }
 
+void cupid_io_helper_set_child(int slot, pid_t child) {
+  if (slot >= 0) atomic_store(&registry_child[slot], (int)child);
+}
+
 void cupid_io_helper_end(int slot) {
   if (slot < 0) return;
   atomic_store(&registry_child[slot], 0);
@@ -144,7 +148,10 @@ static void atomic_free(struct cupid_atomic_file_private *f) {
   cupid_free(&f);
 }
 
-/* Create the temporary sibling exclusively (retrying on a name clash) and return its fd. */
+/* Create the temporary sibling exclusively (retrying on a name clash) and return its fd. The
+ * name is registered before the file is created: a signal between the two would otherwise
+ * leave the new file behind (seen in tests/unit/signals.sh: SIGTERM during the VTU output);
+ * unlinking a name that does not exist yet is harmless. */
 static cupid_status create_temp(struct cupid_atomic_file_private *f, int *fd_out) {
   const char *slash = strrchr(f->path, '/');
   const char *base = slash ? slash + 1 : f->path;
@@ -155,11 +162,16 @@ static cupid_status create_temp(struct cupid_atomic_file_private *f, int *fd_out
     unsigned long counter = atomic_fetch_add(&temp_counter, 1);
     snprintf(f->temp, size, "%.*s.%s.tmp.%ld.%lu", dirlen, f->path, base, (long)getpid(),
              counter);
+    f->slot = registry_add(f->temp);
     int fd = open(f->temp, O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
     if (fd >= 0) {
       *fd_out = fd;
       return CUPID_SUCCESS;
     }
+    int err = errno;
+    registry_remove(f->slot); /* not ours (a clash) or not created */
+    f->slot = -1;
+    errno = err;
     if (errno != EEXIST)
       return CUPID_ERROR(CUPID_ERR_IO, "cannot write '%s': cannot create temporary file '%s': %s",
                          f->path, f->temp, strerror(errno));
@@ -181,8 +193,7 @@ cupid_status cupid_atomic_open(const char *path, cupid_atomic_file *file) {
   f->slot = -1;
   CUPID_TRY(cupid_strdup(path, &f->path));
   CUPID_TRY(cupid_malloc(ATOMIC_BUFFER_SIZE, 1, "file buffer", &f->buffer));
-  CUPID_TRY(create_temp(f, &fd));
-  f->slot = registry_add(f->temp);
+  CUPID_TRY(create_temp(f, &fd)); /* registers the temporary name (f->slot) */
   f->stream = fdopen(fd, "wb");
   CUPID_TRY_CHECK(f->stream, CUPID_ERR_IO, "cannot write '%s': fdopen: %s", path, strerror(errno));
   fd = -1; /* owned by the stream now */

@@ -18,6 +18,9 @@ void cupid_io_xml_escape(FILE *out, const char *s);
  * cupid_io_helper_end() (-1 if none is free: the file is then not protected).
  */
 int cupid_io_helper_begin(const char *path, pid_t child);
+/** The helper of @p slot (registered with child 0 before it was started, so that a signal in
+ *  between already removes its file) is now running as @p child. */
+void cupid_io_helper_set_child(int slot, pid_t child);
 /** The helper has exited: forget it (the file is complete or already removed). */
 void cupid_io_helper_end(int slot);
 

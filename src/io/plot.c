@@ -240,12 +240,16 @@ static cupid_status spawn_gnuplot(const char *gnuplot, const char *dir, const ch
     if (rc == 0) rc = posix_spawn_file_actions_adddup2(&actions, fds[1], 2);
     pid_t pid = -1;
     char *argv[] = {"gnuplot", (char *)script, NULL};
+    /* The PNG's name is registered before gnuplot starts: a signal from here on removes it
+     * (and, once the pid is known, stops gnuplot first). */
+    int slot = rc == 0 ? cupid_io_helper_begin(png, 0) : -1;
     if (rc == 0) rc = posix_spawn(&pid, gnuplot, &actions, NULL, argv, environ);
     posix_spawn_file_actions_destroy(&actions);
     close(fds[1]);
     fds[1] = -1;
+    if (rc != 0) cupid_io_helper_end(slot);
     if (rc == 0) {
-      int slot = cupid_io_helper_begin(png, pid);
+      cupid_io_helper_set_child(slot, pid);
       char chunk[4096];
       for (;;) {
         ssize_t n = read(fds[0], chunk, sizeof chunk);
