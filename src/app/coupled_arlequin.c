@@ -7,10 +7,12 @@
  * on one edge of the overlap and extends beyond the other; the beam extends beyond the first
  * edge and either ends on the second (beam [0, 0.6], PD [0.4, 1], overlap [0.4, 0.6]: nothing
  * is deactivated) or runs on inside the PD region, where it gives way (beam [0, 1]: the pairs
- * on [0.6, 1] are made inactive, their FE nodes held at zero). Constraints and loads go to the part they touch; loads
- * inside the overlap (which both models would carry, each with its weight) are not yet
- * supported. Static (CHOLMOD, or PETSc CG + GAMG: the system is symmetric), evaluate, and dynamic runs (through
- * cupid_app_run_dynamic() with the weighted masses of cupid_app_arlequin_mass()). */
+ * on [0.6, 1] are made inactive, their FE nodes held at zero). Constraints and loads go to
+ * the part they touch; body and point loads reaching into an overlap are shared, alpha to the
+ * beam and 1 - alpha to the PD nodes (a traction inside an overlap acts on no free surface:
+ * refused). Static (CHOLMOD, or PETSc CG + GAMG: the system is symmetric), evaluate, and
+ * dynamic runs (through cupid_app_run_dynamic() with the weighted masses of
+ * cupid_app_arlequin_mass()). */
 #include <math.h>
 #include <stdio.h>
 #include <string.h>
@@ -199,7 +201,7 @@ cleanup:
   return st;
 }
 
-/* 1 if the load acts inside the overlap (both models there: not yet supported). */
+/* 1 if the load acts inside the overlap [lo, hi] (both models there). */
 static int load_in_overlap(const cupid_load *l, double lo, double hi, double tol) {
   switch (l->kind) {
   case CUPID_LOAD_TRACTION: return l->plane_y > lo + tol && l->plane_y < hi - tol;
@@ -209,6 +211,64 @@ static int load_in_overlap(const cupid_load *l, double lo, double hi, double tol
   }
 }
 
+/* The external work is shared like the energy (paper 004 Eq. 8: alpha W_FE + (1 - alpha)
+ * W_PD): a body or point load that reaches into an overlap goes to the beam times alpha and
+ * to the PD nodes times 1 - alpha (alpha = 1 on the FE-only side, 0 on the PD-only side, so
+ * outside the overlaps this is the plain split). */
+typedef struct {
+  const cupid_value *value;
+  const cupid_arlequin_options *o;
+} alpha_load;
+
+static void alpha_field(void *ctx, const double p[3], double density, double out[3]) {
+  const alpha_load *w = ctx;
+  double a = cupid_arlequin_alpha_of(w->o, p[1]);
+  for (int k = 0; k < 3; k++)
+    out[k] = a * cupid_value_eval(&w->value[k], p[0], p[1], p[2], 0.0, density);
+}
+
+/* The PD share: the load applied to the PD nodes as in a PD-only model (into a scratch vector,
+ * with its checks), then scaled by 1 - alpha: at each node for a body load (the integrand),
+ * at the load's point for a point load (so that the two shares sum to the load). */
+static cupid_status add_pd_share(cupid_job *job, const cupid_load *l, const cupid_arlequin_options *o) {
+  cupid_status st = CUPID_SUCCESS;
+  double *scratch = NULL, *keep = job->f_ext;
+  cupid_load copy = *l;
+  CUPID_CALL(cupid_calloc((size_t)job->ndof, sizeof *scratch, "PD load share", &scratch));
+  job->f_ext = scratch;
+  st = cupid_app_pd_stage(job, NULL, 0, &copy, 1, 0);
+  job->f_ext = keep;
+  if (st == CUPID_SUCCESS) {
+    const double *x = cupid_pd_grid_coords(job->grid);
+    for (cupid_int i = 0; i < job->n_pd; i++) {
+      double y = l->kind == CUPID_LOAD_POINT ? l->at[1] : x[3 * i + 1];
+      double w = 1.0 - cupid_arlequin_alpha_of(o, y);
+      for (int c = 0; c < 3; c++) keep[3 * i + c] += w * scratch[3 * i + c];
+    }
+  }
+  cupid_free(&scratch);
+  return st;
+}
+
+/* A body or point load reaching into an overlap: the two shares. */
+static cupid_status add_shared_load(cupid_job *job, const cupid_load *l, const cupid_arlequin_options *o) {
+  const cupid_model_t *m = job->model;
+  alpha_load ctx = {.value = l->value, .o = o};
+  int on_fe = l->kind == CUPID_LOAD_BODY ? cupid_app_fe_node_in_box(job, &l->box)
+                                         : cupid_cuf_contains(job->beam, l->at[0], l->at[1], l->at[2]);
+  int on_pd = l->kind == CUPID_LOAD_BODY ? cupid_app_pd_node_in_box(job, &l->box) : 1;
+  if (!on_fe && !on_pd) return cupid_model_error(m, &l->mark, "the load touches neither the beam nor a PD node");
+  if (on_fe && l->kind == CUPID_LOAD_BODY) {
+    cupid_status st = cupid_cuf_body_force_add(job->beam, &l->box, alpha_field, &ctx, job->f_ext, NULL);
+    if (st != CUPID_SUCCESS) return cupid_model_error(m, &l->mark, "%s", cupid_error_message());
+  } else if (on_fe) {
+    double P[3];
+    alpha_field(&ctx, l->at, 0.0, P);
+    CUPID_CALL(cupid_cuf_point_load_add(job->beam, l->at, P, job->f_ext));
+  }
+  return on_pd ? add_pd_share(job, l, o) : CUPID_SUCCESS;
+}
+
 static cupid_status apply_loads(cupid_job *job) {
   const cupid_model_t *m = job->model;
   cupid_status st = CUPID_SUCCESS;
@@ -216,17 +276,27 @@ static cupid_status apply_loads(cupid_job *job) {
   int npd = 0;
   const cupid_box *ov[2];
   int nov = overlaps(&m->coupling, ov);
+  const cupid_arlequin_options o = options(job);
   double tol = ARL_TOL * (job->fe_info.y_max - job->fe_info.y_min);
   CUPID_CALL(cupid_calloc((size_t)m->n_loads + 1, sizeof *pd, "PD loads", &pd));
   for (int k = 0; k < m->n_loads; k++) {
     const cupid_load *l = &m->loads[k];
+    int shared = 0;
     for (int v = 0; v < nov; v++) {
       double lo = ov[v]->lo[1], hi = ov[v]->hi[1];
       if (!load_in_overlap(l, lo, hi, tol)) continue;
-      st = cupid_model_error(m, &l->mark,
-                             "a load inside the Arlequin overlap [%g, %g] is not yet supported "
-                             "(both models carry it there, each with its weight)", lo, hi);
-      goto cleanup;
+      if (l->kind == CUPID_LOAD_TRACTION) {
+        st = cupid_model_error(m, &l->mark,
+                               "a traction on the plane y = %g inside the Arlequin overlap [%g, "
+                               "%g] acts on no free surface (move it to an end face)",
+                               l->plane_y, lo, hi);
+        goto cleanup;
+      }
+      shared = 1;
+    }
+    if (shared) {
+      CUPID_TRY(add_shared_load(job, l, &o));
+      continue;
     }
     int on_fe = 0;
     switch (l->kind) {

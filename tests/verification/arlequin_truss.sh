@@ -15,7 +15,14 @@
 #  C. dynamics (Newmark, undamped, 5 periods): energy balance <= 1e-10; tip history within
 #     1.5 % RMS (of the 1e-3 amplitude) of the FE-only truss over the first period (measured
 #     0.8 %); period drift against FE below 0.5 % per period (measured in the log);
-#  D. model errors: a load inside the overlap, an overlap bound off the beam nodes;
+#  D. model errors: a traction inside the overlap (no free surface there), an overlap bound off
+#     the beam nodes;
+#  I. a body load b on the whole truss, shared in the overlap (alpha b to the beam, (1 - alpha) b
+#     to the PD nodes, paper 004 Eq. 8): the reaction balances the applied total (1e-9), which
+#     is b L A up to the PD cell cut by the overlap's edge (1e-4), and the FE-only span is
+#     exact: u(y) = (R y - b A y^2 / 2) / (EA) at the nodes y = 0.2, 0.4 (1e-9; linear
+#     elements are nodally exact for a uniform load); a point load inside the overlap is
+#     shared too and balanced (1e-9);
 #  E. a Gaussian pulse (sigma = 0.03 m = 2 h, amplitude 1e-4 m) travelling from y = 0.2 in the
 #     FE span through the overlap into PD, stopped at t = 0.55/c (pulse centre at 0.75): the
 #     reflected energy fraction R = int_0^0.4 u'^2 dy / int g'^2 dy (strain part; a travelling
@@ -123,7 +130,7 @@ expect_err() { # $1 pattern, file on stdin
   out=$("$CUPID" run err.yaml --quiet 2>&1); rc=$?
   if [ "$rc" -ne 0 ] && grep -q -- "$1" <<<"$out"; then ok; else bad "expected '$1', got rc $rc: $out"; fi
 }
-{ cat base.yaml; printf 'loads:\n  - point: {at: [0, 0.5, 0], value: [0, 1, 0]}\nanalysis: {type: static}\noutput: {directory: e1}\n'; } \
+{ cat base.yaml; printf 'loads:\n  - traction: {y: 0.5, value: [0, 1, 0]}\nanalysis: {type: static}\noutput: {directory: e1}\n'; } \
   | expect_err "inside the Arlequin overlap"
 { sed 's/elements: \[39\]/elements: [40]/' base.yaml; printf 'analysis: {type: static}\noutput: {directory: e2}\n'; } \
   | expect_err "not a beam-node position"
@@ -235,6 +242,34 @@ a, b = json.load(open("static/summary.json")), json.load(open("through/summary.j
 d = max(abs(p["uy"] - q["uy"]) / abs(p["uy"]) for p, q in zip(a["points"], b["points"]))
 print("H. beam through the PD region: max relative difference %.1e" % d)
 sys.exit(0 if d < 1e-12 and abs(b["reaction_sum"][1] + 1e6) < 1e-3 else 1)
+PY
+
+# I. loads shared in the overlap
+cat base.yaml - > body.yaml <<'EOF'
+loads:
+  - body: {box: {y: [0, 1]}, value: [0, 1.0e6, 0]}
+  - point: {at: [0, 0.5, 0], value: [0, 2.0e5, 0]}
+analysis: {type: static}
+output:
+  directory: body
+  points:
+    - {name: y02, at: [0, 0.2, 0]}
+    - {name: y04, at: [0, 0.4, 0]}
+EOF
+"$CUPID" run body.yaml --quiet && ok || bad "shared-load run"
+python3 - <<'PY' && ok || bad "shared loads"
+import json, sys
+s = json.load(open("body/summary.json"))
+R, b, P, EA = s["applied_load_sum"][1], 1e6, 2e5, 1e9
+errs = []
+if abs(s["reaction_sum"][1] + R) > 1e-9 * R: errs.append("reaction %g, applied %g" % (s["reaction_sum"][1], R))
+if abs(R - (b + P)) > 1e-4 * b: errs.append("applied %g, expected %g" % (R, b + P))
+for p in s["points"]:
+    y = p["y"]; ex = (R * y - b * y * y / 2) / EA
+    if abs(p["uy"] - ex) > 1e-9 * ex: errs.append("u(%g) = %.12g, expected %.12g" % (y, p["uy"], ex))
+print("I. shared loads: applied %.6g (b L A + P = %.6g), reaction %.6g" % (R, b + P, s["reaction_sum"][1]))
+for e in errs: print("  ", e)
+sys.exit(1 if errs else 0)
 PY
 
 echo "arlequin_truss: $pass passed, $fail failed"
