@@ -96,6 +96,10 @@ void cupid_job_progress(const cupid_job *job, const char *fmt, ...)
     __attribute__((format(printf, 2, 3)));
 void cupid_job_phase_end(cupid_job *job, cupid_phase phase, double t0);
 
+/** run.c: the PD materials and operator options of the model (job->pd_materials,
+ *  job->pd_options); a PD region with an orthotropic material is a model error. */
+cupid_status cupid_app_pd_options(cupid_job *job);
+
 /* pd_bc.c: constraints and loads on PD nodes (volume layers, faces, points). */
 cupid_status cupid_app_pd_constraints(cupid_job *job);
 cupid_status cupid_app_pd_loads(cupid_job *job);

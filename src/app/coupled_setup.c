@@ -11,20 +11,7 @@ static cupid_status setup_pd(cupid_job *job) {
   double t0 = cupid_wtime();
   CUPID_CALL(cupid_pd_grid_create_from_model(m, &job->grid));
   job->n_pd = cupid_pd_grid_num_nodes(job->grid);
-  CUPID_CALL(cupid_calloc((size_t)m->n_materials, sizeof *job->pd_materials, "PD materials",
-                          &job->pd_materials));
-  for (int r = 0; r < m->pd.n_regions; r++)
-    CUPID_CHECK(!m->materials[m->pd.regions[r].material].orthotropic, CUPID_ERR_MODEL,
-                "PD region %d: an orthotropic material; peridynamics needs {E, nu}", r);
-  for (int i = 0; i < m->n_materials; i++)
-    job->pd_materials[i] = (cupid_pd_material){.E = m->materials[i].E, .nu = m->materials[i].nu};
-  job->pd_options = (cupid_pd_operator_options){.horizon = m->pd.horizon,
-                                                .model = m->pd.model,
-                                                .influence = m->pd.influence,
-                                                .partial_volume = m->pd.partial_volume,
-                                                .surface_correction = m->pd.surface_correction,
-                                                .materials = job->pd_materials,
-                                                .n_materials = m->n_materials};
+  CUPID_CALL(cupid_app_pd_options(job)); /* run.c */
   cupid_job_phase_end(job, CUPID_PHASE_GRID, t0);
   return CUPID_SUCCESS;
 }

@@ -138,10 +138,8 @@ static cupid_status check_isotropic(const cupid_model_t *m) {
   return CUPID_SUCCESS;
 }
 
-static cupid_status build_pd(cupid_job *job) {
+cupid_status cupid_app_pd_options(cupid_job *job) {
   const cupid_model_t *m = job->model;
-  double t0 = cupid_wtime();
-
   CUPID_CALL(check_isotropic(m));
   CUPID_CALL(cupid_calloc((size_t)m->n_materials, sizeof *job->pd_materials, "PD materials",
                           &job->pd_materials));
@@ -154,6 +152,14 @@ static cupid_status build_pd(cupid_job *job) {
                                                 .surface_correction = m->pd.surface_correction,
                                                 .materials = job->pd_materials,
                                                 .n_materials = m->n_materials};
+  return CUPID_SUCCESS;
+}
+
+static cupid_status build_pd(cupid_job *job) {
+  const cupid_model_t *m = job->model;
+  double t0 = cupid_wtime();
+
+  CUPID_CALL(cupid_app_pd_options(job));
   if (job->slab) { /* this rank's z layers and the halo its rows read (slab.c) */
     int halo = 0;
     CUPID_CALL(cupid_pd_operator_halo_layers(&job->pd_options, m->pd.spacing, &halo));
