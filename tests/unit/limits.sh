@@ -3,19 +3,11 @@
 # tests/models/bad/ must be answered with the expected exit status and message, quickly (each
 # run under `timeout`), without allocating its size (a 1 GB address-space limit, except under
 # ASan, whose shadow memory needs terabytes of address space) and without writing any output.
-set -u
-CUPID=$(realpath "${CUPID:-build/cupid}")
-SRC=$(realpath "${CUPID_SOURCE_DIR:-.}")
+. "$(dirname "$0")/../tools/checks.sh"  # CUPID, SRC, $work (cwd), ok, bad, finish
 L=$SRC/tests/models/limits
-work=$(mktemp -d)
-trap 'rm -rf "$work"' EXIT
-cd "$work"
-pass=0; fail=0
 asan=0
 if ldd "$CUPID" 2>/dev/null | grep -q libasan; then asan=1; fi
 
-ok() { pass=$((pass+1)); }
-bad() { echo "FAIL: $*"; fail=$((fail+1)); }
 
 # run_case CMD MODEL EXIT MAX_SECONDS PATTERN [ARGS...]: `cupid CMD MODEL -o out ARGS` exits with
 # EXIT within MAX_SECONDS, its output matches PATTERN (grep -E), and (unless EXIT is 0) out/ and
@@ -93,5 +85,4 @@ run_case check <(cat "$SRC/tests/models/run_errors/good_small.yaml") 0 5 'PD nod
 run_case run "$SRC/tests/models/run_errors/good_small.yaml" 3 10 'proc' --quiet -o /proc/cupid_cannot_write_here
 rm -f big.yaml empty.yaml
 
-echo "limits: $pass passed, $fail failed"
-[ "$fail" -eq 0 ]
+finish limits

@@ -44,16 +44,8 @@
 #     (measured 0.83 %);
 #  H. a beam on [0, 1] (65 B2) running on through the PD region gives way beyond the overlap:
 #     the static results equal those of the beam ending on it (1e-12).
-set -u
-CUPID=$(realpath "${CUPID:-build/cupid}")
-SRC=$(realpath "${CUPID_SOURCE_DIR:-.}")
+. "$(dirname "$0")/../tools/checks.sh"  # CUPID, SRC, $work (cwd), ok, bad, finish
 T=$SRC/examples/truss
-work=$(mktemp -d)
-trap 'rm -rf "$work"' EXIT
-cd "$work"
-pass=0; fail=0
-ok() { pass=$((pass+1)); }
-bad() { echo "FAIL: $*"; fail=$((fail+1)); }
 
 awk '/^analysis:/{exit} {print}' "$T/truss_arlequin.yaml" | sed 's/penalty: 1.0e9/penalty: 1.0e11/' > base.yaml
 grep -q "penalty: 1.0e11" base.yaml && ok || bad "could not set the penalty"
@@ -348,5 +340,4 @@ ok = d["max_energy_balance_relative"] <= 1e-10 and rms <= 0.03 and abs(Tc - Tf) 
 sys.exit(0 if ok else 1)
 PY
 
-echo "arlequin_truss: $pass passed, $fail failed"
-[ "$fail" -eq 0 ]
+finish arlequin_truss

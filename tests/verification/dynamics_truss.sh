@@ -2,16 +2,8 @@
 # `cupid run` with type: dynamic (issue 5) on small trusses (paper 004 material): the output
 # files, the energy balance, the tip history against the exact triangle wave, and the model
 # errors (unstable central step, consistent mass with central, missing density).
-set -u
-CUPID=$(realpath "${CUPID:-build/cupid}")
-SRC=$(realpath "${CUPID_SOURCE_DIR:-.}")
+. "$(dirname "$0")/../tools/checks.sh"  # CUPID, SRC, $work (cwd), ok, bad, finish
 M=$SRC/tests/models/dynamics
-work=$(mktemp -d)
-trap 'rm -rf "$work"' EXIT
-cd "$work"
-pass=0; fail=0
-ok() { pass=$((pass+1)); }
-bad() { echo "FAIL: $*"; fail=$((fail+1)); }
 
 expect() {
   local code=$1 pattern=$2; shift 3
@@ -67,5 +59,4 @@ expect 1 "no_density.yaml:[0-9]+:[0-9]+: materials.steel: needs a density for a 
 
 expect 1 "time_load.yaml:[0-9]+:[0-9]+: .*time-dependent loads .* are not yet supported" -- "$CUPID" run "$M/time_load.yaml" -o tl
 
-echo "dynamics_truss: $pass passed, $fail failed"
-[ "$fail" -eq 0 ]
+finish dynamics_truss

@@ -36,15 +36,7 @@
 #    than the PD-only truss (truss_pd.yaml) over the same period (measured 2.4% against 3.0%:
 #    60% of the bar is PD, whose free-end surface layer lowers its frequency, the tie adds the
 #    h/2 offset); energy balance 1e-9.
-set -u
-CUPID=$(realpath "${CUPID:-build/cupid}")
-SRC=$(realpath "${CUPID_SOURCE_DIR:-.}")
-work=$(mktemp -d)
-trap 'rm -rf "$work"' EXIT
-cd "$work"
-pass=0; fail=0
-ok() { pass=$((pass+1)); }
-bad() { echo "FAIL: $*"; fail=$((fail+1)); }
+. "$(dirname "$0")/../tools/checks.sh"  # CUPID, SRC, $work (cwd), ok, bad, finish
 
 # model NAME PD(0/1) ANALYSIS-BLOCK [METHOD]
 model() {
@@ -182,5 +174,4 @@ check(rms_l <= 0.05 and rms_l <= rms_p and tl < 1e-9,
 sys.exit(0 if okay else 1)
 PY
 
-echo "lagrange_dynamics: $pass passed, $fail failed"
-[ "$fail" -eq 0 ]
+finish lagrange_dynamics

@@ -15,15 +15,7 @@
 #    (h/2 offset of the tied layers, truncated families: measured -2.83% and -3.89%, against
 #    -1.65% and -1.09% for the fictitious-node method); the lower bound, about 1.5 times the
 #    largest error measured, guards against a coupling fault (a lost tie, a wrong weight).
-set -u
-CUPID=$(realpath "${CUPID:-build/cupid}")
-SRC=$(realpath "${CUPID_SOURCE_DIR:-.}")
-work=$(mktemp -d)
-trap 'rm -rf "$work"' EXIT
-cd "$work"
-pass=0; fail=0
-ok() { pass=$((pass+1)); }
-bad() { echo "FAIL: $*"; fail=$((fail+1)); }
+. "$(dirname "$0")/../tools/checks.sh"  # CUPID, SRC, $work (cwd), ok, bad, finish
 
 for m in cbeam_fe_l9 cbeam_pd_l9_lagrange; do
   if "$CUPID" run "$SRC/examples/cbeam/$m.yaml" -o "$m" --quiet >"$m.log" 2>&1; then ok; else bad "$m failed"; head -5 "$m.log"; fi
@@ -53,5 +45,4 @@ for p in ("A", "B"):
 sys.exit(0 if okay else 1)
 PY
 
-echo "lagrange_partial: $pass passed, $fail failed"
-[ "$fail" -eq 0 ]
+finish lagrange_partial
