@@ -93,9 +93,7 @@ static void run_case(int le) {
     tb_rect(&tb, 0, 8, 1, 0, 8, 1, -1);
   }
   double ys[4] = {0, 6, 12, 18};
-  for (int k = 0; k < 4; k++) tb.axis_y[k] = ys[k];
-  for (int k = 0; k < 3; k++) tb.axis_el[k] = 1;
-  tb.def.n_axis = 4;
+  tb_axis_spans(&tb, 4, ys);
   tb.def.element_nodes = 2;
   cupid_cuf_beam beam = tb_create(&tb);
   cupid_box region = {.lo = {0, 6, 0}, .hi = {8, 12, 8}, .has = {1, 1, 1}};
@@ -232,9 +230,7 @@ static void part_build(part_model *m, double lo, double hi) {
   tb_le(&m->tb, 9);
   tb_rect(&m->tb, 0, 12, 3, 0, 12, 3, -1);
   static const double ys[4] = {0, 6, 12, 18};
-  for (int k = 0; k < 4; k++) m->tb.axis_y[k] = ys[k];
-  for (int k = 0; k < 3; k++) m->tb.axis_el[k] = 1;
-  m->tb.def.n_axis = 4;
+  tb_axis_spans(&m->tb, 4, ys);
   m->tb.def.element_nodes = 3;
   m->beam = tb_create(&m->tb);
   m->region = (cupid_box){.lo = {lo, 6, lo}, .hi = {hi, 12, hi}, .has = {1, 1, 1}};

@@ -59,9 +59,7 @@ static void build(op_model *m, const op_case *pc) {
     tb_rect(&m->tb, 0, XW, 3, 0, XW, 3, -1);
   }
   static const double axes[4] = {0, 6, 12, YL};
-  for (int k = 0; k < 4; k++) m->tb.axis_y[k] = axes[k];
-  for (int k = 0; k < 3; k++) m->tb.axis_el[k] = 1;
-  m->tb.def.n_axis = 4;
+  tb_axis_spans(&m->tb, 4, axes);
   m->tb.def.element_nodes = pc->p;
   m->beam = tb_create(&m->tb);
   static const double box[4][2][2] = {{{0, 12}, {0, 12}}, {{4, 8}, {4, 8}}, {{0, 4}, {0, 4}},

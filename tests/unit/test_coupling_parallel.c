@@ -55,9 +55,7 @@ static void build(par_model *m, const par_case *pc) {
   tb_le(&m->tb, pc->le_nodes);
   tb_rect(&m->tb, 0, XW, 3, 0, XW, 3, -1);
   static const double axes[4] = {0, 6, 12, YL};
-  for (int k = 0; k < 4; k++) m->tb.axis_y[k] = axes[k];
-  for (int k = 0; k < 3; k++) m->tb.axis_el[k] = 1;
-  m->tb.def.n_axis = 4;
+  tb_axis_spans(&m->tb, 4, axes);
   m->tb.def.element_nodes = pc->p;
   m->beam = tb_create(&m->tb);
   m->full_beam = tb_create(&m->tb);

@@ -59,9 +59,7 @@ static void build(patch_model *m, const patch_case *pc) {
   static const int n_axis[3] = {4, 6, 5};
   static const double reg[3][2][2] = {{{6, 12}}, {{3, 6}, {12, 15}}, {{6, 9}, {9, 12}}};
   int L = pc->layout;
-  for (int k = 0; k < n_axis[L]; k++) m->tb.axis_y[k] = axes[L][k];
-  for (int k = 0; k + 1 < n_axis[L]; k++) m->tb.axis_el[k] = 1;
-  m->tb.def.n_axis = n_axis[L];
+  tb_axis_spans(&m->tb, n_axis[L], axes[L]);
   m->tb.def.element_nodes = pc->p;
   m->beam = tb_create(&m->tb);
 

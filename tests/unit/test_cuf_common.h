@@ -55,6 +55,14 @@ static inline void tb_axis(tb_beam *t, double y0, double y1, int ne, int p) {
   t->def.element_nodes = p;
 }
 
+/* Axis with breakpoints ys[0..n-1] and one element between each two (no element size set:
+ * element_nodes stays as given by the caller or the default). */
+static inline void tb_axis_spans(tb_beam *t, int n, const double *ys) {
+  for (int k = 0; k < n; k++) t->axis_y[k] = ys[k];
+  for (int k = 0; k + 1 < n; k++) t->axis_el[k] = 1;
+  t->def.n_axis = n;
+}
+
 /* A rectangle component split into nx x nz equal cells (material -1: the beam's). */
 static inline void tb_rect(tb_beam *t, double x0, double x1, int nx, double z0, double z1, int nz,
                            int material) {
