@@ -315,6 +315,7 @@ cupid_status pd_families_build(struct cupid_pd_operator_private *op) {
   for (int k = 0; k < 3; k++) {
     op->pr[k] = r[k];
     op->pn[k] = g->n[k] + 2 * (cupid_int)r[k];
+    if (k == 0) op->pn[k] = (op->pn[k] + PD_ROW_ALIGN - 1) / PD_ROW_ALIGN * PD_ROW_ALIGN;
     pcells *= (double)op->pn[k];
   }
   op->padded = pcells <= PD_PAD_RATIO * (double)nn + 4096.0;

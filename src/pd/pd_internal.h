@@ -201,6 +201,9 @@ static inline cupid_int pd_family_node(const struct cupid_pd_operator_private *o
 }
 
 #define PD_PAD_RATIO 8
+/* Padded rows hold a multiple of PD_ROW_ALIGN cells (64 bytes of doubles), so that cells of
+ * the same x are equally aligned in every row (stencil.c). */
+#define PD_ROW_ALIGN 8
 
 /* Padded cell index of node i. */
 static inline cupid_int pd_node_pcell(const struct cupid_pd_operator_private *op, cupid_int i) {
@@ -222,6 +225,13 @@ cupid_status pd_stencil_apply(const struct cupid_pd_operator_private *op, cupid_
                               cupid_int last, const double *u, double *f, double *theta);
 /* Free the kept work arrays (operator destroy). */
 void pd_stencil_work_free(struct cupid_pd_operator_private *op);
+/* The stencil kernels come in one instance per x86-64 instruction set (AVX-512, AVX2,
+ * baseline), the CPU's best picked at run time. pd_stencil_force_isa(level) caps the choice
+ * for the whole process (0: the CPU's best; 1 baseline, 3 AVX2, 4 AVX-512), so that tests
+ * check every instance the machine can run and benchmarks can compare them; both return
+ * the lanes (nodes per vector) of the instance now picked. Also read from CUPID_PD_ISA. */
+int pd_stencil_force_isa(int level);
+int pd_stencil_kernel_lanes(void);
 
 /* Smallest and largest+1 neighbour index over the nodes [first, last) (themselves included). */
 void pd_neighbour_span(const struct cupid_pd_operator_private *op, cupid_int first, cupid_int last,

@@ -16,7 +16,7 @@
  * above with neighbours through the dense cell map, near-surface nodes walk their stored
  * stencil entries.
  *
- * Each node's bonds are summed in stencil order (pairs of opposites, four pairs at a time),
+ * Each node's bonds are summed in stencil order (pairs of opposites, one pair at a time),
  * as the bond-list kernels of lps.c and bond.c do bond by bond, so the two paths agree to
  * round-off (tests/unit/test_pd_stencil.c).
  *
@@ -24,37 +24,41 @@
  * need, then (K u)_i = -V^2 sum_s omega beta [ (a_i + a_j) x_s + 15 (b_i + b_j) e_ij ] n_s,
  * b = mu / m. Bond-based (paper 004 section 2.2), one pass:
  * (K u)_i = -V^2 sum_s omega beta / x_s (c_i + c_j)/2 e_ij n_s. */
+#define _POSIX_C_SOURCE 200809L /* posix_memalign */
+#include <stdlib.h>
 #include <string.h>
 
 #include "pd/pd_internal.h"
 
-/* Hot loops in several instruction-set versions, picked at load time (the build uses -O2
- * and no -march; `omp simd` asks for the vectorisation). */
-#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__) && defined(__linux__)
-#define PD_CLONES __attribute__((target_clones("arch=x86-64-v4", "arch=x86-64-v3", "default")))
-#else
-#define PD_CLONES
+/* Lanes: the kernels (stencil_kernels.h) treat PD_KLANES consecutive nodes of a run as
+ * one vector (GNU C vector extensions), keep a lane block's accumulators in registers over
+ * all the stencil pairs and address every neighbour from one base pointer plus the pair's
+ * offset. The last block of a run may reach up to PD_KLANES - 1 cells past the run: those
+ * lanes read the slack that work_reserve adds to the window and are never stored. */
+#define PD_LANES_MAX 8
+#if PD_ROW_ALIGN % PD_LANES_MAX != 0
+#error "padded rows must be whole lane blocks"
 #endif
+#define PD_PAIR_CHUNK 64 /* pairs whose neighbour offsets are tabled at a time */
 
 /* Structure-of-arrays copies of the data the rows depend on. Padded: indexed by padded
- * cell - base, absent cells zero; else by node - base. */
+ * cell - base, absent cells zero; else by node - base. The arrays start `lead` entries into
+ * 64-byte aligned blocks, chosen so that the cells of x = 0 (where the runs of a box start)
+ * are aligned: the lane loads of the node itself and of every neighbour in the same x
+ * column (padded rows are a multiple of PD_ROW_ALIGN cells) then touch one cache line. */
 typedef struct {
-  int padded;
+  int padded, lead;
   cupid_int base, n, cap;
-  cupid_int filled[4];  /* padded: base, n, lo, hi of the last fill (its zeros still hold) */
+  cupid_int filled[4];  /* base, n, lo, hi of the last fill (its zeros and constants hold) */
   double *x, *y, *z; /* displacement components */
   double *a;         /* LPS: kappa theta / m; bond-based: micromodulus c */
   double *b;         /* LPS: mu / m; NULL for bond-based */
-  double *b_store;   /* the b array (b is NULL for bond-based) */
+  double *raw[5];    /* the blocks of x, y, z, a and b (b is NULL for bond-based) */
 } pd_work;
 
 static void work_free(pd_work *w) {
-  cupid_free(&w->x);
-  cupid_free(&w->y);
-  cupid_free(&w->z);
-  cupid_free(&w->a);
-  cupid_free(&w->b_store);
-  w->b = NULL;
+  for (int k = 0; k < 5; k++) cupid_free(&w->raw[k]);
+  w->x = w->y = w->z = w->a = w->b = NULL;
   w->cap = 0;
 }
 
@@ -64,63 +68,37 @@ void pd_stencil_work_free(struct cupid_pd_operator_private *op) {
   cupid_free(&op->work);
 }
 
-/* Arrays for n entries (grown as needed; separate arrays, 8 bytes an entry each). */
-static cupid_status work_reserve(pd_work *w, int padded, cupid_int base, cupid_int n, int lps) {
+/* Arrays for n entries from `lead` on, plus PD_LANES_MAX of zeroed slack (grown as needed;
+ * separate arrays, 8 bytes an entry each). */
+static cupid_status work_reserve(pd_work *w, int padded, cupid_int base, cupid_int n, int lead,
+                                 int lps) {
   if (w->cap < n) {
     work_free(w);
     w->filled[1] = -1;
-    cupid_status st = CUPID_SUCCESS;
-    double **arrays[5] = {&w->x, &w->y, &w->z, &w->a, &w->b_store};
-    for (int k = 0; k < 5; k++)
-      CUPID_TRY(cupid_malloc((size_t)n, sizeof(double), "PD stencil work arrays", arrays[k]));
-    w->cap = n;
-  cleanup:
-    if (st != CUPID_SUCCESS) {
-      work_free(w);
-      return st;
+    const size_t bytes = ((size_t)n + PD_ROW_ALIGN + PD_LANES_MAX) * sizeof(double);
+    for (int k = 0; k < 5; k++) {
+      void *p = NULL;
+      if (posix_memalign(&p, 64, bytes) != 0) {
+        work_free(w);
+        return CUPID_ERROR(CUPID_ERR_MEMORY, "out of memory for the PD stencil work arrays (%zu bytes)",
+                           5 * bytes);
+      }
+      w->raw[k] = p;
     }
+    w->cap = n;
   }
+  if (lead != w->lead) w->filled[1] = -1; /* the data moved */
   w->padded = padded;
+  w->lead = lead;
   w->base = base;
   w->n = n;
-  w->b = lps ? w->b_store : NULL;
+  double **arrays[5] = {&w->x, &w->y, &w->z, &w->a, &w->b};
+  for (int k = 0; k < 5; k++) {
+    *arrays[k] = w->raw[k] + lead;
+    memset(*arrays[k] + n, 0, PD_LANES_MAX * sizeof(double));
+  }
+  if (!lps) w->b = NULL;
   return CUPID_SUCCESS;
-}
-
-/* Copy u on the nodes [lo, hi) (b = mu/m for LPS, a = c for bond-based); padded: zero the
- * whole window first (absent cells read 0). */
-static void work_fill(const struct cupid_pd_operator_private *op, pd_work *w, cupid_int lo,
-                      cupid_int hi, const double *u) {
-  const int lps = w->b != NULL;
-  /* Padded: zero the window (absent cells must read 0) unless
-   * the last fill had the same window and nodes: the kernels write node cells only, so its
-   * zeros still hold (every apply of a time loop). */
-  const cupid_int key[4] = {w->base, w->n, lo, hi};
-  if (w->padded && memcmp(key, w->filled, sizeof key) != 0) {
-    double *arrays[5] = {w->x, w->y, w->z, w->a, w->b};
-#pragma omp parallel for schedule(static) if (w->n > 8 * PD_OMP_MIN_NODES)
-    for (int k = 0; k < 5; k++)
-      if (arrays[k]) memset(arrays[k], 0, (size_t)w->n * sizeof(double));
-    memcpy(w->filled, key, sizeof key);
-  }
-  /* K annihilates translations (every row depends on differences only), so the copy is
-   * shifted by the displacement of the middle node: the ghost corrections then cancel
-   * terms of size |u - u_mid| (the variation of u across the range) instead of |u|, e.g.
-   * exactly nothing for a rigid translation. */
-  const cupid_int mid = lo + (hi - lo) / 2;
-  const double r0 = w->padded ? u[3 * mid] : 0.0, r1 = w->padded ? u[3 * mid + 1] : 0.0,
-               r2 = w->padded ? u[3 * mid + 2] : 0.0;
-#pragma omp parallel for schedule(static) if (hi - lo > PD_OMP_MIN_NODES)
-  for (cupid_int i = lo; i < hi; i++) {
-    const cupid_int q = (w->padded ? pd_node_pcell(op, i) : i) - w->base;
-    w->x[q] = u[3 * i] - r0;
-    w->y[q] = u[3 * i + 1] - r1;
-    w->z[q] = u[3 * i + 2] - r2;
-    if (lps)
-      w->b[q] = op->mu[i] / op->m[i];
-    else
-      w->a[q] = op->c[i];
-  }
 }
 
 /* Position in the work arrays of node i (run R, t = i - R->i0) and of its neighbour at
@@ -144,8 +122,8 @@ static inline cupid_int work_neighbour(const struct cupid_pd_operator_private *o
  *   LPS force:   (q_s - q_s') n = [wx (a+ - a-) + w15 ((b_i + b+) d+ + (b_i + b-) d-)] n
  *   bond force:  (q_s - q_s') n = wc ((c_i + c+) d+ + (c_i + c-) d-) n
  * (wx = omega beta |xi|, w15 = 15 omega beta, wc = omega beta / (2|xi|)): about 40% fewer
- * operations than bond by bond, which is what bounds these loops. Pairs go four at a time
- * (the node's own data and its accumulators loaded once per eight bonds).
+ * operations than bond by bond, which is what bounds these loops. A block of PD_KLANES nodes
+ * keeps its own data and accumulators in registers over all the pairs.
  *
  * Padded lattice, every run in one branch-free form: absent cells hold u = a = b = c = 0,
  * and a node whose family is not full gets the exact excess of those ghost bonds removed
@@ -156,114 +134,31 @@ static inline cupid_int work_neighbour(const struct cupid_pd_operator_private *o
  * reference displacement (work_fill): near the surface the round-off is then relative to
  * the variation of u over the range rather than to the strain. */
 
-#define PD_PAIR_ENTRY(k)                                                                     \
-  const cupid_int jp##k = work_neighbour(op, w, R, i, s + k);                               \
-  const cupid_int jm##k = work_neighbour(op, w, R, i, S->n - 1 - (s + k));                   \
-  const double n0##k = S->nrm[3 * (s + k)], n1##k = S->nrm[3 * (s + k) + 1],                 \
-               n2##k = S->nrm[3 * (s + k) + 2];                                              \
-  (void)n0##k, (void)n1##k, (void)n2##k
-#define PD_DP(k) (n0##k * (X[jp##k + t] - xt) + n1##k * (Y[jp##k + t] - yt) + n2##k * (Z[jp##k + t] - zt))
-#define PD_DM(k) (n0##k * (X[jm##k + t] - xt) + n1##k * (Y[jm##k + t] - yt) + n2##k * (Z[jm##k + t] - zt))
 
-/* a = kappa theta / m with theta = 3V/m sum_s omega beta xi_s . (u_j - u_i) (Eq. 19). */
-PD_CLONES
-static void run_dilatation(const struct cupid_pd_operator_private *op, const pd_work *w,
-                           const pd_run *R, cupid_int i, int len, double *restrict theta) {
-  const pd_stencil *S = &op->st;
+/* The pairs [s0, s1) of the run starting at node i: offsets of the neighbours at +o_s (rp)
+ * and -o_s (rm) relative to node i in the work arrays. */
+static inline void pair_offsets(const struct cupid_pd_operator_private *op, const pd_work *w,
+                                const pd_run *R, cupid_int i, int s0, int s1, cupid_int *rp,
+                                cupid_int *rm) {
   const cupid_int li = work_index(w, R, i);
-  const double *restrict X = w->x, *restrict Y = w->y, *restrict Z = w->z;
-  double acc[PD_RUN_MAX];
-  for (int t = 0; t < len; t++) acc[t] = 0.0;
-  const int half = S->n / 2;
-  int s = 0;
-#define PD_DIL_ENTRY(k)                                                                      \
-  const cupid_int jp##k = work_neighbour(op, w, R, i, s + k);                               \
-  const cupid_int jm##k = work_neighbour(op, w, R, i, S->n - 1 - (s + k));                   \
-  const double g0##k = S->wxn[3 * (s + k)], g1##k = S->wxn[3 * (s + k) + 1],                 \
-               g2##k = S->wxn[3 * (s + k) + 2]
-#define PD_DIL_TERM(k)                                                                       \
-  (g0##k * (X[jp##k + t] - X[jm##k + t]) + g1##k * (Y[jp##k + t] - Y[jm##k + t]) +           \
-   g2##k * (Z[jp##k + t] - Z[jm##k + t]))
-  for (; s + 4 <= half; s += 4) {
-    PD_DIL_ENTRY(0);
-    PD_DIL_ENTRY(1);
-    PD_DIL_ENTRY(2);
-    PD_DIL_ENTRY(3);
-#pragma omp simd
-    for (int t = 0; t < len; t++)
-      acc[t] += ((PD_DIL_TERM(0) + PD_DIL_TERM(1)) + PD_DIL_TERM(2)) + PD_DIL_TERM(3);
-  }
-  for (; s < half; s++) {
-    PD_DIL_ENTRY(0);
-#pragma omp simd
-    for (int t = 0; t < len; t++) acc[t] += PD_DIL_TERM(0);
-  }
-#undef PD_DIL_TERM
-#undef PD_DIL_ENTRY
-  double *restrict a = w->a + li;
-  for (int t = 0; t < len; t++) {
-    const cupid_int n = i + t;
-    double sum = acc[t];
-    if (!R->full && !op->full[n]) { /* ghost bonds: -(sum over them of g).(0 - u_i) */
-      const double *G = op->gself + 3 * n;
-      sum -= G[0] * X[li + t] + G[1] * Y[li + t] + G[2] * Z[li + t];
-    }
-    const double th = 3.0 * op->V * sum / op->m[n];
-    a[t] = op->kappa[n] * th / op->m[n];
-    if (theta) theta[n] = th;
+  for (int s = s0; s < s1; s++) {
+    rp[s - s0] = work_neighbour(op, w, R, i, s) - li;
+    rm[s - s0] = work_neighbour(op, w, R, i, op->st.n - 1 - s) - li;
   }
 }
 
-/* Accumulate the pairs of a block into (gx, gy, gz), then into f[t]. */
-#define PD_FORCE_LOOP(TERMS)                                                                 \
-  _Pragma("omp simd") for (int t = 0; t < len; t++) {                                        \
-    const cupid_int q = li + t;                                                              \
-    const double xt = X[q], yt = Y[q], zt = Z[q];                                            \
-    PD_NODE_LOAD                                                                             \
-    double gx = 0.0, gy = 0.0, gz = 0.0;                                                     \
-    TERMS                                                                                    \
-    fx[t] += gx;                                                                             \
-    fy[t] += gy;                                                                             \
-    fz[t] += gz;                                                                             \
-  }
-#define PD_ADD(k)                                                                            \
-  {                                                                                          \
-    const double qk = PD_PAIR(k);                                                            \
-    gx += qk * n0##k;                                                                        \
-    gy += qk * n1##k;                                                                        \
-    gz += qk * n2##k;                                                                        \
-  }
-#define PD_FORCE_PAIRS(ENTRY_CONSTS)                                                         \
-  const int half = S->n / 2;                                                                 \
-  int s = 0;                                                                                 \
-  for (; s + 4 <= half; s += 4) {                                                            \
-    PD_PAIR_ENTRY(0);                                                                        \
-    PD_PAIR_ENTRY(1);                                                                        \
-    PD_PAIR_ENTRY(2);                                                                        \
-    PD_PAIR_ENTRY(3);                                                                        \
-    ENTRY_CONSTS(0);                                                                         \
-    ENTRY_CONSTS(1);                                                                         \
-    ENTRY_CONSTS(2);                                                                         \
-    ENTRY_CONSTS(3);                                                                         \
-    PD_FORCE_LOOP(PD_ADD(0) PD_ADD(1) PD_ADD(2) PD_ADD(3))                                   \
-  }                                                                                          \
-  for (; s < half; s++) {                                                                    \
-    PD_PAIR_ENTRY(0);                                                                        \
-    ENTRY_CONSTS(0);                                                                         \
-    PD_FORCE_LOOP(PD_ADD(0))                                                                 \
-  }
-
 /* f = -V^2 sum, with the ghost correction k_i G_i + b_i C_i u_i (k_i = a_i for LPS, 0 for
  * bond-based with b_i = c_i) for nodes without a full family. */
-static inline void run_store(const struct cupid_pd_operator_private *op, const pd_work *w,
+static inline __attribute__((always_inline)) void run_store(const struct cupid_pd_operator_private *op, const pd_work *w,
                              const pd_run *R, cupid_int i, int len, double *fx, double *fy,
                              double *fz, double *restrict f) {
   const double V2 = op->V * op->V;
   const cupid_int li = work_index(w, R, i);
   const int lps = op->model == CUPID_PD_LPS;
-  for (int t = 0; t < len; t++) {
-    const cupid_int n = i + t;
-    if (!R->full && !op->full[n]) {
+  if (!R->full)
+    for (int t = 0; t < len; t++) {
+      const cupid_int n = i + t;
+      if (op->full[n]) continue;
       const double *C = op->ncorr + 6 * (size_t)op->crank[n];
       const double u0 = w->x[li + t], u1 = w->y[li + t], u2 = w->z[li + t];
       const double bi = lps ? w->b[li + t] : w->a[li + t];
@@ -277,60 +172,79 @@ static inline void run_store(const struct cupid_pd_operator_private *op, const p
         fz[t] += ai * G[2];
       }
     }
+  for (int t = 0; t < len; t++) {
     f[3 * t] = -V2 * fx[t];
     f[3 * t + 1] = -V2 * fy[t];
     f[3 * t + 2] = -V2 * fz[t];
   }
 }
 
-/* f = -V^2 sum_s omega beta [ (a_i + a_j) x_s + 15 (b_i + b_j) e ] n_s (LPS, Eq. 21). */
-PD_CLONES
-static void run_lps_force(const struct cupid_pd_operator_private *op, const pd_work *w,
-                          const pd_run *R, cupid_int i, int len, double *restrict f) {
-  const pd_stencil *S = &op->st;
-  const cupid_int li = work_index(w, R, i);
-  const double *restrict X = w->x, *restrict Y = w->y, *restrict Z = w->z;
-  const double *restrict A = w->a, *restrict B = w->b;
-  double fx[PD_RUN_MAX], fy[PD_RUN_MAX], fz[PD_RUN_MAX];
-  for (int t = 0; t < len; t++) fx[t] = fy[t] = fz[t] = 0.0;
-#define PD_NODE_LOAD const double bt = B[q];
-#define PD_CONSTS(k) const double wx##k = S->wb[s + k] * S->x[s + k], w15##k = 15.0 * S->wb[s + k]
-#define PD_PAIR(k)                                                                           \
-  (wx##k * (A[jp##k + t] - A[jm##k + t]) +                                                   \
-   w15##k * ((bt + B[jp##k + t]) * PD_DP(k) + (bt + B[jm##k + t]) * PD_DM(k)))
-  PD_FORCE_PAIRS(PD_CONSTS)
-#undef PD_NODE_LOAD
-#undef PD_CONSTS
-#undef PD_PAIR
-  run_store(op, w, R, i, len, fx, fy, fz, f);
+
+/* ---- The kernels, one instance per instruction set (stencil_kernels.h). ---- */
+
+typedef void (*pd_run_kernel)(const struct cupid_pd_operator_private *op, const pd_work *w,
+                              const pd_run *R, cupid_int i, int len, double *restrict out);
+typedef struct {
+  pd_run_kernel dilatation, lps_force, bond_force;
+  int lanes;
+} pd_kernel_set;
+
+/* x86-64 with GCC: AVX-512 (8 lanes), AVX2 + FMA (4) and the SSE2 baseline (2), picked at
+ * run time; the build itself uses no -march. Elsewhere one portable instance of 4 lanes,
+ * which the compiler maps onto whatever vectors the target has. */
+#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__)
+#define PD_MULTI_ISA 1
+#pragma GCC push_options
+#pragma GCC target("arch=x86-64-v4")
+#define PD_KLANES 8
+#define PD_KNAME(x) pd_v4_##x
+#include "pd/stencil_kernels.h"
+#undef PD_KNAME
+#undef PD_KLANES
+#pragma GCC pop_options
+#pragma GCC push_options
+#pragma GCC target("arch=x86-64-v3")
+#define PD_KLANES 4
+#define PD_KNAME(x) pd_v3_##x
+#include "pd/stencil_kernels.h"
+#undef PD_KNAME
+#undef PD_KLANES
+#pragma GCC pop_options
+#define PD_KLANES 2
+#else
+#define PD_MULTI_ISA 0
+#define PD_KLANES 4
+#endif
+#define PD_KNAME(x) pd_base_##x
+#include "pd/stencil_kernels.h"
+#undef PD_KNAME
+#undef PD_KLANES
+
+/* The instance for this CPU, or the one pd_stencil_force_isa() or else the environment
+ * variable CUPID_PD_ISA asked for (tests, benchmarks: 0 = the CPU's best, 1 = baseline,
+ * 3 = AVX2, 4 = AVX-512; one the CPU lacks falls back to the next below). */
+static atomic_int pd_isa_forced;
+
+int pd_stencil_force_isa(int level) {
+  atomic_store(&pd_isa_forced, level);
+  return pd_stencil_kernel_lanes();
 }
 
-/* f = -V^2 sum_s omega beta / x_s (c_i + c_j)/2 e n_s (bond-based). */
-PD_CLONES
-static void run_bond_force(const struct cupid_pd_operator_private *op, const pd_work *w,
-                           const pd_run *R, cupid_int i, int len, double *restrict f) {
-  const pd_stencil *S = &op->st;
-  const cupid_int li = work_index(w, R, i);
-  const double *restrict X = w->x, *restrict Y = w->y, *restrict Z = w->z;
-  const double *restrict A = w->a;
-  double fx[PD_RUN_MAX], fy[PD_RUN_MAX], fz[PD_RUN_MAX];
-  for (int t = 0; t < len; t++) fx[t] = fy[t] = fz[t] = 0.0;
-#define PD_NODE_LOAD const double ct = A[q];
-#define PD_CONSTS(k) const double wc##k = 0.5 * S->wb[s + k] / S->x[s + k]
-#define PD_PAIR(k) (wc##k * ((ct + A[jp##k + t]) * PD_DP(k) + (ct + A[jm##k + t]) * PD_DM(k)))
-  PD_FORCE_PAIRS(PD_CONSTS)
-#undef PD_NODE_LOAD
-#undef PD_CONSTS
-#undef PD_PAIR
-  run_store(op, w, R, i, len, fx, fy, fz, f);
+static const pd_kernel_set *kernels_pick(void) {
+#if PD_MULTI_ISA
+  int forced = atomic_load(&pd_isa_forced);
+  if (forced == 0) { /* the environment's cap, for benchmarks of a whole run */
+    const char *env = getenv("CUPID_PD_ISA");
+    forced = env ? atoi(env) : 0;
+  }
+  __builtin_cpu_init();
+  if ((forced == 0 || forced >= 4) && __builtin_cpu_supports("x86-64-v4")) return &pd_v4_kernels;
+  if ((forced == 0 || forced >= 3) && __builtin_cpu_supports("x86-64-v3")) return &pd_v3_kernels;
+#endif
+  return &pd_base_kernels;
 }
 
-#undef PD_PAIR_ENTRY
-#undef PD_DP
-#undef PD_DM
-#undef PD_FORCE_LOOP
-#undef PD_ADD
-#undef PD_FORCE_PAIRS
+int pd_stencil_kernel_lanes(void) { return kernels_pick()->lanes; }
 
 /* ---- Near-surface nodes without padding: their stored stencil entries, same formulas
  * and order (work arrays indexed by node). ---- */
@@ -392,13 +306,59 @@ static cupid_int first_run(const struct cupid_pd_operator_private *op, cupid_int
   return a;
 }
 
+/* Copy u on the nodes [lo, hi) into the work arrays, with b = mu/m (LPS) or a = c
+ * (bond-based); padded, absent cells read 0. The node constants and the zeros are written
+ * only when the window or the nodes differ from the last fill: the kernels write a (LPS)
+ * at node cells only, so both still hold on every apply of a time loop or a Krylov solve. */
+static void work_fill(const struct cupid_pd_operator_private *op, pd_work *w, cupid_int lo,
+                      cupid_int hi, const double *u) {
+  const int lps = w->b != NULL;
+  const cupid_int key[4] = {w->base, w->n, lo, hi};
+  const int fresh = memcmp(key, w->filled, sizeof key) != 0;
+  if (fresh && w->padded) {
+    double *arrays[5] = {w->x, w->y, w->z, w->a, w->b};
+#pragma omp parallel for schedule(static) if (w->n > 8 * PD_OMP_MIN_NODES)
+    for (int k = 0; k < 5; k++)
+      if (arrays[k]) memset(arrays[k], 0, (size_t)w->n * sizeof(double));
+  }
+  /* K annihilates translations (every row depends on differences only), so the copy is
+   * shifted by the displacement of the middle node: the ghost corrections then cancel
+   * terms of size |u - u_mid| (the variation of u across the range) instead of |u|, e.g.
+   * exactly nothing for a rigid translation. */
+  const cupid_int mid = lo + (hi - lo) / 2;
+  const double r0 = w->padded ? u[3 * mid] : 0.0, r1 = w->padded ? u[3 * mid + 1] : 0.0,
+               r2 = w->padded ? u[3 * mid + 2] : 0.0;
+  /* By runs: consecutive nodes at consecutive positions, a contiguous copy each. */
+  const cupid_int rlo = first_run(op, lo), rhi = first_run(op, hi - 1) + 1;
+#pragma omp parallel for schedule(static) if (hi - lo > PD_OMP_MIN_NODES)
+  for (cupid_int r = rlo; r < rhi; r++) {
+    const pd_run *R = &op->runs[r];
+    const cupid_int a = R->i0 > lo ? R->i0 : lo, b = R->i0 + R->len < hi ? R->i0 + R->len : hi;
+    const cupid_int q = work_index(w, R, a);
+    double *restrict x = w->x + q, *restrict y = w->y + q, *restrict z = w->z + q;
+    const double *restrict ua = u + 3 * a;
+    for (cupid_int t = 0; t < b - a; t++) {
+      x[t] = ua[3 * t] - r0;
+      y[t] = ua[3 * t + 1] - r1;
+      z[t] = ua[3 * t + 2] - r2;
+    }
+    if (!fresh) continue;
+    for (cupid_int t = 0; t < b - a; t++) {
+      if (lps) w->b[q + t] = op->mu[a + t] / op->m[a + t];
+      else w->a[q + t] = op->c[a + t];
+    }
+  }
+  memcpy(w->filled, key, sizeof key);
+}
+
 typedef enum { PASS_DILATATION, PASS_LPS_FORCE, PASS_BOND_FORCE } pd_pass;
 
 /* One pass over the nodes [p, q) (out: f indexed by i - fbase, or theta by node). Inside a
  * parallel region: work-shared; the implicit barrier at the end separates the passes.
  * Dynamic schedule: runs differ in length and in cost (corrections, or family walks). */
-static void sweep(const struct cupid_pd_operator_private *op, const pd_work *w, pd_pass pass,
-                  cupid_int p, cupid_int q, double *out, cupid_int fbase) {
+static void sweep(const struct cupid_pd_operator_private *op, const pd_work *w,
+                  const pd_kernel_set *K, pd_pass pass, cupid_int p, cupid_int q, double *out,
+                  cupid_int fbase) {
   const cupid_int r0 = first_run(op, p), r1 = first_run(op, q);
 #pragma omp for schedule(dynamic, 16)
   for (cupid_int r = r0; r < r1 + (r1 < op->nruns && op->runs[r1].i0 < q); r++) {
@@ -406,9 +366,9 @@ static void sweep(const struct cupid_pd_operator_private *op, const pd_work *w, 
     const cupid_int a = R->i0 > p ? R->i0 : p, b = R->i0 + R->len < q ? R->i0 + R->len : q;
     const int len = (int)(b - a);
     if (R->full || w->padded) {
-      if (pass == PASS_DILATATION) run_dilatation(op, w, R, a, len, out);
-      else if (pass == PASS_LPS_FORCE) run_lps_force(op, w, R, a, len, out + 3 * (a - fbase));
-      else run_bond_force(op, w, R, a, len, out + 3 * (a - fbase));
+      if (pass == PASS_DILATATION) K->dilatation(op, w, R, a, len, out);
+      else if (pass == PASS_LPS_FORCE) K->lps_force(op, w, R, a, len, out + 3 * (a - fbase));
+      else K->bond_force(op, w, R, a, len, out + 3 * (a - fbase));
       continue;
     }
     for (cupid_int i = a; i < b; i++) {
@@ -432,6 +392,7 @@ cupid_status pd_stencil_apply(const struct cupid_pd_operator_private *op, cupid_
   /* The window of the work arrays: padded, every stencil cell of the nodes swept
    * ([lo1, hi1) for LPS, [first, last) else; they hold the nodes [lo, hi)). */
   cupid_int base = lo, len = hi - lo;
+  int lead = 0;
   if (op->padded) {
     cupid_int mn = 0, mx = 0;
     for (int s = 0; s < op->st.n; s++) {
@@ -441,6 +402,7 @@ cupid_status pd_stencil_apply(const struct cupid_pd_operator_private *op, cupid_
     const cupid_int s0 = lps ? lo1 : first, s1 = lps ? hi1 : last;
     base = pd_node_pcell(op, s0) + mn;
     len = pd_node_pcell(op, s1 - 1) + mx + 1 - base;
+    lead = (int)(((base - op->pr[0]) % PD_ROW_ALIGN + PD_ROW_ALIGN) % PD_ROW_ALIGN);
   }
   /* The kept arrays if free, else (a concurrent apply) our own. The operator object is
    * not const (only the handle's users see it so): the cache is its private state. */
@@ -452,15 +414,16 @@ cupid_status pd_stencil_apply(const struct cupid_pd_operator_private *op, cupid_
     if (!mop->work) CUPID_TRY(cupid_calloc(1, sizeof(pd_work), "PD stencil work", &mop->work));
     w = mop->work;
   }
-  CUPID_TRY(work_reserve(w, op->padded, base, len, lps));
+  const pd_kernel_set *K = kernels_pick();
+  CUPID_TRY(work_reserve(w, op->padded, base, len, lead, lps));
   work_fill(op, w, lo, hi, u);
 #pragma omp parallel if (hi - lo > PD_OMP_MIN_NODES)
   {
     if (lps) {
-      sweep(op, w, PASS_DILATATION, lo1, hi1, theta, 0);
-      sweep(op, w, PASS_LPS_FORCE, first, last, f, first);
+      sweep(op, w, K, PASS_DILATATION, lo1, hi1, theta, 0);
+      sweep(op, w, K, PASS_LPS_FORCE, first, last, f, first);
     } else {
-      sweep(op, w, PASS_BOND_FORCE, first, last, f, first);
+      sweep(op, w, K, PASS_BOND_FORCE, first, last, f, first);
     }
   }
 cleanup:

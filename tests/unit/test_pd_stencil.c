@@ -3,7 +3,8 @@
  * random fields: boxes, a union of boxes with a re-entrant corner and a hole, two
  * materials, a row longer than one run, a grid too thin for any full family, a 1D bar;
  * LPS and bond-based, three influence / partial-volume combinations; whole products and
- * row ranges. Also the storage: no bond stored for full families. */
+ * row ranges; every instruction-set instance of the kernels. Also the storage: no bond
+ * stored for full families. */
 #include <math.h>
 #include <string.h>
 
@@ -138,6 +139,25 @@ static void test_bar(void **state) {
   compare(&bar, CUPID_PD_BOND, CUPID_INFLUENCE_CONSTANT, CUPID_PARTIAL_EXACT);
 }
 
+/* Every instruction-set instance of the kernels the CPU can run (AVX-512: 8 lanes, AVX2: 4,
+ * baseline: 2), each against the bond lists: the lane blocks that overhang a run's end,
+ * the runs shorter than a block ("thin", the union's short rows) and the tabled pair
+ * offsets are the instance's own code. */
+static void test_instances(void **state) {
+  (void)state;
+  const int levels[3] = {1, 3, 4};
+  for (int l = 0; l < 3; l++) {
+    const int lanes = pd_stencil_force_isa(levels[l]);
+    print_message("kernel instance %d: %d lanes\n", levels[l], lanes);
+    assert_true(lanes == 2 || lanes == 4 || lanes == 8);
+    for (size_t c = 0; c < sizeof cases / sizeof *cases; c++) {
+      compare(&cases[c], CUPID_PD_LPS, CUPID_INFLUENCE_INVERSE, CUPID_PARTIAL_PDLAMMPS);
+      compare(&cases[c], CUPID_PD_BOND, CUPID_INFLUENCE_GAUSSIAN, CUPID_PARTIAL_PDLAMMPS);
+    }
+  }
+  pd_stencil_force_isa(0);
+}
+
 /* The runs cover every node once, in order, at consecutive (padded) cells with one full
  * flag each; the union is dense enough for the padded lattice, a sparse one is not. */
 static void test_partition(void **state) {
@@ -180,6 +200,7 @@ static void test_partition(void **state) {
 
 int main(void) {
   const struct CMUnitTest tests[] = {cmocka_unit_test(test_lps), cmocka_unit_test(test_bond),
-                                     cmocka_unit_test(test_bar), cmocka_unit_test(test_partition)};
+                                     cmocka_unit_test(test_bar), cmocka_unit_test(test_instances),
+                                     cmocka_unit_test(test_partition)};
   return cmocka_run_group_tests(tests, NULL, NULL);
 }
