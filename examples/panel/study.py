@@ -1,7 +1,8 @@
 #!/usr/bin/env python3
 """FE-mesh and horizon study of the coupled stiffened panel (examples/panel/README.md).
 
-usage: examples/panel/study.py [VARIANT ...] [--cupid build/cupid] [--list]
+usage: examples/panel/study.py [VARIANT ...] [--cupid build/cupid] [--solver petsc]
+                               [--against fine] [--list]
 
 Each variant is panel_pd_l9.yaml with another beam mesh (axis breakpoints / elements / type),
 section mesh (skin x, stringer z breakpoints) or PD horizon / surface correction, run with its
@@ -9,7 +10,10 @@ full-FE twin (the same beam and section mesh, no PD), so that A, B, C are compar
 model they discretise. Prints a markdown table (error of u_z at A, B and sigma_yy at C against
 the twin, the equilibrium imbalance, time and peak memory) and writes it to
 out/panel/study/study.md. Every coupled run takes ~5-10 s and up to 1.4 GB on 2 cores; all
-variants about 3 minutes. With no VARIANT, all of them.
+variants about 3 minutes. With no VARIANT, all of them at h = 1 (the h0.5_* variants, which
+need the matrix-free path: `--cupid build-petsc/cupid --solver petsc`, ~10-15 s each, are run
+only when named). `--against fine` also compares every row with the full FE of a section- and
+beam-converged L9 mesh (REFERENCES; FE only).
 """
 import argparse
 import json
@@ -22,6 +26,17 @@ SKIN44 = "0,12,24,36,44,48,52,56,64,76,88,100,112,124,136,144,148,152,156,164,17
 ADJ = dict(axis_y="0,280,290,310,320,600", axis_el="4,1,1,1,3")
 STRIP = dict(axis_y="0,250,290,290.5,309.5,310,350,600", axis_el="4,1,1,1,1,1,3")
 SC = "energy"
+# Skin split beside the stringers (x 42, 46 | 54, 58) and at the stringers' mid-planes (50):
+# conforming with stringers of 2 or 4 elements across their thickness.
+def breaks(s):
+    """Breakpoints in ascending order (lists built by joining pieces)."""
+    return ",".join(sorted(s.split(","), key=float))
+
+
+SKIN_B = "0,12,24,36,42,46,48,52,54,58,64,76,88,100,112,124,136,142,146,148,152,154,158,164,176,190,200"
+SKIN_X2 = SKIN_B.replace("48,52", "48,50,52").replace("148,152", "148,150,152")
+SKIN_X4 = SKIN_B.replace("48,52", "48,49,50,51,52").replace("148,152", "148,149,150,151,152")
+H05 = dict(h="0.5")
 
 # name: (description, overrides of the example's parameters)
 VARIANTS = {
@@ -56,14 +71,35 @@ VARIANTS = {
     "adj10_energy": ("adj10, surface correction", dict(ADJ, sc=SC)),
     "adj10_m2_energy": ("adj10, m = 2, surface correction", dict(ADJ, delta="2.0", sc=SC)),
     "adj10_m1.5_energy": ("adj10, m = 1.5, surface correction", dict(ADJ, delta="1.5", sc=SC)),
+    "h0.5": ("the example, h = 0.5 (8 x 40 x 40 PD nodes per stringer)", H05),
+    "h0.5_skin": ("h = 0.5, skin split beside the stringers and in 2 through its thickness",
+                  dict(H05, skin_x=SKIN_B, skin_z="0,1,2")),
+    "h0.5_x2": ("h0.5_skin + stringers in 2 elements across their thickness",
+                dict(H05, skin_x=SKIN_X2, skin_z="0,1,2", str_x="0,2,4")),
+    "h0.5_x4": ("h = 0.5, skin in 4 through its thickness, stringers in 4 across theirs",
+                dict(H05, skin_x=SKIN_X4, skin_z="0,0.5,1,1.5,2", str_x="0,1,2,3,4")),
+}
+OPT_IN = {k for k in VARIANTS if k.startswith("h0.5")}
+
+# Full-FE references (FE only): the section and beam mesh refined until A, B, C move by less
+# than 0.2% (README.md: from the example's mesh, B moves by +3.9%).
+REFERENCES = {
+    "fine": dict(skin_x=breaks(SKIN_X4 + ",30,44,56,70,130,144,156,170"), skin_z="0,0.5,1,1.5,2",
+                 str_x="0,1,2,3,4", str_z="2,2.5,3,4,5,6,7.5,9,11,13,15,17,19.5,22",
+                 axis_el="12,2,9"),
 }
 
 DEFAULTS = dict(axis_y="0,290,310,600", axis_el="4,1,3", type="B4", skin_x=SKIN,
-                str_z="2,7,12,17,22", delta="3.0", sc=None)
+                skin_z="0,2", str_x="0,4", str_z="2,7,12,17,22", delta="3.0", h="1.0", sc=None)
 
 
 def lst(s):
     return "[" + ", ".join(s.split(",")) + "]"
+
+
+
+def stringer_x(p, x0):
+    return ",".join(f"{x0 + float(o):g}" for o in p["str_x"].split(","))
 
 
 def models(p, d):
@@ -76,14 +112,14 @@ beam:
     expansion: LE
     element: L9
     components:
-      - {{x: {lst(p['skin_x'])}, z: [0, 2]}}
-      - {{x: [48, 52], z: {lst(p['str_z'])}}}
-      - {{x: [148, 152], z: {lst(p['str_z'])}}}
+      - {{x: {lst(p['skin_x'])}, z: {lst(p['skin_z'])}}}
+      - {{x: {lst(stringer_x(p, 48))}, z: {lst(p['str_z'])}}}
+      - {{x: {lst(stringer_x(p, 148))}, z: {lst(p['str_z'])}}}
 """
     sc = f"  surface_correction: {p['sc']}\n" if p["sc"] else ""
     pd = f"""peridynamics:
-  spacing: 1.0
-  horizon: {p['delta']}
+  spacing: {p['h']}
+  horizon: {float(p['delta']) * float(p['h']):g}
   model: lps
   influence: gaussian
   partial_volume: pdlammps
@@ -109,9 +145,10 @@ output:
             "title: panel study, coupled\n" + beam + pd + rest.replace("DIR", d + "/pd"))
 
 
-def run(cupid, path, outdir):
+def run(cupid, path, outdir, extra=()):
     timer = ["/usr/bin/time", "-f", "%M"] if os.path.exists("/usr/bin/time") else []
-    r = subprocess.run(timer + [cupid, "run", path, "--quiet"], capture_output=True, text=True)
+    r = subprocess.run(timer + [cupid, "run", path, "--quiet", *extra], capture_output=True,
+                       text=True)
     if r.returncode:
         sys.exit(f"{path}: cupid failed\n{r.stdout}{r.stderr}")
     s = json.load(open(os.path.join(outdir, "summary.json")))
@@ -130,16 +167,35 @@ def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("variants", nargs="*")
     ap.add_argument("--cupid", default="build/cupid")
+    ap.add_argument("--solver", help="solver of the coupled runs (e.g. petsc)")
+    ap.add_argument("--against", choices=sorted(REFERENCES),
+                    help="also compare with this converged full-FE reference")
     ap.add_argument("--list", action="store_true")
     a = ap.parse_args()
     if a.list:
         for k, (desc, _) in VARIANTS.items():
             print(f"{k:20s} {desc}")
         return
-    names = a.variants or list(VARIANTS)
+    for n in a.variants:
+        if n not in VARIANTS:
+            sys.exit(f"unknown variant '{n}' (--list names them)")
+    names = a.variants or [k for k in VARIANTS if k not in OPT_IN]
     base = os.path.join("out", "panel", "study")
+    extra = ("--solver", a.solver) if a.solver else ()
+    ref = None
+    if a.against:
+        d = os.path.abspath(os.path.join(base, "ref_" + a.against))
+        os.makedirs(d, exist_ok=True)
+        fe_y, _ = models(dict(DEFAULTS, **REFERENCES[a.against]), d)
+        with open(os.path.join(d, "fe.yaml"), "w") as f:
+            f.write(fe_y)
+        ref, _ = run(a.cupid, os.path.join(d, "fe.yaml"), os.path.join(d, "fe"))
+        print(f"reference '{a.against}' (full FE, {ref['counts']['fe_dofs']} DOFs): A "
+              f"{value(ref, 'A', 'uz'):.4f}, B {value(ref, 'B', 'uz'):.4f}, "
+              f"C {value(ref, 'C', 'syy'):.4f}\n")
+    vs = " | coupled vs reference A, B, C" if ref else ""
     rows = ["| variant | configuration | FE DOFs | u_z A | u_z B | sigma_yy C | imbalance x, y, z [N] "
-            "| time, peak memory |", "|---|---|---|---|---|---|---|---|"]
+            "| time, peak memory" + vs + " |", "|---|---|---|---|---|---|---|---|" + ("---|" if ref else "")]
     print("\n".join(rows), flush=True)
     for n in names:
         desc, over = VARIANTS[n]
@@ -151,7 +207,7 @@ def main():
             with open(os.path.join(d, name), "w") as f:
                 f.write(text)
         fe, _ = run(a.cupid, os.path.join(d, "fe.yaml"), os.path.join(d, "fe"))
-        pd, rss = run(a.cupid, os.path.join(d, "pd.yaml"), os.path.join(d, "pd"))
+        pd, rss = run(a.cupid, os.path.join(d, "pd.yaml"), os.path.join(d, "pd"), extra)
         cells = []
         for pt, c in (("A", "uz"), ("B", "uz"), ("C", "syy")):
             f, q = value(fe, pt, c), value(pd, pt, c)
@@ -159,6 +215,10 @@ def main():
         imb = ", ".join(f"{v:.2f}" for v in pd["equilibrium_imbalance"])
         row = (f"| {n} | {desc} | {fe['counts']['fe_dofs']} | " + " | ".join(cells) +
                f" | {imb} | {pd['total_time_s']:.1f} s, {rss / 1e9:.2f} GB |")
+        if ref:
+            row += " " + ", ".join(
+                f"{100 * (value(pd, pt, c) / value(ref, pt, c) - 1):+.2f}%"
+                for pt, c in (("A", "uz"), ("B", "uz"), ("C", "syy"))) + " |"
         rows.append(row)
         print(row, flush=True)
     with open(os.path.join(base, "study.md"), "w") as f:
