@@ -276,6 +276,15 @@ int64_t cupid_coupling_operator_bytes(const cupid_coupling_operator A);
  */
 cupid_status cupid_coupling_operator_apply(const cupid_coupling_operator A, const double *x,
                                            double *y);
+
+/**
+ * The rows [d0, d1) of y = A x (global DOF numbering; x whole, y of
+ * cupid_coupling_operator_size() entries, those outside [d0, d1) left undefined): the PD rows
+ * through cupid_pd_operator_apply_range() on the extended nodes they need, the FE rows of
+ * the assembled block. What each MPI rank computes for its own rows of a Krylov product.
+ */
+cupid_status cupid_coupling_operator_apply_rows(const cupid_coupling_operator A, const double *x,
+                                                cupid_int d0, cupid_int d1, double *y);
 /**
  * The assembled coupled matrix of Eq. 38 with the PD operator @p pd on the same extended grid
  * (NULL: the operator's own, giving the matrix of cupid_coupling_create()).

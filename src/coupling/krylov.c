@@ -5,8 +5,8 @@
  * has ~19 blocks a PD row, so its factor is ~1/50 of the LPS one), ILU, GAMG or hypre on
  * request. Right preconditioning: GMRES minimises the true residual, so rtol is what the
  * caller gets. Dirichlet DOFs are eliminated: A_ff u_f = f_f - A_fc u_c. On several MPI ranks
- * (replicated model) the vectors and the preconditioner's rows are split over the ranks and
- * the LU is MUMPS's (parallel); every rank gets the whole solution. */
+ * (replicated model) the vectors, the rows of the product and the preconditioner's rows are
+ * split over the ranks and the LU is MUMPS's (parallel); every rank gets the whole solution. */
 #include <math.h>
 #include <stdio.h>
 #include <string.h>
@@ -27,9 +27,9 @@
     }                                                                                         \
   } while (0)
 
-/* On several MPI ranks the model is replicated and every rank applies the whole operator to
- * the gathered x (the product is cheap next to the preconditioner's factorisation, which MUMPS
- * distributes); each rank owns the free DOFs [f0, f1) of the PETSc vectors. */
+/* On several MPI ranks the model is replicated; each rank owns the free DOFs [f0, f1) of the
+ * PETSc vectors and computes only their rows of the product (cupid_coupling_operator_apply_rows:
+ * the PD rows of its range of extended nodes), from the gathered x. */
 typedef struct {
   cupid_coupling_operator A;
   cupid_int n, n_free, f0, f1;
@@ -51,7 +51,10 @@ static PetscErrorCode shell_mult(Mat M, Vec x, Vec y) {
   memset(s->xf, 0, (size_t)s->n * sizeof *s->xf);
   for (cupid_int k = 0; k < s->n_free; k++) s->xf[s->gidx[k]] = xa[k];
   PetscCall(VecRestoreArrayRead(s->xall, &xa));
-  if (cupid_coupling_operator_apply(s->A, s->xf, s->yf) != CUPID_SUCCESS)
+  /* The owned rows only (free DOFs ascend with the global DOFs). */
+  const cupid_int d0 = s->f1 > s->f0 ? s->gidx[s->f0] : 0,
+                  d1 = s->f1 > s->f0 ? s->gidx[s->f1 - 1] + 1 : 0;
+  if (cupid_coupling_operator_apply_rows(s->A, s->xf, d0, d1, s->yf) != CUPID_SUCCESS)
     SETERRQ(PETSC_COMM_SELF, PETSC_ERR_LIB, "coupled operator: %s", cupid_error_message());
   PetscCall(VecGetArray(y, &ya));
   for (cupid_int k = s->f0; k < s->f1; k++) ya[k - s->f0] = s->yf[s->gidx[k]];

@@ -25,6 +25,7 @@ struct cupid_coupling_operator_private {
   cupid_pd_operator_options pd;    /* the PD operator of the model */
   cupid_pd_operator op;            /* ... on the extended grid */
   cupid_int *ext_of;               /* real PD node -> extended node */
+  int ext_ascending;               /* ext_of increases (row ranges map to extended ranges) */
   double *ue, *fe;                 /* 3 per extended node: work vectors of apply */
 };
 
@@ -43,6 +44,8 @@ cupid_status cupid_coupling_operator_create(cupid_cuf_beam beam, cupid_pd_grid g
                          &A->ext_of));
   for (cupid_int i = 0; i < n_ext; i++)
     if (A->parts.map.real[i] >= 0) A->ext_of[A->parts.map.real[i]] = i;
+  A->ext_ascending = 1;
+  for (cupid_int r = 1; r < n_pd; r++) A->ext_ascending &= A->ext_of[r] > A->ext_of[r - 1];
   CUPID_TRY(cupid_malloc((size_t)(3 * n_ext), sizeof *A->ue, "extended displacements", &A->ue));
   CUPID_TRY(cupid_malloc((size_t)(3 * n_ext), sizeof *A->fe, "extended forces", &A->fe));
   *out = A;
@@ -80,15 +83,14 @@ int64_t cupid_coupling_operator_bytes(const cupid_coupling_operator A) {
   return b;
 }
 
-cupid_status cupid_coupling_operator_apply(const cupid_coupling_operator A, const double *x,
-                                           double *y) {
+/* u_ext = [x_PD ; I^{f-PD} x_FE] (Eq. 29) on the extended nodes [lo, hi). */
+static void extended_field(const cupid_coupling_operator A, const double *x, cupid_int lo,
+                           cupid_int hi) {
   const ext_map *m = &A->parts.map;
-  cupid_int n_ext = A->parts.n_ext, n_pd = A->parts.n_pd;
-  const double *xfe = x + 3 * n_pd;
+  const double *xfe = x + 3 * A->parts.n_pd;
   double *ue = A->ue;
-  /* u_ext = [x_PD ; I^{f-PD} x_FE] (Eq. 29). */
-#pragma omp parallel for schedule(static) if (n_ext > 4096)
-  for (cupid_int i = 0; i < n_ext; i++) {
+#pragma omp parallel for schedule(static) if (hi - lo > 4096)
+  for (cupid_int i = lo; i < hi; i++) {
     cupid_int r = m->real[i];
     double *u = ue + 3 * i;
     if (r >= 0) {
@@ -106,7 +108,13 @@ cupid_status cupid_coupling_operator_apply(const cupid_coupling_operator A, cons
       u[2] += w * v[2];
     }
   }
-  CUPID_CALL(cupid_pd_operator_apply(A->op, ue, A->fe));
+}
+
+cupid_status cupid_coupling_operator_apply(const cupid_coupling_operator A, const double *x,
+                                           double *y) {
+  cupid_int n_ext = A->parts.n_ext, n_pd = A->parts.n_pd;
+  extended_field(A, x, 0, n_ext);
+  CUPID_CALL(cupid_pd_operator_apply(A->op, A->ue, A->fe));
   const double *fe = A->fe;
 #pragma omp parallel for schedule(static) if (n_pd > 4096)
   for (cupid_int r = 0; r < n_pd; r++) {
@@ -117,6 +125,50 @@ cupid_status cupid_coupling_operator_apply(const cupid_coupling_operator A, cons
   }
   /* FE rows: real and fictitious FE elements (Eq. 38), assembled. */
   cupid_csr_matvec(A->parts.Kfe, x, y + 3 * n_pd);
+  return CUPID_SUCCESS;
+}
+
+/* y[d] for the DOFs d in [d0, d1) of the FE rows (block rows of Kfe, columns over [PD | FE]). */
+static void fe_rows(const cupid_csr_t *K, const double *x, cupid_int off, cupid_int d0,
+                    cupid_int d1, double *y) {
+  const int bs = K->bs;
+  for (cupid_int a = (d0 - off) / bs; a * bs + off < d1 && a < K->nrows; a++) {
+    double s[3] = {0, 0, 0};
+    for (cupid_int k = K->rowptr[a]; k < K->rowptr[a + 1]; k++) {
+      const double *blk = K->val + (size_t)bs * bs * k, *xc = x + (size_t)bs * K->col[k];
+      for (int i = 0; i < bs; i++)
+        for (int j = 0; j < bs; j++) s[i] += blk[i * bs + j] * xc[j];
+    }
+    for (int i = 0; i < bs; i++) {
+      cupid_int d = off + a * bs + i;
+      if (d >= d0 && d < d1) y[d] = s[i];
+    }
+  }
+}
+
+cupid_status cupid_coupling_operator_apply_rows(const cupid_coupling_operator A, const double *x,
+                                                cupid_int d0, cupid_int d1, double *y) {
+  cupid_int n_pd = A->parts.n_pd, n = cupid_coupling_operator_size(A);
+  CUPID_CHECK(d0 >= 0 && d0 <= d1 && d1 <= n, CUPID_ERR_ARGUMENT,
+              "rows [%lld, %lld) outside the operator's %lld", (long long)d0, (long long)d1,
+              (long long)n);
+  if (!A->ext_ascending) /* no range of extended nodes holds the rows: the whole product */
+    return cupid_coupling_operator_apply(A, x, y);
+  const cupid_int r0 = d0 / 3, r1 = (d1 < 3 * n_pd ? d1 + 2 : 3 * n_pd) / 3;
+  if (r0 < r1) {
+    /* The real nodes [r0, r1) lie in the extended nodes [e0, e1), which read [lo, hi). */
+    const cupid_int e0 = A->ext_of[r0], e1 = A->ext_of[r1 - 1] + 1;
+    cupid_int lo, hi;
+    CUPID_CALL(cupid_pd_operator_dependency_range(A->op, e0, e1, &lo, &hi));
+    extended_field(A, x, lo, hi);
+    CUPID_CALL(cupid_pd_operator_apply_range(A->op, e0, e1, A->ue, A->fe));
+    for (cupid_int r = r0; r < r1; r++) {
+      const double *f = A->fe + 3 * (A->ext_of[r] - e0);
+      for (int c = 0; c < 3; c++)
+        if (3 * r + c >= d0 && 3 * r + c < d1) y[3 * r + c] = f[c];
+    }
+  }
+  if (d1 > 3 * n_pd) fe_rows(A->parts.Kfe, x, 3 * n_pd, d0 > 3 * n_pd ? d0 : 3 * n_pd, d1, y);
   return CUPID_SUCCESS;
 }
 

@@ -177,6 +177,22 @@ static void check_case(const op_case *pc) {
     for (cupid_int i = 0; i < n; i++) z[i] -= y[i];
     worst = fmax(worst, norm(z, n) / norm(y, n));
   }
+  /* Row ranges (what each MPI rank computes of a Krylov product): the same arithmetic as the
+   * whole product, so equal to round-off of the PD kernels' reference shift (1e-13 of |Ax|),
+   * for ranges that cut a node's three rows, that hold only PD or only FE rows, and empty. */
+  CUPID_ASSERT_OK(cupid_coupling_operator_apply(A, x, y));
+  const cupid_int npd3 = 3 * m.n_pd;
+  const cupid_int ranges[6][2] = {{0, n}, {0, npd3 / 2 + 1}, {npd3 / 2 + 1, n},
+                                  {npd3 / 3 + 2, npd3 - 4}, {npd3 - 1, n - 5}, {7, 7}};
+  const double ymax = norm(y, n);
+  for (int r = 0; r < 6; r++) {
+    const cupid_int d0 = ranges[r][0], d1 = ranges[r][1];
+    for (cupid_int i = 0; i < n; i++) z[i] = NAN;
+    CUPID_ASSERT_OK(cupid_coupling_operator_apply_rows(A, x, d0, d1, z));
+    for (cupid_int i = d0; i < d1; i++) ASSERT_NEAR(z[i], y[i], 1e-13 * ymax);
+  }
+  assert_int_equal(cupid_coupling_operator_apply_rows(A, x, 5, n + 1, z), CUPID_ERR_ARGUMENT);
+
   /* The operator's own assembly is the coupled matrix, bit for bit. */
   CUPID_ASSERT_OK(cupid_coupling_operator_assemble(A, NULL, &K2));
   assert_int_equal(K2->nrows, K->nrows);
