@@ -1,0 +1,49 @@
+#!/usr/bin/env bash
+# The coupled stiffened panel at PD spacing h = 0.5 (tests/models/mpi/panel_pd_h05.yaml: the
+# example's L9 mesh, PD regions of 8 x 40 x 40 nodes in both stringers, m = 3) against the
+# converged full-L9 panel (panel_fe_fine.yaml, the mesh refined until A, B, C move by less
+# than 0.2%): u_z at A and B and sigma_yy at C within the issue's 2% (observed -0.24%,
+# -0.91%, -0.09%). Against the example's own full-L9 mesh the coupled panel differs by +0.62%,
+# +4.77%, -2.52%: that mesh is 5.4% off the converged B (one L9 element across a 4 mm
+# stringer), the PD stringer is not; both figures are printed (docs/coupling.md, "A converged
+# full-L9 reference"). Also: the matrix-free GMRES converged (cupid fails the run otherwise),
+# the true relative residual recomputed after it is <= 1e-7 (observed 1.5e-8; GMRES stops at
+# 1e-10 of its own residual estimate, which drifts from the true one), and the z imbalance of
+# Eq. 38 stays below 1% of the 20 N load (observed 0.11 N).
+# The coupled model needs the matrix-free path (the direct one takes ~17 GB): skipped (77)
+# without PETSc. ~15 s on 2 cores.
+if [ "${CUPID_HAVE_PETSC:-0}" != 1 ]; then
+  echo "SKIP: cupid was built without PETSc (scripts/build.sh --with-petsc builds build-petsc/)"
+  exit 77
+fi
+. "$(dirname "$0")/../tools/checks.sh"
+models=$SRC/tests/models/mpi
+"$CUPID" run "$models/panel_pd_h05.yaml" -o pd --quiet && ok || bad "coupled h = 0.5 run"
+"$CUPID" run "$models/panel_fe_fine.yaml" -o fine --quiet && ok || bad "converged full-FE run"
+"$CUPID" run "$SRC/examples/panel/panel_fe_l9.yaml" -o fe --quiet && ok || bad "example full-FE run"
+[ "$fail" -eq 0 ] || finish mpi_panel_fine
+if python3 - <<'PY'; then ok; else bad "panel figures (above)"; fi
+import json
+pd, fine, fe = (json.load(open(f"{d}/summary.json")) for d in ("pd", "fine", "fe"))
+def val(s, name, comp):
+    return next(p for p in s["points"] if p["name"] == name)[comp]
+good = True
+print("point  coupled h=0.5  converged L9  (error)   example-mesh L9  (error)")
+for name, comp in (("A", "uz"), ("B", "uz"), ("C", "syy")):
+    c, r, e = val(pd, name, comp), val(fine, name, comp), val(fe, name, comp)
+    err = c / r - 1
+    print(f"{name} {comp:4s} {c:12.5f} {r:13.5f} ({100 * err:+.2f}%) {e:14.5f} ({100 * (c / e - 1):+.2f}%)")
+    if abs(err) > 0.02:
+        print(f"FAIL: {name}: {100 * err:+.2f}% from the converged full L9 (bound 2%)")
+        good = False
+res = pd["solver"]["residual"]
+imb = abs(pd["equilibrium_imbalance"][2])
+print(f"GMRES residual {res:.1e}, z imbalance {imb:.3f} N of 20 N, "
+      f"{pd['solver']['iterations']} iterations ({pd['solver']['operator']})")
+if not res <= 1e-7:
+    print("FAIL: residual above 1e-7"); good = False
+if not imb <= 0.2:
+    print("FAIL: z imbalance above 1% of the load"); good = False
+raise SystemExit(0 if good else 1)
+PY
+finish mpi_panel_fine
