@@ -1,11 +1,16 @@
 #!/usr/bin/env python3
 """Coupling error against the horizon (the coupled bar, TE2, fictitious nodes).
 
-usage: examples/bar/convergence.py [--cupid build/cupid] [--method fictitious] [H:DELTA ...]
+usage: examples/bar/convergence.py [--cupid build/cupid] [--method fictitious]
+                                   [--solver petsc] [--clamp-elements 3]
+                                   [--surface-correction energy] [H:DELTA ...]
 
 Default cases: fixed m = 3 with delta = 3, 2, 1.5 (h = 1, 2/3, 1/2; the last has 32,000 PD
-nodes and needs ~40 GB for the direct factorisation). Each case is bar_coupled_te2.yaml with
-its spacing and horizon replaced; the reference is bar_fe_te2.yaml. Prints a table of the
+nodes: ~50 GB for the direct factorisation, seconds with `--cupid build-petsc/cupid --solver
+petsc`, the matrix-free path). Each case is bar_coupled_te2.yaml with its spacing and horizon
+replaced; the reference is bar_fe_te2.yaml. `--clamp-elements 3` cuts the clamped span into 3
+B2 elements in both (bar_fe_te2_c3.yaml, the README's bar.yaml), `--surface-correction
+energy` adds the PD surface correction (both as compare_coupled.py). Prints a table of the
 largest error of u_y along the axis relative to the tip displacement, the largest pointwise
 relative error, and the equilibrium imbalance.
 """
@@ -15,6 +20,9 @@ ap = argparse.ArgumentParser()
 ap.add_argument("--cupid", default="build/cupid")
 ap.add_argument("--method", default="fictitious")
 ap.add_argument("--expansion", default="te2")
+ap.add_argument("--solver", help="analysis solver of the coupled runs (e.g. petsc)")
+ap.add_argument("--clamp-elements", type=int, default=1)
+ap.add_argument("--surface-correction", default="none", choices=["none", "energy"])
 ap.add_argument("cases", nargs="*", default=["1:3", "0.6666666666666666:2", "0.5:1.5"])
 a = ap.parse_args()
 here = os.path.dirname(os.path.abspath(__file__))
@@ -24,11 +32,22 @@ os.makedirs(out, exist_ok=True)
 def axis(d):
     return [(float(r["y"]), float(r["uy"])) for r in csv.DictReader(open(os.path.join(d, "line_axis.csv")))]
 
-fe_dir = os.path.join(out, "fe")
-subprocess.run([a.cupid, "run", os.path.join(here, f"bar_fe_{a.expansion}.yaml"), "-o", fe_dir, "--quiet"], check=True)
+def clamped(txt):
+    """The clamped span [0, 30] in a.clamp_elements B2 elements (compare_coupled.py)."""
+    if a.clamp_elements == 1:
+        return txt
+    return re.sub(r"elements: \[1, ", f"elements: [{a.clamp_elements}, ", txt, count=1)
+
+fe_dir = os.path.join(out, f"fe_c{a.clamp_elements}")
+fe_model = os.path.join(out, f"fe_c{a.clamp_elements}.yaml")
+open(fe_model, "w").write(clamped(open(os.path.join(here, f"bar_fe_{a.expansion}.yaml")).read()))
+subprocess.run([a.cupid, "run", fe_model, "-o", fe_dir, "--quiet"], check=True)
 fe = axis(fe_dir)
 tip = abs(fe[-1][1])
-src = open(os.path.join(here, f"bar_coupled_{a.expansion}.yaml")).read()
+src = clamped(open(os.path.join(here, f"bar_coupled_{a.expansion}.yaml")).read())
+if a.surface_correction != "none":
+    src = src.replace("  partial_volume: pdlammps", f"  partial_volume: pdlammps\n  surface_correction: {a.surface_correction}")
+extra = ["--solver", a.solver] if a.solver else []
 print(f"| h | delta | m | PD nodes | max error / tip u | max relative error | equilibrium imbalance | wall s |")
 print("|---|---|---|---|---|---|---|---|")
 for case in a.cases:
@@ -36,11 +55,11 @@ for case in a.cases:
     txt = re.sub(r"spacing: [0-9.]+", f"spacing: {h!r}", src)
     txt = re.sub(r"horizon: [0-9.]+", f"horizon: {d!r}", txt)
     txt = txt.replace("coupling: {method: fictitious}", f"coupling: {{method: {a.method}}}")
-    name = f"h{h:.3f}_d{d:g}_{a.method}"
+    name = f"h{h:.3f}_d{d:g}_{a.method}_c{a.clamp_elements}_{a.surface_correction}"
     model = os.path.join(out, name + ".yaml")
     open(model, "w").write(txt)
     dd = os.path.join(out, name)
-    subprocess.run([a.cupid, "run", model, "-o", dd, "--quiet"], check=True)
+    subprocess.run([a.cupid, "run", model, "-o", dd, "--quiet", *extra], check=True)
     c = axis(dd)
     s = json.load(open(os.path.join(dd, "summary.json")))
     err = max(abs(u - v) for (_, u), (_, v) in zip(c, fe)) / tip

@@ -25,11 +25,15 @@ typedef struct {
   double iterative_bytes, iterative_seconds;
 } cupid_estimate;
 
-/* UMFPACK's LU of the non-symmetric coupled matrix (paper 000 Eq. 38) against the CHOLMOD fit:
- * the coupled bar (examples/bar/bar.yaml, 12,072 DOFs) peaked at 3.5 GB and 25-45 s where the
- * CHOLMOD-style estimate said 0.76 GB of factor (1.02 GB in all) and 6.9 s. */
-#define CUPID_UMFPACK_FILL_FACTOR 4.2
-#define CUPID_UMFPACK_TIME_FACTOR 5.0
+/* UMFPACK's LU of the non-symmetric coupled matrix (paper 000 Eq. 38, with CHOLMOD's ordering,
+ * src/solvers/direct.c) against the CHOLMOD fit, measured peak / factorisation time: the
+ * coupled bar (examples/bar/bar.yaml) 1.73 GB / 5.5 s where the fit says 0.76 GB of factor,
+ * 1.02 GB in all, 6.9 s (memory factor 1.9, time 0.8); the C-beam (cbeam_pd_l9) 2.63 GB / 9 s
+ * against 1.35, 1.69 GB, 15.7 s (1.7, 0.6); the panel (panel_pd_l9) 1.27 GB / 2.8 s against
+ * 0.60, 0.76 GB, 4.6 s (1.85, 0.6). Rounded up, so that solver auto errs towards the safe
+ * side. */
+#define CUPID_UMFPACK_FILL_FACTOR 2.0
+#define CUPID_UMFPACK_TIME_FACTOR 1.0
 
 /* Matrix and factor sizes for n PD nodes and the given number of stored 3x3 blocks. */
 static void estimate_sizes(const cupid_model_t *m, double n, double blocks, cupid_estimate *e) {
