@@ -80,8 +80,8 @@ static cupid_status work_reserve(pd_work *w, int padded, cupid_int base, cupid_i
       void *p = NULL;
       if (posix_memalign(&p, 64, bytes) != 0) {
         work_free(w);
-        return CUPID_ERROR(CUPID_ERR_MEMORY, "out of memory for the PD stencil work arrays (%zu bytes)",
-                           5 * bytes);
+        return CUPID_ERROR(CUPID_ERR_MEMORY,
+                           "out of memory for the PD stencil work arrays (%zu bytes)", 5 * bytes);
       }
       w->raw[k] = p;
     }
@@ -148,10 +148,11 @@ static inline void pair_offsets(const struct cupid_pd_operator_private *op, cons
 }
 
 /* f = -V^2 sum, with the ghost correction k_i G_i + b_i C_i u_i (k_i = a_i for LPS, 0 for
- * bond-based with b_i = c_i) for nodes without a full family. */
-static inline __attribute__((always_inline)) void run_store(const struct cupid_pd_operator_private *op, const pd_work *w,
-                             const pd_run *R, cupid_int i, int len, double *fx, double *fy,
-                             double *fz, double *restrict f) {
+ * bond-based with b_i = c_i) for nodes without a full family. Always inlined: compiled with
+ * each kernel instance's instruction set (the store loop vectorises with it). */
+__attribute__((always_inline)) static inline void
+run_store(const struct cupid_pd_operator_private *op, const pd_work *w, const pd_run *R,
+          cupid_int i, int len, double *fx, double *fy, double *fz, double *restrict f) {
   const double V2 = op->V * op->V;
   const cupid_int li = work_index(w, R, i);
   const int lps = op->model == CUPID_PD_LPS;
