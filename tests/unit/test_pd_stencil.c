@@ -146,10 +146,14 @@ static void test_bar(void **state) {
 static void test_instances(void **state) {
   (void)state;
   const int levels[3] = {1, 3, 4};
+  int seen = 0; /* lanes already checked: a level the CPU lacks falls back to one of them */
   for (int l = 0; l < 3; l++) {
     const int lanes = pd_stencil_force_isa(levels[l]);
-    print_message("kernel instance %d: %d lanes\n", levels[l], lanes);
+    print_message("kernel instance %d: %d lanes%s\n", levels[l], lanes,
+                  seen & lanes ? " (checked above)" : "");
     assert_true(lanes == 2 || lanes == 4 || lanes == 8);
+    if (seen & lanes) continue;
+    seen |= lanes;
     for (size_t c = 0; c < sizeof cases / sizeof *cases; c++) {
       compare(&cases[c], CUPID_PD_LPS, CUPID_INFLUENCE_INVERSE, CUPID_PARTIAL_PDLAMMPS);
       compare(&cases[c], CUPID_PD_BOND, CUPID_INFLUENCE_GAUSSIAN, CUPID_PARTIAL_PDLAMMPS);
