@@ -231,16 +231,26 @@ int pd_stencil_force_isa(int level) {
   return pd_stencil_kernel_lanes();
 }
 
+/* The CPU's levels and the environment's cap, read once (every apply asks). */
+static atomic_int pd_isa_cpu = -1, pd_isa_env = -1;
+
 static const pd_kernel_set *kernels_pick(void) {
 #if PD_MULTI_ISA
-  int forced = atomic_load(&pd_isa_forced);
-  if (forced == 0) { /* the environment's cap, for benchmarks of a whole run */
-    const char *env = getenv("CUPID_PD_ISA");
-    forced = env ? atoi(env) : 0;
+  int cpu = atomic_load(&pd_isa_cpu), env = atomic_load(&pd_isa_env);
+  if (cpu < 0) {
+    __builtin_cpu_init();
+    cpu = __builtin_cpu_supports("x86-64-v4") ? 4 : __builtin_cpu_supports("x86-64-v3") ? 3 : 1;
+    atomic_store(&pd_isa_cpu, cpu);
   }
-  __builtin_cpu_init();
-  if ((forced == 0 || forced >= 4) && __builtin_cpu_supports("x86-64-v4")) return &pd_v4_kernels;
-  if ((forced == 0 || forced >= 3) && __builtin_cpu_supports("x86-64-v3")) return &pd_v3_kernels;
+  if (env < 0) { /* the environment's cap, for benchmarks of a whole run */
+    const char *e = getenv("CUPID_PD_ISA");
+    env = e ? atoi(e) : 0;
+    atomic_store(&pd_isa_env, env);
+  }
+  const int forced = atomic_load(&pd_isa_forced), cap = forced ? forced : env;
+  const int level = cap > 0 && cap < cpu ? cap : cpu;
+  if (level >= 4) return &pd_v4_kernels;
+  if (level >= 3) return &pd_v3_kernels;
 #endif
   return &pd_base_kernels;
 }
