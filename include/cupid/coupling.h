@@ -187,7 +187,10 @@ void cupid_coupling_get_info(const cupid_coupling_h c, cupid_coupling_info *info
  * by node (cupid_pd_operator_assemble_weighted: node p's energy times 1 - alpha(y_p)), which
  * for bond-based PD with one material is the bond weight (w_i + w_j)/2 and for LPS weights each
  * node's dilatation and deviatoric energy. A PD region between two beam parts has two overlaps
- * (n_overlaps = 2): FE-only below the first and above the second, PD-only between them. */
+ * (n_overlaps = 2): FE-only below the first and above the second, PD-only between them.
+ * General layouts (cupid_arlequin_region): several regions, each a box with overlaps along
+ * any of its faces (normal or parallel to the axis); the beam's weight is then the separable
+ * sum 1 - sum_r a_r(y) s_r(x, z), integrated by cupid_cuf_assemble_weight_add(). */
 
 /** The Arlequin weight alpha(y) of the FE model. */
 typedef struct {
@@ -199,16 +202,44 @@ typedef struct {
 /** alpha(y): 1 on the FE-only side, 0 on the PD-only side, the ramp of @p w in [lo, hi]. */
 double cupid_arlequin_alpha(const cupid_arlequin_weight *w, double y);
 
+/** One overlap of a PD region: the slab [lo, hi] along @p axis next to one of its faces,
+ *  with the weight's ramp across it (fe_below: the face is at lo). */
+typedef struct {
+  int axis;             /**< 0: x, 1: y, 2: z */
+  cupid_arlequin_weight weight;
+} cupid_arlequin_ramp;
+
+#define CUPID_ARLEQUIN_MAX_RAMPS 6 /**< one per face of a box */
+
+/** A PD region of a general layout: its box and the overlaps along its interfaces. Inside the
+ *  box the PD weight is w = prod_k (1 - alpha_k(x_k)) over its ramps (1 where no ramp
+ *  reaches; 0 outside the box), alpha = 1 - sum over regions of w. The product keeps the
+ *  beam's weight separable (cupid_cuf_weight): where two ramps cross (a corner of a region
+ *  inside the section), the PD weight is the product of the two. */
+typedef struct {
+  cupid_box box;        /**< the region (axes with has[k] = 0 are unbounded) */
+  int n_ramps;
+  cupid_arlequin_ramp ramps[CUPID_ARLEQUIN_MAX_RAMPS];
+} cupid_arlequin_region;
+
 typedef struct {
   cupid_arlequin_weight weight; /**< the overlap (the lower one when there are two) */
   double penalty;       /**< kappa, N/m per tied node and component */
   int n_overlaps;       /**< 0 or 1: one overlap; 2: also @p second */
   cupid_arlequin_weight second; /**< the upper overlap (above weight; FE-only above it) */
+  /** General layouts (several regions, regions over part of the section, overlaps along x or
+   *  z): when n_regions > 0 these replace weight / n_overlaps / second, which describe one
+   *  unbounded region with ramps along y. */
+  int n_regions;
+  const cupid_arlequin_region *regions;
 } cupid_arlequin_options;
 
-/** alpha(y) of the options: the one ramp, or with two overlaps the larger of the two ramps
+/** alpha(y) of the y-only form: the one ramp, or with two overlaps the larger of the two ramps
  *  (1 below the first and above the second, 0 between them). */
 double cupid_arlequin_alpha_of(const cupid_arlequin_options *o, double y);
+
+/** alpha at the point p: 1 - the sum of the regions' PD weights (1 outside every region). */
+double cupid_arlequin_alpha_at(const cupid_arlequin_options *o, const double p[3]);
 
 typedef struct {
   cupid_int n_tied;     /**< PD nodes tied to the beam (those in the overlap) */

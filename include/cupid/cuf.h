@@ -268,31 +268,66 @@ cupid_status cupid_cuf_mass_total(const cupid_cuf_beam beam, double *total);
 
 /* ---- Weighted stiffness and mass (src/cuf/weighted.c; Arlequin coupling, paper 004 Eqs.
  * 12 and 14) ----
- * The beam's energies multiplied by a weight alpha(y) that depends on the axis coordinate only
- * (overlap zones normal to the axis), evaluated at the axis Gauss points: K_alpha = int alpha
- * B^T C B dV, M_alpha = int alpha rho N^T N dV. The axis rule has p + 2 points (p = nodes per
- * beam element), exact when alpha is a polynomial of degree <= 3 on every beam element (put
- * the kinks of a piecewise weight on element ends). Full and selective reduced integration
- * are supported; MITC is CUPID_ERR_UNSUPPORTED (its tied axis functions are not weighted). */
+ * The beam's energies multiplied by a weight alpha(x, y, z): K_alpha = int alpha B^T C B dV,
+ * M_alpha = int alpha rho N^T N dV. The weight is a separable sum (cupid_cuf_weight)
+ * alpha = c + sum_t a_t(y) s_t(x, z), which keeps the nucleus separable: axis integrals
+ * weighted by a_t, section integrals weighted by s_t. The axis rule has p + 2 points (p = nodes
+ * per beam element), the weighted section rule 2 points more per direction than the
+ * stiffness rule: exact when a_t and s_t are polynomials of degree <= 3 on every element (put
+ * the kinks of a piecewise weight on element boundaries). Full and selective reduced
+ * integration are supported; MITC is CUPID_ERR_UNSUPPORTED (its tied axis functions are not
+ * weighted). */
 
-/** An axis weight alpha(y). */
+/** An axis weight a(y). */
 typedef double (*cupid_cuf_weight_fn)(void *ctx, double y);
 
-/** Add the alpha-weighted stiffness into an existing bs = 3 matrix at the beam's dof_offset
- *  (the pattern must contain the beam's). */
+/** A section weight s(x, z). */
+typedef double (*cupid_cuf_section_weight_fn)(void *ctx, double x, double z);
+
+/** One separable term a(y) s(x, z) of a weight; a NULL function is 1. */
+typedef struct {
+  cupid_cuf_weight_fn axis;
+  void *axis_ctx;
+  cupid_cuf_section_weight_fn section;
+  void *section_ctx;
+} cupid_cuf_weight_term;
+
+/** alpha(x, y, z) = constant + sum of the n_terms terms. */
+typedef struct {
+  double constant;
+  int n_terms;
+  const cupid_cuf_weight_term *terms;
+} cupid_cuf_weight;
+
+/** Add the weighted stiffness into an existing bs = 3 matrix at the beam's dof_offset (the
+ *  pattern must contain the beam's). */
+cupid_status cupid_cuf_assemble_weight_add(const cupid_cuf_beam beam, const cupid_cuf_weight *w,
+                                           cupid_csr K);
+
+/** Add the weighted consistent mass into an existing bs = 3 matrix at dof_offset. */
+cupid_status cupid_cuf_mass_weight_add(const cupid_cuf_beam beam, const cupid_cuf_weight *w,
+                                       cupid_csr M);
+
+/** Add the weighted HRZ-lumped mass into d (global vector, dof_offset applied): the lumping of
+ *  cupid_cuf_mass_lumped() applied to the weighted pair matrices. */
+cupid_status cupid_cuf_mass_lumped_weight(const cupid_cuf_beam beam, const cupid_cuf_weight *w,
+                                          double *d);
+
+/* The axis-only forms alpha(y) = fn(ctx, y) (one term, no constant). */
+
+/** Add the alpha(y)-weighted stiffness into an existing bs = 3 matrix at dof_offset. */
 cupid_status cupid_cuf_assemble_weighted_add(const cupid_cuf_beam beam, cupid_cuf_weight_fn fn,
                                              void *ctx, cupid_csr K);
 
-/** The alpha-weighted stiffness in a new matrix (local numbering, cupid_cuf_pattern()). */
+/** The alpha(y)-weighted stiffness in a new matrix (local numbering, cupid_cuf_pattern()). */
 cupid_status cupid_cuf_assemble_weighted(const cupid_cuf_beam beam, cupid_cuf_weight_fn fn,
                                          void *ctx, cupid_csr *K);
 
-/** Add the alpha-weighted consistent mass into an existing bs = 3 matrix at dof_offset. */
+/** Add the alpha(y)-weighted consistent mass into an existing bs = 3 matrix at dof_offset. */
 cupid_status cupid_cuf_mass_weighted_add(const cupid_cuf_beam beam, cupid_cuf_weight_fn fn,
                                          void *ctx, cupid_csr M);
 
-/** Add the alpha-weighted HRZ-lumped mass into d (global vector, dof_offset applied): the
- *  lumping of cupid_cuf_mass_lumped() applied to the weighted pair matrices. */
+/** Add the alpha(y)-weighted HRZ-lumped mass into d. */
 cupid_status cupid_cuf_mass_lumped_weighted(const cupid_cuf_beam beam, cupid_cuf_weight_fn fn,
                                             void *ctx, double *d);
 /* ---- end of the weighted block ---- */

@@ -131,12 +131,16 @@ typedef enum {
 } cupid_coupling_method;
 typedef enum { CUPID_WEIGHT_LINEAR = 0, CUPID_WEIGHT_CONSTANT = 1, CUPID_WEIGHT_SMOOTH = 2 } cupid_weight;
 
+#define CUPID_MAX_OVERLAPS 32 /**< Arlequin overlaps per model */
+
 typedef struct {
   cupid_coupling_method method;
   double penalty;        /**< arlequin */
-  cupid_box overlap;     /**< arlequin: the overlap (the first of a list) */
-  cupid_box overlap2;    /**< arlequin: the second overlap when n_overlaps == 2 */
-  int n_overlaps;        /**< arlequin: 1, or 2 (`overlap:` as a list of two boxes) */
+  /** arlequin: the overlaps, each a slab along one axis ({y: [..]}, {x: [..]} or {z: [..]})
+   *  inside a PD region next to one of its faces (`overlap:` a box or a list of them) */
+  cupid_box overlaps[CUPID_MAX_OVERLAPS];
+  cupid_mark overlap_marks[CUPID_MAX_OVERLAPS];
+  int n_overlaps;
   cupid_weight weight;   /**< arlequin */
   int has_arlequin;
   cupid_mark mark;

@@ -73,6 +73,8 @@ typedef struct {
 
   /* Coupled models (coupled.c) */
   cupid_coupling_h coupling;
+  cupid_arlequin_region *arlequin_regions; /**< method arlequin: the layout (owned) */
+  int n_arlequin_regions;
   cupid_int n_fictitious;  /**< fictitious PD nodes */
 
   double load_sum[3], reaction_sum[3];

@@ -1,18 +1,19 @@
 /* Coupled models with `coupling: {method: arlequin}` inside a run (paper 004 section 3;
- * src/coupling/arlequin.c for the method). Layouts supported: the beam and one PD region (LPS
- * or bond-based, 1D or 3D) overlap on [lo, hi] = the `overlap` box's y range (its x/z bounds
- * are not used: every PD node of that y range is tied and must lie in the beam); or, with
- * `overlap` a list of two boxes, the PD region sits inside the beam with one overlap at each
- * end and the beam gives way between them (the coupled bar). The PD region starts
- * on one edge of the overlap and extends beyond the other; the beam extends beyond the first
- * edge and either ends on the second (beam [0, 0.6], PD [0.4, 1], overlap [0.4, 0.6]: nothing
- * is deactivated) or runs on inside the PD region, where it gives way (beam [0, 1]: the pairs
- * on [0.6, 1] are made inactive, their FE nodes held at zero). Constraints and loads go to
- * the part they touch; body and point loads reaching into an overlap are shared, alpha to the
- * beam and 1 - alpha to the PD nodes (a traction inside an overlap acts on no free surface:
- * refused). Static (CHOLMOD, or PETSc CG + GAMG: the system is symmetric), evaluate, and
- * dynamic runs (through cupid_app_run_dynamic() with the weighted masses of
- * cupid_app_arlequin_mass()). */
+ * src/coupling/arlequin.c for the method). Any number of PD regions (LPS or bond-based, 1D or
+ * 3D), each a box inside or at the end of the beam, over the whole section (the coupled bar,
+ * the truss) or part of it (LE: a C-beam web, a panel's stringers). Every face of a region
+ * where the beam continues beyond it is an interface and needs an overlap: a slab along one
+ * axis inside the region, starting on that face (`overlap: [{y: [30, 35]}, {z: [15, 30]},
+ * ..]`; one slab serves every region with a face on one of its edges). Both models live in the
+ * overlaps, with the energy weights of paper 004 Eqs. 8-9 ramping across them; inside the
+ * rest of the region (its core) the beam gives way (cupid_coupling_deactivate(): those pairs
+ * are inactive, their FE nodes held at zero). The weights' kinks must fall on element
+ * boundaries (beam nodes along y, section-element edges along x and z), so that the
+ * quadrature is exact. Constraints and loads go to the part they touch; body and point loads
+ * reaching into an overlap are shared, alpha to the beam and 1 - alpha to the PD nodes (a
+ * traction on a plane inside an overlap acts on no free surface: refused). Static (CHOLMOD, or
+ * PETSc CG + GAMG: the system is symmetric), evaluate, and dynamic runs (through
+ * cupid_app_run_dynamic() with the weighted masses of cupid_app_arlequin_mass()). */
 #include <math.h>
 #include <stdio.h>
 #include <string.h>
@@ -20,6 +21,8 @@
 #include "coupled_arlequin.h"
 
 #define ARL_TOL 1e-9
+
+static const char AXIS[3] = {'x', 'y', 'z'};
 
 int cupid_app_is_arlequin(const cupid_job *job) {
   const cupid_model_t *m = job->model;
@@ -29,12 +32,6 @@ int cupid_app_is_arlequin(const cupid_job *job) {
 cupid_status cupid_app_arlequin_check(const cupid_job *job) {
   const cupid_model_t *m = job->model;
   const cupid_coupling *c = &m->coupling;
-  if (m->pd.n_regions != 1)
-    return cupid_model_error(m, &m->pd.mark,
-                             "method arlequin supports one PD region (this model has %d)",
-                             m->pd.n_regions);
-  if (!c->overlap.has[1] || (c->n_overlaps == 2 && !c->overlap2.has[1]))
-    return cupid_model_error(m, &c->mark, "coupling.arlequin.overlap needs a y range");
   if (m->beam.integration == CUPID_CUF_MITC)
     return cupid_model_error(m, &c->mark,
                              "method arlequin: MITC beam integration is not yet supported (use "
@@ -43,117 +40,226 @@ cupid_status cupid_app_arlequin_check(const cupid_job *job) {
   return CUPID_SUCCESS;
 }
 
-/* The overlaps of the model in ascending y (two: one at each end of the PD region). */
-static int overlaps(const cupid_coupling *c, const cupid_box *ov[2]) {
-  ov[0] = &c->overlap;
-  ov[1] = &c->overlap2;
-  if (c->n_overlaps != 2) return 1;
-  if (c->overlap2.lo[1] < c->overlap.lo[1]) ov[0] = &c->overlap2, ov[1] = &c->overlap;
-  return 2;
-}
-
-/* The options of the run: the overlaps, which side is FE-only, the weight and the penalty. */
+/* The options of the run: the layout built by cupid_app_arlequin_prepare(). */
 static cupid_arlequin_options options(const cupid_job *job) {
   const cupid_coupling *c = &job->model->coupling;
-  const cupid_box *ov[2];
-  int n = overlaps(c, ov);
-  cupid_arlequin_options o = {.weight = {.lo = ov[0]->lo[1], .hi = ov[0]->hi[1], .kind = c->weight},
-                              .penalty = c->penalty,
-                              .n_overlaps = n};
-  /* the PD region starts on the overlap's lower edge: the FE-only side is below */
-  double tol = ARL_TOL * (job->fe_info.y_max - job->fe_info.y_min);
-  o.weight.fe_below = job->model->pd.regions[0].box.lo[1] >= o.weight.lo - tol;
-  if (n == 2) /* the PD region between the two: FE-only below the first, above the second */
-    o.weight.fe_below = 1,
-    o.second = (cupid_arlequin_weight){.lo = ov[1]->lo[1], .hi = ov[1]->hi[1], .fe_below = 0,
-                                       .kind = c->weight};
-  return o;
+  return (cupid_arlequin_options){.penalty = c->penalty,
+                                  .n_regions = job->n_arlequin_regions,
+                                  .regions = job->arlequin_regions};
 }
 
-static int close_to(double a, double b, double scale) { return fabs(a - b) <= ARL_TOL * scale; }
+/* ----------------------------------------------------------------------------- geometry */
 
-/* The weight has kinks at the overlap bounds: they must be beam nodes (element ends) for the
- * axis quadrature to be exact. */
-static cupid_status bounds_on_nodes(const cupid_job *job, const double *ends, int n) {
-  for (int k = 0; k < n; k++)
-    if (cupid_cuf_beam_node_at(job->beam, ends[k]) < 0)
-      return cupid_model_error(job->model, &job->model->coupling.mark,
-                               "the overlap bound y = %g is not a beam-node position: move it "
-                               "to an element end (the weight's kinks must fall between "
-                               "elements)",
-                               ends[k]);
-  return CUPID_SUCCESS;
+/* Extent of the model along each axis: the section's box in x and z, the beam in y. */
+static void model_extent(const cupid_job *job, double lo[3], double hi[3]) {
+  lo[1] = job->fe_info.y_min, hi[1] = job->fe_info.y_max;
+  lo[0] = lo[2] = INFINITY, hi[0] = hi[2] = -INFINITY;
+  for (cupid_int e = 0; e < job->fe_info.n_section_elements; e++) {
+    double bx[4];
+    int npe, mat;
+    cupid_cuf_section_element(job->beam, e, &npe, NULL, &mat, bx);
+    lo[0] = fmin(lo[0], bx[0]), hi[0] = fmax(hi[0], bx[1]);
+    lo[2] = fmin(lo[2], bx[2]), hi[2] = fmax(hi[2], bx[3]);
+  }
 }
 
-/* Two overlaps: the PD region spans from the lower edge of the first to the upper edge of the
- * second, the beam reaches beyond both, and gives way between them. */
-static cupid_status prepare_two(cupid_job *job) {
+static double model_scale(const cupid_job *job) {
+  double lo[3], hi[3], s = 0.0;
+  model_extent(job, lo, hi);
+  for (int k = 0; k < 3; k++) s = fmax(s, hi[k] - lo[k]);
+  return s;
+}
+
+/* 1 if the beam continues beyond face (axis k, side: 0 lo, 1 hi) of box b: some point of a
+ * 9 x 9 sample of the face, moved just outside it, lies in the beam. Axes the box leaves
+ * open are sampled over the model's extent. */
+static int face_is_interface(const cupid_job *job, const cupid_box *b, int k, int side) {
+  double lo[3], hi[3], eps = 1e-6 * model_scale(job);
+  model_extent(job, lo, hi);
+  for (int a = 0; a < 3; a++)
+    if (b->has[a]) lo[a] = fmax(lo[a], b->lo[a]), hi[a] = fmin(hi[a], b->hi[a]);
+  int a1 = (k + 1) % 3, a2 = (k + 2) % 3;
+  for (int i = 0; i < 9; i++)
+    for (int j = 0; j < 9; j++) {
+      double p[3];
+      p[k] = side ? b->hi[k] + eps : b->lo[k] - eps;
+      p[a1] = lo[a1] + (i + 0.5) / 9.0 * (hi[a1] - lo[a1]);
+      p[a2] = lo[a2] + (j + 0.5) / 9.0 * (hi[a2] - lo[a2]);
+      if (cupid_cuf_contains(job->beam, p[0], p[1], p[2])) return 1;
+    }
+  return 0;
+}
+
+/* v along x or z (axis k) must not cut a section element that reaches into [olo, ohi] along
+ * the other section axis: the weight's kinks must fall on element edges. */
+static int section_edge_ok(const cupid_job *job, int k, double v, double olo, double ohi, double tol) {
+  for (cupid_int e = 0; e < job->fe_info.n_section_elements; e++) {
+    double bx[4];
+    int npe, mat;
+    cupid_cuf_section_element(job->beam, e, &npe, NULL, &mat, bx);
+    const double *own = k == 0 ? bx : bx + 2, *oth = k == 0 ? bx + 2 : bx;
+    if (oth[1] <= olo + tol || oth[0] >= ohi - tol) continue;
+    if (own[0] < v - tol && own[1] > v + tol) return 0;
+  }
+  return 1;
+}
+
+/* Overlap slab s (its one axis k and [lo, hi]) attached to a face of region box b: 0 (lo face),
+ * 1 (hi face) or -1. The slab starts on the face and ends inside the region. */
+static int slab_face(const cupid_box *slab, const cupid_box *b, double tol, int *axis) {
+  int k = slab->has[0] ? 0 : slab->has[1] ? 1 : 2;
+  *axis = k;
+  if (!b->has[k]) return -1;
+  double lo = slab->lo[k], hi = slab->hi[k];
+  if (fabs(b->lo[k] - lo) <= tol && hi <= b->hi[k] + tol) return 0;
+  if (fabs(b->hi[k] - hi) <= tol && lo >= b->lo[k] - tol) return 1;
+  return -1;
+}
+
+/* 1 if y is the end of a beam element. */
+static int element_end(const cupid_job *job, double y, double tol) {
+  for (cupid_int e = 0; e < job->fe_info.n_beam_elements; e++) {
+    cupid_int first;
+    double y0, y1;
+    cupid_cuf_beam_element(job->beam, e, &first, &y0, &y1);
+    if (fabs(y - y0) <= tol || fabs(y - y1) <= tol) return 1;
+  }
+  return 0;
+}
+
+/* Where a slab's bound must lie: y on a beam-element end; x, z on section-element edges. */
+static cupid_status slab_bounds_ok(const cupid_job *job, const cupid_box *b, int k, int s) {
   const cupid_model_t *m = job->model;
-  const cupid_mark *mk = &m->coupling.mark;
-  const cupid_box *ov[2];
-  overlaps(&m->coupling, ov);
-  double lo1 = ov[0]->lo[1], hi1 = ov[0]->hi[1], lo2 = ov[1]->lo[1], hi2 = ov[1]->hi[1];
-  double b0 = job->fe_info.y_min, b1 = job->fe_info.y_max, L = b1 - b0, tol = ARL_TOL * L;
-  const cupid_box *r = &m->pd.regions[0].box;
-  if (hi1 > lo2 + tol)
-    return cupid_model_error(m, mk, "the two overlaps y in [%g, %g] and [%g, %g] overlap each other",
-                             lo1, hi1, lo2, hi2);
-  if (!close_to(r->lo[1], lo1, L) || !close_to(r->hi[1], hi2, L) || b0 > lo1 - tol || b1 < hi2 + tol)
-    return cupid_model_error(m, &m->pd.regions[0].mark,
-                             "with two overlaps [%g, %g] and [%g, %g] the PD region y in [%g, %g] "
-                             "must span from the lower edge of the first to the upper edge of "
-                             "the second, and the beam [%g, %g] must extend beyond both",
-                             lo1, hi1, lo2, hi2, r->lo[1], r->hi[1], b0, b1);
-  const double ends[4] = {lo1, hi1, lo2, hi2};
-  CUPID_CALL(bounds_on_nodes(job, ends, 4));
-  if (lo2 - hi1 <= tol) return CUPID_SUCCESS; /* no PD-only part between the overlaps */
-  cupid_box give = {.lo = {0, hi1, 0}, .hi = {0, lo2, 0}, .has = {0, 1, 0}};
-  cupid_status st = cupid_coupling_deactivate(job->beam, 1, &give);
-  if (st != CUPID_SUCCESS)
-    return cupid_model_error(m, mk, "the beam cannot give way between the overlaps: %s",
-                             cupid_error_message());
-  cupid_job_progress(job, "Arlequin: the beam gives way on y in [%g, %g] (PD only there)", hi1, lo2);
+  const cupid_mark *mk = &m->coupling.overlap_marks[s];
+  const cupid_box *slab = &m->coupling.overlaps[s];
+  double tol = ARL_TOL * model_scale(job);
+  for (int e = 0; e < 2; e++) {
+    double v = e ? slab->hi[k] : slab->lo[k];
+    if (k == 1) {
+      if (v > job->fe_info.y_min + tol && v < job->fe_info.y_max - tol && !element_end(job, v, tol))
+        return cupid_model_error(m, mk,
+                                 "the overlap bound y = %g is not a beam-element end: move it "
+                                 "(or the beam's axis breakpoints) so that they coincide (the "
+                                 "weight's kinks must fall between elements)",
+                                 v);
+      continue;
+    }
+    int o = 2 - k; /* the other section axis */
+    double olo = b->has[o] ? b->lo[o] : -INFINITY, ohi = b->has[o] ? b->hi[o] : INFINITY;
+    if (!section_edge_ok(job, k, v, olo, ohi, tol))
+      return cupid_model_error(m, mk,
+                               "the overlap bound %c = %g cuts a section element: move it (or "
+                               "the section's breakpoints) to an element edge (the weight's "
+                               "kinks must fall between elements)",
+                               AXIS[k], v);
+  }
   return CUPID_SUCCESS;
 }
 
+/* The layout of region r: a ramp on every interface face, from the slab that starts there. */
+static cupid_status build_region(cupid_job *job, int r, cupid_arlequin_region *out) {
+  const cupid_model_t *m = job->model;
+  const cupid_coupling *c = &m->coupling;
+  const cupid_box *b = &m->pd.regions[r].box;
+  double tol = ARL_TOL * model_scale(job);
+  memset(out, 0, sizeof *out);
+  out->box = *b;
+  for (int k = 0; k < 3; k++)
+    for (int side = 0; side < 2; side++) {
+      if (!b->has[k]) continue;
+      int slab = -1, interface = face_is_interface(job, b, k, side);
+      for (int s = 0; s < c->n_overlaps; s++) {
+        int axis, f = slab_face(&c->overlaps[s], b, tol, &axis);
+        if (axis != k || f != side) continue;
+        if (slab >= 0)
+          return cupid_model_error(m, &c->overlap_marks[s],
+                                   "two overlaps on the face %c = %g of the PD region %d",
+                                   AXIS[k], side ? b->hi[k] : b->lo[k], r);
+        slab = s;
+      }
+      double f = side ? b->hi[k] : b->lo[k];
+      if (slab < 0 && interface)
+        return cupid_model_error(m, &m->pd.regions[r].mark,
+                                 "the face %c = %g of this PD region meets the beam: give it an "
+                                 "overlap (coupling.arlequin.overlap, e.g. {%c: [%g, %g]}: a "
+                                 "slab inside the region starting on that face)",
+                                 AXIS[k], f, AXIS[k], side ? f - 1 : f, side ? f : f + 1);
+      if (slab < 0) continue;
+      if (!interface)
+        return cupid_model_error(m, &c->overlap_marks[slab],
+                                 "the overlap %c in [%g, %g] lies on the face %c = %g of PD region "
+                                 "%d, where the beam does not continue (a free surface): an "
+                                 "overlap belongs on a face the beam meets",
+                                 AXIS[k], c->overlaps[slab].lo[k], c->overlaps[slab].hi[k], AXIS[k],
+                                 f, r);
+      CUPID_CALL(slab_bounds_ok(job, b, k, slab));
+      out->ramps[out->n_ramps++] = (cupid_arlequin_ramp){
+          .axis = k,
+          .weight = {.lo = c->overlaps[slab].lo[k], .hi = c->overlaps[slab].hi[k],
+                     .fe_below = side == 0, .kind = c->weight}};
+    }
+  return CUPID_SUCCESS;
+}
+
+/* The region's core (the box less its overlaps, clipped to the beam's y range): where the
+ * beam gives way. 0 if empty. */
+static int region_core(const cupid_job *job, const cupid_arlequin_region *R, cupid_box *core) {
+  double tol = ARL_TOL * model_scale(job);
+  *core = R->box;
+  for (int q = 0; q < R->n_ramps; q++) {
+    const cupid_arlequin_ramp *a = &R->ramps[q];
+    if (a->weight.fe_below) core->lo[a->axis] = a->weight.hi;
+    else core->hi[a->axis] = a->weight.lo;
+  }
+  core->lo[1] = fmax(core->lo[1], job->fe_info.y_min);
+  core->hi[1] = fmin(core->hi[1], job->fe_info.y_max);
+  for (int k = 0; k < 3; k++)
+    if (core->has[k] && core->hi[k] - core->lo[k] <= tol) return 0;
+  return 1;
+}
+
+/* The regions, their overlaps against the built beam, and the cores where the beam gives
+ * way. Stored in job->arlequin_regions. */
 cupid_status cupid_app_arlequin_prepare(cupid_job *job) {
   const cupid_model_t *m = job->model;
-  const cupid_mark *mk = &m->coupling.mark;
-  if (m->coupling.n_overlaps == 2) return prepare_two(job);
-  double lo = m->coupling.overlap.lo[1], hi = m->coupling.overlap.hi[1];
-  double b0 = job->fe_info.y_min, b1 = job->fe_info.y_max, L = b1 - b0, tol = ARL_TOL * L;
-  const cupid_box *r = &m->pd.regions[0].box;
-  if (lo < b0 - tol || hi > b1 + tol)
-    return cupid_model_error(m, mk, "the overlap y in [%g, %g] must lie inside the beam [%g, %g]",
-                             lo, hi, b0, b1);
-  /* The PD region starts on one edge of the overlap and extends beyond the other; the beam
-   * extends beyond the first edge (its FE-only side). */
-  int below = close_to(r->lo[1], lo, L) && r->hi[1] > hi + tol && b0 < lo - tol;
-  int above = close_to(r->hi[1], hi, L) && r->lo[1] < lo - tol && b1 > hi + tol;
-  if (!below && !above)
-    return cupid_model_error(m, &m->pd.regions[0].mark,
-                             "the PD region y in [%g, %g] must start on one edge of the overlap "
-                             "[%g, %g] and extend beyond the other, and the beam [%g, %g] must "
-                             "extend beyond the first edge",
-                             r->lo[1], r->hi[1], lo, hi, b0, b1);
-  /* The weight has kinks at lo and hi: they must be element ends for exact integration. */
-  const double ends[2] = {lo, hi};
-  CUPID_CALL(bounds_on_nodes(job, ends, 2));
-  /* Beyond the overlap, inside the PD region, the beam gives way (alpha = 0 there). */
-  cupid_box give = {.lo = {0, below ? hi : b0, 0}, .hi = {0, below ? b1 : lo, 0}, .has = {0, 1, 0}};
-  if (give.hi[1] - give.lo[1] <= tol) return CUPID_SUCCESS; /* the beam ends on the overlap */
-  if ((below && b1 > r->hi[1] + tol) || (above && b0 < r->lo[1] - tol))
-    return cupid_model_error(m, mk,
-                             "the beam [%g, %g] runs through the PD region [%g, %g] and out of "
-                             "it: give the second interface its own overlap (overlap: [{y: "
-                             "[..]}, {y: [..]}])",
-                             b0, b1, r->lo[1], r->hi[1]);
-  cupid_status st = cupid_coupling_deactivate(job->beam, 1, &give);
-  if (st != CUPID_SUCCESS)
-    return cupid_model_error(m, mk, "the beam cannot give way beyond the overlap: %s",
-                             cupid_error_message());
-  cupid_job_progress(job, "Arlequin: the beam gives way on y in [%g, %g] (PD only there)",
-                     give.lo[1], give.hi[1]);
+  const cupid_coupling *c = &m->coupling;
+  cupid_status st = CUPID_SUCCESS;
+  for (int s = 0; s < c->n_overlaps; s++)
+    if (!c->overlaps[s].has[1] && m->pd.dimension != 3)
+      return cupid_model_error(m, &c->overlap_marks[s],
+                               "a 1D peridynamic grid overlaps the beam along y only");
+  double tol = ARL_TOL * model_scale(job);
+  for (int s = 0; s < c->n_overlaps; s++) { /* every slab starts on a face of some region */
+    int axis = 1, on_face = 0;
+    for (int r = 0; r < m->pd.n_regions && !on_face; r++)
+      on_face = slab_face(&c->overlaps[s], &m->pd.regions[r].box, tol, &axis) >= 0;
+    if (!on_face) {
+      const cupid_box *o = &c->overlaps[s];
+      return cupid_model_error(m, &c->overlap_marks[s],
+                               "the overlap %c in [%g, %g] starts on no face of a PD region: an "
+                               "overlap is a slab inside a region, from one of its faces inward",
+                               AXIS[axis], o->lo[axis], o->hi[axis]);
+    }
+  }
+  CUPID_CALL(cupid_calloc((size_t)m->pd.n_regions, sizeof *job->arlequin_regions,
+                          "Arlequin regions", &job->arlequin_regions));
+  job->n_arlequin_regions = m->pd.n_regions;
+  for (int r = 0; r < m->pd.n_regions; r++)
+    CUPID_CALL(build_region(job, r, &job->arlequin_regions[r]));
+  for (int r = 0; r < m->pd.n_regions; r++) {
+    cupid_box core;
+    if (!region_core(job, &job->arlequin_regions[r], &core)) continue;
+    st = cupid_coupling_deactivate(job->beam, 1, &core);
+    if (st != CUPID_SUCCESS)
+      return cupid_model_error(m, &m->pd.regions[r].mark,
+                               "the beam cannot give way inside this region, off its overlaps "
+                               "(x [%g, %g], y [%g, %g], z [%g, %g]): %s",
+                               core.lo[0], core.hi[0], core.lo[1], core.hi[1], core.lo[2],
+                               core.hi[2], cupid_error_message());
+    cupid_job_progress(job, "Arlequin: region %d: %d overlaps; the beam gives way on y in [%g, %g]%s",
+                       r, job->arlequin_regions[r].n_ramps, core.lo[1], core.hi[1],
+                       core.has[0] || core.has[2] ? " over part of the section" : "");
+  }
   return CUPID_SUCCESS;
 }
 
@@ -201,14 +307,45 @@ cleanup:
   return st;
 }
 
-/* 1 if the load acts inside the overlap [lo, hi] (both models there). */
-static int load_in_overlap(const cupid_load *l, double lo, double hi, double tol) {
-  switch (l->kind) {
-  case CUPID_LOAD_TRACTION: return l->plane_y > lo + tol && l->plane_y < hi - tol;
-  case CUPID_LOAD_POINT: return l->at[1] >= lo - tol && l->at[1] <= hi + tol;
-  case CUPID_LOAD_BODY:
-  default: return !l->box.has[1] || (l->box.lo[1] < hi - tol && l->box.hi[1] > lo + tol);
+/* The slab of ramp a of region R as a box (the region's extent on the other axes). */
+static cupid_box ramp_slab(const cupid_arlequin_region *R, const cupid_arlequin_ramp *a) {
+  cupid_box s = R->box;
+  s.lo[a->axis] = a->weight.lo, s.hi[a->axis] = a->weight.hi, s.has[a->axis] = 1;
+  return s;
+}
+
+/* 1 if boxes a and b overlap with positive volume (open axes overlap everything). */
+static int boxes_meet(const cupid_box *a, const cupid_box *b, double tol) {
+  for (int k = 0; k < 3; k++)
+    if (a->has[k] && b->has[k] && (a->hi[k] <= b->lo[k] + tol || b->hi[k] <= a->lo[k] - tol)) return 0;
+  return 1;
+}
+
+/* 1 if the load acts inside an overlap (both models there): a traction plane strictly inside a
+ * slab's y range whose patch meets it; a point in a slab; a body load meeting a slab. */
+static int load_in_overlap(const cupid_job *job, const cupid_load *l, double tol) {
+  for (int r = 0; r < job->n_arlequin_regions; r++) {
+    const cupid_arlequin_region *R = &job->arlequin_regions[r];
+    for (int q = 0; q < R->n_ramps; q++) {
+      cupid_box s = ramp_slab(R, &R->ramps[q]);
+      switch (l->kind) {
+      case CUPID_LOAD_TRACTION: {
+        if (!s.has[1] || l->plane_y <= s.lo[1] + tol || l->plane_y >= s.hi[1] - tol) break;
+        cupid_box patch = l->patch;
+        patch.has[1] = 0;
+        if (boxes_meet(&patch, &s, tol)) return 1;
+        break;
+      }
+      case CUPID_LOAD_POINT:
+        if (cupid_box_contains(&s, l->at, tol)) return 1;
+        break;
+      case CUPID_LOAD_BODY:
+      default:
+        if (boxes_meet(&l->box, &s, tol)) return 1;
+      }
+    }
   }
+  return 0;
 }
 
 /* The external work is shared like the energy (paper 004 Eq. 8: alpha W_FE + (1 - alpha)
@@ -222,7 +359,7 @@ typedef struct {
 
 static void alpha_field(void *ctx, const double p[3], double density, double out[3]) {
   const alpha_load *w = ctx;
-  double a = cupid_arlequin_alpha_of(w->o, p[1]);
+  double a = cupid_arlequin_alpha_at(w->o, p);
   for (int k = 0; k < 3; k++)
     out[k] = a * cupid_value_eval(&w->value[k], p[0], p[1], p[2], 0.0, density);
 }
@@ -241,8 +378,8 @@ static cupid_status add_pd_share(cupid_job *job, const cupid_load *l, const cupi
   if (st == CUPID_SUCCESS) {
     const double *x = cupid_pd_grid_coords(job->grid);
     for (cupid_int i = 0; i < job->n_pd; i++) {
-      double y = l->kind == CUPID_LOAD_POINT ? l->at[1] : x[3 * i + 1];
-      double w = 1.0 - cupid_arlequin_alpha_of(o, y);
+      const double *p = l->kind == CUPID_LOAD_POINT ? l->at : x + 3 * i;
+      double w = 1.0 - cupid_arlequin_alpha_at(o, p);
       for (int c = 0; c < 3; c++) keep[3 * i + c] += w * scratch[3 * i + c];
     }
   }
@@ -274,27 +411,19 @@ static cupid_status apply_loads(cupid_job *job) {
   cupid_status st = CUPID_SUCCESS;
   cupid_load *pd = NULL;
   int npd = 0;
-  const cupid_box *ov[2];
-  int nov = overlaps(&m->coupling, ov);
   const cupid_arlequin_options o = options(job);
-  double tol = ARL_TOL * (job->fe_info.y_max - job->fe_info.y_min);
+  double tol = ARL_TOL * model_scale(job);
   CUPID_CALL(cupid_calloc((size_t)m->n_loads + 1, sizeof *pd, "PD loads", &pd));
   for (int k = 0; k < m->n_loads; k++) {
     const cupid_load *l = &m->loads[k];
-    int shared = 0;
-    for (int v = 0; v < nov; v++) {
-      double lo = ov[v]->lo[1], hi = ov[v]->hi[1];
-      if (!load_in_overlap(l, lo, hi, tol)) continue;
+    if (load_in_overlap(job, l, tol)) {
       if (l->kind == CUPID_LOAD_TRACTION) {
         st = cupid_model_error(m, &l->mark,
-                               "a traction on the plane y = %g inside the Arlequin overlap [%g, "
-                               "%g] acts on no free surface (move it to an end face)",
-                               l->plane_y, lo, hi);
+                               "a traction on the plane y = %g inside an Arlequin overlap acts on "
+                               "no free surface (move it to an end face)",
+                               l->plane_y);
         goto cleanup;
       }
-      shared = 1;
-    }
-    if (shared) {
       CUPID_TRY(add_shared_load(job, l, &o));
       continue;
     }
@@ -322,13 +451,20 @@ static cupid_status assemble(cupid_job *job) {
   CUPID_CALL(cupid_arlequin_assemble(job->beam, job->grid, job->op, &o, &job->K, &info));
   cupid_job_phase_end(job, CUPID_PHASE_COUPLING, t0);
   static const char *wn[] = {"linear", "constant", "smooth"};
-  char second[64] = "";
-  if (o.n_overlaps == 2) snprintf(second, sizeof second, " and [%g, %g]", o.second.lo, o.second.hi);
+  char slabs[512] = "";
+  size_t len = 0;
+  const cupid_coupling *c = &job->model->coupling;
+  for (int s = 0; s < c->n_overlaps && len + 48 < sizeof slabs; s++) {
+    const cupid_box *b = &c->overlaps[s];
+    int k = b->has[0] ? 0 : b->has[1] ? 1 : 2;
+    len += (size_t)snprintf(slabs + len, sizeof slabs - len, "%s%c in [%g, %g]", s ? ", " : "",
+                            AXIS[k], b->lo[k], b->hi[k]);
+  }
   cupid_job_progress(job,
-                     "coupling (Arlequin, penalty): overlap y in [%g, %g]%s, %s weight, kappa = "
-                     "%g N/m, %lld tied PD nodes (%d components), min PD weight %.3g; %lld "
+                     "coupling (Arlequin, penalty): %d region(s), overlaps %s, %s weight, kappa "
+                     "= %g N/m, %lld tied PD nodes (%d components), min PD weight %.3g; %lld "
                      "non-zeros",
-                     o.weight.lo, o.weight.hi, second, wn[o.weight.kind], o.penalty,
+                     job->n_arlequin_regions, slabs, wn[c->weight], o.penalty,
                      (long long)info.n_tied, info.components, info.pd_weight_min,
                      (long long)cupid_csr_nnz(job->K));
   return CUPID_SUCCESS;

@@ -341,6 +341,7 @@ void cupid_app_job_destroy(cupid_job *job) {
   cupid_free(&job->f_int);
   cupid_free(&job->pd_stress);
   cupid_free(&job->pd_materials);
+  cupid_free(&job->arlequin_regions);
 }
 
 cupid_status cupid_run_model(const cupid_model_t *model, const cupid_run_options *opts) {

@@ -35,12 +35,118 @@ double cupid_arlequin_alpha_of(const cupid_arlequin_options *o, double y) {
   return a;
 }
 
-static double alpha_fn(void *ctx, double y) { return cupid_arlequin_alpha_of(ctx, y); }
+/* The regions of the options: the general list, or the y-only form as one unbounded region
+ * with its one or two ramps along y. */
+typedef struct {
+  int n;
+  const cupid_arlequin_region *r;
+  cupid_arlequin_region one;
+} layout_t;
 
-/* y lies in an overlap (lattice tolerance tol). */
-static int in_overlap(const cupid_arlequin_options *o, double y, double tol) {
-  if (y >= o->weight.lo - tol && y <= o->weight.hi + tol) return 1;
-  return o->n_overlaps == 2 && y >= o->second.lo - tol && y <= o->second.hi + tol;
+static void layout_of(const cupid_arlequin_options *o, layout_t *L) {
+  if (o->n_regions > 0) {
+    L->n = o->n_regions;
+    L->r = o->regions;
+    return;
+  }
+  memset(&L->one, 0, sizeof L->one);
+  L->one.ramps[L->one.n_ramps++] = (cupid_arlequin_ramp){.axis = 1, .weight = o->weight};
+  if (o->n_overlaps == 2)
+    L->one.ramps[L->one.n_ramps++] = (cupid_arlequin_ramp){.axis = 1, .weight = o->second};
+  L->n = 1;
+  L->r = &L->one;
+}
+
+/* Box tolerance: ARL_TOL of the box's largest extent (PD nodes lie on its faces). */
+static double box_tol(const cupid_box *b) {
+  double ext = 0.0;
+  for (int k = 0; k < 3; k++)
+    if (b->has[k]) ext = fmax(ext, b->hi[k] - b->lo[k]);
+  return ARL_TOL * (ext > 0.0 ? ext : 1.0);
+}
+
+/* The region's PD weight at p restricted to the axes in mask (bit k: axis k): 0 outside the
+ * box along those axes, else the product of 1 - alpha over the ramps along them. */
+static double region_weight_axes(const cupid_arlequin_region *r, const double p[3], int mask) {
+  double tol = box_tol(&r->box), w = 1.0;
+  for (int k = 0; k < 3; k++)
+    if ((mask >> k & 1) && r->box.has[k] && (p[k] < r->box.lo[k] - tol || p[k] > r->box.hi[k] + tol))
+      return 0.0;
+  for (int q = 0; q < r->n_ramps; q++)
+    if (mask >> r->ramps[q].axis & 1) w *= 1.0 - cupid_arlequin_alpha(&r->ramps[q].weight, p[r->ramps[q].axis]);
+  return w;
+}
+
+static double region_weight(const cupid_arlequin_region *r, const double p[3]) {
+  return region_weight_axes(r, p, 7);
+}
+
+/* 1 if the region's weight depends on x or z (a box or ramps across the section). */
+static int region_has_section(const cupid_arlequin_region *r) {
+  if (r->box.has[0] || r->box.has[2]) return 1;
+  for (int q = 0; q < r->n_ramps; q++)
+    if (r->ramps[q].axis != 1) return 1;
+  return 0;
+}
+
+/* PD weight at p: the sum over the regions (they do not overlap), at most 1. */
+static double pd_weight_at(const layout_t *L, const double p[3]) {
+  double w = 0.0;
+  for (int r = 0; r < L->n; r++) w += region_weight(&L->r[r], p);
+  return fmin(w, 1.0);
+}
+
+double cupid_arlequin_alpha_at(const cupid_arlequin_options *o, const double p[3]) {
+  layout_t L;
+  layout_of(o, &L);
+  return 1.0 - pd_weight_at(&L, p);
+}
+
+/* The beam's weight as the separable sum of cupid_cuf_weight: one axis term
+ * 1 - sum a_r(y) over the regions without a section part, and -a_r(y) s_r(x, z) for each
+ * region with one (a_r: the y part of the PD weight, s_r: its x and z part). */
+static double axis_term(void *ctx, double y) {
+  const layout_t *L = ctx;
+  double p[3] = {0.0, y, 0.0}, a = 1.0;
+  for (int r = 0; r < L->n; r++)
+    if (!region_has_section(&L->r[r])) a -= region_weight_axes(&L->r[r], p, 2);
+  return a;
+}
+
+static double region_axis(void *ctx, double y) {
+  double p[3] = {0.0, y, 0.0};
+  return -region_weight_axes(ctx, p, 2);
+}
+
+static double region_section(void *ctx, double x, double z) {
+  double p[3] = {x, 0.0, z};
+  return region_weight_axes(ctx, p, 5);
+}
+
+/* Fill w (terms: room for L->n + 1) with the beam's weight. */
+static void beam_weight(const layout_t *L, cupid_cuf_weight_term *terms, cupid_cuf_weight *w) {
+  int n = 0;
+  terms[n++] = (cupid_cuf_weight_term){.axis = axis_term, .axis_ctx = (void *)L};
+  for (int r = 0; r < L->n; r++)
+    if (region_has_section(&L->r[r]))
+      terms[n++] = (cupid_cuf_weight_term){.axis = region_axis,
+                                           .axis_ctx = (void *)&L->r[r],
+                                           .section = region_section,
+                                           .section_ctx = (void *)&L->r[r]};
+  *w = (cupid_cuf_weight){.constant = 0.0, .n_terms = n, .terms = terms};
+}
+
+/* p lies in an overlap: inside a region and within one of its ramps' slabs (closed). */
+static int in_overlap(const layout_t *L, const double p[3], double tol) {
+  for (int r = 0; r < L->n; r++) {
+    const cupid_arlequin_region *R = &L->r[r];
+    if (!cupid_box_contains(&R->box, p, box_tol(&R->box))) continue;
+    for (int q = 0; q < R->n_ramps; q++) {
+      double c = p[R->ramps[q].axis];
+      if (c >= R->ramps[q].weight.lo - tol && c <= R->ramps[q].weight.hi + tol) return 1;
+    }
+  }
+  return 0;
 }
 
 /* The PD nodes of the overlap and their beam weights: CSR over tied nodes (tptr, tnode, tw). */
@@ -68,10 +174,10 @@ static cupid_status tied_build(cupid_cuf_beam beam, cupid_pd_grid grid,
   memset(t, 0, sizeof *t);
   t->comps = cupid_pd_grid_dimension(grid) == 1 ? 1 : 3;
   CUPID_TRY(cupid_malloc((size_t)n_pd, sizeof *t->node, "tied PD nodes", &t->node));
-  for (cupid_int i = 0; i < n_pd; i++) {
-    double y = x[3 * i + 1];
-    if (in_overlap(o, y, tol)) t->node[t->n++] = i;
-  }
+  layout_t L;
+  layout_of(o, &L);
+  for (cupid_int i = 0; i < n_pd; i++)
+    if (in_overlap(&L, x + 3 * i, tol)) t->node[t->n++] = i;
   CUPID_TRY(cupid_calloc((size_t)t->n + 1, sizeof *t->ptr, "tied rows", &t->ptr));
   CUPID_TRY(cupid_malloc((size_t)(t->n * per + 1), sizeof *t->fe, "tied FE nodes", &t->fe));
   CUPID_TRY(cupid_malloc((size_t)(t->n * per + 1), sizeof *t->w, "tied weights", &t->w));
@@ -184,21 +290,39 @@ static cupid_status add_penalty(const tied_t *t, double kappa, cupid_int n_pd, c
   return CUPID_SUCCESS;
 }
 
+static cupid_status check_region(const cupid_arlequin_region *r, int k) {
+  CUPID_CHECK(r->n_ramps >= 0 && r->n_ramps <= CUPID_ARLEQUIN_MAX_RAMPS, CUPID_ERR_ARGUMENT,
+              "Arlequin: region %d has %d overlaps (0 to %d)", k, r->n_ramps, CUPID_ARLEQUIN_MAX_RAMPS);
+  for (int q = 0; q < r->n_ramps; q++) {
+    const cupid_arlequin_ramp *a = &r->ramps[q];
+    CUPID_CHECK(a->axis >= 0 && a->axis <= 2 && a->weight.hi > a->weight.lo, CUPID_ERR_ARGUMENT,
+                "Arlequin: region %d, overlap %d: axis %d, [%g, %g] (need an axis 0-2 and lo < hi)",
+                k, q, a->axis, a->weight.lo, a->weight.hi);
+  }
+  return CUPID_SUCCESS;
+}
+
 static cupid_status check_options(cupid_cuf_beam beam, cupid_pd_grid grid,
                                   const cupid_arlequin_options *o) {
   CUPID_CHECK(beam && grid && o, CUPID_ERR_ARGUMENT, "Arlequin: NULL argument");
-  CUPID_CHECK(o->weight.hi > o->weight.lo, CUPID_ERR_ARGUMENT,
-              "Arlequin: empty overlap [%g, %g]", o->weight.lo, o->weight.hi);
   CUPID_CHECK(o->penalty > 0, CUPID_ERR_ARGUMENT, "Arlequin: the penalty must be positive");
-  CUPID_CHECK(o->n_overlaps >= 0 && o->n_overlaps <= 2, CUPID_ERR_ARGUMENT,
-              "Arlequin: one or two overlaps, not %d", o->n_overlaps);
-  if (o->n_overlaps == 2)
-    CUPID_CHECK(o->second.hi > o->second.lo && o->second.lo >= o->weight.hi && o->weight.fe_below &&
-                    !o->second.fe_below,
-                CUPID_ERR_ARGUMENT,
-                "Arlequin: the second overlap [%g, %g] must lie above the first [%g, %g], with "
-                "the FE-only parts below the first and above the second",
-                o->second.lo, o->second.hi, o->weight.lo, o->weight.hi);
+  if (o->n_regions > 0) {
+    CUPID_CHECK(o->regions, CUPID_ERR_ARGUMENT, "Arlequin: %d regions without a region array",
+                o->n_regions);
+    for (int k = 0; k < o->n_regions; k++) CUPID_CALL(check_region(&o->regions[k], k));
+  } else {
+    CUPID_CHECK(o->weight.hi > o->weight.lo, CUPID_ERR_ARGUMENT,
+                "Arlequin: empty overlap [%g, %g]", o->weight.lo, o->weight.hi);
+    CUPID_CHECK(o->n_overlaps >= 0 && o->n_overlaps <= 2, CUPID_ERR_ARGUMENT,
+                "Arlequin: one or two overlaps, not %d", o->n_overlaps);
+    if (o->n_overlaps == 2)
+      CUPID_CHECK(o->second.hi > o->second.lo && o->second.lo >= o->weight.hi &&
+                      o->weight.fe_below && !o->second.fe_below,
+                  CUPID_ERR_ARGUMENT,
+                  "Arlequin: the second overlap [%g, %g] must lie above the first [%g, %g], with "
+                  "the FE-only parts below the first and above the second",
+                  o->second.lo, o->second.hi, o->weight.lo, o->weight.hi);
+  }
   cupid_cuf_info fi;
   cupid_cuf_get_info(beam, &fi);
   CUPID_CHECK(fi.dof_offset == 3 * cupid_pd_grid_num_nodes(grid), CUPID_ERR_ARGUMENT,
@@ -206,15 +330,17 @@ static cupid_status check_options(cupid_cuf_beam beam, cupid_pd_grid grid,
   return CUPID_SUCCESS;
 }
 
-/* PD nodal weights 1 - alpha(y_i). */
-static cupid_status pd_weights(cupid_pd_grid grid, const cupid_arlequin_options *w, double **wn,
+/* PD nodal weights 1 - alpha(x_i). */
+static cupid_status pd_weights(cupid_pd_grid grid, const cupid_arlequin_options *o, double **wn,
                                double *wmin) {
   cupid_int n = cupid_pd_grid_num_nodes(grid);
   const double *x = cupid_pd_grid_coords(grid);
+  layout_t L;
+  layout_of(o, &L);
   CUPID_CALL(cupid_malloc((size_t)n + 1, sizeof **wn, "PD weights", wn));
   *wmin = 1.0;
   for (cupid_int i = 0; i < n; i++) {
-    (*wn)[i] = 1.0 - cupid_arlequin_alpha_of(w, x[3 * i + 1]);
+    (*wn)[i] = pd_weight_at(&L, x + 3 * i);
     if ((*wn)[i] < *wmin) *wmin = (*wn)[i];
   }
   return CUPID_SUCCESS;
@@ -236,7 +362,13 @@ cupid_status cupid_arlequin_assemble(cupid_cuf_beam beam, cupid_pd_grid grid, cu
   CUPID_TRY(tied_build(beam, grid, o, &t));
   CUPID_TRY(build_pattern(beam, Kpd, &t, n_pd, n_fe, K));
   CUPID_TRY(add_pd(Kpd, *K));
-  CUPID_TRY(cupid_cuf_assemble_weighted_add(beam, alpha_fn, (void *)o, *K));
+  layout_t L;
+  cupid_cuf_weight_term terms[64];
+  cupid_cuf_weight wfe;
+  layout_of(o, &L);
+  CUPID_TRY_CHECK(L.n < 64, CUPID_ERR_ARGUMENT, "Arlequin: at most 63 regions, not %d", L.n);
+  beam_weight(&L, terms, &wfe);
+  CUPID_TRY(cupid_cuf_assemble_weight_add(beam, &wfe, *K));
   CUPID_TRY(add_penalty(&t, o->penalty, n_pd, *K));
   if (info) *info = (cupid_arlequin_info){.n_tied = t.n, .components = t.comps, .pd_weight_min = wmin};
 cleanup:
@@ -255,8 +387,14 @@ cupid_status cupid_arlequin_mass(cupid_cuf_beam beam, cupid_pd_grid grid,
               "cupid_arlequin_mass: give the PD masses and exactly one of M, lumped");
   cupid_int n = cupid_pd_grid_num_nodes(grid);
   const double *x = cupid_pd_grid_coords(grid);
+  layout_t L;
+  cupid_cuf_weight_term terms[64];
+  cupid_cuf_weight wfe;
+  layout_of(o, &L);
+  CUPID_CHECK(L.n < 64, CUPID_ERR_ARGUMENT, "Arlequin: at most 63 regions, not %d", L.n);
+  beam_weight(&L, terms, &wfe);
   for (cupid_int i = 0; i < n; i++) {
-    double m = (1.0 - cupid_arlequin_alpha_of(o, x[3 * i + 1])) * pd_mass[i]; /* Eq. 14 */
+    double m = pd_weight_at(&L, x + 3 * i) * pd_mass[i]; /* Eq. 14 */
     if (lumped) {
       for (int c = 0; c < 3; c++) lumped[3 * i + c] += m;
       continue;
@@ -266,8 +404,8 @@ cupid_status cupid_arlequin_mass(cupid_cuf_beam beam, cupid_pd_grid grid,
                 (long long)i);
     for (int c = 0; c < 3; c++) blk[4 * c] += m;
   }
-  if (lumped) return cupid_cuf_mass_lumped_weighted(beam, alpha_fn, (void *)o, lumped);
-  return cupid_cuf_mass_weighted_add(beam, alpha_fn, (void *)o, M);
+  if (lumped) return cupid_cuf_mass_lumped_weight(beam, &wfe, lumped);
+  return cupid_cuf_mass_weight_add(beam, &wfe, M);
 }
 
 cupid_status cupid_arlequin_gap(cupid_cuf_beam beam, cupid_pd_grid grid,

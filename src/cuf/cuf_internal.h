@@ -118,6 +118,9 @@ int cuf_section_invert(const struct cupid_cuf_beam_private *b, cupid_int e, doub
  * G_1 = identity, G_2 = d/dz, over element e (m = cuf_local_m), with ng points per direction. */
 void cuf_section_integrals(const struct cupid_cuf_beam_private *b, cupid_int e, int ng,
                            double *E);
+/* The same with the integrand times fn(ctx, x, z) (fn NULL: 1); the Arlequin weights. */
+void cuf_section_integrals_weighted(const struct cupid_cuf_beam_private *b, cupid_int e, int ng,
+                                    cupid_cuf_section_weight_fn fn, void *ctx, double *E);
 
 /* ---- beam_mesh.c ---- */
 cupid_status cuf_axis_build(struct cupid_cuf_beam_private *b, const cupid_beam *def,

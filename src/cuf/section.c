@@ -144,6 +144,11 @@ int cuf_section_invert(const beam_t *b, cupid_int e, double x, double z, double 
 }
 
 void cuf_section_integrals(const beam_t *b, cupid_int e, int ng, double *E) {
+  cuf_section_integrals_weighted(b, e, ng, NULL, NULL, E);
+}
+
+void cuf_section_integrals_weighted(const beam_t *b, cupid_int e, int ng,
+                                    cupid_cuf_section_weight_fn fn, void *ctx, double *E) {
   int m = cuf_local_m(b);
   double gx[CUF_MAX_GAUSS], gw[CUF_MAX_GAUSS];
   cuf_gauss(ng, gx, gw);
@@ -151,9 +156,10 @@ void cuf_section_integrals(const beam_t *b, cupid_int e, int ng, double *E) {
   double F[3][256]; /* G_0 F = F_x, G_1 F = F, G_2 F = F_z; m <= 256 (TE up to N = 21) */
   for (int gi = 0; gi < ng; gi++)
     for (int gj = 0; gj < ng; gj++) {
-      double det;
-      cuf_section_functions(b, e, gx[gi], gx[gj], F[1], F[0], F[2], NULL, NULL, &det);
-      double w = gw[gi] * gw[gj] * det;
+      double det, x, z;
+      cuf_section_functions(b, e, gx[gi], gx[gj], F[1], F[0], F[2], &x, &z, &det);
+      double w = gw[gi] * gw[gj] * det * (fn ? fn(ctx, x, z) : 1.0);
+      if (w == 0.0) continue;
       for (int d = 0; d < 3; d++)
         for (int dd = 0; dd < 3; dd++) {
           double *Ed = E + (size_t)(3 * d + dd) * m * m;

@@ -570,24 +570,28 @@ static cupid_status read_arlequin(model_reader *rd, yaml_node_t *node, cupid_cou
   CUPID_CALL(mr_require(rd, &map, "penalty", &penalty));
   CUPID_CALL(mr_positive(rd, penalty, "coupling.arlequin.penalty", &c->penalty));
   CUPID_CALL(mr_require(rd, &map, "overlap", &overlap));
-  if (overlap->type == YAML_SEQUENCE_NODE) { /* one overlap at each end of the PD region */
-    int n;
-    CUPID_CALL(mr_list(rd, overlap, "coupling.arlequin.overlap", 0, "boxes {y: [..]}", &n));
-    if (n < 1 || n > 2)
+  int n = 1;
+  if (overlap->type == YAML_SEQUENCE_NODE) {
+    CUPID_CALL(mr_list(rd, overlap, "coupling.arlequin.overlap", 0, "slabs {y: [..]}", &n));
+    if (n < 1 || n > CUPID_MAX_OVERLAPS)
       return mr_error(rd, overlap, "coupling.arlequin.overlap",
-                      "lists %d boxes; give one overlap, or two (one at each end of a PD region "
-                      "inside the beam)", n);
-    cupid_box *dst[2] = {&c->overlap, &c->overlap2};
-    for (int i = 0; i < n; i++) {
-      char p[PATH_SIZE];
-      mr_path_index(p, "coupling.arlequin.overlap", i);
-      CUPID_CALL(mr_box(rd, mr_item(rd, overlap, i), p, dst[i]));
-    }
-    c->n_overlaps = n;
-  } else {
-    CUPID_CALL(mr_box(rd, overlap, "coupling.arlequin.overlap", &c->overlap));
-    c->n_overlaps = 1;
+                      "lists %d slabs; give 1 to %d (one per interface face of the PD regions)",
+                      n, CUPID_MAX_OVERLAPS);
   }
+  for (int i = 0; i < n; i++) {
+    char p[PATH_SIZE];
+    yaml_node_t *item = overlap->type == YAML_SEQUENCE_NODE ? mr_item(rd, overlap, i) : overlap;
+    if (overlap->type == YAML_SEQUENCE_NODE) mr_path_index(p, "coupling.arlequin.overlap", i);
+    else snprintf(p, sizeof p, "coupling.arlequin.overlap");
+    CUPID_CALL(mr_box(rd, item, p, &c->overlaps[i]));
+    mr_mark(item, p, &c->overlap_marks[i]);
+    const cupid_box *bx = &c->overlaps[i];
+    if (bx->has[0] + bx->has[1] + bx->has[2] != 1)
+      return mr_error(rd, item, p,
+                      "an overlap is a slab along one axis next to a PD region's face: give "
+                      "exactly one of x, y, z (e.g. {y: [30, 35]})");
+  }
+  c->n_overlaps = n;
   c->weight = CUPID_WEIGHT_LINEAR;
   if ((weight = mr_get(&map, "weight"))) {
     int k;

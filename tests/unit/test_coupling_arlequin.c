@@ -16,6 +16,8 @@
  *    [8, 20], one overlap [8, 12] or two ([8, 12], [16, 20], the beam through and beyond the
  *    region): K symmetric and free of all three rigid translations (1e-12), end load: reaction
  *    (1e-9) and the FE-only spans carry exactly F (1e-9);
+ *  - a general layout (a region over part of the section, overlaps along y and x): see
+ *    case_partial();
  *  - the node-weighted PD stiffness: w = 1 is K, linear in w, symmetric, translation-free,
  *    bond-based (w_i + w_j)/2 per bond, the operator left unchanged. */
 #include <math.h>
@@ -368,6 +370,152 @@ static void test_3d(void **state) {
   case_3d(CUPID_PD_BOND, 1);
 }
 
+/* A general layout: a region over part of the section, with overlaps normal and parallel to
+ * the axis. 8 x 8 bar, LE L4 section (x breakpoints 0 2 4 6 8, z 0 4 8), 12 B2 elements on
+ * [0, 24]; PD region x [0, 4], y [8, 16], z [0, 8] (h = 1, delta = 1.5, nu = 0), overlaps
+ * y [8, 10], y [14, 16] and x [2, 4] (the face x = 4 meets the beam beside the region; x = 0
+ * and z = 0, 8 are free surfaces); the core x [0, 2], y [10, 14] gives way. Checks:
+ *  - K symmetric (1e-14) and free of the three rigid translations (1e-12 of |K|);
+ *  - the weights: the PD weight of each node is the product of its ramps (computed here);
+ *    the weighted mass of a translation (consistent and lumped) is
+ *    rho (V_beam - int w dV) + sum_i w_i rho V, with int w dV = 3 x 6 x 8 = 144 for the
+ *    linear (LPS case) and smooth (bond-based case) ramps (both ramp integrals are W/2): the
+ *    section-weighted quadrature of the beam is exact (1e-12 relative);
+ *  - end traction F at y = 24, clamp at y = 0: the reaction balances F (1e-9), and the gap
+ *    between the tied PD nodes and the beam is small against u (< 1e-3 of max |u|). */
+static double ramp_w(double c, double lo, double hi, int fe_below, cupid_weight kind) {
+  double s = fe_below ? (c - lo) / (hi - lo) : (hi - c) / (hi - lo);
+  if (s <= 0) return 0.0;
+  if (s >= 1) return 1.0;
+  return kind == CUPID_WEIGHT_SMOOTH ? s * s * (3.0 - 2.0 * s) : s;
+}
+
+static void case_partial(cupid_pd_model_kind model) {
+  const double rho = 2.0, Eb = 1000.0;
+  tb_beam tb;
+  tb_init(&tb, Eb, 0.0);
+  tb.mat[0].density = rho;
+  tb.mat[0].has_density = 1;
+  tb_le(&tb, 4);
+  tb_rect(&tb, 0, 8, 4, 0, 8, 2, -1);
+  tb_axis(&tb, 0.0, 24.0, 12, 2);
+  cupid_cuf_beam beam = tb_create(&tb);
+  cupid_weight kind = model == CUPID_PD_LPS ? CUPID_WEIGHT_LINEAR : CUPID_WEIGHT_SMOOTH;
+  cupid_arlequin_region R = {.box = {.lo = {0, 8, 0}, .hi = {4, 16, 8}, .has = {1, 1, 1}}, .n_ramps = 3};
+  R.ramps[0] = (cupid_arlequin_ramp){1, {.lo = 8, .hi = 10, .fe_below = 1, .kind = kind}};
+  R.ramps[1] = (cupid_arlequin_ramp){1, {.lo = 14, .hi = 16, .fe_below = 0, .kind = kind}};
+  R.ramps[2] = (cupid_arlequin_ramp){0, {.lo = 2, .hi = 4, .fe_below = 0, .kind = kind}};
+  int rmat = 0;
+  cupid_pd_grid grid = NULL;
+  cupid_pd_grid_options go = {.spacing = 1.0, .dimension = 3};
+  CUPID_ASSERT_OK(cupid_pd_grid_create(&go, 1, &R.box, &rmat, &grid));
+  cupid_pd_material mat = {.E = Eb, .nu = model == CUPID_PD_BOND ? 0.25 : 0.0};
+  cupid_pd_operator_options po = {.horizon = 1.5, .model = model,
+                                  .influence = CUPID_INFLUENCE_CONSTANT,
+                                  .partial_volume = CUPID_PARTIAL_NONE, .materials = &mat,
+                                  .n_materials = 1};
+  cupid_pd_operator op = NULL;
+  CUPID_ASSERT_OK(cupid_pd_operator_create(grid, &po, &op));
+  cupid_box core = {.lo = {0, 10, 0}, .hi = {2, 14, 8}, .has = {1, 1, 1}};
+  CUPID_ASSERT_OK(cupid_coupling_deactivate(beam, 1, &core));
+  cupid_int n_pd = cupid_pd_grid_num_nodes(grid), nbn = 13, ndof;
+  CUPID_ASSERT_OK(cupid_cuf_set_dof_offset(beam, 3 * n_pd));
+  ndof = 3 * n_pd + cupid_cuf_num_dofs(beam);
+  cupid_cuf_info fi;
+  cupid_cuf_get_info(beam, &fi);
+  cupid_arlequin_options o = {.penalty = 1e5, .n_regions = 1, .regions = &R}; /* 100 E h */
+  cupid_csr K = NULL, M = NULL;
+  cupid_arlequin_info info;
+  CUPID_ASSERT_OK(cupid_arlequin_assemble(beam, grid, op, &o, &K, &info));
+  const double *x = cupid_pd_grid_coords(grid);
+  cupid_int tied = 0;
+  for (cupid_int i = 0; i < n_pd; i++) {
+    const double *p = x + 3 * i;
+    tied += p[1] <= 10 || p[1] >= 14 || p[0] >= 2;
+  }
+  assert_int_equal(info.n_tied, tied);
+  assert_true(cupid_csr_asymmetry(K) <= 1e-14);
+  double *v = NULL, *r = NULL, *f = NULL, *u = NULL, *d = NULL, *pm = NULL, s = max_abs(K);
+  CUPID_ASSERT_OK(cupid_calloc((size_t)ndof, sizeof *v, "v", &v));
+  CUPID_ASSERT_OK(cupid_calloc((size_t)ndof, sizeof *r, "r", &r));
+  CUPID_ASSERT_OK(cupid_calloc((size_t)ndof, sizeof *f, "f", &f));
+  CUPID_ASSERT_OK(cupid_calloc((size_t)ndof, sizeof *u, "u", &u));
+  CUPID_ASSERT_OK(cupid_calloc((size_t)ndof, sizeof *d, "d", &d));
+  CUPID_ASSERT_OK(cupid_calloc((size_t)n_pd, sizeof *pm, "pm", &pm));
+  double V = cupid_pd_grid_cell_volume(grid), pd_expect = 0.0;
+  for (cupid_int i = 0; i < n_pd; i++) {
+    const double *p = x + 3 * i;
+    pm[i] = rho * V;
+    pd_expect += pm[i] * ramp_w(p[1], 8, 10, 1, kind) * ramp_w(p[1], 14, 16, 0, kind) *
+                 ramp_w(p[0], 2, 4, 0, kind);
+  }
+  double expect = rho * (64.0 * 24.0 - 144.0) + pd_expect;
+  for (int k = 0; k < 3; k++) { /* translations: every PD node and LE node moves by 1 */
+    memset(v, 0, sizeof *v * (size_t)ndof);
+    for (cupid_int i = 0; i < n_pd; i++) v[3 * i + k] = 1.0;
+    for (cupid_int bn = 0; bn < nbn; bn++)
+      for (int tau = 0; tau < fi.M; tau++) v[cupid_cuf_dof(beam, tau, bn, k)] = 1.0;
+    cupid_csr_matvec(K, v, r);
+    double fm = 0.0;
+    for (cupid_int q = 0; q < ndof; q++) fm = fmax(fm, fabs(r[q]));
+    assert_true(fm <= 1e-12 * s);
+  }
+  CUPID_ASSERT_OK(cupid_csr_duplicate(K, &M));
+  cupid_csr_zero(M);
+  CUPID_ASSERT_OK(cupid_arlequin_mass(beam, grid, &o, pm, M, NULL));
+  CUPID_ASSERT_OK(cupid_arlequin_mass(beam, grid, &o, pm, NULL, d));
+  cupid_csr_matvec(M, v, r); /* v: the z translation */
+  double mc = 0.0, ml = 0.0;
+  for (cupid_int q = 2; q < ndof; q += 3) mc += r[q], ml += d[q];
+  printf("partial region (%s): weighted mass of a translation %.12g (consistent) %.12g "
+         "(lumped), expected %.12g\n",
+         model == CUPID_PD_LPS ? "LPS" : "bond-based", mc, ml, expect);
+  ASSERT_NEAR(mc, expect, 1e-12 * expect);
+  ASSERT_NEAR(ml, expect, 1e-12 * expect);
+  cupid_dirichlet bc = NULL;
+  CUPID_ASSERT_OK(cupid_dirichlet_create(ndof, &bc));
+  CUPID_ASSERT_OK(cupid_cuf_clamp_node(beam, 0, bc));
+  for (cupid_int bn = 0; bn < nbn; bn++) /* FE nodes where the beam gave way */
+    for (int tau = 0; tau < fi.M; tau++)
+      if (!cupid_cuf_node_used(beam, tau, bn))
+        for (int k = 0; k < 3; k++)
+          CUPID_ASSERT_OK(cupid_dirichlet_fix(bc, cupid_cuf_dof(beam, tau, bn, k), 0.0));
+  CUPID_ASSERT_OK(cupid_dirichlet_finalize(bc));
+  double F = 64.0;
+  for (int tau = 0; tau < fi.M; tau++) f[cupid_cuf_dof(beam, tau, nbn - 1, 1)] = F / fi.M;
+  cupid_solve_info si;
+  CUPID_ASSERT_OK(cupid_direct_solve(K, CUPID_MATRIX_SPD, f, bc, u, &si));
+  cupid_csr_matvec(K, u, r);
+  double reaction = 0.0, umax = 0.0, gap;
+  for (cupid_int q = 1; q < ndof; q += 3)
+    if (bc->fixed[q]) reaction += r[q] - f[q];
+  for (cupid_int q = 0; q < ndof; q++) umax = fmax(umax, fabs(u[q]));
+  CUPID_ASSERT_OK(cupid_arlequin_gap(beam, grid, &o, u, &gap));
+  printf("partial region (%s): %lld tied nodes, reaction %.12g of F = %g, gap %.2e of max |u|\n",
+         model == CUPID_PD_LPS ? "LPS" : "bond-based", (long long)info.n_tied, -reaction, F,
+         gap / umax);
+  ASSERT_NEAR(reaction, -F, 1e-9 * F);
+  assert_true(gap <= 1e-3 * umax);
+  cupid_free(&v);
+  cupid_free(&r);
+  cupid_free(&f);
+  cupid_free(&u);
+  cupid_free(&d);
+  cupid_free(&pm);
+  cupid_dirichlet_destroy(&bc);
+  cupid_csr_destroy(&K);
+  cupid_csr_destroy(&M);
+  cupid_pd_operator_destroy(&op);
+  cupid_pd_grid_destroy(&grid);
+  cupid_cuf_beam_destroy(&beam);
+}
+
+static void test_partial(void **state) {
+  (void)state;
+  case_partial(CUPID_PD_LPS);
+  case_partial(CUPID_PD_BOND);
+}
+
 /* The node-weighted PD stiffness (cupid_pd_operator_assemble_weighted) on an LPS block with
  * the surface correction: w = 1 gives K (bit for bit: the same arithmetic), K(w) is linear in
  * w (K(a + b) = K(a) + K(b) to 1e-13 of |K|), symmetric and free of translations for any
@@ -472,6 +620,7 @@ int main(void) {
       cmocka_unit_test(test_coupled_matrix),
       cmocka_unit_test(test_static),
       cmocka_unit_test(test_3d),
+      cmocka_unit_test(test_partial),
       cmocka_unit_test(test_weighted_pd),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);

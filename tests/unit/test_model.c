@@ -177,7 +177,7 @@ static void test_truss_1d_dynamic(void **state) {
   assert_int_equal(c->method, CUPID_COUPLING_ARLEQUIN);
   assert_true(c->has_arlequin && c->penalty == 1e9);
   assert_int_equal(c->weight, CUPID_WEIGHT_LINEAR);
-  assert_true(c->overlap.has[1] && c->overlap.lo[1] == 0.4 && c->overlap.hi[1] == 0.6);
+  assert_true(c->n_overlaps == 1 && c->overlaps[0].has[1] && c->overlaps[0].lo[1] == 0.4 && c->overlaps[0].hi[1] == 0.6);
   assert_true(m->constraints[0].layer == 0.0375);
   const cupid_analysis *a = &m->analysis;
   assert_int_equal(a->type, CUPID_ANALYSIS_DYNAMIC);

@@ -131,7 +131,7 @@ expect_err() { # $1 pattern, file on stdin
 { cat base.yaml; printf 'loads:\n  - traction: {y: 0.5, value: [0, 1, 0]}\nanalysis: {type: static}\noutput: {directory: e1}\n'; } \
   | expect_err "inside the Arlequin overlap"
 { sed 's/elements: \[39\]/elements: [40]/' base.yaml; printf 'analysis: {type: static}\noutput: {directory: e2}\n'; } \
-  | expect_err "not a beam-node position"
+  | expect_err "not a beam-element end"
 
 # E. pulse through the overlap
 c=$(python3 -c "import math; print(math.sqrt(1e9 / 7800))")

@@ -2,7 +2,9 @@
 # Coupled models that cupid cannot run give a clear model error naming the file position and
 # what to change: a PD region bound that is not a beam-element end, a region over part of the
 # section that cuts section elements or removes part of a TE expansion, Arlequin layouts it does not
-# take (an overlap the region does not start on; two overlaps that overlap; three overlaps).
+# cannot take (an overlap that starts on no region face; two overlaps on one face; an
+# interface face without an overlap; an overlap on a free surface; an overlap bound that cuts a
+# section element; a slab along two axes).
 # Each case must fail (non-zero exit) with the expected phrase in the message.
 set -u
 CUPID=$(realpath "${CUPID:-build/cupid}")
@@ -46,9 +48,16 @@ check() { # $1 name, $2 expected phrase; model on stdin
 check unaligned "bound y = 15 is not a beam-element end" < <(model "{x: [0, 8], y: [10, 15], z: [0, 8]}" "{method: fictitious}")
 check partial_edge "bound x = 3 is not a section-element edge" < <(model "{x: [0, 3], y: [10, 20], z: [0, 8]}" "{method: fictitious}")
 check partial_te "TE expansion spans the whole section" < <(model "{x: [0, 4], y: [10, 20], z: [0, 8]}" "{method: fictitious}" | sed 's/expansion: LE/expansion: TE2/; /element: L4/d')
-check arlequin "must start on one edge of the overlap" < <(model "{x: [0, 8], y: [10, 20], z: [0, 8]}" "{method: arlequin, arlequin: {penalty: 1000, overlap: {y: [8, 12]}}}")
-check arlequin_two "overlap each other" < <(model "{x: [0, 8], y: [10, 20], z: [0, 8]}" "{method: arlequin, arlequin: {penalty: 1000, overlap: [{y: [10, 20]}, {y: [10, 20]}]}}")
-check arlequin_three "lists 3 boxes" < <(model "{x: [0, 8], y: [10, 20], z: [0, 8]}" "{method: arlequin, arlequin: {penalty: 1000, overlap: [{y: [10, 12]}, {y: [12, 14]}, {y: [18, 20]}]}}")
+fine() { sed 's/y: \[0, 10, 20, 30\], elements: \[1, 1, 1\]/y: [0, 10, 15, 20, 30], elements: [1, 1, 1, 1]/'; }
+arl() { echo "{method: arlequin, arlequin: {penalty: 1000, overlap: $1}}"; }
+check arlequin "starts on no face of a PD region" < <(model "{x: [0, 8], y: [10, 20], z: [0, 8]}" "$(arl "{y: [8, 12]}")")
+check arlequin_two "two overlaps on the face y = 10" < <(model "{x: [0, 8], y: [10, 20], z: [0, 8]}" "$(arl "[{y: [10, 20]}, {y: [10, 20]}]")")
+check arlequin_face "the face y = 20 of this PD region meets the beam: give it an overlap" < <(model "{x: [0, 8], y: [10, 20], z: [0, 8]}" "$(arl "{y: [10, 15]}")" | fine)
+half="{x: [0, 4], y: [10, 20], z: [0, 8]}"
+check arlequin_parallel "the face x = 4 of this PD region meets the beam" < <(model "$half" "$(arl "[{y: [10, 15]}, {y: [15, 20]}]")" | fine)
+check arlequin_free "where the beam does not continue (a free surface)" < <(model "$half" "$(arl "[{y: [10, 15]}, {y: [15, 20]}, {x: [0, 4]}]")" | fine)
+check arlequin_cut "the overlap bound x = 2 cuts a section element" < <(model "$half" "$(arl "[{y: [10, 15]}, {y: [15, 20]}, {x: [2, 4]}]")" | fine)
+check arlequin_axes "give exactly one of x, y, z" < <(model "{x: [0, 8], y: [10, 20], z: [0, 8]}" "$(arl "{x: [0, 8], y: [10, 12]}")")
 
 echo "coupling_errors: $pass passed, $fail failed"
 [ "$fail" -eq 0 ]
