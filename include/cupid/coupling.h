@@ -172,7 +172,7 @@ void cupid_coupling_get_info(const cupid_coupling_h c, cupid_coupling_info *info
 
 
 /* ---- Arlequin coupling (paper 004 section 3; src/coupling/arlequin.c) ----
- * The beam and one PD region overlap on [lo, hi] along the axis y; both models live there.
+ * The beam and a PD region overlap on [lo, hi] along the axis y; both models live there.
  * The Hamiltonian is H = alpha H_FE + (1 - alpha) H_PD (Eq. 8): alpha = 1 on the FE-only side,
  * 0 on the PD-only side, a ramp across the overlap (Eq. 9: linear; also constant 0.5 and the
  * C1 cubic 1 - 3s^2 + 2s^3). The FE stiffness and mass are integrated with alpha at the axis

@@ -9,8 +9,9 @@
 int cupid_app_is_arlequin(const cupid_job *job);
 /** What the Arlequin coupling cannot do yet (model errors; called before anything is built). */
 cupid_status cupid_app_arlequin_check(const cupid_job *job);
-/** Geometry of the overlap against the built beam and PD region; where the beam runs on into
- *  the PD region beyond the overlap, it gives way there (cupid_coupling_deactivate()). */
+/** The layout against the built beam: each region's interface faces and the overlap slab on
+ *  each (model errors otherwise), stored in job->arlequin_regions; the beam gives way in each
+ *  region's core (cupid_coupling_deactivate()). */
 cupid_status cupid_app_arlequin_prepare(cupid_job *job);
 /** Constraints, loads, the coupled K, then the static solve, `evaluate` or the dynamics. */
 cupid_status cupid_app_arlequin_run(cupid_job *job);

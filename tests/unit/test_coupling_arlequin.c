@@ -424,6 +424,11 @@ static void case_partial(cupid_pd_model_kind model) {
   cupid_cuf_info fi;
   cupid_cuf_get_info(beam, &fi);
   cupid_arlequin_options o = {.penalty = 1e5, .n_regions = 1, .regions = &R}; /* 100 E h */
+  const double corner[3] = {3, 9, 4}, beside[3] = {6, 12, 4}, inner[3] = {1, 12, 4};
+  double wc = ramp_w(9, 8, 10, 1, kind) * ramp_w(3, 2, 4, 0, kind); /* two ramps cross */
+  ASSERT_NEAR(cupid_arlequin_alpha_at(&o, corner), 1.0 - wc, 1e-15);
+  ASSERT_NEAR(cupid_arlequin_alpha_at(&o, beside), 1.0, 0);
+  ASSERT_NEAR(cupid_arlequin_alpha_at(&o, inner), 0.0, 0);
   cupid_csr K = NULL, M = NULL;
   cupid_arlequin_info info;
   CUPID_ASSERT_OK(cupid_arlequin_assemble(beam, grid, op, &o, &K, &info));
