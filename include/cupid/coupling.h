@@ -251,7 +251,8 @@ typedef struct {
  * The coupled stiffness: weighted PD (@p op on @p grid, LPS or bond-based) + weighted beam + the
  * penalty K_z = kappa [I, -N; -N^T, N^T N] (Eq. 18, sign as coupling.md 7.2). The beam's DOF
  * offset must be 3 * nodes of the grid. CUPID_ERR_MODEL if a PD node of an overlap lies
- * outside the beam.
+ * outside the beam. @p op NULL: the same matrix without the PD block (the assembled part of
+ * the matrix-free operator below).
  */
 cupid_status cupid_arlequin_assemble(cupid_cuf_beam beam, cupid_pd_grid grid,
                                      cupid_pd_operator op, const cupid_arlequin_options *o,
@@ -269,6 +270,39 @@ cupid_status cupid_arlequin_mass(cupid_cuf_beam beam, cupid_pd_grid grid,
 /** Largest constraint gap max_q |d_q - N(x_q) u_FE| over the tied nodes and components. */
 cupid_status cupid_arlequin_gap(cupid_cuf_beam beam, cupid_pd_grid grid,
                                 const cupid_arlequin_options *o, const double *u, double *gap);
+
+/* Matrix-free Arlequin (issue 6; src/coupling/arlequin_operator.c): K x without the PD matrix.
+ * The PD block is the PD operator of @p pd with node p's energy weighted by 1 - alpha(x_p)
+ * (cupid_pd_operator_scale_energy()), applied matrix-free; the weighted beam and the penalty
+ * ties are assembled (cupid_arlequin_assemble() with op NULL). Symmetric positive definite
+ * once held, like the assembled K: CG, preconditioned by the same K with the cheap bond-based
+ * PD operator of cupid_coupling_cheap_options() (cupid_arlequin_preconditioner()). */
+
+/** The matrix-free Arlequin operator (opaque). */
+typedef struct cupid_arlequin_operator_private *cupid_arlequin_operator;
+
+/** Build it (@p beam, @p grid and the region array of @p o are borrowed: they must outlive
+ *  it; the beam's DOF offset must be 3 * nodes of the grid). */
+cupid_status cupid_arlequin_operator_create(cupid_cuf_beam beam, cupid_pd_grid grid,
+                                            const cupid_pd_operator_options *pd,
+                                            const cupid_arlequin_options *o,
+                                            cupid_arlequin_operator *A, cupid_arlequin_info *info);
+/** Destroy and set *A to NULL (NULL-safe). */
+void cupid_arlequin_operator_destroy(cupid_arlequin_operator *A);
+/** Scalar DOFs (3 * PD nodes + the beam's). */
+cupid_int cupid_arlequin_operator_size(const cupid_arlequin_operator A);
+/** Approximate bytes held (the PD operator's bonds and per-node data, the assembled rest). */
+int64_t cupid_arlequin_operator_bytes(const cupid_arlequin_operator A);
+/** y = K x; equals cupid_csr_matvec() with the matrix of cupid_arlequin_assemble() up to
+ *  round-off. Not thread-safe (work vectors). */
+cupid_status cupid_arlequin_operator_apply(const cupid_arlequin_operator A, const double *x,
+                                           double *y);
+/** The rows [d0, d1) of y = K x (the others left undefined): what each MPI rank computes. */
+cupid_status cupid_arlequin_operator_apply_rows(const cupid_arlequin_operator A, const double *x,
+                                                cupid_int d0, cupid_int d1, double *y);
+/** The preconditioner matrix: K with the cheap PD operator (horizon_factor <= 0: 1.5). */
+cupid_status cupid_arlequin_preconditioner(const cupid_arlequin_operator A, double horizon_factor,
+                                           cupid_csr *P);
 /* ---- end of the Arlequin block ---- */
 
 /* ---- Matrix-free fictitious-node coupling (issue 6; src/coupling/operator.c, krylov.c) ----
@@ -357,6 +391,27 @@ typedef struct {
   char method[64];        /**< "gmres+<pc>" */
 } cupid_coupling_krylov_info;
 
+/** A linear operator for cupid_krylov_solve(): n DOFs, y = A x, and optionally only the rows
+ *  [d0, d1) of it (what an MPI rank computes; NULL: the whole product). */
+typedef struct {
+  cupid_int n;
+  cupid_status (*apply)(void *ctx, const double *x, double *y);
+  cupid_status (*apply_rows)(void *ctx, const double *x, cupid_int d0, cupid_int d1, double *y);
+  void *ctx;
+  int symmetric;        /**< 1: symmetric positive definite (CG), 0: GMRES */
+  cupid_int n_pd_dofs;  /**< DOFs [0, n_pd_dofs) form the "pd" field of pc fieldsplit */
+} cupid_linear_operator;
+
+/**
+ * Solve A u = f as cupid_coupling_krylov_solve() does, for any matrix-free operator: CG when
+ * A->symmetric (the unpreconditioned residual norm; the preconditioner from @p P must be
+ * symmetric too: LU of a symmetric P is), else right-preconditioned GMRES.
+ */
+cupid_status cupid_krylov_solve(const cupid_linear_operator *A, const cupid_csr_t *P,
+                                const cupid_dirichlet_t *bc, const double *f, double *u,
+                                const cupid_coupling_krylov_options *opts,
+                                cupid_coupling_krylov_info *info);
+
 /**
  * Solve A u = f with the Dirichlet conditions @p bc (finalized; fixed DOFs take bc->value) by
  * GMRES on the free DOFs, A matrix-free (a PETSc MATSHELL), preconditioned by @p P (the
@@ -366,6 +421,11 @@ typedef struct {
  * iterate).
  */
 cupid_status cupid_coupling_krylov_solve(const cupid_coupling_operator A, const cupid_csr_t *P,
+                                         const cupid_dirichlet_t *bc, const double *f, double *u,
+                                         const cupid_coupling_krylov_options *opts,
+                                         cupid_coupling_krylov_info *info);
+/** The Arlequin system by CG (cupid_krylov_solve() with the matrix-free Arlequin operator). */
+cupid_status cupid_arlequin_krylov_solve(const cupid_arlequin_operator A, const cupid_csr_t *P,
                                          const cupid_dirichlet_t *bc, const double *f, double *u,
                                          const cupid_coupling_krylov_options *opts,
                                          cupid_coupling_krylov_info *info);

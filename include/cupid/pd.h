@@ -229,6 +229,14 @@ cupid_status cupid_pd_operator_assemble(const cupid_pd_operator op, cupid_csr *K
 cupid_status cupid_pd_operator_assemble_weighted(cupid_pd_operator op, const double *w,
                                                  cupid_csr *K);
 
+/**
+ * Weight node p's energy by w_p from now on (w >= 0, one per node): the operator's per-node
+ * moduli are scaled in place, so every later apply, apply_range and assembly is that of the
+ * node-weighted energy of cupid_pd_operator_assemble_weighted() (the matrix-free Arlequin
+ * operator, paper 004 Eq. 12). Calls multiply.
+ */
+cupid_status cupid_pd_operator_scale_energy(cupid_pd_operator op, const double *w);
+
 /** Dilatation theta_i (Eq. 19) of a displacement field (LPS; 0 for bond-based). */
 cupid_status cupid_pd_operator_dilatation(const cupid_pd_operator op, const double *u,
                                           double *theta);

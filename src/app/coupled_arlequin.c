@@ -19,6 +19,7 @@
 #include <string.h>
 
 #include "coupled_arlequin.h"
+#include "coupled_setup.h"
 
 #define ARL_TOL 1e-9
 
@@ -514,10 +515,49 @@ static cupid_status solve(cupid_job *job) {
   return report_gap(job);
 }
 
+/* --solver petsc, static: the PD block matrix-free (src/coupling/arlequin_operator.c), CG
+ * preconditioned by the LU of the cheap twin (MUMPS, parallel on several ranks); the option
+ * -cupid_coupled_assembled keeps the assembled path (CG + GAMG on K's rows). */
+static int matrix_free(const cupid_job *job) {
+  return job->solver == CUPID_SOLVER_PETSC && job->model->analysis.type == CUPID_ANALYSIS_STATIC &&
+         !cupid_petsc_has_option("-cupid_coupled_assembled");
+}
+
+static cupid_status solve_matrix_free(cupid_job *job) {
+  cupid_status st = CUPID_SUCCESS;
+  cupid_arlequin_operator A = NULL;
+  cupid_csr P = NULL;
+  cupid_arlequin_options o = options(job);
+  cupid_arlequin_info info;
+  double t0 = cupid_wtime();
+  CUPID_TRY(cupid_arlequin_operator_create(job->beam, job->grid, &job->pd_options, &o, &A, &info));
+  CUPID_TRY(cupid_arlequin_preconditioner(A, 1.5, &P));
+  cupid_job_phase_end(job, CUPID_PHASE_COUPLING, t0);
+  cupid_job_progress(job,
+                     "coupling (Arlequin, matrix-free): %d region(s), %lld tied PD nodes, min PD "
+                     "weight %.3g; operator %.1f MB, preconditioner matrix %.1f MB",
+                     job->n_arlequin_regions, (long long)info.n_tied, info.pd_weight_min,
+                     (double)cupid_arlequin_operator_bytes(A) / 1e6, (double)cupid_csr_bytes(P) / 1e6);
+  cupid_coupling_krylov_options ko = {.factor_package = "mumps"};
+  cupid_coupling_krylov_info ki;
+  st = cupid_arlequin_krylov_solve(A, P, job->bc, job->f_ext, job->u, &ko, &ki);
+  cupid_app_record_krylov(job, &ki);
+  CUPID_TRY(st);
+  job->solved = 1;
+  CUPID_TRY(cupid_arlequin_operator_apply(A, job->u, job->f_int));
+  cupid_job_progress(job, "solve: %s, %lld equations, %d iterations, residual %.2e", ki.method,
+                     (long long)job->solve.n, ki.iterations, ki.residual);
+  st = report_gap(job);
+cleanup:
+  cupid_csr_destroy(&P);
+  cupid_arlequin_operator_destroy(&A);
+  return st;
+}
+
 cupid_status cupid_app_arlequin_run(cupid_job *job) {
   if (job->model->analysis.type == CUPID_ANALYSIS_EVALUATE) return evaluate(job);
   CUPID_CALL(cupid_app_estimate(job, 0));
-  CUPID_CALL(assemble(job));
+  if (!matrix_free(job)) CUPID_CALL(assemble(job));
   CUPID_CALL(apply_constraints(job));
   CUPID_CALL(cupid_dirichlet_finalize(job->bc));
   CUPID_CALL(apply_loads(job));
@@ -525,7 +565,7 @@ cupid_status cupid_app_arlequin_run(cupid_job *job) {
     CUPID_CALL(cupid_app_run_dynamic(job));
     return report_gap(job);
   }
-  return solve(job);
+  return matrix_free(job) ? solve_matrix_free(job) : solve(job);
 }
 
 cupid_status cupid_app_arlequin_mass(cupid_job *job, cupid_csr *M, double **m_lumped) {

@@ -72,6 +72,27 @@ void cupid_app_coupled_setup_free(cupid_coupled_setup *s) {
   cupid_free(&s->mats);
 }
 
+void cupid_app_record_krylov(cupid_job *job, const cupid_coupling_krylov_info *ki) {
+  job->phases[CUPID_PHASE_FACTORISATION] =
+      (cupid_phase_record){ki->time_setup, cupid_peak_memory(), 1};
+  job->phases[CUPID_PHASE_SOLVE] = (cupid_phase_record){ki->time_solve, cupid_peak_memory(), 1};
+  job->solve.method = "petsc"; /* matrix_free, ksp_type and pc_type tell the path */
+  job->solve.n = job->bc->n_free;
+  job->solve.residual = ki->residual;
+  job->solve.time_factor = ki->time_setup;
+  job->solve.time_solve = ki->time_solve;
+  job->solve.failed_dof = -1;
+  job->solve.iterations = ki->iterations;
+  job->solve.ranks = cupid_petsc_size();
+  job->solve.matrix_free = 1;
+  const char *pc = strchr(ki->method, '+'); /* ki->method is "<ksp>+<pc>" */
+  snprintf(job->solve.ksp_type, sizeof job->solve.ksp_type, "%.*s",
+           pc ? (int)(pc - ki->method) : 31, ki->method);
+  snprintf(job->solve.pc_type, sizeof job->solve.pc_type, "%.31s", pc ? pc + 1 : ki->method);
+  snprintf(job->solve.converged_reason, sizeof job->solve.converged_reason, "%s",
+           ki->converged ? "CONVERGED" : "DIVERGED");
+}
+
 cupid_status cupid_app_coupled_solve_mf(cupid_job *job, const cupid_coupling_options *co,
                                         const cupid_coupling_krylov_options *ko) {
   cupid_status st = CUPID_SUCCESS;
@@ -92,23 +113,7 @@ cupid_status cupid_app_coupled_solve_mf(cupid_job *job, const cupid_coupling_opt
                      (double)cupid_coupling_operator_bytes(A) / 1e6, (double)cupid_csr_bytes(P) / 1e6);
   cupid_coupling_krylov_info ki;
   st = cupid_coupling_krylov_solve(A, P, job->bc, job->f_ext, job->u, ko, &ki);
-  job->phases[CUPID_PHASE_FACTORISATION] =
-      (cupid_phase_record){ki.time_setup, cupid_peak_memory(), 1};
-  job->phases[CUPID_PHASE_SOLVE] = (cupid_phase_record){ki.time_solve, cupid_peak_memory(), 1};
-  job->solve.method = "petsc"; /* matrix_free, ksp_type and pc_type tell the path */
-  job->solve.n = job->bc->n_free;
-  job->solve.residual = ki.residual;
-  job->solve.time_factor = ki.time_setup;
-  job->solve.time_solve = ki.time_solve;
-  job->solve.failed_dof = -1;
-  job->solve.iterations = ki.iterations;
-  job->solve.ranks = cupid_petsc_size();
-  job->solve.matrix_free = 1;
-  snprintf(job->solve.ksp_type, sizeof job->solve.ksp_type, "gmres");
-  const char *pc = strchr(ki.method, '+'); /* ki.method is "gmres+<pc>" */
-  snprintf(job->solve.pc_type, sizeof job->solve.pc_type, "%.31s", pc ? pc + 1 : ki.method);
-  snprintf(job->solve.converged_reason, sizeof job->solve.converged_reason, "%s",
-           ki.converged ? "CONVERGED" : "DIVERGED");
+  cupid_app_record_krylov(job, &ki);
   CUPID_TRY(st);
   job->solved = 1;
   CUPID_TRY(cupid_coupling_operator_apply(A, job->u, job->f_int));

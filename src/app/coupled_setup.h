@@ -36,4 +36,8 @@ void cupid_app_coupled_setup_free(cupid_coupled_setup *s);
 cupid_status cupid_app_coupled_solve_mf(cupid_job *job, const cupid_coupling_options *co,
                                         const cupid_coupling_krylov_options *ko);
 
+/** Record a matrix-free Krylov solve in the job: job->solve (method "petsc", matrix_free 1,
+ *  ksp and pc types, n, residual, iterations, times) and the factorisation / solve phases. */
+void cupid_app_record_krylov(cupid_job *job, const cupid_coupling_krylov_info *ki);
+
 #endif

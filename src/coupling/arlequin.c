@@ -212,19 +212,20 @@ static cupid_status build_pattern(cupid_cuf_beam beam, const cupid_csr_t *Kpd, c
   cupid_int *frp = NULL, *fcol = NULL, *rowptr = NULL, *col = NULL, nb = n_pd + n_fe;
   int64_t *key = NULL;
   CUPID_TRY(cupid_cuf_pattern(beam, &frp, &fcol));
-  size_t cap = (size_t)Kpd->rowptr[n_pd] + (size_t)frp[n_fe], n = 0;
+  size_t cap = (Kpd ? (size_t)Kpd->rowptr[n_pd] : 0) + (size_t)frp[n_fe], n = 0;
   for (cupid_int k = 0; k < t->n; k++) {
     size_t c = (size_t)(t->ptr[k + 1] - t->ptr[k]);
-    cap += 2 * c + c * c;
+    cap += 1 + 2 * c + c * c;
   }
   CUPID_TRY(cupid_malloc(cap + 1, sizeof *key, "Arlequin pattern", &key));
-  for (cupid_int r = 0; r < n_pd; r++)
+  for (cupid_int r = 0; r < (Kpd ? n_pd : 0); r++)
     for (cupid_int q = Kpd->rowptr[r]; q < Kpd->rowptr[r + 1]; q++)
       key[n++] = (int64_t)r * nb + Kpd->col[q];
   for (cupid_int r = 0; r < n_fe; r++)
     for (cupid_int q = frp[r]; q < frp[r + 1]; q++)
       key[n++] = (int64_t)(n_pd + r) * nb + n_pd + fcol[q];
-  for (cupid_int k = 0; k < t->n; k++)
+  for (cupid_int k = 0; k < t->n; k++) {
+    key[n++] = (int64_t)t->node[k] * nb + t->node[k]; /* the penalty's own diagonal */
     for (cupid_int a = t->ptr[k]; a < t->ptr[k + 1]; a++) {
       cupid_int fa = n_pd + t->fe[a];
       key[n++] = (int64_t)t->node[k] * nb + fa;
@@ -232,6 +233,7 @@ static cupid_status build_pattern(cupid_cuf_beam beam, const cupid_csr_t *Kpd, c
       for (cupid_int b = t->ptr[k]; b < t->ptr[k + 1]; b++)
         key[n++] = (int64_t)fa * nb + n_pd + t->fe[b];
     }
+  }
   qsort(key, n, sizeof *key, cmp_key);
   CUPID_TRY(cupid_calloc((size_t)nb + 1, sizeof *rowptr, "Arlequin rows", &rowptr));
   CUPID_TRY(cupid_malloc(n + 1, sizeof *col, "Arlequin columns", &col));
@@ -331,8 +333,8 @@ static cupid_status check_options(cupid_cuf_beam beam, cupid_pd_grid grid,
 }
 
 /* PD nodal weights 1 - alpha(x_i). */
-static cupid_status pd_weights(cupid_pd_grid grid, const cupid_arlequin_options *o, double **wn,
-                               double *wmin) {
+cupid_status cpl_arlequin_pd_weights(cupid_pd_grid grid, const cupid_arlequin_options *o,
+                                     double **wn, double *wmin) {
   cupid_int n = cupid_pd_grid_num_nodes(grid);
   const double *x = cupid_pd_grid_coords(grid);
   layout_t L;
@@ -357,11 +359,11 @@ cupid_status cupid_arlequin_assemble(cupid_cuf_beam beam, cupid_pd_grid grid, cu
   *K = NULL;
   cupid_int n_pd = cupid_pd_grid_num_nodes(grid), n_fe = cupid_cuf_num_dofs(beam) / 3;
   double wmin;
-  CUPID_TRY(pd_weights(grid, o, &wn, &wmin));
-  CUPID_TRY(cupid_pd_operator_assemble_weighted(op, wn, &Kpd)); /* Eq. 12, node by node */
+  CUPID_TRY(cpl_arlequin_pd_weights(grid, o, &wn, &wmin));
+  if (op) CUPID_TRY(cupid_pd_operator_assemble_weighted(op, wn, &Kpd)); /* Eq. 12, node by node */
   CUPID_TRY(tied_build(beam, grid, o, &t));
   CUPID_TRY(build_pattern(beam, Kpd, &t, n_pd, n_fe, K));
-  CUPID_TRY(add_pd(Kpd, *K));
+  if (Kpd) CUPID_TRY(add_pd(Kpd, *K));
   layout_t L;
   cupid_cuf_weight_term terms[64];
   cupid_cuf_weight wfe;

@@ -99,4 +99,9 @@ void cpl_parts_free(cpl_parts *p);
 cupid_status cpl_partial_parts(cupid_cuf_beam beam, cupid_pd_grid grid,
                                const cupid_coupling_options *o, cupid_coupling_h c, cpl_parts *p);
 
+/** The Arlequin PD weights 1 - alpha(x_i) of the grid's nodes (*wn allocated; *wmin their
+ *  smallest) (src/coupling/arlequin.c). */
+cupid_status cpl_arlequin_pd_weights(cupid_pd_grid grid, const cupid_arlequin_options *o,
+                                     double **wn, double *wmin);
+
 #endif

@@ -1,6 +1,7 @@
-/* Krylov solve of the fictitious-node coupled system (paper 000 Eq. 38) on PETSc: GMRES (the
- * matrix is not symmetric) on the free DOFs, the operator a MATSHELL over the matrix-free
- * coupled operator (operator.c), the preconditioner built from the cheap matrix (Eq. 38 with a
+/* Krylov solve of a matrix-free coupled system on PETSc: the fictitious-node system (paper 000
+ * Eq. 38) by GMRES (the matrix is not symmetric), the Arlequin system (paper 004 Eq. 18) by CG
+ * (symmetric positive definite), on the free DOFs, the operator a MATSHELL over the matrix-free
+ * coupled operator (operator.c, arlequin_operator.c: cupid_linear_operator), the preconditioner built from the cheap matrix (Eq. 38 with a
  * short bond-based PD operator) by a PETSc PC: LU through UMFPACK by default (the cheap matrix
  * has ~19 blocks a PD row, so its factor is ~1/50 of the LPS one), ILU, GAMG or hypre on
  * request. Right preconditioning: GMRES minimises the true residual, so rtol is what the
@@ -31,7 +32,7 @@
  * PETSc vectors and computes only their rows of the product (cupid_coupling_operator_apply_rows:
  * the PD rows of its range of extended nodes), from the gathered x. */
 typedef struct {
-  cupid_coupling_operator A;
+  const cupid_linear_operator *A;
   cupid_int n, n_free, f0, f1;
   const cupid_int *gidx; /* free -> global DOF */
   double *xf, *yf;       /* full-length work vectors */
@@ -54,7 +55,9 @@ static PetscErrorCode shell_mult(Mat M, Vec x, Vec y) {
   /* The owned rows only (free DOFs ascend with the global DOFs). */
   const cupid_int d0 = s->f1 > s->f0 ? s->gidx[s->f0] : 0,
                   d1 = s->f1 > s->f0 ? s->gidx[s->f1 - 1] + 1 : 0;
-  if (cupid_coupling_operator_apply_rows(s->A, s->xf, d0, d1, s->yf) != CUPID_SUCCESS)
+  cupid_status st = s->A->apply_rows ? s->A->apply_rows(s->A->ctx, s->xf, d0, d1, s->yf)
+                                     : s->A->apply(s->A->ctx, s->xf, s->yf);
+  if (st != CUPID_SUCCESS)
     SETERRQ(PETSC_COMM_SELF, PETSC_ERR_LIB, "coupled operator: %s", cupid_error_message());
   PetscCall(VecGetArray(y, &ya));
   for (cupid_int k = s->f0; k < s->f1; k++) ya[k - s->f0] = s->yf[s->gidx[k]];
@@ -129,14 +132,15 @@ cleanup:
   return st;
 }
 
-cupid_status cupid_coupling_krylov_solve(const cupid_coupling_operator A, const cupid_csr_t *P,
-                                         const cupid_dirichlet_t *bc, const double *f, double *u,
-                                         const cupid_coupling_krylov_options *opts,
-                                         cupid_coupling_krylov_info *info) {
+cupid_status cupid_krylov_solve(const cupid_linear_operator *A, const cupid_csr_t *P,
+                                const cupid_dirichlet_t *bc, const double *f, double *u,
+                                const cupid_coupling_krylov_options *opts,
+                                cupid_coupling_krylov_info *info) {
   cupid_status st = CUPID_SUCCESS;
   cupid_coupling_krylov_info inf;
   memset(&inf, 0, sizeof inf);
-  cupid_int n = cupid_coupling_operator_size(A);
+  CUPID_CHECK(A && A->apply && P && bc && f && u, CUPID_ERR_ARGUMENT, "Krylov solve: NULL argument");
+  cupid_int n = A->n;
   CUPID_CHECK(bc->n == n && P->nrows * P->bs == n, CUPID_ERR_ARGUMENT,
               "operator (%lld DOFs), preconditioner (%lld) and conditions (%lld) differ",
               (long long)n, (long long)(P->nrows * P->bs), (long long)bc->n);
@@ -167,7 +171,7 @@ cupid_status cupid_coupling_krylov_solve(const cupid_coupling_operator A, const 
 
   /* b_f = f_f - (A u_c)_f */
   for (cupid_int d = 0; d < n; d++) xf[d] = bc->fixed[d] ? bc->value[d] : 0.0;
-  CUPID_TRY(cupid_coupling_operator_apply(A, xf, yf));
+  CUPID_TRY(A->apply(A->ctx, xf, yf));
   PCALL(VecCreateMPI(PETSC_COMM_WORLD, (PetscInt)(f1 - f0), (PetscInt)n_free, &b));
   PCALL(VecDuplicate(b, &x));
   PCALL(VecScatterCreateToAll(x, &ctx.toall, &ctx.xall));
@@ -185,9 +189,14 @@ cupid_status cupid_coupling_krylov_solve(const cupid_coupling_operator A, const 
   CUPID_TRY(free_block_aij(P, bc, f0, f1, &Pm));
   PCALL(KSPCreate(PETSC_COMM_WORLD, &ksp));
   PCALL(KSPSetOperators(ksp, S, Pm));
-  PCALL(KSPSetType(ksp, KSPGMRES));
-  PCALL(KSPGMRESSetRestart(ksp, opts && opts->restart > 0 ? opts->restart : 200));
-  PCALL(KSPSetPCSide(ksp, PC_RIGHT));
+  if (A->symmetric) { /* CG: left preconditioning only; the true residual is recomputed below */
+    PCALL(KSPSetType(ksp, KSPCG));
+    PCALL(KSPSetNormType(ksp, KSP_NORM_UNPRECONDITIONED));
+  } else {
+    PCALL(KSPSetType(ksp, KSPGMRES));
+    PCALL(KSPGMRESSetRestart(ksp, opts && opts->restart > 0 ? opts->restart : 200));
+    PCALL(KSPSetPCSide(ksp, PC_RIGHT));
+  }
   PCALL(KSPSetTolerances(ksp, opts && opts->rtol > 0 ? opts->rtol : 1e-10, 1e-300, PETSC_DEFAULT,
                          opts && opts->max_it > 0 ? opts->max_it : 2000));
   PCALL(KSPGetPC(ksp, &pc));
@@ -202,10 +211,8 @@ cupid_status cupid_coupling_krylov_solve(const cupid_coupling_operator A, const 
   }
   if (!strcmp(pct, "fieldsplit")) {
     /* Two fields: PD DOFs and FE DOFs (sub-solvers from -fieldsplit_pd_* / -fieldsplit_fe_*). */
-    cupid_coupling_info ci;
-    cupid_coupling_operator_get_info(A, &ci);
     cupid_int n_pd_free = 0;
-    while (n_pd_free < n_free && gidx[n_pd_free] < 3 * ci.n_real_pd) n_pd_free++;
+    while (n_pd_free < n_free && gidx[n_pd_free] < A->n_pd_dofs) n_pd_free++;
     /* the owned part of each field (PD DOFs come first) */
     cupid_int p0 = f0 < n_pd_free ? f0 : n_pd_free, p1 = f1 < n_pd_free ? f1 : n_pd_free;
     PetscInt *idx = NULL;
@@ -236,7 +243,7 @@ cupid_status cupid_coupling_krylov_solve(const cupid_coupling_operator A, const 
   inf.converged = reason > 0;
   PCType used;
   PCALL(PCGetType(pc, &used));
-  snprintf(inf.method, sizeof inf.method, "gmres+%s", used);
+  snprintf(inf.method, sizeof inf.method, "%s+%s", A->symmetric ? "cg" : "gmres", used);
 
   /* u = [x_f ; u_c]; the true residual, recomputed. */
   const PetscScalar *xa;
@@ -246,7 +253,7 @@ cupid_status cupid_coupling_krylov_solve(const cupid_coupling_operator A, const 
   for (cupid_int d = 0; d < n; d++) u[d] = bc->fixed[d] ? bc->value[d] : 0.0;
   for (cupid_int k = 0; k < n_free; k++) u[gidx[k]] = xa[k];
   PCALL(VecRestoreArrayRead(ctx.xall, &xa));
-  CUPID_TRY(cupid_coupling_operator_apply(A, u, yf));
+  CUPID_TRY(A->apply(A->ctx, u, yf));
   double r2 = 0.0, f2 = 0.0;
   for (cupid_int k = 0; k < n_free; k++) {
     double r = f[gidx[k]] - yf[gidx[k]];
@@ -257,8 +264,8 @@ cupid_status cupid_coupling_krylov_solve(const cupid_coupling_operator A, const 
   inf.residual = scale > 0 ? sqrt(r2) / scale : sqrt(r2);
   if (!inf.converged)
     st = CUPID_ERROR(CUPID_ERR_NUMERIC,
-                     "GMRES (%s) did not converge: %s after %d iterations, relative residual "
-                     "%.2e; try other -ksp_type / -pc_type options, or --solver direct",
+                     "the Krylov solve (%s) did not converge: %s after %d iterations, relative "
+                     "residual %.2e; try other -ksp_type / -pc_type options, or --solver direct",
                      inf.method, KSPConvergedReasons[reason], inf.iterations, inf.residual);
 cleanup:
   if (info) *info = inf;
@@ -279,10 +286,10 @@ cleanup:
 
 #else
 
-cupid_status cupid_coupling_krylov_solve(const cupid_coupling_operator A, const cupid_csr_t *P,
-                                         const cupid_dirichlet_t *bc, const double *f, double *u,
-                                         const cupid_coupling_krylov_options *opts,
-                                         cupid_coupling_krylov_info *info) {
+cupid_status cupid_krylov_solve(const cupid_linear_operator *A, const cupid_csr_t *P,
+                                const cupid_dirichlet_t *bc, const double *f, double *u,
+                                const cupid_coupling_krylov_options *opts,
+                                cupid_coupling_krylov_info *info) {
   (void)A, (void)P, (void)bc, (void)f, (void)u, (void)opts;
   if (info) memset(info, 0, sizeof *info);
   return CUPID_ERROR(CUPID_ERR_UNSUPPORTED,
@@ -291,3 +298,28 @@ cupid_status cupid_coupling_krylov_solve(const cupid_coupling_operator A, const 
 }
 
 #endif
+
+/* The fictitious-node operator as a cupid_linear_operator. */
+static cupid_status fict_apply(void *ctx, const double *x, double *y) {
+  return cupid_coupling_operator_apply(ctx, x, y);
+}
+
+static cupid_status fict_apply_rows(void *ctx, const double *x, cupid_int d0, cupid_int d1, double *y) {
+  return cupid_coupling_operator_apply_rows(ctx, x, d0, d1, y);
+}
+
+cupid_status cupid_coupling_krylov_solve(const cupid_coupling_operator A, const cupid_csr_t *P,
+                                         const cupid_dirichlet_t *bc, const double *f, double *u,
+                                         const cupid_coupling_krylov_options *opts,
+                                         cupid_coupling_krylov_info *info) {
+  CUPID_CHECK(A, CUPID_ERR_ARGUMENT, "Krylov solve: NULL operator");
+  cupid_coupling_info ci;
+  cupid_coupling_operator_get_info(A, &ci);
+  const cupid_linear_operator L = {.n = cupid_coupling_operator_size(A),
+                                   .apply = fict_apply,
+                                   .apply_rows = fict_apply_rows,
+                                   .ctx = A,
+                                   .symmetric = 0,
+                                   .n_pd_dofs = 3 * ci.n_real_pd};
+  return cupid_krylov_solve(&L, P, bc, f, u, opts, info);
+}

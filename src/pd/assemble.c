@@ -268,26 +268,42 @@ cleanup:
   return st;
 }
 
-/* The moduli enter every node's energy linearly (E_p = V [kappa_p/6 theta_p^2 + 15 mu_p /
- * (2 m_p) sum omega e^2 beta V], bond-based c_p), and theta_p, m_p and the surface factors do
- * not depend on them: scaling node p's moduli by w_p is weighting node p's energy by w_p. The
- * moduli are scaled in place for the assembly and restored from copies (bit-exact). */
-cupid_status cupid_pd_operator_assemble_weighted(cupid_pd_operator op, const double *w,
-                                                 cupid_csr *K) {
-  CUPID_CHECK(op && w && K, CUPID_ERR_ARGUMENT, "weighted assembly needs operator, weights, output");
-  const cupid_int n = op->nnodes;
-  for (cupid_int i = 0; i < n; i++)
+/* Weights must be finite and >= 0. */
+static cupid_status check_weights(const struct cupid_pd_operator_private *op, const double *w) {
+  for (cupid_int i = 0; i < op->nnodes; i++)
     CUPID_CHECK(w[i] >= 0.0 && isfinite(w[i]), CUPID_ERR_ARGUMENT,
                 "energy weight %g of PD node %lld: weights must be finite and >= 0", w[i],
                 (long long)i);
+  return CUPID_SUCCESS;
+}
+
+/* The moduli enter every node's energy linearly (E_p = V [kappa_p/6 theta_p^2 + 15 mu_p /
+ * (2 m_p) sum omega e^2 beta V], bond-based c_p), and theta_p, m_p and the surface factors do
+ * not depend on them: scaling node p's moduli by w_p is weighting node p's energy by w_p. */
+cupid_status cupid_pd_operator_scale_energy(cupid_pd_operator op, const double *w) {
+  CUPID_CHECK(op && w, CUPID_ERR_ARGUMENT, "energy scaling needs an operator and weights");
+  CUPID_CALL(check_weights(op, w));
+  double *moduli[3] = {op->kappa, op->mu, op->c};
+  for (int k = 0; k < 3; k++)
+    if (moduli[k])
+      for (cupid_int i = 0; i < op->nnodes; i++) moduli[k][i] *= w[i];
+  return CUPID_SUCCESS;
+}
+
+/* The moduli are scaled in place for the assembly and restored from copies (bit-exact). */
+cupid_status cupid_pd_operator_assemble_weighted(cupid_pd_operator op, const double *w,
+                                                 cupid_csr *K) {
+  CUPID_CHECK(op && w && K, CUPID_ERR_ARGUMENT, "weighted assembly needs operator, weights, output");
+  CUPID_CALL(check_weights(op, w));
+  const cupid_int n = op->nnodes;
   double *moduli[3] = {op->kappa, op->mu, op->c}, *saved[3] = {NULL, NULL, NULL};
   cupid_status st = CUPID_SUCCESS;
   for (int k = 0; k < 3; k++) {
     if (!moduli[k]) continue;
     CUPID_TRY(cupid_malloc((size_t)n, sizeof *saved[k], "saved PD moduli", &saved[k]));
     memcpy(saved[k], moduli[k], (size_t)n * sizeof *saved[k]);
-    for (cupid_int i = 0; i < n; i++) moduli[k][i] *= w[i];
   }
+  CUPID_TRY(cupid_pd_operator_scale_energy(op, w));
   st = cupid_pd_operator_assemble(op, K);
 cleanup:
   for (int k = 0; k < 3; k++)

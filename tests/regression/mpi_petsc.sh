@@ -3,7 +3,10 @@
 #  1. a small coupled bar (fictitious nodes, non-symmetric Eq. 38: GMRES), assembled MPIAIJ
 #     (-cupid_coupled_assembled) and matrix-free (the default) on 2 ranks,
 #  1b. the same bar on one process: matrix-free Eq. 38 (src/coupling/operator.c, krylov.c),
-#  1c. the coupled bar with Arlequin (symmetric: CG + GAMG on the assembled system), 2 ranks,
+#  1c. the coupled bar with Arlequin (symmetric: CG), 2 ranks: matrix-free (the default: the
+#      node-weighted PD operator, CG + MUMPS LU of the cheap twin) and assembled
+#      (-cupid_coupled_assembled: CG + GAMG on K's rows); the Arlequin panel (two regions over
+#      part of the section) matrix-free on 2 ranks,
 #  2. a small PD-only LPS block (matrix-free MATSHELL + halo exchange, CG + GAMG), with a
 #     prescribed non-zero displacement (lifted right-hand side),
 #  2b. a PD-only column long in z, split into slabs: each rank builds only its z layers and the
@@ -78,12 +81,20 @@ echo "== coupled bar, one process: matrix-free Eq. 38 (GMRES + LU of the bond-ba
 compare "$tmp/bar_direct" "$tmp/bar_mf" "coupled bar, matrix-free"
 python3 -c "import json,sys; s=json.load(open(sys.argv[1]))['solver']; assert s['ranks']==1 and s['operator']=='matrix-free' and s['ksp_type']=='gmres', s" "$tmp/bar_mf/summary.json"
 
-echo "== coupled bar, Arlequin (two overlaps, LPS weighted node by node: symmetric, CG + GAMG), 2 ranks"
+echo "== coupled bar, Arlequin (two overlaps, LPS weighted node by node: symmetric, CG), 2 ranks"
 sed 's/horizon: 3.0/horizon: 1.5/' "$CUPID_SOURCE_DIR/examples/bar/bar_coupled_arlequin_l9.yaml" > "$tmp/arl.yaml"
 "$CUPID" run "$tmp/arl.yaml" -o "$tmp/arl_direct" --solver direct --quiet
 "$MPIEXEC" -n 2 "$CUPID" run "$tmp/arl.yaml" -o "$tmp/arl_petsc" --solver petsc --quiet
-compare "$tmp/arl_direct" "$tmp/arl_petsc" "coupled bar, Arlequin"
-python3 -c "import json,sys; s=json.load(open(sys.argv[1]))['solver']; assert s['ranks']==2 and s['ksp_type']=='cg', s" "$tmp/arl_petsc/summary.json"
+compare "$tmp/arl_direct" "$tmp/arl_petsc" "coupled bar, Arlequin, matrix-free"
+python3 -c "import json,sys; s=json.load(open(sys.argv[1]))['solver']; assert s['ranks']==2 and s['ksp_type']=='cg' and s['operator']=='matrix-free', s" "$tmp/arl_petsc/summary.json"
+"$MPIEXEC" -n 2 "$CUPID" run "$tmp/arl.yaml" -o "$tmp/arl_asm" --solver petsc --quiet -cupid_coupled_assembled
+compare "$tmp/arl_direct" "$tmp/arl_asm" "coupled bar, Arlequin, assembled"
+python3 -c "import json,sys; s=json.load(open(sys.argv[1]))['solver']; assert s['ranks']==2 and s['ksp_type']=='cg' and s['operator']=='assembled', s" "$tmp/arl_asm/summary.json"
+
+echo "== panel, Arlequin (two stringer regions over part of the section), matrix-free, 2 ranks"
+"$CUPID" run "$CUPID_SOURCE_DIR/examples/panel/panel_pd_l9_arlequin.yaml" -o "$tmp/parl_direct" --solver direct --quiet
+"$MPIEXEC" -n 2 "$CUPID" run "$CUPID_SOURCE_DIR/examples/panel/panel_pd_l9_arlequin.yaml" -o "$tmp/parl_petsc" --solver petsc --quiet
+compare "$tmp/parl_direct" "$tmp/parl_petsc" "panel, Arlequin, matrix-free"
 
 echo "== PD-only LPS block, matrix-free, 2 ranks"
 "$CUPID" run "$models/pd_block.yaml" -o "$tmp/pd_direct" --solver direct --quiet

@@ -36,6 +36,7 @@ typedef struct {
   cupid_pd_grid grid;
   cupid_pd_operator op;
   cupid_pd_material mat;
+  cupid_pd_operator_options po;
   cupid_int n_pd, ndof;
   cupid_arlequin_options o;
 } truss;
@@ -54,11 +55,11 @@ static void truss_build(truss *t, double kappa) {
   cupid_pd_grid_options go = {.spacing = 0.015, .dimension = 1, .area = 1.0};
   CUPID_ASSERT_OK(cupid_pd_grid_create(&go, 1, &region, &rmat, &t->grid));
   t->mat = (cupid_pd_material){.E = E_MOD, .nu = 0.0};
-  cupid_pd_operator_options po = {.horizon = 0.045, .model = CUPID_PD_BOND,
-                                  .influence = CUPID_INFLUENCE_CONSTANT,
-                                  .partial_volume = CUPID_PARTIAL_NONE, .materials = &t->mat,
-                                  .n_materials = 1};
-  CUPID_ASSERT_OK(cupid_pd_operator_create(t->grid, &po, &t->op));
+  t->po = (cupid_pd_operator_options){.horizon = 0.045, .model = CUPID_PD_BOND,
+                                      .influence = CUPID_INFLUENCE_CONSTANT,
+                                      .partial_volume = CUPID_PARTIAL_NONE, .materials = &t->mat,
+                                      .n_materials = 1};
+  CUPID_ASSERT_OK(cupid_pd_operator_create(t->grid, &t->po, &t->op));
   t->n_pd = cupid_pd_grid_num_nodes(t->grid);
   assert_int_equal(t->n_pd, 40);
   CUPID_ASSERT_OK(cupid_cuf_set_dof_offset(t->beam, 3 * t->n_pd));
@@ -111,6 +112,52 @@ static double diff_scaled(const cupid_csr_t *A, const cupid_csr_t *B, double s) 
     }
   return d;
 }
+
+/* The matrix-free operator against the assembled K: K x to 1e-13 of |K| |x| (the PD rows are
+ * summed in another order), rows split in three ranges equal to the whole product (1e-13:
+ * apply_range sums a row's bonds in another order than the stencil sweep), and the cheap
+ * preconditioner symmetric with no more blocks than K. */
+static void check_operator(cupid_cuf_beam beam, cupid_pd_grid grid,
+                           const cupid_pd_operator_options *po, const cupid_arlequin_options *o,
+                           const cupid_csr_t *K) {
+  cupid_arlequin_operator A = NULL;
+  CUPID_ASSERT_OK(cupid_arlequin_operator_create(beam, grid, po, o, &A, NULL));
+  cupid_int n = cupid_arlequin_operator_size(A);
+  assert_int_equal(n, 3 * K->nrows);
+  double *x = NULL, *y = NULL, *z = NULL, *yr = NULL;
+  CUPID_ASSERT_OK(cupid_malloc((size_t)n, sizeof *x, "x", &x));
+  CUPID_ASSERT_OK(cupid_malloc((size_t)n, sizeof *y, "y", &y));
+  CUPID_ASSERT_OK(cupid_malloc((size_t)n, sizeof *z, "z", &z));
+  CUPID_ASSERT_OK(cupid_malloc((size_t)n, sizeof *yr, "yr", &yr));
+  uint64_t seed = 11;
+  double xm = 0.0;
+  for (cupid_int d = 0; d < n; d++) x[d] = cupid_test_random(&seed), xm = fmax(xm, fabs(x[d]));
+  cupid_csr_matvec(K, x, z);
+  CUPID_ASSERT_OK(cupid_arlequin_operator_apply(A, x, y));
+  double e = 0.0;
+  for (cupid_int d = 0; d < n; d++) e = fmax(e, fabs(y[d] - z[d]));
+  const cupid_int cut[4] = {0, n / 3 + 1, 2 * n / 3 - 1, n};
+  for (int k = 0; k < 3; k++) CUPID_ASSERT_OK(cupid_arlequin_operator_apply_rows(A, x, cut[k], cut[k + 1], yr));
+  double er = 0.0;
+  for (cupid_int d = 0; d < n; d++) er = fmax(er, fabs(yr[d] - y[d]));
+  cupid_csr P = NULL;
+  CUPID_ASSERT_OK(cupid_arlequin_preconditioner(A, 0.0, &P));
+  printf("matrix-free Arlequin: max |A x - K x| %.1e of |K| |x|, rows in 3 ranges %.1e; "
+         "preconditioner %lld blocks (K %lld), asymmetry %.1e\n",
+         e / (max_abs(K) * xm), er / (max_abs(K) * xm), (long long)cupid_csr_nnz(P), (long long)cupid_csr_nnz(K),
+         cupid_csr_asymmetry(P));
+  assert_true(e <= 1e-13 * max_abs(K) * xm);
+  assert_true(er <= 1e-13 * max_abs(K) * xm);
+  assert_true(cupid_csr_asymmetry(P) <= 1e-14);
+  assert_true(cupid_csr_nnz(P) <= cupid_csr_nnz(K)); /* equal when the model is the cheap one */
+  cupid_csr_destroy(&P);
+  cupid_free(&x);
+  cupid_free(&y);
+  cupid_free(&z);
+  cupid_free(&yr);
+  cupid_arlequin_operator_destroy(&A);
+}
+
 
 static void test_weighted_cuf(void **state) {
   (void)state;
@@ -174,6 +221,7 @@ static void test_coupled_matrix(void **state) {
     pd_mass[i] = RHO * V;
     expect += (1.0 - cupid_arlequin_alpha(&t.o.weight, x[3 * i + 1])) * RHO * V;
   }
+  check_operator(t.beam, t.grid, &t.po, &t.o, K);
   CUPID_ASSERT_OK(cupid_csr_duplicate(K, &M));
   cupid_csr_zero(M);
   CUPID_ASSERT_OK(cupid_arlequin_mass(t.beam, t.grid, &t.o, pd_mass, M, NULL));
@@ -381,6 +429,7 @@ static void test_3d(void **state) {
  *    rho (V_beam - int w dV) + sum_i w_i rho V, with int w dV = 3 x 6 x 8 = 144 for the
  *    linear (LPS case) and smooth (bond-based case) ramps (both ramp integrals are W/2): the
  *    section-weighted quadrature of the beam is exact (1e-12 relative);
+ *  - the matrix-free operator (check_operator());
  *  - end traction F at y = 24, clamp at y = 0: the reaction balances F (1e-9), and the gap
  *    between the tied PD nodes and the beam is small against u (< 1e-3 of max |u|). */
 static double ramp_w(double c, double lo, double hi, int fe_below, cupid_weight kind) {
@@ -465,6 +514,8 @@ static void case_partial(cupid_pd_model_kind model) {
     for (cupid_int q = 0; q < ndof; q++) fm = fmax(fm, fabs(r[q]));
     assert_true(fm <= 1e-12 * s);
   }
+  check_operator(beam, grid, &po, &o, K);
+  check_operator(beam, grid, &po, &o, K);
   CUPID_ASSERT_OK(cupid_csr_duplicate(K, &M));
   cupid_csr_zero(M);
   CUPID_ASSERT_OK(cupid_arlequin_mass(beam, grid, &o, pm, M, NULL));
