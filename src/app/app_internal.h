@@ -34,6 +34,7 @@ typedef struct {
   cupid_dynamics_energy energy; /**< at the last step */
   cupid_int steps;
   int lumped, done;
+  int matrix_free; /**< central differences on a matrix-free operator (no assembled K) */
 } cupid_job_dynamic;
 
 /** Where a sampled point lies. */
@@ -75,6 +76,10 @@ typedef struct {
   cupid_coupling_h coupling;
   cupid_arlequin_region *arlequin_regions; /**< method arlequin: the layout (owned) */
   int n_arlequin_regions;
+  /** A matrix-free K of the whole system (a coupled model's operator, borrowed): explicit
+   *  dynamics applies it instead of assembling job->K. */
+  cupid_status (*k_apply)(void *ctx, const double *x, double *y);
+  void *k_ctx;
   cupid_int n_fictitious;  /**< fictitious PD nodes */
 
   double load_sum[3], reaction_sum[3];

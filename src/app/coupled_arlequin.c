@@ -554,18 +554,57 @@ cleanup:
   return st;
 }
 
+/* Central differences with a lumped mass need K only through products: the matrix-free
+ * operator, no assembled K (cupid_app_run_dynamic() takes job->k_apply). */
+static int explicit_matrix_free(const cupid_job *job) {
+  const cupid_dynamic *d = &job->model->analysis.dynamic;
+  return job->model->analysis.type == CUPID_ANALYSIS_DYNAMIC &&
+         d->integrator == CUPID_INTEGRATOR_CENTRAL && d->lumped_mass;
+}
+
+static cupid_status k_apply(void *ctx, const double *x, double *y) {
+  return cupid_arlequin_operator_apply(ctx, x, y);
+}
+
+static cupid_status dynamic_matrix_free(cupid_job *job) {
+  cupid_status st = CUPID_SUCCESS;
+  cupid_arlequin_operator A = NULL;
+  cupid_arlequin_options o = options(job);
+  cupid_arlequin_info info;
+  double t0 = cupid_wtime();
+  CUPID_TRY(cupid_arlequin_operator_create(job->beam, job->grid, &job->pd_options, &o, &A, &info));
+  cupid_job_phase_end(job, CUPID_PHASE_COUPLING, t0);
+  cupid_job_progress(job,
+                     "coupling (Arlequin, matrix-free for central differences): %d region(s), "
+                     "%lld tied PD nodes, min PD weight %.3g; operator %.1f MB",
+                     job->n_arlequin_regions, (long long)info.n_tied, info.pd_weight_min,
+                     (double)cupid_arlequin_operator_bytes(A) / 1e6);
+  job->k_apply = k_apply;
+  job->k_ctx = A;
+  st = cupid_app_run_dynamic(job);
+  job->k_apply = NULL;
+  job->k_ctx = NULL;
+  CUPID_TRY(st);
+  st = report_gap(job);
+cleanup:
+  cupid_arlequin_operator_destroy(&A);
+  return st;
+}
+
 cupid_status cupid_app_arlequin_run(cupid_job *job) {
   if (job->model->analysis.type == CUPID_ANALYSIS_EVALUATE) return evaluate(job);
   CUPID_CALL(cupid_app_estimate(job, 0));
-  if (!matrix_free(job)) CUPID_CALL(assemble(job));
+  const int mf_static = matrix_free(job), mf_dynamic = explicit_matrix_free(job);
+  if (!mf_static && !mf_dynamic) CUPID_CALL(assemble(job));
   CUPID_CALL(apply_constraints(job));
   CUPID_CALL(cupid_dirichlet_finalize(job->bc));
   CUPID_CALL(apply_loads(job));
+  if (mf_dynamic) return dynamic_matrix_free(job);
   if (job->model->analysis.type == CUPID_ANALYSIS_DYNAMIC) {
     CUPID_CALL(cupid_app_run_dynamic(job));
     return report_gap(job);
   }
-  return matrix_free(job) ? solve_matrix_free(job) : solve(job);
+  return mf_static ? solve_matrix_free(job) : solve(job);
 }
 
 cupid_status cupid_app_arlequin_mass(cupid_job *job, cupid_csr *M, double **m_lumped) {

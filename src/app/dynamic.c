@@ -382,11 +382,13 @@ static cupid_status finish_outputs(dyn_output *o) {
   return CUPID_SUCCESS;
 }
 
-/* PD-only central differences run on the matrix-free operator (issue 6): no assembled K,
- * no factor, memory O(nodes), so the direct-solver memory estimate does not apply. */
-static int pd_matrix_free(const cupid_job *job) {
-  return job->grid && !job->beam && !job->K &&
-         job->model->analysis.dynamic.integrator == CUPID_INTEGRATOR_CENTRAL;
+/* Central differences run on a matrix-free operator (issue 6): PD-only models on the PD
+ * operator, coupled models on the one they set in job->k_apply (Arlequin with a lumped mass).
+ * No assembled K, no factor, memory O(nodes), so the direct-solver memory estimate does not
+ * apply. */
+static int matrix_free(const cupid_job *job) {
+  if (job->model->analysis.dynamic.integrator != CUPID_INTEGRATOR_CENTRAL || job->K) return 0;
+  return job->k_apply || (job->grid && !job->beam);
 }
 
 static cupid_status pd_apply(void *op, const double *x, double *y) {
@@ -400,7 +402,7 @@ cupid_status cupid_app_run_dynamic(cupid_job *job) {
   cupid_csr M = NULL;
   double *m_lumped = NULL, *v = NULL, t0 = cupid_wtime();
   dyn_output o = {.job = job};
-  const int mf = pd_matrix_free(job);
+  const int mf = matrix_free(job);
   if (!mf) CUPID_TRY(cupid_app_estimate(job, 0));
   /* A coupled pipeline assembles its global K (with the coupling terms) before calling. */
   if (!job->K && job->grid && !mf) CUPID_TRY(cupid_pd_operator_assemble(job->op, &job->K));
@@ -422,6 +424,7 @@ cupid_status cupid_app_run_dynamic(cupid_job *job) {
   opt.rayleigh_stiffness = d->rayleigh_stiffness;
   job->dyn.steps = opt.steps;
   job->dyn.lumped = m_lumped != NULL;
+  job->dyn.matrix_free = mf;
   cupid_dynamics_system sys = {.K = job->K, .M = M, .m_lumped = m_lumped, .bc = job->bc,
                                .f = job->f_ext};
   if (is_lagrange(job))
@@ -432,7 +435,9 @@ cupid_status cupid_app_run_dynamic(cupid_job *job) {
                      d->integrator == CUPID_INTEGRATOR_NEWMARK ? "newmark" : "central",
                      (long long)opt.steps, opt.dt, m_lumped ? "lumped" : "consistent");
   t0 = cupid_wtime();
-  cupid_dynamics_explicit_system esys = {.n = job->ndof, .apply = pd_apply, .ctx = job->op,
+  cupid_dynamics_explicit_system esys = {.n = job->ndof,
+                                         .apply = job->k_apply ? job->k_apply : pd_apply,
+                                         .ctx = job->k_apply ? job->k_ctx : (void *)job->op,
                                          .m_lumped = m_lumped, .bc = job->bc, .f = job->f_ext};
   st = mf ? cupid_dynamics_run_explicit(&esys, &opt, job->u, v, monitor, &o, &job->dyn.info)
           : cupid_dynamics_run(&sys, &opt, job->u, v, monitor, &o, &job->dyn.info);
@@ -447,7 +452,7 @@ cupid_status cupid_app_run_dynamic(cupid_job *job) {
     job->solve = job->dyn.info.factor;
     job->solved = 1;
   }
-  if (mf) CUPID_TRY(cupid_pd_operator_apply(job->op, job->u, job->f_int));
+  if (mf) CUPID_TRY(esys.apply(esys.ctx, job->u, job->f_int));
   else cupid_csr_matvec(job->K, job->u, job->f_int);
   t0 = cupid_wtime();
   CUPID_TRY(finish_outputs(&o));
@@ -478,6 +483,7 @@ void cupid_app_dynamic_json(cupid_json js, const cupid_job *job) {
   cupid_json_number(js, "duration", d->dt * (double)job->dyn.steps);
   cupid_json_integer(js, "every", d->every);
   cupid_json_string(js, "mass", job->dyn.lumped ? "lumped" : "consistent");
+  cupid_json_string(js, "operator", job->dyn.matrix_free ? "matrix-free" : "assembled");
   if (nm) {
     cupid_json_number(js, "newmark_beta", d->newmark_beta);
     cupid_json_number(js, "newmark_gamma", d->newmark_gamma);
