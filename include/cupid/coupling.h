@@ -424,11 +424,10 @@ cupid_status cupid_coupling_krylov_solve(const cupid_coupling_operator A, const 
                                          const cupid_dirichlet_t *bc, const double *f, double *u,
                                          const cupid_coupling_krylov_options *opts,
                                          cupid_coupling_krylov_info *info);
-/** The Arlequin system by CG (cupid_krylov_solve() with the matrix-free Arlequin operator). */
-cupid_status cupid_arlequin_krylov_solve(const cupid_arlequin_operator A, const cupid_csr_t *P,
-                                         const cupid_dirichlet_t *bc, const double *f, double *u,
-                                         const cupid_coupling_krylov_options *opts,
-                                         cupid_coupling_krylov_info *info);
+/** The fictitious-node operator as a cupid_linear_operator (GMRES; A borrowed). */
+void cupid_coupling_operator_linear(const cupid_coupling_operator A, cupid_linear_operator *L);
+/** The Arlequin operator as a cupid_linear_operator (symmetric: CG; A borrowed). */
+void cupid_arlequin_operator_linear(const cupid_arlequin_operator A, cupid_linear_operator *L);
 /* ---- end of the matrix-free coupling block ---- */
 
 #ifdef __cplusplus

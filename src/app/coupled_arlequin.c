@@ -523,30 +523,33 @@ static int matrix_free(const cupid_job *job) {
          !cupid_petsc_has_option("-cupid_coupled_assembled");
 }
 
-static cupid_status solve_matrix_free(cupid_job *job) {
-  cupid_status st = CUPID_SUCCESS;
-  cupid_arlequin_operator A = NULL;
-  cupid_csr P = NULL;
+/* The matrix-free operator and, when P is given, the cheap preconditioner matrix (the
+ * coupling phase). */
+static cupid_status create_operator(cupid_job *job, cupid_arlequin_operator *A, cupid_csr *P) {
   cupid_arlequin_options o = options(job);
   cupid_arlequin_info info;
   double t0 = cupid_wtime();
-  CUPID_TRY(cupid_arlequin_operator_create(job->beam, job->grid, &job->pd_options, &o, &A, &info));
-  CUPID_TRY(cupid_arlequin_preconditioner(A, 1.5, &P));
+  CUPID_CALL(cupid_arlequin_operator_create(job->beam, job->grid, &job->pd_options, &o, A, &info));
+  if (P) CUPID_CALL(cupid_arlequin_preconditioner(*A, 1.5, P));
   cupid_job_phase_end(job, CUPID_PHASE_COUPLING, t0);
   cupid_job_progress(job,
                      "coupling (Arlequin, matrix-free): %d region(s), %lld tied PD nodes, min PD "
                      "weight %.3g; operator %.1f MB, preconditioner matrix %.1f MB",
                      job->n_arlequin_regions, (long long)info.n_tied, info.pd_weight_min,
-                     (double)cupid_arlequin_operator_bytes(A) / 1e6, (double)cupid_csr_bytes(P) / 1e6);
+                     (double)cupid_arlequin_operator_bytes(*A) / 1e6,
+                     P ? (double)cupid_csr_bytes(*P) / 1e6 : 0.0);
+  return CUPID_SUCCESS;
+}
+
+static cupid_status solve_matrix_free(cupid_job *job) {
+  cupid_status st = CUPID_SUCCESS;
+  cupid_arlequin_operator A = NULL;
+  cupid_csr P = NULL;
+  CUPID_TRY(create_operator(job, &A, &P));
   cupid_coupling_krylov_options ko = {.factor_package = "mumps"};
-  cupid_coupling_krylov_info ki;
-  st = cupid_arlequin_krylov_solve(A, P, job->bc, job->f_ext, job->u, &ko, &ki);
-  cupid_app_record_krylov(job, &ki);
-  CUPID_TRY(st);
-  job->solved = 1;
-  CUPID_TRY(cupid_arlequin_operator_apply(A, job->u, job->f_int));
-  cupid_job_progress(job, "solve: %s, %lld equations, %d iterations, residual %.2e", ki.method,
-                     (long long)job->solve.n, ki.iterations, ki.residual);
+  cupid_linear_operator L;
+  cupid_arlequin_operator_linear(A, &L);
+  CUPID_TRY(cupid_app_krylov_solve(job, &L, P, &ko));
   st = report_gap(job);
 cleanup:
   cupid_csr_destroy(&P);
@@ -569,16 +572,7 @@ static cupid_status k_apply(void *ctx, const double *x, double *y) {
 static cupid_status dynamic_matrix_free(cupid_job *job) {
   cupid_status st = CUPID_SUCCESS;
   cupid_arlequin_operator A = NULL;
-  cupid_arlequin_options o = options(job);
-  cupid_arlequin_info info;
-  double t0 = cupid_wtime();
-  CUPID_TRY(cupid_arlequin_operator_create(job->beam, job->grid, &job->pd_options, &o, &A, &info));
-  cupid_job_phase_end(job, CUPID_PHASE_COUPLING, t0);
-  cupid_job_progress(job,
-                     "coupling (Arlequin, matrix-free for central differences): %d region(s), "
-                     "%lld tied PD nodes, min PD weight %.3g; operator %.1f MB",
-                     job->n_arlequin_regions, (long long)info.n_tied, info.pd_weight_min,
-                     (double)cupid_arlequin_operator_bytes(A) / 1e6);
+  CUPID_TRY(create_operator(job, &A, NULL)); /* central differences need no preconditioner */
   job->k_apply = k_apply;
   job->k_ctx = A;
   st = cupid_app_run_dynamic(job);

@@ -72,7 +72,9 @@ void cupid_app_coupled_setup_free(cupid_coupled_setup *s) {
   cupid_free(&s->mats);
 }
 
-void cupid_app_record_krylov(cupid_job *job, const cupid_coupling_krylov_info *ki) {
+/* Record a matrix-free Krylov solve in the job: job->solve and the factorisation / solve
+ * phases. */
+static void record_krylov(cupid_job *job, const cupid_coupling_krylov_info *ki) {
   job->phases[CUPID_PHASE_FACTORISATION] =
       (cupid_phase_record){ki->time_setup, cupid_peak_memory(), 1};
   job->phases[CUPID_PHASE_SOLVE] = (cupid_phase_record){ki->time_solve, cupid_peak_memory(), 1};
@@ -93,6 +95,19 @@ void cupid_app_record_krylov(cupid_job *job, const cupid_coupling_krylov_info *k
            ki->converged ? "CONVERGED" : "DIVERGED");
 }
 
+cupid_status cupid_app_krylov_solve(cupid_job *job, const cupid_linear_operator *L,
+                                    const cupid_csr_t *P, const cupid_coupling_krylov_options *ko) {
+  cupid_coupling_krylov_info ki;
+  cupid_status st = cupid_krylov_solve(L, P, job->bc, job->f_ext, job->u, ko, &ki);
+  record_krylov(job, &ki);
+  CUPID_CALL(st);
+  job->solved = 1;
+  CUPID_CALL(L->apply(L->ctx, job->u, job->f_int));
+  cupid_job_progress(job, "solve: %s, %lld equations, %d iterations, residual %.2e", ki.method,
+                     (long long)job->solve.n, ki.iterations, ki.residual);
+  return CUPID_SUCCESS;
+}
+
 cupid_status cupid_app_coupled_solve_mf(cupid_job *job, const cupid_coupling_options *co,
                                         const cupid_coupling_krylov_options *ko) {
   cupid_status st = CUPID_SUCCESS;
@@ -111,14 +126,9 @@ cupid_status cupid_app_coupled_solve_mf(cupid_job *job, const cupid_coupling_opt
                      "%.1f MB",
                      ci.n_interfaces, (long long)ci.n_fictitious_pd, (long long)ci.n_fictitious_fe,
                      (double)cupid_coupling_operator_bytes(A) / 1e6, (double)cupid_csr_bytes(P) / 1e6);
-  cupid_coupling_krylov_info ki;
-  st = cupid_coupling_krylov_solve(A, P, job->bc, job->f_ext, job->u, ko, &ki);
-  cupid_app_record_krylov(job, &ki);
-  CUPID_TRY(st);
-  job->solved = 1;
-  CUPID_TRY(cupid_coupling_operator_apply(A, job->u, job->f_int));
-  cupid_job_progress(job, "solve: %s, %lld equations, %d iterations, residual %.2e", ki.method,
-                     (long long)job->solve.n, ki.iterations, ki.residual);
+  cupid_linear_operator L;
+  cupid_coupling_operator_linear(A, &L);
+  CUPID_TRY(cupid_app_krylov_solve(job, &L, P, ko));
 cleanup:
   cupid_csr_destroy(&P);
   cupid_coupling_operator_destroy(&A);

@@ -36,8 +36,11 @@ void cupid_app_coupled_setup_free(cupid_coupled_setup *s);
 cupid_status cupid_app_coupled_solve_mf(cupid_job *job, const cupid_coupling_options *co,
                                         const cupid_coupling_krylov_options *ko);
 
-/** Record a matrix-free Krylov solve in the job: job->solve (method "petsc", matrix_free 1,
- *  ksp and pc types, n, residual, iterations, times) and the factorisation / solve phases. */
-void cupid_app_record_krylov(cupid_job *job, const cupid_coupling_krylov_info *ki);
+/** Solve the job's system K u = f_ext with its conditions by cupid_krylov_solve() on the
+ *  matrix-free @p L, preconditioned by @p P, and record it: job->u, job->f_int (= K u),
+ *  job->solve (method "petsc", matrix_free 1, ksp and pc types, n, residual, iterations,
+ *  times), the factorisation / solve phases and job->solved. */
+cupid_status cupid_app_krylov_solve(cupid_job *job, const cupid_linear_operator *L,
+                                    const cupid_csr_t *P, const cupid_coupling_krylov_options *ko);
 
 #endif

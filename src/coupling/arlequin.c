@@ -14,6 +14,8 @@
 
 /* Lattice tolerance (relative to h) for "a PD node lies in the overlap". */
 #define ARL_TOL 1e-9
+/* Terms of the beam's weight: one for the regions without a section part, one per other. */
+#define ARL_MAX_TERMS 64
 
 double cupid_arlequin_alpha(const cupid_arlequin_weight *w, double y) {
   double len = w->hi - w->lo;
@@ -123,8 +125,13 @@ static double region_section(void *ctx, double x, double z) {
   return region_weight_axes(ctx, p, 5);
 }
 
-/* Fill w (terms: room for L->n + 1) with the beam's weight. */
-static void beam_weight(const layout_t *L, cupid_cuf_weight_term *terms, cupid_cuf_weight *w) {
+/* The layout of o into *L and the beam's weight into *w (terms: ARL_MAX_TERMS; *w points
+ * into terms and L, which must outlive its use). */
+static cupid_status beam_weight(const cupid_arlequin_options *o, layout_t *L,
+                                cupid_cuf_weight_term *terms, cupid_cuf_weight *w) {
+  layout_of(o, L);
+  CUPID_CHECK(L->n < ARL_MAX_TERMS, CUPID_ERR_ARGUMENT, "Arlequin: at most %d regions, not %d",
+              ARL_MAX_TERMS - 1, L->n);
   int n = 0;
   terms[n++] = (cupid_cuf_weight_term){.axis = axis_term, .axis_ctx = (void *)L};
   for (int r = 0; r < L->n; r++)
@@ -134,6 +141,7 @@ static void beam_weight(const layout_t *L, cupid_cuf_weight_term *terms, cupid_c
                                            .section = region_section,
                                            .section_ctx = (void *)&L->r[r]};
   *w = (cupid_cuf_weight){.constant = 0.0, .n_terms = n, .terms = terms};
+  return CUPID_SUCCESS;
 }
 
 /* p lies in an overlap: inside a region and within one of its ramps' slabs (closed). */
@@ -365,11 +373,9 @@ cupid_status cupid_arlequin_assemble(cupid_cuf_beam beam, cupid_pd_grid grid, cu
   CUPID_TRY(build_pattern(beam, Kpd, &t, n_pd, n_fe, K));
   if (Kpd) CUPID_TRY(add_pd(Kpd, *K));
   layout_t L;
-  cupid_cuf_weight_term terms[64];
+  cupid_cuf_weight_term terms[ARL_MAX_TERMS];
   cupid_cuf_weight wfe;
-  layout_of(o, &L);
-  CUPID_TRY_CHECK(L.n < 64, CUPID_ERR_ARGUMENT, "Arlequin: at most 63 regions, not %d", L.n);
-  beam_weight(&L, terms, &wfe);
+  CUPID_TRY(beam_weight(o, &L, terms, &wfe));
   CUPID_TRY(cupid_cuf_assemble_weight_add(beam, &wfe, *K));
   CUPID_TRY(add_penalty(&t, o->penalty, n_pd, *K));
   if (info) *info = (cupid_arlequin_info){.n_tied = t.n, .components = t.comps, .pd_weight_min = wmin};
@@ -390,11 +396,9 @@ cupid_status cupid_arlequin_mass(cupid_cuf_beam beam, cupid_pd_grid grid,
   cupid_int n = cupid_pd_grid_num_nodes(grid);
   const double *x = cupid_pd_grid_coords(grid);
   layout_t L;
-  cupid_cuf_weight_term terms[64];
+  cupid_cuf_weight_term terms[ARL_MAX_TERMS];
   cupid_cuf_weight wfe;
-  layout_of(o, &L);
-  CUPID_CHECK(L.n < 64, CUPID_ERR_ARGUMENT, "Arlequin: at most 63 regions, not %d", L.n);
-  beam_weight(&L, terms, &wfe);
+  CUPID_CALL(beam_weight(o, &L, terms, &wfe));
   for (cupid_int i = 0; i < n; i++) {
     double m = pd_weight_at(&L, x + 3 * i) * pd_mass[i]; /* Eq. 14 */
     if (lumped) {

@@ -129,16 +129,11 @@ static cupid_status lin_apply_rows(void *ctx, const double *x, cupid_int d0, cup
   return cupid_arlequin_operator_apply_rows(ctx, x, d0, d1, y);
 }
 
-cupid_status cupid_arlequin_krylov_solve(const cupid_arlequin_operator A, const cupid_csr_t *P,
-                                         const cupid_dirichlet_t *bc, const double *f, double *u,
-                                         const cupid_coupling_krylov_options *opts,
-                                         cupid_coupling_krylov_info *info) {
-  CUPID_CHECK(A, CUPID_ERR_ARGUMENT, "Krylov solve: NULL operator");
-  const cupid_linear_operator L = {.n = A->n,
-                                   .apply = lin_apply,
-                                   .apply_rows = lin_apply_rows,
-                                   .ctx = A,
-                                   .symmetric = 1,
-                                   .n_pd_dofs = 3 * A->n_pd};
-  return cupid_krylov_solve(&L, P, bc, f, u, opts, info);
+void cupid_arlequin_operator_linear(const cupid_arlequin_operator A, cupid_linear_operator *L) {
+  *L = (cupid_linear_operator){.n = A->n,
+                               .apply = lin_apply,
+                               .apply_rows = lin_apply_rows,
+                               .ctx = A,
+                               .symmetric = 1,
+                               .n_pd_dofs = 3 * A->n_pd};
 }

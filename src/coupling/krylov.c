@@ -308,18 +308,23 @@ static cupid_status fict_apply_rows(void *ctx, const double *x, cupid_int d0, cu
   return cupid_coupling_operator_apply_rows(ctx, x, d0, d1, y);
 }
 
+void cupid_coupling_operator_linear(const cupid_coupling_operator A, cupid_linear_operator *L) {
+  cupid_coupling_info ci;
+  cupid_coupling_operator_get_info(A, &ci);
+  *L = (cupid_linear_operator){.n = cupid_coupling_operator_size(A),
+                               .apply = fict_apply,
+                               .apply_rows = fict_apply_rows,
+                               .ctx = A,
+                               .symmetric = 0,
+                               .n_pd_dofs = 3 * ci.n_real_pd};
+}
+
 cupid_status cupid_coupling_krylov_solve(const cupid_coupling_operator A, const cupid_csr_t *P,
                                          const cupid_dirichlet_t *bc, const double *f, double *u,
                                          const cupid_coupling_krylov_options *opts,
                                          cupid_coupling_krylov_info *info) {
   CUPID_CHECK(A, CUPID_ERR_ARGUMENT, "Krylov solve: NULL operator");
-  cupid_coupling_info ci;
-  cupid_coupling_operator_get_info(A, &ci);
-  const cupid_linear_operator L = {.n = cupid_coupling_operator_size(A),
-                                   .apply = fict_apply,
-                                   .apply_rows = fict_apply_rows,
-                                   .ctx = A,
-                                   .symmetric = 0,
-                                   .n_pd_dofs = 3 * ci.n_real_pd};
+  cupid_linear_operator L;
+  cupid_coupling_operator_linear(A, &L);
   return cupid_krylov_solve(&L, P, bc, f, u, opts, info);
 }
