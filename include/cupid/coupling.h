@@ -376,9 +376,11 @@ typedef struct {
   int restart;            /**< GMRES restart; <= 0: 200 */
   const char *pc;         /**< PETSc PC type for the cheap matrix ("lu", "ilu", "gamg",
                                "hypre"; "fieldsplit": two fields "pd" and "fe", sub-solvers
-                               from -fieldsplit_pd_* / -fieldsplit_fe_*; NULL: "lu");
-                               run-time options (-ksp_*, -pc_*) override */
-  const char *factor_package; /**< for lu/ilu: "umfpack", "mumps", "petsc" (NULL: umfpack) */
+                               from -fieldsplit_pd_* / -fieldsplit_fe_*; NULL: "lu", or
+                               "cholesky" for a symmetric operator); run-time options
+                               (-ksp_*, -pc_*) override */
+  const char *factor_package; /**< for lu/ilu: "umfpack", "mumps", "petsc" (NULL: umfpack on
+                                   one rank, mumps on several); cholesky: mumps */
 } cupid_coupling_krylov_options;
 
 /** What the Krylov solve did. */

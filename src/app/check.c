@@ -123,12 +123,12 @@ static void estimate_iterative(const cupid_job *job, cupid_estimate *e) {
     e->iterative_seconds = 2.0 + 1.2e-3 * (double)job->n_pd;
   } else if (cupid_app_is_coupled(job) && job->model->coupling.method == CUPID_COUPLING_ARLEQUIN &&
              job->model->analysis.type == CUPID_ANALYSIS_STATIC) {
-    /* Matrix-free Arlequin + MUMPS LU of the cheap twin, measured on the Arlequin C-beam and
-     * panel (12,000 / 6,400 / 51,200 PD nodes: 0.99 / 0.59 / 3.9 GB, 5.1 / 3.5 / 31 s): ~85 kB
-     * a PD node, most of it the penalty ties' FE-FE couplings in the twin's factor. */
+    /* Matrix-free Arlequin + MUMPS Cholesky of the cheap twin, measured on the Arlequin
+     * C-beam and panel (12,000 / 6,400 / 51,200 PD nodes: 0.68 / 0.42 / 2.6 GB, 3.0 / 1.9 /
+     * 15 s): ~55 kB a PD node, most of it the twin's factor. */
     e->iterative_matrix_free = 1;
-    e->iterative_bytes = 85e3 * (double)job->n_pd + 30.0 * ndof * 8.0;
-    e->iterative_seconds = 1.0 + 5.5e-4 * (double)job->n_pd;
+    e->iterative_bytes = 55e3 * (double)job->n_pd + 30.0 * ndof * 8.0;
+    e->iterative_seconds = 1.0 + 2.8e-4 * (double)job->n_pd;
   } else {
     double entries = 9.0 * e->matrix_blocks;
     int general = is_fictitious_coupled(job);
@@ -192,7 +192,7 @@ cupid_status cupid_app_estimate(const cupid_job *job, int print) {
            e.iterative_matrix_free
                ? (!job->beam ? "matrix-free CG + GAMG"
                   : is_fictitious_coupled(job) ? "matrix-free GMRES + LU of a bond-based twin"
-                                               : "matrix-free CG + LU of a bond-based twin")
+                                               : "matrix-free CG + Cholesky of a bond-based twin")
                                    : "Krylov + AMG/ILU, assembled",
            e.iterative_bytes / 1e9, e.iterative_seconds,
            cupid_petsc_available() ? "" : " (this build has no PETSc)");

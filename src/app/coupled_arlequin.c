@@ -516,7 +516,7 @@ static cupid_status solve(cupid_job *job) {
 }
 
 /* --solver petsc, static: the PD block matrix-free (src/coupling/arlequin_operator.c), CG
- * preconditioned by the LU of the cheap twin (MUMPS, parallel on several ranks); the option
+ * preconditioned by the Cholesky factor of the cheap twin (MUMPS, parallel on several ranks); the option
  * -cupid_coupled_assembled keeps the assembled path (CG + GAMG on K's rows). */
 static int matrix_free(const cupid_job *job) {
   return job->solver == CUPID_SOLVER_PETSC && job->model->analysis.type == CUPID_ANALYSIS_STATIC &&

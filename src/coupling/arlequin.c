@@ -213,7 +213,10 @@ static int cmp_key(const void *a, const void *b) {
   return (x > y) - (x < y);
 }
 
-/* The union pattern: PD K, the beam's (shifted to block n_pd), and the penalty couplings. */
+/* The union pattern: PD K, the beam's (shifted to block n_pd), and the penalty couplings. The
+ * penalty's FE-FE blocks N^T N couple the FE nodes of the one (beam element, section element)
+ * pair that holds the tied node (cupid_cuf_shape_at()), which the beam's pattern already
+ * couples: only the PD-FE blocks and the tied node's diagonal are added. */
 static cupid_status build_pattern(cupid_cuf_beam beam, const cupid_csr_t *Kpd, const tied_t *t,
                                   cupid_int n_pd, cupid_int n_fe, cupid_csr *K) {
   cupid_status st = CUPID_SUCCESS;
@@ -223,7 +226,7 @@ static cupid_status build_pattern(cupid_cuf_beam beam, const cupid_csr_t *Kpd, c
   size_t cap = (Kpd ? (size_t)Kpd->rowptr[n_pd] : 0) + (size_t)frp[n_fe], n = 0;
   for (cupid_int k = 0; k < t->n; k++) {
     size_t c = (size_t)(t->ptr[k + 1] - t->ptr[k]);
-    cap += 1 + 2 * c + c * c;
+    cap += 1 + 2 * c;
   }
   CUPID_TRY(cupid_malloc(cap + 1, sizeof *key, "Arlequin pattern", &key));
   for (cupid_int r = 0; r < (Kpd ? n_pd : 0); r++)
@@ -238,8 +241,6 @@ static cupid_status build_pattern(cupid_cuf_beam beam, const cupid_csr_t *Kpd, c
       cupid_int fa = n_pd + t->fe[a];
       key[n++] = (int64_t)t->node[k] * nb + fa;
       key[n++] = (int64_t)fa * nb + t->node[k];
-      for (cupid_int b = t->ptr[k]; b < t->ptr[k + 1]; b++)
-        key[n++] = (int64_t)fa * nb + n_pd + t->fe[b];
     }
   }
   qsort(key, n, sizeof *key, cmp_key);

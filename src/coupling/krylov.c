@@ -200,9 +200,15 @@ cupid_status cupid_krylov_solve(const cupid_linear_operator *A, const cupid_csr_
   PCALL(KSPSetTolerances(ksp, opts && opts->rtol > 0 ? opts->rtol : 1e-10, 1e-300, PETSC_DEFAULT,
                          opts && opts->max_it > 0 ? opts->max_it : 2000));
   PCALL(KSPGetPC(ksp, &pc));
-  const char *pct = opts && opts->pc ? opts->pc : "lu";
+  /* A symmetric operator gets a Cholesky factor of its (symmetric positive definite) twin:
+   * MUMPS's LL^T, about 2/3 of the LU's memory (the Arlequin panel at h = 0.5: 2.6 GB
+   * against 3.7 GB in all). */
+  const char *pct = opts && opts->pc ? opts->pc : A->symmetric ? "cholesky" : "lu";
   PCALL(PCSetType(pc, pct));
-  if (!strcmp(pct, "lu") || !strcmp(pct, "ilu")) {
+  if (A->symmetric) PCALL(MatSetOption(Pm, MAT_SPD, PETSC_TRUE));
+  if (!strcmp(pct, "cholesky")) {
+    PCALL(PCFactorSetMatSolverType(pc, opts && opts->factor_package ? opts->factor_package : "mumps"));
+  } else if (!strcmp(pct, "lu") || !strcmp(pct, "ilu")) {
     /* UMFPACK and PETSc's own LU are sequential: MUMPS on several ranks */
     const char *pkg = opts && opts->factor_package ? opts->factor_package
                       : size > 1                   ? "mumps"

@@ -3,7 +3,7 @@
 # y [280, 320], overlaps y [280, 290], [310, 320] and z [2, 7]) at PD spacing h = 0.5 (m = 3,
 # 8 x 80 x 40 nodes a stringer, 51,200 in all; kappa 5e4 = 10 E h) on the matrix-free
 # Arlequin path (`--solver petsc`: the node-weighted LPS operator, CG preconditioned by the
-# LU of the cheap weighted twin), against the example's full L9 (panel_fe_l9.yaml; the
+# Cholesky factor of the cheap weighted twin), against the example's full L9 (panel_fe_l9.yaml; the
 # Arlequin beam mesh moves it by <= 0.02%): u_z at A and B and sigma_yy at C within the
 # issue's 2% (observed -0.11%, -0.78%, +0.42%; at h = 1 B was +2.44%: the 4-node-thick PD
 # stringer). The converged full-L9 panel (tests/models/mpi/panel_fe_fine.yaml) is printed
@@ -12,8 +12,8 @@
 # (observed 32: the cheap twin is a good preconditioner), the true residual <= 1e-6 (observed
 # 7e-8: the penalty makes K ill-conditioned, so CG's 1e-10 is not reached in the true
 # residual), equilibrium to 1e-6 of the load (symmetric, momentum-conserving).
-# The assembled matrix would hold 278 M blocks (20 GB): skipped (77) without PETSc. ~35 s and
-# 3.9 GB on 2 cores.
+# The assembled matrix would hold 278 M blocks (20 GB): skipped (77) without PETSc. ~20 s and
+# 2.6 GB on 2 cores.
 if [ "${CUPID_HAVE_PETSC:-0}" != 1 ]; then
   echo "SKIP: cupid was built without PETSc (scripts/build.sh --with-petsc builds build-petsc/)"
   exit 77
