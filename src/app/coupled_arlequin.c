@@ -11,9 +11,11 @@
  * boundaries (beam nodes along y, section-element edges along x and z), so that the
  * quadrature is exact. Constraints and loads go to the part they touch; body and point loads
  * reaching into an overlap are shared, alpha to the beam and 1 - alpha to the PD nodes (a
- * traction on a plane inside an overlap acts on no free surface: refused). Static (CHOLMOD, or
- * PETSc CG + GAMG: the system is symmetric), evaluate, and dynamic runs (through
- * cupid_app_run_dynamic() with the weighted masses of cupid_app_arlequin_mass()). */
+ * traction on a plane inside an overlap acts on no free surface: refused). Static runs
+ * (CHOLMOD; with --solver petsc matrix-free, CG + Cholesky of a cheap twin, or assembled with
+ * -cupid_coupled_assembled: the system is symmetric), evaluate, and dynamic runs (through
+ * cupid_app_run_dynamic() with the weighted masses of cupid_app_arlequin_mass(); central
+ * differences with a lumped mass on the matrix-free operator). */
 #include <math.h>
 #include <stdio.h>
 #include <string.h>
