@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Coupling error against the horizon (the coupled bar, TE2, fictitious nodes).
 
-usage: examples/bar/convergence.py [--cupid build/cupid] [--method fictitious]
+usage: examples/bar/convergence.py [--cupid build/cupid] [--method fictitious|lagrange|arlequin]
                                    [--solver petsc] [--clamp-elements 3]
                                    [--surface-correction energy] [H:DELTA ...]
 
@@ -10,7 +10,10 @@ nodes: ~50 GB for the direct factorisation, seconds with `--cupid build-petsc/cu
 petsc`, the matrix-free path). Each case is bar_coupled_te2.yaml with its spacing and horizon
 replaced; the reference is bar_fe_te2.yaml. `--clamp-elements 3` cuts the clamped span into 3
 B2 elements in both (bar_fe_te2_c3.yaml, the README's bar.yaml), `--surface-correction
-energy` adds the PD surface correction (both as compare_coupled.py). Prints a table of the
+energy` adds the PD surface correction (both as compare_coupled.py). `--method arlequin` puts
+the overlaps [30, 35] and [65, 70] inside the PD region (beam-element ends there, the
+penalty 10 E h, as bar_coupled_arlequin_l9.yaml) and the FE reference gets the same element
+ends. Prints a table of the
 largest error of u_y along the axis relative to the tip displacement, the largest pointwise
 relative error, and the equilibrium imbalance.
 """
@@ -33,10 +36,20 @@ def axis(d):
     return [(float(r["y"]), float(r["uy"])) for r in csv.DictReader(open(os.path.join(d, "line_axis.csv")))]
 
 def clamped(txt):
-    """The clamped span [0, 30] in a.clamp_elements B2 elements (compare_coupled.py)."""
+    """The clamped span [0, 30] in a.clamp_elements B2 elements (compare_coupled.py); for
+    Arlequin, element ends at the overlap bounds 35 and 65 too."""
+    if a.method == "arlequin":
+        txt = txt.replace("axis: {y: [0, 30, 70, 100], elements: [1, 1, 1]",
+                          "axis: {y: [0, 30, 35, 65, 70, 100], elements: [1, 1, 1, 1, 1]")
     if a.clamp_elements == 1:
         return txt
     return re.sub(r"elements: \[1, ", f"elements: [{a.clamp_elements}, ", txt, count=1)
+
+def coupling(h):
+    if a.method != "arlequin":
+        return f"coupling: {{method: {a.method}}}"
+    return ("coupling: {method: arlequin, arlequin: {penalty: %g, overlap: [{y: [30, 35]}, "
+            "{y: [65, 70]}]}}" % (10 * 10000 * h))  # kappa = 10 E h, E = 10 GPa
 
 fe_dir = os.path.join(out, f"fe_c{a.clamp_elements}")
 fe_model = os.path.join(out, f"fe_c{a.clamp_elements}.yaml")
@@ -54,7 +67,7 @@ for case in a.cases:
     h, d = (float(v) for v in case.split(":"))
     txt = re.sub(r"spacing: [0-9.]+", f"spacing: {h!r}", src)
     txt = re.sub(r"horizon: [0-9.]+", f"horizon: {d!r}", txt)
-    txt = txt.replace("coupling: {method: fictitious}", f"coupling: {{method: {a.method}}}")
+    txt = txt.replace("coupling: {method: fictitious}", coupling(h))
     name = f"h{h:.3f}_d{d:g}_{a.method}_c{a.clamp_elements}_{a.surface_correction}"
     model = os.path.join(out, name + ".yaml")
     open(model, "w").write(txt)
