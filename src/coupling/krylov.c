@@ -1,13 +1,15 @@
-/* Krylov solve of a matrix-free coupled system on PETSc: the fictitious-node system (paper 000
- * Eq. 38) by GMRES (the matrix is not symmetric), the Arlequin system (paper 004 Eq. 18) by CG
- * (symmetric positive definite), on the free DOFs, the operator a MATSHELL over the matrix-free
- * coupled operator (operator.c, arlequin_operator.c: cupid_linear_operator), the preconditioner built from the cheap matrix (Eq. 38 with a
- * short bond-based PD operator) by a PETSc PC: LU through UMFPACK by default (the cheap matrix
- * has ~19 blocks a PD row, so its factor is ~1/50 of the LPS one), ILU, GAMG or hypre on
- * request. Right preconditioning: GMRES minimises the true residual, so rtol is what the
- * caller gets. Dirichlet DOFs are eliminated: A_ff u_f = f_f - A_fc u_c. On several MPI ranks
- * (replicated model) the vectors, the rows of the product and the preconditioner's rows are
- * split over the ranks and the LU is MUMPS's (parallel); every rank gets the whole solution. */
+/* Krylov solve of a matrix-free coupled system on PETSc, on the free DOFs: the fictitious-node
+ * system (paper 000 Eq. 38) by GMRES (not symmetric), the Arlequin system (paper 004 Eq. 18) by
+ * CG (symmetric positive definite). The operator is a MATSHELL over a cupid_linear_operator
+ * (operator.c, arlequin_operator.c); the preconditioner is built from the cheap twin (the same
+ * system with a short bond-based PD operator) by a PETSc PC: by default an LU (UMFPACK on one
+ * rank, MUMPS on several) for GMRES, a MUMPS Cholesky for CG (the twin has ~19 blocks a PD row,
+ * so its factor is ~1/50 of the LPS one); ILU, GAMG or hypre on request. GMRES is right
+ * preconditioned, so it minimises the true residual and rtol is what the caller gets; the true
+ * residual is recomputed at the end either way. Dirichlet DOFs are eliminated:
+ * A_ff u_f = f_f - A_fc u_c. On several MPI ranks (replicated model) the vectors, the rows of
+ * the product and the preconditioner's rows are split over the ranks and the factor is MUMPS's
+ * (parallel); every rank gets the whole solution. */
 #include <math.h>
 #include <stdio.h>
 #include <string.h>
