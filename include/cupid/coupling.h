@@ -402,12 +402,25 @@ typedef struct {
   void *ctx;
   int symmetric;        /**< 1: symmetric positive definite (CG), 0: GMRES */
   cupid_int n_pd_dofs;  /**< DOFs [0, n_pd_dofs) form the "pd" field of pc fieldsplit */
+  /** NULL or a whole grid: the operator is replicated on every rank. A slab of a partitioned
+   *  grid (issue 6, parts = the MPI ranks): the operator holds this rank's slab, n = 3 per
+   *  slab node (owned and halo) + the FE DOFs, and apply_rows gives the owned PD rows and
+   *  this slab's share of the FE rows, whose sum over the slabs is the whole FE rows. */
+  const cupid_pd_grid_partition *part;
 } cupid_linear_operator;
+
+/** y = A x. Replicated: the whole product. A slab (A->part): its owned PD rows and the whole
+ *  FE rows, summed over the ranks (collective); the halo rows of y are left as they were. */
+cupid_status cupid_krylov_apply(const cupid_linear_operator *A, const double *x, double *y);
 
 /**
  * Solve A u = f as cupid_coupling_krylov_solve() does, for any matrix-free operator: CG when
  * A->symmetric (the unpreconditioned residual norm; the preconditioner from @p P must be
- * symmetric too: LU of a symmetric P is), else right-preconditioned GMRES.
+ * symmetric too: LU of a symmetric P is), else right-preconditioned GMRES. On a slab
+ * (A->part), @p P, @p bc, @p f and @p u are the slab's (local DOFs as A's): P's owned PD rows
+ * and its share of the FE rows (summed over the ranks, like A's), bc on every local DOF (the
+ * halo's as on their owner), f on the owned DOFs and the FE DOFs (the same on every rank);
+ * u gets every local DOF (owned, halo and FE), the same FE part on every rank.
  */
 cupid_status cupid_krylov_solve(const cupid_linear_operator *A, const cupid_csr_t *P,
                                 const cupid_dirichlet_t *bc, const double *f, double *u,

@@ -184,7 +184,11 @@ static cupid_status tied_build(cupid_cuf_beam beam, cupid_pd_grid grid,
   CUPID_TRY(cupid_malloc((size_t)n_pd, sizeof *t->node, "tied PD nodes", &t->node));
   layout_t L;
   layout_of(o, &L);
-  for (cupid_int i = 0; i < n_pd; i++)
+  /* a slab of a partitioned grid ties its owned nodes only: every tied node once over the
+   * slabs (the halo's rows are not this slab's) */
+  cupid_pd_grid_partition part;
+  cupid_pd_grid_get_partition(grid, &part);
+  for (cupid_int i = part.owned_first; i < part.owned_last; i++)
     if (in_overlap(&L, x + 3 * i, tol)) t->node[t->n++] = i;
   CUPID_TRY(cupid_calloc((size_t)t->n + 1, sizeof *t->ptr, "tied rows", &t->ptr));
   CUPID_TRY(cupid_malloc((size_t)(t->n * per + 1), sizeof *t->fe, "tied FE nodes", &t->fe));
@@ -341,6 +345,15 @@ static cupid_status check_options(cupid_cuf_beam beam, cupid_pd_grid grid,
   return CUPID_SUCCESS;
 }
 
+/* On a slab of a partitioned grid (issue 6) the FE rows are summed over the slabs: the last
+ * slab, which owns the FE DOFs, adds the weighted beam; every slab adds the penalty of its
+ * owned tied nodes. A whole grid does both. */
+static int owns_beam(cupid_pd_grid grid) {
+  cupid_pd_grid_partition part;
+  cupid_pd_grid_get_partition(grid, &part);
+  return part.parts <= 1 || part.part == part.parts - 1;
+}
+
 /* PD nodal weights 1 - alpha(x_i). */
 cupid_status cpl_arlequin_pd_weights(cupid_pd_grid grid, const cupid_arlequin_options *o,
                                      double **wn, double *wmin) {
@@ -377,7 +390,7 @@ cupid_status cupid_arlequin_assemble(cupid_cuf_beam beam, cupid_pd_grid grid, cu
   cupid_cuf_weight_term terms[ARL_MAX_TERMS];
   cupid_cuf_weight wfe;
   CUPID_TRY(beam_weight(o, &L, terms, &wfe));
-  CUPID_TRY(cupid_cuf_assemble_weight_add(beam, &wfe, *K));
+  if (owns_beam(grid)) CUPID_TRY(cupid_cuf_assemble_weight_add(beam, &wfe, *K));
   CUPID_TRY(add_penalty(&t, o->penalty, n_pd, *K));
   if (info) *info = (cupid_arlequin_info){.n_tied = t.n, .components = t.comps, .pd_weight_min = wmin};
 cleanup:

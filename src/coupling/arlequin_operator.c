@@ -23,6 +23,7 @@ struct cupid_arlequin_operator_private {
   cupid_arlequin_options o;      /* borrowed region array */
   cupid_csr R;                   /* K_FE(alpha) + K_z, assembled */
   cupid_int n_pd, n;
+  cupid_pd_grid_partition part;  /* the grid's: a slab holds its owned rows (issue 6) */
   double *fpd;                   /* work: 3 per PD node */
 };
 
@@ -44,6 +45,7 @@ cupid_status cupid_arlequin_operator_create(cupid_cuf_beam beam, cupid_pd_grid g
   A->o = *o;
   A->n_pd = cupid_pd_grid_num_nodes(grid);
   A->n = 3 * A->n_pd + cupid_cuf_num_dofs(beam);
+  cupid_pd_grid_get_partition(grid, &A->part);
   CUPID_TRY(cupid_arlequin_assemble(beam, grid, NULL, o, &A->R, info));
   CUPID_TRY(cupid_pd_operator_create(grid, pd, &A->op));
   CUPID_TRY(cpl_arlequin_pd_weights(grid, o, &w, &wmin));
@@ -135,5 +137,6 @@ void cupid_arlequin_operator_linear(const cupid_arlequin_operator A, cupid_linea
                                .apply_rows = lin_apply_rows,
                                .ctx = A,
                                .symmetric = 1,
-                               .n_pd_dofs = 3 * A->n_pd};
+                               .n_pd_dofs = 3 * A->n_pd,
+                               .part = &A->part};
 }

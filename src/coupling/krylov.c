@@ -134,29 +134,119 @@ cleanup:
   return st;
 }
 
-cupid_status cupid_krylov_solve(const cupid_linear_operator *A, const cupid_csr_t *P,
-                                const cupid_dirichlet_t *bc, const double *f, double *u,
-                                const cupid_coupling_krylov_options *opts,
-                                cupid_coupling_krylov_info *info) {
+/* The owned ranges of the two fields of pc fieldsplit, in PETSc's global numbering. */
+typedef struct {
+  PetscInt pd_first, pd_last, fe_first, fe_last;
+  int pd_blocks; /* the PD field is whole nodes (block size 3) */
+} ksp_fields;
+
+/* The KSP for A (matrix-free S) preconditioned from Pm: CG or right-preconditioned GMRES, the
+ * default PC (a Cholesky factor for CG, an LU for GMRES), the fields of pc fieldsplit, then
+ * the run-time options. *is_pd and *is_fe are the caller's to destroy. */
+static cupid_status configure_ksp(const cupid_linear_operator *A,
+                                  const cupid_coupling_krylov_options *opts, Mat S, Mat Pm,
+                                  const ksp_fields *fields, KSP *out, IS *is_pd, IS *is_fe) {
+  cupid_status st = CUPID_SUCCESS;
+  KSP ksp = NULL;
+  PC pc;
+  PetscMPIInt size = 1;
+  MPI_Comm_size(PETSC_COMM_WORLD, &size);
+  PCALL(KSPCreate(PETSC_COMM_WORLD, &ksp));
+  PCALL(KSPSetOperators(ksp, S, Pm));
+  if (A->symmetric) { /* CG: left preconditioning only; the true residual is recomputed after */
+    PCALL(KSPSetType(ksp, KSPCG));
+    PCALL(KSPSetNormType(ksp, KSP_NORM_UNPRECONDITIONED));
+  } else {
+    PCALL(KSPSetType(ksp, KSPGMRES));
+    PCALL(KSPGMRESSetRestart(ksp, opts && opts->restart > 0 ? opts->restart : 200));
+    PCALL(KSPSetPCSide(ksp, PC_RIGHT));
+  }
+  PCALL(KSPSetTolerances(ksp, opts && opts->rtol > 0 ? opts->rtol : 1e-10, 1e-300, PETSC_DEFAULT,
+                         opts && opts->max_it > 0 ? opts->max_it : 2000));
+  PCALL(KSPGetPC(ksp, &pc));
+  /* A symmetric operator gets a Cholesky factor of its (symmetric positive definite) twin:
+   * MUMPS's LL^T, about 2/3 of the LU's memory (the Arlequin panel at h = 0.5: 2.6 GB
+   * against 3.7 GB in all). */
+  const char *pct = opts && opts->pc ? opts->pc : A->symmetric ? "cholesky" : "lu";
+  PCALL(PCSetType(pc, pct));
+  if (A->symmetric) PCALL(MatSetOption(Pm, MAT_SPD, PETSC_TRUE));
+  if (!strcmp(pct, "cholesky")) {
+    PCALL(PCFactorSetMatSolverType(pc, opts && opts->factor_package ? opts->factor_package : "mumps"));
+  } else if (!strcmp(pct, "lu") || !strcmp(pct, "ilu")) {
+    /* UMFPACK and PETSc's own LU are sequential: MUMPS on several ranks */
+    const char *pkg = opts && opts->factor_package ? opts->factor_package
+                      : size > 1                   ? "mumps"
+                                                   : (!strcmp(pct, "lu") ? "umfpack" : "petsc");
+    PCALL(PCFactorSetMatSolverType(pc, pkg));
+  }
+  if (!strcmp(pct, "fieldsplit")) {
+    /* Two fields: PD DOFs and FE DOFs (sub-solvers from -fieldsplit_pd_* / -fieldsplit_fe_*). */
+    PCALL(ISCreateStride(PETSC_COMM_WORLD, fields->pd_last - fields->pd_first, fields->pd_first,
+                         1, is_pd));
+    PCALL(ISCreateStride(PETSC_COMM_WORLD, fields->fe_last - fields->fe_first, fields->fe_first,
+                         1, is_fe));
+    if (fields->pd_blocks) PCALL(ISSetBlockSize(*is_pd, 3));
+    PCALL(PCFieldSplitSetIS(pc, "pd", *is_pd));
+    PCALL(PCFieldSplitSetIS(pc, "fe", *is_fe));
+  }
+  PCALL(KSPSetFromOptions(ksp));
+  PCALL(KSPSetUp(ksp));
+  PCALL(PCSetUp(pc));
+  *out = ksp;
+  ksp = NULL;
+cleanup:
+  if (ksp) KSPDestroy(&ksp);
+  return st;
+}
+
+/* Solve, and what the solve did into *inf (iterations, convergence, time, method). */
+static cupid_status run_ksp(KSP ksp, const cupid_linear_operator *A, Vec b, Vec x,
+                            cupid_coupling_krylov_info *inf) {
+  cupid_status st = CUPID_SUCCESS;
+  PetscInt its;
+  KSPConvergedReason reason;
+  PC pc;
+  PCType used;
+  double t0 = cupid_wtime();
+  PCALL(KSPSolve(ksp, b, x));
+  inf->time_solve = cupid_wtime() - t0;
+  PCALL(KSPGetIterationNumber(ksp, &its));
+  PCALL(KSPGetConvergedReason(ksp, &reason));
+  inf->iterations = (int)its;
+  inf->converged = reason > 0;
+  PCALL(KSPGetPC(ksp, &pc));
+  PCALL(PCGetType(pc, &used));
+  snprintf(inf->method, sizeof inf->method, "%s+%s", A->symmetric ? "cg" : "gmres", used);
+cleanup:
+  return st;
+}
+
+/* The error of a solve that did not converge (CUPID_SUCCESS if it did). */
+static cupid_status not_converged(KSP ksp, const cupid_coupling_krylov_info *inf) {
+  if (inf->converged) return CUPID_SUCCESS;
+  KSPConvergedReason reason = KSP_CONVERGED_ITERATING;
+  KSPGetConvergedReason(ksp, &reason);
+  return CUPID_ERROR(CUPID_ERR_NUMERIC,
+                     "the Krylov solve (%s) did not converge: %s after %d iterations, relative "
+                     "residual %.2e; try other -ksp_type / -pc_type options, or --solver direct",
+                     inf->method, KSPConvergedReasons[reason], inf->iterations, inf->residual);
+}
+
+/* The model replicated on every rank: the free DOFs only, split evenly over the ranks. */
+static cupid_status solve_replicated(const cupid_linear_operator *A, const cupid_csr_t *P,
+                                     const cupid_dirichlet_t *bc, const double *f, double *u,
+                                     const cupid_coupling_krylov_options *opts,
+                                     cupid_coupling_krylov_info *info) {
   cupid_status st = CUPID_SUCCESS;
   cupid_coupling_krylov_info inf;
   memset(&inf, 0, sizeof inf);
-  CUPID_CHECK(A && A->apply && P && bc && f && u, CUPID_ERR_ARGUMENT, "Krylov solve: NULL argument");
   cupid_int n = A->n;
-  CUPID_CHECK(bc->n == n && P->nrows * P->bs == n, CUPID_ERR_ARGUMENT,
-              "operator (%lld DOFs), preconditioner (%lld) and conditions (%lld) differ",
-              (long long)n, (long long)(P->nrows * P->bs), (long long)bc->n);
-  PetscBool init = PETSC_FALSE;
-  if (PetscInitialized(&init) || !init)
-    CUPID_CHECK(PetscInitializeNoArguments() == 0, CUPID_ERR_UNSUPPORTED,
-                "PETSc could not be initialised");
   cupid_int *gidx = NULL;
   double *xf = NULL, *yf = NULL;
   Mat S = NULL, Pm = NULL;
   Vec x = NULL, b = NULL;
   KSP ksp = NULL;
   IS is_pd = NULL, is_fe = NULL;
-  PC pc;
   cupid_int n_free = bc->n_free;
   shell_ctx ctx = {0}; /* complete once the work vectors exist */
   PetscMPIInt rank = 0, size = 1;
@@ -189,69 +279,16 @@ cupid_status cupid_krylov_solve(const cupid_linear_operator *A, const cupid_csr_
                        (PetscInt)n_free, (PetscInt)n_free, &ctx, &S));
   PCALL(MatShellSetOperation(S, MATOP_MULT, (void (*)(void))shell_mult));
   CUPID_TRY(free_block_aij(P, bc, f0, f1, &Pm));
-  PCALL(KSPCreate(PETSC_COMM_WORLD, &ksp));
-  PCALL(KSPSetOperators(ksp, S, Pm));
-  if (A->symmetric) { /* CG: left preconditioning only; the true residual is recomputed below */
-    PCALL(KSPSetType(ksp, KSPCG));
-    PCALL(KSPSetNormType(ksp, KSP_NORM_UNPRECONDITIONED));
-  } else {
-    PCALL(KSPSetType(ksp, KSPGMRES));
-    PCALL(KSPGMRESSetRestart(ksp, opts && opts->restart > 0 ? opts->restart : 200));
-    PCALL(KSPSetPCSide(ksp, PC_RIGHT));
-  }
-  PCALL(KSPSetTolerances(ksp, opts && opts->rtol > 0 ? opts->rtol : 1e-10, 1e-300, PETSC_DEFAULT,
-                         opts && opts->max_it > 0 ? opts->max_it : 2000));
-  PCALL(KSPGetPC(ksp, &pc));
-  /* A symmetric operator gets a Cholesky factor of its (symmetric positive definite) twin:
-   * MUMPS's LL^T, about 2/3 of the LU's memory (the Arlequin panel at h = 0.5: 2.6 GB
-   * against 3.7 GB in all). */
-  const char *pct = opts && opts->pc ? opts->pc : A->symmetric ? "cholesky" : "lu";
-  PCALL(PCSetType(pc, pct));
-  if (A->symmetric) PCALL(MatSetOption(Pm, MAT_SPD, PETSC_TRUE));
-  if (!strcmp(pct, "cholesky")) {
-    PCALL(PCFactorSetMatSolverType(pc, opts && opts->factor_package ? opts->factor_package : "mumps"));
-  } else if (!strcmp(pct, "lu") || !strcmp(pct, "ilu")) {
-    /* UMFPACK and PETSc's own LU are sequential: MUMPS on several ranks */
-    const char *pkg = opts && opts->factor_package ? opts->factor_package
-                      : size > 1                   ? "mumps"
-                                                   : (!strcmp(pct, "lu") ? "umfpack" : "petsc");
-    PCALL(PCFactorSetMatSolverType(pc, pkg));
-  }
-  if (!strcmp(pct, "fieldsplit")) {
-    /* Two fields: PD DOFs and FE DOFs (sub-solvers from -fieldsplit_pd_* / -fieldsplit_fe_*). */
+  {
+    /* the owned part of each field (PD DOFs come first) */
     cupid_int n_pd_free = 0;
     while (n_pd_free < n_free && gidx[n_pd_free] < A->n_pd_dofs) n_pd_free++;
-    /* the owned part of each field (PD DOFs come first) */
     cupid_int p0 = f0 < n_pd_free ? f0 : n_pd_free, p1 = f1 < n_pd_free ? f1 : n_pd_free;
-    PetscInt *idx = NULL;
-    CUPID_TRY(cupid_malloc((size_t)(f1 - f0) + 1, sizeof *idx, "field indices", &idx));
-    for (cupid_int k = f0; k < f1; k++) idx[k - f0] = (PetscInt)k;
-    PCALL(ISCreateGeneral(PETSC_COMM_WORLD, (PetscInt)(p1 - p0), idx + (p0 - f0),
-                          PETSC_COPY_VALUES, &is_pd));
-    PCALL(ISCreateGeneral(PETSC_COMM_WORLD, (PetscInt)(f1 - p1), idx + (p1 - f0),
-                          PETSC_COPY_VALUES, &is_fe));
-    cupid_free(&idx);
-    if (size == 1 && n_pd_free % 3 == 0) PCALL(ISSetBlockSize(is_pd, 3));
-    PCALL(PCFieldSplitSetIS(pc, "pd", is_pd));
-    PCALL(PCFieldSplitSetIS(pc, "fe", is_fe));
+    const ksp_fields fields = {p0, p1, p1, f1, size == 1 && n_pd_free % 3 == 0};
+    CUPID_TRY(configure_ksp(A, opts, S, Pm, &fields, &ksp, &is_pd, &is_fe));
   }
-  PCALL(KSPSetFromOptions(ksp));
-  PCALL(KSPSetUp(ksp));
-  PCALL(PCSetUp(pc));
-  inf.time_setup = cupid_wtime() - t0;
-
-  t0 = cupid_wtime();
-  PCALL(KSPSolve(ksp, b, x));
-  inf.time_solve = cupid_wtime() - t0;
-  PetscInt its;
-  KSPConvergedReason reason;
-  PCALL(KSPGetIterationNumber(ksp, &its));
-  PCALL(KSPGetConvergedReason(ksp, &reason));
-  inf.iterations = (int)its;
-  inf.converged = reason > 0;
-  PCType used;
-  PCALL(PCGetType(pc, &used));
-  snprintf(inf.method, sizeof inf.method, "%s+%s", A->symmetric ? "cg" : "gmres", used);
+  CUPID_TRY(run_ksp(ksp, A, b, x, &inf));
+  inf.time_setup = cupid_wtime() - t0 - inf.time_solve;
 
   /* u = [x_f ; u_c]; the true residual, recomputed. */
   const PetscScalar *xa;
@@ -270,11 +307,7 @@ cupid_status cupid_krylov_solve(const cupid_linear_operator *A, const cupid_csr_
   }
   double scale = bnorm > 0 ? (double)bnorm : sqrt(f2);
   inf.residual = scale > 0 ? sqrt(r2) / scale : sqrt(r2);
-  if (!inf.converged)
-    st = CUPID_ERROR(CUPID_ERR_NUMERIC,
-                     "the Krylov solve (%s) did not converge: %s after %d iterations, relative "
-                     "residual %.2e; try other -ksp_type / -pc_type options, or --solver direct",
-                     inf.method, KSPConvergedReasons[reason], inf.iterations, inf.residual);
+  st = not_converged(ksp, &inf);
 cleanup:
   if (info) *info = inf;
   if (ksp) KSPDestroy(&ksp);
@@ -292,6 +325,318 @@ cleanup:
   return st;
 }
 
+/* ------------------------------------------------------------ a slab per rank (issue 6) */
+
+/* The grid partitioned into slabs (A->part): local DOFs [3 per slab node (owned + halo) | FE
+ * DOFs], global DOFs [3 per grid node | FE DOFs]; local PD DOF d is global 3 first_global + d.
+ * Rank r owns the global DOFs of its owned nodes, the last rank also the FE DOFs (contiguous
+ * ranges in rank order, as PETSc lays out a vector). A fixed DOF stays in the system as a
+ * row s * identity with its column dropped (symmetric, no renumbering): it solves for the
+ * correction to the fixed values, which is zero. The FE rows are the sum of the slabs'
+ * shares (cupid_arlequin_assemble() on a slab), reduced after each product. */
+typedef struct {
+  const cupid_linear_operator *A;
+  const cupid_dirichlet_t *bc; /* local */
+  cupid_int n, n_pd, pd0, pd1;  /* local DOFs, local PD DOFs, owned local PD DOFs [pd0, pd1) */
+  PetscInt g0, nloc;           /* owned global DOFs [g0, g0 + nloc) */
+  PetscInt fe_global;          /* global index of the first FE DOF */
+  int fe_owner;                /* this rank owns the FE DOFs */
+  double s;                    /* diagonal of the fixed rows */
+  double *xw, *yw;             /* local work vectors */
+  VecScatter halo;             /* global x -> every local DOF */
+  Vec xl;
+} slab_ctx;
+
+/* Global DOF of local DOF d. */
+static PetscInt slab_global(const slab_ctx *c, cupid_int d) {
+  return d < c->n_pd ? (PetscInt)(3 * c->A->part->first_global + d)
+                     : c->fe_global + (PetscInt)(d - c->n_pd);
+}
+
+/* y = A x on the owned PD rows and the whole FE rows (summed over the ranks). */
+static cupid_status slab_product(const cupid_linear_operator *A, const double *x, double *y) {
+  const cupid_pd_grid_partition *p = A->part;
+  CUPID_CALL(A->apply_rows(A->ctx, x, 3 * p->owned_first, 3 * p->owned_last, y));
+  CUPID_CALL(A->apply_rows(A->ctx, x, A->n_pd_dofs, A->n, y));
+  int n_fe = (int)(A->n - A->n_pd_dofs);
+  CUPID_CHECK(MPI_Allreduce(MPI_IN_PLACE, y + A->n_pd_dofs, n_fe, MPI_DOUBLE, MPI_SUM,
+                            PETSC_COMM_WORLD) == MPI_SUCCESS,
+              CUPID_ERR_NUMERIC, "MPI_Allreduce of the FE rows failed");
+  return CUPID_SUCCESS;
+}
+
+/* x (global) -> c->xl (every local DOF). */
+static PetscErrorCode slab_gather(slab_ctx *c, Vec x) {
+  PetscCall(VecScatterBegin(c->halo, x, c->xl, INSERT_VALUES, SCATTER_FORWARD));
+  PetscCall(VecScatterEnd(c->halo, x, c->xl, INSERT_VALUES, SCATTER_FORWARD));
+  return 0;
+}
+
+/* The owned entries of the local vector v into the PETSc array a. */
+static void slab_owned(const slab_ctx *c, const double *v, PetscScalar *a) {
+  PetscInt k = 0;
+  for (cupid_int d = c->pd0; d < c->pd1; d++) a[k++] = v[d];
+  if (c->fe_owner)
+    for (cupid_int d = c->n_pd; d < c->n; d++) a[k++] = v[d];
+}
+
+static PetscErrorCode slab_mult(Mat M, Vec x, Vec y) {
+  slab_ctx *c;
+  const PetscScalar *xa;
+  PetscScalar *ya;
+  PetscCall(MatShellGetContext(M, &c));
+  PetscCall(slab_gather(c, x));
+  PetscCall(VecGetArrayRead(c->xl, &xa));
+  for (cupid_int d = 0; d < c->n; d++) c->xw[d] = c->bc->fixed[d] ? 0.0 : xa[d];
+  cupid_status st = slab_product(c->A, c->xw, c->yw);
+  if (st != CUPID_SUCCESS)
+    SETERRQ(PETSC_COMM_SELF, PETSC_ERR_LIB, "coupled operator: %s", cupid_error_message());
+  for (cupid_int d = 0; d < c->n; d++)
+    if (c->bc->fixed[d]) c->yw[d] = c->s * xa[d];
+  PetscCall(VecRestoreArrayRead(c->xl, &xa));
+  PetscCall(VecGetArray(y, &ya));
+  slab_owned(c, c->yw, ya);
+  PetscCall(VecRestoreArray(y, &ya));
+  return 0;
+}
+
+/* Row counts of the preconditioner's owned rows, split into the diagonal and off-diagonal
+ * blocks of MPIAIJ: the owned PD rows from this slab, the FE rows summed over the slabs
+ * (an over-count: each slab's FE columns are counted, capped at the row's length). */
+static cupid_status slab_counts(const slab_ctx *c, const cupid_csr_t *P, PetscInt *dnz,
+                                PetscInt *onz, PetscInt N) {
+  const int bs = P->bs;
+  const cupid_int n_fe = c->n - c->n_pd;
+  double *fe = NULL; /* per FE row: columns in the owner's range, the others */
+  CUPID_CALL(cupid_calloc((size_t)(2 * n_fe) + 1, sizeof *fe, "preconditioner row counts", &fe));
+  for (cupid_int R = 0; R < P->nrows; R++)
+    for (int a = 0; a < bs; a++) {
+      cupid_int d = R * bs + a;
+      int pd_row = d >= c->pd0 && d < c->pd1, fe_row = d >= c->n_pd;
+      if ((!pd_row && !fe_row) || c->bc->fixed[d]) continue;
+      cupid_int din = 0, dout = 0;
+      for (cupid_int k = P->rowptr[R]; k < P->rowptr[R + 1]; k++)
+        for (int b = 0; b < bs; b++) {
+          cupid_int e = P->col[k] * bs + b;
+          if (c->bc->fixed[e]) continue;
+          PetscInt g = slab_global(c, e);
+          /* FE rows belong to the FE owner: its FE columns are diagonal, a PD column may lie
+           * in its range or not (count it in both) */
+          if (fe_row) din++, dout += e < c->n_pd;
+          else if (g >= c->g0 && g < c->g0 + c->nloc) din++;
+          else dout++;
+        }
+      if (pd_row) dnz[d - c->pd0] = (PetscInt)din, onz[d - c->pd0] = (PetscInt)dout;
+      else fe[2 * (d - c->n_pd)] = (double)din, fe[2 * (d - c->n_pd) + 1] = (double)dout;
+    }
+  cupid_status st = CUPID_SUCCESS;
+  if (MPI_Allreduce(MPI_IN_PLACE, fe, (int)(2 * n_fe), MPI_DOUBLE, MPI_SUM, PETSC_COMM_WORLD) !=
+      MPI_SUCCESS)
+    st = CUPID_ERROR(CUPID_ERR_NUMERIC, "MPI_Allreduce of the row counts failed");
+  if (st == CUPID_SUCCESS && c->fe_owner)
+    for (cupid_int i = 0; i < n_fe; i++) {
+      PetscInt k = c->pd1 - c->pd0 + (PetscInt)i;
+      double din = fe[2 * i], dout = fe[2 * i + 1];
+      dnz[k] = (PetscInt)(din > (double)c->nloc ? (double)c->nloc : din) + 1;
+      onz[k] = (PetscInt)(dout > (double)(N - c->nloc) ? (double)(N - c->nloc) : dout);
+    }
+  for (PetscInt k = 0; k < c->nloc; k++)
+    if (dnz[k] == 0) dnz[k] = 1; /* a fixed row's diagonal */
+  cupid_free(&fe);
+  return st;
+}
+
+/* The preconditioner matrix: this slab's rows of P in global numbering (ADD_VALUES: the FE
+ * rows' shares meet on their owner), fixed rows s * identity, fixed columns dropped. */
+static cupid_status slab_matrix(const slab_ctx *c, const cupid_csr_t *P, PetscInt N, Mat *out) {
+  cupid_status st = CUPID_SUCCESS;
+  const int bs = P->bs;
+  PetscInt *dnz = NULL, *onz = NULL, *cols = NULL;
+  PetscScalar *vals = NULL;
+  Mat M = NULL;
+  cupid_int maxrow = 1;
+  for (cupid_int R = 0; R < P->nrows; R++)
+    if ((P->rowptr[R + 1] - P->rowptr[R]) * bs > maxrow) maxrow = (P->rowptr[R + 1] - P->rowptr[R]) * bs;
+  CUPID_TRY(cupid_calloc((size_t)c->nloc + 1, sizeof *dnz, "preconditioner row counts", &dnz));
+  CUPID_TRY(cupid_calloc((size_t)c->nloc + 1, sizeof *onz, "preconditioner row counts", &onz));
+  CUPID_TRY(cupid_malloc((size_t)maxrow + 1, sizeof *cols, "preconditioner row", &cols));
+  CUPID_TRY(cupid_malloc((size_t)maxrow + 1, sizeof *vals, "preconditioner row", &vals));
+  CUPID_TRY(slab_counts(c, P, dnz, onz, N));
+  PCALL(MatCreate(PETSC_COMM_WORLD, &M));
+  PCALL(MatSetSizes(M, c->nloc, c->nloc, N, N));
+  PCALL(MatSetType(M, MATAIJ));
+  PCALL(MatSeqAIJSetPreallocation(M, 0, dnz));
+  PCALL(MatMPIAIJSetPreallocation(M, 0, dnz, 0, onz));
+  for (cupid_int R = 0; R < P->nrows; R++)
+    for (int a = 0; a < bs; a++) {
+      cupid_int d = R * bs + a;
+      if (!(d >= c->pd0 && d < c->pd1) && d < c->n_pd) continue; /* a halo row */
+      PetscInt row = slab_global(c, d), len = 0;
+      if (c->bc->fixed[d]) {
+        if (d < c->n_pd || c->fe_owner) PCALL(MatSetValue(M, row, row, c->s, ADD_VALUES));
+        continue;
+      }
+      for (cupid_int k = P->rowptr[R]; k < P->rowptr[R + 1]; k++)
+        for (int b = 0; b < bs; b++) {
+          cupid_int e = P->col[k] * bs + b;
+          if (c->bc->fixed[e]) continue;
+          cols[len] = slab_global(c, e);
+          vals[len++] = P->val[(size_t)k * bs * bs + a * bs + b];
+        }
+      PCALL(MatSetValues(M, 1, &row, len, cols, vals, ADD_VALUES));
+    }
+  PCALL(MatAssemblyBegin(M, MAT_FINAL_ASSEMBLY));
+  PCALL(MatAssemblyEnd(M, MAT_FINAL_ASSEMBLY));
+  *out = M;
+  M = NULL;
+cleanup:
+  if (M) MatDestroy(&M);
+  cupid_free(&dnz);
+  cupid_free(&onz);
+  cupid_free(&cols);
+  cupid_free(&vals);
+  return st;
+}
+
+/* The fixed rows' diagonal: the mean |diagonal| of P over the free owned PD DOFs of all
+ * ranks (the scale of the other rows, so the fixed rows neither dominate nor vanish). */
+static double slab_fixed_scale(const slab_ctx *c, const cupid_csr_t *P) {
+  double sum[2] = {0.0, 0.0};
+  for (cupid_int d = c->pd0; d < c->pd1; d++) {
+    if (c->bc->fixed[d]) continue;
+    const double *blk = cupid_csr_find((cupid_csr)P, d / 3, d / 3);
+    if (blk) sum[0] += fabs(blk[4 * (d % 3)]), sum[1] += 1.0;
+  }
+  MPI_Allreduce(MPI_IN_PLACE, sum, 2, MPI_DOUBLE, MPI_SUM, PETSC_COMM_WORLD);
+  return sum[1] > 0 && sum[0] > 0 ? sum[0] / sum[1] : 1.0;
+}
+
+/* The scatter from the global vector x to every local DOF. */
+static cupid_status slab_halo(slab_ctx *c, Vec x) {
+  cupid_status st = CUPID_SUCCESS;
+  PetscInt *idx = NULL;
+  IS from = NULL;
+  CUPID_CALL(cupid_malloc((size_t)c->n + 1, sizeof *idx, "halo indices", &idx));
+  for (cupid_int d = 0; d < c->n; d++) idx[d] = slab_global(c, d);
+  PCALL(ISCreateGeneral(PETSC_COMM_SELF, (PetscInt)c->n, idx, PETSC_USE_POINTER, &from));
+  PCALL(VecCreateSeq(PETSC_COMM_SELF, (PetscInt)c->n, &c->xl));
+  PCALL(VecScatterCreate(x, from, c->xl, NULL, &c->halo));
+cleanup:
+  if (from) ISDestroy(&from);
+  cupid_free(&idx);
+  return st;
+}
+
+static cupid_status solve_slabs(const cupid_linear_operator *A, const cupid_csr_t *P,
+                                const cupid_dirichlet_t *bc, const double *f, double *u,
+                                const cupid_coupling_krylov_options *opts,
+                                cupid_coupling_krylov_info *info) {
+  cupid_status st = CUPID_SUCCESS;
+  cupid_coupling_krylov_info inf;
+  memset(&inf, 0, sizeof inf);
+  const cupid_pd_grid_partition *p = A->part;
+  PetscMPIInt size = 1;
+  MPI_Comm_size(PETSC_COMM_WORLD, &size);
+  CUPID_CHECK(p->parts == size, CUPID_ERR_ARGUMENT, "a grid of %d slabs on %d MPI ranks",
+              p->parts, (int)size);
+  slab_ctx c = {.A = A, .bc = bc, .n = A->n, .n_pd = A->n_pd_dofs, .pd0 = 3 * p->owned_first,
+                .pd1 = 3 * p->owned_last, .fe_owner = p->part == p->parts - 1};
+  const PetscInt N = (PetscInt)(3 * p->global_nodes + (A->n - A->n_pd_dofs));
+  c.g0 = (PetscInt)(3 * (p->first_global + p->owned_first));
+  c.nloc = (PetscInt)(c.pd1 - c.pd0) + (c.fe_owner ? (PetscInt)(A->n - A->n_pd_dofs) : 0);
+  c.fe_global = (PetscInt)(3 * p->global_nodes);
+  Mat S = NULL, Pm = NULL;
+  Vec x = NULL, b = NULL;
+  KSP ksp = NULL;
+  IS is_pd = NULL, is_fe = NULL;
+  CUPID_TRY(cupid_calloc((size_t)c.n + 1, sizeof *c.xw, "work vector", &c.xw));
+  CUPID_TRY(cupid_calloc((size_t)c.n + 1, sizeof *c.yw, "work vector", &c.yw));
+  c.s = slab_fixed_scale(&c, P);
+
+  /* b = f - A u_c on the free owned DOFs, 0 on the fixed ones */
+  for (cupid_int d = 0; d < c.n; d++) c.xw[d] = bc->fixed[d] ? bc->value[d] : 0.0;
+  CUPID_TRY(slab_product(A, c.xw, c.yw));
+  for (cupid_int d = 0; d < c.n; d++) c.yw[d] = bc->fixed[d] ? 0.0 : f[d] - c.yw[d];
+  PCALL(VecCreateMPI(PETSC_COMM_WORLD, c.nloc, N, &b));
+  PCALL(VecDuplicate(b, &x));
+  PetscScalar *ba;
+  PCALL(VecGetArray(b, &ba));
+  slab_owned(&c, c.yw, ba);
+  PCALL(VecRestoreArray(b, &ba));
+  PetscReal bnorm;
+  PCALL(VecNorm(b, NORM_2, &bnorm));
+  CUPID_TRY(slab_halo(&c, x));
+
+  double t0 = cupid_wtime();
+  PCALL(MatCreateShell(PETSC_COMM_WORLD, c.nloc, c.nloc, N, N, &c, &S));
+  PCALL(MatShellSetOperation(S, MATOP_MULT, (void (*)(void))slab_mult));
+  CUPID_TRY(slab_matrix(&c, P, N, &Pm));
+  const PetscInt pd_owned = (PetscInt)(c.pd1 - c.pd0);
+  const ksp_fields fields = {c.g0, c.g0 + pd_owned, c.g0 + pd_owned, c.g0 + c.nloc, 1};
+  CUPID_TRY(configure_ksp(A, opts, S, Pm, &fields, &ksp, &is_pd, &is_fe));
+  CUPID_TRY(run_ksp(ksp, A, b, x, &inf));
+  inf.time_setup = cupid_wtime() - t0 - inf.time_solve;
+
+  /* u = u_c + x on every local DOF; the true residual over the free owned DOFs, recomputed */
+  const PetscScalar *xa;
+  PCALL(slab_gather(&c, x));
+  PCALL(VecGetArrayRead(c.xl, &xa));
+  for (cupid_int d = 0; d < c.n; d++) u[d] = bc->fixed[d] ? bc->value[d] : xa[d];
+  PCALL(VecRestoreArrayRead(c.xl, &xa));
+  CUPID_TRY(slab_product(A, u, c.yw));
+  double sums[2] = {0.0, 0.0}; /* |r|^2, |f|^2 */
+  for (cupid_int d = 0; d < c.n; d++) {
+    int owned = (d >= c.pd0 && d < c.pd1) || (d >= c.n_pd && c.fe_owner);
+    if (!owned || bc->fixed[d]) continue;
+    sums[0] += (f[d] - c.yw[d]) * (f[d] - c.yw[d]);
+    sums[1] += f[d] * f[d];
+  }
+  MPI_Allreduce(MPI_IN_PLACE, sums, 2, MPI_DOUBLE, MPI_SUM, PETSC_COMM_WORLD);
+  double scale = bnorm > 0 ? (double)bnorm : sqrt(sums[1]);
+  inf.residual = scale > 0 ? sqrt(sums[0]) / scale : sqrt(sums[0]);
+  st = not_converged(ksp, &inf);
+cleanup:
+  if (info) *info = inf;
+  if (ksp) KSPDestroy(&ksp);
+  if (is_pd) ISDestroy(&is_pd);
+  if (is_fe) ISDestroy(&is_fe);
+  if (S) MatDestroy(&S);
+  if (Pm) MatDestroy(&Pm);
+  if (x) VecDestroy(&x);
+  if (b) VecDestroy(&b);
+  if (c.halo) VecScatterDestroy(&c.halo);
+  if (c.xl) VecDestroy(&c.xl);
+  cupid_free(&c.xw);
+  cupid_free(&c.yw);
+  return st;
+}
+
+static int is_slab(const cupid_linear_operator *A) { return A->part && A->part->parts > 1; }
+
+cupid_status cupid_krylov_solve(const cupid_linear_operator *A, const cupid_csr_t *P,
+                                const cupid_dirichlet_t *bc, const double *f, double *u,
+                                const cupid_coupling_krylov_options *opts,
+                                cupid_coupling_krylov_info *info) {
+  if (info) memset(info, 0, sizeof *info);
+  CUPID_CHECK(A && A->apply && P && bc && f && u, CUPID_ERR_ARGUMENT, "Krylov solve: NULL argument");
+  CUPID_CHECK(bc->n == A->n && P->nrows * P->bs == A->n, CUPID_ERR_ARGUMENT,
+              "operator (%lld DOFs), preconditioner (%lld) and conditions (%lld) differ",
+              (long long)A->n, (long long)(P->nrows * P->bs), (long long)bc->n);
+  CUPID_CHECK(!is_slab(A) || A->apply_rows, CUPID_ERR_ARGUMENT,
+              "Krylov solve: an operator on a slab needs apply_rows");
+  PetscBool init = PETSC_FALSE;
+  if (PetscInitialized(&init) || !init)
+    CUPID_CHECK(PetscInitializeNoArguments() == 0, CUPID_ERR_UNSUPPORTED,
+                "PETSc could not be initialised");
+  return is_slab(A) ? solve_slabs(A, P, bc, f, u, opts, info)
+                    : solve_replicated(A, P, bc, f, u, opts, info);
+}
+
+cupid_status cupid_krylov_apply(const cupid_linear_operator *A, const double *x, double *y) {
+  CUPID_CHECK(A && x && y, CUPID_ERR_ARGUMENT, "cupid_krylov_apply: NULL argument");
+  return is_slab(A) ? slab_product(A, x, y) : A->apply(A->ctx, x, y);
+}
+
 #else
 
 cupid_status cupid_krylov_solve(const cupid_linear_operator *A, const cupid_csr_t *P,
@@ -303,6 +648,13 @@ cupid_status cupid_krylov_solve(const cupid_linear_operator *A, const cupid_csr_
   return CUPID_ERROR(CUPID_ERR_UNSUPPORTED,
                      "the matrix-free coupled solve needs the PETSc engine: configure with "
                      "-DCUPID_WITH_PETSC=ON");
+}
+
+cupid_status cupid_krylov_apply(const cupid_linear_operator *A, const double *x, double *y) {
+  CUPID_CHECK(A && x && y, CUPID_ERR_ARGUMENT, "cupid_krylov_apply: NULL argument");
+  CUPID_CHECK(!A->part || A->part->parts <= 1, CUPID_ERR_UNSUPPORTED,
+              "an operator on a slab needs the PETSc engine (MPI)");
+  return A->apply(A->ctx, x, y);
 }
 
 #endif
