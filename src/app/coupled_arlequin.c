@@ -270,9 +270,9 @@ cupid_status cupid_app_arlequin_prepare(cupid_job *job) {
 
 static int pd_node_near(const cupid_job *job, double y, double layer) {
   const double *x = cupid_pd_grid_coords(job->grid);
-  for (cupid_int i = 0; i < job->n_pd; i++)
-    if (fabs(x[3 * i + 1] - y) < layer) return 1;
-  return 0;
+  int found = 0;
+  for (cupid_int i = 0; i < job->n_pd && !found; i++) found = fabs(x[3 * i + 1] - y) < layer;
+  return cupid_app_global_count(job, found) > 0; /* a slab: some rank's slab (collective) */
 }
 
 static cupid_status apply_constraints(cupid_job *job) {
@@ -531,15 +531,19 @@ static cupid_status create_operator(cupid_job *job, cupid_arlequin_operator *A, 
   cupid_arlequin_options o = options(job);
   cupid_arlequin_info info;
   double t0 = cupid_wtime();
-  CUPID_CALL(cupid_arlequin_operator_create(job->beam, job->grid, &job->pd_options, &o, A, &info));
-  if (P) CUPID_CALL(cupid_arlequin_preconditioner(*A, 1.5, P));
+  /* a slab: every rank's failure stops all of them before the next collective call */
+  cupid_status st = cupid_arlequin_operator_create(job->beam, job->grid, &job->pd_options, &o, A, &info);
+  if (st == CUPID_SUCCESS && P) st = cupid_arlequin_preconditioner(*A, 1.5, P);
+  CUPID_CALL(job->slab ? cupid_app_slab_agree(st) : st);
+  info.n_tied = cupid_app_global_count(job, info.n_tied); /* a slab ties its owned nodes */
   cupid_job_phase_end(job, CUPID_PHASE_COUPLING, t0);
   cupid_job_progress(job,
                      "coupling (Arlequin, matrix-free): %d region(s), %lld tied PD nodes, min PD "
-                     "weight %.3g; operator %.1f MB, preconditioner matrix %.1f MB",
+                     "weight %.3g; operator %.1f MB, preconditioner matrix %.1f MB%s",
                      job->n_arlequin_regions, (long long)info.n_tied, info.pd_weight_min,
                      (double)cupid_arlequin_operator_bytes(*A) / 1e6,
-                     P ? (double)cupid_csr_bytes(*P) / 1e6 : 0.0);
+                     P ? (double)cupid_csr_bytes(*P) / 1e6 : 0.0,
+                     job->slab ? " (rank 0's slab)" : "");
   return CUPID_SUCCESS;
 }
 
@@ -550,8 +554,14 @@ static cupid_status solve_matrix_free(cupid_job *job) {
   CUPID_TRY(create_operator(job, &A, &P));
   cupid_coupling_krylov_options ko = {.factor_package = "mumps"};
   cupid_linear_operator L;
-  cupid_arlequin_operator_linear(A, &L);
+  cupid_arlequin_operator_linear(A, &L); /* on a slab: its rows (cupid_krylov_solve) */
   CUPID_TRY(cupid_app_krylov_solve(job, &L, P, &ko));
+  if (job->slab) { /* rank 0 gathers the slabs into the whole model; the others stop */
+    cupid_csr_destroy(&P);
+    cupid_arlequin_operator_destroy(&A);
+    CUPID_TRY(cupid_app_slab_collect(job));
+    if (job->slab) goto cleanup;
+  }
   st = report_gap(job);
 cleanup:
   cupid_csr_destroy(&P);

@@ -80,6 +80,13 @@ static void record_krylov(cupid_job *job, const cupid_coupling_krylov_info *ki) 
   job->phases[CUPID_PHASE_SOLVE] = (cupid_phase_record){ki->time_solve, cupid_peak_memory(), 1};
   job->solve.method = "petsc"; /* matrix_free, ksp_type and pc_type tell the path */
   job->solve.n = job->bc->n_free;
+  if (job->slab) { /* the owned free DOFs of every slab, and the FE ones once */
+    cupid_int own = 0;
+    for (cupid_int d = 0; d < job->ndof; d++)
+      own += !job->bc->fixed[d] && (d >= job->fe_offset ? cupid_petsc_rank() == 0
+                                                        : cupid_app_pd_owned(job, d / 3));
+    job->solve.n = cupid_app_global_count(job, own);
+  }
   job->solve.residual = ki->residual;
   job->solve.time_factor = ki->time_setup;
   job->solve.time_solve = ki->time_solve;
@@ -102,7 +109,7 @@ cupid_status cupid_app_krylov_solve(cupid_job *job, const cupid_linear_operator 
   record_krylov(job, &ki);
   CUPID_CALL(st);
   job->solved = 1;
-  CUPID_CALL(L->apply(L->ctx, job->u, job->f_int));
+  CUPID_CALL(cupid_krylov_apply(L, job->u, job->f_int)); /* a slab: owned and FE rows */
   cupid_job_progress(job, "solve: %s, %lld equations, %d iterations, residual %.2e", ki.method,
                      (long long)job->solve.n, ki.iterations, ki.residual);
   return CUPID_SUCCESS;

@@ -15,9 +15,14 @@ int cupid_app_slab_wanted(const cupid_job *job) {
   const cupid_model_t *m = job->model;
   cupid_solver_kind req = job->opts->solver >= 0 ? (cupid_solver_kind)job->opts->solver
                                                  : m->analysis.solver;
+  /* coupled: the matrix-free Arlequin solve (coupled_arlequin.c); the fictitious-node
+   * operator is replicated (its extended grid spans the slabs: docs/scale.md) */
+  int arlequin = m->has_beam && m->coupling.method == CUPID_COUPLING_ARLEQUIN &&
+                 !cupid_petsc_has_option("-cupid_coupled_assembled");
+  if (cupid_petsc_has_option("-cupid_replicate")) return 0; /* every rank the whole model */
   return cupid_petsc_size() > 1 && !job->opts->check_only && m->has_peridynamics &&
-         !m->has_beam && m->pd.dimension == 3 && m->analysis.type == CUPID_ANALYSIS_STATIC &&
-         req != CUPID_SOLVER_DIRECT;
+         (!m->has_beam || arlequin) && m->pd.dimension == 3 &&
+         m->analysis.type == CUPID_ANALYSIS_STATIC && req != CUPID_SOLVER_DIRECT;
 }
 
 int cupid_app_pd_owned(const cupid_job *job, cupid_int node) {
@@ -55,15 +60,18 @@ cupid_status cupid_app_slab_check_points(cupid_job *job) {
 }
 
 /* Gather n_per_node values of every owned node of every rank on rank 0 (into *whole, which
- * rank 0 allocates for the global nodes). */
+ * rank 0 allocates for the global nodes). A 3-per-node field of a coupled model also takes
+ * the FE DOFs, the same on every rank (rank 0's copy), after the global nodes' DOFs. */
 static cupid_status gather_nodes(const cupid_job *job, const double *local, int n_per_node,
                                  double **whole) {
   const cupid_int first = job->part.owned_first, owned = job->part.owned_last - first;
+  const cupid_int pd = n_per_node * job->part.global_nodes, fe = n_per_node == 3 ? job->n_fe_dofs : 0;
   cupid_status st = CUPID_SUCCESS;
   if (cupid_petsc_rank() == 0)
-    st = cupid_calloc((size_t)(n_per_node * job->part.global_nodes), sizeof **whole,
-                      "gathered PD fields", whole);
+    st = cupid_calloc((size_t)(pd + fe) + 1, sizeof **whole, "gathered PD fields", whole);
   CUPID_CALL(cupid_app_slab_agree(st));
+  if (cupid_petsc_rank() == 0)
+    for (cupid_int d = 0; d < fe; d++) (*whole)[pd + d] = local[job->fe_offset + d];
   return cupid_petsc_gather_root(local + (size_t)n_per_node * (size_t)first, n_per_node * owned,
                                  *whole);
 }
@@ -80,15 +88,20 @@ static cupid_status bc_as_doubles(const cupid_job *job, double **flags, double *
   return CUPID_SUCCESS;
 }
 
-/* Rank 0 becomes a whole-grid job: the whole grid (no operator), the gathered fields. */
+/* Rank 0 becomes a whole-grid job: the whole grid (no operator), the gathered fields (and
+ * the beam, for a coupled model). */
 static cupid_status become_whole(cupid_job *job, double *g[6]) {
   double *u = g[0], *f_ext = g[1], *f_int = g[2], *flags = g[3], *values = g[4], *stress = g[5];
   cupid_pd_operator_destroy(&job->op);
   cupid_pd_grid_destroy(&job->grid);
   CUPID_CALL(cupid_pd_grid_create_from_model(job->model, &job->grid));
   job->n_pd = cupid_pd_grid_num_nodes(job->grid);
-  job->ndof = 3 * job->n_pd;
-  job->fe_offset = job->ndof;
+  job->fe_offset = 3 * job->n_pd;
+  job->ndof = job->fe_offset + job->n_fe_dofs;
+  if (job->beam) { /* the beam's DOFs follow the whole grid's now */
+    CUPID_CALL(cupid_cuf_set_dof_offset(job->beam, job->fe_offset));
+    cupid_cuf_get_info(job->beam, &job->fe_info);
+  }
   cupid_dirichlet_destroy(&job->bc);
   CUPID_CALL(cupid_dirichlet_create(job->ndof, &job->bc));
   for (cupid_int d = 0; d < job->ndof; d++) {

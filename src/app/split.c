@@ -32,9 +32,10 @@ int cupid_app_pd_node_in_box(const cupid_job *job, const cupid_box *b) {
   double h = cupid_pd_grid_spacing(job->grid);
   cupid_box bb = *b;
   if (cupid_pd_grid_dimension(job->grid) == 1) bb.has[0] = bb.has[2] = 0; /* a bar along y */
-  for (cupid_int i = 0; i < job->n_pd; i++)
-    if (cupid_box_contains(&bb, x + 3 * i, SPLIT_TOL * h)) return 1;
-  return 0;
+  int found = 0;
+  for (cupid_int i = 0; i < job->n_pd && !found; i++)
+    found = cupid_box_contains(&bb, x + 3 * i, SPLIT_TOL * h);
+  return cupid_app_global_count(job, found) > 0; /* a slab: some rank's slab (collective) */
 }
 
 cupid_status cupid_app_pd_stage(cupid_job *job, cupid_constraint *cons, int nc,

@@ -4,9 +4,9 @@
 #     (-cupid_coupled_assembled) and matrix-free (the default) on 2 ranks,
 #  1b. the same bar on one process: matrix-free Eq. 38 (src/coupling/operator.c, krylov.c),
 #  1c. the coupled bar with Arlequin (symmetric: CG), 2 ranks: matrix-free (the default: the
-#      node-weighted PD operator, CG + MUMPS LU of the cheap twin) and assembled
-#      (-cupid_coupled_assembled: CG + GAMG on K's rows); the Arlequin panel (two regions over
-#      part of the section) matrix-free on 2 ranks,
+#      PD grid split into z slabs, one per rank, the node-weighted PD operator, CG + MUMPS
+#      Cholesky of the cheap twin) and assembled (-cupid_coupled_assembled: CG + GAMG on K's
+#      rows); the Arlequin panel (two regions over part of the section) in slabs on 2 ranks,
 #  2. a small PD-only LPS block (matrix-free MATSHELL + halo exchange, CG + GAMG), with a
 #     prescribed non-zero displacement (lifted right-hand side),
 #  2b. a PD-only column long in z, split into slabs: each rank builds only its z layers and the
@@ -86,7 +86,26 @@ sed 's/horizon: 3.0/horizon: 1.5/' "$CUPID_SOURCE_DIR/examples/bar/bar_coupled_a
 "$CUPID" run "$tmp/arl.yaml" -o "$tmp/arl_direct" --solver direct --quiet
 "$MPIEXEC" -n 2 "$CUPID" run "$tmp/arl.yaml" -o "$tmp/arl_petsc" --solver petsc --quiet
 compare "$tmp/arl_direct" "$tmp/arl_petsc" "coupled bar, Arlequin, matrix-free"
-python3 -c "import json,sys; s=json.load(open(sys.argv[1]))['solver']; assert s['ranks']==2 and s['ksp_type']=='cg' and s['operator']=='matrix-free', s" "$tmp/arl_petsc/summary.json"
+slabs_agree() { # direct-dir slab-dir label: the PD grid was split into 2 z slabs (each rank
+  # built only its layers + halo) and the counts and equilibrium match the direct solve's
+  python3 - "$1/summary.json" "$2/summary.json" "$3" <<'PY'
+import json, sys
+d, p = (json.load(open(f)) for f in sys.argv[1:3])
+s = p["solver"]
+assert s["ranks"] == 2 and s["ksp_type"] == "cg" and s["operator"] == "matrix-free", s
+assert s["pd_slabs"]["ranks"] == 2 and s["pd_slabs"]["largest_slab_nodes"] < p["counts"]["pd_nodes"], s
+for k in ("pd_nodes", "fe_dofs", "bonds", "constrained_dofs"):
+    assert d["counts"][k] == p["counts"][k], (k, d["counts"][k], p["counts"][k])
+assert s["equations"] == d["solver"]["equations"], (s["equations"], d["solver"]["equations"])
+# reactions from the slabs' K u (owned rows + FE rows summed over the ranks): in balance as
+# tightly as the direct solve (1e-6 of the load: the penalty kappa = 10 E h makes K stiff)
+imb = max(abs(v) for v in p["equilibrium_imbalance"]) / max(abs(v) for v in p["applied_load_sum"])
+print(f"{sys.argv[3]}: largest slab {s['pd_slabs']['largest_slab_nodes']} of "
+      f"{p['counts']['pd_nodes']} PD nodes, imbalance {imb:.1e}")
+assert imb <= 1e-6, imb
+PY
+}
+slabs_agree "$tmp/arl_direct" "$tmp/arl_petsc" "coupled bar, Arlequin, slabs"
 "$MPIEXEC" -n 2 "$CUPID" run "$tmp/arl.yaml" -o "$tmp/arl_asm" --solver petsc --quiet -cupid_coupled_assembled
 compare "$tmp/arl_direct" "$tmp/arl_asm" "coupled bar, Arlequin, assembled"
 python3 -c "import json,sys; s=json.load(open(sys.argv[1]))['solver']; assert s['ranks']==2 and s['ksp_type']=='cg' and s['operator']=='assembled', s" "$tmp/arl_asm/summary.json"
@@ -95,6 +114,7 @@ echo "== panel, Arlequin (two stringer regions over part of the section), matrix
 "$CUPID" run "$CUPID_SOURCE_DIR/examples/panel/panel_pd_l9_arlequin.yaml" -o "$tmp/parl_direct" --solver direct --quiet
 "$MPIEXEC" -n 2 "$CUPID" run "$CUPID_SOURCE_DIR/examples/panel/panel_pd_l9_arlequin.yaml" -o "$tmp/parl_petsc" --solver petsc --quiet
 compare "$tmp/parl_direct" "$tmp/parl_petsc" "panel, Arlequin, matrix-free"
+slabs_agree "$tmp/parl_direct" "$tmp/parl_petsc" "panel, Arlequin, slabs"
 
 echo "== PD-only LPS block, matrix-free, 2 ranks"
 "$CUPID" run "$models/pd_block.yaml" -o "$tmp/pd_direct" --solver direct --quiet
