@@ -252,7 +252,10 @@ typedef struct {
  * penalty K_z = kappa [I, -N; -N^T, N^T N] (Eq. 18, sign as coupling.md 7.2). The beam's DOF
  * offset must be 3 * nodes of the grid. CUPID_ERR_MODEL if a PD node of an overlap lies
  * outside the beam. @p op NULL: the same matrix without the PD block (the assembled part of
- * the matrix-free operator below).
+ * the matrix-free operator below). On a slab of a partitioned grid (issue 6,
+ * cupid_pd_grid_partition) this is the slab's share: only its owned tied nodes add their
+ * penalty, and only the last slab (the owner of the FE DOFs) adds the weighted beam, so the
+ * owned PD rows are the whole matrix's and the FE rows sum over the slabs to the whole FE rows.
  */
 cupid_status cupid_arlequin_assemble(cupid_cuf_beam beam, cupid_pd_grid grid,
                                      cupid_pd_operator op, const cupid_arlequin_options *o,

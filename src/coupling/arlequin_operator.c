@@ -9,7 +9,11 @@
  * The preconditioner matrix is the same K with the cheap PD operator of the fictitious-node
  * path (cupid_coupling_cheap_options(): bond-based, horizon 1.5 h, micromodulus calibrated to
  * the bulk modulus), weighted node by node the same way: symmetric positive definite like K,
- * with ~19 blocks a PD row. */
+ * with ~19 blocks a PD row.
+ *
+ * On a slab of a partitioned grid (issue 6) the operator is the slab's: its owned PD rows are
+ * the whole operator's (the halo holds what they read) and its FE rows are the slab's share
+ * (cupid_arlequin_assemble() on a slab), summed over the ranks by cupid_krylov_solve(). */
 #include <string.h>
 
 #include "coupling_internal.h"

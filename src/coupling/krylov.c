@@ -7,9 +7,12 @@
  * so its factor is ~1/50 of the LPS one); ILU, GAMG or hypre on request. GMRES is right
  * preconditioned, so it minimises the true residual and rtol is what the caller gets; the true
  * residual is recomputed at the end either way. Dirichlet DOFs are eliminated:
- * A_ff u_f = f_f - A_fc u_c. On several MPI ranks (replicated model) the vectors, the rows of
- * the product and the preconditioner's rows are split over the ranks and the factor is MUMPS's
- * (parallel); every rank gets the whole solution. */
+ * A_ff u_f = f_f - A_fc u_c. On several MPI ranks with a replicated model the vectors, the
+ * rows of the product and the preconditioner's rows are split over the ranks and the factor is
+ * MUMPS's (parallel); every rank gets the whole solution. With a slab of the PD grid per rank
+ * (the operator's part, issue 6) each rank holds only its slab's DOFs and the FE DOFs: the
+ * product gathers the halo through a VecScatter and sums the FE rows over the ranks, and the
+ * fixed DOFs stay in the system as scaled identity rows (solve_slabs below). */
 #include <math.h>
 #include <stdio.h>
 #include <string.h>
@@ -479,9 +482,12 @@ static cupid_status slab_matrix(const slab_ctx *c, const cupid_csr_t *P, PetscIn
       for (cupid_int k = P->rowptr[R]; k < P->rowptr[R + 1]; k++)
         for (int b = 0; b < bs; b++) {
           cupid_int e = P->col[k] * bs + b;
-          if (c->bc->fixed[e]) continue;
+          double v = P->val[(size_t)k * bs * bs + a * bs + b];
+          /* an FE row's share holds the beam's pattern on every slab but its values only on
+           * the last: the zeros are not sent to the owner */
+          if (c->bc->fixed[e] || (d >= c->n_pd && v == 0.0)) continue;
           cols[len] = slab_global(c, e);
-          vals[len++] = P->val[(size_t)k * bs * bs + a * bs + b];
+          vals[len++] = v;
         }
       PCALL(MatSetValues(M, 1, &row, len, cols, vals, ADD_VALUES));
     }
