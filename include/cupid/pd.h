@@ -32,6 +32,11 @@ typedef struct {
   int part;         /**< the slab this grid holds, 0 <= part < parts */
   int halo_layers;  /**< z layers kept on each side of the owned ones (see
                          cupid_pd_operator_halo_layers) */
+  /** With parts > 1 and own_z[1] > own_z[0]: own the z layers between the planes own_z[0]
+   *  and own_z[1] (cell faces, as cupid_pd_grid_partition reports them) instead of the
+   *  balanced split: a second grid cut like another grid's slab (the extended grid of the
+   *  fictitious-node coupling). */
+  double own_z[2];
 } cupid_pd_grid_options;
 
 /**
@@ -47,6 +52,8 @@ typedef struct {
   cupid_int first_global;  /**< global index of local node 0 */
   cupid_int owned_first, owned_last; /**< owned local nodes */
   int parts, part;
+  int halo_layers;         /**< as the grid's options gave it */
+  double own_z[2];         /**< the owned layers' z range (their outer cell faces) */
 } cupid_pd_grid_partition;
 
 /**

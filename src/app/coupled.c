@@ -259,7 +259,7 @@ static cupid_status solve(cupid_job *job) {
 
 /* --solver petsc: the fictitious-node system (Eq. 38) without the PD matrix, GMRES
  * preconditioned by the LU of a cheap bond-based twin (src/coupling/operator.c, krylov.c;
- * issue 6), on one rank or several (replicated model, MUMPS's parallel LU). The PETSc option
+ * issue 6), on one rank or several (the PD grid in z slabs, slab.c; MUMPS's parallel LU). The PETSc option
  * -cupid_coupled_assembled takes the assembled path instead (solve(): Eq. 38 assembled, its
  * rows split over the ranks, GMRES + block Jacobi/ILU). */
 int cupid_app_coupled_matrix_free(const cupid_job *job) {
@@ -279,7 +279,7 @@ static cupid_status solve_matrix_free(cupid_job *job) {
    * nodes (bench/README_coupled.md); -pc_factor_mat_solver_type overrides it. */
   cupid_coupling_krylov_options ko = {.factor_package = "mumps"};
   CUPID_TRY(cupid_app_coupled_solve_mf(job, &co, &ko));
-  if (!job->quiet) CUPID_TRY(print_equilibrium(job));
+  if (!job->quiet && !job->slab) CUPID_TRY(print_equilibrium(job)); /* a slab: rank 0 is whole */
 cleanup:
   cupid_free(&boxes);
   cupid_free(&mats);

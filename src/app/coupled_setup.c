@@ -121,21 +121,29 @@ cupid_status cupid_app_coupled_solve_mf(cupid_job *job, const cupid_coupling_opt
   cupid_coupling_operator A = NULL;
   cupid_csr P = NULL;
   double t0 = cupid_wtime();
-  CUPID_TRY(cupid_coupling_operator_create(job->beam, job->grid, co, &A));
-  cupid_coupling_info ci;
+  /* a slab (job->slab): every rank's failure stops all of them before the next collective */
+  st = cupid_coupling_operator_create(job->beam, job->grid, co, &A);
+  if (st == CUPID_SUCCESS) st = cupid_coupling_preconditioner(A, 1.5, &P);
+  CUPID_TRY(job->slab ? cupid_app_slab_agree(st) : st);
+  cupid_coupling_info ci; /* the whole model's, on a slab too */
   cupid_coupling_operator_get_info(A, &ci);
   job->n_fictitious = ci.n_fictitious_pd;
-  CUPID_TRY(cupid_coupling_preconditioner(A, 1.5, &P));
   cupid_job_phase_end(job, CUPID_PHASE_COUPLING, t0);
   cupid_job_progress(job,
                      "coupling (fictitious nodes, matrix-free): %d interfaces, %lld fictitious PD "
                      "nodes, %lld fictitious FE nodes; operator %.1f MB, preconditioner matrix "
-                     "%.1f MB",
+                     "%.1f MB%s",
                      ci.n_interfaces, (long long)ci.n_fictitious_pd, (long long)ci.n_fictitious_fe,
-                     (double)cupid_coupling_operator_bytes(A) / 1e6, (double)cupid_csr_bytes(P) / 1e6);
+                     (double)cupid_coupling_operator_bytes(A) / 1e6, (double)cupid_csr_bytes(P) / 1e6,
+                     job->slab ? " (rank 0's slab)" : "");
   cupid_linear_operator L;
-  cupid_coupling_operator_linear(A, &L);
+  cupid_coupling_operator_linear(A, &L); /* on a slab: its rows (cupid_krylov_solve) */
   CUPID_TRY(cupid_app_krylov_solve(job, &L, P, ko));
+  if (job->slab) { /* rank 0 gathers the slabs into the whole model; the others stop */
+    cupid_csr_destroy(&P);
+    cupid_coupling_operator_destroy(&A);
+    CUPID_TRY(cupid_app_slab_collect(job));
+  }
 cleanup:
   cupid_csr_destroy(&P);
   cupid_coupling_operator_destroy(&A);

@@ -15,13 +15,13 @@ int cupid_app_slab_wanted(const cupid_job *job) {
   const cupid_model_t *m = job->model;
   cupid_solver_kind req = job->opts->solver >= 0 ? (cupid_solver_kind)job->opts->solver
                                                  : m->analysis.solver;
-  /* coupled: the matrix-free Arlequin solve (coupled_arlequin.c); the fictitious-node
-   * operator is replicated (its extended grid spans the slabs: docs/scale.md) */
-  int arlequin = m->has_beam && m->coupling.method == CUPID_COUPLING_ARLEQUIN &&
-                 !cupid_petsc_has_option("-cupid_coupled_assembled");
+  /* coupled: the matrix-free solves, Arlequin (coupled_arlequin.c) and fictitious nodes
+   * (coupled.c); Lagrange multipliers and the assembled paths keep the replicated model */
+  int coupled_mf = m->has_beam && m->coupling.method != CUPID_COUPLING_LAGRANGE &&
+                   !cupid_petsc_has_option("-cupid_coupled_assembled");
   if (cupid_petsc_has_option("-cupid_replicate")) return 0; /* every rank the whole model */
   return cupid_petsc_size() > 1 && !job->opts->check_only && m->has_peridynamics &&
-         (!m->has_beam || arlequin) && m->pd.dimension == 3 &&
+         (!m->has_beam || coupled_mf) && m->pd.dimension == 3 &&
          m->analysis.type == CUPID_ANALYSIS_STATIC && req != CUPID_SOLVER_DIRECT;
 }
 

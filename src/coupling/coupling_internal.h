@@ -95,9 +95,20 @@ cupid_status cpl_parts_build(cupid_cuf_beam beam, cupid_pd_grid grid,
 cupid_status cpl_parts_assemble(const cpl_parts *p, const cupid_pd_operator_options *pd,
                                 cupid_csr *K);
 void cpl_parts_free(cpl_parts *p);
+/** The options of an extended grid: the whole one (@p cut NULL or a whole grid's partition),
+ *  or the slab cut like the real grid's slab @p cut (same z window and halo). */
+cupid_pd_grid_options cpl_ext_grid_options(double h, const cupid_pd_grid_partition *cut);
+/** The extended grid of a coupling with some region over part of the section (partial.c). */
+cupid_status cpl_partial_extended_grid(cupid_cuf_beam beam, const cupid_coupling_options *o,
+                                       const cupid_pd_grid_partition *cut, cupid_pd_grid *ext);
 /** The parts when some region covers part of the section (src/coupling/partial.c). */
 cupid_status cpl_partial_parts(cupid_cuf_beam beam, cupid_pd_grid grid,
                                const cupid_coupling_options *o, cupid_coupling_h c, cpl_parts *p);
+
+/** The real grid's partition of a fictitious-node operator, and its real PD nodes (the
+ *  slab's, on a slab). */
+const cupid_pd_grid_partition *cpl_operator_partition(const cupid_coupling_operator A,
+                                                      cupid_int *n_pd);
 
 /** The Arlequin PD weights 1 - alpha(x_i) of the grid's nodes (*wn allocated; *wmin their
  *  smallest) (src/coupling/arlequin.c). */

@@ -11,6 +11,8 @@
 
 #define TOL 1e-9
 
+static int any_partial_region(cupid_cuf_beam beam, const cupid_coupling_options *o);
+
 /* ------------------------------------------------------------------------------ geometry */
 
 static void section_bbox(const cupid_cuf_beam beam, double bb[4]) {
@@ -319,7 +321,8 @@ static cupid_status build_interface(interface_t *it, const cupid_coupling_option
 /* Extended grid: real regions first (so real nodes keep their materials), then, for every
  * interface, a slab of the region's section reaching 2 delta (whole spacings) into the beam. */
 static cupid_status extended_grid(const cupid_coupling_options *o, const interface_t *iface,
-                                  int n_iface, double y_min, double y_max, cupid_pd_grid *ext) {
+                                  int n_iface, double y_min, double y_max,
+                                  const cupid_pd_grid_partition *cut, cupid_pd_grid *ext) {
   cupid_status st = CUPID_SUCCESS;
   int nb = o->n_regions + n_iface;
   cupid_box *boxes = NULL;
@@ -352,12 +355,24 @@ static cupid_status extended_grid(const cupid_coupling_options *o, const interfa
     boxes[k] = b;
     mats[k++] = o->region_materials[it->region];
   }
-  cupid_pd_grid_options go = {.spacing = h, .dimension = 3, .area = 0.0};
+  cupid_pd_grid_options go = cpl_ext_grid_options(h, cut);
   CUPID_TRY(cupid_pd_grid_create(&go, k, boxes, mats, ext));
 cleanup:
   cupid_free(&boxes);
   cupid_free(&mats);
   return st;
+}
+
+cupid_pd_grid_options cpl_ext_grid_options(double h, const cupid_pd_grid_partition *cut) {
+  cupid_pd_grid_options go = {.spacing = h, .dimension = 3, .area = 0.0};
+  if (cut && cut->parts > 1) {
+    go.parts = cut->parts;
+    go.part = cut->part;
+    go.halo_layers = cut->halo_layers;
+    go.own_z[0] = cut->own_z[0];
+    go.own_z[1] = cut->own_z[1];
+  }
+  return go;
 }
 
 void cpl_ext_map_free(ext_map *m) {
@@ -523,7 +538,7 @@ static cupid_status full_parts(cupid_cuf_beam beam, cupid_pd_grid grid,
   CUPID_TRY(cpl_find_interfaces(beam, o, c));
   for (int f = 0; f < c->n_iface; f++) CUPID_TRY(build_interface(&c->iface[f], o, grid, M, 2));
 
-  CUPID_TRY(extended_grid(o, c->iface, c->n_iface, info.y_min, info.y_max, &p->ext));
+  CUPID_TRY(extended_grid(o, c->iface, c->n_iface, info.y_min, info.y_max, NULL, &p->ext));
   p->n_ext = cupid_pd_grid_num_nodes(p->ext);
   CUPID_TRY(cpl_map_extended(p->ext, grid, beam, M, pe, &p->map, &p->n_fict));
   CUPID_TRY_CHECK(p->n_ext - p->n_fict == n_pd, CUPID_ERR_ARGUMENT,
@@ -551,8 +566,9 @@ cleanup:
   return st;
 }
 
-cupid_status cpl_parts_build(cupid_cuf_beam beam, cupid_pd_grid grid,
-                             const cupid_coupling_options *o, cupid_coupling_h c, cpl_parts *p) {
+/* The parts on a whole real grid. */
+static cupid_status whole_parts(cupid_cuf_beam beam, cupid_pd_grid grid,
+                                const cupid_coupling_options *o, cupid_coupling_h c, cpl_parts *p) {
   cupid_cuf_info info;
   cupid_cuf_get_info(beam, &info);
   memset(p, 0, sizeof *p);
@@ -560,10 +576,95 @@ cupid_status cpl_parts_build(cupid_cuf_beam beam, cupid_pd_grid grid,
   CUPID_CHECK(info.dof_offset == 3 * p->n_pd, CUPID_ERR_ARGUMENT,
               "the beam's DOF offset (%lld) must be 3 x the real PD nodes (%lld)",
               (long long)info.dof_offset, (long long)(3 * p->n_pd));
-  int any_partial = 0;
-  for (int r = 0; r < o->n_regions; r++) any_partial |= !cpl_region_full(beam, &o->regions[r]);
-  cupid_status st = any_partial ? cpl_partial_parts(beam, grid, o, c, p)
-                                : full_parts(beam, grid, o, c, p);
+  cupid_status st = any_partial_region(beam, o) ? cpl_partial_parts(beam, grid, o, c, p)
+                                                : full_parts(beam, grid, o, c, p);
+  if (st != CUPID_SUCCESS) cpl_parts_free(p);
+  return st;
+}
+
+static int any_partial_region(cupid_cuf_beam beam, const cupid_coupling_options *o) {
+  int any = 0;
+  for (int r = 0; r < o->n_regions; r++) any |= !cpl_region_full(beam, &o->regions[r]);
+  return any;
+}
+
+/* This slab's share of the whole FE rows F (block columns [G real PD nodes | FE nodes]): the
+ * PD columns of its owned nodes (local indices), the FE columns on the last slab only, so
+ * that the shares sum over the slabs to F. */
+static cupid_status fe_rows_share(const cupid_csr_t *F, const cupid_pd_grid_partition *cut,
+                                  cupid_int n_local, cpl_rowbuild *rb, cupid_csr *share) {
+  const cupid_int G = cut->global_nodes, g0 = cut->first_global + cut->owned_first,
+                  g1 = cut->first_global + cut->owned_last;
+  const int last = cut->part == cut->parts - 1;
+  CUPID_CALL(cpl_rowbuild_init(rb, F->nrows, n_local + F->nrows));
+  for (cupid_int a = 0; a < F->nrows; a++) {
+    for (cupid_int k = F->rowptr[a]; k < F->rowptr[a + 1]; k++) {
+      cupid_int col = F->col[k];
+      const double *blk = F->val + 9 * k;
+      if (col < G && col >= g0 && col < g1)
+        CUPID_CALL(cpl_rowbuild_add(rb, col - cut->first_global, 1.0, blk));
+      else if (col >= G && last)
+        CUPID_CALL(cpl_rowbuild_add(rb, n_local + col - G, 1.0, blk));
+    }
+    CUPID_CALL(cpl_rowbuild_end_row(rb, n_local + a));
+  }
+  return cpl_rowbuild_finish(rb, share);
+}
+
+/* A slab of a partitioned real grid (issue 6). The FE rows are built on the whole real grid,
+ * whose coordinates are cheap next to its PD operator (the section fits of Eqs. 33-35 and
+ * the fictitious FE nodes of regions over part of the section read whole planes of PD nodes,
+ * which span the slabs), then cut to this slab's share (fe_rows_share). The extended grid is
+ * cut like the real slab (the same z window and halo), so its owned real nodes are the real
+ * slab's, and the PD rows of the owned nodes are the whole operator's. The interfaces and
+ * the info in c are the whole model's. */
+static cupid_status slab_parts(cupid_cuf_beam beam, cupid_pd_grid grid,
+                               const cupid_pd_grid_partition *cut, const cupid_coupling_options *o,
+                               cupid_coupling_h c, cpl_parts *p) {
+  cupid_status st = CUPID_SUCCESS;
+  cupid_pd_grid whole = NULL;
+  cpl_parts wp = {0};
+  cpl_rowbuild rb = {0};
+  cupid_cuf_info info;
+  cupid_cuf_get_info(beam, &info);
+  const cupid_int n_local = cupid_pd_grid_num_nodes(grid);
+  CUPID_CHECK(info.dof_offset == 3 * n_local, CUPID_ERR_ARGUMENT,
+              "the beam's DOF offset (%lld) must be 3 x the slab's PD nodes (%lld)",
+              (long long)info.dof_offset, (long long)(3 * n_local));
+  cupid_pd_grid_options go = {.spacing = o->spacing, .dimension = 3};
+  CUPID_TRY(cupid_pd_grid_create(&go, o->n_regions, o->regions, o->region_materials, &whole));
+  CUPID_TRY_CHECK(cupid_pd_grid_num_nodes(whole) == cut->global_nodes, CUPID_ERR_ARGUMENT,
+                  "the regions give %lld PD nodes, the slab's grid %lld",
+                  (long long)cupid_pd_grid_num_nodes(whole), (long long)cut->global_nodes);
+  CUPID_TRY(cupid_cuf_set_dof_offset(beam, 3 * cut->global_nodes));
+  st = whole_parts(beam, whole, o, c, &wp);
+  cupid_cuf_set_dof_offset(beam, 3 * n_local); /* back, whatever happened */
+  CUPID_TRY(st);
+  CUPID_TRY(fe_rows_share(wp.Kfe, cut, n_local, &rb, &p->Kfe));
+  p->n_pd = n_local;
+  if (any_partial_region(beam, o))
+    CUPID_TRY(cpl_partial_extended_grid(beam, o, cut, &p->ext));
+  else
+    CUPID_TRY(extended_grid(o, c->iface, c->n_iface, info.y_min, info.y_max, cut, &p->ext));
+  p->n_ext = cupid_pd_grid_num_nodes(p->ext);
+  CUPID_TRY(cpl_map_extended(p->ext, grid, beam, info.M, info.element_nodes, &p->map, &p->n_fict));
+  CUPID_TRY_CHECK(p->n_ext - p->n_fict == n_local, CUPID_ERR_ARGUMENT,
+                  "the extended slab holds %lld real nodes, the real slab %lld",
+                  (long long)(p->n_ext - p->n_fict), (long long)n_local);
+cleanup:
+  cpl_parts_free(&wp);
+  cpl_rowbuild_free(&rb);
+  cupid_pd_grid_destroy(&whole);
+  return st;
+}
+
+cupid_status cpl_parts_build(cupid_cuf_beam beam, cupid_pd_grid grid,
+                             const cupid_coupling_options *o, cupid_coupling_h c, cpl_parts *p) {
+  cupid_pd_grid_partition cut;
+  cupid_pd_grid_get_partition(grid, &cut);
+  if (cut.parts <= 1) return whole_parts(beam, grid, o, c, p);
+  memset(p, 0, sizeof *p);
+  cupid_status st = slab_parts(beam, grid, &cut, o, c, p);
   if (st != CUPID_SUCCESS) cpl_parts_free(p);
   return st;
 }

@@ -675,14 +675,15 @@ static cupid_status fict_apply_rows(void *ctx, const double *x, cupid_int d0, cu
 }
 
 void cupid_coupling_operator_linear(const cupid_coupling_operator A, cupid_linear_operator *L) {
-  cupid_coupling_info ci;
-  cupid_coupling_operator_get_info(A, &ci);
+  cupid_int n_pd = 0; /* the slab's on a slab (the info counts the whole model) */
+  const cupid_pd_grid_partition *part = cpl_operator_partition(A, &n_pd);
   *L = (cupid_linear_operator){.n = cupid_coupling_operator_size(A),
                                .apply = fict_apply,
                                .apply_rows = fict_apply_rows,
                                .ctx = A,
                                .symmetric = 0,
-                               .n_pd_dofs = 3 * ci.n_real_pd};
+                               .n_pd_dofs = 3 * n_pd,
+                               .part = part};
 }
 
 cupid_status cupid_coupling_krylov_solve(const cupid_coupling_operator A, const cupid_csr_t *P,

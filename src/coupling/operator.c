@@ -26,6 +26,7 @@ struct cupid_coupling_operator_private {
   cupid_pd_operator op;            /* ... on the extended grid */
   cupid_int *ext_of;               /* real PD node -> extended node */
   int ext_ascending;               /* ext_of increases (row ranges map to extended ranges) */
+  cupid_pd_grid_partition part;    /* the real grid's: a slab holds its owned rows (issue 6) */
   double *ue, *fe;                 /* 3 per extended node: work vectors of apply */
 };
 
@@ -38,6 +39,7 @@ cupid_status cupid_coupling_operator_create(cupid_cuf_beam beam, cupid_pd_grid g
   CUPID_TRY(cupid_calloc(1, sizeof *A->c, "coupling", &A->c));
   CUPID_TRY(cpl_parts_build(beam, grid, opts, A->c, &A->parts));
   A->pd = opts->pd;
+  cupid_pd_grid_get_partition(grid, &A->part);
   CUPID_TRY(cupid_pd_operator_create(A->parts.ext, &A->pd, &A->op));
   cupid_int n_ext = A->parts.n_ext, n_pd = A->parts.n_pd;
   CUPID_TRY(cupid_malloc((size_t)(n_pd > 0 ? n_pd : 1), sizeof *A->ext_of, "real -> extended",
@@ -72,6 +74,12 @@ cupid_int cupid_coupling_operator_size(const cupid_coupling_operator A) {
 
 void cupid_coupling_operator_get_info(const cupid_coupling_operator A, cupid_coupling_info *info) {
   *info = A->c->info;
+}
+
+const cupid_pd_grid_partition *cpl_operator_partition(const cupid_coupling_operator A,
+                                                      cupid_int *n_pd) {
+  *n_pd = A->parts.n_pd;
+  return &A->part;
 }
 
 int64_t cupid_coupling_operator_bytes(const cupid_coupling_operator A) {

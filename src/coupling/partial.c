@@ -32,8 +32,8 @@ static double snap_hi(double v, double a, double h) {
 
 /* Extended grid: the real regions, then, for every region and section element, the part of
  * the element within 2 delta (whole spacings) of the region's box over the beam's y range. */
-static cupid_status partial_extended_grid(cupid_cuf_beam beam, const cupid_coupling_options *o,
-                                          cupid_pd_grid *ext) {
+cupid_status cpl_partial_extended_grid(cupid_cuf_beam beam, const cupid_coupling_options *o,
+                                       const cupid_pd_grid_partition *cut, cupid_pd_grid *ext) {
   cupid_status st = CUPID_SUCCESS;
   cupid_cuf_info info;
   cupid_cuf_get_info(beam, &info);
@@ -76,7 +76,7 @@ static cupid_status partial_extended_grid(cupid_cuf_beam beam, const cupid_coupl
       mats[k++] = o->region_materials[r];
     }
   }
-  cupid_pd_grid_options go = {.spacing = h, .dimension = 3, .area = 0.0};
+  cupid_pd_grid_options go = cpl_ext_grid_options(h, cut);
   CUPID_TRY(cupid_pd_grid_create(&go, k, boxes, mats, ext));
 cleanup:
   cupid_free(&boxes);
@@ -244,7 +244,7 @@ cupid_status cpl_partial_parts(cupid_cuf_beam beam, cupid_pd_grid grid,
               "a PD region over part of the section needs an LE section expansion");
   cupid_int n_pd = p->n_pd;
 
-  CUPID_TRY(partial_extended_grid(beam, o, &p->ext));
+  CUPID_TRY(cpl_partial_extended_grid(beam, o, NULL, &p->ext));
   p->n_ext = cupid_pd_grid_num_nodes(p->ext);
   CUPID_TRY(cpl_map_extended(p->ext, grid, beam, info.M, info.element_nodes, &p->map, &p->n_fict));
   CUPID_TRY_CHECK(p->n_ext - p->n_fict == n_pd, CUPID_ERR_ARGUMENT,

@@ -102,6 +102,11 @@ static cupid_status apply_partition(const cupid_pd_grid_options *opts, int n_box
     }
     bound[e] = k;
   }
+  if (opts->own_z[1] > opts->own_z[0]) /* an explicit window (another grid's slab) */
+    for (int e = 0; e < 2; e++) {
+      cupid_int k = (cupid_int)floor((opts->own_z[e] - g->origin[2]) / g->h + 0.5);
+      bound[e] = k < 0 ? 0 : k > nk ? nk : k;
+    }
   if (cnt[bound[1]] == cnt[bound[0]]) {
     cupid_free(&cnt);
     return CUPID_ERROR(CUPID_ERR_MODEL,
@@ -117,7 +122,10 @@ static cupid_status apply_partition(const cupid_pd_grid_options *opts, int n_box
                                       .owned_first = cnt[bound[0]] - cnt[w0],
                                       .owned_last = cnt[w1] - cnt[bound[1]],
                                       .parts = opts->parts,
-                                      .part = opts->part};
+                                      .part = opts->part,
+                                      .halo_layers = opts->halo_layers,
+                                      .own_z = {g->origin[2] + (double)bound[0] * g->h,
+                                                g->origin[2] + (double)bound[1] * g->h}};
   cupid_free(&cnt);
   g->origin[2] += (double)w0 * g->h;
   g->n[2] = w1 - w0;
@@ -243,7 +251,9 @@ cupid_status pd_grid_build(const cupid_pd_grid_options *opts, int n_boxes, const
     if (g->dense[c] >= 0) nn++;
   g->nnodes = nn;
   if (opts->parts <= 1) {
-    g->part = (cupid_pd_grid_partition){.global_nodes = nn, .owned_last = nn, .parts = 1};
+    g->part = (cupid_pd_grid_partition){
+        .global_nodes = nn, .owned_last = nn, .parts = 1,
+        .own_z = {g->origin[2], g->origin[2] + (double)g->n[2] * g->h}};
   } else {
     /* apply_partition left the global counts; the owned range ends where the owned layers do */
     g->part.owned_last = nn - g->part.owned_last;
