@@ -182,8 +182,9 @@ void cupid_direct_factor_destroy(cupid_direct_factor *F);
 /* ---- PETSc/MPI engine (src/solvers/petsc.c; issue 6) ----
  * Optional: with CUPID_HAVE_PETSC == 0 (cupid_config.h) every function below is a stub and the
  * solves return CUPID_ERR_UNSUPPORTED. Every rank holds the whole (replicated) model, except for
- * PD-only 3D static models on several ranks, where each rank holds one slab of the PD grid
- * (cupid_pd_grid_partition; cupid_petsc_solve_pd). The solves are collective over
+ * 3D static models on several ranks solved matrix-free (PD-only: cupid_petsc_solve_pd; coupled
+ * by fictitious nodes or Arlequin: cupid_krylov_solve in coupling.h), where each rank holds
+ * one slab of the PD grid (cupid_pd_grid_partition). The solves are collective over
  * PETSC_COMM_WORLD. */
 
 /** 1 when cupid was built with PETSc (CMake option CUPID_WITH_PETSC). */

@@ -345,7 +345,8 @@ void cupid_app_job_destroy(cupid_job *job) {
 }
 
 cupid_status cupid_run_model(const cupid_model_t *model, const cupid_run_options *opts) {
-  /* Under MPI every rank runs the pipeline on the replicated model; rank 0 speaks and writes. */
+  /* Under MPI every rank runs the pipeline, on the replicated model or on its slab of the PD
+   * grid (slab.c); rank 0 speaks and writes. */
   int rank = cupid_petsc_rank();
   cupid_job job = {.model = model, .opts = opts, .quiet = opts->quiet || !isatty(2) || rank != 0};
   cupid_status st = CUPID_SUCCESS;
