@@ -638,7 +638,7 @@ static cupid_status slab_parts(cupid_cuf_beam beam, cupid_pd_grid grid,
                   (long long)cupid_pd_grid_num_nodes(whole), (long long)cut->global_nodes);
   CUPID_TRY(cupid_cuf_set_dof_offset(beam, 3 * cut->global_nodes));
   st = whole_parts(beam, whole, o, c, &wp);
-  cupid_cuf_set_dof_offset(beam, 3 * n_local); /* back, whatever happened */
+  (void)cupid_cuf_set_dof_offset(beam, 3 * n_local); /* back, whatever happened */
   CUPID_TRY(st);
   CUPID_TRY(fe_rows_share(wp.Kfe, cut, n_local, &rb, &p->Kfe));
   p->n_pd = n_local;

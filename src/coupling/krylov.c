@@ -70,18 +70,69 @@ static PetscErrorCode shell_mult(Mat M, Vec x, Vec y) {
   return 0;
 }
 
+/* The work arrays of building an AIJ matrix: row counts (diagonal and off-diagonal blocks)
+ * of the owned rows, one row's columns and values. */
+typedef struct {
+  PetscInt *dnz, *onz, *cols;
+  PetscScalar *vals;
+} aij_rows;
+
+static cupid_status aij_rows_alloc(cupid_int nloc, cupid_int maxrow, aij_rows *r) {
+  CUPID_CALL(cupid_calloc((size_t)nloc + 1, sizeof *r->dnz, "preconditioner row counts", &r->dnz));
+  CUPID_CALL(cupid_calloc((size_t)nloc + 1, sizeof *r->onz, "preconditioner row counts", &r->onz));
+  CUPID_CALL(cupid_malloc((size_t)maxrow + 1, sizeof *r->cols, "preconditioner row", &r->cols));
+  return cupid_malloc((size_t)maxrow + 1, sizeof *r->vals, "preconditioner row", &r->vals);
+}
+
+static void aij_rows_free(aij_rows *r) {
+  cupid_free(&r->dnz);
+  cupid_free(&r->onz);
+  cupid_free(&r->cols);
+  cupid_free(&r->vals);
+}
+
+/* The longest scalar row of the block-CSR P. */
+static cupid_int block_row_max(const cupid_csr_t *P) {
+  cupid_int m = 1;
+  for (cupid_int R = 0; R < P->nrows; R++)
+    if ((P->rowptr[R + 1] - P->rowptr[R]) * P->bs > m) m = (P->rowptr[R + 1] - P->rowptr[R]) * P->bs;
+  return m;
+}
+
+/* A parallel AIJ matrix of nloc owned rows (of N), preallocated by row counts. */
+static cupid_status create_aij(PetscInt nloc, PetscInt N, const PetscInt *dnz,
+                               const PetscInt *onz, Mat *M) {
+  cupid_status st = CUPID_SUCCESS;
+  PCALL(MatCreate(PETSC_COMM_WORLD, M));
+  PCALL(MatSetSizes(*M, nloc, nloc, N, N));
+  PCALL(MatSetType(*M, MATAIJ));
+  PCALL(MatSeqAIJSetPreallocation(*M, 0, dnz));
+  PCALL(MatMPIAIJSetPreallocation(*M, 0, dnz, 0, onz));
+cleanup:
+  return st;
+}
+
+/* Assemble *M and hand it over as *out. */
+static cupid_status finish_aij(Mat *M, Mat *out) {
+  cupid_status st = CUPID_SUCCESS;
+  PCALL(MatAssemblyBegin(*M, MAT_FINAL_ASSEMBLY));
+  PCALL(MatAssemblyEnd(*M, MAT_FINAL_ASSEMBLY));
+  *out = *M;
+  *M = NULL;
+cleanup:
+  return st;
+}
+
 /* The free-free block of the block-CSR P as a PETSc AIJ matrix (scalar rows), the owned rows
  * [f0, f1) of it on each rank. */
 static cupid_status free_block_aij(const cupid_csr_t *P, const cupid_dirichlet_t *bc,
                                    cupid_int f0, cupid_int f1, Mat *out) {
   cupid_status st = CUPID_SUCCESS;
-  PetscInt *dnz = NULL, *onz = NULL, *cols = NULL;
-  PetscScalar *vals = NULL;
+  aij_rows r = {0};
   Mat M = NULL;
   const int bs = P->bs;
-  cupid_int n_free = bc->n_free, nloc = f1 - f0, maxrow = 0;
-  CUPID_TRY(cupid_calloc((size_t)nloc + 1, sizeof *dnz, "preconditioner row counts", &dnz));
-  CUPID_TRY(cupid_calloc((size_t)nloc + 1, sizeof *onz, "preconditioner row counts", &onz));
+  cupid_int n_free = bc->n_free, nloc = f1 - f0;
+  CUPID_TRY(aij_rows_alloc(nloc, block_row_max(P), &r));
   for (cupid_int R = 0; R < P->nrows; R++) {
     cupid_int len = 0, din = 0;
     for (cupid_int k = P->rowptr[R]; k < P->rowptr[R + 1]; k++)
@@ -92,17 +143,10 @@ static cupid_status free_block_aij(const cupid_csr_t *P, const cupid_dirichlet_t
       }
     for (int a = 0; a < bs; a++) {
       cupid_int fi = bc->free_index[R * bs + a];
-      if (fi >= f0 && fi < f1) dnz[fi - f0] = (PetscInt)din, onz[fi - f0] = (PetscInt)(len - din);
+      if (fi >= f0 && fi < f1) r.dnz[fi - f0] = (PetscInt)din, r.onz[fi - f0] = (PetscInt)(len - din);
     }
-    if (len > maxrow) maxrow = len;
   }
-  CUPID_TRY(cupid_malloc((size_t)maxrow + 1, sizeof *cols, "preconditioner row", &cols));
-  CUPID_TRY(cupid_malloc((size_t)maxrow + 1, sizeof *vals, "preconditioner row", &vals));
-  PCALL(MatCreate(PETSC_COMM_WORLD, &M));
-  PCALL(MatSetSizes(M, (PetscInt)nloc, (PetscInt)nloc, (PetscInt)n_free, (PetscInt)n_free));
-  PCALL(MatSetType(M, MATAIJ));
-  PCALL(MatSeqAIJSetPreallocation(M, 0, dnz));
-  PCALL(MatMPIAIJSetPreallocation(M, 0, dnz, 0, onz));
+  CUPID_TRY(create_aij((PetscInt)nloc, (PetscInt)n_free, r.dnz, r.onz, &M));
   for (cupid_int R = 0; R < P->nrows; R++)
     for (int a = 0; a < bs; a++) {
       cupid_int fi = bc->free_index[R * bs + a];
@@ -112,11 +156,11 @@ static cupid_status free_block_aij(const cupid_csr_t *P, const cupid_dirichlet_t
         for (int b = 0; b < bs; b++) {
           cupid_int fc = bc->free_index[P->col[k] * bs + b];
           if (fc < 0) continue;
-          cols[len] = (PetscInt)fc;
-          vals[len++] = P->val[(size_t)k * bs * bs + a * bs + b];
+          r.cols[len] = (PetscInt)fc;
+          r.vals[len++] = P->val[(size_t)k * bs * bs + a * bs + b];
         }
       PetscInt row = (PetscInt)fi;
-      PCALL(MatSetValues(M, 1, &row, len, cols, vals, INSERT_VALUES));
+      PCALL(MatSetValues(M, 1, &row, len, r.cols, r.vals, INSERT_VALUES));
     }
   /* Block size 3 (GAMG's default near null space: the translations) when every node is
    * free or fixed as a whole. */
@@ -124,17 +168,29 @@ static cupid_status free_block_aij(const cupid_csr_t *P, const cupid_dirichlet_t
   for (cupid_int d = 0; d < bc->n && whole; d += 3)
     whole = bc->fixed[d] == bc->fixed[d + 1] && bc->fixed[d] == bc->fixed[d + 2];
   if (whole && bs == 3) PCALL(MatSetBlockSize(M, 3));
-  PCALL(MatAssemblyBegin(M, MAT_FINAL_ASSEMBLY));
-  PCALL(MatAssemblyEnd(M, MAT_FINAL_ASSEMBLY));
-  *out = M;
-  M = NULL;
+  CUPID_TRY(finish_aij(&M, out));
 cleanup:
   if (M) MatDestroy(&M);
-  cupid_free(&dnz);
-  cupid_free(&onz);
-  cupid_free(&cols);
-  cupid_free(&vals);
+  aij_rows_free(&r);
   return st;
+}
+
+/* The PETSc objects of one solve. */
+typedef struct {
+  Mat S, Pm;      /* the shell operator, the preconditioner matrix */
+  Vec x, b;
+  KSP ksp;
+  IS is_pd, is_fe; /* the fields of pc fieldsplit */
+} ksp_objects;
+
+static void ksp_objects_destroy(ksp_objects *k) {
+  if (k->ksp) KSPDestroy(&k->ksp);
+  if (k->is_pd) ISDestroy(&k->is_pd);
+  if (k->is_fe) ISDestroy(&k->is_fe);
+  if (k->S) MatDestroy(&k->S);
+  if (k->Pm) MatDestroy(&k->Pm);
+  if (k->x) VecDestroy(&k->x);
+  if (k->b) VecDestroy(&k->b);
 }
 
 /* The owned ranges of the two fields of pc fieldsplit, in PETSc's global numbering. */
@@ -145,10 +201,13 @@ typedef struct {
 
 /* The KSP for A (matrix-free S) preconditioned from Pm: CG or right-preconditioned GMRES, the
  * default PC (a Cholesky factor for CG, an LU for GMRES), the fields of pc fieldsplit, then
- * the run-time options. *is_pd and *is_fe are the caller's to destroy. */
+ * the run-time options, into k->ksp (and the fields' k->is_pd, k->is_fe). */
 static cupid_status configure_ksp(const cupid_linear_operator *A,
-                                  const cupid_coupling_krylov_options *opts, Mat S, Mat Pm,
-                                  const ksp_fields *fields, KSP *out, IS *is_pd, IS *is_fe) {
+                                  const cupid_coupling_krylov_options *opts,
+                                  const ksp_fields *fields, ksp_objects *k) {
+  Mat S = k->S, Pm = k->Pm;
+  IS *is_pd = &k->is_pd, *is_fe = &k->is_fe;
+  KSP *out = &k->ksp;
   cupid_status st = CUPID_SUCCESS;
   KSP ksp = NULL;
   PC pc;
@@ -246,10 +305,7 @@ static cupid_status solve_replicated(const cupid_linear_operator *A, const cupid
   cupid_int n = A->n;
   cupid_int *gidx = NULL;
   double *xf = NULL, *yf = NULL;
-  Mat S = NULL, Pm = NULL;
-  Vec x = NULL, b = NULL;
-  KSP ksp = NULL;
-  IS is_pd = NULL, is_fe = NULL;
+  ksp_objects obj = {0};
   cupid_int n_free = bc->n_free;
   shell_ctx ctx = {0}; /* complete once the work vectors exist */
   PetscMPIInt rank = 0, size = 1;
@@ -267,36 +323,36 @@ static cupid_status solve_replicated(const cupid_linear_operator *A, const cupid
   /* b_f = f_f - (A u_c)_f */
   for (cupid_int d = 0; d < n; d++) xf[d] = bc->fixed[d] ? bc->value[d] : 0.0;
   CUPID_TRY(A->apply(A->ctx, xf, yf));
-  PCALL(VecCreateMPI(PETSC_COMM_WORLD, (PetscInt)(f1 - f0), (PetscInt)n_free, &b));
-  PCALL(VecDuplicate(b, &x));
-  PCALL(VecScatterCreateToAll(x, &ctx.toall, &ctx.xall));
+  PCALL(VecCreateMPI(PETSC_COMM_WORLD, (PetscInt)(f1 - f0), (PetscInt)n_free, &obj.b));
+  PCALL(VecDuplicate(obj.b, &obj.x));
+  PCALL(VecScatterCreateToAll(obj.x, &ctx.toall, &ctx.xall));
   PetscScalar *ba;
-  PCALL(VecGetArray(b, &ba));
+  PCALL(VecGetArray(obj.b, &ba));
   for (cupid_int k = f0; k < f1; k++) ba[k - f0] = f[gidx[k]] - yf[gidx[k]];
-  PCALL(VecRestoreArray(b, &ba));
+  PCALL(VecRestoreArray(obj.b, &ba));
   PetscReal bnorm;
-  PCALL(VecNorm(b, NORM_2, &bnorm));
+  PCALL(VecNorm(obj.b, NORM_2, &bnorm));
 
   double t0 = cupid_wtime();
   PCALL(MatCreateShell(PETSC_COMM_WORLD, (PetscInt)(f1 - f0), (PetscInt)(f1 - f0),
-                       (PetscInt)n_free, (PetscInt)n_free, &ctx, &S));
-  PCALL(MatShellSetOperation(S, MATOP_MULT, (void (*)(void))shell_mult));
-  CUPID_TRY(free_block_aij(P, bc, f0, f1, &Pm));
+                       (PetscInt)n_free, (PetscInt)n_free, &ctx, &obj.S));
+  PCALL(MatShellSetOperation(obj.S, MATOP_MULT, (void (*)(void))shell_mult));
+  CUPID_TRY(free_block_aij(P, bc, f0, f1, &obj.Pm));
   {
     /* the owned part of each field (PD DOFs come first) */
     cupid_int n_pd_free = 0;
     while (n_pd_free < n_free && gidx[n_pd_free] < A->n_pd_dofs) n_pd_free++;
     cupid_int p0 = f0 < n_pd_free ? f0 : n_pd_free, p1 = f1 < n_pd_free ? f1 : n_pd_free;
     const ksp_fields fields = {p0, p1, p1, f1, size == 1 && n_pd_free % 3 == 0};
-    CUPID_TRY(configure_ksp(A, opts, S, Pm, &fields, &ksp, &is_pd, &is_fe));
+    CUPID_TRY(configure_ksp(A, opts, &fields, &obj));
   }
-  CUPID_TRY(run_ksp(ksp, A, b, x, &inf));
+  CUPID_TRY(run_ksp(obj.ksp, A, obj.b, obj.x, &inf));
   inf.time_setup = cupid_wtime() - t0 - inf.time_solve;
 
   /* u = [x_f ; u_c]; the true residual, recomputed. */
   const PetscScalar *xa;
-  PCALL(VecScatterBegin(ctx.toall, x, ctx.xall, INSERT_VALUES, SCATTER_FORWARD));
-  PCALL(VecScatterEnd(ctx.toall, x, ctx.xall, INSERT_VALUES, SCATTER_FORWARD));
+  PCALL(VecScatterBegin(ctx.toall, obj.x, ctx.xall, INSERT_VALUES, SCATTER_FORWARD));
+  PCALL(VecScatterEnd(ctx.toall, obj.x, ctx.xall, INSERT_VALUES, SCATTER_FORWARD));
   PCALL(VecGetArrayRead(ctx.xall, &xa));
   for (cupid_int d = 0; d < n; d++) u[d] = bc->fixed[d] ? bc->value[d] : 0.0;
   for (cupid_int k = 0; k < n_free; k++) u[gidx[k]] = xa[k];
@@ -310,16 +366,10 @@ static cupid_status solve_replicated(const cupid_linear_operator *A, const cupid
   }
   double scale = bnorm > 0 ? (double)bnorm : sqrt(f2);
   inf.residual = scale > 0 ? sqrt(r2) / scale : sqrt(r2);
-  st = not_converged(ksp, &inf);
+  st = not_converged(obj.ksp, &inf);
 cleanup:
   if (info) *info = inf;
-  if (ksp) KSPDestroy(&ksp);
-  if (is_pd) ISDestroy(&is_pd);
-  if (is_fe) ISDestroy(&is_fe);
-  if (S) MatDestroy(&S);
-  if (Pm) MatDestroy(&Pm);
-  if (x) VecDestroy(&x);
-  if (b) VecDestroy(&b);
+  ksp_objects_destroy(&obj);
   if (ctx.toall) VecScatterDestroy(&ctx.toall);
   if (ctx.xall) VecDestroy(&ctx.xall);
   cupid_free(&gidx);
@@ -454,22 +504,11 @@ static cupid_status slab_counts(const slab_ctx *c, const cupid_csr_t *P, PetscIn
 static cupid_status slab_matrix(const slab_ctx *c, const cupid_csr_t *P, PetscInt N, Mat *out) {
   cupid_status st = CUPID_SUCCESS;
   const int bs = P->bs;
-  PetscInt *dnz = NULL, *onz = NULL, *cols = NULL;
-  PetscScalar *vals = NULL;
+  aij_rows r = {0};
   Mat M = NULL;
-  cupid_int maxrow = 1;
-  for (cupid_int R = 0; R < P->nrows; R++)
-    if ((P->rowptr[R + 1] - P->rowptr[R]) * bs > maxrow) maxrow = (P->rowptr[R + 1] - P->rowptr[R]) * bs;
-  CUPID_TRY(cupid_calloc((size_t)c->nloc + 1, sizeof *dnz, "preconditioner row counts", &dnz));
-  CUPID_TRY(cupid_calloc((size_t)c->nloc + 1, sizeof *onz, "preconditioner row counts", &onz));
-  CUPID_TRY(cupid_malloc((size_t)maxrow + 1, sizeof *cols, "preconditioner row", &cols));
-  CUPID_TRY(cupid_malloc((size_t)maxrow + 1, sizeof *vals, "preconditioner row", &vals));
-  CUPID_TRY(slab_counts(c, P, dnz, onz, N));
-  PCALL(MatCreate(PETSC_COMM_WORLD, &M));
-  PCALL(MatSetSizes(M, c->nloc, c->nloc, N, N));
-  PCALL(MatSetType(M, MATAIJ));
-  PCALL(MatSeqAIJSetPreallocation(M, 0, dnz));
-  PCALL(MatMPIAIJSetPreallocation(M, 0, dnz, 0, onz));
+  CUPID_TRY(aij_rows_alloc(c->nloc, block_row_max(P), &r));
+  CUPID_TRY(slab_counts(c, P, r.dnz, r.onz, N));
+  CUPID_TRY(create_aij(c->nloc, N, r.dnz, r.onz, &M));
   for (cupid_int R = 0; R < P->nrows; R++)
     for (int a = 0; a < bs; a++) {
       cupid_int d = R * bs + a;
@@ -486,21 +525,15 @@ static cupid_status slab_matrix(const slab_ctx *c, const cupid_csr_t *P, PetscIn
           /* an FE row's share holds the beam's pattern on every slab but its values only on
            * the last: the zeros are not sent to the owner */
           if (c->bc->fixed[e] || (d >= c->n_pd && v == 0.0)) continue;
-          cols[len] = slab_global(c, e);
-          vals[len++] = v;
+          r.cols[len] = slab_global(c, e);
+          r.vals[len++] = v;
         }
-      PCALL(MatSetValues(M, 1, &row, len, cols, vals, ADD_VALUES));
+      PCALL(MatSetValues(M, 1, &row, len, r.cols, r.vals, ADD_VALUES));
     }
-  PCALL(MatAssemblyBegin(M, MAT_FINAL_ASSEMBLY));
-  PCALL(MatAssemblyEnd(M, MAT_FINAL_ASSEMBLY));
-  *out = M;
-  M = NULL;
+  CUPID_TRY(finish_aij(&M, out));
 cleanup:
   if (M) MatDestroy(&M);
-  cupid_free(&dnz);
-  cupid_free(&onz);
-  cupid_free(&cols);
-  cupid_free(&vals);
+  aij_rows_free(&r);
   return st;
 }
 
@@ -533,6 +566,7 @@ cleanup:
   return st;
 }
 
+/* The PD grid in slabs, one a rank (slab_ctx above). */
 static cupid_status solve_slabs(const cupid_linear_operator *A, const cupid_csr_t *P,
                                 const cupid_dirichlet_t *bc, const double *f, double *u,
                                 const cupid_coupling_krylov_options *opts,
@@ -551,10 +585,7 @@ static cupid_status solve_slabs(const cupid_linear_operator *A, const cupid_csr_
   c.g0 = (PetscInt)(3 * (p->first_global + p->owned_first));
   c.nloc = (PetscInt)(c.pd1 - c.pd0) + (c.fe_owner ? (PetscInt)(A->n - A->n_pd_dofs) : 0);
   c.fe_global = (PetscInt)(3 * p->global_nodes);
-  Mat S = NULL, Pm = NULL;
-  Vec x = NULL, b = NULL;
-  KSP ksp = NULL;
-  IS is_pd = NULL, is_fe = NULL;
+  ksp_objects obj = {0};
   CUPID_TRY(cupid_calloc((size_t)c.n + 1, sizeof *c.xw, "work vector", &c.xw));
   CUPID_TRY(cupid_calloc((size_t)c.n + 1, sizeof *c.yw, "work vector", &c.yw));
   c.s = slab_fixed_scale(&c, P);
@@ -563,29 +594,29 @@ static cupid_status solve_slabs(const cupid_linear_operator *A, const cupid_csr_
   for (cupid_int d = 0; d < c.n; d++) c.xw[d] = bc->fixed[d] ? bc->value[d] : 0.0;
   CUPID_TRY(slab_product(A, c.xw, c.yw));
   for (cupid_int d = 0; d < c.n; d++) c.yw[d] = bc->fixed[d] ? 0.0 : f[d] - c.yw[d];
-  PCALL(VecCreateMPI(PETSC_COMM_WORLD, c.nloc, N, &b));
-  PCALL(VecDuplicate(b, &x));
+  PCALL(VecCreateMPI(PETSC_COMM_WORLD, c.nloc, N, &obj.b));
+  PCALL(VecDuplicate(obj.b, &obj.x));
   PetscScalar *ba;
-  PCALL(VecGetArray(b, &ba));
+  PCALL(VecGetArray(obj.b, &ba));
   slab_owned(&c, c.yw, ba);
-  PCALL(VecRestoreArray(b, &ba));
+  PCALL(VecRestoreArray(obj.b, &ba));
   PetscReal bnorm;
-  PCALL(VecNorm(b, NORM_2, &bnorm));
-  CUPID_TRY(slab_halo(&c, x));
+  PCALL(VecNorm(obj.b, NORM_2, &bnorm));
+  CUPID_TRY(slab_halo(&c, obj.x));
 
   double t0 = cupid_wtime();
-  PCALL(MatCreateShell(PETSC_COMM_WORLD, c.nloc, c.nloc, N, N, &c, &S));
-  PCALL(MatShellSetOperation(S, MATOP_MULT, (void (*)(void))slab_mult));
-  CUPID_TRY(slab_matrix(&c, P, N, &Pm));
+  PCALL(MatCreateShell(PETSC_COMM_WORLD, c.nloc, c.nloc, N, N, &c, &obj.S));
+  PCALL(MatShellSetOperation(obj.S, MATOP_MULT, (void (*)(void))slab_mult));
+  CUPID_TRY(slab_matrix(&c, P, N, &obj.Pm));
   const PetscInt pd_owned = (PetscInt)(c.pd1 - c.pd0);
   const ksp_fields fields = {c.g0, c.g0 + pd_owned, c.g0 + pd_owned, c.g0 + c.nloc, 1};
-  CUPID_TRY(configure_ksp(A, opts, S, Pm, &fields, &ksp, &is_pd, &is_fe));
-  CUPID_TRY(run_ksp(ksp, A, b, x, &inf));
+  CUPID_TRY(configure_ksp(A, opts, &fields, &obj));
+  CUPID_TRY(run_ksp(obj.ksp, A, obj.b, obj.x, &inf));
   inf.time_setup = cupid_wtime() - t0 - inf.time_solve;
 
   /* u = u_c + x on every local DOF; the true residual over the free owned DOFs, recomputed */
   const PetscScalar *xa;
-  PCALL(slab_gather(&c, x));
+  PCALL(slab_gather(&c, obj.x));
   PCALL(VecGetArrayRead(c.xl, &xa));
   for (cupid_int d = 0; d < c.n; d++) u[d] = bc->fixed[d] ? bc->value[d] : xa[d];
   PCALL(VecRestoreArrayRead(c.xl, &xa));
@@ -600,16 +631,10 @@ static cupid_status solve_slabs(const cupid_linear_operator *A, const cupid_csr_
   MPI_Allreduce(MPI_IN_PLACE, sums, 2, MPI_DOUBLE, MPI_SUM, PETSC_COMM_WORLD);
   double scale = bnorm > 0 ? (double)bnorm : sqrt(sums[1]);
   inf.residual = scale > 0 ? sqrt(sums[0]) / scale : sqrt(sums[0]);
-  st = not_converged(ksp, &inf);
+  st = not_converged(obj.ksp, &inf);
 cleanup:
   if (info) *info = inf;
-  if (ksp) KSPDestroy(&ksp);
-  if (is_pd) ISDestroy(&is_pd);
-  if (is_fe) ISDestroy(&is_fe);
-  if (S) MatDestroy(&S);
-  if (Pm) MatDestroy(&Pm);
-  if (x) VecDestroy(&x);
-  if (b) VecDestroy(&b);
+  ksp_objects_destroy(&obj);
   if (c.halo) VecScatterDestroy(&c.halo);
   if (c.xl) VecDestroy(&c.xl);
   cupid_free(&c.xw);

@@ -26,6 +26,7 @@
 
 #include "cupid/coupling.h"
 #include "test_cuf_common.h"
+#include "test_slabs.h"
 
 #define E_MOD 1e9
 #define RHO 7800.0
@@ -439,90 +440,40 @@ static double ramp_w(double c, double lo, double hi, int fe_below, cupid_weight 
   return kind == CUPID_WEIGHT_SMOOTH ? s * s * (3.0 - 2.0 * s) : s;
 }
 
-/* The grid split into z slabs (issue 6; cupid_pd_grid_partition): on each slab the operator's
- * owned PD rows equal the whole operator's, and the slabs' FE rows sum to the whole FE rows
- * (the last slab adds the weighted beam, each slab the penalty of its owned tied nodes), for
- * the matrix-free product and the cheap preconditioner alike: 1e-13 of |K| |x| (the same
- * terms summed in another order). The beam's DOF offset follows each slab's nodes. */
+/* The grid split into z slabs (issue 6, test_slabs.h): each slab's owned PD rows and its
+ * share of the FE rows (the last slab adds the weighted beam, each slab the penalty of its
+ * owned tied nodes) against the whole operator and preconditioner. */
+typedef struct {
+  cupid_cuf_beam beam;
+  const cupid_pd_operator_options *po;
+  const cupid_arlequin_options *o;
+} arl_slab_ctx;
+
+static cupid_status arl_create(void *ctx, cupid_pd_grid g, void **op, cupid_csr *P) {
+  const arl_slab_ctx *c = ctx;
+  cupid_arlequin_operator A = NULL;
+  CUPID_CALL(cupid_arlequin_operator_create(c->beam, g, c->po, c->o, &A, NULL));
+  *op = A;
+  return cupid_arlequin_preconditioner(A, 0.0, P);
+}
+
+static cupid_status arl_rows(void *op, const double *x, cupid_int d0, cupid_int d1, double *y) {
+  return cupid_arlequin_operator_apply_rows(op, x, d0, d1, y);
+}
+
+static void arl_destroy(void *op) {
+  cupid_arlequin_operator A = op;
+  cupid_arlequin_operator_destroy(&A);
+}
+
 static void check_slabs(cupid_cuf_beam beam, const cupid_box *box, const cupid_pd_operator_options *po,
                         const cupid_arlequin_options *o, int parts) {
   int rmat = 0, halo = 0;
-  cupid_pd_grid_options go = {.spacing = 1.0, .dimension = 3};
-  cupid_pd_grid whole = NULL;
-  CUPID_ASSERT_OK(cupid_pd_grid_create(&go, 1, box, &rmat, &whole));
-  cupid_int G = cupid_pd_grid_num_nodes(whole), n_fe = cupid_cuf_num_dofs(beam), N = 3 * G + n_fe;
-  CUPID_ASSERT_OK(cupid_cuf_set_dof_offset(beam, 3 * G));
-  cupid_arlequin_operator A = NULL;
-  cupid_csr P = NULL;
-  CUPID_ASSERT_OK(cupid_arlequin_operator_create(beam, whole, po, o, &A, NULL));
-  CUPID_ASSERT_OK(cupid_arlequin_preconditioner(A, 0.0, &P));
-  double *x = NULL, *y = NULL, *py = NULL, *ys = NULL, *pys = NULL;
-  CUPID_ASSERT_OK(cupid_malloc((size_t)N, sizeof *x, "x", &x));
-  CUPID_ASSERT_OK(cupid_malloc((size_t)N, sizeof *y, "y", &y));
-  CUPID_ASSERT_OK(cupid_malloc((size_t)N, sizeof *py, "Px", &py));
-  CUPID_ASSERT_OK(cupid_calloc((size_t)N, sizeof *ys, "y slabs", &ys));
-  CUPID_ASSERT_OK(cupid_calloc((size_t)N, sizeof *pys, "Px slabs", &pys));
-  uint64_t seed = 5;
-  double xm = 0.0;
-  for (cupid_int d = 0; d < N; d++) x[d] = cupid_test_random(&seed), xm = fmax(xm, fabs(x[d]));
-  CUPID_ASSERT_OK(cupid_arlequin_operator_apply(A, x, y));
-  cupid_csr_matvec(P, x, py);
   CUPID_ASSERT_OK(cupid_pd_operator_halo_layers(po, 1.0, &halo));
-  cupid_int owned_total = 0;
-  for (int part = 0; part < parts; part++) {
-    cupid_pd_grid g = NULL;
-    cupid_pd_grid_options gs = {.spacing = 1.0, .dimension = 3, .parts = parts, .part = part,
-                                .halo_layers = halo};
-    CUPID_ASSERT_OK(cupid_pd_grid_create(&gs, 1, box, &rmat, &g));
-    cupid_pd_grid_partition pt;
-    cupid_pd_grid_get_partition(g, &pt);
-    cupid_int nl = cupid_pd_grid_num_nodes(g), n = 3 * nl + n_fe;
-    owned_total += pt.owned_last - pt.owned_first;
-    CUPID_ASSERT_OK(cupid_cuf_set_dof_offset(beam, 3 * nl));
-    cupid_arlequin_operator As = NULL;
-    cupid_csr Ps = NULL;
-    CUPID_ASSERT_OK(cupid_arlequin_operator_create(beam, g, po, o, &As, NULL));
-    CUPID_ASSERT_OK(cupid_arlequin_preconditioner(As, 0.0, &Ps));
-    double *xl = NULL, *yl = NULL, *pl = NULL;
-    CUPID_ASSERT_OK(cupid_malloc((size_t)n, sizeof *xl, "x local", &xl));
-    CUPID_ASSERT_OK(cupid_calloc((size_t)n, sizeof *yl, "y local", &yl));
-    CUPID_ASSERT_OK(cupid_calloc((size_t)n, sizeof *pl, "Px local", &pl));
-    for (cupid_int d = 0; d < 3 * nl; d++) xl[d] = x[3 * pt.first_global + d];
-    for (cupid_int d = 0; d < n_fe; d++) xl[3 * nl + d] = x[3 * G + d];
-    CUPID_ASSERT_OK(cupid_arlequin_operator_apply_rows(As, xl, 3 * pt.owned_first, 3 * pt.owned_last, yl));
-    CUPID_ASSERT_OK(cupid_arlequin_operator_apply_rows(As, xl, 3 * nl, n, yl));
-    cupid_csr_matvec(Ps, xl, pl);
-    for (cupid_int d = 3 * pt.owned_first; d < 3 * pt.owned_last; d++) {
-      ys[3 * pt.first_global + d] = yl[d];
-      pys[3 * pt.first_global + d] = pl[d];
-    }
-    for (cupid_int d = 0; d < n_fe; d++) ys[3 * G + d] += yl[3 * nl + d], pys[3 * G + d] += pl[3 * nl + d];
-    cupid_free(&xl);
-    cupid_free(&yl);
-    cupid_free(&pl);
-    cupid_csr_destroy(&Ps);
-    cupid_arlequin_operator_destroy(&As);
-    cupid_pd_grid_destroy(&g);
-  }
-  assert_int_equal(owned_total, G);
-  double e = 0.0, ep = 0.0, ym = 0.0, pm = 0.0;
-  for (cupid_int d = 0; d < N; d++) {
-    e = fmax(e, fabs(ys[d] - y[d])), ep = fmax(ep, fabs(pys[d] - py[d]));
-    ym = fmax(ym, fabs(y[d])), pm = fmax(pm, fabs(py[d]));
-  }
-  printf("Arlequin on %d z slabs (halo %d layers): owned + summed FE rows against the whole "
-         "grid: operator %.1e, preconditioner %.1e of max |y|\n", parts, halo, e / ym, ep / pm);
-  assert_true(e <= 1e-13 * ym);
-  assert_true(ep <= 1e-13 * pm);
-  CUPID_ASSERT_OK(cupid_cuf_set_dof_offset(beam, 3 * G));
-  cupid_free(&x);
-  cupid_free(&y);
-  cupid_free(&py);
-  cupid_free(&ys);
-  cupid_free(&pys);
-  cupid_csr_destroy(&P);
-  cupid_arlequin_operator_destroy(&A);
-  cupid_pd_grid_destroy(&whole);
+  arl_slab_ctx ctx = {.beam = beam, .po = po, .o = o};
+  const slab_operator so = {.create = arl_create, .apply_rows = arl_rows, .destroy = arl_destroy,
+                            .ctx = &ctx};
+  slab_check("Arlequin", &so, beam, 1, box, &rmat, halo, parts);
 }
 
 static void case_partial(cupid_pd_model_kind model) {

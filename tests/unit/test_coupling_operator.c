@@ -24,6 +24,7 @@
 #include "cupid/coupling.h"
 #include "cupid_config.h"
 #include "test_cuf_common.h"
+#include "test_slabs.h"
 
 #define XW 12.0
 #define YL 18.0
@@ -102,87 +103,44 @@ static double norm(const double *v, cupid_int n) {
   return sqrt(s);
 }
 
-/* The real grid split into z slabs (issue 6): on each slab (its extended grid cut to the same
- * z window) the owned PD rows of the operator and of the preconditioner equal the whole
- * model's, and the slabs' FE rows sum to the whole FE rows (PD columns of owned nodes only,
- * FE columns on the last slab); 1e-13 of max |y| (the same terms, summed in another order);
- * the info is the whole model's. */
+/* The real grid split into z slabs (issue 6, test_slabs.h): on each slab (its extended grid
+ * cut by the same z planes) the owned PD rows and the share of the FE rows (PD columns of the
+ * owned nodes, FE columns on the last slab) of the operator and of the twin against the whole
+ * model's; the info is the whole model's on every slab. */
+typedef struct {
+  op_model *m;
+  cupid_coupling_info whole;
+} fict_slab_ctx;
+
+static cupid_status fict_create(void *ctx, cupid_pd_grid g, void **op, cupid_csr *P) {
+  fict_slab_ctx *c = ctx;
+  cupid_coupling_operator A = NULL;
+  CUPID_CALL(cupid_coupling_operator_create(c->m->beam, g, &c->m->co, &A));
+  *op = A;
+  cupid_coupling_info info;
+  cupid_coupling_operator_get_info(A, &info);
+  assert_true(memcmp(&info, &c->whole, sizeof info) == 0);
+  return cupid_coupling_preconditioner(A, 1.5, P);
+}
+
+static cupid_status fict_rows(void *op, const double *x, cupid_int d0, cupid_int d1, double *y) {
+  return cupid_coupling_operator_apply_rows(op, x, d0, d1, y);
+}
+
+static void fict_destroy(void *op) {
+  cupid_coupling_operator A = op;
+  cupid_coupling_operator_destroy(&A);
+}
+
 static void check_slabs(op_model *m, cupid_coupling_operator A, int parts) {
-  cupid_int G = m->n_pd, n_fe = cupid_cuf_num_dofs(m->beam), N = m->ndof;
   int halo = 0;
   CUPID_ASSERT_OK(cupid_pd_operator_halo_layers(&m->co.pd, 1.0, &halo));
-  cupid_csr P = NULL;
-  CUPID_ASSERT_OK(cupid_coupling_preconditioner(A, 1.5, &P));
-  cupid_coupling_info whole_info;
-  cupid_coupling_operator_get_info(A, &whole_info);
-  double *x = NULL, *y = NULL, *py = NULL, *ys = NULL, *pys = NULL;
-  CUPID_ASSERT_OK(cupid_malloc((size_t)N, sizeof *x, "x", &x));
-  CUPID_ASSERT_OK(cupid_malloc((size_t)N, sizeof *y, "y", &y));
-  CUPID_ASSERT_OK(cupid_malloc((size_t)N, sizeof *py, "Px", &py));
-  CUPID_ASSERT_OK(cupid_calloc((size_t)N, sizeof *ys, "y slabs", &ys));
-  CUPID_ASSERT_OK(cupid_calloc((size_t)N, sizeof *pys, "Px slabs", &pys));
-  uint64_t seed = 3;
-  for (cupid_int d = 0; d < N; d++) x[d] = 2.0 * cupid_test_random(&seed) - 1.0;
-  CUPID_ASSERT_OK(cupid_coupling_operator_apply(A, x, y));
-  cupid_csr_matvec(P, x, py);
-  int nr = m->co.n_regions;
-  cupid_int owned_total = 0;
-  for (int part = 0; part < parts; part++) {
-    cupid_pd_grid g = NULL;
-    cupid_pd_grid_options gs = {.spacing = 1.0, .dimension = 3, .parts = parts, .part = part,
-                                .halo_layers = halo};
-    CUPID_ASSERT_OK(cupid_pd_grid_create(&gs, nr, m->region, m->region_mat, &g));
-    cupid_pd_grid_partition pt;
-    cupid_pd_grid_get_partition(g, &pt);
-    cupid_int nl = cupid_pd_grid_num_nodes(g), n = 3 * nl + n_fe;
-    owned_total += pt.owned_last - pt.owned_first;
-    CUPID_ASSERT_OK(cupid_cuf_set_dof_offset(m->beam, 3 * nl));
-    cupid_coupling_operator As = NULL;
-    cupid_csr Ps = NULL;
-    CUPID_ASSERT_OK(cupid_coupling_operator_create(m->beam, g, &m->co, &As));
-    CUPID_ASSERT_OK(cupid_coupling_preconditioner(As, 1.5, &Ps));
-    cupid_coupling_info si;
-    cupid_coupling_operator_get_info(As, &si);
-    assert_true(memcmp(&si, &whole_info, sizeof si) == 0);
-    assert_int_equal(cupid_coupling_operator_size(As), n);
-    double *xl = NULL, *yl = NULL, *pl = NULL;
-    CUPID_ASSERT_OK(cupid_malloc((size_t)n, sizeof *xl, "x local", &xl));
-    CUPID_ASSERT_OK(cupid_calloc((size_t)n, sizeof *yl, "y local", &yl));
-    CUPID_ASSERT_OK(cupid_calloc((size_t)n, sizeof *pl, "Px local", &pl));
-    for (cupid_int d = 0; d < 3 * nl; d++) xl[d] = x[3 * pt.first_global + d];
-    for (cupid_int d = 0; d < n_fe; d++) xl[3 * nl + d] = x[3 * G + d];
-    CUPID_ASSERT_OK(cupid_coupling_operator_apply_rows(As, xl, 3 * pt.owned_first, 3 * pt.owned_last, yl));
-    CUPID_ASSERT_OK(cupid_coupling_operator_apply_rows(As, xl, 3 * nl, n, yl));
-    cupid_csr_matvec(Ps, xl, pl);
-    for (cupid_int d = 3 * pt.owned_first; d < 3 * pt.owned_last; d++) {
-      ys[3 * pt.first_global + d] = yl[d];
-      pys[3 * pt.first_global + d] = pl[d];
-    }
-    for (cupid_int d = 0; d < n_fe; d++) ys[3 * G + d] += yl[3 * nl + d], pys[3 * G + d] += pl[3 * nl + d];
-    cupid_free(&xl);
-    cupid_free(&yl);
-    cupid_free(&pl);
-    cupid_csr_destroy(&Ps);
-    cupid_coupling_operator_destroy(&As);
-    cupid_pd_grid_destroy(&g);
-  }
-  CUPID_ASSERT_OK(cupid_cuf_set_dof_offset(m->beam, 3 * G));
-  assert_int_equal(owned_total, G);
-  double e = 0.0, ep = 0.0, ym = 0.0, pm = 0.0;
-  for (cupid_int d = 0; d < N; d++) {
-    e = fmax(e, fabs(ys[d] - y[d])), ep = fmax(ep, fabs(pys[d] - py[d]));
-    ym = fmax(ym, fabs(y[d])), pm = fmax(pm, fabs(py[d]));
-  }
-  printf("  %d z slabs (halo %d layers): owned + summed FE rows against the whole model: "
-         "operator %.1e, preconditioner %.1e of max |y|\n", parts, halo, e / ym, ep / pm);
-  assert_true(e <= 1e-13 * ym);
-  assert_true(ep <= 1e-13 * pm);
-  cupid_free(&x);
-  cupid_free(&y);
-  cupid_free(&py);
-  cupid_free(&ys);
-  cupid_free(&pys);
-  cupid_csr_destroy(&P);
+  fict_slab_ctx ctx = {.m = m};
+  cupid_coupling_operator_get_info(A, &ctx.whole);
+  const slab_operator so = {.create = fict_create, .apply_rows = fict_rows,
+                            .destroy = fict_destroy, .ctx = &ctx};
+  slab_check("  fictitious nodes", &so, m->beam, m->co.n_regions, m->region, m->region_mat, halo,
+             parts);
 }
 
 #if CUPID_HAVE_PETSC
