@@ -42,6 +42,12 @@ double *cupid_csr_find(const cupid_csr_t *A, cupid_int row, cupid_int col);
 /** y = A x (OpenMP over rows). x has ncols*bs entries, y nrows*bs. */
 void cupid_csr_matvec(const cupid_csr_t *A, const double *x, double *y);
 
+/** Only the scalar rows [d0, d1) of y = A x, where A's scalar row r is y[off + r] (a block
+ *  of rows inside a longer vector, as a coupled operator's FE rows are); the other entries
+ *  of y are left as they were. x has ncols*bs entries. OpenMP over block rows. */
+void cupid_csr_matvec_rows(const cupid_csr_t *A, const double *x, cupid_int off, cupid_int d0,
+                           cupid_int d1, double *y);
+
 /** The same matrix with bs = 1. */
 cupid_status cupid_csr_to_scalar(const cupid_csr_t *A, cupid_csr *S);
 

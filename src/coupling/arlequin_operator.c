@@ -78,27 +78,12 @@ int64_t cupid_arlequin_operator_bytes(const cupid_arlequin_operator A) {
          cupid_csr_bytes(A->R);
 }
 
-/* y[d] = (R x)[d] for d in [d0, d1), block row by block row. */
-static void rest_rows(const cupid_csr_t *R, const double *x, cupid_int d0, cupid_int d1, double *y) {
-  const cupid_int a0 = d0 / 3, a1 = (d1 + 2) / 3;
-#pragma omp parallel for schedule(static) if (a1 - a0 > 4096)
-  for (cupid_int a = a0; a < a1; a++) {
-    double s[3] = {0, 0, 0};
-    for (cupid_int k = R->rowptr[a]; k < R->rowptr[a + 1]; k++) {
-      const double *blk = R->val + 9 * (size_t)k, *xc = x + 3 * (size_t)R->col[k];
-      for (int i = 0; i < 3; i++) s[i] += blk[3 * i] * xc[0] + blk[3 * i + 1] * xc[1] + blk[3 * i + 2] * xc[2];
-    }
-    for (int i = 0; i < 3; i++)
-      if (3 * a + i >= d0 && 3 * a + i < d1) y[3 * a + i] = s[i];
-  }
-}
-
 cupid_status cupid_arlequin_operator_apply_rows(const cupid_arlequin_operator A, const double *x,
                                                 cupid_int d0, cupid_int d1, double *y) {
   CUPID_CHECK(A && x && y && d0 >= 0 && d0 <= d1 && d1 <= A->n, CUPID_ERR_ARGUMENT,
               "Arlequin operator: rows [%lld, %lld) outside its %lld", (long long)d0,
               (long long)d1, (long long)(A ? A->n : 0));
-  rest_rows(A->R, x, d0, d1, y);
+  cupid_csr_matvec_rows(A->R, x, 0, d0, d1, y);
   const cupid_int r0 = d0 / 3, r1 = (d1 < 3 * A->n_pd ? d1 + 2 : 3 * A->n_pd) / 3;
   if (r0 >= r1) return CUPID_SUCCESS;
   /* the PD rows [r0, r1): the weighted PD operator on the nodes they depend on */

@@ -136,24 +136,6 @@ cupid_status cupid_coupling_operator_apply(const cupid_coupling_operator A, cons
   return CUPID_SUCCESS;
 }
 
-/* y[d] for the DOFs d in [d0, d1) of the FE rows (block rows of Kfe, columns over [PD | FE]). */
-static void fe_rows(const cupid_csr_t *K, const double *x, cupid_int off, cupid_int d0,
-                    cupid_int d1, double *y) {
-  const int bs = K->bs;
-  for (cupid_int a = (d0 - off) / bs; a * bs + off < d1 && a < K->nrows; a++) {
-    double s[3] = {0, 0, 0};
-    for (cupid_int k = K->rowptr[a]; k < K->rowptr[a + 1]; k++) {
-      const double *blk = K->val + (size_t)bs * bs * k, *xc = x + (size_t)bs * K->col[k];
-      for (int i = 0; i < bs; i++)
-        for (int j = 0; j < bs; j++) s[i] += blk[i * bs + j] * xc[j];
-    }
-    for (int i = 0; i < bs; i++) {
-      cupid_int d = off + a * bs + i;
-      if (d >= d0 && d < d1) y[d] = s[i];
-    }
-  }
-}
-
 cupid_status cupid_coupling_operator_apply_rows(const cupid_coupling_operator A, const double *x,
                                                 cupid_int d0, cupid_int d1, double *y) {
   cupid_int n_pd = A->parts.n_pd, n = cupid_coupling_operator_size(A);
@@ -176,7 +158,8 @@ cupid_status cupid_coupling_operator_apply_rows(const cupid_coupling_operator A,
         if (3 * r + c >= d0 && 3 * r + c < d1) y[3 * r + c] = f[c];
     }
   }
-  if (d1 > 3 * n_pd) fe_rows(A->parts.Kfe, x, 3 * n_pd, d0 > 3 * n_pd ? d0 : 3 * n_pd, d1, y);
+  /* FE rows: block rows of Kfe, columns over [PD | FE] */
+  cupid_csr_matvec_rows(A->parts.Kfe, x, 3 * n_pd, d0, d1, y);
   return CUPID_SUCCESS;
 }
 

@@ -231,6 +231,26 @@ void cupid_csr_matvec(const cupid_csr_t *A, const double *x, double *y) {
     matvec_general(A, x, y);
 }
 
+void cupid_csr_matvec_rows(const cupid_csr_t *A, const double *x, cupid_int off, cupid_int d0,
+                           cupid_int d1, double *y) {
+  const int bs = A->bs;
+  if (d0 < off) d0 = off;
+  if (d1 > off + A->nrows * bs) d1 = off + A->nrows * bs;
+  if (d0 >= d1) return;
+  const cupid_int r0 = (d0 - off) / bs, r1 = (d1 - off + bs - 1) / bs;
+#pragma omp parallel for schedule(static) if (r1 - r0 > 4096)
+  for (cupid_int r = r0; r < r1; r++)
+    for (int a = 0; a < bs; a++) {
+      const cupid_int d = off + r * bs + a;
+      if (d < d0 || d >= d1) continue;
+      double s = 0.0;
+      for (cupid_int p = A->rowptr[r]; p < A->rowptr[r + 1]; p++)
+        for (int b = 0; b < bs; b++)
+          s += A->val[((size_t)p * bs + a) * bs + b] * x[(size_t)A->col[p] * bs + b];
+      y[d] = s;
+    }
+}
+
 /* A scatter: serial, since the rows of A^T are not at hand (a gather would need A^T). */
 void cupid_csr_matvec_transpose(const cupid_csr_t *A, const double *x, double *y) {
   const int bs = A->bs;

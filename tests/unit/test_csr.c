@@ -116,6 +116,24 @@ static void check_matvec(int bs, uint64_t seed) {
     for (cupid_int r = 0; r < M; r++) s += D[r * N + c] * xt[r];
     ASSERT_NEAR(yt[c], s, 1e-13);
   }
+  /* Row ranges of y placed at an offset inside a longer vector (cupid_csr_matvec_rows): the
+   * whole product's rows to 1e-13 (the bs = 3 product sums in its own order; same bound as
+   * above); entries outside the range, and the parts of ranges beyond A's rows, untouched.
+   * Ranges cut blocks of rows. */
+  const cupid_int off = 5, L = off + M + 4;
+  double *z = malloc((size_t)L * sizeof *z);
+  const cupid_int ranges[4][2] = {{0, L}, {off + 1, off + M - 2}, {off + M - 1, L}, {3, 3}};
+  for (int q = 0; q < 4; q++) {
+    for (cupid_int d = 0; d < L; d++) z[d] = -7.0;
+    const cupid_int d0 = ranges[q][0], d1 = ranges[q][1];
+    cupid_csr_matvec_rows(A, x, off, d0, d1, z);
+    for (cupid_int d = 0; d < L; d++) {
+      int in = d >= d0 && d < d1 && d >= off && d < off + M;
+      if (in) ASSERT_NEAR(z[d], y[d - off], 1e-13);
+      else assert_true(z[d] == -7.0);
+    }
+  }
+  free(z);
   free(D);
   free(x);
   free(y);
