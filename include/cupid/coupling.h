@@ -371,65 +371,6 @@ void cupid_coupling_cheap_options(const cupid_pd_operator_options *fine, double 
 cupid_status cupid_coupling_preconditioner(const cupid_coupling_operator A, double horizon_factor,
                                            cupid_csr *P);
 
-/** Options of the Krylov solve of the coupled system. */
-typedef struct {
-  double rtol;            /**< |b - A u| / |b| on the free DOFs (right preconditioning, so the
-                               true residual); <= 0: 1e-10 */
-  int max_it;             /**< <= 0: 2000 */
-  int restart;            /**< GMRES restart; <= 0: 200 */
-  const char *pc;         /**< PETSc PC type for the cheap matrix ("lu", "ilu", "gamg",
-                               "hypre"; "fieldsplit": two fields "pd" and "fe", sub-solvers
-                               from -fieldsplit_pd_* / -fieldsplit_fe_*; NULL: "lu", or
-                               "cholesky" for a symmetric operator); run-time options
-                               (-ksp_*, -pc_*) override */
-  const char *factor_package; /**< for lu/ilu: "umfpack", "mumps", "petsc" (NULL: umfpack on
-                                   one rank, mumps on several); cholesky: mumps */
-} cupid_coupling_krylov_options;
-
-/** What the Krylov solve did. */
-typedef struct {
-  int iterations;
-  double residual;        /**< final |b - A u| / |b| on the free DOFs, recomputed */
-  double time_setup;      /**< seconds: PETSc matrix of the cheap operator + PC set-up */
-  double time_solve;      /**< seconds: the Krylov iterations */
-  int converged;          /**< PETSc's reason > 0 */
-  char method[64];        /**< "gmres+<pc>" */
-} cupid_coupling_krylov_info;
-
-/** A linear operator for cupid_krylov_solve(): n DOFs, y = A x, and optionally only the rows
- *  [d0, d1) of it (what an MPI rank computes; NULL: the whole product). */
-typedef struct {
-  cupid_int n;
-  cupid_status (*apply)(void *ctx, const double *x, double *y);
-  cupid_status (*apply_rows)(void *ctx, const double *x, cupid_int d0, cupid_int d1, double *y);
-  void *ctx;
-  int symmetric;        /**< 1: symmetric positive definite (CG), 0: GMRES */
-  cupid_int n_pd_dofs;  /**< DOFs [0, n_pd_dofs) form the "pd" field of pc fieldsplit */
-  /** NULL or a whole grid: the operator is replicated on every rank. A slab of a partitioned
-   *  grid (issue 6, parts = the MPI ranks): the operator holds this rank's slab, n = 3 per
-   *  slab node (owned and halo) + the FE DOFs, and apply_rows gives the owned PD rows and
-   *  this slab's share of the FE rows, whose sum over the slabs is the whole FE rows. */
-  const cupid_pd_grid_partition *part;
-} cupid_linear_operator;
-
-/** y = A x. Replicated: the whole product. A slab (A->part): its owned PD rows and the whole
- *  FE rows, summed over the ranks (collective); the halo rows of y are left as they were. */
-cupid_status cupid_krylov_apply(const cupid_linear_operator *A, const double *x, double *y);
-
-/**
- * Solve A u = f as cupid_coupling_krylov_solve() does, for any matrix-free operator: CG when
- * A->symmetric (the unpreconditioned residual norm; the preconditioner from @p P must be
- * symmetric too: LU of a symmetric P is), else right-preconditioned GMRES. On a slab
- * (A->part), @p P, @p bc, @p f and @p u are the slab's (local DOFs as A's): P's owned PD rows
- * and its share of the FE rows (summed over the ranks, like A's), bc on every local DOF (the
- * halo's as on their owner), f on the owned DOFs and the FE DOFs (the same on every rank);
- * u gets every local DOF (owned, halo and FE), the same FE part on every rank.
- */
-cupid_status cupid_krylov_solve(const cupid_linear_operator *A, const cupid_csr_t *P,
-                                const cupid_dirichlet_t *bc, const double *f, double *u,
-                                const cupid_coupling_krylov_options *opts,
-                                cupid_coupling_krylov_info *info);
-
 /**
  * Solve A u = f with the Dirichlet conditions @p bc (finalized; fixed DOFs take bc->value) by
  * GMRES on the free DOFs, A matrix-free (a PETSc MATSHELL), preconditioned by @p P (the
@@ -440,8 +381,8 @@ cupid_status cupid_krylov_solve(const cupid_linear_operator *A, const cupid_csr_
  */
 cupid_status cupid_coupling_krylov_solve(const cupid_coupling_operator A, const cupid_csr_t *P,
                                          const cupid_dirichlet_t *bc, const double *f, double *u,
-                                         const cupid_coupling_krylov_options *opts,
-                                         cupid_coupling_krylov_info *info);
+                                         const cupid_krylov_options *opts,
+                                         cupid_krylov_info *info);
 /** The fictitious-node operator as a cupid_linear_operator (GMRES; A borrowed). */
 void cupid_coupling_operator_linear(const cupid_coupling_operator A, cupid_linear_operator *L);
 /** The Arlequin operator as a cupid_linear_operator (symmetric: CG; A borrowed). */

@@ -39,22 +39,8 @@ typedef struct {
   double own_z[2];
 } cupid_pd_grid_options;
 
-/**
- * Where a grid sits in the whole union (issue 6). A slab grid (options.parts > 1) holds the
- * z layers [k0 - halo, k1 + halo) of the union, where part p owns the layers [k0, k1): the
- * z layers are split into parts contiguous slabs of nearly equal node counts (each at least
- * one layer). Nodes are numbered x fastest and z slowest in the union and in the slab alike,
- * so local node l is global node first_global + l, and the owned nodes are the local range
- * [owned_first, owned_last). A whole grid has first_global 0 and owns all its nodes.
- */
-typedef struct {
-  cupid_int global_nodes;  /**< nodes of the whole union */
-  cupid_int first_global;  /**< global index of local node 0 */
-  cupid_int owned_first, owned_last; /**< owned local nodes */
-  int parts, part;
-  int halo_layers;         /**< as the grid's options gave it */
-  double own_z[2];         /**< the owned layers' z range (their outer cell faces) */
-} cupid_pd_grid_partition;
+/* cupid_pd_grid_partition, where a grid sits in the whole union, is in solvers.h (the
+ * Krylov solves over slabs read it too). */
 
 /**
  * Build the grid of a union of boxes (or, with opts->parts > 1, one slab of it plus its halo:

@@ -259,7 +259,127 @@ cupid_status cupid_petsc_solve(const cupid_csr_t *K, cupid_matrix_kind kind, con
                                const cupid_petsc_options *opts, cupid_solve_info *info);
 
 /* The matrix-free PD solve cupid_petsc_solve_pd() is declared at the end of pd.h. */
+
+/**
+ * Where a grid sits in the whole union (issue 6). A slab grid (options.parts > 1) holds the
+ * z layers [k0 - halo, k1 + halo) of the union, where part p owns the layers [k0, k1): the
+ * z layers are split into parts contiguous slabs of nearly equal node counts (each at least
+ * one layer). Nodes are numbered x fastest and z slowest in the union and in the slab alike,
+ * so local node l is global node first_global + l, and the owned nodes are the local range
+ * [owned_first, owned_last). A whole grid has first_global 0 and owns all its nodes.
+ */
+typedef struct {
+  cupid_int global_nodes;  /**< nodes of the whole union */
+  cupid_int first_global;  /**< global index of local node 0 */
+  cupid_int owned_first, owned_last; /**< owned local nodes */
+  int parts, part;
+  int halo_layers;         /**< as the grid's options gave it */
+  double own_z[2];         /**< the owned layers' z range (their outer cell faces) */
+} cupid_pd_grid_partition;
+
+/* ---- Matrix-free Krylov solves on PETSc (src/solvers/krylov.c) ---- */
+
+/** Options of a Krylov solve of a matrix-free system. */
+typedef struct {
+  double rtol;            /**< |b - A u| / |b| on the free DOFs (right preconditioning, so the
+                               true residual); <= 0: 1e-10 */
+  int max_it;             /**< <= 0: 2000 */
+  int restart;            /**< GMRES restart; <= 0: 200 */
+  const char *pc;         /**< PETSc PC type for the cheap matrix ("lu", "ilu", "gamg",
+                               "hypre"; "fieldsplit": two fields "pd" and "fe", sub-solvers
+                               from -fieldsplit_pd_* / -fieldsplit_fe_*; NULL: "lu", or
+                               "cholesky" for a symmetric operator); run-time options
+                               (-ksp_*, -pc_*) override */
+  const char *factor_package; /**< for lu/ilu: "umfpack", "mumps", "petsc" (NULL: umfpack on
+                                   one rank, mumps on several); cholesky: mumps */
+} cupid_krylov_options;
+
+/** What the Krylov solve did. */
+typedef struct {
+  int iterations;
+  double residual;        /**< final |b - A u| / |b| on the free DOFs, recomputed */
+  double time_setup;      /**< seconds: PETSc matrix of the cheap operator + PC set-up */
+  double time_solve;      /**< seconds: the Krylov iterations */
+  int converged;          /**< PETSc's reason > 0 */
+  char method[64];        /**< "gmres+<pc>" */
+} cupid_krylov_info;
+
+/** A linear operator for cupid_krylov_solve(): n DOFs, y = A x, and optionally only the rows
+ *  [d0, d1) of it (what an MPI rank computes; NULL: the whole product). */
+typedef struct {
+  cupid_int n;
+  cupid_status (*apply)(void *ctx, const double *x, double *y);
+  cupid_status (*apply_rows)(void *ctx, const double *x, cupid_int d0, cupid_int d1, double *y);
+  void *ctx;
+  int symmetric;        /**< 1: symmetric positive definite (CG), 0: GMRES */
+  cupid_int n_pd_dofs;  /**< DOFs [0, n_pd_dofs) form the "pd" field of pc fieldsplit */
+  /** NULL or a whole grid: the operator is replicated on every rank. A slab of a partitioned
+   *  grid (issue 6, parts = the MPI ranks): the operator holds this rank's slab, n = 3 per
+   *  slab node (owned and halo) + the FE DOFs, and apply_rows gives the owned PD rows and
+   *  this slab's share of the FE rows, whose sum over the slabs is the whole FE rows. */
+  const cupid_pd_grid_partition *part;
+} cupid_linear_operator;
+
+/** y = A x. Replicated: the whole product. A slab (A->part): its owned PD rows and the whole
+ *  FE rows, summed over the ranks (collective); the halo rows of y are left as they were. */
+cupid_status cupid_krylov_apply(const cupid_linear_operator *A, const double *x, double *y);
+
+/**
+ * Solve A u = f as cupid_coupling_krylov_solve() does, for any matrix-free operator: CG when
+ * A->symmetric (the unpreconditioned residual norm; the preconditioner from @p P must be
+ * symmetric too: LU of a symmetric P is), else right-preconditioned GMRES. On a slab
+ * (A->part), @p P, @p bc, @p f and @p u are the slab's (local DOFs as A's): P's owned PD rows
+ * and its share of the FE rows (summed over the ranks, like A's), bc on every local DOF (the
+ * halo's as on their owner), f on the owned DOFs and the FE DOFs (the same on every rank);
+ * u gets every local DOF (owned, halo and FE), the same FE part on every rank.
+ */
+cupid_status cupid_krylov_solve(const cupid_linear_operator *A, const cupid_csr_t *P,
+                                const cupid_dirichlet_t *bc, const double *f, double *u,
+                                const cupid_krylov_options *opts,
+                                cupid_krylov_info *info);
+
+
 /* ---- end of the PETSc block ---- */
+
+
+/* ---- Solver engines as a table (src/solvers/engine.c) ----
+ * Each engine fills one cupid_solver_type; the problem (problem.h) picks one by name or by cost
+ * (`auto`) and solves through it, so no code outside the table asks which engine it is. */
+
+/** What a path is expected to cost (problem.h's estimates). */
+typedef struct {
+  double bytes;     /**< peak memory, one rank */
+  double seconds;   /**< set-up + solve */
+  char what[96];    /**< the path, e.g. "CHOLMOD" or "matrix-free GMRES + LU of a bond-based twin" */
+} cupid_solver_cost;
+
+typedef struct {
+  const char *name;   /**< as in the model file and --solver: "direct", "petsc" */
+  int kind;           /**< its cupid_solver_kind (model.h) */
+  int iterative;      /**< 1: Krylov, the matrix-free paths are its own */
+  /** 1 when this build has the engine. */
+  int (*available)(void);
+  /** Ready the engine (PETSc and MPI start here when not already started). */
+  cupid_status (*start)(void);
+  /** Solve K u = f on the free DOFs of @p bc (finalized); @p hints may be NULL. */
+  cupid_status (*solve_matrix)(const cupid_csr_t *K, cupid_matrix_kind kind, const double *f,
+                               const cupid_dirichlet_t *bc, double *u,
+                               const cupid_petsc_options *hints, cupid_solve_info *info);
+  /** Solve the matrix-free A u = f preconditioned by the matrix @p P (NULL: the engine has
+   *  no matrix-free solve). */
+  cupid_status (*solve_operator)(const cupid_linear_operator *A, const cupid_csr_t *P,
+                                 const cupid_dirichlet_t *bc, const double *f, double *u,
+                                 const cupid_krylov_options *opts, cupid_krylov_info *info);
+} cupid_solver_type;
+
+/** The engine of a cupid_solver_kind (DIRECT or PETSC; NULL otherwise). */
+const cupid_solver_type *cupid_solver_type_get(int kind);
+/** The k-th engine of the table (0, 1, ...; NULL past the end): factorisations first, then
+ *  the iterative engines. */
+const cupid_solver_type *cupid_solver_type_at(int k);
+/** The engine named @p name ("direct", "petsc"; NULL if unknown). */
+const cupid_solver_type *cupid_solver_type_find(const char *name);
+/* ---- end of the engine table ---- */
 
 #ifdef __cplusplus
 }

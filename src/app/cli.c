@@ -1,6 +1,8 @@
-/* The `cupid` command line (model-format.md, "Command line"):
+/* The `cupid` command line (model-format.md, "Command line"): parse, then create, set up,
+ * solve and write the problem (include/cupid/problem.h), and turn the status into the exit code.
  *   cupid run MODEL.yaml [-o DIR] [--solver auto|direct|petsc] [--threads N]
- *                        [--max-memory GB] [--quiet] [-PETSC_OPTION [VALUE]]...
+ *                        [--max-memory GB] [--quiet] [--replicate] [--assembled]
+ *                        [-PETSC_OPTION [VALUE]]...
  *   mpirun -n N cupid run MODEL.yaml --solver petsc [...]   (every rank runs, rank 0 writes)
  *   cupid check MODEL.yaml
  *   cupid --version | --help
@@ -13,12 +15,13 @@
 
 #include "cupid/app.h"
 #include "cupid/io.h"
-#include "cupid/model.h"
+#include "cupid/problem.h"
 #include "cupid/solvers.h"
 
 static const char usage_text[] =
     "usage: cupid run MODEL.yaml [-o DIR] [--solver auto|direct|petsc] [--threads N]\n"
-    "                            [--max-memory GB] [--quiet] [-petsc_option [value]]...\n"
+    "                            [--max-memory GB] [--quiet] [--replicate] [--assembled]\n"
+    "                            [-petsc_option [value]]...\n"
     "       mpirun -n N cupid run MODEL.yaml --solver petsc [...]\n"
     "       cupid check MODEL.yaml\n"
     "       cupid --version | --help\n";
@@ -39,6 +42,10 @@ static const char help_text[] =
     "  --max-memory GB    refuse models whose estimated memory exceeds GB\n"
     "                     (default: 90% of the physical memory)\n"
     "  -q, --quiet        no progress messages on stderr\n"
+    "  --replicate        under mpirun, keep the whole model on every rank instead of\n"
+    "                     splitting the PD grid into z slabs (for comparisons)\n"
+    "  --assembled        PETSc solves of coupled models on the assembled matrix\n"
+    "                     instead of the matrix-free operator\n"
     "  -ksp_*, -pc_*, -log_view, ... (one dash) go to PETSc (--solver petsc; builds\n"
     "                     with PETSc only), e.g. -ksp_monitor -pc_type hypre\n"
     "\n"
@@ -60,11 +67,11 @@ static int usage_error(const char *fmt, const char *arg) {
   return 1;
 }
 
+/* An engine's name (the solver table) or auto. */
 static int parse_solver(const char *s) {
   if (!strcmp(s, "auto")) return CUPID_SOLVER_AUTO;
-  if (!strcmp(s, "direct")) return CUPID_SOLVER_DIRECT;
-  if (!strcmp(s, "petsc")) return CUPID_SOLVER_PETSC;
-  return -1;
+  const cupid_solver_type *e = cupid_solver_type_find(s);
+  return e ? e->kind : -1;
 }
 
 static int parse_positive(const char *s, double *out) {
@@ -124,6 +131,10 @@ static int parse_options(int argc, char **argv, int first, cupid_run_options *op
         return usage_error("--max-memory: expected a positive number of GB, got '%s'", argv[i]);
     } else if (!strcmp(a, "-q") || !strcmp(a, "--quiet")) {
       opts->quiet = 1;
+    } else if (!strcmp(a, "--replicate")) {
+      opts->replicate = 1;
+    } else if (!strcmp(a, "--assembled")) {
+      opts->assembled = 1;
     } else if (a[0] == '-' && a[1] != '\0') {
       return usage_error("unknown option '%s'", a);
     } else if (!*model_path) {
@@ -178,7 +189,7 @@ int cupid_cli_main(int argc, char **argv) {
   int is_run = !strcmp(cmd, "run"), is_check = !strcmp(cmd, "check");
   if (!is_run && !is_check) return usage_error("unknown command '%s'", cmd);
 
-  cupid_run_options opts = {.solver = -1};
+  cupid_run_options opts = cupid_run_options_default();
   const char *path = NULL;
   /* argv[0] and the PETSc options: kept until PetscFinalize (PETSc holds the pointers). */
   static char *petsc_argv[4096];
@@ -196,14 +207,18 @@ int cupid_cli_main(int argc, char **argv) {
   signal(SIGTERM, on_signal);
 
   /* PETSc (and MPI) start here when launched by mpirun or asked for explicitly; `auto` starts it
-   * later, only if it picks PETSc (src/app/run.c). */
+   * later, only if it picks PETSc (src/problem/problem.c). */
   cupid_status st = CUPID_SUCCESS;
-  if (cupid_petsc_available() && (cupid_petsc_launched_parallel() || opts.solver == CUPID_SOLVER_PETSC))
+  const cupid_solver_type *requested = cupid_solver_type_get(opts.solver);
+  if (cupid_petsc_available() && (cupid_petsc_launched_parallel() || (requested && requested->iterative)))
     st = cupid_petsc_initialize(petsc_argc, petsc_argv);
-  cupid_model model = NULL;
-  if (st == CUPID_SUCCESS) st = cupid_model_read(path, &model);
-  if (st == CUPID_SUCCESS) st = cupid_run_model(model, &opts);
-  cupid_model_destroy(&model);
+  cupid_problem problem = NULL;
+  if (st == CUPID_SUCCESS) st = cupid_problem_create_from_file(path, &opts, &problem);
+  if (st == CUPID_SUCCESS) st = cupid_problem_setup(problem);
+  if (st == CUPID_SUCCESS && is_check) st = cupid_problem_print_estimate(problem);
+  if (st == CUPID_SUCCESS && is_run) st = cupid_problem_solve(problem);
+  if (st == CUPID_SUCCESS && is_run) st = cupid_problem_write_outputs(problem);
+  cupid_problem_destroy(&problem);
   if (cupid_petsc_initialized()) return finish_parallel(st);
   if (st != CUPID_SUCCESS) return report_error(st);
   return 0;

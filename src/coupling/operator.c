@@ -184,3 +184,34 @@ cupid_status cupid_coupling_preconditioner(const cupid_coupling_operator A, doub
   cupid_coupling_cheap_options(&A->pd, h, horizon_factor, &cheap);
   return cpl_parts_assemble(&A->parts, &cheap, P);
 }
+
+/* The fictitious-node operator as a cupid_linear_operator. */
+static cupid_status fict_apply(void *ctx, const double *x, double *y) {
+  return cupid_coupling_operator_apply(ctx, x, y);
+}
+
+static cupid_status fict_apply_rows(void *ctx, const double *x, cupid_int d0, cupid_int d1, double *y) {
+  return cupid_coupling_operator_apply_rows(ctx, x, d0, d1, y);
+}
+
+void cupid_coupling_operator_linear(const cupid_coupling_operator A, cupid_linear_operator *L) {
+  cupid_int n_pd = 0; /* the slab's on a slab (the info counts the whole model) */
+  const cupid_pd_grid_partition *part = cpl_operator_partition(A, &n_pd);
+  *L = (cupid_linear_operator){.n = cupid_coupling_operator_size(A),
+                               .apply = fict_apply,
+                               .apply_rows = fict_apply_rows,
+                               .ctx = A,
+                               .symmetric = 0,
+                               .n_pd_dofs = 3 * n_pd,
+                               .part = part};
+}
+
+cupid_status cupid_coupling_krylov_solve(const cupid_coupling_operator A, const cupid_csr_t *P,
+                                         const cupid_dirichlet_t *bc, const double *f, double *u,
+                                         const cupid_krylov_options *opts,
+                                         cupid_krylov_info *info) {
+  CUPID_CHECK(A, CUPID_ERR_ARGUMENT, "Krylov solve: NULL operator");
+  cupid_linear_operator L;
+  cupid_coupling_operator_linear(A, &L);
+  return cupid_krylov_solve(&L, P, bc, f, u, opts, info);
+}

@@ -37,23 +37,16 @@ void cupid_petsc_set_args(int argc, char **argv) {
 #include <math.h>
 #include <petscksp.h>
 
+#include "petsc_internal.h"
+
 static int g_initialized = 0;
 
-/* A PETSc call inside a function with `st` and `cleanup:`: PETSc's message becomes cupid's. */
-#define PTRY(expr)                                                                             \
-  do {                                                                                         \
-    PetscErrorCode ierr_ = (expr);                                                             \
-    if (ierr_) {                                                                               \
-      st = petsc_error(ierr_, #expr);                                                          \
-      goto cleanup;                                                                            \
-    }                                                                                          \
-  } while (0)
-
-static cupid_status petsc_error(PetscErrorCode ierr, const char *what) {
+/* PTRY: petsc_internal.h. */
+cupid_status cupid_petsc_error(int ierr, const char *what) {
   const char *text = NULL;
-  PetscErrorMessage(ierr, &text, NULL);
+  PetscErrorMessage((PetscErrorCode)ierr, &text, NULL);
   cupid_status code = ierr == PETSC_ERR_MEM ? CUPID_ERR_MEMORY : CUPID_ERR_NUMERIC;
-  return CUPID_ERROR(code, "PETSc error %d (%s) in %s", (int)ierr, text ? text : "unknown", what);
+  return CUPID_ERROR(code, "PETSc error %d (%s) in %s", ierr, text ? text : "unknown", what);
 }
 
 cupid_status cupid_petsc_initialize(int argc, char **argv) {

@@ -20,7 +20,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "cupid/app.h"
+#include "cupid/problem.h"
 #include "cupid/model.h"
 #include "cupid/pd.h"
 
@@ -80,8 +80,8 @@ static double pd_cells(const cupid_model_t *m) {
   return isfinite(cells) ? cells : INFINITY;
 }
 
-/* Point-in-region tests of the output lines and points (cupid_app_check_points samples up to
- * every point of a line): the app refuses more than 2e8 (src/app/check.c, guard_output), which
+/* Point-in-region tests of the output lines and points (cupid_problem_check_points samples up to
+ * every point of a line): the app refuses more than 2e8 (src/problem/estimate.c, guard_output), which
  * still take seconds under ASan; only the refusal and small counts are exercised here. */
 static int sampling_ok(const cupid_model_t *m) {
   double points = m->output.n_points;

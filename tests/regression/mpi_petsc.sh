@@ -1,13 +1,13 @@
 #!/usr/bin/env bash
 # The PETSc/MPI engine (issue 6) against the direct solver, on 2 MPI ranks:
 #  1. a small coupled bar (fictitious nodes, non-symmetric Eq. 38: GMRES), assembled MPIAIJ
-#     (-cupid_coupled_assembled), matrix-free with the PD grid in z slabs (the default) and
-#     matrix-free with the model replicated (-cupid_replicate) on 2 ranks; the C-beam's web
+#     (--assembled), matrix-free with the PD grid in z slabs (the default) and
+#     matrix-free with the model replicated (--replicate) on 2 ranks; the C-beam's web
 #     region over part of the section (fictitious nodes beyond its z faces) in slabs,
 #  1b. the same bar on one process: matrix-free Eq. 38 (src/coupling/operator.c, krylov.c),
 #  1c. the coupled bar with Arlequin (symmetric: CG), 2 ranks: matrix-free (the default: the
 #      PD grid split into z slabs, one per rank, the node-weighted PD operator, CG + MUMPS
-#      Cholesky of the cheap twin) and assembled (-cupid_coupled_assembled: CG + GAMG on K's
+#      Cholesky of the cheap twin) and assembled (--assembled: CG + GAMG on K's
 #      rows); the Arlequin panel (two regions over part of the section) in slabs on 2 ranks,
 #  2. a small PD-only LPS block (matrix-free MATSHELL + halo exchange, CG + GAMG), with a
 #     prescribed non-zero displacement (lifted right-hand side),
@@ -89,10 +89,10 @@ assert imb <= 1e-6, imb
 PY
 }
 
-echo "== coupled bar (fictitious nodes), 2 ranks, assembled Eq. 38 (-cupid_coupled_assembled)"
+echo "== coupled bar (fictitious nodes), 2 ranks, assembled Eq. 38 (--assembled)"
 "$CUPID" run "$models/coupled_bar.yaml" -o "$tmp/bar_direct" --solver direct --quiet
 "$MPIEXEC" -n 2 "$CUPID" run "$models/coupled_bar.yaml" -o "$tmp/bar_petsc" --solver petsc --quiet \
-  -cupid_coupled_assembled
+  --assembled
 compare "$tmp/bar_direct" "$tmp/bar_petsc" "coupled bar"
 python3 -c "import json,sys; s=json.load(open(sys.argv[1]))['solver']; assert s['ranks']==2 and s['operator']=='assembled' and s['ksp_type']=='gmres', s" "$tmp/bar_petsc/summary.json"
 
@@ -101,7 +101,7 @@ echo "== coupled bar, 2 ranks, matrix-free Eq. 38 (the default: GMRES + MUMPS LU
 compare "$tmp/bar_direct" "$tmp/bar_mf2" "coupled bar, matrix-free, 2 ranks"
 slabs_agree "$tmp/bar_direct" "$tmp/bar_mf2" "coupled bar, slabs" gmres
 "$MPIEXEC" -n 2 "$CUPID" run "$models/coupled_bar.yaml" -o "$tmp/bar_rep2" --solver petsc --quiet \
-  -cupid_replicate
+  --replicate
 compare "$tmp/bar_direct" "$tmp/bar_rep2" "coupled bar, matrix-free, 2 ranks, replicated model"
 python3 -c "import json,sys; s=json.load(open(sys.argv[1]))['solver']; assert 'pd_slabs' not in s and s['ranks']==2, s" "$tmp/bar_rep2/summary.json"
 
@@ -123,7 +123,7 @@ sed 's/horizon: 3.0/horizon: 1.5/' "$CUPID_SOURCE_DIR/examples/bar/bar_coupled_a
 "$MPIEXEC" -n 2 "$CUPID" run "$tmp/arl.yaml" -o "$tmp/arl_petsc" --solver petsc --quiet
 compare "$tmp/arl_direct" "$tmp/arl_petsc" "coupled bar, Arlequin, matrix-free"
 slabs_agree "$tmp/arl_direct" "$tmp/arl_petsc" "coupled bar, Arlequin, slabs" cg
-"$MPIEXEC" -n 2 "$CUPID" run "$tmp/arl.yaml" -o "$tmp/arl_asm" --solver petsc --quiet -cupid_coupled_assembled
+"$MPIEXEC" -n 2 "$CUPID" run "$tmp/arl.yaml" -o "$tmp/arl_asm" --solver petsc --quiet --assembled
 compare "$tmp/arl_direct" "$tmp/arl_asm" "coupled bar, Arlequin, assembled"
 python3 -c "import json,sys; s=json.load(open(sys.argv[1]))['solver']; assert s['ranks']==2 and s['ksp_type']=='cg' and s['operator']=='assembled', s" "$tmp/arl_asm/summary.json"
 

@@ -169,8 +169,8 @@ static void check_krylov(const op_model *m, cupid_coupling_operator A, const cup
   CUPID_ASSERT_OK(cupid_direct_solve(K, CUPID_MATRIX_GENERAL, f, bc, ud, NULL));
   cupid_csr P = NULL;
   CUPID_ASSERT_OK(cupid_coupling_preconditioner(A, 1.5, &P));
-  cupid_coupling_krylov_options ko = {.rtol = 1e-12};
-  cupid_coupling_krylov_info ki;
+  cupid_krylov_options ko = {.rtol = 1e-12};
+  cupid_krylov_info ki;
   CUPID_ASSERT_OK(cupid_coupling_krylov_solve(A, P, bc, f, u, &ko, &ki));
   double e = 0.0;
   for (cupid_int d = 0; d < n; d++) e = fmax(e, fabs(u[d] - ud[d]));

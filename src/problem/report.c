@@ -4,7 +4,7 @@
 #include <stdio.h>
 #include <string.h>
 
-#include "app_internal.h"
+#include "problem_internal.h"
 #include "cupid/io.h"
 
 static const char *phase_names[CUPID_PHASE_COUNT] = {"grid",          "assembly", "coupling",
@@ -21,10 +21,10 @@ static cupid_status join_path(const char *dir, const char *name, char *out, size
 }
 
 /* Write `line_<name>.csv`: s,x,y,z,ux,uy,uz,region, and its plot. */
-static cupid_status write_line(cupid_job *job, const cupid_output_line *line) {
+static cupid_status write_line(cupid_problem_state *prob, const cupid_output_line *line) {
   char name[512], path[4096];
   snprintf(name, sizeof name, "line_%s.csv", line->name);
-  CUPID_CALL(join_path(job->outdir, name, path, sizeof path));
+  CUPID_CALL(join_path(prob->outdir, name, path, sizeof path));
   cupid_atomic_file file = NULL;
   CUPID_CALL(cupid_atomic_open(path, &file));
   FILE *out = cupid_atomic_stream(file);
@@ -36,7 +36,7 @@ static cupid_status write_line(cupid_job *job, const cupid_output_line *line) {
     double t = line->points > 1 ? (double)k / (line->points - 1) : 0.0, p[3], u[3];
     for (int a = 0; a < 3; a++) p[a] = line->from[a] + t * (line->to[a] - line->from[a]);
     cupid_region_kind region;
-    cupid_status st = cupid_app_sample(job, p, u, NULL, &region);
+    cupid_status st = cupid_problem_sample_point(prob, p, u, NULL, &region);
     if (st != CUPID_SUCCESS) {
       cupid_atomic_abort(&file);
       return st;
@@ -45,33 +45,33 @@ static cupid_status write_line(cupid_job *job, const cupid_output_line *line) {
             u[1], u[2], region_name(region));
   }
   CUPID_CALL(cupid_atomic_commit(&file));
-  if (!job->model->output.plots) return CUPID_SUCCESS;
+  if (!prob->model->output.plots) return CUPID_SUCCESS;
   char stem[512], title[600];
   snprintf(stem, sizeof stem, "line_%s", line->name);
   snprintf(title, sizeof title, "%s: displacement along line '%s'",
-           job->model->title[0] ? job->model->title : "cupid", line->name);
+           prob->model->title[0] ? prob->model->title : "cupid", line->name);
   cupid_plot_curve curves[3];
   for (int c = 0; c < 3; c++)
     curves[c] = (cupid_plot_curve){.csv = name, .xcol = 1, .ycol = 5 + c,
                                    .title = c == 0 ? "u_x" : c == 1 ? "u_y" : "u_z",
                                    .style = "linespoints pt 7 ps 0.4"};
   int made = 0;
-  return cupid_plot(job->outdir, stem, title, "s (distance along the line)", "displacement", 3,
+  return cupid_plot(prob->outdir, stem, title, "s (distance along the line)", "displacement", 3,
                     curves, &made);
 }
 
 /* `pd_nodes.csv`: x,y,z,ux,uy,uz,fx,fy,fz per real PD node; f = K u, the internal force,
  * which equals the applied load plus the reaction at every node. */
-static cupid_status write_pd_nodes(cupid_job *job) {
+static cupid_status write_pd_nodes(cupid_problem_state *prob) {
   char path[4096];
-  CUPID_CALL(join_path(job->outdir, "pd_nodes.csv", path, sizeof path));
+  CUPID_CALL(join_path(prob->outdir, "pd_nodes.csv", path, sizeof path));
   cupid_atomic_file file = NULL;
   CUPID_CALL(cupid_atomic_open(path, &file));
   FILE *out = cupid_atomic_stream(file);
-  const double *x = cupid_pd_grid_coords(job->grid);
+  const double *x = cupid_pd_grid_coords(prob->grid);
   fprintf(out, "x,y,z,ux,uy,uz,fx,fy,fz\n");
-  for (cupid_int i = 0; i < job->n_pd; i++) {
-    const double *p = x + 3 * i, *u = job->u + 3 * i, *f = job->f_int + 3 * i;
+  for (cupid_int i = 0; i < prob->n_pd; i++) {
+    const double *p = x + 3 * i, *u = prob->u + 3 * i, *f = prob->f_int + 3 * i;
     fprintf(out, "%.10g,%.10g,%.10g,%.12e,%.12e,%.12e,%.12e,%.12e,%.12e\n", p[0], p[1], p[2], u[0],
             u[1], u[2], f[0], f[1], f[2]);
   }
@@ -79,9 +79,9 @@ static cupid_status write_pd_nodes(cupid_job *job) {
 }
 
 /* `pd.vtu`: PD nodes as VTK vertices. */
-static cupid_status write_pd_vtu(cupid_job *job) {
+static cupid_status write_pd_vtu(cupid_problem_state *prob) {
   cupid_status st = CUPID_SUCCESS;
-  cupid_int n = job->n_pd, *conn = NULL, *offs = NULL;
+  cupid_int n = prob->n_pd, *conn = NULL, *offs = NULL;
   unsigned char *types = NULL;
   double *mat = NULL, *fixed = NULL, *stress = NULL;
   char path[4096];
@@ -90,37 +90,37 @@ static cupid_status write_pd_vtu(cupid_job *job) {
   CUPID_TRY(cupid_malloc((size_t)n, sizeof *types, "VTU cell types", &types));
   CUPID_TRY(cupid_malloc((size_t)n, sizeof *mat, "VTU materials", &mat));
   CUPID_TRY(cupid_malloc((size_t)n, sizeof *fixed, "VTU constraint flags", &fixed));
-  if (job->pd_stress) {
+  if (prob->pd_stress) {
     /* VTK's symmetric-tensor order is xx yy zz xy yz xz; cupid's is xx yy zz yz xz xy. */
     static const int vtk_order[6] = {0, 1, 2, 5, 3, 4};
     CUPID_TRY(cupid_malloc((size_t)(6 * n), sizeof *stress, "VTU stresses", &stress));
     for (cupid_int i = 0; i < n; i++)
-      for (int c = 0; c < 6; c++) stress[6 * i + c] = job->pd_stress[6 * i + vtk_order[c]];
+      for (int c = 0; c < 6; c++) stress[6 * i + c] = prob->pd_stress[6 * i + vtk_order[c]];
   }
-  const int *m = cupid_pd_grid_materials(job->grid);
+  const int *m = cupid_pd_grid_materials(prob->grid);
   for (cupid_int i = 0; i < n; i++) {
     conn[i] = i;
     offs[i] = i + 1;
     types[i] = CUPID_VTK_VERTEX;
     mat[i] = m[i];
-    fixed[i] = job->bc ? (double)(job->bc->fixed[3 * i] + job->bc->fixed[3 * i + 1] +
-                                  job->bc->fixed[3 * i + 2])
+    fixed[i] = prob->bc ? (double)(prob->bc->fixed[3 * i] + prob->bc->fixed[3 * i + 1] +
+                                  prob->bc->fixed[3 * i + 2])
                        : 0.0;
   }
-  cupid_vtu_array pdata[5] = {{"displacement", 3, job->u},
-                              {"force", 3, job->f_int},
+  cupid_vtu_array pdata[5] = {{"displacement", 3, prob->u},
+                              {"force", 3, prob->f_int},
                               {"material", 1, mat},
                               {"constrained_components", 1, fixed},
                               {"stress", 6, stress}};
   cupid_vtu_mesh mesh = {.n_points = n,
-                         .points = cupid_pd_grid_coords(job->grid),
+                         .points = cupid_pd_grid_coords(prob->grid),
                          .n_cells = n,
                          .connectivity = conn,
                          .offsets = offs,
                          .types = types,
                          .point_data = pdata,
-                         .n_point_data = job->pd_stress ? 5 : 4};
-  CUPID_TRY(join_path(job->outdir, "pd.vtu", path, sizeof path));
+                         .n_point_data = prob->pd_stress ? 5 : 4};
+  CUPID_TRY(join_path(prob->outdir, "pd.vtu", path, sizeof path));
   CUPID_TRY(cupid_vtu_write(path, &mesh));
 cleanup:
   cupid_free(&conn);
@@ -134,22 +134,22 @@ cleanup:
 
 /* `beam.vtu` (the 3D reconstruction of the beam as hexahedra), `pd.vtu`, and `model.pvd`,
  * the collection ParaView opens with both parts. */
-static cupid_status write_vtu(cupid_job *job) {
+static cupid_status write_vtu(cupid_problem_state *prob) {
   char path[4096];
   const char *files[2];
   const double times[2] = {0.0, 0.0};
   const int parts[2] = {0, 1};
   int n = 0;
-  if (job->beam) {
-    CUPID_CALL(join_path(job->outdir, "beam.vtu", path, sizeof path));
-    CUPID_CALL(cupid_app_fe_write_vtu(job, path));
+  if (prob->beam) {
+    CUPID_CALL(join_path(prob->outdir, "beam.vtu", path, sizeof path));
+    CUPID_CALL(cupid_problem_fe_write_vtu(prob, path));
     files[n++] = "beam.vtu";
   }
-  if (job->grid) {
-    CUPID_CALL(write_pd_vtu(job));
+  if (prob->grid) {
+    CUPID_CALL(write_pd_vtu(prob));
     files[n++] = "pd.vtu";
   }
-  CUPID_CALL(join_path(job->outdir, "model.pvd", path, sizeof path));
+  CUPID_CALL(join_path(prob->outdir, "model.pvd", path, sizeof path));
   return cupid_pvd_write(path, n, files, times, parts);
 }
 
@@ -159,54 +159,54 @@ static void json_vec3(cupid_json js, const char *key, const double v[3]) {
   cupid_json_end_array(js);
 }
 
-static void json_counts(cupid_json js, const cupid_job *job) {
+static void json_counts(cupid_json js, const cupid_problem_state *prob) {
   cupid_int nfixed = 0;
-  for (cupid_int d = 0; d < job->ndof && job->bc; d++) nfixed += job->bc->fixed[d];
+  for (cupid_int d = 0; d < prob->ndof && prob->bc; d++) nfixed += prob->bc->fixed[d];
   cupid_json_begin_object(js, "counts");
-  cupid_json_integer(js, "fe_nodes", job->beam ? job->fe_info.n_fe_nodes : 0);
-  cupid_json_integer(js, "fe_dofs", job->n_fe_dofs);
-  cupid_json_integer(js, "pd_nodes", job->n_pd);
-  cupid_json_integer(js, "bonds", job->n_bonds);
-  cupid_json_integer(js, "pd_dofs", 3 * job->n_pd);
-  cupid_json_integer(js, "fictitious_nodes", job->n_fictitious);
-  cupid_json_integer(js, "dofs", job->ndof);
+  cupid_json_integer(js, "fe_nodes", prob->beam ? prob->fe_info.n_fe_nodes : 0);
+  cupid_json_integer(js, "fe_dofs", prob->n_fe_dofs);
+  cupid_json_integer(js, "pd_nodes", prob->n_pd);
+  cupid_json_integer(js, "bonds", prob->n_bonds);
+  cupid_json_integer(js, "pd_dofs", 3 * prob->n_pd);
+  cupid_json_integer(js, "fictitious_nodes", prob->n_fictitious);
+  cupid_json_integer(js, "dofs", prob->ndof);
   cupid_json_integer(js, "constrained_dofs", nfixed);
-  cupid_json_integer(js, "matrix_nonzeros", job->K ? cupid_csr_nnz(job->K) : 0);
+  cupid_json_integer(js, "matrix_nonzeros", prob->K ? cupid_csr_nnz(prob->K) : 0);
   cupid_json_end_object(js);
 }
 
-static void json_phases(cupid_json js, const cupid_job *job) {
+static void json_phases(cupid_json js, const cupid_problem_state *prob) {
   cupid_json_begin_object(js, "phases");
   for (int p = 0; p < CUPID_PHASE_COUNT; p++) {
     cupid_json_begin_object(js, phase_names[p]);
-    cupid_json_number(js, "time_s", job->phases[p].used ? job->phases[p].seconds : 0.0);
-    cupid_json_integer(js, "peak_memory_bytes", job->phases[p].used ? job->phases[p].peak_memory : 0);
+    cupid_json_number(js, "time_s", prob->phases[p].used ? prob->phases[p].seconds : 0.0);
+    cupid_json_integer(js, "peak_memory_bytes", prob->phases[p].used ? prob->phases[p].peak_memory : 0);
     cupid_json_end_object(js);
   }
   cupid_json_end_object(js);
 }
 
-static void json_solver(cupid_json js, const cupid_job *job) {
+static void json_solver(cupid_json js, const cupid_problem_state *prob) {
   cupid_json_begin_object(js, "solver");
-  if (job->solved) {
-    cupid_json_string(js, "method", job->solve.method);
-    cupid_json_integer(js, "equations", job->solve.n);
-    cupid_json_integer(js, "matrix_nonzeros", job->solve.nnz_matrix);
-    cupid_json_number(js, "factor_nonzeros", job->solve.nnz_factor);
-    cupid_json_number(js, "residual", job->solve.residual);
-    cupid_json_number(js, "backward_error", job->solve.backward_error);
-    if (job->solver_reason[0]) cupid_json_string(js, "choice", job->solver_reason);
-    if (job->solver == CUPID_SOLVER_PETSC) { /* issue 6: what the Krylov solve did */
-      cupid_json_integer(js, "ranks", job->solve.ranks);
-      cupid_json_integer(js, "iterations", job->solve.iterations);
-      cupid_json_string(js, "ksp_type", job->solve.ksp_type);
-      cupid_json_string(js, "pc_type", job->solve.pc_type);
-      cupid_json_string(js, "converged_reason", job->solve.converged_reason);
-      cupid_json_string(js, "operator", job->solve.matrix_free ? "matrix-free" : "assembled");
-      if (job->slab_ranks > 1) { /* the PD grid was split into z slabs, one per rank */
+  if (prob->solved) {
+    cupid_json_string(js, "method", prob->solve.method);
+    cupid_json_integer(js, "equations", prob->solve.n);
+    cupid_json_integer(js, "matrix_nonzeros", prob->solve.nnz_matrix);
+    cupid_json_number(js, "factor_nonzeros", prob->solve.nnz_factor);
+    cupid_json_number(js, "residual", prob->solve.residual);
+    cupid_json_number(js, "backward_error", prob->solve.backward_error);
+    if (prob->solver_reason[0]) cupid_json_string(js, "choice", prob->solver_reason);
+    if (prob->engine && prob->engine->iterative) { /* issue 6: what the Krylov solve did */
+      cupid_json_integer(js, "ranks", prob->solve.ranks);
+      cupid_json_integer(js, "iterations", prob->solve.iterations);
+      cupid_json_string(js, "ksp_type", prob->solve.ksp_type);
+      cupid_json_string(js, "pc_type", prob->solve.pc_type);
+      cupid_json_string(js, "converged_reason", prob->solve.converged_reason);
+      cupid_json_string(js, "operator", prob->solve.matrix_free ? "matrix-free" : "assembled");
+      if (prob->slab_ranks > 1) { /* the PD grid was split into z slabs, one per rank */
         cupid_json_begin_object(js, "pd_slabs");
-        cupid_json_integer(js, "ranks", job->slab_ranks);
-        cupid_json_integer(js, "largest_slab_nodes", job->slab_nodes_max);
+        cupid_json_integer(js, "ranks", prob->slab_ranks);
+        cupid_json_integer(js, "largest_slab_nodes", prob->slab_nodes_max);
         cupid_json_end_object(js);
       }
     }
@@ -217,14 +217,14 @@ static void json_solver(cupid_json js, const cupid_job *job) {
   cupid_json_end_object(js);
 }
 
-static cupid_status json_points(cupid_json js, const cupid_job *job) {
-  const cupid_output *o = &job->model->output;
+static cupid_status json_points(cupid_json js, const cupid_problem_state *prob) {
+  const cupid_output *o = &prob->model->output;
   cupid_json_begin_array(js, "points");
   for (int k = 0; k < o->n_points; k++) {
     const cupid_output_point *pt = &o->points[k];
     double u[3], s[6];
     cupid_region_kind region;
-    CUPID_CALL(cupid_app_sample(job, pt->at, u, s, &region));
+    CUPID_CALL(cupid_problem_sample_point(prob, pt->at, u, s, &region));
     cupid_json_begin_object(js, NULL);
     cupid_json_string(js, "name", pt->name);
     cupid_json_number(js, "x", pt->at[0]);
@@ -244,10 +244,10 @@ static cupid_status json_points(cupid_json js, const cupid_job *job) {
   return CUPID_SUCCESS;
 }
 
-static cupid_status write_summary(cupid_job *job) {
-  const cupid_model_t *m = job->model;
+static cupid_status write_summary(cupid_problem_state *prob) {
+  const cupid_model_t *m = prob->model;
   char path[4096];
-  CUPID_CALL(join_path(job->outdir, "summary.json", path, sizeof path));
+  CUPID_CALL(join_path(prob->outdir, "summary.json", path, sizeof path));
   cupid_atomic_file file = NULL;
   cupid_json js = NULL;
   cupid_status st = CUPID_SUCCESS;
@@ -260,18 +260,18 @@ static cupid_status write_summary(cupid_job *job) {
   cupid_json_string(js, "model_file", m->file);
   cupid_json_string(js, "analysis", types[m->analysis.type]);
   cupid_json_integer(js, "threads", cupid_num_threads());
-  json_counts(js, job);
-  json_phases(js, job);
-  json_solver(js, job);
+  json_counts(js, prob);
+  json_phases(js, prob);
+  json_solver(js, prob);
   double imbalance[3];
-  for (int c = 0; c < 3; c++) imbalance[c] = job->load_sum[c] + job->reaction_sum[c];
-  json_vec3(js, "applied_load_sum", job->load_sum);
-  json_vec3(js, "reaction_sum", job->reaction_sum);
+  for (int c = 0; c < 3; c++) imbalance[c] = prob->load_sum[c] + prob->reaction_sum[c];
+  json_vec3(js, "applied_load_sum", prob->load_sum);
+  json_vec3(js, "reaction_sum", prob->reaction_sum);
   json_vec3(js, "equilibrium_imbalance", imbalance);
-  if (job->dyn.done) cupid_app_dynamic_json(js, job);
-  cupid_json_number(js, "total_time_s", cupid_wtime() - job->t_start);
+  if (prob->dyn.done) cupid_problem_dynamic_json(js, prob);
+  cupid_json_number(js, "total_time_s", cupid_wtime() - prob->t_start);
   cupid_json_integer(js, "peak_memory_bytes", cupid_peak_memory());
-  CUPID_TRY(json_points(js, job));
+  CUPID_TRY(json_points(js, prob));
   cupid_json_end_object(js);
   CUPID_TRY(cupid_json_status(js));
   cupid_json_destroy(&js);
@@ -282,39 +282,42 @@ cleanup:
   return st;
 }
 
-int cupid_app_needs_stress(const cupid_job *job) {
-  const cupid_output *o = &job->model->output;
+int cupid_problem_needs_stress(const cupid_problem_state *prob) {
+  const cupid_output *o = &prob->model->output;
   if (o->vtu) return 1;
   for (int k = 0; k < o->n_points; k++)
     if (o->points[k].stress) return 1;
   return 0;
 }
 
-cupid_status cupid_app_write_outputs(cupid_job *job) {
-  const cupid_output *o = &job->model->output;
-  double t0 = cupid_wtime();
-  CUPID_CALL(cupid_mkdir_p(job->outdir));
-  if (job->grid && !job->pd_stress && cupid_app_needs_stress(job)) {
-    CUPID_CALL(cupid_calloc((size_t)(6 * job->n_pd), sizeof(double), "PD stresses", &job->pd_stress));
-    CUPID_CALL(cupid_pd_operator_stress(job->op, job->u, job->pd_stress));
-  }
-  for (int k = 0; k < o->n_lines; k++) CUPID_CALL(write_line(job, &o->lines[k]));
-  if (o->pd_nodes && job->grid) CUPID_CALL(write_pd_nodes(job));
-  /* dynamic runs wrote their VTU time series (src/app/dynamic.c) */
-  if (o->vtu && job->model->analysis.type != CUPID_ANALYSIS_DYNAMIC) CUPID_CALL(write_vtu(job));
-  /* The output phase is recorded before summary.json so that the file reports it. */
-  cupid_job_phase_end(job, CUPID_PHASE_OUTPUT, t0);
-  return write_summary(job);
+cupid_status cupid_problem_pd_stress(cupid_problem_state *prob) {
+  if (!prob->grid || prob->pd_stress || !prob->u) return CUPID_SUCCESS;
+  CUPID_CALL(cupid_calloc((size_t)(6 * prob->n_pd), sizeof(double), "PD stresses", &prob->pd_stress));
+  return cupid_pd_operator_stress(prob->op, prob->u, prob->pd_stress);
 }
 
-cupid_status cupid_app_check_points(const cupid_job *job) {
-  const cupid_output *o = &job->model->output;
+cupid_status cupid_problem_report(cupid_problem_state *prob) {
+  const cupid_output *o = &prob->model->output;
+  double t0 = cupid_wtime();
+  CUPID_CALL(cupid_mkdir_p(prob->outdir));
+  if (cupid_problem_needs_stress(prob)) CUPID_CALL(cupid_problem_pd_stress(prob));
+  for (int k = 0; k < o->n_lines; k++) CUPID_CALL(write_line(prob, &o->lines[k]));
+  if (o->pd_nodes && prob->grid) CUPID_CALL(write_pd_nodes(prob));
+  /* dynamic runs wrote their VTU time series (dynamic.c) */
+  if (o->vtu && prob->model->analysis.type != CUPID_ANALYSIS_DYNAMIC) CUPID_CALL(write_vtu(prob));
+  /* The output phase is recorded before summary.json so that the file reports it. */
+  cupid_problem_phase_end(prob, CUPID_PHASE_OUTPUT, t0);
+  return write_summary(prob);
+}
+
+cupid_status cupid_problem_check_points(const cupid_problem_state *prob) {
+  const cupid_output *o = &prob->model->output;
   for (int k = 0; k < o->n_points; k++) {
     double u[3];
     cupid_region_kind region;
-    CUPID_CALL(cupid_app_sample(job, o->points[k].at, u, NULL, &region));
+    CUPID_CALL(cupid_problem_sample_point(prob, o->points[k].at, u, NULL, &region));
     if (region == CUPID_REGION_NONE)
-      return cupid_model_error(job->model, &o->points[k].mark,
+      return cupid_model_error(prob->model, &o->points[k].mark,
                                "the point (%g, %g, %g) lies outside the model",
                                o->points[k].at[0], o->points[k].at[1], o->points[k].at[2]);
   }
@@ -326,10 +329,10 @@ cupid_status cupid_app_check_points(const cupid_job *job) {
     for (int i = 0; i < line->points && region == CUPID_REGION_NONE; i++) {
       double t = line->points > 1 ? (double)i / (line->points - 1) : 0.0, p[3], u[3];
       for (int a = 0; a < 3; a++) p[a] = line->from[a] + t * (line->to[a] - line->from[a]);
-      CUPID_CALL(cupid_app_sample(job, p, u, NULL, &region));
+      CUPID_CALL(cupid_problem_sample_point(prob, p, u, NULL, &region));
     }
     if (region == CUPID_REGION_NONE)
-      return cupid_model_error(job->model, &line->mark,
+      return cupid_model_error(prob->model, &line->mark,
                                "the line from (%g, %g, %g) to (%g, %g, %g) lies outside the model "
                                "(none of its %d points is inside)",
                                line->from[0], line->from[1], line->from[2], line->to[0],

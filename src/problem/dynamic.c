@@ -4,7 +4,7 @@
  * model.pvd with their times, PNG plots, and a "dynamic" block in summary.json.
  *
  * FE-only and PD-only models. The global system uses the [3 per PD node | FE DOFs] layout of
- * the job, so a coupled model only needs its coupling terms in K (and, for Arlequin, the
+ * the prob, so a coupled model only needs its coupling terms in K (and, for Arlequin, the
  * weighted masses: coupled_arlequin.c; for Lagrange, the tied PD nodes' mass moved onto the
  * beam through the tie, and outputs that see the tied nodes recovered) before
  * cupid_dynamics_run(). */
@@ -12,14 +12,14 @@
 #include <stdio.h>
 #include <string.h>
 
-#include "app_internal.h"
-#include "coupled_arlequin.h"
+#include "problem_internal.h"
+#include "method.h"
 #include "cupid/dynamics.h"
 #include "cupid/io.h"
 
 /* The state of the output during a run. */
 typedef struct {
-  cupid_job *job;
+  cupid_problem_state *prob;
   cupid_atomic_file history, energies;
   char (*files)[64];
   double *times;
@@ -29,16 +29,16 @@ typedef struct {
   double *u_view;   /* Lagrange: u with the tied PD nodes recovered from the beam (outputs) */
 } dyn_output;
 
-static cupid_status out_path(const cupid_job *job, const char *name, char *path, size_t len) {
-  int n = snprintf(path, len, "%s/%s", job->outdir, name);
-  CUPID_CHECK(n > 0 && (size_t)n < len, CUPID_ERR_IO, "output path too long: %s/%s", job->outdir,
+static cupid_status out_path(const cupid_problem_state *prob, const char *name, char *path, size_t len) {
+  int n = snprintf(path, len, "%s/%s", prob->outdir, name);
+  CUPID_CHECK(n > 0 && (size_t)n < len, CUPID_ERR_IO, "output path too long: %s/%s", prob->outdir,
               name);
   return CUPID_SUCCESS;
 }
 
 /* Every material used by the model needs a density. */
-static cupid_status check_density(const cupid_job *job) {
-  const cupid_model_t *m = job->model;
+static cupid_status check_density(const cupid_problem_state *prob) {
+  const cupid_model_t *m = prob->model;
   const cupid_dynamic *d = &m->analysis.dynamic;
   for (int k = 0; k < m->n_materials; k++) {
     int used = 0;
@@ -96,94 +96,9 @@ static cupid_status check_time_independent(const cupid_model_t *m) {
   return CUPID_SUCCESS;
 }
 
-cupid_status cupid_app_dynamic_check(const cupid_job *job) {
-  const cupid_model_t *m = job->model;
-  if (m->has_beam && m->has_peridynamics && !cupid_app_is_arlequin(job) &&
-      m->coupling.method != CUPID_COUPLING_LAGRANGE)
-    return cupid_model_error(m, &m->analysis.dynamic.mark,
-                             "type dynamic of coupled beam + peridynamics models is not yet "
-                             "supported by cupid %s with the fictitious-node method (FE-only, "
-                             "PD-only, Lagrange and Arlequin models are)",
-                             cupid_version());
-  CUPID_CALL(check_time_independent(m));
-  return check_density(job);
-}
-
-/* 1 if the model is beam + PD coupled by Lagrange multipliers (eliminated: the tied PD nodes
- * are fixed in the system and follow the beam). */
-static int is_lagrange(const cupid_job *job) {
-  return job->beam && job->grid && job->coupling && !cupid_app_is_arlequin(job) &&
-         job->model->coupling.method == CUPID_COUPLING_LAGRANGE;
-}
-
-/* Lagrange: the tied PD nodes' rho V leaves the PD diagonal and goes to the beam DOFs through
- * the tie (T^T M T, cupid_coupling_lagrange_mass()), so that the eliminated system's mass is
- * consistent with its stiffness T^T K T. */
-static cupid_status lagrange_mass(cupid_job *job, cupid_csr M, double *m_lumped) {
-  cupid_status st = CUPID_SUCCESS;
-  double *pd_mass = NULL;
-  const cupid_int *tied;
-  cupid_int nt;
-  CUPID_TRY(cupid_malloc((size_t)job->n_pd + 1, sizeof *pd_mass, "PD masses", &pd_mass));
-  for (cupid_int i = 0; i < job->n_pd; i++) pd_mass[i] = m_lumped[3 * i];
-  cupid_coupling_tied(job->coupling, &tied, &nt);
-  for (cupid_int t = 0; t < nt; t++)
-    for (int c = 0; c < 3; c++) m_lumped[3 * tied[t] + c] = 0.0;
-  CUPID_TRY(cupid_coupling_lagrange_mass(job->coupling, pd_mass, M, M ? NULL : m_lumped));
-cleanup:
-  cupid_free(&pd_mass);
-  return st;
-}
-
-/* PD nodal mass rho V (every component), FE consistent matrix or HRZ diagonal. With both PD
- * and FE (a coupled layout) and a consistent FE mass, M takes K's global pattern: the beam's
- * mass at its DOF offset and rho V on the PD diagonal (Arlequin weights are the coupling's;
- * Lagrange moves the tied nodes' mass onto the beam). */
-static cupid_status build_mass(cupid_job *job, cupid_csr *M, double **m_lumped) {
-  const cupid_model_t *m = job->model;
-  if (cupid_app_is_arlequin(job)) return cupid_app_arlequin_mass(job, M, m_lumped); /* Eq. 14 */
-  int lumped = m->analysis.dynamic.lumped_mass || !job->beam;
-  CUPID_CALL(cupid_calloc((size_t)job->ndof, sizeof(double), "lumped mass", m_lumped));
-  if (job->grid) {
-    const int *mat = cupid_pd_grid_materials(job->grid);
-    double vol = cupid_pd_grid_cell_volume(job->grid);
-    for (cupid_int i = 0; i < job->n_pd; i++)
-      for (int c = 0; c < 3; c++) (*m_lumped)[3 * i + c] = m->materials[mat[i]].density * vol;
-  }
-  if (lumped) {
-    if (job->beam) CUPID_CALL(cupid_cuf_mass_lumped(job->beam, *m_lumped));
-    if (is_lagrange(job)) CUPID_CALL(lagrange_mass(job, NULL, *m_lumped));
-    return CUPID_SUCCESS;
-  }
-  if (is_lagrange(job)) { /* before the PD diagonal goes in: the tied entries are zeroed */
-    CUPID_CALL(cupid_csr_duplicate(job->K, M));
-    cupid_csr_zero(*M);
-    CUPID_CALL(cupid_cuf_mass_add(job->beam, *M));
-    CUPID_CALL(lagrange_mass(job, *M, *m_lumped));
-    for (cupid_int i = 0; i < job->n_pd; i++) {
-      double *blk = cupid_csr_find(*M, i, i);
-      CUPID_CHECK(blk, CUPID_ERR_INTERNAL, "the stiffness lacks the diagonal block of PD node %lld",
-                  (long long)i);
-      for (int c = 0; c < 3; c++) blk[4 * c] += (*m_lumped)[3 * i + c];
-    }
-    cupid_free(m_lumped);
-    return CUPID_SUCCESS;
-  }
-  if (!job->grid) {
-    CUPID_CALL(cupid_cuf_mass_assemble(job->beam, M));
-  } else {
-    CUPID_CALL(cupid_csr_duplicate(job->K, M));
-    cupid_csr_zero(*M);
-    CUPID_CALL(cupid_cuf_mass_add(job->beam, *M));
-    for (cupid_int i = 0; i < job->n_pd; i++) {
-      double *blk = cupid_csr_find(*M, i, i);
-      CUPID_CHECK(blk, CUPID_ERR_INTERNAL, "the stiffness lacks the diagonal block of PD node %lld",
-                  (long long)i);
-      for (int c = 0; c < 3; c++) blk[4 * c] += (*m_lumped)[3 * i + c];
-    }
-  }
-  cupid_free(m_lumped);
-  return CUPID_SUCCESS;
+cupid_status cupid_problem_dynamic_check(const cupid_problem_state *prob) {
+  CUPID_CALL(check_time_independent(prob->model));
+  return check_density(prob);
 }
 
 static void field_of_values(void *ctx, const double p[3], double density, double out[3]) {
@@ -192,41 +107,41 @@ static void field_of_values(void *ctx, const double p[3], double density, double
 }
 
 /* u0, v0 from the model's expressions (PD: nodal values; FE: cupid_cuf_interpolate). */
-static cupid_status initial_state(cupid_job *job, double *v) {
-  const cupid_model_t *m = job->model;
+static cupid_status initial_state(cupid_problem_state *prob, double *v) {
+  const cupid_model_t *m = prob->model;
   const cupid_dynamic *d = &m->analysis.dynamic;
-  if (job->grid) {
-    const double *x = cupid_pd_grid_coords(job->grid);
-    const int *mat = cupid_pd_grid_materials(job->grid);
-    for (cupid_int i = 0; i < job->n_pd; i++) {
+  if (prob->grid) {
+    const double *x = cupid_pd_grid_coords(prob->grid);
+    const int *mat = cupid_pd_grid_materials(prob->grid);
+    for (cupid_int i = 0; i < prob->n_pd; i++) {
       const double *p = x + 3 * i;
       double rho = m->materials[mat[i]].density;
       for (int c = 0; c < 3; c++) {
-        job->u[3 * i + c] = cupid_value_eval(&d->initial_displacement[c], p[0], p[1], p[2], 0, rho);
+        prob->u[3 * i + c] = cupid_value_eval(&d->initial_displacement[c], p[0], p[1], p[2], 0, rho);
         v[3 * i + c] = cupid_value_eval(&d->initial_velocity[c], p[0], p[1], p[2], 0, rho);
       }
     }
   }
-  if (job->beam) {
-    CUPID_CALL(cupid_cuf_interpolate(job->beam, field_of_values, (void *)d->initial_displacement,
-                                     job->u));
-    CUPID_CALL(cupid_cuf_interpolate(job->beam, field_of_values, (void *)d->initial_velocity, v));
+  if (prob->beam) {
+    CUPID_CALL(cupid_cuf_interpolate(prob->beam, field_of_values, (void *)d->initial_displacement,
+                                     prob->u));
+    CUPID_CALL(cupid_cuf_interpolate(prob->beam, field_of_values, (void *)d->initial_velocity, v));
   }
   return CUPID_SUCCESS;
 }
 
 /* PD nodes as VTK vertices with displacement and velocity. */
 static cupid_status write_pd_step(dyn_output *o, const char *path, const double *v) {
-  cupid_job *job = o->job;
+  cupid_problem_state *prob = o->prob;
   cupid_status st = CUPID_SUCCESS;
-  cupid_int n = job->n_pd, *conn = NULL, *offs = NULL;
+  cupid_int n = prob->n_pd, *conn = NULL, *offs = NULL;
   unsigned char *types = NULL;
   CUPID_TRY(cupid_malloc((size_t)n, sizeof *conn, "VTU connectivity", &conn));
   CUPID_TRY(cupid_malloc((size_t)n, sizeof *offs, "VTU offsets", &offs));
   CUPID_TRY(cupid_malloc((size_t)n, sizeof *types, "VTU cell types", &types));
   for (cupid_int i = 0; i < n; i++) conn[i] = i, offs[i] = i + 1, types[i] = CUPID_VTK_VERTEX;
-  cupid_vtu_array pdata[2] = {{"displacement", 3, job->u}, {"velocity", 3, v}};
-  cupid_vtu_mesh mesh = {.n_points = n, .points = cupid_pd_grid_coords(job->grid), .n_cells = n,
+  cupid_vtu_array pdata[2] = {{"displacement", 3, prob->u}, {"velocity", 3, v}};
+  cupid_vtu_mesh mesh = {.n_points = n, .points = cupid_pd_grid_coords(prob->grid), .n_cells = n,
                          .connectivity = conn, .offsets = offs, .types = types,
                          .point_data = pdata, .n_point_data = 2};
   CUPID_TRY(cupid_vtu_write(path, &mesh));
@@ -238,12 +153,12 @@ cleanup:
 }
 
 static cupid_status write_vtu_step(dyn_output *o, cupid_int step, double t, const double *v) {
-  cupid_job *job = o->job;
+  cupid_problem_state *prob = o->prob;
   char name[64], path[4096];
-  snprintf(name, sizeof name, "%s_%06lld.vtu", job->grid ? "pd" : "beam", (long long)step);
-  CUPID_CALL(out_path(job, name, path, sizeof path));
-  if (job->grid) CUPID_CALL(write_pd_step(o, path, v));
-  else CUPID_CALL(cupid_app_fe_write_vtu(job, path));
+  snprintf(name, sizeof name, "%s_%06lld.vtu", prob->grid ? "pd" : "beam", (long long)step);
+  CUPID_CALL(out_path(prob, name, path, sizeof path));
+  if (prob->grid) CUPID_CALL(write_pd_step(o, path, v));
+  else CUPID_CALL(cupid_problem_fe_write_vtu(prob, path));
   if (o->n_files == o->cap_files) {
     int cap = o->cap_files ? 2 * o->cap_files : 64;
     char(*files)[64] = NULL;
@@ -269,13 +184,13 @@ static cupid_status write_vtu_step(dyn_output *o, cupid_int step, double t, cons
 }
 
 static cupid_status history_row(dyn_output *o, double t) {
-  const cupid_output *out = &o->job->model->output;
+  const cupid_output *out = &o->prob->model->output;
   FILE *f = cupid_atomic_stream(o->history);
   fprintf(f, "%.10e", t);
   for (int k = 0; k < out->n_points; k++) {
     double u[3];
     cupid_region_kind region;
-    CUPID_CALL(cupid_app_sample(o->job, out->points[k].at, u, NULL, &region));
+    CUPID_CALL(cupid_problem_sample_point(o->prob, out->points[k].at, u, NULL, &region));
     fprintf(f, ",%.10e,%.10e,%.10e", u[0], u[1], u[2]);
   }
   fputc('\n', f);
@@ -289,14 +204,14 @@ static cupid_status monitor(void *ctx, cupid_int step, double t, int output, con
                             const double *v, const double *a, const cupid_dynamics_energy *e) {
   (void)a;
   dyn_output *o = ctx;
-  double *u_run = o->job->u;
+  double *u_run = o->prob->u;
   if (o->u_view) { /* outputs see the tied nodes following the beam (they are fixed in u) */
-    memcpy(o->u_view, u, sizeof *u * (size_t)o->job->ndof);
-    cupid_coupling_recover(o->job->coupling, o->u_view);
-    o->job->u = o->u_view;
+    memcpy(o->u_view, u, sizeof *u * (size_t)o->prob->ndof);
+    o->prob->method->recover(o->prob, o->u_view);
+    o->prob->u = o->u_view;
   }
   cupid_status st = monitor_outputs(o, step, t, output, v, e);
-  o->job->u = u_run;
+  o->prob->u = u_run;
   return st;
 }
 
@@ -308,25 +223,25 @@ static cupid_status monitor_outputs(dyn_output *o, cupid_int step, double t, int
   fprintf(cupid_atomic_stream(o->energies), "%.10e,%lld,%.10e,%.10e,%.10e,%.10e,%.10e,%.10e\n", t,
           (long long)step, e->kinetic, e->strain, e->damping, e->external,
           e->kinetic + e->strain + e->damping - e->external, e->balance);
-  if (o->job->model->output.vtu) CUPID_CALL(write_vtu_step(o, step, t, v));
-  o->job->dyn.energy = *e;
-  if (step > 0 && step % (o->job->dyn.steps / 10 > 0 ? o->job->dyn.steps / 10 : 1) == 0)
-    cupid_job_progress(o->job, "dynamics: step %lld / %lld, t = %.4g", (long long)step,
-                       (long long)o->job->dyn.steps, t);
+  if (o->prob->model->output.vtu) CUPID_CALL(write_vtu_step(o, step, t, v));
+  o->prob->dyn.energy = *e;
+  if (step > 0 && step % (o->prob->dyn.steps / 10 > 0 ? o->prob->dyn.steps / 10 : 1) == 0)
+    cupid_problem_progress(o->prob, "dynamics: step %lld / %lld, t = %.4g", (long long)step,
+                       (long long)o->prob->dyn.steps, t);
   return CUPID_SUCCESS;
 }
 
 static cupid_status open_outputs(dyn_output *o) {
-  cupid_job *job = o->job;
-  const cupid_output *out = &job->model->output;
+  cupid_problem_state *prob = o->prob;
+  const cupid_output *out = &prob->model->output;
   char path[4096];
-  CUPID_CALL(cupid_mkdir_p(job->outdir));
-  CUPID_CALL(out_path(job, "energies.csv", path, sizeof path));
+  CUPID_CALL(cupid_mkdir_p(prob->outdir));
+  CUPID_CALL(out_path(prob, "energies.csv", path, sizeof path));
   CUPID_CALL(cupid_atomic_open(path, &o->energies));
   fprintf(cupid_atomic_stream(o->energies),
           "t,step,kinetic,strain,damping_dissipated,external_work,total,balance\n");
   if (out->n_points == 0) return CUPID_SUCCESS;
-  CUPID_CALL(out_path(job, "history.csv", path, sizeof path));
+  CUPID_CALL(out_path(prob, "history.csv", path, sizeof path));
   CUPID_CALL(cupid_atomic_open(path, &o->history));
   FILE *f = cupid_atomic_stream(o->history);
   fprintf(f, "t");
@@ -337,9 +252,9 @@ static cupid_status open_outputs(dyn_output *o) {
   return CUPID_SUCCESS;
 }
 
-static cupid_status plots(const cupid_job *job) {
-  const cupid_output *out = &job->model->output;
-  const char *title = job->model->title[0] ? job->model->title : "cupid";
+static cupid_status plots(const cupid_problem_state *prob) {
+  const cupid_output *out = &prob->model->output;
+  const char *title = prob->model->title[0] ? prob->model->title : "cupid";
   char t[600];
   int made = 0;
   cupid_plot_curve ec[5];
@@ -348,7 +263,7 @@ static cupid_status plots(const cupid_job *job) {
     ec[k] = (cupid_plot_curve){.csv = "energies.csv", .xname = "t", .yname = enames[k],
                                .title = enames[k]};
   snprintf(t, sizeof t, "%s: energies", title);
-  CUPID_CALL(cupid_plot(job->outdir, "energies", t, "t", "energy", 5, ec, &made));
+  CUPID_CALL(cupid_plot(prob->outdir, "energies", t, "t", "energy", 5, ec, &made));
   for (int k = 0; k < out->n_points; k++) {
     char stem[512], cols[3][200];
     cupid_plot_curve hc[3];
@@ -359,13 +274,13 @@ static cupid_status plots(const cupid_job *job) {
     }
     snprintf(stem, sizeof stem, "history_%s", out->points[k].name);
     snprintf(t, sizeof t, "%s: displacement history at '%s'", title, out->points[k].name);
-    CUPID_CALL(cupid_plot(job->outdir, stem, t, "t", "displacement", 3, hc, &made));
+    CUPID_CALL(cupid_plot(prob->outdir, stem, t, "t", "displacement", 3, hc, &made));
   }
   return CUPID_SUCCESS;
 }
 
 static cupid_status finish_outputs(dyn_output *o) {
-  cupid_job *job = o->job;
+  cupid_problem_state *prob = o->prob;
   char path[4096];
   if (o->history) CUPID_CALL(cupid_atomic_commit(&o->history));
   CUPID_CALL(cupid_atomic_commit(&o->energies));
@@ -373,44 +288,27 @@ static cupid_status finish_outputs(dyn_output *o) {
     const char **names = NULL;
     CUPID_CALL(cupid_calloc((size_t)o->n_files, sizeof *names, "PVD names", &names));
     for (int k = 0; k < o->n_files; k++) names[k] = o->files[k];
-    cupid_status st = out_path(job, "model.pvd", path, sizeof path);
+    cupid_status st = out_path(prob, "model.pvd", path, sizeof path);
     if (st == CUPID_SUCCESS) st = cupid_pvd_write(path, o->n_files, names, o->times, NULL);
     cupid_free(&names);
     CUPID_CALL(st);
   }
-  if (job->model->output.plots) CUPID_CALL(plots(job));
+  if (prob->model->output.plots) CUPID_CALL(plots(prob));
   return CUPID_SUCCESS;
 }
 
-/* Central differences run on a matrix-free operator (issue 6): PD-only models on the PD
- * operator, coupled models on the one they set in job->k_apply (Arlequin with a lumped mass).
- * No assembled K, no factor, memory O(nodes), so the direct-solver memory estimate does not
- * apply. */
-static int matrix_free(const cupid_job *job) {
-  if (job->model->analysis.dynamic.integrator != CUPID_INTEGRATOR_CENTRAL || job->K) return 0;
-  return job->k_apply || (job->grid && !job->beam);
-}
-
-static cupid_status pd_apply(void *op, const double *x, double *y) {
-  return cupid_pd_operator_apply(op, x, y);
-}
-
-cupid_status cupid_app_run_dynamic(cupid_job *job) {
-  const cupid_model_t *m = job->model;
+cupid_status cupid_problem_run_dynamic(cupid_problem_state *prob, const cupid_method_operator *op) {
+  const cupid_model_t *m = prob->model;
   const cupid_dynamic *d = &m->analysis.dynamic;
   cupid_status st = CUPID_SUCCESS;
   cupid_csr M = NULL;
   double *m_lumped = NULL, *v = NULL, t0 = cupid_wtime();
-  dyn_output o = {.job = job};
-  const int mf = matrix_free(job);
-  if (!mf) CUPID_TRY(cupid_app_estimate(job, 0));
-  /* A coupled pipeline assembles its global K (with the coupling terms) before calling. */
-  if (!job->K && job->grid && !mf) CUPID_TRY(cupid_pd_operator_assemble(job->op, &job->K));
-  else if (!job->K && !mf) CUPID_TRY(cupid_cuf_assemble(job->beam, &job->K));
-  CUPID_TRY(build_mass(job, &M, &m_lumped));
-  cupid_job_phase_end(job, CUPID_PHASE_ASSEMBLY, t0);
-  CUPID_TRY(cupid_calloc((size_t)job->ndof, sizeof *v, "velocities", &v));
-  CUPID_TRY(initial_state(job, v));
+  dyn_output o = {.prob = prob};
+  const int mf = op != NULL;
+  CUPID_TRY(prob->method->mass(prob, &M, &m_lumped));
+  cupid_problem_phase_end(prob, CUPID_PHASE_ASSEMBLY, t0);
+  CUPID_TRY(cupid_calloc((size_t)prob->ndof, sizeof *v, "velocities", &v));
+  CUPID_TRY(initial_state(prob, v));
 
   cupid_dynamics_options opt = cupid_dynamics_defaults();
   opt.integrator = d->integrator;
@@ -422,44 +320,44 @@ cupid_status cupid_app_run_dynamic(cupid_job *job) {
   opt.gamma = d->newmark_gamma;
   opt.rayleigh_mass = d->rayleigh_mass;
   opt.rayleigh_stiffness = d->rayleigh_stiffness;
-  job->dyn.steps = opt.steps;
-  job->dyn.lumped = m_lumped != NULL;
-  job->dyn.matrix_free = mf;
-  cupid_dynamics_system sys = {.K = job->K, .M = M, .m_lumped = m_lumped, .bc = job->bc,
-                               .f = job->f_ext};
-  if (is_lagrange(job))
-    CUPID_TRY(cupid_malloc((size_t)job->ndof, sizeof *o.u_view, "recovered displacements",
+  prob->dyn.steps = opt.steps;
+  prob->dyn.lumped = m_lumped != NULL;
+  prob->dyn.matrix_free = mf;
+  cupid_dynamics_system sys = {.K = prob->K, .M = M, .m_lumped = m_lumped, .bc = prob->bc,
+                               .f = prob->f_ext};
+  if (prob->method->recover)
+    CUPID_TRY(cupid_malloc((size_t)prob->ndof, sizeof *o.u_view, "recovered displacements",
                            &o.u_view));
   CUPID_TRY(open_outputs(&o));
-  cupid_job_progress(job, "dynamics: %s, %lld steps of %g, %s mass",
+  cupid_problem_progress(prob, "dynamics: %s, %lld steps of %g, %s mass",
                      d->integrator == CUPID_INTEGRATOR_NEWMARK ? "newmark" : "central",
                      (long long)opt.steps, opt.dt, m_lumped ? "lumped" : "consistent");
   t0 = cupid_wtime();
-  cupid_dynamics_explicit_system esys = {.n = job->ndof,
-                                         .apply = job->k_apply ? job->k_apply : pd_apply,
-                                         .ctx = job->k_apply ? job->k_ctx : (void *)job->op,
-                                         .m_lumped = m_lumped, .bc = job->bc, .f = job->f_ext};
-  st = mf ? cupid_dynamics_run_explicit(&esys, &opt, job->u, v, monitor, &o, &job->dyn.info)
-          : cupid_dynamics_run(&sys, &opt, job->u, v, monitor, &o, &job->dyn.info);
+  cupid_dynamics_explicit_system esys = {.n = prob->ndof,
+                                         .apply = mf ? op->apply : NULL,
+                                         .ctx = mf ? op->ctx : NULL,
+                                         .m_lumped = m_lumped, .bc = prob->bc, .f = prob->f_ext};
+  st = mf ? cupid_dynamics_run_explicit(&esys, &opt, prob->u, v, monitor, &o, &prob->dyn.info)
+          : cupid_dynamics_run(&sys, &opt, prob->u, v, monitor, &o, &prob->dyn.info);
   if (st == CUPID_ERR_ARGUMENT && d->integrator == CUPID_INTEGRATOR_CENTRAL &&
-      job->dyn.info.dt_critical > 0 && d->dt > job->dyn.info.dt_critical)
+      prob->dyn.info.dt_critical > 0 && d->dt > prob->dyn.info.dt_critical)
     st = cupid_model_error(m, &d->mark, "%s", cupid_error_message());
   CUPID_TRY(st);
-  job->phases[CUPID_PHASE_FACTORISATION] =
-      (cupid_phase_record){job->dyn.info.factor.time_factor, cupid_peak_memory(), 1};
-  job->phases[CUPID_PHASE_SOLVE] = (cupid_phase_record){cupid_wtime() - t0, cupid_peak_memory(), 1};
+  prob->phases[CUPID_PHASE_FACTORISATION] =
+      (cupid_phase_record){prob->dyn.info.factor.time_factor, cupid_peak_memory(), 1};
+  prob->phases[CUPID_PHASE_SOLVE] = (cupid_phase_record){cupid_wtime() - t0, cupid_peak_memory(), 1};
   if (d->integrator == CUPID_INTEGRATOR_NEWMARK) {
-    job->solve = job->dyn.info.factor;
-    job->solved = 1;
+    prob->solve = prob->dyn.info.factor;
+    prob->solved = 1;
   }
-  if (mf) CUPID_TRY(esys.apply(esys.ctx, job->u, job->f_int));
-  else cupid_csr_matvec(job->K, job->u, job->f_int);
+  if (mf) CUPID_TRY(esys.apply(esys.ctx, prob->u, prob->f_int));
+  else cupid_csr_matvec(prob->K, prob->u, prob->f_int);
   t0 = cupid_wtime();
   CUPID_TRY(finish_outputs(&o));
-  cupid_job_phase_end(job, CUPID_PHASE_OUTPUT, t0);
-  job->dyn.done = 1;
-  cupid_job_progress(job, "dynamics: done, %lld output steps, energy balance %.2e (relative)",
-                     (long long)o.out_count, job->dyn.info.max_balance);
+  cupid_problem_phase_end(prob, CUPID_PHASE_OUTPUT, t0);
+  prob->dyn.done = 1;
+  cupid_problem_progress(prob, "dynamics: done, %lld output steps, energy balance %.2e (relative)",
+                     (long long)o.out_count, prob->dyn.info.max_balance);
 cleanup:
   cupid_atomic_abort(&o.history);
   cupid_atomic_abort(&o.energies);
@@ -472,18 +370,18 @@ cleanup:
   return st;
 }
 
-void cupid_app_dynamic_json(cupid_json js, const cupid_job *job) {
-  const cupid_dynamic *d = &job->model->analysis.dynamic;
-  const cupid_dynamics_info *in = &job->dyn.info;
+void cupid_problem_dynamic_json(cupid_json js, const cupid_problem_state *prob) {
+  const cupid_dynamic *d = &prob->model->analysis.dynamic;
+  const cupid_dynamics_info *in = &prob->dyn.info;
   cupid_json_begin_object(js, "dynamic");
   int nm = d->integrator == CUPID_INTEGRATOR_NEWMARK;
   cupid_json_string(js, "integrator", nm ? "newmark" : "central");
   cupid_json_number(js, "dt", d->dt);
-  cupid_json_integer(js, "steps", job->dyn.steps);
-  cupid_json_number(js, "duration", d->dt * (double)job->dyn.steps);
+  cupid_json_integer(js, "steps", prob->dyn.steps);
+  cupid_json_number(js, "duration", d->dt * (double)prob->dyn.steps);
   cupid_json_integer(js, "every", d->every);
-  cupid_json_string(js, "mass", job->dyn.lumped ? "lumped" : "consistent");
-  cupid_json_string(js, "operator", job->dyn.matrix_free ? "matrix-free" : "assembled");
+  cupid_json_string(js, "mass", prob->dyn.lumped ? "lumped" : "consistent");
+  cupid_json_string(js, "operator", prob->dyn.matrix_free ? "matrix-free" : "assembled");
   if (nm) {
     cupid_json_number(js, "newmark_beta", d->newmark_beta);
     cupid_json_number(js, "newmark_gamma", d->newmark_gamma);
@@ -496,10 +394,10 @@ void cupid_app_dynamic_json(cupid_json js, const cupid_job *job) {
   cupid_json_number(js, "rayleigh_stiffness", d->rayleigh_stiffness);
   cupid_json_number(js, "time_stepping_s", in->time_step_s);
   cupid_json_begin_object(js, "final_energy");
-  cupid_json_number(js, "kinetic", job->dyn.energy.kinetic);
-  cupid_json_number(js, "strain", job->dyn.energy.strain);
-  cupid_json_number(js, "damping_dissipated", job->dyn.energy.damping);
-  cupid_json_number(js, "external_work", job->dyn.energy.external);
+  cupid_json_number(js, "kinetic", prob->dyn.energy.kinetic);
+  cupid_json_number(js, "strain", prob->dyn.energy.strain);
+  cupid_json_number(js, "damping_dissipated", prob->dyn.energy.damping);
+  cupid_json_number(js, "external_work", prob->dyn.energy.external);
   cupid_json_end_object(js);
   cupid_json_number(js, "max_energy_balance_relative", in->max_balance);
   cupid_json_end_object(js);

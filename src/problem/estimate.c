@@ -12,9 +12,10 @@
  * time of the bond-based fit. An estimate to decide what fits, not a promise. */
 #include <math.h>
 #include <stdio.h>
+#include <string.h>
 #include <unistd.h>
 
-#include "app_internal.h"
+#include "method.h"
 
 typedef struct {
   double matrix_blocks, matrix_bytes;
@@ -23,6 +24,7 @@ typedef struct {
   /* The PETSc path (docs/scale.md): bytes per rank with one rank, seconds of setup + solve. */
   int iterative_matrix_free;
   double iterative_bytes, iterative_seconds;
+  const char *direct_name, *iterative_what;
 } cupid_estimate;
 
 /* UMFPACK's LU of the non-symmetric coupled matrix (paper 000 Eq. 38, with CHOLMOD's ordering,
@@ -58,10 +60,10 @@ static void estimate_sizes(const cupid_model_t *m, double n, double blocks, cupi
                    10.0 * ndof * 8.0;
 }
 
-static cupid_status estimate(const cupid_job *job, cupid_estimate *e) {
+static cupid_status estimate(const cupid_problem_state *prob, cupid_estimate *e) {
   cupid_pd_estimate pe;
-  CUPID_CALL(cupid_pd_operator_estimate(job->grid, &job->pd_options, &pe));
-  estimate_sizes(job->model, (double)job->n_pd, (double)pe.blocks, e);
+  CUPID_CALL(cupid_pd_operator_estimate(prob->grid, &prob->pd_options, &pe));
+  estimate_sizes(prob->model, (double)prob->n_pd, (double)pe.blocks, e);
   return CUPID_SUCCESS;
 }
 
@@ -72,14 +74,14 @@ static double physical_memory(void) {
 
 /* The beam's matrix: its exact pattern (cheap to build) and a banded-profile bound for the
  * factor, since the beam axis orders the DOFs into a band of a few elements' width. */
-static cupid_status estimate_fe(const cupid_job *job, cupid_estimate *e) {
+static cupid_status estimate_fe(const cupid_problem_state *prob, cupid_estimate *e) {
   cupid_int *rowptr = NULL, *col = NULL;
-  CUPID_CALL(cupid_cuf_pattern(job->beam, &rowptr, &col));
-  cupid_int nb = job->fe_info.n_fe_nodes;
+  CUPID_CALL(cupid_cuf_pattern(prob->beam, &rowptr, &col));
+  cupid_int nb = prob->fe_info.n_fe_nodes;
   double blocks = (double)rowptr[nb];
   cupid_free(&rowptr);
   cupid_free(&col);
-  double ndof = (double)job->n_fe_dofs, bw = 9.0 * blocks / ndof;
+  double ndof = (double)prob->n_fe_dofs, bw = 9.0 * blocks / ndof;
   e->matrix_blocks += blocks;
   e->matrix_bytes += blocks * 80.0 + 8.0 * (double)nb;
   e->factor_nnz += 2.0 * ndof * bw;
@@ -89,99 +91,80 @@ static cupid_status estimate_fe(const cupid_job *job, cupid_estimate *e) {
   return CUPID_SUCCESS;
 }
 
-double cupid_app_memory_limit(const cupid_job *job) {
-  return job->opts->max_memory_gb > 0 ? job->opts->max_memory_gb * 1e9 : 0.9 * physical_memory();
+double cupid_problem_memory_limit(const cupid_problem_state *prob) {
+  return prob->opts->max_memory_gb > 0 ? prob->opts->max_memory_gb * 1e9 : 0.9 * physical_memory();
 }
-#define memory_limit cupid_app_memory_limit
+#define memory_limit cupid_problem_memory_limit
 
-static int is_fictitious_coupled(const cupid_job *job) {
-  return cupid_app_is_coupled(job) && job->model->coupling.method == CUPID_COUPLING_FICTITIOUS;
+/* The direct engine factors a non-symmetric system (fictitious nodes, Eq. 38) by UMFPACK. */
+static int general_matrix(const cupid_problem_state *prob) {
+  return prob->method->matrix == CUPID_MATRIX_GENERAL;
 }
 
-/* The iterative path. Assembled (beam, coupled, 1D): cupid's K, PETSc's AIJ copy (12 B per
- * entry) and ~50% more for the preconditioner (GAMG hierarchy or ILU factors); per iteration
- * about one pass over the matrix at ~2 GB/s; 40 CG or 150 GMRES iterations. Matrix-free PD:
- * no K, a 19-block bond-based preconditioner matrix (x2.5 with its GAMG hierarchy and PETSc
- * copies), setup + ~32 CG iterations worth 25 operator products at ~1.5e7 bonds per second per
- * pass (LPS: two passes). Calibrated on the LPS cubes of docs/scale.md (100^3: 6.3 GB and 439 s
- * measured, 6.0 GB and 435 s estimated); an estimate, not a promise. */
-static void estimate_iterative(const cupid_job *job, cupid_estimate *e) {
-  double ndof = (double)job->ndof;
-  int free3d = job->grid && !job->beam && cupid_pd_grid_dimension(job->grid) == 3;
-  e->iterative_matrix_free = free3d;
-  if (free3d) {
-    double n = (double)job->n_pd, passes = job->model->pd.model == CUPID_PD_LPS ? 2.0 : 1.0;
-    e->iterative_bytes = 2.5 * 19.0 * 9.0 * 12.0 * n + 30.0 * ndof * 8.0;
-    e->iterative_seconds = 2.0 + 25.0 * passes * (double)job->n_bonds / 1.5e7 + 2e-5 * n;
-  } else if (is_fictitious_coupled(job) && job->model->analysis.type == CUPID_ANALYSIS_STATIC &&
-             job->grid && cupid_pd_grid_dimension(job->grid) == 3) {
-    /* Matrix-free Eq. 38 + MUMPS LU of the cheap twin, measured on cbeam_web200 (10^5 PD
-     * nodes: 4.3 GB, 115 s on a loaded machine; bench/README_coupled.md): ~1.6 kB a PD node
-     * for the operator and the cheap matrix, ~40 kB for its factor. */
-    e->iterative_matrix_free = 1;
-    e->iterative_bytes = 42e3 * (double)job->n_pd + 30.0 * ndof * 8.0;
-    e->iterative_seconds = 2.0 + 1.2e-3 * (double)job->n_pd;
-  } else if (cupid_app_is_coupled(job) && job->model->coupling.method == CUPID_COUPLING_ARLEQUIN &&
-             job->model->analysis.type == CUPID_ANALYSIS_STATIC) {
-    /* Matrix-free Arlequin + MUMPS Cholesky of the cheap twin, measured on the Arlequin
-     * C-beam and panel (12,000 / 6,400 / 51,200 PD nodes: 0.68 / 0.42 / 2.6 GB, 3.0 / 1.9 /
-     * 15 s): ~55 kB a PD node, most of it the twin's factor. */
-    e->iterative_matrix_free = 1;
-    e->iterative_bytes = 55e3 * (double)job->n_pd + 30.0 * ndof * 8.0;
-    e->iterative_seconds = 1.0 + 2.8e-4 * (double)job->n_pd;
-  } else {
-    double entries = 9.0 * e->matrix_blocks;
-    int general = is_fictitious_coupled(job);
-    e->iterative_bytes = e->matrix_bytes + 1.5 * 12.0 * entries + 30.0 * ndof * 8.0;
-    e->iterative_seconds = 1.0 + (general ? 150.0 : 40.0) * 12.0 * entries / 2e9 + 3.0 * 12.0 * entries / 2e9;
+/* The iterative path: the method's matrix-free estimate where it has one (method_*.c), else
+ * the assembled Krylov solve: cupid's K, PETSc's AIJ copy (12 B per entry) and ~50% more for
+ * the preconditioner (GAMG hierarchy or ILU factors); per iteration about one pass over the
+ * matrix at ~2 GB/s; 40 CG or 150 GMRES iterations. An estimate, not a promise. */
+static void estimate_iterative(const cupid_problem_state *prob, cupid_estimate *e) {
+  double ndof = (double)prob->ndof;
+  const char *what = NULL;
+  e->iterative_matrix_free = prob->method->estimate_matrix_free &&
+                             prob->method->estimate_matrix_free(prob, &e->iterative_bytes,
+                                                                &e->iterative_seconds, &what);
+  e->iterative_what = e->iterative_matrix_free ? what : "Krylov + AMG/ILU, assembled";
+  if (e->iterative_matrix_free) return;
+  double entries = 9.0 * e->matrix_blocks;
+  e->iterative_bytes = e->matrix_bytes + 1.5 * 12.0 * entries + 30.0 * ndof * 8.0;
+  e->iterative_seconds = 1.0 + (general_matrix(prob) ? 150.0 : 40.0) * 12.0 * entries / 2e9 +
+                         3.0 * 12.0 * entries / 2e9;
+}
+
+/* Both paths' figures (the direct one with UMFPACK's measured fill for a general matrix). */
+static cupid_status estimate_all(const cupid_problem_state *prob, cupid_estimate *e) {
+  memset(e, 0, sizeof *e);
+  if (prob->grid) CUPID_CALL(estimate(prob, e));
+  if (prob->beam) CUPID_CALL(estimate_fe(prob, e));
+  e->direct_name = "CHOLMOD";
+  if (general_matrix(prob)) { /* UMFPACK LU, measured above the CHOLMOD fit */
+    e->total_bytes += (CUPID_UMFPACK_FILL_FACTOR - 1.0) * e->factor_bytes;
+    e->factor_bytes *= CUPID_UMFPACK_FILL_FACTOR;
+    e->factor_nnz *= CUPID_UMFPACK_FILL_FACTOR;
+    e->factor_seconds *= CUPID_UMFPACK_TIME_FACTOR;
+    e->direct_name = "UMFPACK";
   }
-}
-
-int cupid_app_auto_picks_direct(const cupid_job *job, double bytes, double seconds) {
-  return bytes <= CUPID_AUTO_DIRECT_MEMORY_SHARE * memory_limit(job) &&
-         seconds <= CUPID_AUTO_DIRECT_SECONDS;
-}
-
-cupid_status cupid_app_direct_cost(const cupid_job *job, double *bytes, double *seconds) {
-  cupid_estimate e = {0};
-  if (job->grid) CUPID_CALL(estimate(job, &e));
-  if (job->beam) CUPID_CALL(estimate_fe(job, &e));
-  if (is_fictitious_coupled(job)) {
-    e.total_bytes += (CUPID_UMFPACK_FILL_FACTOR - 1.0) * e.factor_bytes;
-    e.factor_seconds *= CUPID_UMFPACK_TIME_FACTOR;
-  }
-  *bytes = e.total_bytes;
-  *seconds = e.factor_seconds;
+  estimate_iterative(prob, e);
   return CUPID_SUCCESS;
 }
 
-cupid_status cupid_app_estimate(const cupid_job *job, int print) {
-  cupid_estimate e = {0};
-  if (job->grid) CUPID_CALL(estimate(job, &e));
-  if (job->beam) CUPID_CALL(estimate_fe(job, &e));
-  const char *direct_name = "CHOLMOD";
-  if (is_fictitious_coupled(job)) { /* UMFPACK LU, measured above the CHOLMOD fit */
-    e.total_bytes += (CUPID_UMFPACK_FILL_FACTOR - 1.0) * e.factor_bytes;
-    e.factor_bytes *= CUPID_UMFPACK_FILL_FACTOR;
-    e.factor_nnz *= CUPID_UMFPACK_FILL_FACTOR;
-    e.factor_seconds *= CUPID_UMFPACK_TIME_FACTOR;
-    direct_name = "UMFPACK";
-  }
-  estimate_iterative(job, &e);
-  double limit = memory_limit(job);
-  int iterative = job->solver == CUPID_SOLVER_PETSC;
+cupid_status cupid_problem_costs(const cupid_problem_state *prob, cupid_solver_cost *direct,
+                                 cupid_solver_cost *iterative) {
+  cupid_estimate e;
+  CUPID_CALL(estimate_all(prob, &e));
+  *direct = (cupid_solver_cost){.bytes = e.total_bytes, .seconds = e.factor_seconds};
+  *iterative = (cupid_solver_cost){.bytes = e.iterative_bytes, .seconds = e.iterative_seconds};
+  snprintf(direct->what, sizeof direct->what, "%s", e.direct_name);
+  snprintf(iterative->what, sizeof iterative->what, "%s", e.iterative_what);
+  return CUPID_SUCCESS;
+}
+
+cupid_status cupid_problem_estimate(const cupid_problem_state *prob, int print) {
+  cupid_estimate e;
+  CUPID_CALL(estimate_all(prob, &e));
+  const char *direct_name = e.direct_name;
+  double limit = memory_limit(prob);
+  int iterative = prob->engine && prob->engine->iterative;
   if (print && cupid_petsc_rank() != 0) print = 0, iterative = -1; /* rank 0 prints */
   if (iterative < 0) return CUPID_SUCCESS;
   if (print) {
-    const cupid_model_t *m = job->model;
+    const cupid_model_t *m = prob->model;
     printf("model: %s%s%s\n", m->file, m->title[0] ? " - " : "", m->title);
-    if (job->beam)
+    if (prob->beam)
       printf("beam: %lld nodes, %lld FE nodes, %lld FE DOFs\n",
-             (long long)job->fe_info.n_beam_nodes, (long long)job->fe_info.n_fe_nodes,
-             (long long)job->n_fe_dofs);
-    if (job->grid)
-      printf("PD nodes: %lld\nbonds: %lld\n", (long long)job->n_pd, (long long)job->n_bonds);
-    printf("DOFs: %lld\n", (long long)job->ndof);
+             (long long)prob->fe_info.n_beam_nodes, (long long)prob->fe_info.n_fe_nodes,
+             (long long)prob->n_fe_dofs);
+    if (prob->grid)
+      printf("PD nodes: %lld\nbonds: %lld\n", (long long)prob->n_pd, (long long)prob->n_bonds);
+    printf("DOFs: %lld\n", (long long)prob->ndof);
     printf("stiffness matrix: about %.3g stored 3x3 blocks, %.3g GB\n", e.matrix_blocks,
            e.matrix_bytes / 1e9);
     printf("direct solver (%s): about %.3g factor entries, %.3g GB, %.3g s\n", direct_name,
@@ -189,15 +172,11 @@ cupid_status cupid_app_estimate(const cupid_job *job, int print) {
     printf("estimated peak memory, direct path: %.3g GB (limit %.3g GB)\n", e.total_bytes / 1e9,
            limit / 1e9);
     printf("iterative path (PETSc %s): about %.3g GB per rank on one rank, %.3g s%s\n",
-           e.iterative_matrix_free
-               ? (!job->beam ? "matrix-free CG + GAMG"
-                  : is_fictitious_coupled(job) ? "matrix-free GMRES + LU of a bond-based twin"
-                                               : "matrix-free CG + Cholesky of a bond-based twin")
-                                   : "Krylov + AMG/ILU, assembled",
-           e.iterative_bytes / 1e9, e.iterative_seconds,
+           e.iterative_what, e.iterative_bytes / 1e9, e.iterative_seconds,
            cupid_petsc_available() ? "" : " (this build has no PETSc)");
     if (m->analysis.type == CUPID_ANALYSIS_STATIC) {
-      int direct = cupid_app_auto_picks_direct(job, e.total_bytes, e.factor_seconds);
+      int direct = e.total_bytes <= CUPID_AUTO_DIRECT_MEMORY_SHARE * limit &&
+                   e.factor_seconds <= CUPID_AUTO_DIRECT_SECONDS;
       printf("solver auto would pick: %s\n",
              direct ? "direct (below a quarter of the memory limit and 120 s)"
              : cupid_petsc_available() ? "petsc (the direct estimate exceeds a quarter of the "
@@ -215,7 +194,7 @@ cupid_status cupid_app_estimate(const cupid_job *job, int print) {
                          "%s: the PETSc path needs about %.3g GB (%lld PD nodes), more than the "
                          "limit of %.3g GB; use --max-memory GB to raise the limit, more ranks "
                          "on more machines, or a coarser grid",
-                         job->model->file, e.iterative_bytes / 1e9, (long long)job->n_pd,
+                         prob->model->file, e.iterative_bytes / 1e9, (long long)prob->n_pd,
                          limit / 1e9);
     return CUPID_SUCCESS;
   }
@@ -224,7 +203,7 @@ cupid_status cupid_app_estimate(const cupid_job *job, int print) {
                        "%s: the model needs about %.3g GB (%lld PD nodes; stiffness %.3g GB, "
                        "factor %.3g GB), more than the limit of %.3g GB; use --max-memory GB to "
                        "raise the limit, or a coarser grid",
-                       job->model->file, e.total_bytes / 1e9, (long long)job->n_pd,
+                       prob->model->file, e.total_bytes / 1e9, (long long)prob->n_pd,
                        e.matrix_bytes / 1e9, e.factor_bytes / 1e9, limit / 1e9);
   return CUPID_SUCCESS;
 }
@@ -274,8 +253,8 @@ static cupid_status guard_output(const cupid_model_t *m) {
 /* The beam: DOFs = 3 x beam nodes x expansion terms M, and at least M coupled blocks per FE
  * node for TE (every term couples with every term of its beam node) or le_nodes for LE. A lower
  * bound from the model alone, so a beam that cannot fit is refused before it is built. */
-static cupid_status guard_beam(const cupid_job *job, double limit) {
-  const cupid_model_t *m = job->model;
+static cupid_status guard_beam(const cupid_problem_state *prob, double limit) {
+  const cupid_model_t *m = prob->model;
   const cupid_beam *b = &m->beam;
   if (!m->has_beam || !(limit > 0)) return CUPID_SUCCESS;
   double beam_nodes = 1, terms = 0;
@@ -300,12 +279,12 @@ static cupid_status guard_beam(const cupid_job *job, double limit) {
                            beam_nodes, terms, dofs, bytes / 1e9, limit / 1e9);
 }
 
-cupid_status cupid_app_guard_size(const cupid_job *job) {
-  const cupid_model_t *m = job->model;
+cupid_status cupid_problem_guard_size(const cupid_problem_state *prob) {
+  const cupid_model_t *m = prob->model;
   const cupid_peridynamics *pd = &m->pd;
   CUPID_CALL(guard_output(m));
-  CUPID_CALL(guard_beam(job, memory_limit(job)));
-  double limit = memory_limit(job), h = pd->spacing;
+  CUPID_CALL(guard_beam(prob, memory_limit(prob)));
+  double limit = memory_limit(prob), h = pd->spacing;
   if (!m->has_peridynamics || pd->n_regions <= 0 || !(h > 0) || !(limit > 0)) return CUPID_SUCCESS;
   double ratio = pd->horizon / h, reach = ceil(ratio - 1e-9);
   /* Bounding box (the dense cell index is 8 B per cell), the largest region (the union has at
@@ -364,9 +343,13 @@ cupid_status cupid_app_guard_size(const cupid_job *job) {
   double total = grid_bytes + op_bytes, solver_bytes = 0;
   /* The direct solver's matrix and factor count unless PETSc may take the solve (requested, or
    * auto in a build with PETSc: auto then picks it for a model this large). */
-  cupid_solver_kind req = job->opts->solver >= 0 ? (cupid_solver_kind)job->opts->solver : m->analysis.solver;
-  int petsc_may_solve = req == CUPID_SOLVER_PETSC || (req == CUPID_SOLVER_AUTO && cupid_petsc_available());
-  if (!job->opts->check_only && m->analysis.type != CUPID_ANALYSIS_EVALUATE && !petsc_may_solve) {
+  const cupid_solver_type *req = cupid_solver_type_get(
+      prob->opts->solver >= 0 ? prob->opts->solver : (int)m->analysis.solver); /* NULL: auto */
+  int petsc_may_solve = 0; /* auto: when this build has an iterative engine */
+  for (int k = 0; !req && cupid_solver_type_at(k); k++)
+    petsc_may_solve |= cupid_solver_type_at(k)->iterative && cupid_solver_type_at(k)->available();
+  if (req) petsc_may_solve = req->iterative;
+  if (!prob->opts->check_only && m->analysis.type != CUPID_ANALYSIS_EVALUATE && !petsc_may_solve) {
     cupid_estimate e;
     estimate_sizes(m, nodes, nodes + bonds, &e);
     solver_bytes = e.total_bytes;

@@ -1,4 +1,4 @@
-/* Krylov solve of a matrix-free coupled system on PETSc, on the free DOFs: the fictitious-node
+/* Krylov solve of a matrix-free system on PETSc (the coupled systems of src/coupling), on the free DOFs: the fictitious-node
  * system (paper 000 Eq. 38) by GMRES (not symmetric), the Arlequin system (paper 004 Eq. 18) by
  * CG (symmetric positive definite). The operator is a MATSHELL over a cupid_linear_operator
  * (operator.c, arlequin_operator.c); the preconditioner is built from the cheap twin (the same
@@ -17,21 +17,13 @@
 #include <stdio.h>
 #include <string.h>
 
-#include "coupling_internal.h"
-#include "cupid/coupling.h"
+#include "cupid/solvers.h"
 #include "cupid_config.h"
 
 #if CUPID_HAVE_PETSC
 #include <petscksp.h>
 
-#define PCALL(expr)                                                                           \
-  do {                                                                                        \
-    PetscErrorCode ierr_ = (expr);                                                            \
-    if (ierr_) {                                                                              \
-      st = CUPID_ERROR(CUPID_ERR_NUMERIC, "PETSc error %d in %s", (int)ierr_, #expr);         \
-      goto cleanup;                                                                           \
-    }                                                                                         \
-  } while (0)
+#include "petsc_internal.h"
 
 /* On several MPI ranks the model is replicated; each rank owns the free DOFs [f0, f1) of the
  * PETSc vectors and computes only their rows of the product (cupid_coupling_operator_apply_rows:
@@ -103,11 +95,11 @@ static cupid_int block_row_max(const cupid_csr_t *P) {
 static cupid_status create_aij(PetscInt nloc, PetscInt N, const PetscInt *dnz,
                                const PetscInt *onz, Mat *M) {
   cupid_status st = CUPID_SUCCESS;
-  PCALL(MatCreate(PETSC_COMM_WORLD, M));
-  PCALL(MatSetSizes(*M, nloc, nloc, N, N));
-  PCALL(MatSetType(*M, MATAIJ));
-  PCALL(MatSeqAIJSetPreallocation(*M, 0, dnz));
-  PCALL(MatMPIAIJSetPreallocation(*M, 0, dnz, 0, onz));
+  PTRY(MatCreate(PETSC_COMM_WORLD, M));
+  PTRY(MatSetSizes(*M, nloc, nloc, N, N));
+  PTRY(MatSetType(*M, MATAIJ));
+  PTRY(MatSeqAIJSetPreallocation(*M, 0, dnz));
+  PTRY(MatMPIAIJSetPreallocation(*M, 0, dnz, 0, onz));
 cleanup:
   return st;
 }
@@ -115,8 +107,8 @@ cleanup:
 /* Assemble *M and hand it over as *out. */
 static cupid_status finish_aij(Mat *M, Mat *out) {
   cupid_status st = CUPID_SUCCESS;
-  PCALL(MatAssemblyBegin(*M, MAT_FINAL_ASSEMBLY));
-  PCALL(MatAssemblyEnd(*M, MAT_FINAL_ASSEMBLY));
+  PTRY(MatAssemblyBegin(*M, MAT_FINAL_ASSEMBLY));
+  PTRY(MatAssemblyEnd(*M, MAT_FINAL_ASSEMBLY));
   *out = *M;
   *M = NULL;
 cleanup:
@@ -160,14 +152,14 @@ static cupid_status free_block_aij(const cupid_csr_t *P, const cupid_dirichlet_t
           r.vals[len++] = P->val[(size_t)k * bs * bs + a * bs + b];
         }
       PetscInt row = (PetscInt)fi;
-      PCALL(MatSetValues(M, 1, &row, len, r.cols, r.vals, INSERT_VALUES));
+      PTRY(MatSetValues(M, 1, &row, len, r.cols, r.vals, INSERT_VALUES));
     }
   /* Block size 3 (GAMG's default near null space: the translations) when every node is
    * free or fixed as a whole. */
   int whole = f0 == 0 && f1 == n_free; /* one rank (local sizes need not be multiples of 3) */
   for (cupid_int d = 0; d < bc->n && whole; d += 3)
     whole = bc->fixed[d] == bc->fixed[d + 1] && bc->fixed[d] == bc->fixed[d + 2];
-  if (whole && bs == 3) PCALL(MatSetBlockSize(M, 3));
+  if (whole && bs == 3) PTRY(MatSetBlockSize(M, 3));
   CUPID_TRY(finish_aij(&M, out));
 cleanup:
   if (M) MatDestroy(&M);
@@ -203,7 +195,7 @@ typedef struct {
  * default PC (a Cholesky factor for CG, an LU for GMRES), the fields of pc fieldsplit, then
  * the run-time options, into k->ksp (and the fields' k->is_pd, k->is_fe). */
 static cupid_status configure_ksp(const cupid_linear_operator *A,
-                                  const cupid_coupling_krylov_options *opts,
+                                  const cupid_krylov_options *opts,
                                   const ksp_fields *fields, ksp_objects *k) {
   Mat S = k->S, Pm = k->Pm;
   IS *is_pd = &k->is_pd, *is_fe = &k->is_fe;
@@ -213,47 +205,47 @@ static cupid_status configure_ksp(const cupid_linear_operator *A,
   PC pc;
   PetscMPIInt size = 1;
   MPI_Comm_size(PETSC_COMM_WORLD, &size);
-  PCALL(KSPCreate(PETSC_COMM_WORLD, &ksp));
-  PCALL(KSPSetOperators(ksp, S, Pm));
+  PTRY(KSPCreate(PETSC_COMM_WORLD, &ksp));
+  PTRY(KSPSetOperators(ksp, S, Pm));
   if (A->symmetric) { /* CG: left preconditioning only; the true residual is recomputed after */
-    PCALL(KSPSetType(ksp, KSPCG));
-    PCALL(KSPSetNormType(ksp, KSP_NORM_UNPRECONDITIONED));
+    PTRY(KSPSetType(ksp, KSPCG));
+    PTRY(KSPSetNormType(ksp, KSP_NORM_UNPRECONDITIONED));
   } else {
-    PCALL(KSPSetType(ksp, KSPGMRES));
-    PCALL(KSPGMRESSetRestart(ksp, opts && opts->restart > 0 ? opts->restart : 200));
-    PCALL(KSPSetPCSide(ksp, PC_RIGHT));
+    PTRY(KSPSetType(ksp, KSPGMRES));
+    PTRY(KSPGMRESSetRestart(ksp, opts && opts->restart > 0 ? opts->restart : 200));
+    PTRY(KSPSetPCSide(ksp, PC_RIGHT));
   }
-  PCALL(KSPSetTolerances(ksp, opts && opts->rtol > 0 ? opts->rtol : 1e-10, 1e-300, PETSC_DEFAULT,
+  PTRY(KSPSetTolerances(ksp, opts && opts->rtol > 0 ? opts->rtol : 1e-10, 1e-300, PETSC_DEFAULT,
                          opts && opts->max_it > 0 ? opts->max_it : 2000));
-  PCALL(KSPGetPC(ksp, &pc));
+  PTRY(KSPGetPC(ksp, &pc));
   /* A symmetric operator gets a Cholesky factor of its (symmetric positive definite) twin:
    * MUMPS's LL^T, about 2/3 of the LU's memory (the Arlequin panel at h = 0.5: 2.6 GB
    * against 3.7 GB in all). */
   const char *pct = opts && opts->pc ? opts->pc : A->symmetric ? "cholesky" : "lu";
-  PCALL(PCSetType(pc, pct));
-  if (A->symmetric) PCALL(MatSetOption(Pm, MAT_SPD, PETSC_TRUE));
+  PTRY(PCSetType(pc, pct));
+  if (A->symmetric) PTRY(MatSetOption(Pm, MAT_SPD, PETSC_TRUE));
   if (!strcmp(pct, "cholesky")) {
-    PCALL(PCFactorSetMatSolverType(pc, opts && opts->factor_package ? opts->factor_package : "mumps"));
+    PTRY(PCFactorSetMatSolverType(pc, opts && opts->factor_package ? opts->factor_package : "mumps"));
   } else if (!strcmp(pct, "lu") || !strcmp(pct, "ilu")) {
     /* UMFPACK and PETSc's own LU are sequential: MUMPS on several ranks */
     const char *pkg = opts && opts->factor_package ? opts->factor_package
                       : size > 1                   ? "mumps"
                                                    : (!strcmp(pct, "lu") ? "umfpack" : "petsc");
-    PCALL(PCFactorSetMatSolverType(pc, pkg));
+    PTRY(PCFactorSetMatSolverType(pc, pkg));
   }
   if (!strcmp(pct, "fieldsplit")) {
     /* Two fields: PD DOFs and FE DOFs (sub-solvers from -fieldsplit_pd_* / -fieldsplit_fe_*). */
-    PCALL(ISCreateStride(PETSC_COMM_WORLD, fields->pd_last - fields->pd_first, fields->pd_first,
+    PTRY(ISCreateStride(PETSC_COMM_WORLD, fields->pd_last - fields->pd_first, fields->pd_first,
                          1, is_pd));
-    PCALL(ISCreateStride(PETSC_COMM_WORLD, fields->fe_last - fields->fe_first, fields->fe_first,
+    PTRY(ISCreateStride(PETSC_COMM_WORLD, fields->fe_last - fields->fe_first, fields->fe_first,
                          1, is_fe));
-    if (fields->pd_blocks) PCALL(ISSetBlockSize(*is_pd, 3));
-    PCALL(PCFieldSplitSetIS(pc, "pd", *is_pd));
-    PCALL(PCFieldSplitSetIS(pc, "fe", *is_fe));
+    if (fields->pd_blocks) PTRY(ISSetBlockSize(*is_pd, 3));
+    PTRY(PCFieldSplitSetIS(pc, "pd", *is_pd));
+    PTRY(PCFieldSplitSetIS(pc, "fe", *is_fe));
   }
-  PCALL(KSPSetFromOptions(ksp));
-  PCALL(KSPSetUp(ksp));
-  PCALL(PCSetUp(pc));
+  PTRY(KSPSetFromOptions(ksp));
+  PTRY(KSPSetUp(ksp));
+  PTRY(PCSetUp(pc));
   *out = ksp;
   ksp = NULL;
 cleanup:
@@ -263,28 +255,28 @@ cleanup:
 
 /* Solve, and what the solve did into *inf (iterations, convergence, time, method). */
 static cupid_status run_ksp(KSP ksp, const cupid_linear_operator *A, Vec b, Vec x,
-                            cupid_coupling_krylov_info *inf) {
+                            cupid_krylov_info *inf) {
   cupid_status st = CUPID_SUCCESS;
   PetscInt its;
   KSPConvergedReason reason;
   PC pc;
   PCType used;
   double t0 = cupid_wtime();
-  PCALL(KSPSolve(ksp, b, x));
+  PTRY(KSPSolve(ksp, b, x));
   inf->time_solve = cupid_wtime() - t0;
-  PCALL(KSPGetIterationNumber(ksp, &its));
-  PCALL(KSPGetConvergedReason(ksp, &reason));
+  PTRY(KSPGetIterationNumber(ksp, &its));
+  PTRY(KSPGetConvergedReason(ksp, &reason));
   inf->iterations = (int)its;
   inf->converged = reason > 0;
-  PCALL(KSPGetPC(ksp, &pc));
-  PCALL(PCGetType(pc, &used));
+  PTRY(KSPGetPC(ksp, &pc));
+  PTRY(PCGetType(pc, &used));
   snprintf(inf->method, sizeof inf->method, "%s+%s", A->symmetric ? "cg" : "gmres", used);
 cleanup:
   return st;
 }
 
 /* The error of a solve that did not converge (CUPID_SUCCESS if it did). */
-static cupid_status not_converged(KSP ksp, const cupid_coupling_krylov_info *inf) {
+static cupid_status not_converged(KSP ksp, const cupid_krylov_info *inf) {
   if (inf->converged) return CUPID_SUCCESS;
   KSPConvergedReason reason = KSP_CONVERGED_ITERATING;
   KSPGetConvergedReason(ksp, &reason);
@@ -297,10 +289,10 @@ static cupid_status not_converged(KSP ksp, const cupid_coupling_krylov_info *inf
 /* The model replicated on every rank: the free DOFs only, split evenly over the ranks. */
 static cupid_status solve_replicated(const cupid_linear_operator *A, const cupid_csr_t *P,
                                      const cupid_dirichlet_t *bc, const double *f, double *u,
-                                     const cupid_coupling_krylov_options *opts,
-                                     cupid_coupling_krylov_info *info) {
+                                     const cupid_krylov_options *opts,
+                                     cupid_krylov_info *info) {
   cupid_status st = CUPID_SUCCESS;
-  cupid_coupling_krylov_info inf;
+  cupid_krylov_info inf;
   memset(&inf, 0, sizeof inf);
   cupid_int n = A->n;
   cupid_int *gidx = NULL;
@@ -323,20 +315,20 @@ static cupid_status solve_replicated(const cupid_linear_operator *A, const cupid
   /* b_f = f_f - (A u_c)_f */
   for (cupid_int d = 0; d < n; d++) xf[d] = bc->fixed[d] ? bc->value[d] : 0.0;
   CUPID_TRY(A->apply(A->ctx, xf, yf));
-  PCALL(VecCreateMPI(PETSC_COMM_WORLD, (PetscInt)(f1 - f0), (PetscInt)n_free, &obj.b));
-  PCALL(VecDuplicate(obj.b, &obj.x));
-  PCALL(VecScatterCreateToAll(obj.x, &ctx.toall, &ctx.xall));
+  PTRY(VecCreateMPI(PETSC_COMM_WORLD, (PetscInt)(f1 - f0), (PetscInt)n_free, &obj.b));
+  PTRY(VecDuplicate(obj.b, &obj.x));
+  PTRY(VecScatterCreateToAll(obj.x, &ctx.toall, &ctx.xall));
   PetscScalar *ba;
-  PCALL(VecGetArray(obj.b, &ba));
+  PTRY(VecGetArray(obj.b, &ba));
   for (cupid_int k = f0; k < f1; k++) ba[k - f0] = f[gidx[k]] - yf[gidx[k]];
-  PCALL(VecRestoreArray(obj.b, &ba));
+  PTRY(VecRestoreArray(obj.b, &ba));
   PetscReal bnorm;
-  PCALL(VecNorm(obj.b, NORM_2, &bnorm));
+  PTRY(VecNorm(obj.b, NORM_2, &bnorm));
 
   double t0 = cupid_wtime();
-  PCALL(MatCreateShell(PETSC_COMM_WORLD, (PetscInt)(f1 - f0), (PetscInt)(f1 - f0),
+  PTRY(MatCreateShell(PETSC_COMM_WORLD, (PetscInt)(f1 - f0), (PetscInt)(f1 - f0),
                        (PetscInt)n_free, (PetscInt)n_free, &ctx, &obj.S));
-  PCALL(MatShellSetOperation(obj.S, MATOP_MULT, (void (*)(void))shell_mult));
+  PTRY(MatShellSetOperation(obj.S, MATOP_MULT, (void (*)(void))shell_mult));
   CUPID_TRY(free_block_aij(P, bc, f0, f1, &obj.Pm));
   {
     /* the owned part of each field (PD DOFs come first) */
@@ -351,12 +343,12 @@ static cupid_status solve_replicated(const cupid_linear_operator *A, const cupid
 
   /* u = [x_f ; u_c]; the true residual, recomputed. */
   const PetscScalar *xa;
-  PCALL(VecScatterBegin(ctx.toall, obj.x, ctx.xall, INSERT_VALUES, SCATTER_FORWARD));
-  PCALL(VecScatterEnd(ctx.toall, obj.x, ctx.xall, INSERT_VALUES, SCATTER_FORWARD));
-  PCALL(VecGetArrayRead(ctx.xall, &xa));
+  PTRY(VecScatterBegin(ctx.toall, obj.x, ctx.xall, INSERT_VALUES, SCATTER_FORWARD));
+  PTRY(VecScatterEnd(ctx.toall, obj.x, ctx.xall, INSERT_VALUES, SCATTER_FORWARD));
+  PTRY(VecGetArrayRead(ctx.xall, &xa));
   for (cupid_int d = 0; d < n; d++) u[d] = bc->fixed[d] ? bc->value[d] : 0.0;
   for (cupid_int k = 0; k < n_free; k++) u[gidx[k]] = xa[k];
-  PCALL(VecRestoreArrayRead(ctx.xall, &xa));
+  PTRY(VecRestoreArrayRead(ctx.xall, &xa));
   CUPID_TRY(A->apply(A->ctx, u, yf));
   double r2 = 0.0, f2 = 0.0;
   for (cupid_int k = 0; k < n_free; k++) {
@@ -515,7 +507,7 @@ static cupid_status slab_matrix(const slab_ctx *c, const cupid_csr_t *P, PetscIn
       if (!(d >= c->pd0 && d < c->pd1) && d < c->n_pd) continue; /* a halo row */
       PetscInt row = slab_global(c, d), len = 0;
       if (c->bc->fixed[d]) {
-        if (d < c->n_pd || c->fe_owner) PCALL(MatSetValue(M, row, row, c->s, ADD_VALUES));
+        if (d < c->n_pd || c->fe_owner) PTRY(MatSetValue(M, row, row, c->s, ADD_VALUES));
         continue;
       }
       for (cupid_int k = P->rowptr[R]; k < P->rowptr[R + 1]; k++)
@@ -528,7 +520,7 @@ static cupid_status slab_matrix(const slab_ctx *c, const cupid_csr_t *P, PetscIn
           r.cols[len] = slab_global(c, e);
           r.vals[len++] = v;
         }
-      PCALL(MatSetValues(M, 1, &row, len, r.cols, r.vals, ADD_VALUES));
+      PTRY(MatSetValues(M, 1, &row, len, r.cols, r.vals, ADD_VALUES));
     }
   CUPID_TRY(finish_aij(&M, out));
 cleanup:
@@ -557,9 +549,9 @@ static cupid_status slab_halo(slab_ctx *c, Vec x) {
   IS from = NULL;
   CUPID_CALL(cupid_malloc((size_t)c->n + 1, sizeof *idx, "halo indices", &idx));
   for (cupid_int d = 0; d < c->n; d++) idx[d] = slab_global(c, d);
-  PCALL(ISCreateGeneral(PETSC_COMM_SELF, (PetscInt)c->n, idx, PETSC_USE_POINTER, &from));
-  PCALL(VecCreateSeq(PETSC_COMM_SELF, (PetscInt)c->n, &c->xl));
-  PCALL(VecScatterCreate(x, from, c->xl, NULL, &c->halo));
+  PTRY(ISCreateGeneral(PETSC_COMM_SELF, (PetscInt)c->n, idx, PETSC_USE_POINTER, &from));
+  PTRY(VecCreateSeq(PETSC_COMM_SELF, (PetscInt)c->n, &c->xl));
+  PTRY(VecScatterCreate(x, from, c->xl, NULL, &c->halo));
 cleanup:
   if (from) ISDestroy(&from);
   cupid_free(&idx);
@@ -569,10 +561,10 @@ cleanup:
 /* The PD grid in slabs, one a rank (slab_ctx above). */
 static cupid_status solve_slabs(const cupid_linear_operator *A, const cupid_csr_t *P,
                                 const cupid_dirichlet_t *bc, const double *f, double *u,
-                                const cupid_coupling_krylov_options *opts,
-                                cupid_coupling_krylov_info *info) {
+                                const cupid_krylov_options *opts,
+                                cupid_krylov_info *info) {
   cupid_status st = CUPID_SUCCESS;
-  cupid_coupling_krylov_info inf;
+  cupid_krylov_info inf;
   memset(&inf, 0, sizeof inf);
   const cupid_pd_grid_partition *p = A->part;
   PetscMPIInt size = 1;
@@ -594,19 +586,19 @@ static cupid_status solve_slabs(const cupid_linear_operator *A, const cupid_csr_
   for (cupid_int d = 0; d < c.n; d++) c.xw[d] = bc->fixed[d] ? bc->value[d] : 0.0;
   CUPID_TRY(slab_product(A, c.xw, c.yw));
   for (cupid_int d = 0; d < c.n; d++) c.yw[d] = bc->fixed[d] ? 0.0 : f[d] - c.yw[d];
-  PCALL(VecCreateMPI(PETSC_COMM_WORLD, c.nloc, N, &obj.b));
-  PCALL(VecDuplicate(obj.b, &obj.x));
+  PTRY(VecCreateMPI(PETSC_COMM_WORLD, c.nloc, N, &obj.b));
+  PTRY(VecDuplicate(obj.b, &obj.x));
   PetscScalar *ba;
-  PCALL(VecGetArray(obj.b, &ba));
+  PTRY(VecGetArray(obj.b, &ba));
   slab_owned(&c, c.yw, ba);
-  PCALL(VecRestoreArray(obj.b, &ba));
+  PTRY(VecRestoreArray(obj.b, &ba));
   PetscReal bnorm;
-  PCALL(VecNorm(obj.b, NORM_2, &bnorm));
+  PTRY(VecNorm(obj.b, NORM_2, &bnorm));
   CUPID_TRY(slab_halo(&c, obj.x));
 
   double t0 = cupid_wtime();
-  PCALL(MatCreateShell(PETSC_COMM_WORLD, c.nloc, c.nloc, N, N, &c, &obj.S));
-  PCALL(MatShellSetOperation(obj.S, MATOP_MULT, (void (*)(void))slab_mult));
+  PTRY(MatCreateShell(PETSC_COMM_WORLD, c.nloc, c.nloc, N, N, &c, &obj.S));
+  PTRY(MatShellSetOperation(obj.S, MATOP_MULT, (void (*)(void))slab_mult));
   CUPID_TRY(slab_matrix(&c, P, N, &obj.Pm));
   const PetscInt pd_owned = (PetscInt)(c.pd1 - c.pd0);
   const ksp_fields fields = {c.g0, c.g0 + pd_owned, c.g0 + pd_owned, c.g0 + c.nloc, 1};
@@ -616,10 +608,10 @@ static cupid_status solve_slabs(const cupid_linear_operator *A, const cupid_csr_
 
   /* u = u_c + x on every local DOF; the true residual over the free owned DOFs, recomputed */
   const PetscScalar *xa;
-  PCALL(slab_gather(&c, obj.x));
-  PCALL(VecGetArrayRead(c.xl, &xa));
+  PTRY(slab_gather(&c, obj.x));
+  PTRY(VecGetArrayRead(c.xl, &xa));
   for (cupid_int d = 0; d < c.n; d++) u[d] = bc->fixed[d] ? bc->value[d] : xa[d];
-  PCALL(VecRestoreArrayRead(c.xl, &xa));
+  PTRY(VecRestoreArrayRead(c.xl, &xa));
   CUPID_TRY(slab_product(A, u, c.yw));
   double sums[2] = {0.0, 0.0}; /* |r|^2, |f|^2 */
   for (cupid_int d = 0; d < c.n; d++) {
@@ -646,8 +638,8 @@ static int is_slab(const cupid_linear_operator *A) { return A->part && A->part->
 
 cupid_status cupid_krylov_solve(const cupid_linear_operator *A, const cupid_csr_t *P,
                                 const cupid_dirichlet_t *bc, const double *f, double *u,
-                                const cupid_coupling_krylov_options *opts,
-                                cupid_coupling_krylov_info *info) {
+                                const cupid_krylov_options *opts,
+                                cupid_krylov_info *info) {
   if (info) memset(info, 0, sizeof *info);
   CUPID_CHECK(A && A->apply && P && bc && f && u, CUPID_ERR_ARGUMENT, "Krylov solve: NULL argument");
   CUPID_CHECK(bc->n == A->n && P->nrows * P->bs == A->n, CUPID_ERR_ARGUMENT,
@@ -672,8 +664,8 @@ cupid_status cupid_krylov_apply(const cupid_linear_operator *A, const double *x,
 
 cupid_status cupid_krylov_solve(const cupid_linear_operator *A, const cupid_csr_t *P,
                                 const cupid_dirichlet_t *bc, const double *f, double *u,
-                                const cupid_coupling_krylov_options *opts,
-                                cupid_coupling_krylov_info *info) {
+                                const cupid_krylov_options *opts,
+                                cupid_krylov_info *info) {
   (void)A, (void)P, (void)bc, (void)f, (void)u, (void)opts;
   if (info) memset(info, 0, sizeof *info);
   return CUPID_ERROR(CUPID_ERR_UNSUPPORTED,
@@ -689,34 +681,3 @@ cupid_status cupid_krylov_apply(const cupid_linear_operator *A, const double *x,
 }
 
 #endif
-
-/* The fictitious-node operator as a cupid_linear_operator. */
-static cupid_status fict_apply(void *ctx, const double *x, double *y) {
-  return cupid_coupling_operator_apply(ctx, x, y);
-}
-
-static cupid_status fict_apply_rows(void *ctx, const double *x, cupid_int d0, cupid_int d1, double *y) {
-  return cupid_coupling_operator_apply_rows(ctx, x, d0, d1, y);
-}
-
-void cupid_coupling_operator_linear(const cupid_coupling_operator A, cupid_linear_operator *L) {
-  cupid_int n_pd = 0; /* the slab's on a slab (the info counts the whole model) */
-  const cupid_pd_grid_partition *part = cpl_operator_partition(A, &n_pd);
-  *L = (cupid_linear_operator){.n = cupid_coupling_operator_size(A),
-                               .apply = fict_apply,
-                               .apply_rows = fict_apply_rows,
-                               .ctx = A,
-                               .symmetric = 0,
-                               .n_pd_dofs = 3 * n_pd,
-                               .part = part};
-}
-
-cupid_status cupid_coupling_krylov_solve(const cupid_coupling_operator A, const cupid_csr_t *P,
-                                         const cupid_dirichlet_t *bc, const double *f, double *u,
-                                         const cupid_coupling_krylov_options *opts,
-                                         cupid_coupling_krylov_info *info) {
-  CUPID_CHECK(A, CUPID_ERR_ARGUMENT, "Krylov solve: NULL operator");
-  cupid_linear_operator L;
-  cupid_coupling_operator_linear(A, &L);
-  return cupid_krylov_solve(&L, P, bc, f, u, opts, info);
-}

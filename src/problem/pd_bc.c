@@ -11,44 +11,44 @@
 #include <math.h>
 #include <string.h>
 
-#include "app_internal.h"
+#include "problem_internal.h"
 
 /* Relative tolerance on lattice positions (box bounds on cell faces must include the nodes
  * that sit exactly on them after round-off). */
 #define CUPID_LATTICE_TOL 1e-9
 
-static void node_lattice(const cupid_job *job, cupid_int node, cupid_int ijk[3]) {
-  const double *x = cupid_pd_grid_coords(job->grid) + 3 * node;
-  double o[3], h = cupid_pd_grid_spacing(job->grid);
-  cupid_pd_grid_origin(job->grid, o);
+static void node_lattice(const cupid_problem_state *prob, cupid_int node, cupid_int ijk[3]) {
+  const double *x = cupid_pd_grid_coords(prob->grid) + 3 * node;
+  double o[3], h = cupid_pd_grid_spacing(prob->grid);
+  cupid_pd_grid_origin(prob->grid, o);
   for (int a = 0; a < 3; a++) ijk[a] = (cupid_int)floor((x[a] - o[a]) / h);
-  if (cupid_pd_grid_dimension(job->grid) == 1) ijk[0] = ijk[2] = 0;
+  if (cupid_pd_grid_dimension(prob->grid) == 1) ijk[0] = ijk[2] = 0;
 }
 
-static cupid_status constraint_on_nodes(cupid_job *job, const cupid_constraint *c,
+static cupid_status constraint_on_nodes(cupid_problem_state *prob, const cupid_constraint *c,
                                         cupid_int *count) {
-  const cupid_model_t *m = job->model;
-  const double *x = cupid_pd_grid_coords(job->grid);
-  const int *mat = cupid_pd_grid_materials(job->grid);
-  double h = cupid_pd_grid_spacing(job->grid);
+  const cupid_model_t *m = prob->model;
+  const double *x = cupid_pd_grid_coords(prob->grid);
+  const int *mat = cupid_pd_grid_materials(prob->grid);
+  double h = cupid_pd_grid_spacing(prob->grid);
   double layer = c->layer > 0 ? c->layer : m->pd.horizon;
   *count = 0;
-  for (cupid_int i = 0; i < job->n_pd; i++) {
+  for (cupid_int i = 0; i < prob->n_pd; i++) {
     const double *p = x + 3 * i;
     int in = c->kind == CUPID_CONSTRAINT_CLAMP ? fabs(p[1] - c->plane_y) < layer
                                                : cupid_box_contains(&c->box, p, CUPID_LATTICE_TOL * h);
     if (!in) continue;
-    *count += cupid_app_pd_owned(job, i);
+    *count += cupid_problem_pd_owned(prob, i);
     for (int a = 0; a < 3; a++) {
       cupid_int d = 3 * i + a;
       if (c->kind == CUPID_CONSTRAINT_DISPLACEMENT) {
         if (c->value[a].kind == CUPID_VALUE_NONE) continue;
-        job->bc->fixed[d] = 1;
-        job->bc->value[d] =
+        prob->bc->fixed[d] = 1;
+        prob->bc->value[d] =
             cupid_value_eval(&c->value[a], p[0], p[1], p[2], 0.0, m->materials[mat[i]].density);
       } else if (c->kind == CUPID_CONSTRAINT_CLAMP || c->components[a]) {
-        job->bc->fixed[d] = 1;
-        job->bc->value[d] = 0.0;
+        prob->bc->fixed[d] = 1;
+        prob->bc->value[d] = 0.0;
       }
     }
   }
@@ -57,22 +57,23 @@ static cupid_status constraint_on_nodes(cupid_job *job, const cupid_constraint *
 
 /* A 1D grid is a bar along y: its x and z components carry no stiffness, so they are
  * eliminated (held at zero) rather than left singular. */
-static void eliminate_transverse_1d(cupid_job *job) {
-  if (cupid_pd_grid_dimension(job->grid) != 1) return;
-  for (cupid_int i = 0; i < job->n_pd; i++) {
-    job->bc->fixed[3 * i] = job->bc->fixed[3 * i + 2] = 1;
-    job->bc->value[3 * i] = job->bc->value[3 * i + 2] = 0.0;
+static void eliminate_transverse_1d(cupid_problem_state *prob) {
+  if (cupid_pd_grid_dimension(prob->grid) != 1) return;
+  for (cupid_int i = 0; i < prob->n_pd; i++) {
+    prob->bc->fixed[3 * i] = prob->bc->fixed[3 * i + 2] = 1;
+    prob->bc->value[3 * i] = prob->bc->value[3 * i + 2] = 0.0;
   }
 }
 
-cupid_status cupid_app_pd_constraints(cupid_job *job) {
-  const cupid_model_t *m = job->model;
-  eliminate_transverse_1d(job);
-  for (int k = 0; k < m->n_constraints; k++) {
-    const cupid_constraint *c = &m->constraints[k];
+cupid_status cupid_problem_pd_constraints(cupid_problem_state *prob, const cupid_constraint *cons,
+                                          int n) {
+  const cupid_model_t *m = prob->model;
+  eliminate_transverse_1d(prob);
+  for (int k = 0; k < n; k++) {
+    const cupid_constraint *c = &cons[k];
     cupid_int count;
-    CUPID_CALL(constraint_on_nodes(job, c, &count));
-    if (cupid_app_global_count(job, count) == 0) {
+    CUPID_CALL(constraint_on_nodes(prob, c, &count));
+    if (cupid_problem_global_count(prob, count) == 0) {
       if (c->kind == CUPID_CONSTRAINT_CLAMP)
         return cupid_model_error(m, &c->mark,
                                  "no PD node lies within %g of the plane y = %g (the clamp fixes "
@@ -85,9 +86,9 @@ cupid_status cupid_app_pd_constraints(cupid_job *job) {
   }
   /* A clamp layer of zero nodes is caught above; report what was fixed for the log. */
   cupid_int nfixed = 0;
-  for (cupid_int d = 0; d < job->ndof; d++) nfixed += job->bc->fixed[d] && cupid_app_pd_owned(job, d / 3);
-  nfixed = cupid_app_global_count(job, nfixed);
-  cupid_job_progress(job, "constraints: %lld DOFs prescribed", (long long)nfixed);
+  for (cupid_int d = 0; d < prob->ndof; d++) nfixed += prob->bc->fixed[d] && cupid_problem_pd_owned(prob, d / 3);
+  nfixed = cupid_problem_global_count(prob, nfixed);
+  cupid_problem_progress(prob, "constraints: %lld DOFs prescribed", (long long)nfixed);
   return CUPID_SUCCESS;
 }
 
@@ -109,35 +110,35 @@ static double face_area(const cupid_load *l, const double *p, double h, int dim,
 }
 
 /* A node lies on the traction plane if its cell has a face there that is a free surface. */
-static int on_free_face(const cupid_job *job, cupid_int node, double plane_y) {
-  const double *p = cupid_pd_grid_coords(job->grid) + 3 * node;
-  double h = cupid_pd_grid_spacing(job->grid);
+static int on_free_face(const cupid_problem_state *prob, cupid_int node, double plane_y) {
+  const double *p = cupid_pd_grid_coords(prob->grid) + 3 * node;
+  double h = cupid_pd_grid_spacing(prob->grid);
   double d = plane_y - p[1];
   if (fabs(fabs(d) - 0.5 * h) > CUPID_LATTICE_TOL * h * 10) return 0;
   cupid_int ijk[3];
-  node_lattice(job, node, ijk);
+  node_lattice(prob, node, ijk);
   cupid_int across = ijk[1] + (d > 0 ? 1 : -1);
-  return cupid_pd_grid_node_at(job->grid, ijk[0], across, ijk[2]) < 0;
+  return cupid_pd_grid_node_at(prob->grid, ijk[0], across, ijk[2]) < 0;
 }
 
-static cupid_status traction_load(cupid_job *job, const cupid_load *l) {
-  const cupid_model_t *m = job->model;
-  const double *x = cupid_pd_grid_coords(job->grid);
-  const int *mat = cupid_pd_grid_materials(job->grid);
-  double h = cupid_pd_grid_spacing(job->grid);
-  int dim = cupid_pd_grid_dimension(job->grid);
+static cupid_status traction_load(cupid_problem_state *prob, const cupid_load *l, double *f) {
+  const cupid_model_t *m = prob->model;
+  const double *x = cupid_pd_grid_coords(prob->grid);
+  const int *mat = cupid_pd_grid_materials(prob->grid);
+  double h = cupid_pd_grid_spacing(prob->grid);
+  int dim = cupid_pd_grid_dimension(prob->grid);
   cupid_int count = 0;
-  for (cupid_int i = 0; i < job->n_pd; i++) {
-    if (!on_free_face(job, i, l->plane_y)) continue;
+  for (cupid_int i = 0; i < prob->n_pd; i++) {
+    if (!on_free_face(prob, i, l->plane_y)) continue;
     const double *p = x + 3 * i;
     double a = face_area(l, p, h, dim, m->pd.area);
     if (a <= 0) continue;
-    count += cupid_app_pd_owned(job, i);
+    count += cupid_problem_pd_owned(prob, i);
     for (int c = 0; c < 3; c++)
-      job->f_ext[3 * i + c] +=
+      f[3 * i + c] +=
           a * cupid_value_eval(&l->value[c], p[0], l->plane_y, p[2], 0.0, m->materials[mat[i]].density);
   }
-  if (cupid_app_global_count(job, count) == 0)
+  if (cupid_problem_global_count(prob, count) == 0)
     return cupid_model_error(m, &l->mark,
                              "no free PD surface lies on the plane y = %g%s (a traction acts on "
                              "an end face of a PD region)",
@@ -145,64 +146,64 @@ static cupid_status traction_load(cupid_job *job, const cupid_load *l) {
   return CUPID_SUCCESS;
 }
 
-static cupid_status point_load(cupid_job *job, const cupid_load *l) {
-  const cupid_model_t *m = job->model;
-  double o[3], h = cupid_pd_grid_spacing(job->grid);
-  cupid_pd_grid_origin(job->grid, o);
-  int dim = cupid_pd_grid_dimension(job->grid);
+static cupid_status point_load(cupid_problem_state *prob, const cupid_load *l, double *f) {
+  const cupid_model_t *m = prob->model;
+  double o[3], h = cupid_pd_grid_spacing(prob->grid);
+  cupid_pd_grid_origin(prob->grid, o);
+  int dim = cupid_pd_grid_dimension(prob->grid);
   cupid_int ijk[3];
   for (int a = 0; a < 3; a++) ijk[a] = (cupid_int)floor((l->at[a] - o[a]) / h);
   if (dim == 1) ijk[0] = ijk[2] = 0;
-  cupid_int node = cupid_pd_grid_node_at(job->grid, ijk[0], ijk[1], ijk[2]);
+  cupid_int node = cupid_pd_grid_node_at(prob->grid, ijk[0], ijk[1], ijk[2]);
   /* A point on a cell face belongs to the cell below it when the one above is absent. */
   for (int a = 0; a < 3 && node < 0; a++) {
     if (dim == 1 && a != 1) continue;
-    double f = (l->at[a] - o[a]) / h;
-    if (fabs(f - round(f)) < 1e-9) {
+    double s = (l->at[a] - o[a]) / h;
+    if (fabs(s - round(s)) < 1e-9) {
       cupid_int q[3] = {ijk[0], ijk[1], ijk[2]};
       q[a] -= 1;
-      node = cupid_pd_grid_node_at(job->grid, q[0], q[1], q[2]);
+      node = cupid_pd_grid_node_at(prob->grid, q[0], q[1], q[2]);
     }
   }
   /* a slab: the rank that owns the node counts it (others may hold it in their halo) */
-  if (cupid_app_global_count(job, node >= 0 && cupid_app_pd_owned(job, node)) == 0)
+  if (cupid_problem_global_count(prob, node >= 0 && cupid_problem_pd_owned(prob, node)) == 0)
     return cupid_model_error(m, &l->mark, "the point (%g, %g, %g) lies outside every PD region",
                              l->at[0], l->at[1], l->at[2]);
   if (node < 0) return CUPID_SUCCESS; /* on another rank's slab */
-  const int *mat = cupid_pd_grid_materials(job->grid);
+  const int *mat = cupid_pd_grid_materials(prob->grid);
   for (int c = 0; c < 3; c++)
-    job->f_ext[3 * node + c] += cupid_value_eval(&l->value[c], l->at[0], l->at[1], l->at[2], 0.0,
+    f[3 * node + c] += cupid_value_eval(&l->value[c], l->at[0], l->at[1], l->at[2], 0.0,
                                                  m->materials[mat[node]].density);
   return CUPID_SUCCESS;
 }
 
-static cupid_status body_load(cupid_job *job, const cupid_load *l) {
-  const cupid_model_t *m = job->model;
-  const double *x = cupid_pd_grid_coords(job->grid);
-  const int *mat = cupid_pd_grid_materials(job->grid);
-  double h = cupid_pd_grid_spacing(job->grid), vol = cupid_pd_grid_cell_volume(job->grid);
+static cupid_status body_load(cupid_problem_state *prob, const cupid_load *l, double *f) {
+  const cupid_model_t *m = prob->model;
+  const double *x = cupid_pd_grid_coords(prob->grid);
+  const int *mat = cupid_pd_grid_materials(prob->grid);
+  double h = cupid_pd_grid_spacing(prob->grid), vol = cupid_pd_grid_cell_volume(prob->grid);
   cupid_int count = 0;
-  for (cupid_int i = 0; i < job->n_pd; i++) {
+  for (cupid_int i = 0; i < prob->n_pd; i++) {
     const double *p = x + 3 * i;
     if (!cupid_box_contains(&l->box, p, CUPID_LATTICE_TOL * h)) continue;
-    count += cupid_app_pd_owned(job, i);
+    count += cupid_problem_pd_owned(prob, i);
     double rho = m->materials[mat[i]].density;
     for (int c = 0; c < 3; c++)
-      job->f_ext[3 * i + c] += vol * cupid_value_eval(&l->value[c], p[0], p[1], p[2], 0.0, rho);
+      f[3 * i + c] += vol * cupid_value_eval(&l->value[c], p[0], p[1], p[2], 0.0, rho);
   }
-  if (cupid_app_global_count(job, count) == 0)
+  if (cupid_problem_global_count(prob, count) == 0)
     return cupid_model_error(m, &l->mark, "the box contains no PD node");
   return CUPID_SUCCESS;
 }
 
-cupid_status cupid_app_pd_loads(cupid_job *job) {
-  const cupid_model_t *m = job->model;
-  for (int k = 0; k < m->n_loads; k++) {
-    const cupid_load *l = &m->loads[k];
+cupid_status cupid_problem_pd_loads(cupid_problem_state *prob, const cupid_load *loads, int n,
+                                    double *f) {
+  for (int k = 0; k < n; k++) {
+    const cupid_load *l = &loads[k];
     switch (l->kind) {
-    case CUPID_LOAD_TRACTION: CUPID_CALL(traction_load(job, l)); break;
-    case CUPID_LOAD_POINT: CUPID_CALL(point_load(job, l)); break;
-    case CUPID_LOAD_BODY: CUPID_CALL(body_load(job, l)); break;
+    case CUPID_LOAD_TRACTION: CUPID_CALL(traction_load(prob, l, f)); break;
+    case CUPID_LOAD_POINT: CUPID_CALL(point_load(prob, l, f)); break;
+    case CUPID_LOAD_BODY: CUPID_CALL(body_load(prob, l, f)); break;
     }
   }
   return CUPID_SUCCESS;

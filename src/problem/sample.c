@@ -5,10 +5,10 @@
  * the weights renormalised, which extrapolates constantly over that last half cell. */
 #include <math.h>
 
-#include "app_internal.h"
+#include "problem_internal.h"
 
-static int inside_pd(const cupid_job *job, const double p[3]) {
-  const cupid_model_t *m = job->model;
+static int inside_pd(const cupid_problem_state *prob, const double p[3]) {
+  const cupid_model_t *m = prob->model;
   double tol = 1e-9 * m->pd.spacing;
   for (int r = 0; r < m->pd.n_regions; r++) {
     cupid_box b = m->pd.regions[r].box;
@@ -18,28 +18,28 @@ static int inside_pd(const cupid_job *job, const double p[3]) {
   return 0;
 }
 
-cupid_status cupid_app_sample(const cupid_job *job, const double p[3], double u[3],
+cupid_status cupid_problem_sample_point(const cupid_problem_state *prob, const double p[3], double u[3],
                               double sigma[6], cupid_region_kind *region) {
   for (int c = 0; c < 3; c++) u[c] = NAN;
   if (sigma)
     for (int c = 0; c < 6; c++) sigma[c] = NAN;
   *region = CUPID_REGION_NONE;
-  if (job->beam && cupid_cuf_contains(job->beam, p[0], p[1], p[2])) {
+  if (prob->beam && cupid_cuf_contains(prob->beam, p[0], p[1], p[2])) {
     *region = CUPID_REGION_FE;
-    if (!job->u) return CUPID_SUCCESS;
-    CUPID_CALL(cupid_cuf_displacement_at(job->beam, job->u, p[0], p[1], p[2], u));
-    if (sigma) CUPID_CALL(cupid_cuf_stress_at(job->beam, job->u, p[0], p[1], p[2], sigma));
+    if (!prob->u) return CUPID_SUCCESS;
+    CUPID_CALL(cupid_cuf_displacement_at(prob->beam, prob->u, p[0], p[1], p[2], u));
+    if (sigma) CUPID_CALL(cupid_cuf_stress_at(prob->beam, prob->u, p[0], p[1], p[2], sigma));
     return CUPID_SUCCESS;
   }
-  if (!job->grid || !inside_pd(job, p)) return CUPID_SUCCESS;
-  if (!job->u) { /* before the solve: only say where the point lies */
+  if (!prob->grid || !inside_pd(prob, p)) return CUPID_SUCCESS;
+  if (!prob->u) { /* before the solve: only say where the point lies */
     *region = CUPID_REGION_PD;
     return CUPID_SUCCESS;
   }
 
-  double o[3], h = cupid_pd_grid_spacing(job->grid);
-  cupid_pd_grid_origin(job->grid, o);
-  int dim = cupid_pd_grid_dimension(job->grid);
+  double o[3], h = cupid_pd_grid_spacing(prob->grid);
+  cupid_pd_grid_origin(prob->grid, o);
+  int dim = cupid_pd_grid_dimension(prob->grid);
   cupid_int base[3] = {0, 0, 0};
   double w[3] = {0, 0, 0};
   for (int a = 0; a < 3; a++) {
@@ -55,26 +55,26 @@ cupid_status cupid_app_sample(const cupid_job *job, const double p[3], double u[
     double wt = 1.0;
     for (int a = 0; a < 3; a++)
       if (dim == 3 || a == 1) wt *= d[a] ? w[a] : 1.0 - w[a];
-    cupid_int node = cupid_pd_grid_node_at(job->grid, base[0] + d[0], base[1] + d[1], base[2] + d[2]);
+    cupid_int node = cupid_pd_grid_node_at(prob->grid, base[0] + d[0], base[1] + d[1], base[2] + d[2]);
     if (node < 0 || wt == 0.0) continue;
     wsum += wt;
-    for (int c = 0; c < 3; c++) acc_u[c] += wt * job->u[3 * node + c];
-    if (sigma && job->pd_stress)
-      for (int c = 0; c < 6; c++) acc_s[c] += wt * job->pd_stress[6 * node + c];
+    for (int c = 0; c < 3; c++) acc_u[c] += wt * prob->u[3 * node + c];
+    if (sigma && prob->pd_stress)
+      for (int c = 0; c < 6; c++) acc_s[c] += wt * prob->pd_stress[6 * node + c];
   }
   if (wsum <= 0.0) {
     /* Exactly on a node-free corner: take the node whose cell contains the point. */
     cupid_int ijk[3];
     for (int a = 0; a < 3; a++) ijk[a] = (dim == 1 && a != 1) ? 0 : (cupid_int)floor((p[a] - o[a]) / h);
-    cupid_int node = cupid_pd_grid_node_at(job->grid, ijk[0], ijk[1], ijk[2]);
+    cupid_int node = cupid_pd_grid_node_at(prob->grid, ijk[0], ijk[1], ijk[2]);
     if (node < 0) return CUPID_SUCCESS;
     wsum = 1.0;
-    for (int c = 0; c < 3; c++) acc_u[c] = job->u[3 * node + c];
-    if (sigma && job->pd_stress)
-      for (int c = 0; c < 6; c++) acc_s[c] = job->pd_stress[6 * node + c];
+    for (int c = 0; c < 3; c++) acc_u[c] = prob->u[3 * node + c];
+    if (sigma && prob->pd_stress)
+      for (int c = 0; c < 6; c++) acc_s[c] = prob->pd_stress[6 * node + c];
   }
   for (int c = 0; c < 3; c++) u[c] = acc_u[c] / wsum;
-  if (sigma && job->pd_stress)
+  if (sigma && prob->pd_stress)
     for (int c = 0; c < 6; c++) sigma[c] = acc_s[c] / wsum;
   *region = CUPID_REGION_PD;
   return CUPID_SUCCESS;

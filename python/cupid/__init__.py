@@ -1,0 +1,244 @@
+"""cupid from Python: run a model through libcupid and read its results as numpy arrays.
+
+    import cupid
+    p = cupid.Problem("examples/bar/bar.yaml")   # or a dict with the model file's keys
+    p.solve()
+    u = p.pd_displacement                        # (n, 3) numpy array
+    u_tip, region = p.sample([[5, 100, 5]])
+    print(p.info["reaction_sum"], p.info["imbalance"])
+    p.write_outputs()                            # the model's output files, as `cupid run`
+
+The library is loaded with ctypes (python3 and python3-numpy from Debian; nothing else):
+from $CUPID_LIBRARY, else the build tree beside this package (build/libcupid.so), else the
+system's (an installed libcupid). Errors raise cupid.Error, whose message carries the model
+file's file:line:col, and whose exit_code is the command line's (1 model, 2 numerical, 3 I/O,
+4 internal).
+"""
+import ctypes
+import ctypes.util
+import json
+import os
+
+import numpy as np
+
+__all__ = ["Problem", "Error", "library_path"]
+
+_c_int64 = ctypes.c_int64
+
+
+class Error(RuntimeError):
+    """A cupid failure: .status (e.g. "model error"), .exit_code and the message."""
+
+    def __init__(self, message, status, exit_code):
+        super().__init__(message)
+        self.status = status
+        self.exit_code = exit_code
+
+
+class _RunOptions(ctypes.Structure):  # cupid_run_options (problem.h)
+    _fields_ = [("output_dir", ctypes.c_char_p), ("solver", ctypes.c_int),
+                ("threads", ctypes.c_int), ("max_memory_gb", ctypes.c_double),
+                ("quiet", ctypes.c_int), ("check_only", ctypes.c_int),
+                ("replicate", ctypes.c_int), ("assembled", ctypes.c_int)]
+
+
+class _Info(ctypes.Structure):  # cupid_problem_info (problem.h)
+    _fields_ = [("stage", ctypes.c_int), ("analysis", ctypes.c_char_p),
+                ("coupling", ctypes.c_char_p), ("solver", ctypes.c_char_p),
+                ("solver_reason", ctypes.c_char_p), ("method", ctypes.c_char_p),
+                ("pd_nodes", _c_int64), ("bonds", _c_int64), ("fictitious_nodes", _c_int64),
+                ("fe_nodes", _c_int64), ("fe_dofs", _c_int64), ("dofs", _c_int64),
+                ("constrained_dofs", _c_int64), ("matrix_free", ctypes.c_int),
+                ("iterations", ctypes.c_int), ("residual", ctypes.c_double),
+                ("load_sum", ctypes.c_double * 3), ("reaction_sum", ctypes.c_double * 3),
+                ("imbalance", ctypes.c_double), ("phase_seconds", ctypes.c_double * 6),
+                ("total_seconds", ctypes.c_double), ("peak_memory_bytes", _c_int64)]
+
+
+_SOLVERS = {None: -1, "auto": 0, "direct": 1, "petsc": 2}
+_FIELDS = {"pd_coordinates": 0, "pd_displacement": 1, "pd_force": 2, "pd_load": 3,
+           "pd_stress": 4, "beam_points": 5, "beam_displacement": 6}
+_REGIONS = {0: "none", 1: "PD", 2: "FE"}
+_PHASES = ("grid", "assembly", "coupling", "factorisation", "solve", "output")
+
+
+def library_path():
+    """Where libcupid is loaded from."""
+    env = os.environ.get("CUPID_LIBRARY")
+    if env:
+        return env
+    here = os.path.dirname(os.path.abspath(__file__))
+    local = os.path.join(here, "..", "..", "build", "libcupid.so")
+    if os.path.exists(local):
+        return os.path.normpath(local)
+    found = ctypes.util.find_library("cupid")
+    if not found:
+        raise OSError("libcupid not found: build it (scripts/build.sh) or set CUPID_LIBRARY")
+    return found
+
+
+_lib = None
+
+
+def _load():
+    global _lib
+    if _lib is not None:
+        return _lib
+    lib = ctypes.CDLL(library_path())
+    P = ctypes.c_void_p
+    sigs = {
+        "cupid_problem_create_from_file": ([ctypes.c_char_p, ctypes.POINTER(_RunOptions),
+                                            ctypes.POINTER(P)], ctypes.c_int),
+        "cupid_problem_create_from_string": ([ctypes.c_char_p, ctypes.c_char_p,
+                                              ctypes.POINTER(_RunOptions), ctypes.POINTER(P)],
+                                             ctypes.c_int),
+        "cupid_problem_setup": ([P], ctypes.c_int),
+        "cupid_problem_solve": ([P], ctypes.c_int),
+        "cupid_problem_write_outputs": ([P], ctypes.c_int),
+        "cupid_problem_destroy": ([ctypes.POINTER(P)], None),
+        "cupid_problem_get_field": ([P, ctypes.c_int, ctypes.POINTER(ctypes.POINTER(ctypes.c_double)),
+                                     ctypes.POINTER(_c_int64), ctypes.POINTER(ctypes.c_int)],
+                                    ctypes.c_int),
+        "cupid_problem_sample": ([P, _c_int64, ctypes.POINTER(ctypes.c_double),
+                                  ctypes.POINTER(ctypes.c_double), ctypes.POINTER(ctypes.c_double),
+                                  ctypes.POINTER(ctypes.c_int)], ctypes.c_int),
+        "cupid_problem_get_info": ([P, ctypes.POINTER(_Info)], ctypes.c_int),
+        "cupid_error_message": ([], ctypes.c_char_p),
+        "cupid_status_name": ([ctypes.c_int], ctypes.c_char_p),
+        "cupid_status_exit_code": ([ctypes.c_int], ctypes.c_int),
+        "cupid_version": ([], ctypes.c_char_p),
+    }
+    for name, (args, res) in sigs.items():
+        f = getattr(lib, name)
+        f.argtypes, f.restype = args, res
+    _lib = lib
+    return lib
+
+
+def _check(status):
+    if status != 0:
+        lib = _lib
+        raise Error(lib.cupid_error_message().decode(), lib.cupid_status_name(status).decode(),
+                    lib.cupid_status_exit_code(status))
+
+
+def version():
+    return _load().cupid_version().decode()
+
+
+class Problem:
+    """A model being set up, solved and reported (include/cupid/problem.h).
+
+    model: a path to a model file, or a dict with the model file's keys (model-format.md).
+    output_dir, solver ("auto", "direct", "petsc"), threads, max_memory_gb, quiet: as the
+    command line's -o, --solver, --threads, --max-memory, --quiet.
+    """
+
+    def __init__(self, model, output_dir=None, solver=None, threads=0, max_memory_gb=0.0,
+                 quiet=True):
+        lib = _load()
+        if solver not in _SOLVERS:
+            raise ValueError("solver must be one of auto, direct, petsc")
+        self._out = output_dir.encode() if output_dir else None
+        opts = _RunOptions(output_dir=self._out, solver=_SOLVERS[solver], threads=int(threads),
+                           max_memory_gb=float(max_memory_gb), quiet=1 if quiet else 0)
+        self._p = ctypes.c_void_p()
+        if isinstance(model, dict):
+            # JSON is YAML (flow style): the reader takes it as a model file.
+            text = json.dumps(model).encode()
+            _check(lib.cupid_problem_create_from_string(text, b"<dict>", ctypes.byref(opts),
+                                                        ctypes.byref(self._p)))
+        else:
+            _check(lib.cupid_problem_create_from_file(os.fsencode(model), ctypes.byref(opts),
+                                                      ctypes.byref(self._p)))
+        self._stage = 0
+
+    def __del__(self):
+        self.close()
+
+    def close(self):
+        """Free the problem (also done when it is garbage-collected)."""
+        if getattr(self, "_p", None) and self._p.value and _lib is not None:
+            _lib.cupid_problem_destroy(ctypes.byref(self._p))
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
+
+    def setup(self):
+        """Grid, beam, coupling layout, solver choice, constraints and loads."""
+        if self._stage < 1:
+            _check(_lib.cupid_problem_setup(self._p))
+            self._stage = 1
+        return self
+
+    def solve(self):
+        """The analysis (static, dynamic or evaluate); sets the problem up first if needed."""
+        self.setup()
+        if self._stage < 2:
+            _check(_lib.cupid_problem_solve(self._p))
+            self._stage = 2
+        return self
+
+    def write_outputs(self):
+        """The model's output files (summary.json, lines, VTU, plots) in the output directory."""
+        _check(_lib.cupid_problem_write_outputs(self._p))
+        return self
+
+    def field(self, name):
+        """A field as a copied (n, components) numpy array: pd_coordinates, pd_displacement,
+        pd_force, pd_load, pd_stress (sxx syy szz syz sxz sxy), beam_points,
+        beam_displacement."""
+        if name not in _FIELDS:
+            raise KeyError("unknown field %r (one of %s)" % (name, ", ".join(_FIELDS)))
+        values = ctypes.POINTER(ctypes.c_double)()
+        n, comps = _c_int64(), ctypes.c_int()
+        _check(_lib.cupid_problem_get_field(self._p, _FIELDS[name], ctypes.byref(values),
+                                            ctypes.byref(n), ctypes.byref(comps)))
+        if n.value == 0:
+            return np.zeros((0, comps.value))
+        flat = np.ctypeslib.as_array(values, shape=(n.value * comps.value,))
+        return flat.reshape(n.value, comps.value).copy()
+
+    pd_coordinates = property(lambda self: self.field("pd_coordinates"))
+    pd_displacement = property(lambda self: self.field("pd_displacement"))
+    pd_force = property(lambda self: self.field("pd_force"))
+    pd_load = property(lambda self: self.field("pd_load"))
+    pd_stress = property(lambda self: self.field("pd_stress"))
+    beam_points = property(lambda self: self.field("beam_points"))
+    beam_displacement = property(lambda self: self.field("beam_displacement"))
+
+    def sample(self, points, stress=False):
+        """Displacements (n, 3) at points (n, 3), as the output points sample them, and each
+        point's region ("PD", "FE" or "none": NaN there); with stress=True also (n, 6)."""
+        pts = np.ascontiguousarray(np.atleast_2d(np.asarray(points, dtype=float)))
+        if pts.shape[1] != 3:
+            raise ValueError("points must have 3 coordinates")
+        n = pts.shape[0]
+        u = np.empty((n, 3))
+        s = np.empty((n, 6)) if stress else None
+        reg = (ctypes.c_int * n)()
+        dp = ctypes.POINTER(ctypes.c_double)
+        _check(_lib.cupid_problem_sample(self._p, n, pts.ctypes.data_as(dp), u.ctypes.data_as(dp),
+                                         s.ctypes.data_as(dp) if stress else None, reg))
+        regions = [_REGIONS[r] for r in reg]
+        return (u, regions, s) if stress else (u, regions)
+
+    @property
+    def info(self):
+        """Counts, solver, resultants, imbalance and phase times as a dict."""
+        i = _Info()
+        _check(_lib.cupid_problem_get_info(self._p, ctypes.byref(i)))
+        d = {}
+        for name, _ in _Info._fields_:
+            v = getattr(i, name)
+            if isinstance(v, bytes):
+                v = v.decode()
+            elif name in ("load_sum", "reaction_sum"):
+                v = list(v)
+            elif name == "phase_seconds":
+                v = dict(zip(_PHASES, v))
+            d[name] = v
+        return d

@@ -1,0 +1,106 @@
+"""The Python package against the command line (issue 15): the same model through cupid.Problem
+and `cupid run` gives the same numbers; fields, sampling, dict models and errors."""
+import json
+import os
+import subprocess
+
+import numpy as np
+import pytest
+
+import cupid
+
+SRC = os.environ.get("CUPID_SOURCE_DIR", os.path.join(os.path.dirname(__file__), "..", ".."))
+CLI = os.environ.get("CUPID", os.path.join(SRC, "build", "cupid"))
+BAR = os.path.join(SRC, "tests", "models", "mpi", "coupled_bar.yaml")
+
+
+@pytest.fixture(scope="module")
+def bar(tmp_path_factory):
+    out = tmp_path_factory.mktemp("cli")
+    subprocess.run([CLI, "run", BAR, "-o", str(out), "--quiet"], check=True)
+    summary = json.load(open(out / "summary.json"))
+    p = cupid.Problem(BAR)
+    p.solve()
+    return p, summary
+
+
+def test_points_equal_the_cli(bar):
+    p, summary = bar
+    pts = np.array([[q["x"], q["y"], q["z"]] for q in summary["points"]])
+    u, regions = p.sample(pts)
+    umax = np.abs(p.pd_displacement).max()
+    for k, q in enumerate(summary["points"]):
+        # the same code path: equal to the last printed digit
+        assert np.allclose(u[k], [q["ux"], q["uy"], q["uz"]], rtol=0, atol=1e-12 * umax)
+        assert regions[k] == q["region"]
+
+
+def test_counts_and_resultants_equal_the_cli(bar):
+    p, summary = bar
+    info = p.info
+    for key in ("pd_nodes", "bonds", "fictitious_nodes", "fe_dofs", "dofs", "constrained_dofs"):
+        assert info[key] == summary["counts"][key], key
+    scale = np.abs(summary["applied_load_sum"]).max()
+    assert np.allclose(info["load_sum"], summary["applied_load_sum"], rtol=0, atol=1e-12 * scale)
+    assert np.allclose(info["reaction_sum"], summary["reaction_sum"], rtol=0, atol=1e-12 * scale)
+    assert info["coupling"] == "fictitious" and info["stage"] == 2
+
+
+def test_fields_have_the_model_shape(bar):
+    p, summary = bar
+    n = summary["counts"]["pd_nodes"]
+    assert p.pd_coordinates.shape == (n, 3)
+    assert p.pd_displacement.shape == (n, 3)
+    assert p.pd_force.shape == (n, 3)
+    assert p.pd_stress.shape == (n, 6)
+    assert p.beam_points.shape == p.beam_displacement.shape and p.beam_points.shape[0] > 0
+    assert np.all(np.isfinite(p.pd_displacement)) and np.all(np.isfinite(p.beam_displacement))
+    # sampling at a PD node's centre gives that node's displacement
+    x = p.pd_coordinates
+    k = int(np.argmax(x[:, 1]))
+    u, regions = p.sample(x[k])
+    assert regions == ["PD"]
+    assert np.allclose(u[0], p.pd_displacement[k], rtol=1e-12, atol=0)
+
+
+def pd_bar(E=10000.0, load=100.0):
+    """A 10 x 10 x 20 LPS bar, fixed at y < 0, pulled at y = 20 (as examples/pd_bar)."""
+    return {
+        "title": "dict bar",
+        "materials": {"resin": {"E": E, "nu": 0.2}},
+        "peridynamics": {"spacing": 1.0, "horizon": 3.0, "model": "lps", "material": "resin",
+                         "regions": [{"x": [0, 10], "y": [-3, 20], "z": [0, 10]}]},
+        "constraints": [{"fix": {"box": {"y": [-3, 0]}}}],
+        "loads": [{"traction": {"y": 20, "value": [0, load, 0]}}],
+        "analysis": {"type": "static", "solver": "direct"},
+        "output": {"directory": "unused"},
+    }
+
+
+def test_a_dict_model_runs_and_is_linear():
+    u1 = cupid.Problem(pd_bar(load=100.0)).solve().pd_displacement
+    u2 = cupid.Problem(pd_bar(load=200.0)).solve().pd_displacement
+    assert np.abs(u1[:, 1]).max() > 0
+    # linear elasticity: twice the load, twice the displacement (to the solver's residual)
+    assert np.allclose(u2, 2 * u1, rtol=0, atol=1e-9 * np.abs(u2).max())
+
+
+def test_model_errors_carry_file_line_col(tmp_path):
+    bad = tmp_path / "bad.yaml"
+    bad.write_text(open(BAR).read().replace("spacing: 2.0", "spacing: -2.0"))
+    with pytest.raises(cupid.Error) as e:
+        cupid.Problem(str(bad)).solve()
+    assert e.value.exit_code == 1
+    assert str(bad) + ":" in str(e.value)
+    line = str(e.value).split(str(bad) + ":")[1].split(":")[0]
+    assert line.isdigit()
+
+
+def test_stage_order_and_unknown_field(bar):
+    p, _ = bar
+    with pytest.raises(KeyError):
+        p.field("temperature")
+    q = cupid.Problem(pd_bar())
+    with pytest.raises(cupid.Error) as e:
+        q.field("pd_displacement")  # before solve
+    assert e.value.exit_code == 4

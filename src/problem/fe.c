@@ -1,0 +1,53 @@
+/* The CUF beam of a model inside a run: the beam's DOFs sit after the PD DOFs in the global
+ * system (offset fe_offset), so the same vectors serve PD-only, FE-only and coupled models. */
+#include <string.h>
+
+#include "problem_internal.h"
+#include "cupid/io.h"
+
+cupid_status cupid_problem_fe_build(cupid_problem_state *prob) {
+  double t0 = cupid_wtime();
+  CUPID_CALL(cupid_cuf_beam_create(prob->model, &prob->beam));
+  prob->fe_offset = 3 * prob->n_pd;
+  CUPID_CALL(cupid_cuf_set_dof_offset(prob->beam, prob->fe_offset));
+  cupid_cuf_get_info(prob->beam, &prob->fe_info);
+  prob->n_fe_dofs = prob->fe_info.n_dofs;
+  cupid_problem_phase_end(prob, CUPID_PHASE_GRID, t0);
+  cupid_problem_progress(prob, "beam: %lld FE nodes, %lld DOFs", (long long)prob->fe_info.n_fe_nodes,
+                     (long long)prob->n_fe_dofs);
+  return CUPID_SUCCESS;
+}
+
+static void field_of_model(void *ctx, const double p[3], double density, double out[3]) {
+  const cupid_value *v = ctx;
+  for (int c = 0; c < 3; c++) out[c] = cupid_value_eval(&v[c], p[0], p[1], p[2], 0.0, density);
+}
+
+/* `evaluate`: the generalised DOFs that represent the imposed field (LE: nodal values; TE:
+ * the section-wise L2 projection, exact for polynomials up to the expansion order). */
+cupid_status cupid_problem_fe_impose_field(cupid_problem_state *prob) {
+  return cupid_cuf_interpolate(prob->beam, field_of_model, (void *)prob->model->analysis.field,
+                               prob->u);
+}
+
+static void unit_field(void *ctx, const double p[3], double density, double out[3]) {
+  const int *k = ctx;
+  for (int c = 0; c < 3; c++) out[c] = c == *k ? 1.0 : 0.0;
+}
+
+cupid_status cupid_problem_translations(const cupid_problem_state *prob, double *t) {
+  for (int k = 0; k < 3; k++) {
+    double *tk = t + (size_t)k * (size_t)prob->ndof;
+    for (cupid_int i = 0; i < prob->n_pd; i++) tk[3 * i + k] = 1.0;
+    if (prob->beam) CUPID_CALL(cupid_cuf_interpolate(prob->beam, unit_field, &k, tk));
+  }
+  return CUPID_SUCCESS;
+}
+
+cupid_status cupid_problem_fe_write_vtu(cupid_problem_state *prob, const char *path) {
+  cupid_cuf_vtu *vtu = NULL;
+  CUPID_CALL(cupid_cuf_vtu_build(prob->beam, prob->u, 0, &vtu));
+  cupid_status st = cupid_vtu_write(path, &vtu->mesh);
+  cupid_cuf_vtu_destroy(&vtu);
+  return st;
+}

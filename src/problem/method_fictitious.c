@@ -1,0 +1,128 @@
+/* Coupling by fictitious nodes (paper 000 section 4; src/coupling/fictitious.c): the beam gives
+ * way inside the PD regions, constraints and loads go to the part they touch, and the coupled
+ * matrix of Eq. 38 is solved by UMFPACK (it is not symmetric), or without the PD matrix by the
+ * PETSc engine: GMRES preconditioned by the LU of a cheap bond-based twin (src/coupling/
+ * operator.c, solvers/krylov.c; issue 6), on one rank or several (the PD grid in z slabs). */
+#include "method.h"
+
+static cupid_status check(const cupid_problem_state *prob) {
+  const cupid_model_t *m = prob->model;
+  /* the fictitious nodes and elements need a 3D grid */
+  if (m->pd.dimension != 3)
+    return cupid_model_error(m, &m->pd.mark,
+                             "a coupled model needs a 3D peridynamic grid (dimension: 3) with "
+                             "method fictitious (1D grids: methods lagrange and arlequin)");
+  if (m->analysis.type == CUPID_ANALYSIS_DYNAMIC)
+    return cupid_model_error(m, &m->analysis.mark,
+                             "type dynamic is not supported with coupling method fictitious: its "
+                             "coupled operator (paper 000 Eq. 38) is a static, non-symmetric "
+                             "construction with massless fictitious nodes (see docs/dynamics.md); "
+                             "use `coupling: {method: lagrange}` or `{method: arlequin}` for "
+                             "coupled dynamics, or type static or evaluate");
+  return CUPID_SUCCESS;
+}
+
+static cupid_status constraints(cupid_problem_state *prob) {
+  return cupid_method_split_constraints(prob, NULL);
+}
+
+static cupid_status assemble(cupid_problem_state *prob) {
+  if (prob->K) return CUPID_SUCCESS;
+  double t0 = cupid_wtime();
+  cupid_status st = CUPID_SUCCESS;
+  cupid_box *boxes = NULL;
+  int *mats = NULL;
+  cupid_coupling_options co;
+  CUPID_TRY(cupid_method_coupling_options(prob, &co, &boxes, &mats));
+  CUPID_TRY(cupid_coupling_create(prob->beam, prob->grid, &co, &prob->coupling, &prob->K));
+  cupid_coupling_info ci;
+  cupid_coupling_get_info(prob->coupling, &ci);
+  prob->n_fictitious = ci.n_fictitious_pd;
+  cupid_problem_phase_end(prob, CUPID_PHASE_COUPLING, t0);
+  cupid_problem_progress(prob,
+                         "coupling (fictitious nodes): %d interfaces, %lld fictitious PD nodes, "
+                         "%lld fictitious FE nodes; %lld non-zeros (%.1f MB)",
+                         ci.n_interfaces, (long long)ci.n_fictitious_pd,
+                         (long long)ci.n_fictitious_fe, (long long)cupid_csr_nnz(prob->K),
+                         (double)cupid_csr_bytes(prob->K) / 1e6);
+cleanup:
+  cupid_free(&boxes);
+  cupid_free(&mats);
+  return st;
+}
+
+/* The PETSc engine, static, 3D: matrix-free unless --assembled asks for Eq. 38 assembled
+ * (its rows split over the ranks, GMRES + block Jacobi/ILU). */
+static int matrix_free(const cupid_problem_state *prob) {
+  return prob->engine->iterative && !prob->opts->assembled && prob->grid &&
+         cupid_pd_grid_dimension(prob->grid) == 3;
+}
+
+static cupid_status solve_matrix_free(cupid_problem_state *prob) {
+  cupid_status st = CUPID_SUCCESS;
+  cupid_box *boxes = NULL;
+  int *mats = NULL;
+  cupid_coupling_options co;
+  cupid_coupling_operator A = NULL;
+  cupid_csr P = NULL;
+  double t0 = cupid_wtime();
+  CUPID_TRY(cupid_method_coupling_options(prob, &co, &boxes, &mats));
+  /* a slab: every rank's failure stops all of them before the next collective call */
+  st = cupid_coupling_operator_create(prob->beam, prob->grid, &co, &A);
+  if (st == CUPID_SUCCESS) st = cupid_coupling_preconditioner(A, 1.5, &P);
+  CUPID_TRY(prob->slab ? cupid_problem_slab_agree(st) : st);
+  cupid_coupling_info ci; /* the whole model's, on a slab too */
+  cupid_coupling_operator_get_info(A, &ci);
+  prob->n_fictitious = ci.n_fictitious_pd;
+  cupid_problem_phase_end(prob, CUPID_PHASE_COUPLING, t0);
+  cupid_problem_progress(prob,
+                         "coupling (fictitious nodes, matrix-free): %d interfaces, %lld fictitious "
+                         "PD nodes, %lld fictitious FE nodes; operator %.1f MB, preconditioner "
+                         "matrix %.1f MB%s",
+                         ci.n_interfaces, (long long)ci.n_fictitious_pd, (long long)ci.n_fictitious_fe,
+                         (double)cupid_coupling_operator_bytes(A) / 1e6,
+                         (double)cupid_csr_bytes(P) / 1e6, prob->slab ? " (rank 0's slab)" : "");
+  cupid_linear_operator L;
+  cupid_coupling_operator_linear(A, &L); /* on a slab: its rows (cupid_krylov_solve) */
+  CUPID_TRY(cupid_method_krylov_solve(prob, &L, P));
+  if (prob->slab) { /* rank 0 gathers the slabs into the whole model; the others stop */
+    cupid_csr_destroy(&P);
+    cupid_coupling_operator_destroy(&A);
+    CUPID_TRY(cupid_problem_slab_collect(prob));
+  }
+cleanup:
+  cupid_csr_destroy(&P);
+  cupid_coupling_operator_destroy(&A);
+  cupid_free(&boxes);
+  cupid_free(&mats);
+  return st;
+}
+
+/* Matrix-free Eq. 38 + MUMPS LU of the cheap twin, measured on cbeam_web200 (10^5 PD nodes:
+ * 4.3 GB, 115 s on a loaded machine; bench/README_coupled.md): ~1.6 kB a PD node for the
+ * operator and the cheap matrix, ~40 kB for its factor. */
+static int estimate_matrix_free(const cupid_problem_state *prob, double *bytes, double *seconds,
+                                const char **what) {
+  if (prob->model->analysis.type != CUPID_ANALYSIS_STATIC || !prob->grid ||
+      cupid_pd_grid_dimension(prob->grid) != 3)
+    return 0;
+  *bytes = 42e3 * (double)prob->n_pd + 30.0 * (double)prob->ndof * 8.0;
+  *seconds = 2.0 + 1.2e-3 * (double)prob->n_pd;
+  *what = "matrix-free GMRES + LU of a bond-based twin";
+  return 1;
+}
+
+const cupid_method_ops cupid_method_fictitious = {
+    .name = "fictitious",
+    .caps = CUPID_METHOD_SLABS | CUPID_METHOD_GUARD_MATRIX_FREE,
+    .matrix = CUPID_MATRIX_GENERAL, /* Eq. 38 is not symmetric: UMFPACK, GMRES */
+    .check = check,
+    .prepare = cupid_method_deactivate_regions,
+    .constraints = constraints,
+    .loads = cupid_method_split_loads,
+    .assemble = assemble,
+    .matrix_free = matrix_free,
+    .solve_matrix_free = solve_matrix_free,
+    .report = cupid_method_print_equilibrium,
+    .estimate_matrix_free = estimate_matrix_free,
+};

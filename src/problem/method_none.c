@@ -1,0 +1,103 @@
+/* Models with one part (method.h, cupid_method_none): a PD grid alone or a beam alone. The
+ * constraints and loads go to that part; PD-only 3D static models solve matrix-free on the
+ * PETSc engine (the 2-delta LPS matrix is never formed: cupid_petsc_solve_pd, CG + GAMG, in
+ * slabs under mpirun) and PD-only central differences run on the PD operator. */
+#include "method.h"
+
+static cupid_status check(const cupid_problem_state *prob) {
+  if (prob->model->analysis.type == CUPID_ANALYSIS_DYNAMIC) return cupid_problem_dynamic_check(prob);
+  return CUPID_SUCCESS;
+}
+
+static cupid_status constraints(cupid_problem_state *prob) {
+  const cupid_model_t *m = prob->model;
+  if (prob->grid) CUPID_CALL(cupid_problem_pd_constraints(prob, m->constraints, m->n_constraints));
+  if (prob->beam) CUPID_CALL(cupid_cuf_apply_constraints(prob->beam, m, prob->bc));
+  return CUPID_SUCCESS;
+}
+
+static cupid_status loads(cupid_problem_state *prob) {
+  const cupid_model_t *m = prob->model;
+  if (prob->grid) CUPID_CALL(cupid_problem_pd_loads(prob, m->loads, m->n_loads, prob->f_ext));
+  if (prob->beam) CUPID_CALL(cupid_cuf_load_vector(prob->beam, m, prob->f_ext));
+  return CUPID_SUCCESS;
+}
+
+static cupid_status assemble(cupid_problem_state *prob) {
+  if (prob->K) return CUPID_SUCCESS;
+  double t0 = cupid_wtime();
+  if (prob->grid) CUPID_CALL(cupid_pd_operator_assemble(prob->op, &prob->K));
+  else CUPID_CALL(cupid_cuf_assemble(prob->beam, &prob->K));
+  cupid_problem_phase_end(prob, CUPID_PHASE_ASSEMBLY, t0);
+  cupid_problem_progress(prob, "assembly: %lld non-zeros (%.1f MB)", (long long)cupid_csr_nnz(prob->K),
+                         (double)cupid_csr_bytes(prob->K) / 1e6);
+  return CUPID_SUCCESS;
+}
+
+static int is_pd_3d(const cupid_problem_state *prob) {
+  return prob->grid && !prob->beam && cupid_pd_grid_dimension(prob->grid) == 3;
+}
+
+static int matrix_free(const cupid_problem_state *prob) {
+  return prob->engine->iterative && is_pd_3d(prob);
+}
+
+/* K u = f by CG on the PD operator (PETSc); a slab computes its owned rows, rank 0 gathers. */
+static cupid_status solve_matrix_free(cupid_problem_state *prob) {
+  cupid_status st = cupid_petsc_solve_pd(prob->op, prob->grid, prob->pd_materials, prob->f_ext,
+                                         prob->bc, prob->u, &prob->solve);
+  cupid_problem_record_solve(prob);
+  CUPID_CALL(st);
+  prob->solved = 1;
+  cupid_problem_progress(prob, "solve: PETSc matrix-free, %s + %s, %d iterations on %d rank%s, "
+                         "%lld equations, residual %.2e", prob->solve.ksp_type, prob->solve.pc_type,
+                         prob->solve.iterations, prob->solve.ranks, prob->solve.ranks == 1 ? "" : "s",
+                         (long long)prob->solve.n, prob->solve.residual);
+  if (!prob->slab) return cupid_pd_operator_apply(prob->op, prob->u, prob->f_int);
+  const cupid_int a = prob->part.owned_first, b = prob->part.owned_last;
+  CUPID_CALL(cupid_pd_operator_apply_range(prob->op, a, b, prob->u, prob->f_int + 3 * a));
+  return cupid_problem_slab_collect(prob);
+}
+
+static cupid_status pd_apply(void *op, const double *x, double *y) {
+  return cupid_pd_operator_apply(op, x, y);
+}
+
+/* PD only: the PD operator (borrowed); a beam alone has none (its K is assembled). */
+static cupid_status explicit_operator(cupid_problem_state *prob, cupid_method_operator *op) {
+  if (prob->grid && !prob->beam) *op = (cupid_method_operator){.apply = pd_apply, .ctx = prob->op};
+  return CUPID_SUCCESS;
+}
+
+static cupid_status mass(cupid_problem_state *prob, cupid_csr *M, double **m_lumped) {
+  return cupid_method_plain_mass(prob, 0, M, m_lumped);
+}
+
+/* Matrix-free PD: no K, a 19-block bond-based preconditioner matrix (x2.5 with its GAMG
+ * hierarchy and PETSc copies), setup + ~32 CG iterations worth 25 operator products at ~1.5e7
+ * bonds per second per pass (LPS: two passes). Calibrated on the LPS cubes of docs/scale.md
+ * (100^3: 6.3 GB and 439 s measured, 6.0 GB and 435 s estimated). */
+static int estimate_matrix_free(const cupid_problem_state *prob, double *bytes, double *seconds,
+                                const char **what) {
+  if (!is_pd_3d(prob)) return 0;
+  double n = (double)prob->n_pd, passes = prob->model->pd.model == CUPID_PD_LPS ? 2.0 : 1.0;
+  *bytes = 2.5 * 19.0 * 9.0 * 12.0 * n + 30.0 * (double)prob->ndof * 8.0;
+  *seconds = 2.0 + 25.0 * passes * (double)prob->n_bonds / 1.5e7 + 2e-5 * n;
+  *what = "matrix-free CG + GAMG";
+  return 1;
+}
+
+const cupid_method_ops cupid_method_none = {
+    .name = "none",
+    .caps = CUPID_METHOD_DYNAMIC | CUPID_METHOD_GRID_1D | CUPID_METHOD_SLABS,
+    .matrix = CUPID_MATRIX_SPD,
+    .check = check,
+    .constraints = constraints,
+    .loads = loads,
+    .assemble = assemble,
+    .matrix_free = matrix_free,
+    .solve_matrix_free = solve_matrix_free,
+    .explicit_operator = explicit_operator,
+    .mass = mass,
+    .estimate_matrix_free = estimate_matrix_free,
+};

@@ -1,0 +1,210 @@
+/* Private to src/problem: the state of one problem (include/cupid/problem.h) and the stages
+ * that fill it. The coupling method of a model is a table of functions (method.h); the solver
+ * engine another (cupid_solver_type, solvers.h): the stages call through them and never test
+ * which method or engine it is. */
+#ifndef CUPID_PROBLEM_INTERNAL_H
+#define CUPID_PROBLEM_INTERNAL_H
+
+#include "cupid/coupling.h"
+#include "cupid/cuf.h"
+#include "cupid/dynamics.h"
+#include "cupid/model.h"
+#include "cupid/pd.h"
+#include "cupid/problem.h"
+#include "cupid/solvers.h"
+
+/** Phases reported in summary.json (model-format.md: grid, assembly, coupling,
+ *  factorisation, solve, output). */
+typedef enum {
+  CUPID_PHASE_GRID = 0,
+  CUPID_PHASE_ASSEMBLY,
+  CUPID_PHASE_COUPLING,
+  CUPID_PHASE_FACTORISATION,
+  CUPID_PHASE_SOLVE,
+  CUPID_PHASE_OUTPUT,
+  CUPID_PHASE_COUNT
+} cupid_phase;
+
+typedef struct {
+  double seconds;
+  int64_t peak_memory; /**< process peak RSS at the end of the phase */
+  int used;
+} cupid_phase_record;
+
+/** State of a `type: dynamic` run (src/app/dynamic.c). */
+typedef struct {
+  cupid_dynamics_info info;
+  cupid_dynamics_energy energy; /**< at the last step */
+  cupid_int steps;
+  int lumped, done;
+  int matrix_free; /**< central differences on a matrix-free operator (no assembled K) */
+} cupid_problem_dynamic;
+
+typedef struct cupid_method_ops cupid_method_ops; /* method.h */
+
+/** The stages a problem has passed (cupid_problem_info.stage). */
+enum { CUPID_STAGE_CREATED = 0, CUPID_STAGE_SET_UP = 1, CUPID_STAGE_SOLVED = 2 };
+
+typedef struct cupid_problem_private {
+  const cupid_model_t *model;
+  cupid_model owned_model;  /**< created from a file or string: the problem's to free */
+  cupid_run_options options;
+  const cupid_run_options *opts; /**< = &options */
+  const cupid_method_ops *method; /**< the coupling method's table (method.h) */
+  int stage;
+  const char *outdir;
+  int quiet;
+
+  /* Peridynamics */
+  cupid_pd_grid grid;
+  cupid_pd_operator op;
+  cupid_pd_operator_options pd_options; /**< kept for size estimates */
+  cupid_pd_material *pd_materials;      /**< owned; pd_options.materials points here */
+  cupid_int n_pd;          /**< PD nodes */
+  cupid_int n_bonds;
+
+  /* CUF beam (FE): its DOFs follow the PD DOFs, from fe_offset = 3 n_pd. */
+  cupid_cuf_beam beam;
+  cupid_cuf_info fe_info;
+  cupid_int fe_offset, n_fe_dofs;
+
+  /* The linear system: [3 DOFs per PD node | FE DOFs]. */
+  cupid_int ndof;
+  cupid_csr K;
+  cupid_dirichlet bc;
+  double *u;               /**< displacements */
+  double *f_ext;           /**< applied loads */
+  double *f_int;           /**< K u (internal force; = loads + reactions at equilibrium) */
+  double *pd_stress;       /**< 6 per PD node, or NULL */
+  cupid_solve_info solve;
+  int solved;              /**< a linear solve was done */
+
+  cupid_problem_dynamic dyn;   /**< type: dynamic */
+
+  /* Coupled models (method_*.c) */
+  cupid_coupling_h coupling;
+  cupid_arlequin_region *arlequin_regions; /**< method arlequin: the layout (owned) */
+  int n_arlequin_regions;
+  cupid_int n_fictitious;  /**< fictitious PD nodes */
+
+  double load_sum[3], reaction_sum[3];
+  cupid_phase_record phases[CUPID_PHASE_COUNT];
+  double t_start;
+
+  /* Solver engine (issue 6): DIRECT or PETSC once chosen (AUTO until then), its table and
+   * why it was chosen. */
+  cupid_solver_kind solver;
+  const cupid_solver_type *engine;
+  char solver_reason[160];
+
+  /* Distributed PD (issue 6, slab.c): this rank holds one z slab of the grid (slab = 1 until
+   * rank 0 gathers the results); the grid's n_pd, u, f_ext, f_int, bc are then the slab's. */
+  int slab;
+  cupid_pd_grid_partition part;  /**< of prob->grid */
+  int slab_ranks;                /**< > 1: the run was split into this many slabs */
+  int slab_nodes_max;            /**< the largest slab (nodes incl. halo) */
+
+  /* Fields served by cupid_problem_get_field (built on demand). */
+  double *beam_points, *beam_u; /**< the beam's 3D reconstruction: points, displacements */
+  cupid_int n_beam_points;
+  cupid_box *region_boxes;      /**< cupid_problem_coupling_options: one per PD region */
+  int *region_materials;
+} cupid_problem_state;
+
+/* problem.c: the stages. */
+void cupid_problem_progress(const cupid_problem_state *prob, const char *fmt, ...)
+    __attribute__((format(printf, 2, 3)));
+void cupid_problem_phase_end(cupid_problem_state *prob, cupid_phase phase, double t0);
+/** The factorisation and solve phases from prob->solve (a linear solve just done). */
+void cupid_problem_record_solve(cupid_problem_state *prob);
+/** Solve prob->K u = f_ext with prob->bc by the chosen engine into prob->u and prob->solve;
+ *  a breakdown names the node (PD) or beam node and expansion term (FE). */
+cupid_status cupid_problem_linear_solve(cupid_problem_state *prob, cupid_matrix_kind kind);
+/** The initial or imposed field of the model's expressions @p v on the PD nodes (into u). */
+void cupid_problem_pd_field(const cupid_problem_state *prob, const cupid_value v[3], double t,
+                            double *u);
+
+/** The PD materials and operator options of the model (prob->pd_materials,
+ *  prob->pd_options); a PD region with an orthotropic material is a model error. */
+cupid_status cupid_problem_pd_options(cupid_problem_state *prob);
+
+/* pd_bc.c: constraints and loads on PD nodes (volume layers, faces, points). */
+cupid_status cupid_problem_pd_constraints(cupid_problem_state *prob, const cupid_constraint *cons,
+                                          int n);
+/** Add the loads to f (3 per PD node, in the layout of prob->f_ext). */
+cupid_status cupid_problem_pd_loads(cupid_problem_state *prob, const cupid_load *loads, int n,
+                                    double *f);
+
+/* split.c: which part (beam, PD grid) a constraint or load of a coupled model touches. */
+/** A used beam node lies on the plane y. */
+int cupid_problem_fe_node_at(const cupid_problem_state *prob, double y);
+/** A used beam node lies in the box's y range. */
+int cupid_problem_fe_node_in_box(const cupid_problem_state *prob, const cupid_box *b);
+/** A PD node lies in the box (only y counts on a 1D grid). */
+int cupid_problem_pd_node_in_box(const cupid_problem_state *prob, const cupid_box *b);
+
+/* sample.c: displacement (and stress) at a point, by trilinear interpolation of the grid. */
+cupid_status cupid_problem_sample_point(const cupid_problem_state *prob, const double p[3],
+                                        double u[3], double sigma[6], cupid_region_kind *region);
+
+/* slab.c (issue 6): PD models split into z slabs over the MPI ranks. */
+/** Several ranks, 3D, static, solver petsc or auto, a method that runs on slabs. */
+int cupid_problem_slab_wanted(const cupid_problem_state *prob);
+/** The status of every rank agreed (collective): an error on any rank is an error on all, so
+ *  that none waits alone in the next collective call (the failing rank keeps its message). */
+cupid_status cupid_problem_slab_agree(cupid_status st);
+/** Node i counts on this rank (always, unless a slab does not own it). */
+int cupid_problem_pd_owned(const cupid_problem_state *prob, cupid_int node);
+/** A count of owned nodes summed over the ranks of a slab run (collective there). */
+cupid_int cupid_problem_global_count(const cupid_problem_state *prob, cupid_int count);
+/** cupid_problem_check_points against the whole grid, built on rank 0 for the check
+ *  (collective). */
+cupid_status cupid_problem_slab_check_points(cupid_problem_state *prob);
+/** After the solve: stresses of the slab, every owned field gathered on rank 0, which then
+ *  holds the whole grid and fields (prob->slab = 0 there) for the outputs (collective). */
+cupid_status cupid_problem_slab_collect(cupid_problem_state *prob);
+
+/* report.c: every file of output (summary.json, lines, pd_nodes.csv, VTU, plots). */
+/** The outputs need nodal PD stresses (VTU, or a point with stress). */
+int cupid_problem_needs_stress(const cupid_problem_state *prob);
+/** prob->pd_stress from prob->u (once). */
+cupid_status cupid_problem_pd_stress(cupid_problem_state *prob);
+cupid_status cupid_problem_report(cupid_problem_state *prob);
+/** Every output point must lie inside the model (checked before solving). */
+cupid_status cupid_problem_check_points(const cupid_problem_state *prob);
+
+/* fe.c: the CUF beam of a model: creation, constraints, loads, sampling, VTU. */
+cupid_status cupid_problem_fe_build(cupid_problem_state *prob);
+cupid_status cupid_problem_fe_impose_field(cupid_problem_state *prob);
+/** Unit-translation vectors: t[k * ndof + d] = generalised DOF d of the field e_k. */
+cupid_status cupid_problem_translations(const cupid_problem_state *prob, double *t);
+cupid_status cupid_problem_fe_write_vtu(cupid_problem_state *prob, const char *path);
+
+/* dynamic.c: type dynamic. */
+/** What type dynamic needs of any model (densities, integrator settings, loads constant). */
+cupid_status cupid_problem_dynamic_check(const cupid_problem_state *prob);
+/** The "dynamic" block of summary.json. */
+void cupid_problem_dynamic_json(cupid_json js, const cupid_problem_state *prob);
+
+/* estimate.c: `cupid check` and the memory guard of `cupid run`. */
+cupid_status cupid_problem_estimate(const cupid_problem_state *prob, int print);
+/** Before the grid is built: refuse a model whose grid, neighbour lists (and, for a solve, matrix
+ *  and factor) cannot fit, from lower bounds computed from the regions alone (no allocation);
+ *  also grids whose overlapping regions would take hours to build, and output lines of more
+ *  than 10^8 points (or 2x10^8 point-region tests) in all. */
+cupid_status cupid_problem_guard_size(const cupid_problem_state *prob);
+/** The memory limit (--max-memory, else 90% of the physical memory). */
+double cupid_problem_memory_limit(const cupid_problem_state *prob);
+/** The estimated cost of each engine for this problem (cupid_solver_cost per engine kind). */
+cupid_status cupid_problem_costs(const cupid_problem_state *prob, cupid_solver_cost *direct,
+                                 cupid_solver_cost *iterative);
+
+/** `solver: auto` keeps the direct engine while its estimated peak memory stays below this
+ *  share of the memory limit and its factorisation below these seconds (problem.c). */
+#define CUPID_AUTO_DIRECT_MEMORY_SHARE 0.25
+#define CUPID_AUTO_DIRECT_SECONDS 120.0
+
+/** Free everything a problem owns; the struct itself is the caller's. */
+void cupid_problem_state_free(cupid_problem_state *prob);
+
+#endif
