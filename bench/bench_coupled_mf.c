@@ -141,14 +141,14 @@ int main(int argc, char **argv) {
   t_last = cupid_wtime();
 
   int rc = 0;
-  cupid_krylov_info ki;
+  cupid_solve_info ki;
   memset(&ki, 0, sizeof ki);
 #if CUPID_HAVE_PETSC
   cupid_krylov_options ko = {.rtol = rtol, .restart = restart, .pc = pc,
                                       .factor_package = pkg};
   cupid_status st = cupid_coupling_krylov_solve(A, P, sys.bc, sys.f_ext, sys.u, &ko, &ki);
   double peak = (double)cupid_peak_memory() / 1048576.0;
-  printf("| %-34s | %8.2f | %8s |\n", "PC set-up (PETSc matrix + factor)", ki.time_setup, "");
+  printf("| %-34s | %8.2f | %8s |\n", "PC set-up (PETSc matrix + factor)", ki.time_factor, "");
   printf("| %-34s | %8.2f | %8.0f |\n", "GMRES", ki.time_solve, peak);
   check(st, "krylov");
 #else
@@ -165,8 +165,8 @@ int main(int argc, char **argv) {
          (double)cupid_csr_bytes(P) / 1048576.0,
          (double)P->rowptr[P->nrows] / (double)P->nrows, t_apply);
 #if CUPID_HAVE_PETSC
-  printf("%s: %d iterations, relative residual %.2e (horizon %.2f h, rtol %.0e)\n", ki.method,
-         ki.iterations, ki.residual, horizon, rtol);
+  printf("%s + %s: %d iterations, relative residual %.2e (horizon %.2f h, rtol %.0e)\n",
+         ki.ksp_type, ki.pc_type, ki.iterations, ki.residual, horizon, rtol);
   /* Equilibrium |R + P| / |P| (R: reactions A u - f on fixed DOFs), as `cupid run` prints it:
    * the fictitious-node method does not conserve momentum (docs/coupling.md). */
   double load[3], reac[3], pn = 0.0, rn = 0.0;

@@ -382,7 +382,7 @@ cupid_status cupid_coupling_preconditioner(const cupid_coupling_operator A, doub
 cupid_status cupid_coupling_krylov_solve(const cupid_coupling_operator A, const cupid_csr_t *P,
                                          const cupid_dirichlet_t *bc, const double *f, double *u,
                                          const cupid_krylov_options *opts,
-                                         cupid_krylov_info *info);
+                                         cupid_solve_info *info);
 /** The fictitious-node operator as a cupid_linear_operator (GMRES; A borrowed). */
 void cupid_coupling_operator_linear(const cupid_coupling_operator A, cupid_linear_operator *L);
 /** The Arlequin operator as a cupid_linear_operator (symmetric: CG; A borrowed). */

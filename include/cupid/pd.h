@@ -304,23 +304,11 @@ cupid_status cupid_pd_assemble_rows_bond(const cupid_pd_grid grid, const cupid_p
                                          double radius, cupid_int first, cupid_int last,
                                          cupid_csr *K);
 
-/**
- * Matrix-free PD solve K u = f with PETSc (K the operator's stiffness, never assembled): a
- * MATSHELL whose product computes the owned z-slab of rows with cupid_pd_operator_apply_range()
- * after a VecScatter of their dependency range (halo exchange); Dirichlet DOFs as scaled identity
- * rows with the right-hand side lifted. op, f, bc and u are local to @p grid: a whole grid
- * (every rank the same; u gets the whole solution on every rank) or, on a slab grid with one
- * part per rank (cupid_pd_grid_partition), the slab's nodes (f and bc read on the owned nodes
- * and, for bc, the halo; u gets the owned nodes and their dependency range, enough for K u and
- * the stress of the owned nodes). CG preconditioned by GAMG on
- * cupid_pd_assemble_rows_bond() of the owned rows (radius 1.5 h, option -cupid_pc_radius R in
- * units of h) with the rigid-body near null space; -ksp_* / -pc_* options apply. Same checks and
- * outputs as cupid_petsc_solve() (info->matrix_free = 1). Collective; dimension 3 only.
- * Stub returning CUPID_ERR_UNSUPPORTED without PETSc.
- */
-cupid_status cupid_petsc_solve_pd(const cupid_pd_operator op, const cupid_pd_grid grid,
-                                  const cupid_pd_material *materials, const double *f,
-                                  const cupid_dirichlet_t *bc, double *u, cupid_solve_info *info);
+/** The PD operator as a node operator for the matrix-free PETSc solve (solvers.h,
+ *  cupid_petsc_solve_nodes): its products and diagonal, and the bond-based rows of radius r of
+ *  @p materials as the preconditioner's. The three objects are borrowed. */
+void cupid_pd_node_operator(const cupid_pd_operator op, const cupid_pd_grid grid,
+                            const cupid_pd_material *materials, cupid_node_operator *A);
 /* ---- end of the distributed-solve block ---- */
 
 #ifdef __cplusplus

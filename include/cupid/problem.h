@@ -159,6 +159,15 @@ cupid_status cupid_problem_get_system(cupid_problem p, cupid_problem_system *sys
  *  problem). */
 cupid_status cupid_problem_coupling_options(cupid_problem p, cupid_coupling_options *co);
 
+/** The model's output points (output.points): how many, and point k's name (borrowed),
+ *  coordinates and whether it asks for the stress. */
+int cupid_problem_output_point_count(cupid_problem p);
+cupid_status cupid_problem_output_point(cupid_problem p, int k, const char **name, double xyz[3],
+                                        int *stress);
+
+/** Where cupid_problem_write_outputs() writes: -o, else the model's output.directory. */
+const char *cupid_problem_output_directory(cupid_problem p);
+
 /** The model a problem was created with (borrowed). */
 const cupid_model_t *cupid_problem_model(cupid_problem p);
 

@@ -258,7 +258,8 @@ cupid_status cupid_petsc_solve(const cupid_csr_t *K, cupid_matrix_kind kind, con
                                const cupid_dirichlet_t *bc, double *u,
                                const cupid_petsc_options *opts, cupid_solve_info *info);
 
-/* The matrix-free PD solve cupid_petsc_solve_pd() is declared at the end of pd.h. */
+/* The matrix-free PD solve: cupid_petsc_solve_nodes() below, over a cupid_node_operator (pd.h's
+ * cupid_pd_node_operator() makes one of a PD operator). */
 
 /**
  * Where a grid sits in the whole union (issue 6). A slab grid (options.parts > 1) holds the
@@ -294,15 +295,6 @@ typedef struct {
                                    one rank, mumps on several); cholesky: mumps */
 } cupid_krylov_options;
 
-/** What the Krylov solve did. */
-typedef struct {
-  int iterations;
-  double residual;        /**< final |b - A u| / |b| on the free DOFs, recomputed */
-  double time_setup;      /**< seconds: PETSc matrix of the cheap operator + PC set-up */
-  double time_solve;      /**< seconds: the Krylov iterations */
-  int converged;          /**< PETSc's reason > 0 */
-  char method[64];        /**< "gmres+<pc>" */
-} cupid_krylov_info;
 
 /** A linear operator for cupid_krylov_solve(): n DOFs, y = A x, and optionally only the rows
  *  [d0, d1) of it (what an MPI rank computes; NULL: the whole product). */
@@ -336,11 +328,54 @@ cupid_status cupid_krylov_apply(const cupid_linear_operator *A, const double *x,
 cupid_status cupid_krylov_solve(const cupid_linear_operator *A, const cupid_csr_t *P,
                                 const cupid_dirichlet_t *bc, const double *f, double *u,
                                 const cupid_krylov_options *opts,
-                                cupid_krylov_info *info);
+                                cupid_solve_info *info);
 
 
 /* ---- end of the PETSc block ---- */
 
+
+/**
+ * An operator on nodes of 3 DOFs (a PD operator, local to a whole grid or a slab with its
+ * halo) as the matrix-free PETSc solve reads it: products of row ranges, the node range those
+ * rows read, the diagonal blocks, and the rows of a cheap preconditioner matrix. The solvers
+ * see it only through these functions (src/pd fills it: cupid_pd_node_operator in pd.h).
+ */
+typedef struct cupid_node_operator cupid_node_operator;
+struct cupid_node_operator {
+  const void *op, *grid, *materials; /**< the provider's objects */
+  cupid_int nodes;                   /**< local nodes */
+  cupid_pd_grid_partition part;      /**< where they sit in the whole (slabs: issue 6) */
+  int dimension;
+  double spacing;
+  const double *coords;              /**< 3 per local node (the rigid-body modes of GAMG) */
+  /** y = rows [3 n0, 3 n1) of K x (x: local DOFs, y: 3 (n1 - n0) values). */
+  cupid_status (*apply_range)(const cupid_node_operator *A, cupid_int n0, cupid_int n1,
+                              const double *x, double *y);
+  /** The local nodes [*lo, *hi) that rows of nodes [n0, n1) read. */
+  cupid_status (*dependency_range)(const cupid_node_operator *A, cupid_int n0, cupid_int n1,
+                                   cupid_int *lo, cupid_int *hi);
+  /** The 3x3 diagonal blocks, 9 per local node. */
+  cupid_status (*diagonal)(const cupid_node_operator *A, double *blocks);
+  /** Rows of nodes [n0, n1) of a cheap SPD matrix of bond radius @p radius (the PC's). */
+  cupid_status (*preconditioner_rows)(const cupid_node_operator *A, double radius, cupid_int n0,
+                                      cupid_int n1, cupid_csr *rows);
+};
+
+/**
+ * Solve K u = f for a node operator by CG on PETSc, K never assembled: a MATSHELL whose product
+ * computes the owned rows after a VecScatter of their dependency range (halo exchange);
+ * Dirichlet DOFs as scaled identity rows with the right-hand side lifted. Preconditioned by
+ * GAMG on the operator's cheap rows (radius 1.5 h, option -cupid_pc_radius R in units of h)
+ * with the rigid-body near null space; -ksp_* / -pc_* options apply. f, bc and u are local to
+ * the operator: a whole grid (u gets the whole solution on every rank) or, with one slab per
+ * rank (A->part.parts > 1), f and bc read on the owned nodes (bc also on the halo) and u
+ * getting the owned nodes and their dependency range. Same checks and outputs as
+ * cupid_petsc_solve() (info->matrix_free = 1). Collective; dimension 3 only. Builds without
+ * PETSc: CUPID_ERR_UNSUPPORTED.
+ */
+cupid_status cupid_petsc_solve_nodes(const cupid_node_operator *A, const double *f,
+                                     const cupid_dirichlet_t *bc, double *u,
+                                     cupid_solve_info *info);
 
 /* ---- Solver engines as a table (src/solvers/engine.c) ----
  * Each engine fills one cupid_solver_type; the problem (problem.h) picks one by name or by cost
@@ -369,7 +404,7 @@ typedef struct {
    *  no matrix-free solve). */
   cupid_status (*solve_operator)(const cupid_linear_operator *A, const cupid_csr_t *P,
                                  const cupid_dirichlet_t *bc, const double *f, double *u,
-                                 const cupid_krylov_options *opts, cupid_krylov_info *info);
+                                 const cupid_krylov_options *opts, cupid_solve_info *info);
 } cupid_solver_type;
 
 /** The engine of a cupid_solver_kind (DIRECT or PETSC; NULL otherwise). */

@@ -107,6 +107,11 @@ def _load():
         "cupid_status_name": ([ctypes.c_int], ctypes.c_char_p),
         "cupid_status_exit_code": ([ctypes.c_int], ctypes.c_int),
         "cupid_version": ([], ctypes.c_char_p),
+        "cupid_problem_output_directory": ([P], ctypes.c_char_p),
+        "cupid_problem_output_point_count": ([P], ctypes.c_int),
+        "cupid_problem_output_point": ([P, ctypes.c_int, ctypes.POINTER(ctypes.c_char_p),
+                                        ctypes.POINTER(ctypes.c_double),
+                                        ctypes.POINTER(ctypes.c_int)], ctypes.c_int),
     }
     for name, (args, res) in sigs.items():
         f = getattr(lib, name)
@@ -182,6 +187,11 @@ class Problem:
             self._stage = 2
         return self
 
+    @property
+    def output_dir(self):
+        """Where write_outputs() writes (output_dir=, else the model's output.directory)."""
+        return _lib.cupid_problem_output_directory(self._p).decode()
+
     def write_outputs(self):
         """The model's output files (summary.json, lines, VTU, plots) in the output directory."""
         _check(_lib.cupid_problem_write_outputs(self._p))
@@ -225,6 +235,26 @@ class Problem:
                                          s.ctypes.data_as(dp) if stress else None, reg))
         regions = [_REGIONS[r] for r in reg]
         return (u, regions, s) if stress else (u, regions)
+
+    def sample_output_points(self):
+        """The model's output points as summary.json lists them: name, x, y, z, ux, uy, uz,
+        region and, where the point asks for it, sxx syy szz syz sxz sxy."""
+        return [dict(p) for p in self._output_points()]
+
+    def _output_points(self):
+        n = _lib.cupid_problem_output_point_count(self._p)
+        for k in range(n):
+            name = ctypes.c_char_p()
+            xyz = (ctypes.c_double * 3)()
+            want = ctypes.c_int()
+            _check(_lib.cupid_problem_output_point(self._p, k, ctypes.byref(name), xyz,
+                                                   ctypes.byref(want)))
+            u, regions, s = self.sample([list(xyz)], stress=True)
+            row = {"name": name.value.decode(), "x": xyz[0], "y": xyz[1], "z": xyz[2],
+                   "ux": u[0, 0], "uy": u[0, 1], "uz": u[0, 2], "region": regions[0]}
+            if want.value:
+                row.update(zip(("sxx", "syy", "szz", "syz", "sxz", "sxy"), s[0]))
+            yield row
 
     @property
     def info(self):

@@ -209,7 +209,7 @@ void cupid_coupling_operator_linear(const cupid_coupling_operator A, cupid_linea
 cupid_status cupid_coupling_krylov_solve(const cupid_coupling_operator A, const cupid_csr_t *P,
                                          const cupid_dirichlet_t *bc, const double *f, double *u,
                                          const cupid_krylov_options *opts,
-                                         cupid_krylov_info *info) {
+                                         cupid_solve_info *info) {
   CUPID_CHECK(A, CUPID_ERR_ARGUMENT, "Krylov solve: NULL operator");
   cupid_linear_operator L;
   cupid_coupling_operator_linear(A, &L);

@@ -264,3 +264,39 @@ cupid_status cupid_pd_operator_stress(const cupid_pd_operator op, const double *
   cupid_free(&theta);
   return CUPID_SUCCESS;
 }
+
+/* ------------------------------------------------- the PD operator as a node operator
+ * What the matrix-free PETSc solve reads of it (solvers.h, cupid_node_operator). */
+
+static cupid_status node_apply_range(const cupid_node_operator *A, cupid_int n0, cupid_int n1,
+                                     const double *x, double *y) {
+  return cupid_pd_operator_apply_range((cupid_pd_operator)A->op, n0, n1, x, y);
+}
+
+static cupid_status node_dependency_range(const cupid_node_operator *A, cupid_int n0, cupid_int n1,
+                                          cupid_int *lo, cupid_int *hi) {
+  return cupid_pd_operator_dependency_range((cupid_pd_operator)A->op, n0, n1, lo, hi);
+}
+
+static cupid_status node_diagonal(const cupid_node_operator *A, double *blocks) {
+  return cupid_pd_operator_diagonal((cupid_pd_operator)A->op, blocks);
+}
+
+static cupid_status node_preconditioner_rows(const cupid_node_operator *A, double radius,
+                                             cupid_int n0, cupid_int n1, cupid_csr *rows) {
+  return cupid_pd_assemble_rows_bond((cupid_pd_grid)A->grid, A->materials, radius, n0, n1, rows);
+}
+
+void cupid_pd_node_operator(const cupid_pd_operator op, const cupid_pd_grid grid,
+                            const cupid_pd_material *materials, cupid_node_operator *A) {
+  *A = (cupid_node_operator){.op = op, .grid = grid, .materials = materials,
+                             .nodes = cupid_pd_grid_num_nodes(grid),
+                             .dimension = cupid_pd_grid_dimension(grid),
+                             .spacing = cupid_pd_grid_spacing(grid),
+                             .coords = cupid_pd_grid_coords(grid),
+                             .apply_range = node_apply_range,
+                             .dependency_range = node_dependency_range,
+                             .diagonal = node_diagonal,
+                             .preconditioner_rows = node_preconditioner_rows};
+  cupid_pd_grid_get_partition(grid, &A->part);
+}

@@ -139,3 +139,18 @@ cupid_status cupid_problem_coupling_options(cupid_problem_state *prob, cupid_cou
   cupid_free(&prob->region_materials);
   return cupid_method_coupling_options(prob, co, &prob->region_boxes, &prob->region_materials);
 }
+
+int cupid_problem_output_point_count(cupid_problem_state *prob) {
+  return prob ? prob->model->output.n_points : 0;
+}
+
+cupid_status cupid_problem_output_point(cupid_problem_state *prob, int k, const char **name,
+                                        double xyz[3], int *stress) {
+  CUPID_CHECK(prob && k >= 0 && k < prob->model->output.n_points, CUPID_ERR_ARGUMENT,
+              "cupid_problem_output_point: no output point %d", k);
+  const cupid_output_point *pt = &prob->model->output.points[k];
+  if (name) *name = pt->name;
+  for (int a = 0; a < 3; a++) xyz[a] = pt->at[a];
+  if (stress) *stress = pt->stress;
+  return CUPID_SUCCESS;
+}

@@ -98,10 +98,19 @@ cupid_status cupid_method_coupling_options(const cupid_problem_state *prob,
                                            int **mats);
 /** |R + P| / |P| on stderr (the figure of merit of a coupled run). */
 cupid_status cupid_method_print_equilibrium(const cupid_problem_state *prob);
-/** Solve prob's system by cupid_krylov_solve on the matrix-free @p L preconditioned by @p P
- *  and record it (prob->u, f_int, solve, phases, solved). */
+/** Solve prob's system by the engine's matrix-free solve of @p L preconditioned by *P and
+ *  record it (prob->u, f_int, solve, phases, solved). On a slab the operator (@p owner) and *P
+ *  are then freed (both set to NULL) and rank 0 gathers the whole model (slab.c). */
 cupid_status cupid_method_krylov_solve(cupid_problem_state *prob, const cupid_linear_operator *L,
-                                       const cupid_csr_t *P);
+                                       cupid_csr *P, cupid_method_operator *owner);
+/** The coupling object and its assembled K by @p create (cupid_coupling_create or
+ *  cupid_coupling_lagrange_create), timed as the coupling phase; *info is the coupling's. */
+cupid_status cupid_method_build_coupling(cupid_problem_state *prob,
+                                         cupid_status (*create)(const cupid_cuf_beam,
+                                                                const cupid_pd_grid,
+                                                                const cupid_coupling_options *,
+                                                                cupid_coupling_h *, cupid_csr *),
+                                         cupid_coupling_info *info);
 /** The PD and beam masses of a layout without coupling terms in the mass (none, Lagrange):
  *  rho V on the PD nodes, the beam's consistent or HRZ mass; with @p move_tied (Lagrange) the
  *  tied PD nodes' mass goes onto the beam through the tie. */

@@ -481,25 +481,6 @@ static cupid_status create_operator(cupid_problem_state *prob, cupid_arlequin_op
   return CUPID_SUCCESS;
 }
 
-static cupid_status solve_matrix_free(cupid_problem_state *prob) {
-  cupid_status st = CUPID_SUCCESS;
-  cupid_arlequin_operator A = NULL;
-  cupid_csr P = NULL;
-  CUPID_TRY(create_operator(prob, &A, &P));
-  cupid_linear_operator L;
-  cupid_arlequin_operator_linear(A, &L); /* on a slab: its rows (cupid_krylov_solve) */
-  CUPID_TRY(cupid_method_krylov_solve(prob, &L, P));
-  if (prob->slab) { /* rank 0 gathers the slabs into the whole model; the others stop */
-    cupid_csr_destroy(&P);
-    cupid_arlequin_operator_destroy(&A);
-    CUPID_TRY(cupid_problem_slab_collect(prob));
-  }
-cleanup:
-  cupid_csr_destroy(&P);
-  cupid_arlequin_operator_destroy(&A);
-  return st;
-}
-
 static cupid_status k_apply(void *ctx, const double *x, double *y) {
   return cupid_arlequin_operator_apply(ctx, x, y);
 }
@@ -508,6 +489,22 @@ static void destroy_operator(void **ctx) {
   cupid_arlequin_operator A = *ctx;
   cupid_arlequin_operator_destroy(&A);
   *ctx = NULL;
+}
+
+static cupid_status solve_matrix_free(cupid_problem_state *prob) {
+  cupid_status st = CUPID_SUCCESS;
+  cupid_arlequin_operator A = NULL;
+  cupid_csr P = NULL;
+  CUPID_TRY(create_operator(prob, &A, &P));
+  cupid_linear_operator L;
+  cupid_arlequin_operator_linear(A, &L); /* on a slab: its rows (cupid_krylov_solve) */
+  cupid_method_operator owner = {.ctx = A, .destroy = destroy_operator};
+  st = cupid_method_krylov_solve(prob, &L, &P, &owner);
+  A = owner.ctx; /* NULL once a slab freed it */
+cleanup:
+  cupid_csr_destroy(&P);
+  cupid_arlequin_operator_destroy(&A);
+  return st;
 }
 
 /* Central differences (lumped mass, checked) need K only through products: the matrix-free

@@ -145,9 +145,8 @@ cupid_status cupid_method_print_equilibrium(const cupid_problem_state *prob) {
 }
 
 /* Record a matrix-free Krylov solve: prob->solve and the factorisation / solve phases. */
-static void record_krylov(cupid_problem_state *prob, const cupid_krylov_info *ki) {
-  prob->solve.method = "petsc"; /* matrix_free, ksp_type and pc_type tell the path */
-  prob->solve.n = prob->bc->n_free;
+static void record_krylov(cupid_problem_state *prob, const cupid_solve_info *si) {
+  prob->solve = *si;
   if (prob->slab) { /* the owned free DOFs of every slab, and the FE ones once */
     cupid_int own = 0;
     for (cupid_int d = 0; d < prob->ndof; d++)
@@ -155,38 +154,50 @@ static void record_krylov(cupid_problem_state *prob, const cupid_krylov_info *ki
                                                           : cupid_problem_pd_owned(prob, d / 3));
     prob->solve.n = cupid_problem_global_count(prob, own);
   }
-  prob->solve.residual = ki->residual;
-  prob->solve.time_factor = ki->time_setup;
-  prob->solve.time_solve = ki->time_solve;
-  prob->solve.failed_dof = -1;
-  prob->solve.iterations = ki->iterations;
-  prob->solve.ranks = cupid_petsc_size();
-  prob->solve.matrix_free = 1;
-  const char *pc = strchr(ki->method, '+'); /* ki->method is "<ksp>+<pc>" */
-  snprintf(prob->solve.ksp_type, sizeof prob->solve.ksp_type, "%.*s",
-           pc ? (int)(pc - ki->method) : 31, ki->method);
-  snprintf(prob->solve.pc_type, sizeof prob->solve.pc_type, "%.31s", pc ? pc + 1 : ki->method);
-  snprintf(prob->solve.converged_reason, sizeof prob->solve.converged_reason, "%s",
-           ki->converged ? "CONVERGED" : "DIVERGED");
   cupid_problem_record_solve(prob);
 }
 
 cupid_status cupid_method_krylov_solve(cupid_problem_state *prob, const cupid_linear_operator *L,
-                                       const cupid_csr_t *P) {
+                                       cupid_csr *P, cupid_method_operator *owner) {
   /* MUMPS: PETSc's UMFPACK interface has 32-bit indices and ran out of them at 10^5 PD
    * nodes (bench/README_coupled.md); -pc_factor_mat_solver_type overrides it. */
   cupid_krylov_options ko = {.factor_package = "mumps"};
-  cupid_krylov_info ki;
+  cupid_solve_info ki = {0};
   CUPID_CHECK(prob->engine->solve_operator, CUPID_ERR_UNSUPPORTED,
               "solver %s has no matrix-free solve", prob->engine->name);
-  cupid_status st = prob->engine->solve_operator(L, P, prob->bc, prob->f_ext, prob->u, &ko, &ki);
+  cupid_status st = prob->engine->solve_operator(L, *P, prob->bc, prob->f_ext, prob->u, &ko, &ki);
   record_krylov(prob, &ki);
   CUPID_CALL(st);
   prob->solved = 1;
   CUPID_CALL(cupid_krylov_apply(L, prob->u, prob->f_int)); /* a slab: owned and FE rows */
-  cupid_problem_progress(prob, "solve: %s, %lld equations, %d iterations, residual %.2e",
-                         ki.method, (long long)prob->solve.n, ki.iterations, ki.residual);
-  return CUPID_SUCCESS;
+  cupid_problem_progress(prob, "solve: %s + %s, %lld equations, %d iterations, residual %.2e",
+                         ki.ksp_type, ki.pc_type, (long long)prob->solve.n, ki.iterations,
+                         ki.residual);
+  if (!prob->slab) return CUPID_SUCCESS;
+  cupid_csr_destroy(P); /* rank 0 gathers the slabs into the whole model; the others stop */
+  if (owner->destroy) owner->destroy(&owner->ctx);
+  return cupid_problem_slab_collect(prob);
+}
+
+cupid_status cupid_method_build_coupling(cupid_problem_state *prob,
+                                         cupid_status (*create)(const cupid_cuf_beam,
+                                                                const cupid_pd_grid,
+                                                                const cupid_coupling_options *,
+                                                                cupid_coupling_h *, cupid_csr *),
+                                         cupid_coupling_info *info) {
+  double t0 = cupid_wtime();
+  cupid_status st = CUPID_SUCCESS;
+  cupid_box *boxes = NULL;
+  int *mats = NULL;
+  cupid_coupling_options co;
+  CUPID_TRY(cupid_method_coupling_options(prob, &co, &boxes, &mats));
+  CUPID_TRY(create(prob->beam, prob->grid, &co, &prob->coupling, &prob->K));
+  cupid_coupling_get_info(prob->coupling, info);
+  cupid_problem_phase_end(prob, CUPID_PHASE_COUPLING, t0);
+cleanup:
+  cupid_free(&boxes);
+  cupid_free(&mats);
+  return st;
 }
 
 /* ---------------------------------------------------------------------------- the mass */

@@ -28,27 +28,16 @@ static cupid_status constraints(cupid_problem_state *prob) {
 
 static cupid_status assemble(cupid_problem_state *prob) {
   if (prob->K) return CUPID_SUCCESS;
-  double t0 = cupid_wtime();
-  cupid_status st = CUPID_SUCCESS;
-  cupid_box *boxes = NULL;
-  int *mats = NULL;
-  cupid_coupling_options co;
-  CUPID_TRY(cupid_method_coupling_options(prob, &co, &boxes, &mats));
-  CUPID_TRY(cupid_coupling_create(prob->beam, prob->grid, &co, &prob->coupling, &prob->K));
   cupid_coupling_info ci;
-  cupid_coupling_get_info(prob->coupling, &ci);
+  CUPID_CALL(cupid_method_build_coupling(prob, cupid_coupling_create, &ci));
   prob->n_fictitious = ci.n_fictitious_pd;
-  cupid_problem_phase_end(prob, CUPID_PHASE_COUPLING, t0);
   cupid_problem_progress(prob,
                          "coupling (fictitious nodes): %d interfaces, %lld fictitious PD nodes, "
                          "%lld fictitious FE nodes; %lld non-zeros (%.1f MB)",
                          ci.n_interfaces, (long long)ci.n_fictitious_pd,
                          (long long)ci.n_fictitious_fe, (long long)cupid_csr_nnz(prob->K),
                          (double)cupid_csr_bytes(prob->K) / 1e6);
-cleanup:
-  cupid_free(&boxes);
-  cupid_free(&mats);
-  return st;
+  return CUPID_SUCCESS;
 }
 
 /* The PETSc engine, static, 3D: matrix-free unless --assembled asks for Eq. 38 assembled
@@ -56,6 +45,12 @@ cleanup:
 static int matrix_free(const cupid_problem_state *prob) {
   return prob->engine->iterative && !prob->opts->assembled && prob->grid &&
          cupid_pd_grid_dimension(prob->grid) == 3;
+}
+
+static void destroy_operator(void **ctx) {
+  cupid_coupling_operator A = *ctx;
+  cupid_coupling_operator_destroy(&A);
+  *ctx = NULL;
 }
 
 static cupid_status solve_matrix_free(cupid_problem_state *prob) {
@@ -84,12 +79,9 @@ static cupid_status solve_matrix_free(cupid_problem_state *prob) {
                          (double)cupid_csr_bytes(P) / 1e6, prob->slab ? " (rank 0's slab)" : "");
   cupid_linear_operator L;
   cupid_coupling_operator_linear(A, &L); /* on a slab: its rows (cupid_krylov_solve) */
-  CUPID_TRY(cupid_method_krylov_solve(prob, &L, P));
-  if (prob->slab) { /* rank 0 gathers the slabs into the whole model; the others stop */
-    cupid_csr_destroy(&P);
-    cupid_coupling_operator_destroy(&A);
-    CUPID_TRY(cupid_problem_slab_collect(prob));
-  }
+  cupid_method_operator owner = {.ctx = A, .destroy = destroy_operator};
+  st = cupid_method_krylov_solve(prob, &L, &P, &owner);
+  A = owner.ctx; /* NULL once a slab freed it */
 cleanup:
   cupid_csr_destroy(&P);
   cupid_coupling_operator_destroy(&A);

@@ -15,26 +15,15 @@ static cupid_status check(const cupid_problem_state *prob) {
  * loads on them act through the tie. */
 static cupid_status assemble(cupid_problem_state *prob) {
   if (prob->K) return CUPID_SUCCESS;
-  double t0 = cupid_wtime();
-  cupid_status st = CUPID_SUCCESS;
-  cupid_box *boxes = NULL;
-  int *mats = NULL;
-  cupid_coupling_options co;
-  CUPID_TRY(cupid_method_coupling_options(prob, &co, &boxes, &mats));
-  CUPID_TRY(cupid_coupling_lagrange_create(prob->beam, prob->grid, &co, &prob->coupling, &prob->K));
   cupid_coupling_info ci;
-  cupid_coupling_get_info(prob->coupling, &ci);
+  CUPID_CALL(cupid_method_build_coupling(prob, cupid_coupling_lagrange_create, &ci));
   const cupid_int *tied;
   cupid_int nt;
   cupid_coupling_tied(prob->coupling, &tied, &nt);
-  cupid_problem_phase_end(prob, CUPID_PHASE_COUPLING, t0);
   cupid_problem_progress(prob, "coupling (Lagrange multipliers, eliminated): %d interfaces, %lld "
                          "tied PD nodes; %lld non-zeros (%.1f MB)", ci.n_interfaces, (long long)nt,
                          (long long)cupid_csr_nnz(prob->K), (double)cupid_csr_bytes(prob->K) / 1e6);
-cleanup:
-  cupid_free(&boxes);
-  cupid_free(&mats);
-  return st;
+  return CUPID_SUCCESS;
 }
 
 static cupid_status constraints(cupid_problem_state *prob) {

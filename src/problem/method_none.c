@@ -1,6 +1,6 @@
 /* Models with one part (method.h, cupid_method_none): a PD grid alone or a beam alone. The
  * constraints and loads go to that part; PD-only 3D static models solve matrix-free on the
- * PETSc engine (the 2-delta LPS matrix is never formed: cupid_petsc_solve_pd, CG + GAMG, in
+ * PETSc engine (the 2-delta LPS matrix is never formed: cupid_petsc_solve_nodes, CG + GAMG, in
  * slabs under mpirun) and PD-only central differences run on the PD operator. */
 #include "method.h"
 
@@ -44,8 +44,9 @@ static int matrix_free(const cupid_problem_state *prob) {
 
 /* K u = f by CG on the PD operator (PETSc); a slab computes its owned rows, rank 0 gathers. */
 static cupid_status solve_matrix_free(cupid_problem_state *prob) {
-  cupid_status st = cupid_petsc_solve_pd(prob->op, prob->grid, prob->pd_materials, prob->f_ext,
-                                         prob->bc, prob->u, &prob->solve);
+  cupid_node_operator A;
+  cupid_pd_node_operator(prob->op, prob->grid, prob->pd_materials, &A);
+  cupid_status st = cupid_petsc_solve_nodes(&A, prob->f_ext, prob->bc, prob->u, &prob->solve);
   cupid_problem_record_solve(prob);
   CUPID_CALL(st);
   prob->solved = 1;

@@ -500,6 +500,8 @@ void cupid_problem_destroy(cupid_problem *p) {
 
 const cupid_model_t *cupid_problem_model(cupid_problem p) { return p ? p->model : NULL; }
 
+const char *cupid_problem_output_directory(cupid_problem p) { return p ? p->outdir : NULL; }
+
 cupid_status cupid_problem_write_outputs(cupid_problem_state *prob) {
   CUPID_CHECK(prob && prob->stage == CUPID_STAGE_SOLVED, CUPID_ERR_ARGUMENT,
               "cupid_problem_write_outputs: solve the problem first");

@@ -1,7 +1,7 @@
 /* Distributed PD-only runs (issue 6): under `mpirun -n N` a static 3D PD model solved by PETSc
  * is split into N slabs of z layers. Each rank builds only its slab and the halo its rows read
  * (cupid_pd_grid_create_part_from_model, cupid_pd_operator_halo_layers), applies constraints
- * and loads to it, and solves its rows matrix-free (cupid_petsc_solve_pd). Afterwards each rank
+ * and loads to it, and solves its rows matrix-free (cupid_petsc_solve_nodes). Afterwards each rank
  * sends the fields of its owned nodes to rank 0, which rebuilds the whole grid (coordinates
  * only, no operator) to write the outputs as in a one-process run.
  *

@@ -255,7 +255,7 @@ cleanup:
 
 /* Solve, and what the solve did into *inf (iterations, convergence, time, method). */
 static cupid_status run_ksp(KSP ksp, const cupid_linear_operator *A, Vec b, Vec x,
-                            cupid_krylov_info *inf) {
+                            cupid_solve_info *inf) {
   cupid_status st = CUPID_SUCCESS;
   PetscInt its;
   KSPConvergedReason reason;
@@ -267,32 +267,39 @@ static cupid_status run_ksp(KSP ksp, const cupid_linear_operator *A, Vec b, Vec 
   PTRY(KSPGetIterationNumber(ksp, &its));
   PTRY(KSPGetConvergedReason(ksp, &reason));
   inf->iterations = (int)its;
-  inf->converged = reason > 0;
   PTRY(KSPGetPC(ksp, &pc));
   PTRY(PCGetType(pc, &used));
-  snprintf(inf->method, sizeof inf->method, "%s+%s", A->symmetric ? "cg" : "gmres", used);
+  PetscMPIInt size = 1;
+  MPI_Comm_size(PETSC_COMM_WORLD, &size);
+  inf->method = "petsc";
+  inf->matrix_free = 1;
+  inf->ranks = (int)size;
+  inf->failed_dof = -1;
+  snprintf(inf->ksp_type, sizeof inf->ksp_type, "%s", A->symmetric ? "cg" : "gmres");
+  snprintf(inf->pc_type, sizeof inf->pc_type, "%s", used);
+  snprintf(inf->converged_reason, sizeof inf->converged_reason, "%s", KSPConvergedReasons[reason]);
 cleanup:
   return st;
 }
 
 /* The error of a solve that did not converge (CUPID_SUCCESS if it did). */
-static cupid_status not_converged(KSP ksp, const cupid_krylov_info *inf) {
-  if (inf->converged) return CUPID_SUCCESS;
-  KSPConvergedReason reason = KSP_CONVERGED_ITERATING;
-  KSPGetConvergedReason(ksp, &reason);
+static cupid_status not_converged(const cupid_solve_info *inf) {
+  if (!strncmp(inf->converged_reason, "CONVERGED", 9)) return CUPID_SUCCESS;
   return CUPID_ERROR(CUPID_ERR_NUMERIC,
-                     "the Krylov solve (%s) did not converge: %s after %d iterations, relative "
-                     "residual %.2e; try other -ksp_type / -pc_type options, or --solver direct",
-                     inf->method, KSPConvergedReasons[reason], inf->iterations, inf->residual);
+                     "the Krylov solve (%s + %s) did not converge: %s after %d iterations, "
+                     "relative residual %.2e; try other -ksp_type / -pc_type options, or "
+                     "--solver direct",
+                     inf->ksp_type, inf->pc_type, inf->converged_reason, inf->iterations,
+                     inf->residual);
 }
 
 /* The model replicated on every rank: the free DOFs only, split evenly over the ranks. */
 static cupid_status solve_replicated(const cupid_linear_operator *A, const cupid_csr_t *P,
                                      const cupid_dirichlet_t *bc, const double *f, double *u,
                                      const cupid_krylov_options *opts,
-                                     cupid_krylov_info *info) {
+                                     cupid_solve_info *info) {
   cupid_status st = CUPID_SUCCESS;
-  cupid_krylov_info inf;
+  cupid_solve_info inf;
   memset(&inf, 0, sizeof inf);
   cupid_int n = A->n;
   cupid_int *gidx = NULL;
@@ -339,7 +346,8 @@ static cupid_status solve_replicated(const cupid_linear_operator *A, const cupid
     CUPID_TRY(configure_ksp(A, opts, &fields, &obj));
   }
   CUPID_TRY(run_ksp(obj.ksp, A, obj.b, obj.x, &inf));
-  inf.time_setup = cupid_wtime() - t0 - inf.time_solve;
+  inf.time_factor = cupid_wtime() - t0 - inf.time_solve;
+  inf.n = n_free;
 
   /* u = [x_f ; u_c]; the true residual, recomputed. */
   const PetscScalar *xa;
@@ -358,7 +366,7 @@ static cupid_status solve_replicated(const cupid_linear_operator *A, const cupid
   }
   double scale = bnorm > 0 ? (double)bnorm : sqrt(f2);
   inf.residual = scale > 0 ? sqrt(r2) / scale : sqrt(r2);
-  st = not_converged(obj.ksp, &inf);
+  st = not_converged(&inf);
 cleanup:
   if (info) *info = inf;
   ksp_objects_destroy(&obj);
@@ -562,9 +570,9 @@ cleanup:
 static cupid_status solve_slabs(const cupid_linear_operator *A, const cupid_csr_t *P,
                                 const cupid_dirichlet_t *bc, const double *f, double *u,
                                 const cupid_krylov_options *opts,
-                                cupid_krylov_info *info) {
+                                cupid_solve_info *info) {
   cupid_status st = CUPID_SUCCESS;
-  cupid_krylov_info inf;
+  cupid_solve_info inf;
   memset(&inf, 0, sizeof inf);
   const cupid_pd_grid_partition *p = A->part;
   PetscMPIInt size = 1;
@@ -604,7 +612,7 @@ static cupid_status solve_slabs(const cupid_linear_operator *A, const cupid_csr_
   const ksp_fields fields = {c.g0, c.g0 + pd_owned, c.g0 + pd_owned, c.g0 + c.nloc, 1};
   CUPID_TRY(configure_ksp(A, opts, &fields, &obj));
   CUPID_TRY(run_ksp(obj.ksp, A, obj.b, obj.x, &inf));
-  inf.time_setup = cupid_wtime() - t0 - inf.time_solve;
+  inf.time_factor = cupid_wtime() - t0 - inf.time_solve;
 
   /* u = u_c + x on every local DOF; the true residual over the free owned DOFs, recomputed */
   const PetscScalar *xa;
@@ -623,7 +631,7 @@ static cupid_status solve_slabs(const cupid_linear_operator *A, const cupid_csr_
   MPI_Allreduce(MPI_IN_PLACE, sums, 2, MPI_DOUBLE, MPI_SUM, PETSC_COMM_WORLD);
   double scale = bnorm > 0 ? (double)bnorm : sqrt(sums[1]);
   inf.residual = scale > 0 ? sqrt(sums[0]) / scale : sqrt(sums[0]);
-  st = not_converged(obj.ksp, &inf);
+  st = not_converged(&inf);
 cleanup:
   if (info) *info = inf;
   ksp_objects_destroy(&obj);
@@ -639,7 +647,7 @@ static int is_slab(const cupid_linear_operator *A) { return A->part && A->part->
 cupid_status cupid_krylov_solve(const cupid_linear_operator *A, const cupid_csr_t *P,
                                 const cupid_dirichlet_t *bc, const double *f, double *u,
                                 const cupid_krylov_options *opts,
-                                cupid_krylov_info *info) {
+                                cupid_solve_info *info) {
   if (info) memset(info, 0, sizeof *info);
   CUPID_CHECK(A && A->apply && P && bc && f && u, CUPID_ERR_ARGUMENT, "Krylov solve: NULL argument");
   CUPID_CHECK(bc->n == A->n && P->nrows * P->bs == A->n, CUPID_ERR_ARGUMENT,
@@ -665,7 +673,7 @@ cupid_status cupid_krylov_apply(const cupid_linear_operator *A, const double *x,
 cupid_status cupid_krylov_solve(const cupid_linear_operator *A, const cupid_csr_t *P,
                                 const cupid_dirichlet_t *bc, const double *f, double *u,
                                 const cupid_krylov_options *opts,
-                                cupid_krylov_info *info) {
+                                cupid_solve_info *info) {
   (void)A, (void)P, (void)bc, (void)f, (void)u, (void)opts;
   if (info) memset(info, 0, sizeof *info);
   return CUPID_ERROR(CUPID_ERR_UNSUPPORTED,

@@ -1,5 +1,5 @@
 /* The PETSc/MPI engine (issue 6): Krylov solves of replicated cupid systems, assembled (MPIAIJ)
- * or matrix-free for PD (MATSHELL over cupid_pd_operator_apply_range). The only file that
+ * or matrix-free for node operators such as PD (MATSHELL over cupid_node_operator products). The only file that
  * includes petsc.h; without PETSc (CUPID_HAVE_PETSC 0) every entry point is a stub.
  *
  * Layout: every rank holds the whole model. The unknowns are all DOFs (fixed ones as scaled
@@ -9,7 +9,6 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "cupid/pd.h"
 #include "cupid/solvers.h"
 #include "cupid_config.h"
 
@@ -482,7 +481,7 @@ cleanup:
  * goff + d; this rank owns the local DOFs [first, last) (a whole grid: an even split). */
 
 typedef struct {
-  cupid_pd_operator op;
+  const cupid_node_operator *op;
   const cupid_dirichlet_t *bc; /* local DOFs */
   double s;               /* identity-row scale */
   cupid_int goff;         /* global DOF of local DOF 0 */
@@ -509,8 +508,8 @@ static PetscErrorCode shell_mult(Mat A, Vec x, Vec y) {
   for (cupid_int k = 0; k < nd; k++) c->work[d0 + k] = (fixed && fixed[d0 + k]) ? 0.0 : xd[k];
   PetscCall(VecRestoreArrayRead(c->xdep, &xd));
   PetscCall(VecGetArray(y, &yl));
-  if (cupid_pd_operator_apply_range(c->op, c->first / 3, c->last / 3, c->work, yl) != CUPID_SUCCESS)
-    SETERRQ(PETSC_COMM_SELF, PETSC_ERR_LIB, "cupid_pd_operator_apply_range failed");
+  if (c->op->apply_range(c->op, c->first / 3, c->last / 3, c->work, yl) != CUPID_SUCCESS)
+    SETERRQ(PETSC_COMM_SELF, PETSC_ERR_LIB, "the node operator's product failed");
   if (fixed) {
     PetscCall(VecGetArrayRead(x, &xl));
     for (cupid_int d = c->first; d < c->last; d++)
@@ -544,8 +543,7 @@ cleanup:
  * non-zeros of each local row into dnz/onz and sum the free diagonal into diag (P NULL), or
  * insert them into P. Dirichlet rows and columns eliminated as in the operator (rows:
  * s * identity). */
-static cupid_status pc_pass(const cupid_pd_grid grid, const cupid_pd_material *materials,
-                            double radius, const shell_ctx *c, double s, PetscInt *dnz,
+static cupid_status pc_pass(double radius, const shell_ctx *c, double s, PetscInt *dnz,
                             PetscInt *onz, double diag[2], Mat P) {
   cupid_status st = CUPID_SUCCESS;
   cupid_csr Kr = NULL;
@@ -555,7 +553,7 @@ static cupid_status pc_pass(const cupid_pd_grid grid, const cupid_pd_material *m
   cupid_int cap = 0;
   for (cupid_int n0 = c->first / 3; n0 < c->last / 3; n0 += PC_CHUNK_NODES) {
     cupid_int n1 = n0 + PC_CHUNK_NODES < c->last / 3 ? n0 + PC_CHUNK_NODES : c->last / 3;
-    CUPID_TRY(cupid_pd_assemble_rows_bond(grid, materials, radius, n0, n1, &Kr));
+    CUPID_TRY(c->op->preconditioner_rows(c->op, radius, n0, n1, &Kr));
     for (cupid_int r = 0; r < Kr->nrows; r++) {
       cupid_int len = 3 * (Kr->rowptr[r + 1] - Kr->rowptr[r]) + 1;
       if (P && len > cap) {
@@ -606,15 +604,14 @@ cleanup:
 /* The preconditioner matrix: owned rows of the short-range bond-based stiffness, its identity
  * rows scaled like the operator's (same ratio to the diagonal: the mean free diagonal of the
  * bond-based matrix over all ranks). */
-static cupid_status pc_matrix(const cupid_pd_grid grid, const cupid_pd_material *materials,
-                              double radius, const shell_ctx *c, cupid_int n, Mat *P) {
+static cupid_status pc_matrix(double radius, const shell_ctx *c, cupid_int n, Mat *P) {
   cupid_status st = CUPID_SUCCESS;
   PetscInt *dnz = NULL, *onz = NULL;
   cupid_int nloc = c->last - c->first;
   double diag[2] = {0.0, 0.0};
   CUPID_TRY(cupid_calloc((size_t)nloc + 1, sizeof *dnz, "PETSc preallocation", &dnz));
   CUPID_TRY(cupid_calloc((size_t)nloc + 1, sizeof *onz, "PETSc preallocation", &onz));
-  CUPID_TRY(pc_pass(grid, materials, radius, c, 0.0, dnz, onz, diag, NULL));
+  CUPID_TRY(pc_pass(radius, c, 0.0, dnz, onz, diag, NULL));
   MPI_Allreduce(MPI_IN_PLACE, diag, 2, MPI_DOUBLE, MPI_SUM, PETSC_COMM_WORLD);
   PTRY(MatCreate(PETSC_COMM_WORLD, P));
   PTRY(MatSetSizes(*P, (PetscInt)nloc, (PetscInt)nloc, (PetscInt)n, (PetscInt)n));
@@ -623,8 +620,7 @@ static cupid_status pc_matrix(const cupid_pd_grid grid, const cupid_pd_material 
   PTRY(MatSeqAIJSetPreallocation(*P, 0, dnz));
   PTRY(MatMPIAIJSetPreallocation(*P, 0, dnz, 0, onz));
   PTRY(MatSetOption(*P, MAT_SYMMETRIC, PETSC_TRUE));
-  CUPID_TRY(pc_pass(grid, materials, radius, c, diag[1] > 0 ? diag[0] / diag[1] : 1.0, NULL, NULL,
-                    NULL, *P));
+  CUPID_TRY(pc_pass(radius, c, diag[1] > 0 ? diag[0] / diag[1] : 1.0, NULL, NULL, NULL, *P));
   PTRY(MatAssemblyBegin(*P, MAT_FINAL_ASSEMBLY));
   PTRY(MatAssemblyEnd(*P, MAT_FINAL_ASSEMBLY));
 cleanup:
@@ -634,12 +630,12 @@ cleanup:
 }
 
 /* The mean |diagonal| of the operator over the free owned DOFs of all ranks. */
-static cupid_status operator_scale(const cupid_pd_operator op, cupid_int nodes, const shell_ctx *c,
-                                   double *s) {
+static cupid_status operator_scale(const cupid_node_operator *op, cupid_int nodes,
+                                   const shell_ctx *c, double *s) {
   double *blocks = NULL;
   cupid_status st = CUPID_SUCCESS;
   CUPID_TRY(cupid_malloc((size_t)(9 * nodes), sizeof *blocks, "operator diagonal", &blocks));
-  CUPID_TRY(cupid_pd_operator_diagonal(op, blocks));
+  CUPID_TRY(op->diagonal(op, blocks));
   double sc[2] = {0.0, 0.0};
   for (cupid_int d = c->first; d < c->last; d++) {
     double v = blocks[9 * (d / 3) + 4 * (d % 3)];
@@ -667,16 +663,15 @@ cleanup:
   return st;
 }
 
-cupid_status cupid_petsc_solve_pd(const cupid_pd_operator op, const cupid_pd_grid grid,
-                                  const cupid_pd_material *materials, const double *f,
-                                  const cupid_dirichlet_t *bc, double *u, cupid_solve_info *info) {
+cupid_status cupid_petsc_solve_nodes(const cupid_node_operator *op, const double *f,
+                                     const cupid_dirichlet_t *bc, double *u,
+                                     cupid_solve_info *info) {
   cupid_solve_info local;
   if (!info) info = &local;
-  cupid_pd_grid_partition part;
-  cupid_pd_grid_get_partition(grid, &part);
+  const cupid_pd_grid_partition part = op->part;
   const int slab = part.parts > 1;
-  cupid_int nodes = cupid_pd_grid_num_nodes(grid), nl = 3 * nodes, n = 3 * part.global_nodes;
-  CUPID_CHECK(cupid_pd_grid_dimension(grid) == 3, CUPID_ERR_UNSUPPORTED,
+  cupid_int nodes = op->nodes, nl = 3 * nodes, n = 3 * part.global_nodes;
+  CUPID_CHECK(op->dimension == 3, CUPID_ERR_UNSUPPORTED,
               "the matrix-free PETSc path needs a 3D grid");
   CUPID_CHECK(!slab || part.parts == cupid_petsc_size(), CUPID_ERR_ARGUMENT,
               "a grid of %d slabs on %d MPI ranks", part.parts, cupid_petsc_size());
@@ -699,7 +694,7 @@ cupid_status cupid_petsc_solve_pd(const cupid_pd_operator op, const cupid_pd_gri
   Vec b = NULL, x = NULL;
   double *uc = NULL, *kuc = NULL;
   double t0 = cupid_wtime();
-  CUPID_TRY(cupid_pd_operator_dependency_range(op, c.first / 3, c.last / 3, &c.lo, &c.hi));
+  CUPID_TRY(op->dependency_range(op, c.first / 3, c.last / 3, &c.lo, &c.hi));
   CUPID_TRY(cupid_calloc((size_t)nl, sizeof *c.work, "matrix-free work vector", &c.work));
   CUPID_TRY(operator_scale(op, nodes, &c, &c.s));
 
@@ -719,7 +714,7 @@ cupid_status cupid_petsc_solve_pd(const cupid_pd_operator op, const cupid_pd_gri
     for (cupid_int d = 0; d < nl; d++)
       if (bc->fixed[d] && bc->value[d] != 0.0) uc[d] = bc->value[d], lifted = 1;
   lifted = cupid_petsc_max_int(lifted);
-  if (lifted) CUPID_TRY(cupid_pd_operator_apply_range(op, c.first / 3, c.last / 3, uc, kuc));
+  if (lifted) CUPID_TRY(op->apply_range(op, c.first / 3, c.last / 3, uc, kuc));
   PetscScalar *bl;
   PTRY(VecGetArray(b, &bl));
   for (cupid_int d = c.first; d < c.last; d++)
@@ -731,8 +726,8 @@ cupid_status cupid_petsc_solve_pd(const cupid_pd_operator op, const cupid_pd_gri
   PetscReal radius = 1.5;
   PetscBool set;
   PTRY(PetscOptionsGetReal(NULL, NULL, "-cupid_pc_radius", &radius, &set));
-  CUPID_TRY(pc_matrix(grid, materials, radius * cupid_pd_grid_spacing(grid), &c, n, &P));
-  CUPID_TRY(set_rigid_body(P, cupid_pd_grid_coords(grid), c.first, c.last));
+  CUPID_TRY(pc_matrix(radius * op->spacing, &c, n, &P));
+  CUPID_TRY(set_rigid_body(P, op->coords, c.first, c.last));
   double t_setup = cupid_wtime() - t0;
 
   solver_defaults def = {KSPCG, PCGAMG, 0};
@@ -787,9 +782,9 @@ cupid_status cupid_petsc_solve(const cupid_csr_t *K, cupid_matrix_kind kind, con
   return NO_PETSC;
 }
 
-cupid_status cupid_petsc_solve_pd(const cupid_pd_operator op, const cupid_pd_grid grid,
-                                  const cupid_pd_material *materials, const double *f,
-                                  const cupid_dirichlet_t *bc, double *u, cupid_solve_info *info) {
+cupid_status cupid_petsc_solve_nodes(const cupid_node_operator *op, const double *f,
+                                     const cupid_dirichlet_t *bc, double *u,
+                                     cupid_solve_info *info) {
   return NO_PETSC;
 }
 
