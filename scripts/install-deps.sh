@@ -8,7 +8,10 @@
 # Only packages that are missing are installed, so a prepared machine pays nothing.
 set -euo pipefail
 
-pkgs=(cmake make gcc pkg-config libsuitesparse-dev libopenblas-dev libyaml-dev libcmocka-dev gnuplot-nox python3)
+# python3-numpy, python3-meshio and python3-vtk9: regression.vtu_readers opens every VTU cupid
+# writes with meshio and VTK's own reader (run by /usr/bin/python3, which these serve).
+pkgs=(cmake make gcc pkg-config libsuitesparse-dev libopenblas-dev libyaml-dev libcmocka-dev gnuplot-nox python3
+      python3-numpy python3-meshio python3-vtk9 python3-pytest)
 for arg in "$@"; do
   case $arg in
     --with-petsc) pkgs+=(petsc-dev) ;;

@@ -1,7 +1,7 @@
 /**
  * @file io.h
  * @brief Output files: atomic writes (temp + rename, never a half-written file),
- *        a streaming JSON writer, VTK XML unstructured grids (.vtu, appended raw binary,
+ *        a streaming JSON writer, VTK XML unstructured grids (.vtu, appended base64 data,
  *        UInt64 headers) and .pvd collections for ParaView, and gnuplot PNG plots.
  */
 #ifndef CUPID_IO_H
@@ -107,19 +107,32 @@ typedef struct {
 } cupid_vtu_mesh;
 
 /**
- * Write a .vtu file (VTK XML UnstructuredGrid version 1.0, appended raw binary, UInt64 block
- * headers, host byte order declared in byte_order): Points Float64, connectivity and offsets
- * Int64, types UInt8, data arrays Float64 with their NumberOfComponents, values as given
- * (6-component symmetric tensors in the caller's order). Written atomically. The mesh is
- * checked first (CUPID_ERR_ARGUMENT): offsets increasing and ending at the connectivity
- * length, connectivity within [0, n_points), arrays present. Zero points/cells are allowed.
+ * Write a .vtu file (VTK XML UnstructuredGrid version 1.0, host byte order declared in
+ * byte_order): Points Float64, connectivity and offsets Int64, types UInt8, data arrays
+ * Float64 with their NumberOfComponents, values as given (6-component symmetric tensors in
+ * the caller's order). The arrays are appended data with encoding="base64", as VTK's own
+ * writer makes them: each array one padded base64 run of its UInt64 byte count followed by
+ * its bytes, offsets in characters after the '_' marker (4/3 the size of raw bytes, but
+ * read by VTK/ParaView, meshio and every other reader; raw appended data is not). Written
+ * atomically. The mesh is checked first (CUPID_ERR_ARGUMENT): offsets increasing and ending
+ * at the connectivity length, connectivity within [0, n_points), arrays present. Zero
+ * points/cells are allowed.
  */
 cupid_status cupid_vtu_write(const char *path, const cupid_vtu_mesh *mesh);
 
 /**
  * Write a .pvd collection (atomically): n datasets (file names relative to the .pvd), their
- * times (NULL: all 0; must be finite) and parts (NULL: all 0).
+ * block names (NULL, or a NULL/empty entry: the file's base name without its extension and
+ * without a trailing `_<digits>` step number, so "pd_000100.vtu" is "pd"), times (NULL: all
+ * 0; must be finite) and parts (NULL: the distinct names numbered 0, 1, ... in order of
+ * first appearance; else >= 0). ParaView shows the data sets of one time as blocks with these
+ * names (the DataSet `name` attribute).
  */
+cupid_status cupid_pvd_write_named(const char *path, int n, const char *const *files,
+                                   const char *const *names, const double *times,
+                                   const int *parts);
+
+/** cupid_pvd_write_named() with the default names (from the file names). */
 cupid_status cupid_pvd_write(const char *path, int n, const char *const *files,
                              const double *times, const int *parts);
 

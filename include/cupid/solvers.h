@@ -147,7 +147,10 @@ typedef struct {
  * relative residual above 1e-4 (a singular system with an inconsistent load).
  * A singular or indefinite K_ff gives CUPID_ERR_NUMERIC with info->failed_dof set; so do a
  * pivot ratio below the CUPID_DIRECT_PIVOT_TOL bound (a matrix singular up to round-off) and a
- * residual failure (failed_dof is then the DOF of the smallest pivot).
+ * residual failure (failed_dof is then the DOF of the smallest pivot). A non-finite (NaN or
+ * Inf) load vector entry, right-hand side f_f - K_fc u_c, entry of K_ff or solution entry is
+ * CUPID_ERR_NUMERIC too, its message naming the cause and the first such DOF (failed_dof
+ * stays -1: no factorisation broke down).
  * u (K->nrows*bs entries) receives the full solution. bc may be NULL (no fixed DOFs) and
  * info may be NULL. CHOLMOD uses one triangle of K_ff (K must be symmetric; an asymmetric
  * K shows up as a residual failure).

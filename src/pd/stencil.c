@@ -231,8 +231,10 @@ int pd_stencil_force_isa(int level) {
   return pd_stencil_kernel_lanes();
 }
 
+#if PD_MULTI_ISA
 /* The CPU's levels and the environment's cap, read once (every apply asks). */
 static atomic_int pd_isa_cpu = -1, pd_isa_env = -1;
+#endif
 
 static const pd_kernel_set *kernels_pick(void) {
 #if PD_MULTI_ISA

@@ -83,6 +83,25 @@ static cupid_status singular_error(cupid_int dof, int bs, const char *how) {
 }
 
 /*
+ * A NaN or Inf would otherwise slip through: a NaN norm fails no comparison (|r|/|b| was
+ * reported as 0 and NaN displacements as a success), an infinite load reads as a singular
+ * matrix. Name the first non-finite entry of @p v (n values; DOF global[k], or k if global is
+ * NULL) and what it is; CUPID_SUCCESS if all are finite. info->failed_dof stays -1: nothing
+ * broke down in a factorisation (the message names the DOF).
+ */
+static cupid_status check_finite(cupid_int n, const double *v, const cupid_int *global, int bs,
+                                 const char *what, const char *hint, const char *method) {
+  for (cupid_int k = 0; k < n; k++) {
+    if (isfinite(v[k])) continue;
+    char where[96];
+    describe_dof(where, sizeof where, global ? global[k] : k, bs);
+    return CUPID_ERROR(CUPID_ERR_NUMERIC, "%s: non-finite %s %g at %s: %s", method, what, v[k],
+                       where, hint);
+  }
+  return CUPID_SUCCESS;
+}
+
+/*
  * Rows of K_ff from the block rows of K. Free DOFs are numbered in increasing global order,
  * so mapped column indices stay sorted. With lower_only, row k keeps columns >= k, which is
  * column k of the lower triangle of the (symmetric) K_ff in compressed-column form.
@@ -460,6 +479,8 @@ cupid_status cupid_direct_solve(const cupid_csr_t *K, cupid_matrix_kind kind, co
     bc = own;
   }
   CUPID_TRY(check_dirichlet(bc));
+  CUPID_TRY(check_finite(N, f, NULL, bs, "load vector entry",
+                         "a load (or an expression in one) is not finite", info->method));
   const cupid_int n = bc->n_free;
   info->n = n;
   int any_prescribed = 0;
@@ -482,11 +503,27 @@ cupid_status cupid_direct_solve(const cupid_csr_t *K, cupid_matrix_kind kind, co
   else
     memset(w, 0, (size_t)N * sizeof *w);
   for (cupid_int k = 0; k < n; k++) b[k] = f[global[k]] - w[global[k]];
+  CUPID_TRY(check_finite(n, b, global, bs, "right-hand side f - K u_c",
+                         "the stiffness coupling this DOF to prescribed displacements is not "
+                         "finite",
+                         info->method));
   const double bnorm = norm2(n, b), bmax = max_abs(n, b);
 
   double t0 = cupid_wtime();
   CUPID_TRY(reduce_matrix(K, bc, global, kind == CUPID_MATRIX_SPD, &F.A));
   info->nnz_matrix = F.A.nnz_full;
+  for (cupid_int k = 0; k < n && st == CUPID_SUCCESS; k++) /* entries of row/column k */
+    for (cupid_int t = F.A.p[k]; t < F.A.p[k + 1]; t++)
+      if (!isfinite(F.A.x[t])) {
+        char where[96], other[96] = "itself (the diagonal)";
+        describe_dof(where, sizeof where, global[k], bs);
+        if (F.A.i[t] != k) describe_dof(other, sizeof other, global[F.A.i[t]], bs);
+        st = CUPID_ERROR(CUPID_ERR_NUMERIC,
+                         "%s: non-finite stiffness matrix entry %g coupling %s to %s",
+                         info->method, F.A.x[t], where, other);
+        break;
+      }
+  if (st != CUPID_SUCCESS) goto cleanup;
   if (kind == CUPID_MATRIX_SPD)
     st = factor_cholmod(&F, global, bs, info);
   else
@@ -509,6 +546,10 @@ cupid_status cupid_direct_solve(const cupid_csr_t *K, cupid_matrix_kind kind, co
     info->refinements = 1;
   }
   info->time_solve = cupid_wtime() - t0;
+  for (cupid_int k = 0; k < n; k++) x[k] = u[global[k]];
+  CUPID_TRY(check_finite(n, x, global, bs, "solution",
+                         "the solve overflowed (a badly scaled or singular stiffness matrix)",
+                         info->method));
   info->backward_error = backward_error(K, bc, u, global, n, b, bmax, free_norm_inf(K, bc));
   if (!(info->backward_error <= FAIL_ABOVE) || !(info->residual <= RESIDUAL_FAIL_ABOVE)) {
     /* Point at the smallest pivot: where a near-singularity shows up. */

@@ -1,11 +1,14 @@
 #!/usr/bin/env python3
-"""Independent reader for cupid's .vtu files (VTK XML UnstructuredGrid, appended raw data).
+"""Independent reader for cupid's .vtu files (VTK XML UnstructuredGrid, appended base64 data).
 
-Standard library only (xml.etree + struct). Checks the structure against the VTK file format
-(header_type UInt64, offsets of every DataArray into <AppendedData encoding="raw"> after the
-'_' marker, block sizes matching NumberOfPoints/NumberOfCells x NumberOfComponents, cell offsets
-increasing and ending at the connectivity length, connectivity inside the points) and dumps
-every array as text, one value per line, floats with repr() (exact round trip):
+Standard library only (xml.etree + base64 + struct). Checks the structure against the VTK file
+format (header_type UInt64, <AppendedData encoding="base64"> whose text is '_' then one base64
+run per DataArray, at the DataArray's offset in characters after the '_': each run padded to a
+multiple of 4 characters, '=' only at its end, decoding to a UInt64 byte count and exactly that
+many bytes; runs contiguous and covering the appended data; block sizes matching
+NumberOfPoints/NumberOfCells x NumberOfComponents, cell offsets increasing and ending at the
+connectivity length, connectivity inside the points) and dumps every array as text, one value
+per line, floats with repr() (exact round trip):
 
     points N
     cells M
@@ -15,24 +18,38 @@ every array as text, one value per line, floats with repr() (exact round trip):
 
 Usage: read_vtu.py FILE.vtu [OUT.txt]   (exit status 1 with a message if the file is wrong)
 """
+import base64
+import binascii
+import re
 import struct
 import sys
 import xml.etree.ElementTree as ET
 
 TYPES = {"Float64": ("d", 8), "Float32": ("f", 4), "Int64": ("q", 8), "Int32": ("i", 4),
          "UInt64": ("Q", 8), "UInt8": ("B", 1)}
+RUN = re.compile(rb"[A-Za-z0-9+/]*(?:[A-Za-z0-9+/]{2}==|[A-Za-z0-9+/]{3}=)?")
 
 
 def fail(msg):
     sys.exit("read_vtu.py: " + msg)
 
 
+def decode(text, what):
+    """Bytes of one padded base64 run (validated: alphabet, length, '=' only at its end)."""
+    if len(text) % 4 or RUN.fullmatch(text) is None:
+        fail("%s: not one padded base64 run" % what)
+    try:
+        return base64.b64decode(text, validate=True)
+    except binascii.Error as e:
+        fail("%s: %s" % (what, e))
+
+
 def read(path):
     data = open(path, "rb").read()
-    tag = b'<AppendedData encoding="raw">'
+    tag = b'<AppendedData encoding="base64">'
     start = data.find(tag)
     if start < 0:
-        fail("no raw AppendedData")
+        fail("no base64 AppendedData")
     marker = data.find(b"_", start + len(tag))
     if marker < 0 or data[start + len(tag):marker].strip():
         fail("no '_' marker")
@@ -40,11 +57,14 @@ def read(path):
     tail = data.rfind(b"</AppendedData>")
     if tail < 0 or data[tail:].split() != [b"</AppendedData>", b"</VTKFile>"]:
         fail("file does not end with </AppendedData></VTKFile>")
+    text = data[base:tail].rstrip()  # the runs, back to back
     root = ET.fromstring(data[:start] + b"</VTKFile>")
     if root.tag != "VTKFile" or root.get("type") != "UnstructuredGrid":
         fail("not an UnstructuredGrid")
     if root.get("header_type") != "UInt64":
         fail("header_type is not UInt64")
+    if root.get("compressor") is not None:
+        fail("compressed data")
     order = {"LittleEndian": "<", "BigEndian": ">"}.get(root.get("byte_order"))
     if order is None:
         fail("bad byte_order")
@@ -56,23 +76,32 @@ def read(path):
     arrays, blocks = [], []
     for section in ("PointData", "CellData", "Points", "Cells"):
         for el in piece.findall(section + "/DataArray"):
+            name = el.get("Name")
             if el.get("format") != "appended":
-                fail("array %s is not appended" % el.get("Name"))
+                fail("array %s is not appended" % name)
             code, size = TYPES[el.get("type")]
             ncomp = int(el.get("NumberOfComponents", "1"))
-            off = base + int(el.get("offset"))
-            (nbytes,) = struct.unpack(order + "Q", data[off:off + 8])
-            if off + 8 + nbytes > tail or nbytes % size:
-                fail("array %s: bad size %d" % (el.get("Name"), nbytes))
+            off = int(el.get("offset"))
+            head = decode(text[off:off + 12], "array %s" % name)
+            if len(head) < 8:
+                fail("array %s: no byte count" % name)
+            (nbytes,) = struct.unpack(order + "Q", head[:8])
+            end = off + (8 + nbytes + 2) // 3 * 4
+            if end > len(text) or nbytes % size:
+                fail("array %s: bad size %d" % (name, nbytes))
+            raw = decode(text[off:end], "array %s" % name)
+            if len(raw) != 8 + nbytes:
+                fail("array %s: %d bytes after the count, expected %d" % (name, len(raw) - 8,
+                                                                          nbytes))
             count = nbytes // size
-            values = struct.unpack(order + code * count, data[off + 8:off + 8 + nbytes])
-            blocks.append((off, off + 8 + nbytes))
-            arrays.append((section, el.get("Name"), el.get("type"), ncomp, values))
+            values = struct.unpack(order + code * count, raw[8:])
+            blocks.append((off, end))
+            arrays.append((section, name, el.get("type"), ncomp, values))
     blocks.sort()
     for (a0, a1), (b0, b1) in zip(blocks, blocks[1:]):
-        if a1 > b0:
-            fail("appended blocks overlap")
-    if blocks and (blocks[0][0] != base or data[blocks[-1][1]:tail].strip()):
+        if a1 != b0:
+            fail("appended runs overlap or leave a gap")
+    if blocks and (blocks[0][0] != 0 or blocks[-1][1] != len(text)):
         fail("appended data has gaps at its ends")
     named = {(s, n): v for s, n, _, _, v in arrays}
     for s, n, _, ncomp, v in arrays:

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Interrupted runs (docs/hardening.md): SIGINT or SIGTERM at a random moment of a run that takes
-# about a second (mostly writing 30 MB of VTU and CSV, and gnuplot) must leave no temporary
+# about a second (mostly writing 50 MB of VTU and CSV, and gnuplot) must leave no temporary
 # file and no partial file: every output file that exists afterwards is complete (summary.json
 # parses, CSVs have every row, the VTU passes tests/tools/read_vtu.py, PNGs end with IEND).
 # Half of the trials start from the complete outputs of an earlier run (a final file is then

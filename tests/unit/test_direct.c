@@ -295,6 +295,91 @@ static void test_spd_not_symmetric(void **state) {
   free(u);
 }
 
+/* Expect CUPID_ERR_NUMERIC naming @p what at @p dof ("DOF 37 = node 12, component y"). */
+static void expect_non_finite(const cupid_csr_t *K, cupid_matrix_kind kind, const double *f,
+                              const cupid_dirichlet_t *bc, const char *what, cupid_int dof) {
+  const cupid_int n = K->nrows * K->bs;
+  double *u = malloc((size_t)n * sizeof *u);
+  cupid_solve_info info;
+  const cupid_status st = cupid_direct_solve(K, kind, f, bc, u, &info);
+  const char *msg = cupid_error_message();
+  print_message("  %s: status %d, residual %.3g: %s\n", info.method, (int)st, info.residual, msg);
+  assert_int_equal(st, CUPID_ERR_NUMERIC);
+  assert_int_equal(info.failed_dof, -1); /* no factorisation broke down: the message names it */
+  assert_non_null(strstr(msg, what));
+  char where[64];
+  snprintf(where, sizeof where, "DOF %lld = node %lld, component %c", (long long)dof,
+           (long long)(dof / 3), "xyz"[dof % 3]);
+  assert_non_null(strstr(msg, where));
+  assert_null(strstr(msg, "singular or not positive definite"));
+  assert_null(strstr(msg, "singular or ill-conditioned"));
+  free(u);
+}
+
+/*
+ * Non-finite numbers fail with their cause and DOF. A NaN load used to come back as a success
+ * with residual 0 and NaN displacements (a NaN norm fails no comparison, and bnorm > 0 was
+ * false), an infinite one as "the stiffness matrix is singular".
+ */
+static void test_non_finite(void **state) {
+  (void)state;
+  const grid_spec g = {5, 4, 3, 3, B_SPD, 0.5, 0.0, 0};
+  cupid_csr K = grid_matrix(&g);
+  const cupid_int n = K->nrows * 3;
+  double *f = malloc((size_t)n * sizeof *f), *u = malloc((size_t)n * sizeof *u);
+  uint64_t seed = 19;
+  for (cupid_int k = 0; k < n; k++) f[k] = cupid_test_random(&seed);
+  const double bad[] = {NAN, INFINITY, -INFINITY};
+  for (int kind = 0; kind < 2; kind++)
+    for (int b = 0; b < 3; b++) {
+      const double keep = f[37];
+      f[37] = bad[b];
+      expect_non_finite(K, (cupid_matrix_kind)kind, f, NULL, "non-finite load vector entry", 37);
+      f[37] = keep;
+    }
+  /* Prescribed displacements on node 0 (and a NaN load there: the reactions would be NaN). */
+  cupid_dirichlet bc = NULL;
+  CUPID_ASSERT_OK(cupid_dirichlet_create(n, &bc));
+  for (int c = 0; c < 3; c++) CUPID_ASSERT_OK(cupid_dirichlet_fix(bc, c, 1e-3 * (c + 1)));
+  CUPID_ASSERT_OK(cupid_dirichlet_finalize(bc));
+  f[1] = NAN;
+  expect_non_finite(K, CUPID_MATRIX_SPD, f, bc, "non-finite load vector entry", 1);
+  f[1] = 0.0;
+  /* A NaN coupling node 1 (free) to node 0 (prescribed): in K_fc u_c, not in K_ff. */
+  double *block = cupid_csr_find(K, 1, 0);
+  assert_non_null(block);
+  const double keep = block[0];
+  block[0] = NAN;
+  expect_non_finite(K, CUPID_MATRIX_SPD, f, bc, "non-finite right-hand side", 3);
+  expect_non_finite(K, CUPID_MATRIX_GENERAL, f, bc, "non-finite right-hand side", 3);
+  block[0] = keep;
+  /* A NaN in K_ff (the diagonal of node 5, component y). */
+  block = cupid_csr_find(K, 5, 5);
+  const double diag = block[4];
+  block[4] = NAN;
+  expect_non_finite(K, CUPID_MATRIX_SPD, f, NULL, "non-finite stiffness matrix entry", 16);
+  expect_non_finite(K, CUPID_MATRIX_GENERAL, f, NULL, "non-finite stiffness matrix entry", 16);
+  block[4] = diag;
+  /* Finite but overflowing: K scaled by 1e-20 and loads of 1e300 give |u| ~ 1e320. */
+  for (cupid_int p = 0; p < K->rowptr[K->nrows] * 9; p++) K->val[p] *= 1e-20;
+  for (cupid_int k = 0; k < n; k++) f[k] = 1e300;
+  cupid_solve_info info;
+  assert_int_equal(cupid_direct_solve(K, CUPID_MATRIX_SPD, f, NULL, u, &info), CUPID_ERR_NUMERIC);
+  print_message("  %s\n", cupid_error_message());
+  assert_non_null(strstr(cupid_error_message(), "non-finite solution"));
+  assert_null(strstr(cupid_error_message(), "singular or"));
+  assert_int_equal(info.failed_dof, -1);
+  /* The same system with finite numbers still solves. */
+  for (cupid_int p = 0; p < K->rowptr[K->nrows] * 9; p++) K->val[p] *= 1e20;
+  for (cupid_int k = 0; k < n; k++) f[k] = cupid_test_random(&seed);
+  CUPID_ASSERT_OK(cupid_direct_solve(K, CUPID_MATRIX_SPD, f, bc, u, &info));
+  assert_true(info.residual < 1e-12);
+  cupid_dirichlet_destroy(&bc);
+  cupid_csr_destroy(&K);
+  free(f);
+  free(u);
+}
+
 /* A random sparse SPD matrix (symmetric, strictly diagonally dominant) from triplets. */
 static void test_random_spd(void **state) {
   (void)state;
@@ -482,6 +567,7 @@ int main(void) {
                                      cmocka_unit_test(test_floating_component),
                                      cmocka_unit_test(test_indefinite),
                                      cmocka_unit_test(test_spd_not_symmetric),
+                                     cmocka_unit_test(test_non_finite),
                                      cmocka_unit_test(test_random_spd),
                                      cmocka_unit_test(test_all_fixed_and_empty),
                                      cmocka_unit_test(test_bad_arguments),

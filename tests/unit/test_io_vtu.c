@@ -1,4 +1,4 @@
-/* Unit tests of the .vtu/.pvd writers (src/io/vtu.c), read back in C and by
+/* Unit tests of the .vtu/.pvd writers (src/io/vtu.c): appended base64 data, read back in C and by
  * tests/tools/read_vtu.py (an independent reader that checks the file's structure). */
 #define _POSIX_C_SOURCE 200809L
 #include <math.h>
@@ -120,13 +120,44 @@ static void make_mesh(test_mesh *m) {
 
 /* ---------------------------------------------------------------- reading back in C */
 
+/* The value of one base64 character, -1 for '=' and -2 for anything else. */
+static int base64_value(char c) {
+  if (c >= 'A' && c <= 'Z') return c - 'A';
+  if (c >= 'a' && c <= 'z') return c - 'a' + 26;
+  if (c >= '0' && c <= '9') return c - '0' + 52;
+  if (c == '+') return 62;
+  if (c == '/') return 63;
+  return c == '=' ? -1 : -2;
+}
+
+/* Decode @p nchars characters (a multiple of 4, '=' only in the last group) into @p out;
+ * returns the number of bytes. */
+static size_t base64_decode(const char *text, size_t nchars, unsigned char *out) {
+  assert_int_equal(nchars % 4, 0);
+  size_t n = 0;
+  for (size_t g = 0; g < nchars; g += 4) {
+    int v[4];
+    for (int k = 0; k < 4; k++) v[k] = base64_value(text[g + k]);
+    const int last = g + 4 == nchars;
+    assert_true(v[0] >= 0 && v[1] >= 0);
+    assert_true(v[2] >= 0 || (last && v[2] == -1 && v[3] == -1));
+    assert_true(v[3] >= 0 || (last && v[3] == -1));
+    out[n++] = (unsigned char)(v[0] << 2 | v[1] >> 4);
+    if (v[2] >= 0) out[n++] = (unsigned char)((v[1] & 15) << 4 | v[2] >> 2);
+    if (v[3] >= 0) out[n++] = (unsigned char)((v[2] & 3) << 6 | v[3]);
+  }
+  return n;
+}
+
 /*
- * The raw bytes of the appended array whose Name attribute is @p xml_name (as written in the
- * XML, i.e. escaped): offset from the header, UInt64 byte count, data. Returns the data.
+ * The appended array whose Name attribute is @p xml_name (as written in the XML, i.e.
+ * escaped): offset (in characters) from the header, then one padded base64 run that decodes
+ * to a UInt64 byte count and exactly that many bytes, followed by the next run or the end of
+ * the appended data. Returns the data (caller frees) and its byte count.
  */
-static const char *appended_array(const char *file, size_t size, const char *xml_name,
-                                  uint64_t *nbytes) {
-  const char *data_tag = strstr(file, "<AppendedData encoding=\"raw\">");
+static unsigned char *appended_array(const char *file, size_t size, const char *xml_name,
+                                     uint64_t *nbytes) {
+  const char *data_tag = strstr(file, "<AppendedData encoding=\"base64\">");
   assert_non_null(data_tag);
   const char *marker = strchr(data_tag, '_');
   assert_non_null(marker);
@@ -138,19 +169,28 @@ static const char *appended_array(const char *file, size_t size, const char *xml
   assert_non_null(off);
   assert_true(off < strchr(el, '>'));
   uint64_t offset = strtoull(off + 8, NULL, 10);
-  const char *block = marker + 1 + offset;
-  assert_true(block + 8 <= file + size);
-  memcpy(nbytes, block, 8);
-  assert_true(block + 8 + *nbytes <= file + size);
-  return block + 8;
+  const char *run = marker + 1 + offset;
+  assert_true(run + 12 <= file + size);
+  unsigned char head[9];
+  assert_true(base64_decode(run, 12, head) >= 8); /* the count: bytes 0-7 of the run */
+  memcpy(nbytes, head, 8);
+  const size_t nchars = (size_t)(8 + *nbytes + 2) / 3 * 4;
+  assert_true(run + nchars <= file + size);
+  assert_true(run[nchars] == '\n' || base64_value(run[nchars]) >= 0); /* the run ends here */
+  unsigned char *bytes = malloc(nchars / 4 * 3);
+  assert_non_null(bytes);
+  assert_int_equal(base64_decode(run, nchars, bytes), 8 + *nbytes);
+  memmove(bytes, bytes + 8, (size_t)*nbytes);
+  return bytes;
 }
 
 static void expect_array(const char *file, size_t size, const char *xml_name, const void *values,
                          size_t nbytes) {
   uint64_t got = 0;
-  const char *data = appended_array(file, size, xml_name, &got);
+  unsigned char *data = appended_array(file, size, xml_name, &got);
   if (got != nbytes) fail_msg("%s: %llu bytes, expected %zu", xml_name, (unsigned long long)got, nbytes);
   if (nbytes && memcmp(data, values, nbytes) != 0) fail_msg("%s: values differ", xml_name);
+  free(data);
 }
 
 static void check_with_c_reader(const char *path, const test_mesh *m) {
@@ -285,6 +325,45 @@ static void test_vtu_empty(void **state) {
   free(text);
 }
 
+/* Every length of the last base64 group (byte counts 8 + n = 0, 1, 2 mod 3 for both the
+ * 1-byte types and the 8-byte values), read back by both readers. */
+static void test_vtu_padding(void **state) {
+  (void)state;
+  double p[3 * 6], a[6];
+  cupid_int conn[6], offs[6];
+  unsigned char types[6];
+  for (int i = 0; i < 6; i++) {
+    for (int d = 0; d < 3; d++) p[3 * i + d] = 0.1 * i - 0.7 * d;
+    a[i] = -1.0 / (i + 3);
+    conn[i] = i;
+    offs[i] = i + 1;
+    types[i] = CUPID_VTK_VERTEX;
+  }
+  for (int n = 1; n <= 6; n++) {
+    cupid_vtu_array pd[] = {{"a", 1, a}};
+    cupid_vtu_mesh mesh = {.n_points = n, .points = p, .n_cells = n, .connectivity = conn,
+                           .offsets = offs, .types = types, .point_data = pd, .n_point_data = 1};
+    const char *path = in_root("pad.vtu");
+    CUPID_ASSERT_OK(cupid_vtu_write(path, &mesh));
+    size_t size;
+    char *file = slurp(path, &size);
+    assert_non_null(file);
+    expect_array(file, size, "a", a, (size_t)n * 8);
+    expect_array(file, size, "Points", p, (size_t)n * 24);
+    expect_array(file, size, "connectivity", conn, (size_t)n * 8);
+    expect_array(file, size, "offsets", offs, (size_t)n * 8);
+    expect_array(file, size, "types", types, (size_t)n);
+    free(file);
+    char *text = python_dump(path);
+    char expect[64];
+    snprintf(expect, sizeof expect, "points %d\ncells %d\n", n, n);
+    assert_non_null(strstr(text, expect));
+    snprintf(expect, sizeof expect, "array Cells types UInt8 1 %d\n", n);
+    assert_non_null(strstr(text, expect));
+    free(text);
+  }
+}
+
 static void test_vtu_rejects_bad_meshes(void **state) {
   (void)state;
   test_mesh *m = calloc(1, sizeof *m);
@@ -324,9 +403,12 @@ static void test_pvd(void **state) {
                       "<?xml version=\"1.0\"?>\n"
                       "<VTKFile type=\"Collection\" version=\"0.1\" byte_order=\"LittleEndian\">\n"
                       "  <Collection>\n"
-                      "    <DataSet timestep=\"0\" group=\"\" part=\"0\" file=\"beam.vtu\"/>\n"
-                      "    <DataSet timestep=\"0\" group=\"\" part=\"1\" file=\"pd.vtu\"/>\n"
-                      "    <DataSet timestep=\"0.0025\" group=\"\" part=\"0\" file=\"step_1&amp;2.vtu\"/>\n"
+                      "    <DataSet timestep=\"0\" group=\"\" part=\"0\" name=\"beam\" "
+                      "file=\"beam.vtu\"/>\n"
+                      "    <DataSet timestep=\"0\" group=\"\" part=\"1\" name=\"pd\" "
+                      "file=\"pd.vtu\"/>\n"
+                      "    <DataSet timestep=\"0.0025\" group=\"\" part=\"0\" "
+                      "name=\"step_1&amp;2\" file=\"step_1&amp;2.vtu\"/>\n"
                       "  </Collection>\n"
                       "</VTKFile>\n");
   free(text);
@@ -342,6 +424,57 @@ static void test_pvd(void **state) {
   const double bad[] = {NAN};
   assert_int_equal(cupid_pvd_write(in_root("bad.pvd"), 1, files, bad, NULL), CUPID_ERR_ARGUMENT);
   assert_int_equal(cupid_pvd_write(in_root("bad.pvd"), 2, NULL, NULL, NULL), CUPID_ERR_ARGUMENT);
+  const int negative[] = {0, -1};
+  assert_int_equal(cupid_pvd_write(in_root("bad.pvd"), 2, files, NULL, negative),
+                   CUPID_ERR_ARGUMENT);
+  assert_null(slurp(in_root("bad.pvd"), NULL));
+}
+
+/* Block names: given, or from the file names without a step number; default parts number the
+ * distinct names (a time series of two blocks: pd and beam at every time). */
+static void test_pvd_names(void **state) {
+  (void)state;
+  const char *files[] = {"pd_000000.vtu", "beam_000000.vtu", "pd_000100.vtu", "beam_000100.vtu",
+                         "dir/x_1.vtu",   "_7.vtu",          "run_2b.vtu"};
+  const double times[] = {0.0, 0.0, 1e-3, 1e-3, 0.0, 0.0, 0.0};
+  const char *path = in_root("series.pvd");
+  CUPID_ASSERT_OK(cupid_pvd_write(path, 7, files, times, NULL));
+  char *text = slurp(path, NULL);
+  assert_non_null(text);
+  assert_string_equal(text,
+                      "<?xml version=\"1.0\"?>\n"
+                      "<VTKFile type=\"Collection\" version=\"0.1\" byte_order=\"LittleEndian\">\n"
+                      "  <Collection>\n"
+                      "    <DataSet timestep=\"0\" group=\"\" part=\"0\" name=\"pd\" "
+                      "file=\"pd_000000.vtu\"/>\n"
+                      "    <DataSet timestep=\"0\" group=\"\" part=\"1\" name=\"beam\" "
+                      "file=\"beam_000000.vtu\"/>\n"
+                      "    <DataSet timestep=\"0.001\" group=\"\" part=\"0\" name=\"pd\" "
+                      "file=\"pd_000100.vtu\"/>\n"
+                      "    <DataSet timestep=\"0.001\" group=\"\" part=\"1\" name=\"beam\" "
+                      "file=\"beam_000100.vtu\"/>\n"
+                      "    <DataSet timestep=\"0\" group=\"\" part=\"2\" name=\"x\" "
+                      "file=\"dir/x_1.vtu\"/>\n"
+                      "    <DataSet timestep=\"0\" group=\"\" part=\"3\" name=\"_7\" "
+                      "file=\"_7.vtu\"/>\n"
+                      "    <DataSet timestep=\"0\" group=\"\" part=\"4\" name=\"run_2b\" "
+                      "file=\"run_2b.vtu\"/>\n"
+                      "  </Collection>\n"
+                      "</VTKFile>\n");
+  free(text);
+  /* Given names (escaped; a NULL or empty entry falls back to the file) and parts. */
+  const char *names[] = {"PD <nodes>", NULL, ""};
+  const int parts[] = {3, 0, 7};
+  CUPID_ASSERT_OK(cupid_pvd_write_named(path, 3, files, names, NULL, parts));
+  text = slurp(path, NULL);
+  assert_non_null(text);
+  assert_non_null(strstr(text, "\n    <DataSet timestep=\"0\" group=\"\" part=\"3\" "
+                               "name=\"PD &lt;nodes&gt;\" file=\"pd_000000.vtu\"/>\n"
+                               "    <DataSet timestep=\"0\" group=\"\" part=\"0\" name=\"beam\" "
+                               "file=\"beam_000000.vtu\"/>\n"
+                               "    <DataSet timestep=\"0\" group=\"\" part=\"7\" name=\"pd\" "
+                               "file=\"pd_000100.vtu\"/>\n  </Collection>"));
+  free(text);
 }
 
 /* 10^6 PD-like nodes as vertex cells with displacement and damage. */
@@ -399,8 +532,10 @@ int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test_setup_teardown(test_vtu_round_trip, setup, teardown),
       cmocka_unit_test_setup_teardown(test_vtu_empty, setup, teardown),
+      cmocka_unit_test_setup_teardown(test_vtu_padding, setup, teardown),
       cmocka_unit_test_setup_teardown(test_vtu_rejects_bad_meshes, setup, teardown),
       cmocka_unit_test_setup_teardown(test_pvd, setup, teardown),
+      cmocka_unit_test_setup_teardown(test_pvd_names, setup, teardown),
       cmocka_unit_test_setup_teardown(test_vtu_speed, setup, teardown),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
