@@ -103,6 +103,12 @@ typedef enum {
 cupid_status cupid_problem_get_field(cupid_problem p, cupid_field field, const double **values,
                                      cupid_int *n, int *components);
 
+/** Type dynamic: the history of the output points, one row a step (*n_rows rows of *n_cols =
+ *  1 + 3 n_points: t, then ux uy uz of each output point in the model's order), as
+ *  history.csv holds it (borrowed; after solve; *n_rows = 0 for other analyses). */
+cupid_status cupid_problem_get_history(cupid_problem p, const double **rows, cupid_int *n_rows,
+                                       int *n_cols);
+
 /** Where a sampled point lies. */
 typedef enum { CUPID_REGION_NONE = 0, CUPID_REGION_PD = 1, CUPID_REGION_FE = 2 } cupid_region_kind;
 

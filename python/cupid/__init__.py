@@ -109,6 +109,9 @@ def _load():
         "cupid_version": ([], ctypes.c_char_p),
         "cupid_problem_output_directory": ([P], ctypes.c_char_p),
         "cupid_problem_output_point_count": ([P], ctypes.c_int),
+        "cupid_problem_get_history": ([P, ctypes.POINTER(ctypes.POINTER(ctypes.c_double)),
+                                       ctypes.POINTER(_c_int64), ctypes.POINTER(ctypes.c_int)],
+                                      ctypes.c_int),
         "cupid_problem_output_point": ([P, ctypes.c_int, ctypes.POINTER(ctypes.c_char_p),
                                         ctypes.POINTER(ctypes.c_double),
                                         ctypes.POINTER(ctypes.c_int)], ctypes.c_int),
@@ -235,6 +238,31 @@ class Problem:
                                          s.ctypes.data_as(dp) if stress else None, reg))
         regions = [_REGIONS[r] for r in reg]
         return (u, regions, s) if stress else (u, regions)
+
+    @property
+    def history(self):
+        """Type dynamic: a dict with "t" (steps,) and, for each output point, its name mapped to
+        the (steps, 3) displacements, as history.csv holds them."""
+        rows = ctypes.POINTER(ctypes.c_double)()
+        n, cols = _c_int64(), ctypes.c_int()
+        _check(_lib.cupid_problem_get_history(self._p, ctypes.byref(rows), ctypes.byref(n),
+                                              ctypes.byref(cols)))
+        h = (np.ctypeslib.as_array(rows, shape=(n.value * cols.value,)).reshape(n.value, cols.value).copy()
+             if n.value else np.zeros((0, cols.value)))
+        out = {"t": h[:, 0]}
+        names = [p["name"] for p in self._point_names()]
+        for k, name in enumerate(names):
+            out[name] = h[:, 1 + 3 * k:4 + 3 * k]
+        return out
+
+    def _point_names(self):
+        for k in range(_lib.cupid_problem_output_point_count(self._p)):
+            name = ctypes.c_char_p()
+            xyz = (ctypes.c_double * 3)()
+            want = ctypes.c_int()
+            _check(_lib.cupid_problem_output_point(self._p, k, ctypes.byref(name), xyz,
+                                                   ctypes.byref(want)))
+            yield {"name": name.value.decode(), "at": list(xyz), "stress": bool(want.value)}
 
     def sample_output_points(self):
         """The model's output points as summary.json lists them: name, x, y, z, ux, uy, uz,

@@ -104,3 +104,19 @@ def test_stage_order_and_unknown_field(bar):
     with pytest.raises(cupid.Error) as e:
         q.field("pd_displacement")  # before solve
     assert e.value.exit_code == 4
+
+
+def test_dynamic_history_equals_history_csv(tmp_path):
+    model = os.path.join(SRC, "tests", "models", "dynamics", "fe_truss.yaml")
+    subprocess.run([CLI, "run", model, "-o", str(tmp_path), "--quiet"], check=True)
+    rows = np.loadtxt(tmp_path / "history.csv", delimiter=",", skiprows=1)
+    header = open(tmp_path / "history.csv").readline().strip().split(",")
+    p = cupid.Problem(model).solve()
+    h = p.history
+    assert h["t"].shape[0] == rows.shape[0] > 10
+    assert np.allclose(h["t"], rows[:, 0], rtol=1e-9, atol=0)
+    scale = np.abs(rows[:, 1:]).max()
+    for k, name in enumerate(n for n in h if n != "t"):
+        assert header[1 + 3 * k] == name + "_ux"
+        # history.csv prints 11 significant digits
+        assert np.allclose(h[name], rows[:, 1 + 3 * k:4 + 3 * k], rtol=0, atol=1e-9 * scale)

@@ -183,12 +183,34 @@ static cupid_status write_vtu_step(dyn_output *o, cupid_int step, double t, cons
   return CUPID_SUCCESS;
 }
 
+/* A row of the history (t, then u at every output point) kept in the problem
+ * (cupid_problem_get_history), grown by doubling. */
+static cupid_status history_grow(cupid_problem_state *prob, double **row) {
+  const int cols = 1 + 3 * prob->model->output.n_points;
+  if (prob->history_rows == prob->history_cap) {
+    cupid_int cap = prob->history_cap ? 2 * prob->history_cap : 1024;
+    double *h = NULL;
+    CUPID_CALL(cupid_malloc((size_t)cap * (size_t)cols, sizeof *h, "history", &h));
+    if (prob->history_rows)
+      memcpy(h, prob->history, sizeof *h * (size_t)prob->history_rows * (size_t)cols);
+    cupid_free(&prob->history);
+    prob->history = h;
+    prob->history_cap = cap;
+  }
+  prob->history_cols = cols;
+  *row = prob->history + (size_t)prob->history_rows++ * (size_t)cols;
+  return CUPID_SUCCESS;
+}
+
 static cupid_status history_row(dyn_output *o, double t) {
   const cupid_output *out = &o->prob->model->output;
   FILE *f = cupid_atomic_stream(o->history);
+  double *row;
+  CUPID_CALL(history_grow(o->prob, &row));
+  row[0] = t;
   fprintf(f, "%.10e", t);
   for (int k = 0; k < out->n_points; k++) {
-    double u[3];
+    double *u = row + 1 + 3 * k;
     cupid_region_kind region;
     CUPID_CALL(cupid_problem_sample_point(o->prob, out->points[k].at, u, NULL, &region));
     fprintf(f, ",%.10e,%.10e,%.10e", u[0], u[1], u[2]);

@@ -154,3 +154,13 @@ cupid_status cupid_problem_output_point(cupid_problem_state *prob, int k, const 
   if (stress) *stress = pt->stress;
   return CUPID_SUCCESS;
 }
+
+cupid_status cupid_problem_get_history(cupid_problem_state *prob, const double **rows,
+                                       cupid_int *n_rows, int *n_cols) {
+  CUPID_CALL(need_stage(prob, CUPID_STAGE_SOLVED, "cupid_problem_get_history"));
+  CUPID_CHECK(rows && n_rows && n_cols, CUPID_ERR_ARGUMENT, "cupid_problem_get_history: NULL output");
+  *rows = prob->history;
+  *n_rows = prob->history_rows;
+  *n_cols = prob->history_rows ? prob->history_cols : 1 + 3 * prob->model->output.n_points;
+  return CUPID_SUCCESS;
+}

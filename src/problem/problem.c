@@ -437,6 +437,7 @@ void cupid_problem_state_free(cupid_problem_state *prob) {
   cupid_free(&prob->arlequin_regions);
   cupid_free(&prob->beam_points);
   cupid_free(&prob->beam_u);
+  cupid_free(&prob->history);
   cupid_free(&prob->region_boxes);
   cupid_free(&prob->region_materials);
 }

@@ -107,6 +107,9 @@ typedef struct cupid_problem_private {
   /* Fields served by cupid_problem_get_field (built on demand). */
   double *beam_points, *beam_u; /**< the beam's 3D reconstruction: points, displacements */
   cupid_int n_beam_points;
+  double *history;              /**< type dynamic: t and u at the output points, per step */
+  cupid_int history_rows, history_cap;
+  int history_cols;
   cupid_box *region_boxes;      /**< cupid_problem_coupling_options: one per PD region */
   int *region_materials;
 } cupid_problem_state;
