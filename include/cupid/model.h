@@ -175,7 +175,13 @@ typedef struct {
 } cupid_load;
 
 typedef enum { CUPID_ANALYSIS_STATIC = 0, CUPID_ANALYSIS_DYNAMIC = 1, CUPID_ANALYSIS_EVALUATE = 2 } cupid_analysis_type;
-typedef enum { CUPID_SOLVER_AUTO = 0, CUPID_SOLVER_DIRECT = 1, CUPID_SOLVER_PETSC = 2 } cupid_solver_kind;
+/** The solver engines (the table of solvers.h): auto picks one by its estimate. */
+typedef enum {
+  CUPID_SOLVER_AUTO = 0,
+  CUPID_SOLVER_DIRECT = 1, /**< SuiteSparse: CHOLMOD, UMFPACK */
+  CUPID_SOLVER_PETSC = 2,  /**< PETSc/MPI: Krylov, matrix-free, slabs (builds with PETSc) */
+  CUPID_SOLVER_KRYLOV = 3  /**< built in: matrix-free CG/GMRES + a SuiteSparse-factored twin */
+} cupid_solver_kind;
 typedef enum { CUPID_INTEGRATOR_NEWMARK = 0, CUPID_INTEGRATOR_CENTRAL = 1 } cupid_integrator;
 
 typedef struct {

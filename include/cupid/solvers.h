@@ -176,6 +176,17 @@ typedef struct cupid_direct_factor_private *cupid_direct_factor;
 cupid_status cupid_direct_factor_create(const cupid_csr_t *K, const cupid_dirichlet_t *bc,
                                         cupid_direct_factor *F, cupid_solve_info *info);
 
+/** As cupid_direct_factor_create() for @p kind SPD (CHOLMOD) or GENERAL (UMFPACK LU of K_ff;
+ *  CUPID_ERR_NUMERIC on a zero pivot). */
+cupid_status cupid_direct_factor_create_kind(const cupid_csr_t *K, cupid_matrix_kind kind,
+                                             const cupid_dirichlet_t *bc,
+                                             cupid_direct_factor *F, cupid_solve_info *info);
+/** The free DOFs the factor solves for. */
+cupid_int cupid_direct_factor_size(const cupid_direct_factor F);
+/** Solve K_ff x = b in the free numbering (b and x of cupid_direct_factor_size() entries, the
+ *  free DOFs in increasing global order; b and x must not alias). */
+cupid_status cupid_direct_factor_solve_free(cupid_direct_factor F, const double *b, double *x);
+
 /**
  * Solve K_ff x_f = b_f for full-length vectors: b and x have K->nrows*bs entries, only the
  * free entries of b are read and only the free entries of x are written (the caller moves
@@ -395,6 +406,7 @@ typedef struct {
   const char *name;   /**< as in the model file and --solver: "direct", "petsc" */
   int kind;           /**< its cupid_solver_kind (model.h) */
   int iterative;      /**< 1: Krylov, the matrix-free paths are its own */
+  int distributed;    /**< 1: solves over MPI ranks (PD grids in slabs) */
   /** 1 when this build has the engine. */
   int (*available)(void);
   /** Ready the engine (PETSc and MPI start here when not already started). */
@@ -403,6 +415,9 @@ typedef struct {
   cupid_status (*solve_matrix)(const cupid_csr_t *K, cupid_matrix_kind kind, const double *f,
                                const cupid_dirichlet_t *bc, double *u,
                                const cupid_petsc_options *hints, cupid_solve_info *info);
+  /** The matrix-free PD solve of a node operator (NULL: the engine has none). */
+  cupid_status (*solve_nodes)(const cupid_node_operator *A, const double *f,
+                              const cupid_dirichlet_t *bc, double *u, cupid_solve_info *info);
   /** Solve the matrix-free A u = f preconditioned by the matrix @p P (NULL: the engine has
    *  no matrix-free solve). */
   cupid_status (*solve_operator)(const cupid_linear_operator *A, const cupid_csr_t *P,
@@ -410,10 +425,22 @@ typedef struct {
                                  const cupid_krylov_options *opts, cupid_solve_info *info);
 } cupid_solver_type;
 
+/**
+ * The built-in matrix-free Krylov solve (the `krylov` engine, src/solvers/iterative.c): as
+ * cupid_krylov_solve() on one process without PETSc. A->symmetric: CG preconditioned by the
+ * CHOLMOD factor of P_ff; else right-preconditioned restarted GMRES with the UMFPACK LU of P_ff.
+ * Fixed DOFs eliminated; rtol, max_it and restart of @p opts (0: 1e-10, 2000, 200); pc and
+ * factor_package ignored. Not converged: CUPID_ERR_NUMERIC. info: method "krylov", ksp_type,
+ * pc_type ("cholmod"/"umfpack"), iterations, residual (true, recomputed), times.
+ */
+cupid_status cupid_iterative_solve(const cupid_linear_operator *A, const cupid_csr_t *P,
+                                   const cupid_dirichlet_t *bc, const double *f, double *u,
+                                   const cupid_krylov_options *opts, cupid_solve_info *info);
+
 /** The engine of a cupid_solver_kind (DIRECT or PETSC; NULL otherwise). */
 const cupid_solver_type *cupid_solver_type_get(int kind);
-/** The k-th engine of the table (0, 1, ...; NULL past the end): factorisations first, then
- *  the iterative engines. */
+/** The k-th engine of the table (0, 1, ...; NULL past the end): the factorisation first, then
+ *  the iterative engines (the built-in one before PETSc). */
 const cupid_solver_type *cupid_solver_type_at(int k);
 /** The engine named @p name ("direct", "petsc"; NULL if unknown). */
 const cupid_solver_type *cupid_solver_type_find(const char *name);

@@ -899,7 +899,7 @@ static cupid_status read_dynamic(model_reader *rd, yaml_node_t *node, cupid_dyna
 static cupid_status read_analysis(model_reader *rd, yaml_node_t *node) {
   static const char *const keys[] = {"type", "solver", "field", "dynamic"};
   static const char *const types[] = {"static", "dynamic", "evaluate"};
-  static const char *const solvers[] = {"auto", "direct", "petsc"};
+  static const char *const solvers[] = {"auto", "direct", "petsc", "krylov"};
   cupid_analysis *a = &rd->model->analysis;
   mr_map map;
   yaml_node_t *v;

@@ -47,8 +47,8 @@ struct cupid_method_ops {
   cupid_status (*loads)(cupid_problem_state *prob);
   /** prob->K: the whole system's stiffness with the coupling terms (unless already built). */
   cupid_status (*assemble)(cupid_problem_state *prob);
-  /** 1 when the static solve with the chosen engine takes the matrix-free path. */
-  int (*matrix_free)(const cupid_problem_state *prob);
+  /** 1 when the static solve with @p engine takes the matrix-free path. */
+  int (*matrix_free)(const cupid_problem_state *prob, const cupid_solver_type *engine);
   /** The matrix-free static solve: prob->u, f_int, solve, phases, solved. */
   cupid_status (*solve_matrix_free)(cupid_problem_state *prob);
   /** Central differences with a lumped mass without K: the operator (NULL: assemble K). */

@@ -452,11 +452,11 @@ static cupid_status report_gap(const cupid_problem_state *prob) {
   return CUPID_SUCCESS;
 }
 
-/* The PETSc engine, static: the PD block matrix-free (src/coupling/arlequin_operator.c), CG
+/* An iterative engine (krylov, petsc), static: the PD block matrix-free (src/coupling/arlequin_operator.c), CG
  * preconditioned by the Cholesky factor of the cheap twin (MUMPS, parallel on several ranks);
  * --assembled keeps the assembled path (CG + GAMG on K's rows). */
-static int matrix_free(const cupid_problem_state *prob) {
-  return prob->engine->iterative && !prob->opts->assembled;
+static int matrix_free(const cupid_problem_state *prob, const cupid_solver_type *engine) {
+  return engine->solve_operator && !prob->opts->assembled;
 }
 
 /* The matrix-free operator and, when P is given, the cheap preconditioner matrix (the

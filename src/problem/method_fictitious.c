@@ -40,10 +40,10 @@ static cupid_status assemble(cupid_problem_state *prob) {
   return CUPID_SUCCESS;
 }
 
-/* The PETSc engine, static, 3D: matrix-free unless --assembled asks for Eq. 38 assembled
- * (its rows split over the ranks, GMRES + block Jacobi/ILU). */
-static int matrix_free(const cupid_problem_state *prob) {
-  return prob->engine->iterative && !prob->opts->assembled && prob->grid &&
+/* An iterative engine (krylov, petsc), static, 3D: matrix-free unless --assembled asks for
+ * Eq. 38 assembled (PETSc: its rows split over the ranks, GMRES + block Jacobi/ILU). */
+static int matrix_free(const cupid_problem_state *prob, const cupid_solver_type *engine) {
+  return engine->solve_operator && !prob->opts->assembled && prob->grid &&
          cupid_pd_grid_dimension(prob->grid) == 3;
 }
 
@@ -90,16 +90,20 @@ cleanup:
   return st;
 }
 
-/* Matrix-free Eq. 38 + MUMPS LU of the cheap twin, measured on cbeam_web200 (10^5 PD nodes:
- * 4.3 GB, 115 s on a loaded machine; bench/README_coupled.md): ~1.6 kB a PD node for the
- * operator and the cheap matrix, ~40 kB for its factor. */
+/* Matrix-free Eq. 38 + LU of the cheap twin. Memory: ~1.6 kB a PD node for the operator and
+ * the cheap matrix, ~40 kB for its factor (MUMPS on cbeam_web200, 10^5 PD nodes: 4.3 GB,
+ * bench/README_coupled.md; UMFPACK, solver krylov: 0.16 GB for the 4,000 nodes of the coupled
+ * bar). Time: ~25 operator products at ~1.5e7 bonds a second a pass (LPS: two passes; GMRES
+ * took 23-32 iterations on the bar, the C-beam and the panel) and the twin's factor, ~2e-4 s a
+ * PD node (measured 0.7-2.3 s on those three, loaded 2-core machine). */
 static int estimate_matrix_free(const cupid_problem_state *prob, double *bytes, double *seconds,
                                 const char **what) {
   if (prob->model->analysis.type != CUPID_ANALYSIS_STATIC || !prob->grid ||
       cupid_pd_grid_dimension(prob->grid) != 3)
     return 0;
+  const double passes = prob->model->pd.model == CUPID_PD_LPS ? 2.0 : 1.0;
   *bytes = 42e3 * (double)prob->n_pd + 30.0 * (double)prob->ndof * 8.0;
-  *seconds = 2.0 + 1.2e-3 * (double)prob->n_pd;
+  *seconds = 1.0 + 25.0 * passes * (double)prob->n_bonds / 1.5e7 + 2e-4 * (double)prob->n_pd;
   *what = "matrix-free GMRES + LU of a bond-based twin";
   return 1;
 }

@@ -45,8 +45,8 @@ static cupid_status loads(cupid_problem_state *prob) {
   return CUPID_SUCCESS;
 }
 
-static int never(const cupid_problem_state *prob) {
-  (void)prob;
+static int never(const cupid_problem_state *prob, const cupid_solver_type *engine) {
+  (void)prob, (void)engine;
   return 0;
 }
 

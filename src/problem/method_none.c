@@ -38,15 +38,15 @@ static int is_pd_3d(const cupid_problem_state *prob) {
   return prob->grid && !prob->beam && cupid_pd_grid_dimension(prob->grid) == 3;
 }
 
-static int matrix_free(const cupid_problem_state *prob) {
-  return prob->engine->iterative && is_pd_3d(prob);
+static int matrix_free(const cupid_problem_state *prob, const cupid_solver_type *engine) {
+  return engine->solve_nodes && is_pd_3d(prob);
 }
 
 /* K u = f by CG on the PD operator (PETSc); a slab computes its owned rows, rank 0 gathers. */
 static cupid_status solve_matrix_free(cupid_problem_state *prob) {
   cupid_node_operator A;
   cupid_pd_node_operator(prob->op, prob->grid, prob->pd_materials, &A);
-  cupid_status st = cupid_petsc_solve_nodes(&A, prob->f_ext, prob->bc, prob->u, &prob->solve);
+  cupid_status st = prob->engine->solve_nodes(&A, prob->f_ext, prob->bc, prob->u, &prob->solve);
   cupid_problem_record_solve(prob);
   CUPID_CALL(st);
   prob->solved = 1;

@@ -95,7 +95,9 @@ typedef struct cupid_problem_private {
    * why it was chosen. */
   cupid_solver_kind solver;
   const cupid_solver_type *engine;
-  char solver_reason[160];
+  cupid_solver_cost estimate;   /**< static: the chosen engine's path as estimated (seconds 0:
+                                     none) */
+  char solver_reason[320];
 
   /* Distributed PD (issue 6, slab.c): this rank holds one z slab of the grid (slab = 1 until
    * rank 0 gathers the results); the grid's n_pd, u, f_ext, f_int, bc are then the slab's. */
@@ -202,10 +204,10 @@ double cupid_problem_memory_limit(const cupid_problem_state *prob);
 cupid_status cupid_problem_costs(const cupid_problem_state *prob, cupid_solver_cost *direct,
                                  cupid_solver_cost *iterative);
 
-/** `solver: auto` keeps the direct engine while its estimated peak memory stays below this
- *  share of the memory limit and its factorisation below these seconds (problem.c). */
-#define CUPID_AUTO_DIRECT_MEMORY_SHARE 0.25
-#define CUPID_AUTO_DIRECT_SECONDS 120.0
+/** `solver: auto` (problem.c): the available engine of the smallest estimated time whose
+ *  estimated memory fits the limit, and why (for the log and summary.json). */
+cupid_status cupid_problem_auto_engine(const cupid_problem_state *prob,
+                                       const cupid_solver_type **engine, char *why, size_t len);
 
 /** Free everything a problem owns; the struct itself is the caller's. */
 void cupid_problem_state_free(cupid_problem_state *prob);

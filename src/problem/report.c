@@ -196,6 +196,14 @@ static void json_solver(cupid_json js, const cupid_problem_state *prob) {
     cupid_json_number(js, "residual", prob->solve.residual);
     cupid_json_number(js, "backward_error", prob->solve.backward_error);
     if (prob->solver_reason[0]) cupid_json_string(js, "choice", prob->solver_reason);
+    cupid_json_string(js, "engine", prob->engine->name);
+    if (prob->estimate.seconds > 0) { /* what the choice rested on (bench/estimates.sh) */
+      cupid_json_begin_object(js, "estimate");
+      cupid_json_string(js, "path", prob->estimate.what);
+      cupid_json_number(js, "seconds", prob->estimate.seconds);
+      cupid_json_number(js, "bytes", prob->estimate.bytes);
+      cupid_json_end_object(js);
+    }
     if (prob->engine && prob->engine->iterative) { /* issue 6: what the Krylov solve did */
       cupid_json_integer(js, "ranks", prob->solve.ranks);
       cupid_json_integer(js, "iterations", prob->solve.iterations);

@@ -13,7 +13,7 @@
 
 int cupid_problem_slab_wanted(const cupid_problem_state *prob) {
   const cupid_model_t *m = prob->model;
-  /* auto, or an iterative engine asked for */
+  /* auto, or an engine that solves over the ranks */
   const cupid_solver_type *engine = cupid_solver_type_get(
       prob->opts->solver >= 0 ? prob->opts->solver : (int)m->analysis.solver);
   /* the methods whose matrix-free solve runs on slabs (PD only, fictitious nodes, Arlequin);
@@ -22,7 +22,7 @@ int cupid_problem_slab_wanted(const cupid_problem_state *prob) {
   int slabs = (prob->method->caps & CUPID_METHOD_SLABS) && !(m->has_beam && prob->opts->assembled);
   return slabs && !prob->opts->replicate && cupid_petsc_size() > 1 && !prob->opts->check_only &&
          m->has_peridynamics && m->pd.dimension == 3 &&
-         m->analysis.type == CUPID_ANALYSIS_STATIC && (!engine || engine->iterative);
+         m->analysis.type == CUPID_ANALYSIS_STATIC && (!engine || engine->distributed);
 }
 
 int cupid_problem_pd_owned(const cupid_problem_state *prob, cupid_int node) {

@@ -1,7 +1,9 @@
 /* The solver engines as a table (solvers.h, cupid_solver_type): the direct engine
- * (SuiteSparse: CHOLMOD for SPD systems, UMFPACK otherwise; src/solvers/direct.c) and the
- * PETSc engine (Krylov on assembled matrices, petsc.c; matrix-free Krylov, krylov.c). The
- * only place that maps an engine's name or kind to its functions. */
+ * (SuiteSparse: CHOLMOD for SPD systems, UMFPACK otherwise; src/solvers/direct.c), the built-in
+ * iterative engine `krylov` (matrix-free CG/GMRES preconditioned by a SuiteSparse factor of
+ * the cheap twin, iterative.c; one process) and the PETSc engine (Krylov on assembled
+ * matrices, petsc.c; matrix-free Krylov, krylov.c; MPI). The only place that maps an engine's
+ * name or kind to its functions. */
 #include <string.h>
 
 #include "cupid/model.h"
@@ -26,16 +28,29 @@ static const cupid_solver_type engines[] = {
     {.name = "direct",
      .kind = CUPID_SOLVER_DIRECT,
      .iterative = 0,
+     .distributed = 0,
      .available = always,
      .start = nothing_to_start,
      .solve_matrix = direct_solve_matrix,
+     .solve_nodes = NULL,
      .solve_operator = NULL},
+    {.name = "krylov",
+     .kind = CUPID_SOLVER_KRYLOV,
+     .iterative = 1,
+     .distributed = 0,
+     .available = always,
+     .start = nothing_to_start,
+     .solve_matrix = direct_solve_matrix, /* an assembled system: the factorisation */
+     .solve_nodes = NULL,
+     .solve_operator = cupid_iterative_solve},
     {.name = "petsc",
      .kind = CUPID_SOLVER_PETSC,
      .iterative = 1,
+     .distributed = 1,
      .available = cupid_petsc_available,
      .start = petsc_start,
      .solve_matrix = cupid_petsc_solve,
+     .solve_nodes = cupid_petsc_solve_nodes,
      .solve_operator = cupid_krylov_solve},
 };
 

@@ -1,19 +1,23 @@
 /*
- * A reusable CHOLMOD factorisation of K_ff (include/cupid/solvers.h, "reusable SPD
- * factorisation" block): factored once, solved at every step of an implicit time integration
- * with a constant step (Newmark). Only the free DOFs are factored, lower triangle stored.
+ * A reusable factorisation of K_ff (include/cupid/solvers.h, "reusable factorisation" block):
+ * factored once, solved many times: at every step of an implicit time integration with a
+ * constant step (Newmark, CHOLMOD), or at every iteration of a Krylov solve preconditioned by
+ * a cheap twin (src/solvers/iterative.c: CHOLMOD for SPD twins, UMFPACK LU for the others).
+ * Only the free DOFs are factored; SPD: lower triangle stored.
  */
 #include <math.h>
 #include <stdio.h>
 #include <string.h>
 
 #include <cholmod.h>
+#include <umfpack.h>
 
 #include "cupid/solvers.h"
 
 _Static_assert(sizeof(SuiteSparse_long) == sizeof(cupid_int), "SuiteSparse_long is not 64-bit");
 
 struct cupid_direct_factor_private {
+  cupid_matrix_kind kind; /* SPD: CHOLMOD LL'; GENERAL: UMFPACK LU */
   cupid_int n_full, n;  /* all scalar DOFs, free DOFs */
   cupid_int *global;    /* free index -> global DOF */
   cupid_int *p, *i;     /* lower triangle of K_ff, compressed column */
@@ -21,7 +25,9 @@ struct cupid_direct_factor_private {
   cholmod_common cc;
   int cc_started;
   cholmod_factor *L;
-  double *work;         /* n: right-hand side / solution in free numbering */
+  void *symbolic, *numeric; /* UMFPACK (GENERAL) */
+  double control[UMFPACK_CONTROL];
+  double *work, *work2; /* n: right-hand side / solution in free numbering */
 };
 
 /* Columns of the lower triangle of K_ff = rows of the upper part of the symmetric K_ff, in
@@ -51,6 +57,65 @@ static cupid_status reduce_lower(cupid_direct_factor F, const cupid_csr_t *K, co
       CUPID_CALL(cupid_malloc((size_t)F->p[F->n], sizeof *F->x, "factor values", &F->x));
     }
   }
+  return CUPID_SUCCESS;
+}
+
+/* The rows of K_ff in compressed form (every column): read as columns they are K_ff^T, which
+ * UMFPACK solves with UMFPACK_At (no transposed copy). */
+static cupid_status reduce_full(cupid_direct_factor F, const cupid_csr_t *K, const cupid_int *fi) {
+  const int bs = K->bs;
+  CUPID_CALL(cupid_calloc((size_t)F->n + 1, sizeof *F->p, "factor pointers", &F->p));
+  for (int pass = 0; pass < 2; pass++) {
+    for (cupid_int k = 0; k < F->n; k++) {
+      cupid_int g = F->global[k], row = g / bs, t = pass ? F->p[k] : 0;
+      int a = (int)(g % bs);
+      for (cupid_int q = K->rowptr[row]; q < K->rowptr[row + 1]; q++)
+        for (int b = 0; b < bs; b++) {
+          cupid_int c = fi ? fi[K->col[q] * bs + b] : K->col[q] * bs + b;
+          if (c < 0) continue;
+          if (pass) {
+            F->i[t] = c;
+            F->x[t] = K->val[(q * bs + a) * bs + b];
+          }
+          t++;
+        }
+      if (!pass) F->p[k + 1] = t;
+    }
+    if (!pass) {
+      for (cupid_int k = 0; k < F->n; k++) F->p[k + 1] += F->p[k];
+      CUPID_CALL(cupid_malloc((size_t)F->p[F->n] + 1, sizeof *F->i, "factor indices", &F->i));
+      CUPID_CALL(cupid_malloc((size_t)F->p[F->n] + 1, sizeof *F->x, "factor values", &F->x));
+    }
+  }
+  return CUPID_SUCCESS;
+}
+
+/* UMFPACK LU of K_ff^T (the rows read as columns), CHOLMOD's ordering as in direct.c. */
+static cupid_status factorise_lu(cupid_direct_factor F, cupid_solve_info *info) {
+  umfpack_dl_defaults(F->control);
+  F->control[UMFPACK_PRL] = 0;
+  F->control[UMFPACK_ORDERING] = UMFPACK_ORDERING_CHOLMOD;
+  /* No iterative refinement in the solves: each step costs a product with K_ff and a solve
+   * (measured: 60% of a Krylov solve preconditioned by this factor, where the Krylov method
+   * itself corrects the residual). */
+  F->control[UMFPACK_IRSTEP] = 0;
+  double uinfo[UMFPACK_INFO];
+  SuiteSparse_long s = umfpack_dl_symbolic(F->n, F->n, F->p, F->i, F->x, &F->symbolic,
+                                           F->control, uinfo);
+  CUPID_CHECK(s == UMFPACK_OK, s == UMFPACK_ERROR_out_of_memory ? CUPID_ERR_MEMORY : CUPID_ERR_INTERNAL,
+              "UMFPACK analysis failed (status %ld)", (long)s);
+  s = umfpack_dl_numeric(F->p, F->i, F->x, F->symbolic, &F->numeric, F->control, uinfo);
+  if (info) {
+    info->nnz_factor = uinfo[UMFPACK_LNZ] + uinfo[UMFPACK_UNZ] - (double)F->n;
+    info->flops_factor = uinfo[UMFPACK_FLOPS];
+    info->memory_factor = (int64_t)(uinfo[UMFPACK_PEAK_MEMORY] * uinfo[UMFPACK_SIZE_OF_UNIT]);
+    info->pivot_ratio = uinfo[UMFPACK_RCOND];
+  }
+  CUPID_CHECK(s != UMFPACK_WARNING_singular_matrix, CUPID_ERR_NUMERIC,
+              "the matrix is singular (zero pivot in its LU factorisation): the model may be "
+              "unconstrained");
+  CUPID_CHECK(s == UMFPACK_OK, s == UMFPACK_ERROR_out_of_memory ? CUPID_ERR_MEMORY : CUPID_ERR_INTERNAL,
+              "UMFPACK factorisation failed (status %ld)", (long)s);
   return CUPID_SUCCESS;
 }
 
@@ -136,6 +201,12 @@ static cupid_status factorise(cupid_direct_factor F, cupid_solve_info *info) {
 
 cupid_status cupid_direct_factor_create(const cupid_csr_t *K, const cupid_dirichlet_t *bc,
                                         cupid_direct_factor *out, cupid_solve_info *info) {
+  return cupid_direct_factor_create_kind(K, CUPID_MATRIX_SPD, bc, out, info);
+}
+
+cupid_status cupid_direct_factor_create_kind(const cupid_csr_t *K, cupid_matrix_kind kind,
+                                             const cupid_dirichlet_t *bc,
+                                             cupid_direct_factor *out, cupid_solve_info *info) {
   cupid_status st = CUPID_SUCCESS;
   cupid_direct_factor F = NULL;
   CUPID_CHECK(K && out && K->nrows == K->ncols, CUPID_ERR_ARGUMENT,
@@ -146,24 +217,33 @@ cupid_status cupid_direct_factor_create(const cupid_csr_t *K, const cupid_dirich
   CUPID_CHECK(!bc || bc->n == n_full, CUPID_ERR_ARGUMENT,
               "cupid_direct_factor_create: the conditions have %lld DOFs, the matrix %lld",
               (long long)(bc ? bc->n : 0), (long long)n_full);
+  CUPID_CHECK(kind == CUPID_MATRIX_SPD || kind == CUPID_MATRIX_GENERAL, CUPID_ERR_ARGUMENT,
+              "cupid_direct_factor_create: unknown matrix kind %d", (int)kind);
   if (info) {
     memset(info, 0, sizeof *info);
-    info->method = "cholmod";
+    info->method = kind == CUPID_MATRIX_SPD ? "cholmod" : "umfpack";
     info->failed_dof = -1;
   }
   CUPID_TRY(cupid_calloc(1, sizeof *F, "factorisation", &F));
+  F->kind = kind;
   F->n_full = n_full;
   F->n = bc ? bc->n_free : n_full;
   CUPID_TRY_CHECK(F->n > 0, CUPID_ERR_NUMERIC, "no free DOF to solve for");
   CUPID_TRY(cupid_malloc((size_t)F->n, sizeof *F->global, "free DOF map", &F->global));
   CUPID_TRY(cupid_malloc((size_t)F->n, sizeof *F->work, "factor work", &F->work));
+  CUPID_TRY(cupid_malloc((size_t)F->n, sizeof *F->work2, "factor work", &F->work2));
   for (cupid_int d = 0, k = 0; d < n_full; d++)
     if (!bc || !bc->fixed[d]) F->global[k++] = d;
-  CUPID_TRY(reduce_lower(F, K, bc ? bc->free_index : NULL));
-  CUPID_TRY(factorise(F, info));
+  if (kind == CUPID_MATRIX_SPD) {
+    CUPID_TRY(reduce_lower(F, K, bc ? bc->free_index : NULL));
+    CUPID_TRY(factorise(F, info));
+  } else {
+    CUPID_TRY(reduce_full(F, K, bc ? bc->free_index : NULL));
+    CUPID_TRY(factorise_lu(F, info));
+  }
   if (info) {
     info->n = F->n;
-    info->nnz_matrix = 2 * F->p[F->n] - F->n;
+    info->nnz_matrix = kind == CUPID_MATRIX_SPD ? 2 * F->p[F->n] - F->n : F->p[F->n];
     info->time_factor = cupid_wtime() - t0;
   }
   *out = F;
@@ -176,11 +256,27 @@ cleanup:
 cupid_status cupid_direct_factor_solve(cupid_direct_factor F, const double *b, double *x) {
   CUPID_CHECK(F && b && x, CUPID_ERR_ARGUMENT, "cupid_direct_factor_solve: NULL argument");
   for (cupid_int k = 0; k < F->n; k++) F->work[k] = b[F->global[k]];
+  CUPID_CALL(cupid_direct_factor_solve_free(F, F->work, F->work2));
+  for (cupid_int k = 0; k < F->n; k++) x[F->global[k]] = F->work2[k];
+  return CUPID_SUCCESS;
+}
+
+cupid_int cupid_direct_factor_size(const cupid_direct_factor F) { return F ? F->n : 0; }
+
+cupid_status cupid_direct_factor_solve_free(cupid_direct_factor F, const double *b, double *x) {
+  CUPID_CHECK(F && b && x, CUPID_ERR_ARGUMENT, "cupid_direct_factor_solve_free: NULL argument");
+  if (F->kind == CUPID_MATRIX_GENERAL) {
+    double sinfo[UMFPACK_INFO];
+    const SuiteSparse_long s = umfpack_dl_solve(UMFPACK_At, F->p, F->i, F->x, x, b, F->numeric,
+                                                F->control, sinfo);
+    CUPID_CHECK(s == UMFPACK_OK, CUPID_ERR_INTERNAL, "UMFPACK solve failed (status %ld)", (long)s);
+    return CUPID_SUCCESS;
+  }
   cholmod_dense B;
   memset(&B, 0, sizeof B);
   B.nrow = B.nzmax = B.d = (size_t)F->n;
   B.ncol = 1;
-  B.x = F->work;
+  B.x = (double *)b;
   B.xtype = CHOLMOD_REAL;
   B.dtype = CHOLMOD_DOUBLE;
   cholmod_dense *X = cholmod_l_solve(CHOLMOD_A, F->L, &B, &F->cc);
@@ -188,8 +284,7 @@ cupid_status cupid_direct_factor_solve(cupid_direct_factor F, const double *b, d
     cholmod_l_free_dense(&X, &F->cc);
     return CUPID_ERROR(CUPID_ERR_INTERNAL, "CHOLMOD solve failed (status %d)", F->cc.status);
   }
-  const double *xs = X->x;
-  for (cupid_int k = 0; k < F->n; k++) x[F->global[k]] = xs[k];
+  memcpy(x, X->x, (size_t)F->n * sizeof *x);
   cholmod_l_free_dense(&X, &F->cc);
   return CUPID_SUCCESS;
 }
@@ -201,8 +296,11 @@ void cupid_direct_factor_destroy(cupid_direct_factor *F) {
     cholmod_l_free_factor(&f->L, &f->cc);
     cholmod_l_finish(&f->cc);
   }
+  if (f->numeric) umfpack_dl_free_numeric(&f->numeric);
+  if (f->symbolic) umfpack_dl_free_symbolic(&f->symbolic);
   cupid_free(&f->global);
   cupid_free(&f->work);
+  cupid_free(&f->work2);
   cupid_free(&f->p);
   cupid_free(&f->i);
   cupid_free(&f->x);

@@ -373,7 +373,7 @@ static const bad_case cases[] = {
      "1:2001: YAML syntax error: mapping values are not allowed in this context",
      NULL},
     {"solver_typo.yaml",
-     "9:11: analysis.solver: must be one of auto | direct | petsc, got 'Direct'; did you mean",
+     "9:11: analysis.solver: must be one of auto | direct | petsc | krylov, got 'Direct'; did you mean",
      NULL},
     {"spacing_nan.yaml",
      "4:12: peridynamics.spacing: must be a number, got '.nan'",
