@@ -1,12 +1,13 @@
 /* The `cupid` command line (model-format.md, "Command line"): parse, then create, set up,
  * solve and write the problem (include/cupid/problem.h), and turn the status into the exit code.
- *   cupid run MODEL.yaml [-o DIR] [--solver auto|direct|petsc] [--threads N]
+ *   cupid run MODEL.yaml [-o DIR] [--solver auto|direct|krylov|petsc] [--threads N]
  *                        [--max-memory GB] [--quiet] [--replicate] [--assembled]
  *                        [-PETSC_OPTION [VALUE]]...
  *   mpirun -n N cupid run MODEL.yaml --solver petsc [...]   (every rank runs, rank 0 writes)
  *   cupid check MODEL.yaml
  *   cupid --version | --help
  * Exit status: 0 success, 1 model error, 2 numerical failure, 3 I/O failure, 4 internal. */
+#include <math.h>
 #include <signal.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -19,7 +20,7 @@
 #include "cupid/solvers.h"
 
 static const char usage_text[] =
-    "usage: cupid run MODEL.yaml [-o DIR] [--solver auto|direct|petsc] [--threads N]\n"
+    "usage: cupid run MODEL.yaml [-o DIR] [--solver auto|direct|krylov|petsc] [--threads N]\n"
     "                            [--max-memory GB] [--quiet] [--replicate] [--assembled]\n"
     "                            [-petsc_option [value]]...\n"
     "       mpirun -n N cupid run MODEL.yaml --solver petsc [...]\n"
@@ -36,8 +37,9 @@ static const char help_text[] =
     "\n"
     "Options of run:\n"
     "  -o, --output DIR   write the outputs to DIR (overrides output.directory)\n"
-    "  --solver NAME      auto (default: direct for small models, PETSc for large\n"
-    "                     ones when built with it), direct (SuiteSparse) or petsc\n"
+    "  --solver NAME      auto (default: the engine of the smallest estimated time\n"
+    "                     that fits), direct (SuiteSparse), krylov (matrix-free\n"
+    "                     CG/GMRES + a SuiteSparse-factored twin) or petsc (MPI)\n"
     "  --threads N        number of OpenMP threads (default: OMP_NUM_THREADS or all cores)\n"
     "  --max-memory GB    refuse models whose estimated memory exceeds GB\n"
     "                     (default: 90% of the physical memory)\n"
@@ -90,7 +92,7 @@ static int ends_with(const char *s, const char *tail) {
 /* A PETSc run-time option: one dash and a letter (cupid's own short options are -o, -q). */
 static int is_petsc_option(const char *a) {
   return a[0] == '-' && ((a[1] >= 'a' && a[1] <= 'z') || (a[1] >= 'A' && a[1] <= 'Z')) &&
-         strcmp(a, "-o") && strcmp(a, "-q");
+         strcmp(a, "-o") && strcmp(a, "-q") && strcmp(a, "-h");
 }
 
 /* Parse the options that follow `run MODEL` / `check MODEL`. PETSc options (and their values:
@@ -112,13 +114,13 @@ static int parse_options(int argc, char **argv, int first, cupid_run_options *op
       continue;
     }
     if (!strcmp(a, "-o") || !strcmp(a, "--output")) {
-      if (!has_value) return usage_error("option %s needs a directory", a);
+      if (!has_value || !argv[i + 1][0]) return usage_error("option %s needs a directory", a);
       opts->output_dir = argv[++i];
     } else if (!strcmp(a, "--solver")) {
       if (!has_value) return usage_error("option %s needs a value", a);
       opts->solver = parse_solver(argv[++i]);
       if (opts->solver < 0)
-        return usage_error("--solver: unknown solver '%s' (allowed: auto, direct, petsc)", argv[i]);
+        return usage_error("--solver: unknown solver '%s' (allowed: auto, direct, krylov, petsc)", argv[i]);
     } else if (!strcmp(a, "--threads")) {
       double v;
       if (!has_value) return usage_error("option %s needs a value", a);
@@ -135,6 +137,11 @@ static int parse_options(int argc, char **argv, int first, cupid_run_options *op
       opts->replicate = 1;
     } else if (!strcmp(a, "--assembled")) {
       opts->assembled = 1;
+    } else if (!strcmp(a, "-h") || !strcmp(a, "--help")) {
+      fputs(usage_text, stdout);
+      fputs("\n", stdout);
+      fputs(help_text, stdout);
+      return -1; /* done: exit 0 */
     } else if (a[0] == '-' && a[1] != '\0') {
       return usage_error("unknown option '%s'", a);
     } else if (!*model_path) {
@@ -145,6 +152,59 @@ static int parse_options(int argc, char **argv, int first, cupid_run_options *op
   }
   if (!*model_path) return usage_error("%s", "missing the model file");
   return 0;
+}
+
+/* The largest |u| of a 3-component field and where. */
+static double max_displacement(const double *u, const double *x, cupid_int n, const double **at) {
+  double m = -1.0;
+  *at = NULL;
+  for (cupid_int i = 0; i < n; i++) {
+    const double v = sqrt(u[3 * i] * u[3 * i] + u[3 * i + 1] * u[3 * i + 1] + u[3 * i + 2] * u[3 * i + 2]);
+    if (v > m) m = v, *at = x + 3 * i;
+  }
+  return m;
+}
+
+/* The final block of a run on stderr (batch logs as well as terminals): what was solved, the
+ * output points, the largest displacements, the equilibrium, where the files are, time and
+ * memory. Read back through the library, as any program would. */
+static void print_results(cupid_problem p) {
+  cupid_problem_info info;
+  if (cupid_problem_get_info(p, &info) != CUPID_SUCCESS) return;
+  fprintf(stderr, "cupid: %s analysis done in %.2f s, peak memory %.3g GB; solver %s (%s)",
+          info.analysis, info.total_seconds, (double)info.peak_memory_bytes / 1e9, info.solver,
+          info.method);
+  if (info.iterations > 0) fprintf(stderr, ", %d iterations", info.iterations);
+  fprintf(stderr, ", residual %.2e\n", info.residual);
+  const int np = cupid_problem_output_point_count(p);
+  for (int k = 0; k < np; k++) {
+    const char *name;
+    double xyz[3], u[3];
+    int stress, region;
+    if (cupid_problem_output_point(p, k, &name, xyz, &stress) != CUPID_SUCCESS ||
+        cupid_problem_sample(p, 1, xyz, u, NULL, &region) != CUPID_SUCCESS)
+      continue;
+    fprintf(stderr, "  point %s (%g, %g, %g) [%s]: u = (%.6g, %.6g, %.6g)\n", name, xyz[0], xyz[1],
+            xyz[2], region == CUPID_REGION_PD ? "PD" : region == CUPID_REGION_FE ? "FE" : "none",
+            u[0], u[1], u[2]);
+  }
+  const double *u, *x, *at;
+  cupid_int n;
+  int nc;
+  if (cupid_problem_get_field(p, CUPID_FIELD_PD_DISPLACEMENT, &u, &n, &nc) == CUPID_SUCCESS && n > 0 &&
+      cupid_problem_get_field(p, CUPID_FIELD_PD_COORDINATES, &x, &n, &nc) == CUPID_SUCCESS) {
+    const double m = max_displacement(u, x, n, &at);
+    fprintf(stderr, "  max |u| on the PD nodes: %.6g at (%g, %g, %g)\n", m, at[0], at[1], at[2]);
+  }
+  if (cupid_problem_get_field(p, CUPID_FIELD_BEAM_DISPLACEMENT, &u, &n, &nc) == CUPID_SUCCESS && n > 0 &&
+      cupid_problem_get_field(p, CUPID_FIELD_BEAM_POINTS, &x, &n, &nc) == CUPID_SUCCESS) {
+    const double m = max_displacement(u, x, n, &at);
+    fprintf(stderr, "  max |u| on the beam: %.6g at (%g, %g, %g)\n", m, at[0], at[1], at[2]);
+  }
+  if (strcmp(info.analysis, "static") == 0)
+    fprintf(stderr, "  equilibrium: load (%.6g, %.6g, %.6g), |R + P| / |P| = %.3e\n",
+            info.load_sum[0], info.load_sum[1], info.load_sum[2], info.imbalance);
+  fprintf(stderr, "  results in %s (summary.json)\n", cupid_problem_output_directory(p));
 }
 
 static int report_error(cupid_status st) {
@@ -198,7 +258,7 @@ int cupid_cli_main(int argc, char **argv) {
   if (argc >= (int)(sizeof petsc_argv / sizeof *petsc_argv) - 1)
     return usage_error("%s", "too many arguments");
   int rc = parse_options(argc, argv, 2, &opts, &path, petsc_argv, &petsc_argc);
-  if (rc) return rc;
+  if (rc) return rc < 0 ? 0 : rc; /* -1: help printed */
   opts.check_only = is_check;
   petsc_argv[petsc_argc] = NULL;
   cupid_petsc_set_args(petsc_argc, petsc_argv);
@@ -210,7 +270,7 @@ int cupid_cli_main(int argc, char **argv) {
    * later, only if it picks PETSc (src/problem/problem.c). */
   cupid_status st = CUPID_SUCCESS;
   const cupid_solver_type *requested = cupid_solver_type_get(opts.solver);
-  if (cupid_petsc_available() && (cupid_petsc_launched_parallel() || (requested && requested->iterative)))
+  if (cupid_petsc_available() && (cupid_petsc_launched_parallel() || (requested && requested->distributed)))
     st = cupid_petsc_initialize(petsc_argc, petsc_argv);
   cupid_problem problem = NULL;
   if (st == CUPID_SUCCESS) st = cupid_problem_create_from_file(path, &opts, &problem);
@@ -218,6 +278,8 @@ int cupid_cli_main(int argc, char **argv) {
   if (st == CUPID_SUCCESS && is_check) st = cupid_problem_print_estimate(problem);
   if (st == CUPID_SUCCESS && is_run) st = cupid_problem_solve(problem);
   if (st == CUPID_SUCCESS && is_run) st = cupid_problem_write_outputs(problem);
+  if (st == CUPID_SUCCESS && is_run && !opts.quiet && cupid_petsc_rank() == 0)
+    print_results(problem);
   cupid_problem_destroy(&problem);
   if (cupid_petsc_initialized()) return finish_parallel(st);
   if (st != CUPID_SUCCESS) return report_error(st);

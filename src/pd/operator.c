@@ -31,17 +31,29 @@ void cupid_pd_operator_destroy(cupid_pd_operator *op) {
   cupid_free(op);
 }
 
+/* The materials the grid's nodes use must be valid elastic PD materials; the others (a
+ * model's beam-only materials, orthotropic ones included) are not read. */
 static cupid_status check_materials(const struct cupid_pd_grid_private *g,
                                     const cupid_pd_operator_options *opts) {
   CUPID_CHECK(opts->materials && opts->n_materials > 0, CUPID_ERR_ARGUMENT,
               "the PD operator needs materials");
-  for (int k = 0; k < opts->n_materials; k++) {
+  unsigned char *used = NULL;
+  CUPID_CALL(cupid_calloc((size_t)opts->n_materials, 1, "material flags", &used));
+  for (cupid_int i = 0; i < g->nnodes; i++)
+    if (g->material[i] >= 0 && g->material[i] < opts->n_materials) used[g->material[i]] = 1;
+  cupid_status st = CUPID_SUCCESS;
+  for (int k = 0; k < opts->n_materials && st == CUPID_SUCCESS; k++) {
     const cupid_pd_material *mat = &opts->materials[k];
-    CUPID_CHECK(isfinite(mat->E) && mat->E > 0, CUPID_ERR_MODEL,
-                "PD material %d: Young's modulus must be positive, got %g", k, mat->E);
-    CUPID_CHECK(isfinite(mat->nu) && mat->nu > -1 && mat->nu < 0.5, CUPID_ERR_MODEL,
-                "PD material %d: Poisson's ratio must lie in (-1, 0.5), got %g", k, mat->nu);
+    if (!used[k]) continue;
+    if (!(isfinite(mat->E) && mat->E > 0))
+      st = CUPID_ERROR(CUPID_ERR_MODEL, "PD material %d: Young's modulus must be positive, got %g",
+                       k, mat->E);
+    else if (!(isfinite(mat->nu) && mat->nu > -1 && mat->nu < 0.5))
+      st = CUPID_ERROR(CUPID_ERR_MODEL, "PD material %d: Poisson's ratio must lie in (-1, 0.5), got %g",
+                       k, mat->nu);
   }
+  cupid_free(&used);
+  CUPID_CALL(st);
   for (cupid_int i = 0; i < g->nnodes; i++)
     CUPID_CHECK(g->material[i] >= 0 && g->material[i] < opts->n_materials, CUPID_ERR_ARGUMENT,
                 "PD node %lld has material %d, but only %d materials were given", (long long)i,

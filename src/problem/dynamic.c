@@ -234,6 +234,11 @@ static cupid_status monitor(void *ctx, cupid_int step, double t, int output, con
   }
   cupid_status st = monitor_outputs(o, step, t, output, v, e);
   o->prob->u = u_run;
+  /* every tenth of the run, whatever `every` is (the monitor sees every step) */
+  const cupid_int tenth = o->prob->dyn.steps / 10 > 0 ? o->prob->dyn.steps / 10 : 1;
+  if (st == CUPID_SUCCESS && step > 0 && step % tenth == 0)
+    cupid_problem_progress(o->prob, "dynamics: step %lld / %lld, t = %.4g, energy balance %.2e",
+                           (long long)step, (long long)o->prob->dyn.steps, t, e->balance);
   return st;
 }
 
@@ -247,9 +252,6 @@ static cupid_status monitor_outputs(dyn_output *o, cupid_int step, double t, int
           e->kinetic + e->strain + e->damping - e->external, e->balance);
   if (o->prob->model->output.vtu) CUPID_CALL(write_vtu_step(o, step, t, v));
   o->prob->dyn.energy = *e;
-  if (step > 0 && step % (o->prob->dyn.steps / 10 > 0 ? o->prob->dyn.steps / 10 : 1) == 0)
-    cupid_problem_progress(o->prob, "dynamics: step %lld / %lld, t = %.4g", (long long)step,
-                       (long long)o->prob->dyn.steps, t);
   return CUPID_SUCCESS;
 }
 

@@ -157,7 +157,14 @@ cupid_status cupid_problem_estimate(const cupid_problem_state *prob, int print) 
   if (iterative < 0) return CUPID_SUCCESS;
   if (print) {
     const cupid_model_t *m = prob->model;
-    printf("model: %s%s%s\n", m->file, m->title[0] ? " - " : "", m->title);
+    printf("model: %s", m->file);
+    if (m->title[0]) { /* the title's control bytes escaped: a terminal prints them raw */
+      printf(" - ");
+      for (const unsigned char *c = (const unsigned char *)m->title; *c; c++)
+        if (*c < 0x20 || *c == 0x7f) printf("\\x%02x", *c);
+        else putchar(*c);
+    }
+    putchar('\n');
     if (prob->beam)
       printf("beam: %lld nodes, %lld FE nodes, %lld FE DOFs\n",
              (long long)prob->fe_info.n_beam_nodes, (long long)prob->fe_info.n_fe_nodes,
@@ -171,19 +178,23 @@ cupid_status cupid_problem_estimate(const cupid_problem_state *prob, int print) 
            e.factor_nnz, e.factor_bytes / 1e9, e.factor_seconds);
     printf("estimated peak memory, direct path: %.3g GB (limit %.3g GB)\n", e.total_bytes / 1e9,
            limit / 1e9);
-    printf("iterative path (PETSc %s): about %.3g GB per rank on one rank, %.3g s%s\n",
-           e.iterative_what, e.iterative_bytes / 1e9, e.iterative_seconds,
-           cupid_petsc_available() ? "" : " (this build has no PETSc)");
-    if (m->analysis.type == CUPID_ANALYSIS_STATIC) {
-      int direct = e.total_bytes <= CUPID_AUTO_DIRECT_MEMORY_SHARE * limit &&
-                   e.factor_seconds <= CUPID_AUTO_DIRECT_SECONDS;
-      printf("solver auto would pick: %s\n",
-             direct ? "direct (below a quarter of the memory limit and 120 s)"
-             : cupid_petsc_available() ? "petsc (the direct estimate exceeds a quarter of the "
-                                         "memory limit or 120 s)"
-                                       : "direct (PETSc would fit better: rebuild with "
-                                         "scripts/build.sh --with-petsc)");
+    /* the engines of this build that take the iterative path */
+    char takers[96] = "";
+    for (int k = 0; cupid_solver_type_at(k); k++) {
+      const cupid_solver_type *s = cupid_solver_type_at(k);
+      int takes = s->iterative && s->available() &&
+                  (prob->method->matrix_free(prob, s) || (!e.iterative_matrix_free && s->distributed));
+      if (takes)
+        snprintf(takers + strlen(takers), sizeof takers - strlen(takers), "%s%s",
+                 takers[0] ? ", " : "", s->name);
     }
+    printf("iterative path (%s): about %.3g GB on one rank, %.3g s (%s)\n", e.iterative_what,
+           e.iterative_bytes / 1e9, e.iterative_seconds,
+           takers[0] ? takers : "no engine of this build takes it: rebuild with PETSc");
+    const cupid_solver_type *pick;
+    char why[256];
+    CUPID_CALL(cupid_problem_auto_engine(prob, &pick, why, sizeof why));
+    printf("solver auto would pick: %s (%s)\n", pick->name, why);
     printf("the model is valid%s\n", limit > 0 && e.total_bytes > limit
                                           ? ", but too large for the direct solver on this machine"
                                           : "");
@@ -345,10 +356,10 @@ cupid_status cupid_problem_guard_size(const cupid_problem_state *prob) {
    * auto in a build with PETSc: auto then picks it for a model this large). */
   const cupid_solver_type *req = cupid_solver_type_get(
       prob->opts->solver >= 0 ? prob->opts->solver : (int)m->analysis.solver); /* NULL: auto */
-  int petsc_may_solve = 0; /* auto: when this build has an iterative engine */
+  int petsc_may_solve = 0; /* auto: when this build has a matrix-free PD solve */
   for (int k = 0; !req && cupid_solver_type_at(k); k++)
-    petsc_may_solve |= cupid_solver_type_at(k)->iterative && cupid_solver_type_at(k)->available();
-  if (req) petsc_may_solve = req->iterative;
+    petsc_may_solve |= cupid_solver_type_at(k)->solve_nodes && cupid_solver_type_at(k)->available();
+  if (req) petsc_may_solve = req->solve_nodes != NULL;
   if (!prob->opts->check_only && m->analysis.type != CUPID_ANALYSIS_EVALUATE && !petsc_may_solve) {
     cupid_estimate e;
     estimate_sizes(m, nodes, nodes + bonds, &e);

@@ -68,61 +68,99 @@ static cupid_status use_engine(cupid_problem_state *prob, const cupid_solver_typ
   return e->start();
 }
 
-/* The first iterative engine this build has (NULL: none). */
-static const cupid_solver_type *iterative_engine(void) {
+/* The first engine this build has that solves over MPI ranks (NULL: none). */
+static const cupid_solver_type *distributed_engine(void) {
   for (int k = 0; cupid_solver_type_at(k); k++)
-    if (cupid_solver_type_at(k)->iterative && cupid_solver_type_at(k)->available())
+    if (cupid_solver_type_at(k)->distributed && cupid_solver_type_at(k)->available())
       return cupid_solver_type_at(k);
   return NULL;
 }
 
-/* auto: the first engine of the table (the factorisations come first) whose estimate stays
- * below a quarter of the memory limit and two minutes; when none does, the last one this
- * build has (an iterative engine, whose memory grows like n where a factor's grows like
- * n^(4/3)). Analyses other than static take the first engine. */
-static cupid_status choose_automatically(cupid_problem_state *prob) {
-  const cupid_solver_type *first = cupid_solver_type_at(0), *pick = NULL, *last = first;
+/* The estimate of @p e's path for this problem: the factorisation, the method's matrix-free
+ * path where the engine takes it, or (an engine that solves assembled systems by Krylov)
+ * the assembled Krylov solve. */
+static const cupid_solver_cost *path_cost(const cupid_problem_state *prob,
+                                          const cupid_solver_type *e,
+                                          const cupid_solver_cost *factor,
+                                          const cupid_solver_cost *krylov) {
+  if (!e->iterative) return factor;
+  if (prob->method->matrix_free(prob, e)) return krylov;
+  return e->distributed ? krylov : factor; /* krylov: assembled systems are factored */
+}
+
+/* auto: the engine whose estimated time is the smallest among those whose estimated memory
+ * stays below a quarter of the limit (a margin: fill-in and iteration counts are estimated,
+ * not known; ties: the table's order, the factorisation first); when none does, the one of
+ * least memory (the size guard then says what it needs). Analyses other than static take the
+ * first engine (the integrators factor or need no solve). */
+#define AUTO_MEMORY_SHARE 0.25
+cupid_status cupid_problem_auto_engine(const cupid_problem_state *prob,
+                                       const cupid_solver_type **engine, char *why, size_t len) {
+  const cupid_solver_type *first = cupid_solver_type_at(0), *pick = NULL, *lean = NULL;
   if (prob->model->analysis.type != CUPID_ANALYSIS_STATIC) {
-    snprintf(prob->solver_reason, sizeof prob->solver_reason, "auto: the only engine for this analysis");
-    return use_engine(prob, first);
+    snprintf(why, len, "auto: the only engine for this analysis");
+    *engine = first;
+    return CUPID_SUCCESS;
   }
   cupid_solver_cost factor, krylov;
   CUPID_CALL(cupid_problem_costs(prob, &factor, &krylov));
   const double limit = cupid_problem_memory_limit(prob);
-  for (int k = 0; cupid_solver_type_at(k) && !pick; k++) {
+  const cupid_solver_cost *best = NULL, *least = NULL;
+  for (int k = 0; cupid_solver_type_at(k); k++) {
     const cupid_solver_type *e = cupid_solver_type_at(k);
     if (!e->available()) continue;
-    const cupid_solver_cost *c = e->iterative ? &krylov : &factor;
-    if (c->bytes <= CUPID_AUTO_DIRECT_MEMORY_SHARE * limit && c->seconds <= CUPID_AUTO_DIRECT_SECONDS)
-      pick = e;
-    last = e;
+    const cupid_solver_cost *c = path_cost(prob, e, &factor, &krylov);
+    if (!least || c->bytes < least->bytes) least = c, lean = e;
+    if (c->bytes <= AUTO_MEMORY_SHARE * limit && (!best || c->seconds < best->seconds))
+      best = c, pick = e;
   }
-  if (pick == first || (!pick && last == first)) {
-    snprintf(prob->solver_reason, sizeof prob->solver_reason, "auto: %s estimate %.3g GB, %.3g s%s",
-             first->name, factor.bytes / 1e9, factor.seconds,
-             pick ? " (below the limits)" : "; PETSc would fit better but this build has none");
-    return use_engine(prob, first);
+  if (!pick) pick = lean, best = least;
+  int n = snprintf(why, len, "auto: %s (%s), estimate %.3g s and %.3g GB", pick->name, best->what,
+                   best->seconds, best->bytes / 1e9);
+  for (int k = 0; cupid_solver_type_at(k) && n > 0 && (size_t)n < len; k++) { /* the others */
+    const cupid_solver_type *e = cupid_solver_type_at(k);
+    const cupid_solver_cost *c = e->available() ? path_cost(prob, e, &factor, &krylov) : NULL;
+    if (c && c != best)
+      n += snprintf(why + n, len - (size_t)n, "; %s (%s): %.3g s, %.3g GB", e->name, c->what,
+                    c->seconds, c->bytes / 1e9);
   }
-  snprintf(prob->solver_reason, sizeof prob->solver_reason,
-           "auto: the %s solver would need %.3g GB and %.3g s (limits %.3g GB, %.0f s)",
-           first->name, factor.bytes / 1e9, factor.seconds,
-           CUPID_AUTO_DIRECT_MEMORY_SHARE * limit / 1e9, CUPID_AUTO_DIRECT_SECONDS);
-  return use_engine(prob, pick ? pick : last);
+  *engine = pick;
+  return CUPID_SUCCESS;
 }
 
-static cupid_status choose_solver(cupid_problem_state *prob) {
+static cupid_status choose_automatically(cupid_problem_state *prob) {
+  const cupid_solver_type *e = NULL;
+  CUPID_CALL(cupid_problem_auto_engine(prob, &e, prob->solver_reason, sizeof prob->solver_reason));
+  return use_engine(prob, e);
+}
+
+/* The chosen engine's estimate, for summary.json and bench/estimates.sh (static only). */
+static cupid_status record_estimate(cupid_problem_state *prob) {
+  if (prob->model->analysis.type != CUPID_ANALYSIS_STATIC || prob->slab) return CUPID_SUCCESS;
+  cupid_solver_cost factor, krylov;
+  CUPID_CALL(cupid_problem_costs(prob, &factor, &krylov));
+  prob->estimate = *path_cost(prob, prob->engine, &factor, &krylov);
+  return CUPID_SUCCESS;
+}
+
+static cupid_status choose_engine(cupid_problem_state *prob) {
   cupid_solver_kind req = requested_solver(prob);
-  if (prob->slab) { /* only the iterative engine runs on slabs (slab.c) */
+  if (prob->slab) { /* only a distributed engine runs on slabs (slab.c) */
     snprintf(prob->solver_reason, sizeof prob->solver_reason,
              "%s: %d MPI ranks, each holding one z slab of the PD grid",
              req == CUPID_SOLVER_AUTO ? "auto" : "requested", prob->part.parts);
-    return use_engine(prob, iterative_engine());
+    return use_engine(prob, distributed_engine());
   }
   if (req != CUPID_SOLVER_AUTO) {
     snprintf(prob->solver_reason, sizeof prob->solver_reason, "requested");
     return use_engine(prob, cupid_solver_type_get(req));
   }
   return choose_automatically(prob);
+}
+
+static cupid_status choose_solver(cupid_problem_state *prob) {
+  CUPID_CALL(choose_engine(prob));
+  return record_estimate(prob);
 }
 
 /* Name the node (PD) or beam node and expansion term (FE) where a factorisation broke
@@ -345,7 +383,7 @@ static cupid_status require_constraints(const cupid_problem_state *prob) {
 /* `static`: the method's matrix-free solve, or its assembled K through the engine. */
 static cupid_status run_static(cupid_problem_state *prob) {
   CUPID_CALL(require_constraints(prob));
-  if (prob->method->matrix_free(prob)) {
+  if (prob->method->matrix_free(prob, prob->engine)) {
     /* the memory guard where the matrix-free path's estimate is calibrated */
     if (prob->method->caps & CUPID_METHOD_GUARD_MATRIX_FREE) CUPID_CALL(cupid_problem_estimate(prob, 0));
     CUPID_CALL(prob->method->solve_matrix_free(prob));
@@ -454,8 +492,9 @@ cupid_status cupid_problem_create(const cupid_model_t *model, const cupid_run_op
   prob->opts = &prob->options;
   prob->method = cupid_problem_method_of(model);
   /* Under MPI every rank runs the stages, on the replicated model or on its slab of the PD
-   * grid (slab.c); rank 0 speaks and writes. */
-  prob->quiet = prob->options.quiet || !isatty(2) || cupid_petsc_rank() != 0;
+   * grid (slab.c); rank 0 speaks and writes. Progress goes to stderr in batch runs too (a
+   * log under nohup or a batch system), unless quiet. */
+  prob->quiet = prob->options.quiet || cupid_petsc_rank() != 0;
   prob->t_start = cupid_wtime();
   prob->outdir = prob->options.output_dir ? prob->options.output_dir : model->output.directory;
   cupid_set_num_threads(prob->options.threads);

@@ -366,6 +366,17 @@ static void test_errors(void **state) {
   oo.materials = &bad;
   assert_int_equal(cupid_pd_operator_create(g, &oo, &op), CUPID_ERR_MODEL);
   assert_non_null(strstr(cupid_error_message(), "Poisson"));
+  /* a material no node uses is not read (a beam's orthotropic material has no E, nu: issue
+   * 19): the same bad material as the second of two, the nodes on the first */
+  cupid_pd_material two[2] = {{1.0, 0.25}, {0.0, 0.0}};
+  oo.materials = two;
+  oo.n_materials = 2;
+  CUPID_ASSERT_OK(cupid_pd_operator_create(g, &oo, &op));
+  cupid_pd_operator_destroy(&op);
+  two[0] = (cupid_pd_material){-1.0, 0.25}; /* ... but the one the nodes use is */
+  assert_int_equal(cupid_pd_operator_create(g, &oo, &op), CUPID_ERR_MODEL);
+  assert_non_null(strstr(cupid_error_message(), "Young"));
+  oo.n_materials = 1;
   cupid_pd_grid_destroy(&g);
   mat = 3; /* material index beyond the list */
   CUPID_ASSERT_OK(cupid_pd_grid_create(&o, 1, &b, &mat, &g));
