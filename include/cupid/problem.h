@@ -47,6 +47,8 @@ typedef struct {
   int replicate;            /**< --replicate: under mpirun keep the whole model on every rank */
   int assembled;            /**< --assembled: PETSc solves of coupled models on the assembled
                                  matrix instead of the matrix-free operator */
+  int allow_large;          /**< --allow-large: run a dynamic analysis estimated beyond a day,
+                                 50 GB or 10^5 output files */
 } cupid_run_options;
 
 /** The defaults: keep the model's solver, every other option off. */

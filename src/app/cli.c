@@ -22,6 +22,7 @@
 static const char usage_text[] =
     "usage: cupid run MODEL.yaml [-o DIR] [--solver auto|direct|krylov|petsc] [--threads N]\n"
     "                            [--max-memory GB] [--quiet] [--replicate] [--assembled]\n"
+    "                            [--allow-large]\n"
     "                            [-petsc_option [value]]...\n"
     "       mpirun -n N cupid run MODEL.yaml --solver petsc [...]\n"
     "       cupid check MODEL.yaml\n"
@@ -48,6 +49,8 @@ static const char help_text[] =
     "                     splitting the PD grid into z slabs (for comparisons)\n"
     "  --assembled        PETSc solves of coupled models on the assembled matrix\n"
     "                     instead of the matrix-free operator\n"
+    "  --allow-large      run a dynamic analysis estimated to take more than a day\n"
+    "                     or write more than 50 GB or 10^5 files (refused otherwise)\n"
     "  -ksp_*, -pc_*, -log_view, ... (one dash) go to PETSc (--solver petsc; builds\n"
     "                     with PETSc only), e.g. -ksp_monitor -pc_type hypre\n"
     "\n"
@@ -137,6 +140,8 @@ static int parse_options(int argc, char **argv, int first, cupid_run_options *op
       opts->replicate = 1;
     } else if (!strcmp(a, "--assembled")) {
       opts->assembled = 1;
+    } else if (!strcmp(a, "--allow-large")) {
+      opts->allow_large = 1;
     } else if (!strcmp(a, "-h") || !strcmp(a, "--help")) {
       fputs(usage_text, stdout);
       fputs("\n", stdout);

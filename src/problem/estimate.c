@@ -17,6 +17,11 @@
 
 #include "method.h"
 
+/* Limits of a dynamic run without --allow-large (cupid_problem_guard_run). */
+#define RUN_SECONDS_LIMIT 86400.0
+#define OUTPUT_BYTES_LIMIT 50e9
+#define OUTPUT_FILES_LIMIT 1e5
+
 typedef struct {
   double matrix_blocks, matrix_bytes;
   double factor_nnz, factor_bytes, factor_seconds;
@@ -195,6 +200,14 @@ cupid_status cupid_problem_estimate(const cupid_problem_state *prob, int print) 
     char why[256];
     CUPID_CALL(cupid_problem_auto_engine(prob, &pick, why, sizeof why));
     printf("solver auto would pick: %s (%s)\n", pick->name, why);
+    if (m->analysis.type == CUPID_ANALYSIS_DYNAMIC) {
+      double rs, rb, rf;
+      cupid_problem_run_cost(prob, &rs, &rb, &rf);
+      printf("dynamic run: about %.3g s of time stepping, %.3g GB of output in %.0f files%s\n",
+             rs, rb / 1e9, rf,
+             rs > RUN_SECONDS_LIMIT || rb > OUTPUT_BYTES_LIMIT || rf > OUTPUT_FILES_LIMIT
+                 ? " (over the limits: run refuses it without --allow-large)" : "");
+    }
     printf("the model is valid%s\n", limit > 0 && e.total_bytes > limit
                                           ? ", but too large for the direct solver on this machine"
                                           : "");
@@ -360,7 +373,12 @@ cupid_status cupid_problem_guard_size(const cupid_problem_state *prob) {
   for (int k = 0; !req && cupid_solver_type_at(k); k++)
     petsc_may_solve |= cupid_solver_type_at(k)->solve_nodes && cupid_solver_type_at(k)->available();
   if (req) petsc_may_solve = req->solve_nodes != NULL;
-  if (!prob->opts->check_only && m->analysis.type != CUPID_ANALYSIS_EVALUATE && !petsc_may_solve) {
+  /* central differences on an operator need no matrix either (explicit PD: issue 19) */
+  const int explicit_mf = m->analysis.type == CUPID_ANALYSIS_DYNAMIC &&
+                          m->analysis.dynamic.integrator == CUPID_INTEGRATOR_CENTRAL &&
+                          prob->method->explicit_operator;
+  if (!prob->opts->check_only && m->analysis.type != CUPID_ANALYSIS_EVALUATE && !petsc_may_solve &&
+      !explicit_mf) {
     cupid_estimate e;
     estimate_sizes(m, nodes, nodes + bonds, &e);
     solver_bytes = e.total_bytes;
@@ -379,4 +397,46 @@ cupid_status cupid_problem_guard_size(const cupid_problem_state *prob) {
                            "coarser grid",
                            nodes, bonds, total / 1e9, grid_bytes / 1e9, op_bytes / 1e9, solver,
                            limit / 1e9);
+}
+
+/* ------------------------------------------------------------ the run's time and output
+ * A dynamic run of many steps with outputs every step can run for days and write terabytes
+ * from a few lines of model file (issue 19). Estimated from the steps, the outputs asked for and
+ * the model's size; refused beyond a day, 50 GB or 10^5 files unless --allow-large. The time
+ * per step: an operator product at ~3e7 bonds a second a pass on 2 cores (LPS: two passes; the
+ * stencil kernels, bench/README.md) or, with an assembled K, ~2 GB/s over its entries. */
+
+void cupid_problem_run_cost(const cupid_problem_state *prob, double *seconds, double *bytes,
+                            double *files) {
+  const cupid_model_t *m = prob->model;
+  *seconds = *bytes = *files = 0.0;
+  if (m->analysis.type != CUPID_ANALYSIS_DYNAMIC) return;
+  const cupid_dynamic *d = &m->analysis.dynamic;
+  const double steps = d->dt > 0 ? floor(d->duration / d->dt + 0.5) : 0.0;
+  const double outputs = steps / (d->every > 0 ? d->every : 1) + 1.0;
+  const double passes = m->pd.model == CUPID_PD_LPS ? 2.0 : 1.0;
+  const double per_step = passes * (double)prob->n_bonds / 3e7 + 9.0 * 12.0 * (double)prob->n_fe_dofs / 2e9;
+  *seconds = steps * per_step;
+  /* VTU: coordinates, displacement, velocity (base64: 4/3), per output; energies.csv a line
+   * per output; history.csv a line per step */
+  const double points = (double)prob->n_pd + (prob->beam ? 8.0 * (double)prob->fe_info.n_fe_nodes : 0.0);
+  if (m->output.vtu) {
+    *bytes += outputs * points * 9.0 * 8.0 * 4.0 / 3.0;
+    *files += outputs;
+  }
+  *bytes += outputs * 150.0 + (m->output.n_points ? steps * (1.0 + 3.0 * m->output.n_points) * 18.0 : 0.0);
+}
+
+cupid_status cupid_problem_guard_run(const cupid_problem_state *prob) {
+  double seconds, bytes, files;
+  cupid_problem_run_cost(prob, &seconds, &bytes, &files);
+  if (prob->opts->allow_large) return CUPID_SUCCESS;
+  const cupid_model_t *m = prob->model;
+  if (seconds > RUN_SECONDS_LIMIT || bytes > OUTPUT_BYTES_LIMIT || files > OUTPUT_FILES_LIMIT)
+    return cupid_model_error(m, &m->analysis.dynamic.mark,
+                             "this run would take about %.3g hours and write about %.3g GB in "
+                             "%.3g files (limits: 24 hours, 50 GB, 1e5 files): raise `every`, "
+                             "shorten `duration`, or pass --allow-large to run it anyway",
+                             seconds / 3600.0, bytes / 1e9, files);
+  return CUPID_SUCCESS;
 }

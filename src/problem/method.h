@@ -22,6 +22,8 @@ enum {
                                          matrix-free static solve runs on slabs) */
   CUPID_METHOD_GUARD_MATRIX_FREE = 1 << 3, /**< its matrix-free static solve has a calibrated
                                                memory estimate, checked before it runs */
+  CUPID_METHOD_CONDITIONS_ASSEMBLE = 1 << 4, /**< its constraints need the assembled system
+                                                 (Lagrange's tie): `cupid check` skips them */
 };
 
 /** A matrix-free operator of a whole system for explicit dynamics: y = K x. */

@@ -60,7 +60,7 @@ static void recover(const cupid_problem_state *prob, double *u) {
 
 const cupid_method_ops cupid_method_lagrange = {
     .name = "lagrange",
-    .caps = CUPID_METHOD_DYNAMIC | CUPID_METHOD_GRID_1D,
+    .caps = CUPID_METHOD_DYNAMIC | CUPID_METHOD_GRID_1D | CUPID_METHOD_CONDITIONS_ASSEMBLE,
     .matrix = CUPID_MATRIX_SPD,
     .check = check,
     .prepare = cupid_method_deactivate_regions,

@@ -304,12 +304,19 @@ cupid_status cupid_problem_setup(cupid_problem_state *prob) {
   prob->ndof = prob->fe_offset + prob->n_fe_dofs;
   CUPID_CALL(prob->slab ? cupid_problem_slab_check_points(prob) : cupid_problem_check_points(prob));
   if (prob->opts->check_only) {
+    /* `cupid check`: the constraints and loads resolved on the built grid and beam by the
+     * run's own code, so that check refuses what run would (no solver started) */
     prob->engine = cupid_solver_type_at(0);
+    CUPID_CALL(allocate_fields(prob));
+    if (model->analysis.type != CUPID_ANALYSIS_EVALUATE &&
+        !(prob->method->caps & CUPID_METHOD_CONDITIONS_ASSEMBLE))
+      CUPID_CALL(apply_conditions(prob));
     prob->stage = CUPID_STAGE_SET_UP;
     return CUPID_SUCCESS;
   }
   CUPID_CALL(choose_solver(prob));
   cupid_problem_progress(prob, "solver: %s (%s)", prob->engine->name, prob->solver_reason);
+  CUPID_CALL(cupid_problem_guard_run(prob));
   CUPID_CALL(allocate_fields(prob));
   if (model->analysis.type != CUPID_ANALYSIS_EVALUATE) CUPID_CALL(apply_conditions(prob));
   prob->stage = CUPID_STAGE_SET_UP;

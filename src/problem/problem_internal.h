@@ -198,6 +198,11 @@ cupid_status cupid_problem_estimate(const cupid_problem_state *prob, int print);
  *  also grids whose overlapping regions would take hours to build, and output lines of more
  *  than 10^8 points (or 2x10^8 point-region tests) in all. */
 cupid_status cupid_problem_guard_size(const cupid_problem_state *prob);
+/** A dynamic run's estimated time stepping (s), output bytes and files (0 for others). */
+void cupid_problem_run_cost(const cupid_problem_state *prob, double *seconds, double *bytes,
+                            double *files);
+/** Refuse a run beyond a day, 50 GB or 10^5 output files (unless --allow-large). */
+cupid_status cupid_problem_guard_run(const cupid_problem_state *prob);
 /** The memory limit (--max-memory, else 90% of the physical memory). */
 double cupid_problem_memory_limit(const cupid_problem_state *prob);
 /** The estimated cost of each engine for this problem (cupid_solver_cost per engine kind). */

@@ -52,6 +52,13 @@ expect 1 'point_outside.yaml:[0-9]+:[0-9]+: output.points\[0\].*outside' -- "$CU
 expect 1 'traction_no_face.yaml:[0-9]+:[0-9]+: loads\[0\].*no free PD surface' -- "$CUPID" run "$M/traction_no_face.yaml" -o o6
 expect 1 'point_load_outside.yaml:[0-9]+:[0-9]+: loads\[0\].*outside every PD region' -- "$CUPID" run "$M/point_load_outside.yaml" -o o7
 expect 1 'off_lattice.yaml:[0-9]+:[0-9]+: peridynamics.regions\[1\]' -- "$CUPID" run "$M/off_lattice.yaml" -o o8
+# `cupid check` resolves constraints and loads through the run's code (issue 19): what run
+# refuses for a model error, check refuses too, with the same message.
+expect 1 'constraint_empty.yaml:[0-9]+:[0-9]+: constraints\[0\].*no PD node' -- "$CUPID" check "$M/constraint_empty.yaml"
+expect 1 'traction_no_face.yaml:[0-9]+:[0-9]+: loads\[0\].*no free PD surface' -- "$CUPID" check "$M/traction_no_face.yaml"
+expect 1 'point_load_outside.yaml:[0-9]+:[0-9]+: loads\[0\].*outside every PD region' -- "$CUPID" check "$M/point_load_outside.yaml"
+expect 0 'cupid run MODEL.yaml' -- "$CUPID" run --help
+expect 1 'option -o needs a directory' -- "$CUPID" run "$M/good_small.yaml" -o ""
 for d in out_petsc o1 o2 o3 o4 o5 o6 o7 o8; do
   if [ -e "$d" ]; then echo "FAIL: failed run left $d behind"; fail=$((fail+1)); else pass=$((pass+1)); fi
 done

@@ -60,6 +60,9 @@ run~unconstrained_line.yaml~2~10~singular or not positive definite.*check that e
 check~beam_pd_unaligned.yaml~1~1~beam_pd_unaligned.yaml:[0-9]+:[0-9]+: (beam: CUF beam models are not yet supported|peridynamics.regions\[0\]: its bound y = 25 is not a beam-element end)~
 check~beam_huge.yaml~1~1~beam_huge.yaml:[0-9]+:[0-9]+: ~
 run~beam_huge.yaml~1~1~beam_huge.yaml:[0-9]+:[0-9]+: ~
+run~dynamic_output_huge.yaml~1~5~dynamic_output_huge.yaml:[0-9]+:[0-9]+: analysis.dynamic: this run would take about .* hours and write about 486 GB in 1.12e\+08 files .*--allow-large~
+check~dynamic_output_huge.yaml~0~5~dynamic run: about .* s of time stepping, 486 GB of output in 111700001 files \(over the limits~
+run~explicit_pd_block.yaml~0~20~^$~--quiet --max-memory 0.2
 run~../run_errors/good_small.yaml~1~1~good_small.yaml:[0-9]+:[0-9]+: peridynamics: the model has at least 128 PD nodes .*more than the limit of 1e-06 GB~--max-memory 0.000001
 EOF
 
