@@ -77,7 +77,7 @@ tip = abs(fe[-1][1])
 src = clamped(open(os.path.join(here, f"bar_coupled_{a.expansion}.yaml")).read())
 if a.surface_correction != "none":
     src = src.replace("  partial_volume: pdlammps", f"  partial_volume: pdlammps\n  surface_correction: {a.surface_correction}")
-print(f"| h | delta | m | PD nodes | max error / tip u | max relative error | equilibrium imbalance | wall s |")
+print("| h | delta | m | PD nodes | max error / tip u | max relative error | equilibrium imbalance | wall s |")
 print("|---|---|---|---|---|---|---|---|")
 for case in a.cases:
     h, d = (float(v) for v in case.split(":"))
