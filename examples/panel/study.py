@@ -1,25 +1,30 @@
 #!/usr/bin/env python3
 """FE-mesh and horizon study of the coupled stiffened panel (examples/panel/README.md).
 
-usage: examples/panel/study.py [VARIANT ...] [--cupid build/cupid] [--solver petsc]
+usage: examples/panel/study.py [VARIANT ...] [--library build/libcupid.so] [--solver petsc]
                                [--against fine] [--list]
 
 Each variant is panel_pd_l9.yaml with another beam mesh (axis breakpoints / elements / type),
 section mesh (skin x, stringer z breakpoints) or PD horizon / surface correction, run with its
 full-FE twin (the same beam and section mesh, no PD), so that A, B, C are compared with the FE
-model they discretise. Prints a markdown table (error of u_z at A, B and sigma_yy at C against
+model they discretise. The models are built as dicts and solved through the cupid Python
+package (python/cupid); each variant's two models are written to out/panel/study/<variant>/
+(fe.yaml, pd.yaml: JSON, which `cupid run` reads) for rerunning by hand. Prints a markdown table (error of u_z at A, B and sigma_yy at C against
 the twin, the equilibrium imbalance, time and peak memory) and writes it to
 out/panel/study/study.md. Every coupled run takes ~5-10 s and up to 1.4 GB on 2 cores; all
 variants about 3 minutes. With no VARIANT, all of them at h = 1 (the h0.5_* variants, which
-need the matrix-free path: `--cupid build-petsc/cupid --solver petsc`, ~10-15 s each, are run
-only when named). `--against fine` also compares every row with the full FE of a section- and
+need the matrix-free path: `--library build-petsc/libcupid.so --solver petsc`, ~10-15 s each,
+are run only when named). `--against fine` also compares every row with the full FE of a section- and
 beam-converged L9 mesh (REFERENCES; FE only).
 """
 import argparse
+import ctypes
 import json
 import os
-import subprocess
 import sys
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "python"))
+import cupid  # noqa: E402
 
 SKIN = "0,12,24,36,48,52,64,76,88,100,112,124,136,148,152,164,176,190,200"
 SKIN44 = "0,12,24,36,44,48,52,56,64,76,88,100,112,124,136,144,148,152,156,164,176,190,200"
@@ -93,70 +98,83 @@ DEFAULTS = dict(axis_y="0,290,310,600", axis_el="4,1,3", type="B4", skin_x=SKIN,
                 skin_z="0,2", str_x="0,4", str_z="2,7,12,17,22", delta="3.0", h="1.0", sc=None)
 
 
-def lst(s):
-    return "[" + ", ".join(s.split(",")) + "]"
-
+def nums(s):
+    """A breakpoint list "0,12,24" as numbers."""
+    return [float(v) for v in s.split(",")]
 
 
 def stringer_x(p, x0):
-    return ",".join(f"{x0 + float(o):g}" for o in p["str_x"].split(","))
+    return [x0 + float(o) for o in p["str_x"].split(",")]
+
+
+POINTS = [{"name": "A", "at": [195, 600, 1]}, {"name": "B", "at": [5, 600, 1]},
+          {"name": "C", "at": [50, 100, 22], "stress": True}]
 
 
 def models(p, d):
-    beam = f"""materials:
-  resin: {{E: 10000, nu: 0.2}}
-beam:
-  material: resin
-  axis: {{y: {lst(p['axis_y'])}, elements: {lst(p['axis_el'])}, type: {p['type']}}}
-  section:
-    expansion: LE
-    element: L9
-    components:
-      - {{x: {lst(p['skin_x'])}, z: {lst(p['skin_z'])}}}
-      - {{x: {lst(stringer_x(p, 48))}, z: {lst(p['str_z'])}}}
-      - {{x: {lst(stringer_x(p, 148))}, z: {lst(p['str_z'])}}}
-"""
-    sc = f"  surface_correction: {p['sc']}\n" if p["sc"] else ""
-    pd = f"""peridynamics:
-  spacing: {p['h']}
-  horizon: {float(p['delta']) * float(p['h']):g}
-  model: lps
-  influence: gaussian
-  partial_volume: pdlammps
-{sc}  material: resin
-  regions:
-    - {{x: [48, 52], y: [290, 310], z: [2, 22]}}
-    - {{x: [148, 152], y: [290, 310], z: [2, 22]}}
-coupling: {{method: fictitious}}
-analysis: {{type: static, solver: direct}}
-"""
-    rest = """constraints:
-  - clamp: {y: 0}
-loads:
-  - traction: {y: 600, x: [190, 200], z: [0, 2], value: [0, 0, -1]}
-output:
-  directory: DIR
-  points:
-    - {name: A, at: [195, 600, 1]}
-    - {name: B, at: [5, 600, 1]}
-    - {name: C, at: [50, 100, 22], stress: true}
-"""
-    return ("title: panel study, full FE\n" + beam + rest.replace("DIR", d + "/fe"),
-            "title: panel study, coupled\n" + beam + pd + rest.replace("DIR", d + "/pd"))
+    """The full-FE and the coupled model of parameters p (dicts with the model file's keys),
+    their outputs (if written) in d/fe and d/pd."""
+    beam = {"material": "resin",
+            "axis": {"y": nums(p["axis_y"]), "elements": [int(v) for v in p["axis_el"].split(",")],
+                     "type": p["type"]},
+            "section": {"expansion": "LE", "element": "L9", "components": [
+                {"x": nums(p["skin_x"]), "z": nums(p["skin_z"])},
+                {"x": stringer_x(p, 48), "z": nums(p["str_z"])},
+                {"x": stringer_x(p, 148), "z": nums(p["str_z"])}]}}
+    pd = {"spacing": float(p["h"]), "horizon": float(p["delta"]) * float(p["h"]), "model": "lps",
+          "influence": "gaussian", "partial_volume": "pdlammps"}
+    if p["sc"]:
+        pd["surface_correction"] = p["sc"]
+    pd["material"] = "resin"
+    pd["regions"] = [{"x": [48, 52], "y": [290, 310], "z": [2, 22]},
+                     {"x": [148, 152], "y": [290, 310], "z": [2, 22]}]
+
+    def model(title, d_out, extra):
+        m = {"title": title, "materials": {"resin": {"E": 10000, "nu": 0.2}}, "beam": beam}
+        m.update(extra)
+        m["constraints"] = [{"clamp": {"y": 0}}]
+        m["loads"] = [{"traction": {"y": 600, "x": [190, 200], "z": [0, 2], "value": [0, 0, -1]}}]
+        m["output"] = {"directory": d_out, "points": POINTS}
+        return m
+
+    return (model("panel study, full FE", d + "/fe", {}),
+            model("panel study, coupled", d + "/pd",
+                  {"peridynamics": pd, "coupling": {"method": "fictitious"},
+                   "analysis": {"type": "static", "solver": "direct"}}))
 
 
-def run(cupid, path, outdir, extra=()):
-    timer = ["/usr/bin/time", "-f", "%M"] if os.path.exists("/usr/bin/time") else []
-    r = subprocess.run(timer + [cupid, "run", path, "--quiet", *extra], capture_output=True,
-                       text=True)
-    if r.returncode:
-        sys.exit(f"{path}: cupid failed\n{r.stdout}{r.stderr}")
-    s = json.load(open(os.path.join(outdir, "summary.json")))
+def reset_peak_memory():
+    """Restart the process's peak-RSS count (Linux >= 4.0), so that p.info's
+    peak_memory_bytes (getrusage, the process's high-water mark) is this problem's, as
+    /usr/bin/time measured a `cupid run` (the freed heap of the runs before handed back first)."""
     try:
-        rss = int(r.stderr.strip().split()[-1]) * 1024
-    except (ValueError, IndexError):
-        rss = s["peak_memory_bytes"]
-    return s, rss
+        ctypes.CDLL(None).malloc_trim(0)
+    except (OSError, AttributeError):
+        pass
+    try:
+        with open("/proc/self/clear_refs", "w") as f:
+            f.write("5")
+    except OSError:
+        pass  # the peak of the whole script so far
+
+
+def run(model, path, solver=None):
+    """The model (dict) written to path (for `cupid run`) and solved: its output points as
+    summary.json lists them, its counts and resultants (p.info) and its peak memory."""
+    with open(path, "w") as f:
+        json.dump(model, f, indent=1)
+    reset_peak_memory()
+    try:
+        with cupid.Problem(model, solver=solver) as p:
+            p.solve()
+            info = p.info
+            s = {"points": p.sample_output_points(), "counts": info,
+                 "equilibrium_imbalance": [a + b for a, b in zip(info["load_sum"],
+                                                                 info["reaction_sum"])],
+                 "total_time_s": info["total_seconds"]}
+    except cupid.Error as e:
+        sys.exit(f"{path}: cupid failed ({e.status}): {e}")
+    return s, info["peak_memory_bytes"]
 
 
 def value(s, name, comp):
@@ -166,7 +184,9 @@ def value(s, name, comp):
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("variants", nargs="*")
-    ap.add_argument("--cupid", default="build/cupid")
+    ap.add_argument("--library", help="libcupid to load (default: $CUPID_LIBRARY, else "
+                    "build/libcupid.so); build-petsc/libcupid.so for --solver petsc")
+    ap.add_argument("--cupid", help=argparse.SUPPRESS)  # old form: the library beside this binary
     ap.add_argument("--solver", help="solver of the coupled runs (e.g. petsc)")
     ap.add_argument("--against", choices=sorted(REFERENCES),
                     help="also compare with this converged full-FE reference")
@@ -180,16 +200,17 @@ def main():
         if n not in VARIANTS:
             sys.exit(f"unknown variant '{n}' (--list names them)")
     names = a.variants or [k for k in VARIANTS if k not in OPT_IN]
+    lib = a.library or (a.cupid and os.path.join(os.path.dirname(os.path.abspath(a.cupid)),
+                                                 "libcupid.so"))
+    if lib:  # read when the first problem is made
+        os.environ["CUPID_LIBRARY"] = os.path.abspath(lib)
     base = os.path.join("out", "panel", "study")
-    extra = ("--solver", a.solver) if a.solver else ()
     ref = None
     if a.against:
         d = os.path.abspath(os.path.join(base, "ref_" + a.against))
         os.makedirs(d, exist_ok=True)
-        fe_y, _ = models(dict(DEFAULTS, **REFERENCES[a.against]), d)
-        with open(os.path.join(d, "fe.yaml"), "w") as f:
-            f.write(fe_y)
-        ref, _ = run(a.cupid, os.path.join(d, "fe.yaml"), os.path.join(d, "fe"))
+        fe_m, _ = models(dict(DEFAULTS, **REFERENCES[a.against]), d)
+        ref, _ = run(fe_m, os.path.join(d, "fe.yaml"))
         print(f"reference '{a.against}' (full FE, {ref['counts']['fe_dofs']} DOFs): A "
               f"{value(ref, 'A', 'uz'):.4f}, B {value(ref, 'B', 'uz'):.4f}, "
               f"C {value(ref, 'C', 'syy'):.4f}\n")
@@ -202,12 +223,9 @@ def main():
         p = dict(DEFAULTS, **over)
         d = os.path.abspath(os.path.join(base, n))
         os.makedirs(d, exist_ok=True)
-        fe_y, pd_y = models(p, d)
-        for name, text in (("fe.yaml", fe_y), ("pd.yaml", pd_y)):
-            with open(os.path.join(d, name), "w") as f:
-                f.write(text)
-        fe, _ = run(a.cupid, os.path.join(d, "fe.yaml"), os.path.join(d, "fe"))
-        pd, rss = run(a.cupid, os.path.join(d, "pd.yaml"), os.path.join(d, "pd"), extra)
+        fe_m, pd_m = models(p, d)
+        fe, _ = run(fe_m, os.path.join(d, "fe.yaml"))
+        pd, rss = run(pd_m, os.path.join(d, "pd.yaml"), a.solver)
         cells = []
         for pt, c in (("A", "uz"), ("B", "uz"), ("C", "syy")):
             f, q = value(fe, pt, c), value(pd, pt, c)

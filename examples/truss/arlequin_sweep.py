@@ -1,10 +1,11 @@
 #!/usr/bin/env python3
 """Penalty and overlap-size sweeps of the Arlequin truss (paper 004, section 4; Fig. 3).
 
-usage: examples/truss/arlequin_sweep.py [--cupid build/cupid] [--out out/truss/sweep]
+usage: examples/truss/arlequin_sweep.py [--out out/truss/sweep]
 
-Runs examples/truss/truss_fe.yaml (the reference) and variants of truss_arlequin.yaml, and
-writes OUT/sweep.md with, per period k = 1..5 of the first mode:
+Runs examples/truss/truss_fe.yaml (the reference) and variants of truss_arlequin.yaml through
+the cupid Python package (python/cupid; each variant's model text in OUT/<name>.yaml, its
+outputs in OUT/<name>), and writes OUT/sweep.md with, per period k = 1..5 of the first mode:
   amp   (max |u_tip| over period k) / (FE's) - 1, in %;
   phase the lag of the k-th downward zero crossing of u_tip behind FE's, in % of T1
         (positive: the coupled truss is late; cumulative, its growth is the drift per period);
@@ -18,20 +19,17 @@ w = 2, 4, 8, 16 dx (FE on [0, 0.5 + w/2], PD on [0.5 - w/2, 1]; 81 + w/dx nodes)
 and 1e11.
 """
 import argparse
-import csv
 import json
 import math
 import os
 import re
-import subprocess
+import sys
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "python"))
+import cupid  # noqa: E402
 
 T1 = 4.0 / math.sqrt(1e9 / 7800.0)
 HERE = os.path.dirname(os.path.abspath(__file__))
-
-
-def rows(p):
-    with open(p) as f:
-        return [{k: float(v) for k, v in r.items()} for r in csv.DictReader(f)]
 
 
 def down_crossings(h):
@@ -55,13 +53,21 @@ def metrics(h, fe):
     return amp, ph, 100 * rms
 
 
-def run(cupid, text, out, name):
+def run(text, out, name):
+    """The model text solved (written to OUT/<name>.yaml, outputs in OUT/<name>): the tip
+    history as rows {"t", "tip_uy"}, the counts (p.info) and the summary's dynamic block."""
     path = os.path.join(out, name + ".yaml")
     with open(path, "w") as f:
         f.write(text)
-    d = os.path.join(out, name)
-    subprocess.run([cupid, "run", path, "-o", d, "--quiet"], check=True)
-    return rows(os.path.join(d, "history.csv")), json.load(open(os.path.join(d, "summary.json")))
+    with cupid.Problem(path, output_dir=os.path.join(out, name)) as p:
+        p.solve().write_outputs()
+        h, info = p.history, p.info
+        # p.info has no dynamic block (max_energy_balance_relative): read it from the
+        # summary.json that write_outputs() wrote.
+        with open(os.path.join(p.output_dir, "summary.json")) as f:
+            dyn = json.load(f)["dynamic"]
+    hist = [{"t": float(t), "tip_uy": float(u)} for t, u in zip(h["t"], h["tip"][:, 1])]
+    return hist, info, dyn
 
 
 def fmt(v):
@@ -80,31 +86,30 @@ def overlap_model(base, w_dx, kappa):
 
 def main():
     ap = argparse.ArgumentParser()
-    ap.add_argument("--cupid", default="build/cupid")
     ap.add_argument("--out", default="out/truss/sweep")
     a = ap.parse_args()
     os.makedirs(a.out, exist_ok=True)
-    fe, _ = run(a.cupid, open(os.path.join(HERE, "truss_fe.yaml")).read(), a.out, "fe")
+    fe, _, _ = run(open(os.path.join(HERE, "truss_fe.yaml")).read(), a.out, "fe")
     base = open(os.path.join(HERE, "truss_arlequin.yaml")).read()
     out = ["## Penalty sweep (FE 40 + PD 40 nodes, overlap [0.4, 0.6], linear weight, undamped)", "",
            "| kappa (N/m) | beta = kappa h/(EA) | tip RMS vs FE, 1st period (%) | amp err per period (%) | phase lag at crossing k (% T1, cumulative) | energy balance |",
            "|---|---|---|---|---|---|"]
     for kappa in (1e5, 1e7, 1e9, 1e10, 1e11, 1e13):
-        h, s = run(a.cupid, base.replace("penalty: 1.0e9", "penalty: %g" % kappa), a.out, "k%g" % kappa)
+        h, _, dyn = run(base.replace("penalty: 1.0e9", "penalty: %g" % kappa), a.out, "k%g" % kappa)
         amp, ph, rms = metrics(h, fe)
         out.append("| %.0e | %.3g | %.2f | %s | %s | %.1e |" % (
-            kappa, kappa * 0.015 / 1e9, rms, fmt(amp), fmt(ph), s["dynamic"]["max_energy_balance_relative"]))
+            kappa, kappa * 0.015 / 1e9, rms, fmt(amp), fmt(ph), dyn["max_energy_balance_relative"]))
     out += ["", "## Overlap-size sweep (dx = 0.0125 for both, overlap centred at y = 0.5, linear weight)", "",
             "| overlap width | nodes | kappa (N/m) | tip RMS vs FE, 1st period (%) | amp err per period (%) | phase lag at crossing k (% T1, cumulative) |",
             "|---|---|---|---|---|---|"]
     for kappa in (1e9, 1e11):
         for w in (2, 4, 8, 16):
-            h, s = run(a.cupid, overlap_model(base, w, kappa), a.out, "w%d_k%g" % (w, kappa))
+            h, info, _ = run(overlap_model(base, w, kappa), a.out, "w%d_k%g" % (w, kappa))
             amp, ph, rms = metrics(h, fe)
             out.append("| %d dx = %g m | %d | %.0e | %.2f | %s | %s |" % (
-                w, w * 0.0125, s["counts"]["pd_nodes"] + s["counts"]["fe_nodes"], kappa, rms, fmt(amp), fmt(ph)))
+                w, w * 0.0125, info["pd_nodes"] + info["fe_nodes"], kappa, rms, fmt(amp), fmt(ph)))
     # PD-only for reference
-    h, s = run(a.cupid, open(os.path.join(HERE, "truss_pd.yaml")).read(), a.out, "pd")
+    h, _, _ = run(open(os.path.join(HERE, "truss_pd.yaml")).read(), a.out, "pd")
     amp, ph, rms = metrics(h, fe)
     out += ["", "PD-only truss (80 nodes) against FE: tip RMS %.2f %%, amp %s %%, phase %s %% T1" % (rms, fmt(amp), fmt(ph))]
     with open(os.path.join(a.out, "sweep.md"), "w") as f:
