@@ -135,6 +135,13 @@ def version():
     return _load().cupid_version().decode()
 
 
+class _Text(tuple):
+    """A model file's text and the name that stands for the file (Problem.from_text)."""
+
+    def __new__(cls, text, name):
+        return super().__new__(cls, (text, name))
+
+
 class Problem:
     """A model being set up, solved and reported (include/cupid/problem.h).
 
@@ -142,6 +149,11 @@ class Problem:
     output_dir, solver ("auto", "direct", "petsc"), threads, max_memory_gb, quiet: as the
     command line's -o, --solver, --threads, --max-memory, --quiet.
     """
+
+    @classmethod
+    def from_text(cls, text, name="<text>", **options):
+        """A problem from a model file's text (YAML); name stands for the file in messages."""
+        return cls(_Text(text, name), **options)
 
     def __init__(self, model, output_dir=None, solver=None, threads=0, max_memory_gb=0.0,
                  quiet=True):
@@ -152,11 +164,11 @@ class Problem:
         opts = _RunOptions(output_dir=self._out, solver=_SOLVERS[solver], threads=int(threads),
                            max_memory_gb=float(max_memory_gb), quiet=1 if quiet else 0)
         self._p = ctypes.c_void_p()
-        if isinstance(model, dict):
-            # JSON is YAML (flow style): the reader takes it as a model file.
-            text = json.dumps(model).encode()
-            _check(lib.cupid_problem_create_from_string(text, b"<dict>", ctypes.byref(opts),
-                                                        ctypes.byref(self._p)))
+        if isinstance(model, (dict, _Text)):
+            # JSON is YAML (flow style): the reader takes a dict as a model file's text.
+            text, name = (json.dumps(model), "<dict>") if isinstance(model, dict) else model
+            _check(lib.cupid_problem_create_from_string(text.encode(), name.encode(),
+                                                        ctypes.byref(opts), ctypes.byref(self._p)))
         else:
             _check(lib.cupid_problem_create_from_file(os.fsencode(model), ctypes.byref(opts),
                                                       ctypes.byref(self._p)))

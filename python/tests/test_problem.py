@@ -120,3 +120,13 @@ def test_dynamic_history_equals_history_csv(tmp_path):
         assert header[1 + 3 * k] == name + "_ux"
         # history.csv prints 11 significant digits
         assert np.allclose(h[name], rows[:, 1 + 3 * k:4 + 3 * k], rtol=0, atol=1e-9 * scale)
+
+
+def test_from_text_gives_the_file_and_its_errors():
+    text = open(BAR).read()
+    u_text = cupid.Problem.from_text(text, "bar.yaml").solve().pd_displacement
+    u_file = cupid.Problem(BAR).solve().pd_displacement
+    assert np.array_equal(u_text, u_file)
+    with pytest.raises(cupid.Error) as e:
+        cupid.Problem.from_text(text.replace("spacing: 2.0", "spacing: -2.0"), "edited.yaml")
+    assert "edited.yaml:" in str(e.value) and e.value.exit_code == 1
