@@ -54,6 +54,23 @@ void cupid_atomic_abort(cupid_atomic_file *file);
 void cupid_atomic_cleanup_all(void);
 
 /**
+ * The output files of one run as a set (src/io/output_set.c): begin stages a folder beside the
+ * output folder @p dir (its parent is created) and locks @p dir against a second cupid run
+ * (CUPID_ERR_IO naming the other run's pid); the run writes into cupid_output_set_dir();
+ * publish moves the staged files into @p dir (created if missing), summary.json last, after
+ * removing the files of the run's kinds (summary.json, pd_nodes.csv, VTU/PVD, line_*, history*,
+ * energies*, damage*) that the run did not write; other files in @p dir are left alone. abort
+ * (also after a failed publish) removes the staging folder: @p dir stays as it was. Staging
+ * folders of runs that died are removed by the next begin on the same folder. publish and
+ * abort release the lock and consume the handle (NULL-safe).
+ */
+typedef struct cupid_output_set_private *cupid_output_set;
+cupid_status cupid_output_set_begin(const char *dir, cupid_output_set *set);
+const char *cupid_output_set_dir(const cupid_output_set set);
+cupid_status cupid_output_set_publish(cupid_output_set *set);
+void cupid_output_set_abort(cupid_output_set *set);
+
+/**
  * Streaming JSON writer: pretty printed (2-space indent), keys and strings escaped per
  * RFC 8259 (invalid UTF-8 becomes U+FFFD), numbers round-trip exactly ("%.15g", else "%.17g"),
  * NaN/Inf become null, integers exact. Inside objects every value needs a key; inside arrays

@@ -30,8 +30,8 @@ typedef struct {
 } dyn_output;
 
 static cupid_status out_path(const cupid_problem_state *prob, const char *name, char *path, size_t len) {
-  int n = snprintf(path, len, "%s/%s", prob->outdir, name);
-  CUPID_CHECK(n > 0 && (size_t)n < len, CUPID_ERR_IO, "output path too long: %s/%s", prob->outdir,
+  int n = snprintf(path, len, "%s/%s", prob->writedir, name);
+  CUPID_CHECK(n > 0 && (size_t)n < len, CUPID_ERR_IO, "output path too long: %s/%s", prob->writedir,
               name);
   return CUPID_SUCCESS;
 }
@@ -202,20 +202,22 @@ static cupid_status history_grow(cupid_problem_state *prob, double **row) {
   return CUPID_SUCCESS;
 }
 
+/* The output points at time t: in the problem's history and, on the rank that writes the
+ * files, in history.csv. */
 static cupid_status history_row(dyn_output *o, double t) {
   const cupid_output *out = &o->prob->model->output;
-  FILE *f = cupid_atomic_stream(o->history);
+  FILE *f = o->history ? cupid_atomic_stream(o->history) : NULL;
   double *row;
   CUPID_CALL(history_grow(o->prob, &row));
   row[0] = t;
-  fprintf(f, "%.10e", t);
+  if (f) fprintf(f, "%.10e", t);
   for (int k = 0; k < out->n_points; k++) {
     double *u = row + 1 + 3 * k;
     cupid_region_kind region;
     CUPID_CALL(cupid_problem_sample_point(o->prob, out->points[k].at, u, NULL, &region));
-    fprintf(f, ",%.10e,%.10e,%.10e", u[0], u[1], u[2]);
+    if (f) fprintf(f, ",%.10e,%.10e,%.10e", u[0], u[1], u[2]);
   }
-  fputc('\n', f);
+  if (f) fputc('\n', f);
   return CUPID_SUCCESS;
 }
 
@@ -244,13 +246,14 @@ static cupid_status monitor(void *ctx, cupid_int step, double t, int output, con
 
 static cupid_status monitor_outputs(dyn_output *o, cupid_int step, double t, int output,
                                     const double *v, const cupid_dynamics_energy *e) {
-  if (o->history) CUPID_CALL(history_row(o, t));
+  if (o->prob->model->output.n_points) CUPID_CALL(history_row(o, t));
   if (!output) return CUPID_SUCCESS;
   o->out_count++;
-  fprintf(cupid_atomic_stream(o->energies), "%.10e,%lld,%.10e,%.10e,%.10e,%.10e,%.10e,%.10e\n", t,
+  if (o->energies)
+    fprintf(cupid_atomic_stream(o->energies), "%.10e,%lld,%.10e,%.10e,%.10e,%.10e,%.10e,%.10e\n", t,
           (long long)step, e->kinetic, e->strain, e->damping, e->external,
           e->kinetic + e->strain + e->damping - e->external, e->balance);
-  if (o->prob->model->output.vtu) CUPID_CALL(write_vtu_step(o, step, t, v));
+  if (o->prob->model->output.vtu && o->prob->writedir) CUPID_CALL(write_vtu_step(o, step, t, v));
   o->prob->dyn.energy = *e;
   return CUPID_SUCCESS;
 }
@@ -259,7 +262,7 @@ static cupid_status open_outputs(dyn_output *o) {
   cupid_problem_state *prob = o->prob;
   const cupid_output *out = &prob->model->output;
   char path[4096];
-  CUPID_CALL(cupid_mkdir_p(prob->outdir));
+  if (!prob->writedir) return CUPID_SUCCESS; /* an MPI rank other than 0: no files */
   CUPID_CALL(out_path(prob, "energies.csv", path, sizeof path));
   CUPID_CALL(cupid_atomic_open(path, &o->energies));
   fprintf(cupid_atomic_stream(o->energies),
@@ -287,7 +290,7 @@ static cupid_status plots(const cupid_problem_state *prob) {
     ec[k] = (cupid_plot_curve){.csv = "energies.csv", .xname = "t", .yname = enames[k],
                                .title = enames[k]};
   snprintf(t, sizeof t, "%s: energies", title);
-  CUPID_CALL(cupid_plot(prob->outdir, "energies", t, "t", "energy", 5, ec, &made));
+  CUPID_CALL(cupid_plot(prob->writedir, "energies", t, "t", "energy", 5, ec, &made));
   for (int k = 0; k < out->n_points; k++) {
     char stem[512], cols[3][200];
     cupid_plot_curve hc[3];
@@ -298,7 +301,7 @@ static cupid_status plots(const cupid_problem_state *prob) {
     }
     snprintf(stem, sizeof stem, "history_%s", out->points[k].name);
     snprintf(t, sizeof t, "%s: displacement history at '%s'", title, out->points[k].name);
-    CUPID_CALL(cupid_plot(prob->outdir, stem, t, "t", "displacement", 3, hc, &made));
+    CUPID_CALL(cupid_plot(prob->writedir, stem, t, "t", "displacement", 3, hc, &made));
   }
   return CUPID_SUCCESS;
 }
@@ -306,6 +309,7 @@ static cupid_status plots(const cupid_problem_state *prob) {
 static cupid_status finish_outputs(dyn_output *o) {
   cupid_problem_state *prob = o->prob;
   char path[4096];
+  if (!prob->writedir) return CUPID_SUCCESS;
   if (o->history) CUPID_CALL(cupid_atomic_commit(&o->history));
   CUPID_CALL(cupid_atomic_commit(&o->energies));
   if (o->n_files) {

@@ -408,6 +408,16 @@ static cupid_status run_static(cupid_problem_state *prob) {
   return prob->method->report ? prob->method->report(prob) : CUPID_SUCCESS;
 }
 
+/* The run's files go to a staging folder beside the output folder until write_outputs
+ * publishes them (io.h, cupid_output_set): a failed or interrupted run leaves the previous
+ * results as they were. Rank 0 writes. */
+static cupid_status begin_outputs(cupid_problem_state *prob) {
+  if (prob->outputs || cupid_petsc_rank() != 0) return CUPID_SUCCESS;
+  CUPID_CALL(cupid_output_set_begin(prob->outdir, &prob->outputs));
+  prob->writedir = cupid_output_set_dir(prob->outputs);
+  return CUPID_SUCCESS;
+}
+
 /* `dynamic`: central differences (which need a lumped mass) on the method's operator when it
  * has one for this model: no K, no factor, memory O(nodes); otherwise on the assembled K
  * (dynamic.c). */
@@ -421,6 +431,7 @@ static cupid_status run_dynamic(cupid_problem_state *prob) {
     CUPID_TRY(cupid_problem_estimate(prob, 0)); /* before anything scales with the stiffness */
     CUPID_TRY(prob->method->assemble(prob));
   }
+  CUPID_TRY(begin_outputs(prob)); /* the time series are written as the run goes */
   CUPID_TRY(cupid_problem_run_dynamic(prob, op.apply ? &op : NULL));
   if (prob->method->recover) { /* the eliminated unknowns, and K u with them */
     prob->method->recover(prob, prob->u);
@@ -483,6 +494,7 @@ void cupid_problem_state_free(cupid_problem_state *prob) {
   cupid_free(&prob->beam_points);
   cupid_free(&prob->beam_u);
   cupid_free(&prob->history);
+  cupid_output_set_abort(&prob->outputs); /* not published: the previous results stay */
   cupid_free(&prob->region_boxes);
   cupid_free(&prob->region_materials);
 }
@@ -553,7 +565,10 @@ cupid_status cupid_problem_write_outputs(cupid_problem_state *prob) {
   CUPID_CHECK(prob && prob->stage == CUPID_STAGE_SOLVED, CUPID_ERR_ARGUMENT,
               "cupid_problem_write_outputs: solve the problem first");
   if (prob->slab || cupid_petsc_rank() != 0) return CUPID_SUCCESS; /* rank 0 writes */
+  CUPID_CALL(begin_outputs(prob));
   CUPID_CALL(cupid_problem_report(prob));
+  CUPID_CALL(cupid_output_set_publish(&prob->outputs));
+  prob->writedir = NULL;
   cupid_problem_progress(prob, "done: results in %s", prob->outdir);
   return CUPID_SUCCESS;
 }

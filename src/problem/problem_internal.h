@@ -52,7 +52,10 @@ typedef struct cupid_problem_private {
   const cupid_run_options *opts; /**< = &options */
   const cupid_method_ops *method; /**< the coupling method's table (method.h) */
   int stage;
-  const char *outdir;
+  const char *outdir;       /**< where the results go (-o, else output.directory) */
+  cupid_output_set outputs; /**< the run's files, staged until write_outputs publishes them */
+  const char *writedir;     /**< the staging folder the files are written to (NULL: none on this
+                                 MPI rank) */
   int quiet;
 
   /* Peridynamics */

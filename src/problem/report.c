@@ -24,7 +24,7 @@ static cupid_status join_path(const char *dir, const char *name, char *out, size
 static cupid_status write_line(cupid_problem_state *prob, const cupid_output_line *line) {
   char name[512], path[4096];
   snprintf(name, sizeof name, "line_%s.csv", line->name);
-  CUPID_CALL(join_path(prob->outdir, name, path, sizeof path));
+  CUPID_CALL(join_path(prob->writedir, name, path, sizeof path));
   cupid_atomic_file file = NULL;
   CUPID_CALL(cupid_atomic_open(path, &file));
   FILE *out = cupid_atomic_stream(file);
@@ -56,7 +56,7 @@ static cupid_status write_line(cupid_problem_state *prob, const cupid_output_lin
                                    .title = c == 0 ? "u_x" : c == 1 ? "u_y" : "u_z",
                                    .style = "linespoints pt 7 ps 0.4"};
   int made = 0;
-  return cupid_plot(prob->outdir, stem, title, "s (distance along the line)", "displacement", 3,
+  return cupid_plot(prob->writedir, stem, title, "s (distance along the line)", "displacement", 3,
                     curves, &made);
 }
 
@@ -64,7 +64,7 @@ static cupid_status write_line(cupid_problem_state *prob, const cupid_output_lin
  * which equals the applied load plus the reaction at every node. */
 static cupid_status write_pd_nodes(cupid_problem_state *prob) {
   char path[4096];
-  CUPID_CALL(join_path(prob->outdir, "pd_nodes.csv", path, sizeof path));
+  CUPID_CALL(join_path(prob->writedir, "pd_nodes.csv", path, sizeof path));
   cupid_atomic_file file = NULL;
   CUPID_CALL(cupid_atomic_open(path, &file));
   FILE *out = cupid_atomic_stream(file);
@@ -120,7 +120,7 @@ static cupid_status write_pd_vtu(cupid_problem_state *prob) {
                          .types = types,
                          .point_data = pdata,
                          .n_point_data = prob->pd_stress ? 5 : 4};
-  CUPID_TRY(join_path(prob->outdir, "pd.vtu", path, sizeof path));
+  CUPID_TRY(join_path(prob->writedir, "pd.vtu", path, sizeof path));
   CUPID_TRY(cupid_vtu_write(path, &mesh));
 cleanup:
   cupid_free(&conn);
@@ -141,7 +141,7 @@ static cupid_status write_vtu(cupid_problem_state *prob) {
   const int parts[2] = {0, 1};
   int n = 0;
   if (prob->beam) {
-    CUPID_CALL(join_path(prob->outdir, "beam.vtu", path, sizeof path));
+    CUPID_CALL(join_path(prob->writedir, "beam.vtu", path, sizeof path));
     CUPID_CALL(cupid_problem_fe_write_vtu(prob, path));
     files[n++] = "beam.vtu";
   }
@@ -149,7 +149,7 @@ static cupid_status write_vtu(cupid_problem_state *prob) {
     CUPID_CALL(write_pd_vtu(prob));
     files[n++] = "pd.vtu";
   }
-  CUPID_CALL(join_path(prob->outdir, "model.pvd", path, sizeof path));
+  CUPID_CALL(join_path(prob->writedir, "model.pvd", path, sizeof path));
   return cupid_pvd_write(path, n, files, times, parts);
 }
 
@@ -255,7 +255,7 @@ static cupid_status json_points(cupid_json js, const cupid_problem_state *prob) 
 static cupid_status write_summary(cupid_problem_state *prob) {
   const cupid_model_t *m = prob->model;
   char path[4096];
-  CUPID_CALL(join_path(prob->outdir, "summary.json", path, sizeof path));
+  CUPID_CALL(join_path(prob->writedir, "summary.json", path, sizeof path));
   cupid_atomic_file file = NULL;
   cupid_json js = NULL;
   cupid_status st = CUPID_SUCCESS;
@@ -307,7 +307,6 @@ cupid_status cupid_problem_pd_stress(cupid_problem_state *prob) {
 cupid_status cupid_problem_report(cupid_problem_state *prob) {
   const cupid_output *o = &prob->model->output;
   double t0 = cupid_wtime();
-  CUPID_CALL(cupid_mkdir_p(prob->outdir));
   if (cupid_problem_needs_stress(prob)) CUPID_CALL(cupid_problem_pd_stress(prob));
   for (int k = 0; k < o->n_lines; k++) CUPID_CALL(write_line(prob, &o->lines[k]));
   if (o->pd_nodes && prob->grid) CUPID_CALL(write_pd_nodes(prob));
