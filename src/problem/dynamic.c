@@ -337,6 +337,8 @@ cupid_status cupid_problem_run_dynamic(cupid_problem_state *prob, const cupid_me
   cupid_problem_phase_end(prob, CUPID_PHASE_ASSEMBLY, t0);
   CUPID_TRY(cupid_calloc((size_t)prob->ndof, sizeof *v, "velocities", &v));
   CUPID_TRY(initial_state(prob, v));
+  CUPID_TRY(cupid_problem_check_finite(prob, prob->u, &d->mark, "the initial displacement"));
+  CUPID_TRY(cupid_problem_check_finite(prob, v, &d->mark, "the initial velocity"));
 
   cupid_dynamics_options opt = cupid_dynamics_defaults();
   opt.integrator = d->integrator;

@@ -395,6 +395,7 @@ static cupid_status loads(cupid_problem_state *prob) {
         goto cleanup;
       }
       CUPID_TRY(add_shared_load(prob, l, &o));
+      CUPID_TRY(cupid_problem_check_finite(prob, prob->f_ext, &l->mark, "the load"));
       continue;
     }
     int on_fe = 0;
@@ -404,6 +405,7 @@ static cupid_status loads(cupid_problem_state *prob) {
     case CUPID_LOAD_BODY: on_fe = cupid_problem_fe_node_in_box(prob, &l->box); break;
     }
     if (on_fe) CUPID_TRY(cupid_cuf_load_add(prob->beam, m, l, prob->f_ext));
+    if (on_fe) CUPID_TRY(cupid_problem_check_finite(prob, prob->f_ext, &l->mark, "the load"));
     if (!on_fe || (l->kind == CUPID_LOAD_BODY && cupid_problem_pd_node_in_box(prob, &l->box))) pd[npd++] = *l;
   }
   CUPID_TRY(cupid_problem_pd_loads(prob, pd, npd, prob->f_ext));

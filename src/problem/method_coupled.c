@@ -69,6 +69,8 @@ cupid_status cupid_method_split_constraints(cupid_problem_state *prob, const cup
       goto cleanup;
     }
     if (on_fe) CUPID_TRY(cupid_cuf_constraint_apply(prob->beam, m, c, prob->bc));
+    if (on_fe)
+      CUPID_TRY(cupid_problem_check_finite(prob, prob->bc->value, &c->mark, "the prescribed displacement"));
     if (on_pd) pd[npd++] = *c;
   }
   CUPID_TRY(cupid_problem_pd_constraints(prob, pd, npd)); /* also x, z of a 1D grid */
@@ -99,6 +101,7 @@ cupid_status cupid_method_split_loads(cupid_problem_state *prob) {
       break;
     }
     if (on_fe) CUPID_TRY(cupid_cuf_load_add(prob->beam, m, l, prob->f_ext));
+    if (on_fe) CUPID_TRY(cupid_problem_check_finite(prob, prob->f_ext, &l->mark, "the load"));
     if (on_pd) pd[npd++] = *l;
   }
   CUPID_TRY(cupid_problem_pd_loads(prob, pd, npd, prob->f_ext));

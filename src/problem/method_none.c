@@ -12,14 +12,21 @@ static cupid_status check(const cupid_problem_state *prob) {
 static cupid_status constraints(cupid_problem_state *prob) {
   const cupid_model_t *m = prob->model;
   if (prob->grid) CUPID_CALL(cupid_problem_pd_constraints(prob, m->constraints, m->n_constraints));
-  if (prob->beam) CUPID_CALL(cupid_cuf_apply_constraints(prob->beam, m, prob->bc));
+  for (int k = 0; k < m->n_constraints && prob->beam; k++) { /* one by one: errors name it */
+    CUPID_CALL(cupid_cuf_constraint_apply(prob->beam, m, &m->constraints[k], prob->bc));
+    CUPID_CALL(cupid_problem_check_finite(prob, prob->bc->value, &m->constraints[k].mark,
+                                          "the prescribed displacement"));
+  }
   return CUPID_SUCCESS;
 }
 
 static cupid_status loads(cupid_problem_state *prob) {
   const cupid_model_t *m = prob->model;
   if (prob->grid) CUPID_CALL(cupid_problem_pd_loads(prob, m->loads, m->n_loads, prob->f_ext));
-  if (prob->beam) CUPID_CALL(cupid_cuf_load_vector(prob->beam, m, prob->f_ext));
+  for (int k = 0; k < m->n_loads && prob->beam; k++) {
+    CUPID_CALL(cupid_cuf_load_add(prob->beam, m, &m->loads[k], prob->f_ext));
+    CUPID_CALL(cupid_problem_check_finite(prob, prob->f_ext, &m->loads[k].mark, "the load"));
+  }
   return CUPID_SUCCESS;
 }
 

@@ -73,6 +73,7 @@ cupid_status cupid_problem_pd_constraints(cupid_problem_state *prob, const cupid
     const cupid_constraint *c = &cons[k];
     cupid_int count;
     CUPID_CALL(constraint_on_nodes(prob, c, &count));
+    CUPID_CALL(cupid_problem_check_finite(prob, prob->bc->value, &c->mark, "the prescribed displacement"));
     if (cupid_problem_global_count(prob, count) == 0) {
       if (c->kind == CUPID_CONSTRAINT_CLAMP)
         return cupid_model_error(m, &c->mark,
@@ -205,6 +206,7 @@ cupid_status cupid_problem_pd_loads(cupid_problem_state *prob, const cupid_load 
     case CUPID_LOAD_POINT: CUPID_CALL(point_load(prob, l, f)); break;
     case CUPID_LOAD_BODY: CUPID_CALL(body_load(prob, l, f)); break;
     }
+    CUPID_CALL(cupid_problem_check_finite(prob, f, &l->mark, "the load"));
   }
   return CUPID_SUCCESS;
 }

@@ -208,6 +208,29 @@ cupid_status cupid_problem_linear_solve(cupid_problem_state *prob, cupid_matrix_
   return CUPID_SUCCESS;
 }
 
+cupid_status cupid_problem_check_finite(const cupid_problem_state *prob, const double *v,
+                                        const cupid_mark *mark, const char *what) {
+  cupid_int d = 0;
+  while (d < prob->ndof && isfinite(v[d])) d++;
+  if (d == prob->ndof) return CUPID_SUCCESS;
+  char where[160];
+  const char comp = "xyz"[d % 3];
+  if (d < prob->fe_offset) {
+    const double *x = cupid_pd_grid_coords(prob->grid) + 3 * (d / 3);
+    snprintf(where, sizeof where, "PD node (%g, %g, %g), component %c", x[0], x[1], x[2], comp);
+  } else {
+    cupid_int node = (d - prob->fe_offset) / 3 / prob->fe_info.M;
+    snprintf(where, sizeof where, "beam node %lld (y = %g), component %c", (long long)node,
+             cupid_cuf_beam_node_y(prob->beam, node), comp);
+  }
+  if (!mark)
+    return CUPID_ERROR(CUPID_ERR_NUMERIC, "%s is not finite (%g) at %s", what, v[d], where);
+  return cupid_model_error(prob->model, mark,
+                           "%s is not finite (%g) at %s: an expression is undefined or overflows "
+                           "there",
+                           what, v[d], where);
+}
+
 /* ----------------------------------------------------------------------- the set-up */
 
 /* PD regions need isotropic materials (the LPS and bond-based models take E and nu). */
@@ -350,9 +373,11 @@ static cupid_status run_evaluate(cupid_problem_state *prob) {
                                               x[3 * i + 2], 0.0, 0.0);
   }
   if (!prob->beam) {
+    CUPID_CALL(cupid_problem_check_finite(prob, prob->u, &m->analysis.mark, "the field"));
     CUPID_CALL(cupid_pd_operator_apply(prob->op, prob->u, prob->f_int));
   } else {
     CUPID_CALL(cupid_problem_fe_impose_field(prob));
+    CUPID_CALL(cupid_problem_check_finite(prob, prob->u, &m->analysis.mark, "the field"));
     /* FE nodes where the beam gave way are not part of the model. */
     for (cupid_int n = 0; n < prob->fe_info.n_fe_nodes; n++)
       if (!cupid_cuf_node_used(prob->beam, (int)(n % prob->fe_info.M), n / prob->fe_info.M))
@@ -473,6 +498,10 @@ cupid_status cupid_problem_solve(cupid_problem_state *prob) {
   }
   prob->stage = CUPID_STAGE_SOLVED;
   if (prob->slab) return CUPID_SUCCESS; /* a slab rank other than 0: rank 0 holds the model */
+  /* a non-finite result is a failure, never a result (an unstable or overflowing analysis) */
+  CUPID_CALL(cupid_problem_check_finite(prob, prob->u, NULL,
+                                        "the displacement (the analysis diverged or overflowed)"));
+  CUPID_CALL(cupid_problem_check_finite(prob, prob->f_int, NULL, "the internal force"));
   return cupid_problem_force_sums(prob, prob->load_sum, prob->reaction_sum);
 }
 

@@ -132,6 +132,13 @@ cupid_status cupid_problem_linear_solve(cupid_problem_state *prob, cupid_matrix_
 void cupid_problem_pd_field(const cupid_problem_state *prob, const cupid_value v[3], double t,
                             double *u);
 
+/** The first non-finite entry of @p v (a vector of the system's layout, ndof entries) as a
+ *  model error at @p mark: "<what> is not finite (nan) at PD node (x, y, z)" or "... at beam
+ *  node N (y = ...)" (an expression undefined where it was evaluated). CUPID_SUCCESS if all are
+ *  finite. With mark NULL: a numerical failure (exit 2) instead. */
+cupid_status cupid_problem_check_finite(const cupid_problem_state *prob, const double *v,
+                                        const cupid_mark *mark, const char *what);
+
 /** The PD materials and operator options of the model (prob->pd_materials,
  *  prob->pd_options); a PD region with an orthotropic material is a model error. */
 cupid_status cupid_problem_pd_options(cupid_problem_state *prob);

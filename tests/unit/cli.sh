@@ -57,9 +57,17 @@ expect 1 'off_lattice.yaml:[0-9]+:[0-9]+: peridynamics.regions\[1\]' -- "$CUPID"
 expect 1 'constraint_empty.yaml:[0-9]+:[0-9]+: constraints\[0\].*no PD node' -- "$CUPID" check "$M/constraint_empty.yaml"
 expect 1 'traction_no_face.yaml:[0-9]+:[0-9]+: loads\[0\].*no free PD surface' -- "$CUPID" check "$M/traction_no_face.yaml"
 expect 1 'point_load_outside.yaml:[0-9]+:[0-9]+: loads\[0\].*outside every PD region' -- "$CUPID" check "$M/point_load_outside.yaml"
+# Non-finite values are failures, never results (issue 19): from the model, a model error at
+# the expression's key and the point; from the numerics, exit 2.
+expect 1 'load_nan.yaml:13:5: loads\[0\]: the load is not finite \(-?nan\) at PD node \(0.5, 5.5, 0.5\)' -- "$CUPID" run "$M/load_nan.yaml" -o o9
+expect 1 'load_inf.yaml:13:5: loads\[0\]: the load is not finite \(inf\)' -- "$CUPID" run "$M/load_inf.yaml" -o o9
+expect 1 'displacement_nan.yaml:11:5: constraints\[0\]: the prescribed displacement is not finite' -- "$CUPID" run "$M/displacement_nan.yaml" -o o9
+expect 1 'initial_nan.yaml:[0-9]+:[0-9]+: analysis.dynamic: the initial velocity is not finite' -- "$CUPID" run "$M/initial_nan.yaml" -o o9
+expect 2 'not finite' -- "$CUPID" run "$M/newmark_unstable.yaml" -o o9
+expect 2 'numerical error' -- "$CUPID" run "$M/rayleigh_huge.yaml" -o o9
 expect 0 'cupid run MODEL.yaml' -- "$CUPID" run --help
 expect 1 'option -o needs a directory' -- "$CUPID" run "$M/good_small.yaml" -o ""
-for d in out_petsc o1 o2 o3 o4 o5 o6 o7 o8; do
+for d in out_petsc o1 o2 o3 o4 o5 o6 o7 o8 o9; do
   if [ -e "$d" ]; then echo "FAIL: failed run left $d behind"; fail=$((fail+1)); else pass=$((pass+1)); fi
 done
 
