@@ -232,6 +232,8 @@ typedef struct {
 /** A whole model. Sections absent from the file have has_* == 0. */
 typedef struct cupid_model {
   char *file;  /**< path as given */
+  char **sets; /**< the --set overrides applied (key.path=value), for messages */
+  int n_sets;
   char *title; /**< "" if absent */
   cupid_material *materials;
   int n_materials;
@@ -257,6 +259,16 @@ cupid_status cupid_model_read(const char *path, cupid_model *model);
 /** Same, from a string in memory; @p name stands for the file name in messages. */
 cupid_status cupid_model_read_string(const char *text, size_t length, const char *name,
                                      cupid_model *model);
+
+/** Read with overrides: each of @p sets is "key.path=value" (keys separated by dots, list
+ *  items as key[i]; the value is YAML: a number, string, [flow, list] or {flow: map}),
+ *  applied to the document before it is read, so it is validated as a value of the file;
+ *  messages about an override name it ("FILE: --set K=V: key: what is wrong"). */
+cupid_status cupid_model_read_with(const char *path, const char *const *sets, int n_sets,
+                                   cupid_model *model);
+cupid_status cupid_model_read_string_with(const char *text, size_t length, const char *name,
+                                          const char *const *sets, int n_sets,
+                                          cupid_model *model);
 
 /** Destroy and set *model to NULL (NULL-safe). */
 void cupid_model_destroy(cupid_model *model);

@@ -49,6 +49,9 @@ typedef struct {
                                  matrix instead of the matrix-free operator */
   int allow_large;          /**< --allow-large: run a dynamic analysis estimated beyond a day,
                                  50 GB or 10^5 output files */
+  const char *const *sets;  /**< --set key.path=value overrides of the model file (create_from_
+                                 file, create_from_string; model.h cupid_model_read_with) */
+  int n_sets;
 } cupid_run_options;
 
 /** The defaults: keep the model's solver, every other option off. */

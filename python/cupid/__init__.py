@@ -40,7 +40,8 @@ class _RunOptions(ctypes.Structure):  # cupid_run_options (problem.h)
                 ("threads", ctypes.c_int), ("max_memory_gb", ctypes.c_double),
                 ("quiet", ctypes.c_int), ("check_only", ctypes.c_int),
                 ("replicate", ctypes.c_int), ("assembled", ctypes.c_int),
-                ("allow_large", ctypes.c_int)]
+                ("allow_large", ctypes.c_int), ("sets", ctypes.POINTER(ctypes.c_char_p)),
+                ("n_sets", ctypes.c_int)]
 
 
 class _Info(ctypes.Structure):  # cupid_problem_info (problem.h)

@@ -22,7 +22,7 @@
 static const char usage_text[] =
     "usage: cupid run MODEL.yaml [-o DIR] [--solver auto|direct|krylov|petsc] [--threads N]\n"
     "                            [--max-memory GB] [--quiet] [--replicate] [--assembled]\n"
-    "                            [--allow-large]\n"
+    "                            [--allow-large] [--set key.path=value]...\n"
     "                            [-petsc_option [value]]...\n"
     "       mpirun -n N cupid run MODEL.yaml --solver petsc [...]\n"
     "       cupid check MODEL.yaml\n"
@@ -49,6 +49,9 @@ static const char help_text[] =
     "                     splitting the PD grid into z slabs (for comparisons)\n"
     "  --assembled        PETSc solves of coupled models on the assembled matrix\n"
     "                     instead of the matrix-free operator\n"
+    "  --set K=V          override a value of the model file (repeatable), validated\n"
+    "                     as the file's: --set analysis.solver=direct,\n"
+    "                     --set loads[0].traction.value=[0,50,0]\n"
     "  --allow-large      run a dynamic analysis estimated to take more than a day\n"
     "                     or write more than 50 GB or 10^5 files (refused otherwise)\n"
     "  -ksp_*, -pc_*, -log_view, ... (one dash) go to PETSc (--solver petsc; builds\n"
@@ -142,6 +145,13 @@ static int parse_options(int argc, char **argv, int first, cupid_run_options *op
       opts->assembled = 1;
     } else if (!strcmp(a, "--allow-large")) {
       opts->allow_large = 1;
+    } else if (!strcmp(a, "--set")) {
+      static const char *sets[256];
+      if (!has_value) return usage_error("option %s needs key.path=value", a);
+      if (opts->n_sets == (int)(sizeof sets / sizeof *sets))
+        return usage_error("%s", "too many --set options (at most 256)");
+      sets[opts->n_sets++] = argv[++i];
+      opts->sets = sets;
     } else if (!strcmp(a, "-h") || !strcmp(a, "--help")) {
       fputs(usage_text, stdout);
       fputs("\n", stdout);

@@ -10,6 +10,11 @@
 #include "io/model_internal.h"
 
 cupid_status cupid_model_read(const char *path, cupid_model *model) {
+  return cupid_model_read_with(path, NULL, 0, model);
+}
+
+cupid_status cupid_model_read_with(const char *path, const char *const *sets, int n_sets,
+                                   cupid_model *model) {
   CUPID_CHECK(model != NULL, CUPID_ERR_ARGUMENT, "cupid_model_read: model is NULL");
   *model = NULL;
   CUPID_CHECK(path != NULL, CUPID_ERR_ARGUMENT, "cupid_model_read: path is NULL");
@@ -38,7 +43,7 @@ cupid_status cupid_model_read(const char *path, cupid_model *model) {
                      path, MODEL_MAX_FILE_BYTES >> 20);
     goto cleanup;
   }
-  CUPID_TRY(cupid_model_read_string(text ? text : "", length, path, model));
+  CUPID_TRY(cupid_model_read_string_with(text ? text : "", length, path, sets, n_sets, model));
 cleanup:
   fclose(f);
   cupid_free(&text);
@@ -47,7 +52,15 @@ cleanup:
 
 cupid_status cupid_model_read_string(const char *text, size_t length, const char *name,
                                      cupid_model *model) {
+  return cupid_model_read_string_with(text, length, name, NULL, 0, model);
+}
+
+cupid_status cupid_model_read_string_with(const char *text, size_t length, const char *name,
+                                          const char *const *sets, int n_sets,
+                                          cupid_model *model) {
   CUPID_CHECK(model != NULL, CUPID_ERR_ARGUMENT, "cupid_model_read_string: model is NULL");
+  CUPID_CHECK(n_sets >= 0 && (n_sets == 0 || sets), CUPID_ERR_ARGUMENT,
+              "cupid_model_read_string: %d overrides but none given", n_sets);
   *model = NULL;
   CUPID_CHECK(text != NULL || length == 0, CUPID_ERR_ARGUMENT,
               "cupid_model_read_string: text is NULL");
@@ -61,7 +74,12 @@ cupid_status cupid_model_read_string(const char *text, size_t length, const char
   cupid_model_t *m = NULL;
   CUPID_TRY(cupid_calloc(1, sizeof *m, "the model", &m));
   CUPID_TRY(cupid_strdup(name, &m->file));
-  model_reader rd = {&doc, m->file, m};
+  /* the overrides, kept for the messages about their values (cupid_model_error) */
+  CUPID_TRY(cupid_calloc((size_t)n_sets + 1, sizeof *m->sets, "overrides", &m->sets));
+  for (int k = 0; k < n_sets; k++) CUPID_TRY(cupid_strdup(sets[k], &m->sets[k]));
+  m->n_sets = n_sets;
+  CUPID_TRY(mr_apply_overrides(&doc, m->file, sets, n_sets));
+  model_reader rd = {&doc, m->file, m, sets, n_sets};
   CUPID_TRY(mr_read_model(&rd, yaml_document_get_root_node(&doc)));
   *model = m;
   m = NULL;
@@ -111,6 +129,8 @@ void cupid_model_destroy(cupid_model *model) {
   cupid_free(&m->output.directory);
   cupid_free(&m->title);
   cupid_free(&m->file);
+  for (int k = 0; k < m->n_sets; k++) cupid_free(&m->sets[k]);
+  cupid_free(&m->sets);
   cupid_free(model);
 }
 
@@ -122,6 +142,10 @@ cupid_status cupid_model_error(const cupid_model_t *model, const cupid_mark *mar
   vsnprintf(message, sizeof message, fmt, ap);
   va_end(ap);
   const char *file = model && model->file ? model->file : "<model>";
+  if (mark && model && mark->line > MR_SET_LINE && mark->line - 1 - MR_SET_LINE < model->n_sets)
+    return CUPID_ERROR(CUPID_ERR_MODEL, "%s: --set %s: %s%s%s", file,
+                       model->sets[mark->line - 1 - MR_SET_LINE], mark->key,
+                       mark->key[0] ? ": " : "", message);
   if (!mark || mark->line <= 0) {
     if (mark && mark->key[0])
       return CUPID_ERROR(CUPID_ERR_MODEL, "%s: %s: %s", file, mark->key, message);

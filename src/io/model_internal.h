@@ -27,7 +27,16 @@ typedef struct {
   yaml_document_t *doc;
   const char *name; /* the file name used in messages */
   cupid_model_t *model;
+  const char *const *sets; /* the --set overrides, for messages about their nodes */
+  int n_sets;
 } model_reader;
+
+/* Nodes made by an override k (--set) carry the line MR_SET_LINE + k (model_override.c). */
+#define MR_SET_LINE 1000000000
+#define MR_MAX_SETS 256
+/* Apply the overrides "key.path=value" to the loaded document (model_override.c). */
+cupid_status mr_apply_overrides(yaml_document_t *doc, const char *name, const char *const *sets,
+                                int n_sets);
 
 /* A schema mapping: the value of each allowed key (NULL when absent). */
 typedef struct {

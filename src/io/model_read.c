@@ -15,10 +15,15 @@
 /* Errors, marks and messages                                                                 */
 /* ------------------------------------------------------------------------------------------ */
 
-static cupid_status error_va(const char *name, int line0, int column0, const char *path,
+static cupid_status error_va(const model_reader *rd, int line0, int column0, const char *path,
                              const char *fmt, va_list ap) {
   char message[1536];
+  const char *name = rd->name;
   vsnprintf(message, sizeof message, fmt, ap);
+  if (line0 >= MR_SET_LINE && line0 - MR_SET_LINE < rd->n_sets) /* a --set value's node */
+    return CUPID_ERROR(CUPID_ERR_MODEL, "%s: --set %s: %s%s%s", name,
+                       rd->sets[line0 - MR_SET_LINE], path && path[0] ? path : "",
+                       path && path[0] ? ": " : "", message);
   if (path && path[0])
     return CUPID_ERROR(CUPID_ERR_MODEL, "%s:%d:%d: %s: %s", name, line0 + 1, column0 + 1, path,
                        message);
@@ -31,7 +36,7 @@ cupid_status mr_error(const model_reader *rd, const yaml_node_t *node, const cha
   va_start(ap, fmt);
   int line = node ? (int)node->start_mark.line : 0;
   int column = node ? (int)node->start_mark.column : 0;
-  cupid_status st = error_va(rd->name, line, column, path, fmt, ap);
+  cupid_status st = error_va(rd, line, column, path, fmt, ap);
   va_end(ap);
   return st;
 }
@@ -40,7 +45,7 @@ cupid_status mr_error_at(const model_reader *rd, int line0, int column0, const c
                          const char *fmt, ...) {
   va_list ap;
   va_start(ap, fmt);
-  cupid_status st = error_va(rd->name, line0, column0, path, fmt, ap);
+  cupid_status st = error_va(rd, line0, column0, path, fmt, ap);
   va_end(ap);
   return st;
 }
@@ -785,7 +790,7 @@ cupid_status mr_load(const char *text, size_t length, const char *name, yaml_doc
                      name, (int)second_mark.line + 1, (int)second_mark.column + 1);
     goto cleanup;
   }
-  model_reader rd = {doc, name, NULL};
+  model_reader rd = {doc, name, NULL, NULL, 0};
   long visits = 0;
   CUPID_TRY(bounded_walk(&rd, root, 0, &visits));
 cleanup:

@@ -565,7 +565,7 @@ cupid_status cupid_problem_create_from_file(const char *path, const cupid_run_op
   CUPID_CHECK(p, CUPID_ERR_ARGUMENT, "cupid_problem_create_from_file: NULL result pointer");
   *p = NULL;
   cupid_model model = NULL;
-  CUPID_CALL(cupid_model_read(path, &model));
+  CUPID_CALL(cupid_model_read_with(path, opts ? opts->sets : NULL, opts ? opts->n_sets : 0, &model));
   return adopt_model(model, opts, p);
 }
 
@@ -575,7 +575,9 @@ cupid_status cupid_problem_create_from_string(const char *yaml, const char *name
   *p = NULL;
   CUPID_CHECK(yaml, CUPID_ERR_ARGUMENT, "cupid_problem_create_from_string: NULL text");
   cupid_model model = NULL;
-  CUPID_CALL(cupid_model_read_string(yaml, strlen(yaml), name ? name : "<string>", &model));
+  CUPID_CALL(cupid_model_read_string_with(yaml, strlen(yaml), name ? name : "<string>",
+                                          opts ? opts->sets : NULL, opts ? opts->n_sets : 0,
+                                          &model));
   return adopt_model(model, opts, p);
 }
 

@@ -65,6 +65,18 @@ expect 1 'displacement_nan.yaml:11:5: constraints\[0\]: the prescribed displacem
 expect 1 'initial_nan.yaml:[0-9]+:[0-9]+: analysis.dynamic: the initial velocity is not finite' -- "$CUPID" run "$M/initial_nan.yaml" -o o9
 expect 2 'not finite' -- "$CUPID" run "$M/newmark_unstable.yaml" -o o9
 expect 2 'numerical error' -- "$CUPID" run "$M/rayleigh_huge.yaml" -o o9
+# --set key.path=value overrides a value of the model file, validated as the file's (issue 19).
+"$CUPID" run "$M/good_small.yaml" -o s1 --quiet && "$CUPID" run "$M/good_small.yaml" -o s2 --quiet \
+  --set 'loads[0].traction.value=[0, 2, 0]' --set analysis.solver=direct
+if /usr/bin/python3 -c "
+import json, sys
+a, b = (json.load(open(d + '/summary.json')) for d in sys.argv[1:3])
+sys.exit(not (abs(b['points'][0]['uy'] - 2 * a['points'][0]['uy']) <= 1e-9 * abs(a['points'][0]['uy'])
+              and b['solver']['method'] == 'cholmod'))" s1 s2; then pass=$((pass+1)); else echo "FAIL: --set did not double the load"; fail=$((fail+1)); fi
+expect 1 'good_small.yaml: --set peridynamics.spacing=-1: peridynamics.spacing: must be > 0, got -1' -- "$CUPID" run "$M/good_small.yaml" -o o9 --set peridynamics.spacing=-1
+expect 1 "--set analysis.solvr=direct: analysis.solvr: unknown key; did you mean 'solver'" -- "$CUPID" run "$M/good_small.yaml" -o o9 --set analysis.solvr=direct
+expect 1 '--set loads\[3\].traction.value=1: loads\[3\] does not exist \(1 items\)' -- "$CUPID" run "$M/good_small.yaml" -o o9 --set 'loads[3].traction.value=1'
+expect 1 '--set nokey: expected key.path=value' -- "$CUPID" run "$M/good_small.yaml" -o o9 --set nokey
 expect 0 'cupid run MODEL.yaml' -- "$CUPID" run --help
 expect 1 'option -o needs a directory' -- "$CUPID" run "$M/good_small.yaml" -o ""
 for d in out_petsc o1 o2 o3 o4 o5 o6 o7 o8 o9; do
