@@ -146,7 +146,7 @@ static cupid_status apply_one(yaml_document_t *doc, const char *name, const char
                       ? (int)(list->data.sequence.items.top - list->data.sequence.items.start)
                       : -1;
       if (seg.index[q] >= count) {
-        char what[160];
+        char what[320];
         snprintf(what, sizeof what, "%s[%d] does not exist (%d items)", seg.key, seg.index[q],
                  count < 0 ? 0 : count);
         return set_error(name, set, "%s", what);

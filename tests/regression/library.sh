@@ -14,7 +14,13 @@ cmake --install "$BUILD" --prefix "$tmp/inst" >/dev/null
 pc=$(dirname "$(find "$tmp/inst" -name cupid.pc | head -n1)")
 test -n "$pc" || { echo "FAIL: no cupid.pc installed"; exit 1; }
 flags=$(PKG_CONFIG_PATH=$pc pkg-config --cflags --libs cupid)
-cc -std=c17 -Wall -Wextra -Werror "$SRC/examples/c/run_model.c" $flags -lm -o "$tmp/run_model"
+# A sanitized library (the CI's ASan stage) needs its runtime first: the program is built
+# with the same sanitizers.
+san=""
+if ldd "$(find "$tmp/inst" -name 'libcupid.so' | head -n1)" | grep -q libasan; then
+  san="-fsanitize=address,undefined"
+fi
+cc -std=c17 -Wall -Wextra -Werror $san "$SRC/examples/c/run_model.c" $flags -lm -o "$tmp/run_model"
 echo "built examples/c/run_model.c with: pkg-config --cflags --libs cupid -> $flags"
 
 model=$SRC/tests/models/mpi/coupled_bar.yaml
