@@ -6,6 +6,7 @@
  */
 #define _GNU_SOURCE /* posix_spawn_file_actions_addchdir_np, pipe2 */
 #include <errno.h>
+#include <math.h>
 #include <fcntl.h>
 #include <spawn.h>
 #include <stdlib.h>
@@ -120,6 +121,52 @@ static cupid_status plot_curve_columns(const char *dir, const cupid_plot_curve *
   return CUPID_SUCCESS;
 }
 
+/* The largest |value| of column @p col of @p dir/@p csv after @p skip header lines (NaN and
+ * unreadable fields count as 0). */
+static cupid_status column_max_abs(const char *dir, const char *csv, int col, int skip, double *max) {
+  char *path = NULL, *line = NULL;
+  size_t cap = 0;
+  FILE *in = NULL;
+  cupid_status st = CUPID_SUCCESS;
+  size_t size = strlen(dir) + strlen(csv) + 2;
+  *max = 0.0;
+  CUPID_TRY(cupid_malloc(size, 1, "file name", &path));
+  snprintf(path, size, "%s/%s", dir, csv);
+  in = fopen(path, "r");
+  CUPID_TRY_CHECK(in, CUPID_ERR_IO, "cannot read '%s': %s", path, strerror(errno));
+  for (int row = 0; getline(&line, &cap, in) >= 0; row++) {
+    if (row < skip) continue;
+    char *cursor = line, *field = NULL;
+    for (int i = 1; i <= col && (field = csv_next_field(&cursor)); i++) continue;
+    double v = field ? strtod(field, NULL) : 0.0;
+    if (v == v && fabs(v) > *max) *max = fabs(v);
+  }
+cleanup:
+  if (in) fclose(in);
+  free(line);
+  cupid_free(&path);
+  return st;
+}
+
+/* Curves that are zero everywhere (to 1e-12 of the largest curve: round-off of a symmetric
+ * model) say nothing and crowd the key: they are left out (all kept if every one is). */
+static cupid_status plot_keep(const char *dir, int n_curves, const cupid_plot_curve *curves,
+                              const cupid_plot_options *o, unsigned char *keep) {
+  double top = 0.0, m[64];
+  for (int i = 0; i < n_curves; i++) {
+    int x, y;
+    CUPID_CALL(plot_curve_columns(dir, &curves[i], &x, &y));
+    m[i < 64 ? i : 63] = 0.0;
+    if (i < 64) CUPID_CALL(column_max_abs(dir, curves[i].csv, y, o->header_lines, &m[i]));
+    if (i < 64 && m[i] > top) top = m[i];
+  }
+  int kept = 0;
+  for (int i = 0; i < n_curves; i++) kept += keep[i] = i >= 64 || m[i] > 1e-12 * top;
+  if (!kept)
+    for (int i = 0; i < n_curves; i++) keep[i] = 1;
+  return CUPID_SUCCESS;
+}
+
 static cupid_status plot_script(const char *dir, const char *script, const char *stem,
                                 const char *title, const char *xlabel, const char *ylabel,
                                 int n_curves, const cupid_plot_curve *curves,
@@ -128,8 +175,11 @@ static cupid_status plot_script(const char *dir, const char *script, const char 
   cupid_atomic_file file = NULL;
   CUPID_TRY(cupid_atomic_open(script, &file));
   FILE *out = cupid_atomic_stream(file);
-  fprintf(out, "# Written by cupid %s. Remake the plot in this directory with: gnuplot %s.gp\n",
+  fprintf(out, "# Written by cupid %s. Remake the plot with: gnuplot %s.gp (from any folder)\n",
           cupid_version(), stem);
+  /* run from another folder (gnuplot path/to/x.gp): read and write beside the script */
+  fputs("if (exists(\"ARG0\") && strstrt(ARG0, \"/\") > 0) "
+        "{ cd system(sprintf(\"dirname '%s'\", ARG0)) }\n", out);
   fprintf(out, "set terminal pngcairo size %d,%d enhanced font 'sans,11'\nset output ", o->width,
           o->height);
   gp_quote_suffix(out, stem, ".png");
@@ -156,11 +206,19 @@ static cupid_status plot_script(const char *dir, const char *script, const char 
               curves[i].xname ? curves[i].xname : "-", y,
               curves[i].yname ? curves[i].yname : "-");
   }
-  for (int i = 0; i < n_curves; i++) {
+  unsigned char keep[256];
+  CUPID_TRY_CHECK(n_curves <= 256, CUPID_ERR_ARGUMENT, "plot '%s': more than 256 curves", stem);
+  CUPID_TRY(plot_keep(dir, n_curves, curves, o, keep));
+  for (int i = 0; i < n_curves; i++)
+    if (!keep[i])
+      fprintf(out, "# left out, zero everywhere: %s\n", curves[i].title ? curves[i].title : curves[i].csv);
+  for (int i = 0, first = 1; i < n_curves; i++) {
     const cupid_plot_curve *c = &curves[i];
     int x, y;
+    if (!keep[i]) continue;
     CUPID_TRY(plot_curve_columns(dir, c, &x, &y));
-    fputs(i == 0 ? "plot " : ", \\\n     ", out);
+    fputs(first ? "plot " : ", \\\n     ", out);
+    first = 0;
     gp_quote(out, c->csv);
     if (o->header_lines > 0) fprintf(out, " skip %d", o->header_lines);
     fprintf(out, " using %d:%d with ", x, y);

@@ -286,9 +286,12 @@ static cupid_status plots(const cupid_problem_state *prob) {
   int made = 0;
   cupid_plot_curve ec[5];
   static const char *enames[5] = {"kinetic", "strain", "damping_dissipated", "external_work", "total"};
+  /* the total (the balance check) drawn thick and dashed, so it stays visible on top of the
+   * kinetic and strain curves it sums */
   for (int k = 0; k < 5; k++)
     ec[k] = (cupid_plot_curve){.csv = "energies.csv", .xname = "t", .yname = enames[k],
-                               .title = enames[k]};
+                               .title = enames[k],
+                               .style = k == 4 ? "lines lw 3 dt 2 lc rgb 'black'" : "lines lw 1.5"};
   snprintf(t, sizeof t, "%s: energies", title);
   CUPID_CALL(cupid_plot(prob->writedir, "energies", t, "t", "energy", 5, ec, &made));
   for (int k = 0; k < out->n_points; k++) {
@@ -301,7 +304,16 @@ static cupid_status plots(const cupid_problem_state *prob) {
     }
     snprintf(stem, sizeof stem, "history_%s", out->points[k].name);
     snprintf(t, sizeof t, "%s: displacement history at '%s'", title, out->points[k].name);
-    CUPID_CALL(cupid_plot(prob->writedir, stem, t, "t", "displacement", 3, hc, &made));
+    /* the y label names the components that move (the plot leaves out the others) */
+    double umax[3] = {0, 0, 0};
+    for (cupid_int r = 0; r < prob->history_rows; r++)
+      for (int c = 0; c < 3; c++) {
+        const double v = prob->history[(size_t)r * (size_t)prob->history_cols + 1 + 3 * k + c];
+        if (v == v && fabs(v) > umax[c]) umax[c] = fabs(v);
+      }
+    char ylabel[64];
+    cupid_plot_component_label(umax, ylabel, sizeof ylabel);
+    CUPID_CALL(cupid_plot(prob->writedir, stem, t, "t", ylabel, 3, hc, &made));
   }
   return CUPID_SUCCESS;
 }

@@ -185,6 +185,9 @@ int cupid_problem_needs_stress(const cupid_problem_state *prob);
 /** prob->pd_stress from prob->u (once). */
 cupid_status cupid_problem_pd_stress(cupid_problem_state *prob);
 cupid_status cupid_problem_report(cupid_problem_state *prob);
+/** "u_x, u_y" for the components whose largest |value| is not zero to 1e-12 of the largest
+ *  (the ones cupid_plot keeps): a plot's y label. */
+void cupid_plot_component_label(const double umax[3], char *label, size_t len);
 /** Every output point must lie inside the model (checked before solving). */
 cupid_status cupid_problem_check_points(const cupid_problem_state *prob);
 

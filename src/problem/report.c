@@ -20,6 +20,14 @@ static cupid_status join_path(const char *dir, const char *name, char *out, size
   return CUPID_SUCCESS;
 }
 
+void cupid_plot_component_label(const double umax[3], char *label, size_t len) {
+  double top = fmax(umax[0], fmax(umax[1], umax[2]));
+  label[0] = '\0';
+  for (int c = 0, n = 0; c < 3; c++)
+    if (umax[c] > 1e-12 * top || top == 0.0)
+      n += snprintf(label + n, len - (size_t)n, "%su_%c", n ? ", " : "", "xyz"[c]);
+}
+
 /* Write `line_<name>.csv`: s,x,y,z,ux,uy,uz,region, and its plot. */
 static cupid_status write_line(cupid_problem_state *prob, const cupid_output_line *line) {
   char name[512], path[4096];
@@ -32,6 +40,7 @@ static cupid_status write_line(cupid_problem_state *prob, const cupid_output_lin
   for (int a = 0; a < 3; a++) len += (line->to[a] - line->from[a]) * (line->to[a] - line->from[a]);
   len = sqrt(len);
   fprintf(out, "s,x,y,z,ux,uy,uz,region\n");
+  double umax[3] = {0, 0, 0};
   for (int k = 0; k < line->points; k++) {
     double t = line->points > 1 ? (double)k / (line->points - 1) : 0.0, p[3], u[3];
     for (int a = 0; a < 3; a++) p[a] = line->from[a] + t * (line->to[a] - line->from[a]);
@@ -43,6 +52,8 @@ static cupid_status write_line(cupid_problem_state *prob, const cupid_output_lin
     }
     fprintf(out, "%.10g,%.10g,%.10g,%.10g,%.10e,%.10e,%.10e,%s\n", t * len, p[0], p[1], p[2], u[0],
             u[1], u[2], region_name(region));
+    for (int c = 0; c < 3; c++)
+      if (u[c] == u[c] && fabs(u[c]) > umax[c]) umax[c] = fabs(u[c]);
   }
   CUPID_CALL(cupid_atomic_commit(&file));
   if (!prob->model->output.plots) return CUPID_SUCCESS;
@@ -55,9 +66,18 @@ static cupid_status write_line(cupid_problem_state *prob, const cupid_output_lin
     curves[c] = (cupid_plot_curve){.csv = name, .xcol = 1, .ycol = 5 + c,
                                    .title = c == 0 ? "u_x" : c == 1 ? "u_y" : "u_z",
                                    .style = "linespoints pt 7 ps 0.4"};
+  /* The axes say what is plotted, in the model's own quantities (the contract leaves units to
+   * the user): the coordinate a line runs along, and the components that are not zero (the
+   * plot leaves those out, cupid_plot). */
+  char xlabel[64], ylabel[64];
+  int axis = -1, moving = 0;
+  for (int a = 0; a < 3; a++)
+    if (line->to[a] != line->from[a]) axis = a, moving++;
+  if (moving == 1) snprintf(xlabel, sizeof xlabel, "%c", "xyz"[axis]);
+  else snprintf(xlabel, sizeof xlabel, "s (distance along the line)");
+  cupid_plot_component_label(umax, ylabel, sizeof ylabel);
   int made = 0;
-  return cupid_plot(prob->writedir, stem, title, "s (distance along the line)", "displacement", 3,
-                    curves, &made);
+  return cupid_plot(prob->writedir, stem, title, xlabel, ylabel, 3, curves, &made);
 }
 
 /* `pd_nodes.csv`: x,y,z,ux,uy,uz,fx,fy,fz per real PD node; f = K u, the internal force,
@@ -271,11 +291,15 @@ static cupid_status write_summary(cupid_problem_state *prob) {
   json_counts(js, prob);
   json_phases(js, prob);
   json_solver(js, prob);
-  double imbalance[3];
-  for (int c = 0; c < 3; c++) imbalance[c] = prob->load_sum[c] + prob->reaction_sum[c];
   json_vec3(js, "applied_load_sum", prob->load_sum);
   json_vec3(js, "reaction_sum", prob->reaction_sum);
-  json_vec3(js, "equilibrium_imbalance", imbalance);
+  if (m->analysis.type != CUPID_ANALYSIS_DYNAMIC) { /* a static balance; dynamics: the energy's */
+    double imbalance[3];
+    for (int c = 0; c < 3; c++) imbalance[c] = prob->load_sum[c] + prob->reaction_sum[c];
+    json_vec3(js, "equilibrium_imbalance", imbalance);
+  } else {
+    cupid_json_number(js, "energy_balance", prob->dyn.info.max_balance);
+  }
   if (prob->dyn.done) cupid_problem_dynamic_json(js, prob);
   cupid_json_number(js, "total_time_s", cupid_wtime() - prob->t_start);
   cupid_json_integer(js, "peak_memory_bytes", cupid_peak_memory());
