@@ -152,13 +152,8 @@ cleanup:
   return st;
 }
 
-static cupid_status write_vtu_step(dyn_output *o, cupid_int step, double t, const double *v) {
-  cupid_problem_state *prob = o->prob;
-  char name[64], path[4096];
-  snprintf(name, sizeof name, "%s_%06lld.vtu", prob->grid ? "pd" : "beam", (long long)step);
-  CUPID_CALL(out_path(prob, name, path, sizeof path));
-  if (prob->grid) CUPID_CALL(write_pd_step(o, path, v));
-  else CUPID_CALL(cupid_problem_fe_write_vtu(prob, path));
+/* Remember a written VTU file and its time for model.pvd. */
+static cupid_status record_file(dyn_output *o, const char *name, double t) {
   if (o->n_files == o->cap_files) {
     int cap = o->cap_files ? 2 * o->cap_files : 64;
     char(*files)[64] = NULL;
@@ -180,6 +175,26 @@ static cupid_status write_vtu_step(dyn_output *o, cupid_int step, double t, cons
   }
   snprintf(o->files[o->n_files], 64, "%s", name);
   o->times[o->n_files++] = t;
+  return CUPID_SUCCESS;
+}
+
+/* The step's VTU files: the beam's (beam_<step>.vtu) and the PD nodes' (pd_<step>.vtu), each
+ * part the model has (a coupled model both: model.pvd names them as blocks "beam" and "pd"). */
+static cupid_status write_vtu_step(dyn_output *o, cupid_int step, double t, const double *v) {
+  cupid_problem_state *prob = o->prob;
+  char name[64], path[4096];
+  if (prob->beam) {
+    snprintf(name, sizeof name, "beam_%06lld.vtu", (long long)step);
+    CUPID_CALL(out_path(prob, name, path, sizeof path));
+    CUPID_CALL(cupid_problem_fe_write_vtu(prob, path));
+    CUPID_CALL(record_file(o, name, t));
+  }
+  if (prob->grid) {
+    snprintf(name, sizeof name, "pd_%06lld.vtu", (long long)step);
+    CUPID_CALL(out_path(prob, name, path, sizeof path));
+    CUPID_CALL(write_pd_step(o, path, v));
+    CUPID_CALL(record_file(o, name, t));
+  }
   return CUPID_SUCCESS;
 }
 

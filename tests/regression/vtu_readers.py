@@ -24,6 +24,7 @@ Environment: CUPID (the cupid binary), CUPID_SOURCE_DIR (the source tree).
 import csv
 import json
 import os
+import re
 import subprocess
 import sys
 import tempfile
@@ -413,6 +414,34 @@ def dynamic(work, model, kind):
     check_pvd(out, name, expect, 1e-10)
 
 
+def dynamic_coupled(work):
+    """A coupled dynamic series (Arlequin truss): both parts at every output step, the beam as
+    block "beam" (part 0) and the PD nodes as block "pd" (part 1) of model.pvd (issue 19)."""
+    src = open(os.path.join(SRC, "examples/truss/truss_arlequin.yaml")).read()
+    text = re.sub(r"duration: [0-9.e+-]+", "duration: 0.0005", src).replace("vtu: false", "vtu: true")
+    model = os.path.join(work, "truss_arlequin_vtu.yaml")
+    open(model, "w").write(text)
+    out = run(work, "truss_arlequin_vtu", model)
+    if not out:
+        return
+    s = summary(out)
+    beams = sorted(f for f in os.listdir(out) if f.startswith("beam_") and f.endswith(".vtu"))
+    pds = sorted(f for f in os.listdir(out) if f.startswith("pd_") and f.endswith(".vtu"))
+    check(len(beams) >= 2 and [b[5:] for b in beams] == [p[3:] for p in pds],
+          "coupled dynamics: beam files %s, PD files %s" % (beams, pds))
+    expect = []
+    for b, p in zip(beams, pds):
+        for f, kind, part in ((b, "beam", 0), (p, "pd", 1)):
+            vtu = read_all(os.path.join(out, f))
+            check(vtu is not None and len(vtu[0]) > 0, "coupled dynamics: %s unreadable" % f)
+            if kind == "pd" and vtu is not None:
+                check(len(vtu[0]) == s["counts"]["pd_nodes"], "coupled dynamics: %s points" % f)
+        root = ET.parse(os.path.join(out, "model.pvd")).getroot()
+    got = [(d.get("file"), d.get("name"), int(d.get("part"))) for d in root.iter("DataSet")]
+    want = [x for b, p in zip(beams, pds) for x in ((b, "beam", 0), (p, "pd", 1))]
+    check(got == want, "coupled dynamics: model.pvd lists %s, expected %s" % (got[:4], want[:4]))
+
+
 def main():
     check(os.access(CUPID, os.X_OK), "no cupid binary at %s (set CUPID)" % CUPID)
     with tempfile.TemporaryDirectory(prefix="cupid_vtu_readers.") as work:
@@ -421,6 +450,7 @@ def main():
         static_coupled(work)
         dynamic(work, "tests/models/dynamics/fe_truss.yaml", "beam")
         dynamic(work, "tests/models/dynamics/pd_truss.yaml", "pd")
+        dynamic_coupled(work)
     print("vtu_readers: meshio %s (%s), VTK %s: %d checks, %d failed"
           % (meshio.__version__, os.path.dirname(meshio.__file__), vtkVersion.GetVTKVersion(),
              checks, len(failures)))
