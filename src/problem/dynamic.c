@@ -27,6 +27,7 @@ typedef struct {
   cupid_int out_count;
   double *velocity; /* for the PD VTU */
   double *u_view;   /* Lagrange: u with the tied PD nodes recovered from the beam (outputs) */
+  const double *u_out; /* the displacements the outputs of this step show (u or u_view) */
 } dyn_output;
 
 static cupid_status out_path(const cupid_problem_state *prob, const char *name, char *path, size_t len) {
@@ -140,7 +141,7 @@ static cupid_status write_pd_step(dyn_output *o, const char *path, const double 
   CUPID_TRY(cupid_malloc((size_t)n, sizeof *offs, "VTU offsets", &offs));
   CUPID_TRY(cupid_malloc((size_t)n, sizeof *types, "VTU cell types", &types));
   for (cupid_int i = 0; i < n; i++) conn[i] = i, offs[i] = i + 1, types[i] = CUPID_VTK_VERTEX;
-  cupid_vtu_array pdata[2] = {{"displacement", 3, prob->u}, {"velocity", 3, v}};
+  cupid_vtu_array pdata[2] = {{"displacement", 3, o->u_out}, {"velocity", 3, v}};
   cupid_vtu_mesh mesh = {.n_points = n, .points = cupid_pd_grid_coords(prob->grid), .n_cells = n,
                          .connectivity = conn, .offsets = offs, .types = types,
                          .point_data = pdata, .n_point_data = 2};
@@ -186,7 +187,7 @@ static cupid_status write_vtu_step(dyn_output *o, cupid_int step, double t, cons
   if (prob->beam) {
     snprintf(name, sizeof name, "beam_%06lld.vtu", (long long)step);
     CUPID_CALL(out_path(prob, name, path, sizeof path));
-    CUPID_CALL(cupid_problem_fe_write_vtu(prob, path));
+    CUPID_CALL(cupid_problem_fe_write_vtu(prob, o->u_out, path));
     CUPID_CALL(record_file(o, name, t));
   }
   if (prob->grid) {
@@ -229,7 +230,7 @@ static cupid_status history_row(dyn_output *o, double t) {
   for (int k = 0; k < out->n_points; k++) {
     double *u = row + 1 + 3 * k;
     cupid_region_kind region;
-    CUPID_CALL(cupid_problem_sample_point(o->prob, out->points[k].at, u, NULL, &region));
+    CUPID_CALL(cupid_problem_sample_point(o->prob, o->u_out, out->points[k].at, u, NULL, &region));
     if (f) fprintf(f, ",%.10e,%.10e,%.10e", u[0], u[1], u[2]);
   }
   if (f) fputc('\n', f);
@@ -243,14 +244,13 @@ static cupid_status monitor(void *ctx, cupid_int step, double t, int output, con
                             const double *v, const double *a, const cupid_dynamics_energy *e) {
   (void)a;
   dyn_output *o = ctx;
-  double *u_run = o->prob->u;
+  o->u_out = u;
   if (o->u_view) { /* outputs see the tied nodes following the beam (they are fixed in u) */
     memcpy(o->u_view, u, sizeof *u * (size_t)o->prob->ndof);
     o->prob->method->recover(o->prob, o->u_view);
-    o->prob->u = o->u_view;
+    o->u_out = o->u_view;
   }
   cupid_status st = monitor_outputs(o, step, t, output, v, e);
-  o->prob->u = u_run;
   /* every tenth of the run, whatever `every` is (the monitor sees every step) */
   const cupid_int tenth = o->prob->dyn.steps / 10 > 0 ? o->prob->dyn.steps / 10 : 1;
   if (st == CUPID_SUCCESS && step > 0 && step % tenth == 0)

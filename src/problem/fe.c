@@ -44,9 +44,10 @@ cupid_status cupid_problem_translations(const cupid_problem_state *prob, double 
   return CUPID_SUCCESS;
 }
 
-cupid_status cupid_problem_fe_write_vtu(cupid_problem_state *prob, const char *path) {
+cupid_status cupid_problem_fe_write_vtu(const cupid_problem_state *prob, const double *sol,
+                                        const char *path) {
   cupid_cuf_vtu *vtu = NULL;
-  CUPID_CALL(cupid_cuf_vtu_build(prob->beam, prob->u, 0, &vtu));
+  CUPID_CALL(cupid_cuf_vtu_build(prob->beam, sol, 0, &vtu));
   cupid_status st = cupid_vtu_write(path, &vtu->mesh);
   cupid_cuf_vtu_destroy(&vtu);
   return st;

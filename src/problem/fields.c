@@ -81,7 +81,7 @@ cupid_status cupid_problem_sample(cupid_problem_state *prob, cupid_int n, const 
   if (stress) CUPID_CALL(cupid_problem_pd_stress(prob));
   for (cupid_int k = 0; k < n; k++) {
     cupid_region_kind where;
-    CUPID_CALL(cupid_problem_sample_point(prob, xyz + 3 * k, u + 3 * k, stress ? stress + 6 * k : NULL,
+    CUPID_CALL(cupid_problem_sample_point(prob, prob->u, xyz + 3 * k, u + 3 * k, stress ? stress + 6 * k : NULL,
                                           &where));
     if (region) region[k] = (int)where;
   }

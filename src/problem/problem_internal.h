@@ -159,7 +159,9 @@ int cupid_problem_fe_node_in_box(const cupid_problem_state *prob, const cupid_bo
 int cupid_problem_pd_node_in_box(const cupid_problem_state *prob, const cupid_box *b);
 
 /* sample.c: displacement (and stress) at a point, by trilinear interpolation of the grid. */
-cupid_status cupid_problem_sample_point(const cupid_problem_state *prob, const double p[3],
+/** @p sol: the solution vector sampled (NULL: only say where the point lies). */
+cupid_status cupid_problem_sample_point(const cupid_problem_state *prob, const double *sol,
+                                        const double p[3],
                                         double u[3], double sigma[6], cupid_region_kind *region);
 
 /* slab.c (issue 6): PD models split into z slabs over the MPI ranks. */
@@ -196,7 +198,8 @@ cupid_status cupid_problem_fe_build(cupid_problem_state *prob);
 cupid_status cupid_problem_fe_impose_field(cupid_problem_state *prob);
 /** Unit-translation vectors: t[k * ndof + d] = generalised DOF d of the field e_k. */
 cupid_status cupid_problem_translations(const cupid_problem_state *prob, double *t);
-cupid_status cupid_problem_fe_write_vtu(cupid_problem_state *prob, const char *path);
+cupid_status cupid_problem_fe_write_vtu(const cupid_problem_state *prob, const double *sol,
+                                        const char *path);
 
 /* dynamic.c: type dynamic. */
 /** What type dynamic needs of any model (densities, integrator settings, loads constant). */

@@ -45,7 +45,7 @@ static cupid_status write_line(cupid_problem_state *prob, const cupid_output_lin
     double t = line->points > 1 ? (double)k / (line->points - 1) : 0.0, p[3], u[3];
     for (int a = 0; a < 3; a++) p[a] = line->from[a] + t * (line->to[a] - line->from[a]);
     cupid_region_kind region;
-    cupid_status st = cupid_problem_sample_point(prob, p, u, NULL, &region);
+    cupid_status st = cupid_problem_sample_point(prob, prob->u, p, u, NULL, &region);
     if (st != CUPID_SUCCESS) {
       cupid_atomic_abort(&file);
       return st;
@@ -162,7 +162,7 @@ static cupid_status write_vtu(cupid_problem_state *prob) {
   int n = 0;
   if (prob->beam) {
     CUPID_CALL(join_path(prob->writedir, "beam.vtu", path, sizeof path));
-    CUPID_CALL(cupid_problem_fe_write_vtu(prob, path));
+    CUPID_CALL(cupid_problem_fe_write_vtu(prob, prob->u, path));
     files[n++] = "beam.vtu";
   }
   if (prob->grid) {
@@ -252,7 +252,7 @@ static cupid_status json_points(cupid_json js, const cupid_problem_state *prob) 
     const cupid_output_point *pt = &o->points[k];
     double u[3], s[6];
     cupid_region_kind region;
-    CUPID_CALL(cupid_problem_sample_point(prob, pt->at, u, s, &region));
+    CUPID_CALL(cupid_problem_sample_point(prob, prob->u, pt->at, u, s, &region));
     cupid_json_begin_object(js, NULL);
     cupid_json_string(js, "name", pt->name);
     cupid_json_number(js, "x", pt->at[0]);
@@ -346,7 +346,7 @@ cupid_status cupid_problem_check_points(const cupid_problem_state *prob) {
   for (int k = 0; k < o->n_points; k++) {
     double u[3];
     cupid_region_kind region;
-    CUPID_CALL(cupid_problem_sample_point(prob, o->points[k].at, u, NULL, &region));
+    CUPID_CALL(cupid_problem_sample_point(prob, NULL, o->points[k].at, u, NULL, &region));
     if (region == CUPID_REGION_NONE)
       return cupid_model_error(prob->model, &o->points[k].mark,
                                "the point (%g, %g, %g) lies outside the model",
@@ -360,7 +360,7 @@ cupid_status cupid_problem_check_points(const cupid_problem_state *prob) {
     for (int i = 0; i < line->points && region == CUPID_REGION_NONE; i++) {
       double t = line->points > 1 ? (double)i / (line->points - 1) : 0.0, p[3], u[3];
       for (int a = 0; a < 3; a++) p[a] = line->from[a] + t * (line->to[a] - line->from[a]);
-      CUPID_CALL(cupid_problem_sample_point(prob, p, u, NULL, &region));
+      CUPID_CALL(cupid_problem_sample_point(prob, NULL, p, u, NULL, &region));
     }
     if (region == CUPID_REGION_NONE)
       return cupid_model_error(prob->model, &line->mark,

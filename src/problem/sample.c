@@ -18,7 +18,8 @@ static int inside_pd(const cupid_problem_state *prob, const double p[3]) {
   return 0;
 }
 
-cupid_status cupid_problem_sample_point(const cupid_problem_state *prob, const double p[3], double u[3],
+cupid_status cupid_problem_sample_point(const cupid_problem_state *prob, const double *sol,
+                                        const double p[3], double u[3],
                               double sigma[6], cupid_region_kind *region) {
   for (int c = 0; c < 3; c++) u[c] = NAN;
   if (sigma)
@@ -26,13 +27,13 @@ cupid_status cupid_problem_sample_point(const cupid_problem_state *prob, const d
   *region = CUPID_REGION_NONE;
   if (prob->beam && cupid_cuf_contains(prob->beam, p[0], p[1], p[2])) {
     *region = CUPID_REGION_FE;
-    if (!prob->u) return CUPID_SUCCESS;
-    CUPID_CALL(cupid_cuf_displacement_at(prob->beam, prob->u, p[0], p[1], p[2], u));
-    if (sigma) CUPID_CALL(cupid_cuf_stress_at(prob->beam, prob->u, p[0], p[1], p[2], sigma));
+    if (!sol) return CUPID_SUCCESS;
+    CUPID_CALL(cupid_cuf_displacement_at(prob->beam, sol, p[0], p[1], p[2], u));
+    if (sigma) CUPID_CALL(cupid_cuf_stress_at(prob->beam, sol, p[0], p[1], p[2], sigma));
     return CUPID_SUCCESS;
   }
   if (!prob->grid || !inside_pd(prob, p)) return CUPID_SUCCESS;
-  if (!prob->u) { /* before the solve: only say where the point lies */
+  if (!sol) { /* before the solve: only say where the point lies */
     *region = CUPID_REGION_PD;
     return CUPID_SUCCESS;
   }
@@ -58,7 +59,7 @@ cupid_status cupid_problem_sample_point(const cupid_problem_state *prob, const d
     cupid_int node = cupid_pd_grid_node_at(prob->grid, base[0] + d[0], base[1] + d[1], base[2] + d[2]);
     if (node < 0 || wt == 0.0) continue;
     wsum += wt;
-    for (int c = 0; c < 3; c++) acc_u[c] += wt * prob->u[3 * node + c];
+    for (int c = 0; c < 3; c++) acc_u[c] += wt * sol[3 * node + c];
     if (sigma && prob->pd_stress)
       for (int c = 0; c < 6; c++) acc_s[c] += wt * prob->pd_stress[6 * node + c];
   }
@@ -69,7 +70,7 @@ cupid_status cupid_problem_sample_point(const cupid_problem_state *prob, const d
     cupid_int node = cupid_pd_grid_node_at(prob->grid, ijk[0], ijk[1], ijk[2]);
     if (node < 0) return CUPID_SUCCESS;
     wsum = 1.0;
-    for (int c = 0; c < 3; c++) acc_u[c] = prob->u[3 * node + c];
+    for (int c = 0; c < 3; c++) acc_u[c] = sol[3 * node + c];
     if (sigma && prob->pd_stress)
       for (int c = 0; c < 6; c++) acc_s[c] = prob->pd_stress[6 * node + c];
   }

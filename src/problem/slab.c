@@ -42,20 +42,12 @@ cupid_status cupid_problem_slab_agree(cupid_status st) {
   return CUPID_ERROR(CUPID_ERR_MODEL, "another MPI rank reported an error");
 }
 
-/* Output points and lines are checked against the whole grid: rank 0 builds it for the check
- * (coordinates only, freed at once), before anything expensive. */
+/* Output points and lines are checked on rank 0: before the solve the check only locates
+ * them against the model's regions and the beam (cupid_problem_sample_point without a
+ * solution), which every slab knows in whole. */
 cupid_status cupid_problem_slab_check_points(cupid_problem_state *prob) {
   cupid_status st = CUPID_SUCCESS;
-  if (cupid_petsc_rank() == 0) {
-    cupid_pd_grid slab = prob->grid, whole = NULL;
-    st = cupid_pd_grid_create_from_model(prob->model, &whole);
-    if (st == CUPID_SUCCESS) {
-      prob->grid = whole;
-      st = cupid_problem_check_points(prob);
-      prob->grid = slab;
-    }
-    cupid_pd_grid_destroy(&whole);
-  }
+  if (cupid_petsc_rank() == 0) st = cupid_problem_check_points(prob);
   return cupid_problem_slab_agree(st);
 }
 
