@@ -122,7 +122,7 @@ static cupid_status plot_curve_columns(const char *dir, const cupid_plot_curve *
 }
 
 /* The largest |value| of column @p col of @p dir/@p csv after @p skip header lines (NaN and
- * unreadable fields count as 0). */
+ * unreadable fields count as 0; an unreadable file as infinite). */
 static cupid_status column_max_abs(const char *dir, const char *csv, int col, int skip, double *max) {
   char *path = NULL, *line = NULL;
   size_t cap = 0;
@@ -133,7 +133,10 @@ static cupid_status column_max_abs(const char *dir, const char *csv, int col, in
   CUPID_TRY(cupid_malloc(size, 1, "file name", &path));
   snprintf(path, size, "%s/%s", dir, csv);
   in = fopen(path, "r");
-  CUPID_TRY_CHECK(in, CUPID_ERR_IO, "cannot read '%s': %s", path, strerror(errno));
+  if (!in) { /* unknown: the curve is kept, and gnuplot says what is wrong with the file */
+    *max = INFINITY;
+    goto cleanup;
+  }
   for (int row = 0; getline(&line, &cap, in) >= 0; row++) {
     if (row < skip) continue;
     char *cursor = line, *field = NULL;
