@@ -408,8 +408,10 @@ static void element_next_to(const cupid_cuf_beam beam, const interface_t *it, in
     cupid_int first;
     double a, b;
     cupid_cuf_beam_element(beam, e, &first, &a, &b);
-    if (want_below && fabs(b - it->y_i) <= tol) *y0 = a, *y1 = b;
-    if (!want_below && fabs(a - it->y_i) <= tol) *y0 = a, *y1 = b;
+    if ((want_below && fabs(b - it->y_i) <= tol) || (!want_below && fabs(a - it->y_i) <= tol)) {
+      *y0 = a;
+      *y1 = b;
+    }
   }
 }
 
@@ -424,10 +426,14 @@ cupid_status cpl_fictitious_fe_choice(const cupid_coupling_options *o, cupid_fic
     if (!strcmp(env, "adjacent")) *kind = CUPID_FICTITIOUS_FE_ADJACENT;
     else if (!strcmp(env, "removed")) *kind = CUPID_FICTITIOUS_FE_REMOVED;
     else if (!strcmp(env, "plane")) *kind = CUPID_FICTITIOUS_FE_PLANE;
-    else if (end != env && *end == '\0' && v > 0.0) *kind = CUPID_FICTITIOUS_FE_LENGTH, *length = v;
+    else if (end != env && *end == '\0' && v > 0.0) {
+      *kind = CUPID_FICTITIOUS_FE_LENGTH;
+      *length = v;
+    }
     else
       return CUPID_ERROR(CUPID_ERR_ARGUMENT,
-                         "CUPID_FICTITIOUS_FE=%s: expected removed, adjacent, plane or a length > 0",
+                         "CUPID_FICTITIOUS_FE=%s: expected removed, adjacent, plane or a "
+                         "length > 0",
                          env);
   }
   CUPID_CHECK(*kind >= CUPID_FICTITIOUS_FE_REMOVED && *kind <= CUPID_FICTITIOUS_FE_LENGTH,
