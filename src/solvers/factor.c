@@ -30,9 +30,12 @@ struct cupid_direct_factor_private {
   double *work, *work2; /* n: right-hand side / solution in free numbering */
 };
 
-/* Columns of the lower triangle of K_ff = rows of the upper part of the symmetric K_ff, in
- * free numbering (free DOFs are numbered in increasing global order, so indices stay sorted). */
-static cupid_status reduce_lower(cupid_direct_factor F, const cupid_csr_t *K, const cupid_int *fi) {
+/* The rows of K_ff in compressed form, in free numbering (free DOFs are numbered in increasing
+ * global order, so indices stay sorted). With lower, row k keeps the columns >= k: column k of
+ * the lower triangle of the symmetric K_ff (CHOLMOD). Without, every column: read as columns
+ * the rows are K_ff^T, which UMFPACK solves with UMFPACK_At (no transposed copy). */
+static cupid_status reduce(cupid_direct_factor F, const cupid_csr_t *K, const cupid_int *fi,
+                           int lower) {
   const int bs = K->bs;
   CUPID_CALL(cupid_calloc((size_t)F->n + 1, sizeof *F->p, "factor pointers", &F->p));
   for (int pass = 0; pass < 2; pass++) {
@@ -42,37 +45,7 @@ static cupid_status reduce_lower(cupid_direct_factor F, const cupid_csr_t *K, co
       for (cupid_int q = K->rowptr[row]; q < K->rowptr[row + 1]; q++)
         for (int b = 0; b < bs; b++) {
           cupid_int c = fi ? fi[K->col[q] * bs + b] : K->col[q] * bs + b;
-          if (c < k) continue;
-          if (pass) {
-            F->i[t] = c;
-            F->x[t] = K->val[(q * bs + a) * bs + b];
-          }
-          t++;
-        }
-      if (!pass) F->p[k + 1] = t;
-    }
-    if (!pass) {
-      for (cupid_int k = 0; k < F->n; k++) F->p[k + 1] += F->p[k];
-      CUPID_CALL(cupid_malloc((size_t)F->p[F->n], sizeof *F->i, "factor indices", &F->i));
-      CUPID_CALL(cupid_malloc((size_t)F->p[F->n], sizeof *F->x, "factor values", &F->x));
-    }
-  }
-  return CUPID_SUCCESS;
-}
-
-/* The rows of K_ff in compressed form (every column): read as columns they are K_ff^T, which
- * UMFPACK solves with UMFPACK_At (no transposed copy). */
-static cupid_status reduce_full(cupid_direct_factor F, const cupid_csr_t *K, const cupid_int *fi) {
-  const int bs = K->bs;
-  CUPID_CALL(cupid_calloc((size_t)F->n + 1, sizeof *F->p, "factor pointers", &F->p));
-  for (int pass = 0; pass < 2; pass++) {
-    for (cupid_int k = 0; k < F->n; k++) {
-      cupid_int g = F->global[k], row = g / bs, t = pass ? F->p[k] : 0;
-      int a = (int)(g % bs);
-      for (cupid_int q = K->rowptr[row]; q < K->rowptr[row + 1]; q++)
-        for (int b = 0; b < bs; b++) {
-          cupid_int c = fi ? fi[K->col[q] * bs + b] : K->col[q] * bs + b;
-          if (c < 0) continue;
+          if (c < 0 || (lower && c < k)) continue;
           if (pass) {
             F->i[t] = c;
             F->x[t] = K->val[(q * bs + a) * bs + b];
@@ -235,10 +208,10 @@ cupid_status cupid_direct_factor_create_kind(const cupid_csr_t *K, cupid_matrix_
   for (cupid_int d = 0, k = 0; d < n_full; d++)
     if (!bc || !bc->fixed[d]) F->global[k++] = d;
   if (kind == CUPID_MATRIX_SPD) {
-    CUPID_TRY(reduce_lower(F, K, bc ? bc->free_index : NULL));
+    CUPID_TRY(reduce(F, K, bc ? bc->free_index : NULL, 1));
     CUPID_TRY(factorise(F, info));
   } else {
-    CUPID_TRY(reduce_full(F, K, bc ? bc->free_index : NULL));
+    CUPID_TRY(reduce(F, K, bc ? bc->free_index : NULL, 0));
     CUPID_TRY(factorise_lu(F, info));
   }
   if (info) {
