@@ -107,14 +107,12 @@ static cupid_status solve_gmres(system_free *S, const double *b, double *x, doub
   const double bnorm = sqrt(dot(n, b, b));
   double rnorm = bnorm;
   int it = 0;
-  for (;;) {
-    /* r = b - A x, v1 = r / |r|: every cycle starts from the true residual, and only the true
-     * residual ends the solve (the cycle's estimate can run ahead of it when the
-     * preconditioner's factor is inaccurate) */
+  while (rnorm > rtol * bnorm && it < max_it) {
+    /* r = b - A x, v1 = r / |r| */
     CUPID_TRY(apply_free(S, x, w));
     for (cupid_int k = 0; k < n; k++) V[k] = b[k] - w[k];
     rnorm = sqrt(dot(n, V, V));
-    if (rnorm <= rtol * bnorm || it >= max_it) break;
+    if (rnorm <= rtol * bnorm) break;
     for (cupid_int k = 0; k < n; k++) V[k] /= rnorm;
     memset(g, 0, (size_t)(m + 2) * sizeof *g);
     g[0] = rnorm;
