@@ -63,16 +63,22 @@ static char *csv_next_field(char **cursor) {
   return s;
 }
 
+/* Open @p dir/@p csv for reading: *path is the caller's to free; *in NULL if it cannot be read. */
+static cupid_status csv_open(const char *dir, const char *csv, char **path, FILE **in) {
+  size_t size = strlen(dir) + strlen(csv) + 2;
+  CUPID_CALL(cupid_malloc(size, 1, "file name", path));
+  snprintf(*path, size, "%s/%s", dir, csv);
+  *in = fopen(*path, "r");
+  return CUPID_SUCCESS;
+}
+
 /* The 1-based column called @p name in the header line of @p dir/@p csv. */
 static cupid_status csv_column(const char *dir, const char *csv, const char *name, int *col) {
   char *path = NULL, *line = NULL;
   size_t cap = 0;
   FILE *in = NULL;
   cupid_status st = CUPID_SUCCESS;
-  size_t size = strlen(dir) + strlen(csv) + 2;
-  CUPID_TRY(cupid_malloc(size, 1, "file name", &path));
-  snprintf(path, size, "%s/%s", dir, csv);
-  in = fopen(path, "r");
+  CUPID_TRY(csv_open(dir, csv, &path, &in));
   CUPID_TRY_CHECK(in, CUPID_ERR_IO, "cannot read '%s': %s", path, strerror(errno));
   CUPID_TRY_CHECK(getline(&line, &cap, in) >= 0, CUPID_ERR_IO, "cannot read '%s': %s", path,
                   ferror(in) ? strerror(errno) : "no header line");
@@ -128,11 +134,8 @@ static cupid_status column_max_abs(const char *dir, const char *csv, int col, in
   size_t cap = 0;
   FILE *in = NULL;
   cupid_status st = CUPID_SUCCESS;
-  size_t size = strlen(dir) + strlen(csv) + 2;
   *max = 0.0;
-  CUPID_TRY(cupid_malloc(size, 1, "file name", &path));
-  snprintf(path, size, "%s/%s", dir, csv);
-  in = fopen(path, "r");
+  CUPID_TRY(csv_open(dir, csv, &path, &in));
   if (!in) { /* unknown: the curve is kept, and gnuplot says what is wrong with the file */
     *max = INFINITY;
     goto cleanup;
