@@ -110,6 +110,40 @@ typedef struct {
   cupid_mark mark;
 } cupid_pd_region;
 
+/** A pre-crack (peridynamics.precracks[k]): a rectangle on the plane x_normal = at, bounded
+ *  on the two other axes; every bond whose segment crosses it is removed before the run. */
+typedef struct {
+  int normal;     /**< 0 x, 1 y, 2 z */
+  double at;      /**< position of the plane along the normal */
+  cupid_box rect; /**< bounds on the two other axes (has[] = 1, lo < hi); the normal axis has
+                       has[normal] = 0 */
+  cupid_mark mark;
+} cupid_precrack;
+
+typedef enum {
+  CUPID_FRACTURE_STRETCH = 0, /**< critical stretch s0 (bond-based and LPS) */
+  CUPID_FRACTURE_ENERGY = 1   /**< critical bond energy from G0 (LPS) */
+} cupid_fracture_criterion;
+
+#define CUPID_MAX_NO_FAIL 32 /**< no_fail boxes per model */
+
+/** Bond breaking (peridynamics.fracture; docs/theory.md, section Fracture). */
+typedef struct {
+  int has_fracture;                  /**< 0: a linear elastic PD body (no key) */
+  cupid_fracture_criterion criterion;
+  double critical_stretch;           /**< s0 > 0 when has_critical_stretch */
+  int has_critical_stretch;
+  double energy_release_rate;        /**< G0 > 0 when has_energy_release_rate */
+  int has_energy_release_rate;       /**< exactly one of the two is given for `stretch`;
+                                          `energy` needs G0 */
+  int per_iteration_all;             /**< static growth: 1 all bonds over their limit per
+                                          re-solve (default), 0 only the most critical one */
+  cupid_box no_fail[CUPID_MAX_NO_FAIL];
+  cupid_mark no_fail_marks[CUPID_MAX_NO_FAIL];
+  int n_no_fail;
+  cupid_mark mark;
+} cupid_fracture;
+
 typedef struct {
   double spacing, horizon;
   cupid_pd_model_kind model;
@@ -121,6 +155,9 @@ typedef struct {
   int material;    /**< default region material, -1 if not given */
   cupid_pd_region *regions;
   int n_regions;
+  cupid_precrack *precracks;
+  int n_precracks;
+  cupid_fracture fracture;
   cupid_mark mark;
 } cupid_peridynamics;
 
