@@ -288,6 +288,66 @@ double cupid_pd_partial_volume_1d(cupid_partial_volume rule, double d, double h,
 double cupid_pd_influence(cupid_influence kind, double r, double delta);
 
 
+/* ---- Fracture (src/pd/fracture.c; docs/theory.md, section Fracture) ----
+ * Bonds removed before a run (pre-cracks) or broken by a criterion during one leave every
+ * operation of the operator: apply (both paths), ranges, assembly, diagonal, energy, stress;
+ * the weighted volumes m are those of the intact families. Irreversible. Not with a surface
+ * correction (CUPID_ERR_UNSUPPORTED). Not thread-safe against a concurrent apply. */
+
+/** A pre-crack: the rectangle lo[b] <= x_b <= hi[b] (b != normal) on the plane
+ *  x_normal = at. */
+typedef struct {
+  int normal;          /**< 0 x, 1 y, 2 z */
+  double at;
+  double lo[3], hi[3]; /**< bounds of the two other axes (the normal's entries are unused) */
+} cupid_pd_precrack;
+
+/**
+ * Remove every bond whose segment crosses the rectangle (its ends strictly on opposite sides
+ * of the plane, or one on the plane and the other on the positive side; the crossing point
+ * within the bounds, inclusive). *removed = bonds (unordered pairs) removed by this call.
+ */
+cupid_status cupid_pd_operator_precrack(cupid_pd_operator op, const cupid_pd_precrack *crack,
+                                        cupid_int *removed);
+
+typedef enum {
+  CUPID_PD_BREAK_STRETCH = 0, /**< e / |xi| > critical_stretch (linearised stretch) */
+  CUPID_PD_BREAK_ENERGY = 1   /**< LPS: 1/4 |t_ij + t_ji| |e| > critical_energy */
+} cupid_pd_break_criterion;
+
+/** What breaks and what may not. */
+typedef struct {
+  cupid_pd_break_criterion criterion;
+  double critical_stretch;       /**< s0 > 0 (stretch) */
+  double critical_energy;        /**< w_c > 0 (energy): 4 G0 / (pi delta^4) in 3D */
+  const unsigned char *protect;  /**< per node: 1 = no bond of this node breaks; or NULL */
+  const uint32_t *no_fail;       /**< per node: bit b = inside no-fail box b; a bond whose ends
+                                      share a bit never breaks; or NULL */
+} cupid_pd_fracture_options;
+
+/**
+ * Break every intact bond over its limit at u (only_most: only the one furthest over it,
+ * relative to its limit), a bond at exactly its limit holding. The set depends on u alone,
+ * not on the thread count. *broken = bonds broken, *dissipated = the strain energy they
+ * held (the drop of E(u) the breaks cause).
+ */
+cupid_status cupid_pd_operator_break_bonds(cupid_pd_operator op, const double *u,
+                                           const cupid_pd_fracture_options *opts, int only_most,
+                                           cupid_int *broken, double *dissipated);
+
+/** Bonds (unordered pairs) removed so far: pre-cracks and breaks. */
+cupid_int cupid_pd_operator_num_broken(const cupid_pd_operator op);
+
+/** 1 if nodes i and j are bonded and the bond is intact; 0 otherwise. */
+int cupid_pd_operator_bond_intact(const cupid_pd_operator op, cupid_int i, cupid_int j);
+
+/**
+ * Damage per node: 1 - sum over intact bonds of beta V / sum over all its bonds of beta V;
+ * *damaged = nodes with at least one bond removed, *max_damage the largest (both optional).
+ */
+cupid_status cupid_pd_operator_damage(const cupid_pd_operator op, double *damage,
+                                      cupid_int *damaged, double *max_damage);
+
 /* ---- Distributed solves (issue 6): owned-row assembly of a preconditioner, matrix-free PETSc
  * solve. Appended by the PETSc engine (src/pd/assemble_rows.c, src/solvers/petsc.c). ---- */
 

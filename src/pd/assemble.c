@@ -102,6 +102,7 @@ static void add_family(const struct cupid_pd_operator_private *op, const offset_
   if (op->sf) { /* surface correction: g_p[k] = Gp D_pk wxn(p->k) */
     for (int q = 0; q < Fp->n; q++) {
       const int s2 = pd_family_entry(Fp, q);
+      if (pd_bond_broken(op, p, s2)) continue;
       const int32_t d = dp[lin[s2]];
       double sfb[4];
       pd_surface_bond(op, p, pd_family_node(op, Fp, s2), op->st.nrm + 3 * s2, sfb);
@@ -112,6 +113,7 @@ static void add_family(const struct cupid_pd_operator_private *op, const offset_
   }
   if (!Fp->s) {
     for (int s2 = 0; s2 < Fp->n; s2++) {
+      if (pd_bond_broken(op, p, s2)) continue;
       const int32_t d = dp[lin[s2]];
       hit[d] = 1;
       add_vb(acc + 9 * (size_t)d, v[0], v[1], v[2], wxn + 3 * s2);
@@ -120,6 +122,7 @@ static void add_family(const struct cupid_pd_operator_private *op, const offset_
   }
   for (int q = 0; q < Fp->n; q++) {
     const int s2 = Fp->s[q];
+    if (pd_bond_broken(op, p, s2)) continue;
     const int32_t d = dp[lin[s2]];
     hit[d] = 1;
     add_vb(acc + 9 * (size_t)d, v[0], v[1], v[2], wxn + 3 * s2);
@@ -137,6 +140,7 @@ static void gather_row(const struct cupid_pd_operator_private *op, const offset_
   hit[dx[0]] = 1;
   for (int q = 0; q < Fr.n; q++) {
     const int s = pd_family_entry(&Fr, q);
+    if (pd_bond_broken(op, r, s)) continue;
     const int32_t d = dx[t->lin[s]];
     hit[d] = 1;
     if (!values) continue;
@@ -150,16 +154,22 @@ static void gather_row(const struct cupid_pd_operator_private *op, const offset_
   for (int q = -1; q < Fr.n; q++) {
     const int self = q < 0;
     const int sr = self ? 0 : pd_family_entry(&Fr, q);
+    if (!self && pd_bond_broken(op, r, sr)) continue;
     const cupid_int p = self ? r : pd_family_node(op, &Fr, sr);
     const int32_t *dp = dx + (self ? 0 : t->lin[sr]); /* offsets relative to p - r */
     const pd_family Fp = pd_family_of(op, p);
     if (!values) {
       hit[dp[0]] = 1;
-      for (int qq = 0; qq < Fp.n; qq++) hit[dp[t->lin[pd_family_entry(&Fp, qq)]]] = 1;
+      for (int qq = 0; qq < Fp.n; qq++) {
+        const int s2 = pd_family_entry(&Fp, qq);
+        if (!pd_bond_broken(op, p, s2)) hit[dp[t->lin[s2]]] = 1;
+      }
       continue;
     }
     const double Gp = 3.0 * op->V / op->m[p], cp = op->V * op->kappa[p] / 3.0;
-    const double *dir = self ? op->gself + 3 * r : S->wxn + 3 * sr;
+    double gr[3], gp[3]; /* intact self weights (broken bonds leave theta's sums) */
+    const double *dir = self ? pd_gself_intact(op, r, gr) : S->wxn + 3 * sr;
+    const double *gsp = pd_gself_intact(op, p, gp);
     double Dpr = 1.0; /* surface factor of bond p -> r in theta_p */
     if (!self && op->sf) {
       double sfb[4];
@@ -169,7 +179,7 @@ static void gather_row(const struct cupid_pd_operator_private *op, const offset_
     double v[3]; /* c_p g_p[r] Gp, with g_p[r] = -Gp gself_r, or -Gp D_pr wxn(r->p) */
     for (int c = 0; c < 3; c++) v[c] = -cp * Gp * Gp * Dpr * dir[c];
     double mgs[3]; /* g_p[p] / Gp = -gself_p */
-    for (int c = 0; c < 3; c++) mgs[c] = -op->gself[3 * p + c];
+    for (int c = 0; c < 3; c++) mgs[c] = -gsp[c];
     hit[dp[0]] = 1;
     add_outer(acc + 9 * (size_t)dp[0], 1.0, v, mgs);
     add_family(op, t, p, &Fp, dp, v, hit, acc);
@@ -322,15 +332,18 @@ cupid_status cupid_pd_operator_diagonal(const cupid_pd_operator op, double *bloc
     const pd_family F = pd_family_of(op, r);
     for (int q = 0; q < F.n; q++) {
       const int s = pd_family_entry(&F, q);
+      if (pd_bond_broken(op, r, s)) continue;
       const double *n = S->nrm + 3 * s;
       add_outer(blk, pd_pair_coefficient(op, r, pd_family_node(op, &F, s), s), n, n);
     }
     if (op->model == CUPID_PD_BOND) continue;
     for (int q = -1; q < F.n; q++) {
       const int s = q < 0 ? 0 : pd_family_entry(&F, q);
+      if (q >= 0 && pd_bond_broken(op, r, s)) continue;
       const cupid_int p = q < 0 ? r : pd_family_node(op, &F, s);
       const double Gp = 3.0 * op->V / op->m[p], cp = op->V * op->kappa[p] / 3.0;
-      const double *dir = q < 0 ? op->gself + 3 * r : S->wxn + 3 * s;
+      double gr[3];
+      const double *dir = q < 0 ? pd_gself_intact(op, r, gr) : S->wxn + 3 * s;
       double Dpr = 1.0; /* surface factor of bond p -> r in theta_p */
       if (q >= 0 && op->sf) {
         double sfb[4];

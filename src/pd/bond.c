@@ -12,6 +12,7 @@ void pd_bond_apply(const struct cupid_pd_operator_private *op, cupid_int first, 
     for (cupid_int b = op->bptr[i]; b < op->bptr[i + 1]; b++) {
       const cupid_int j = op->bnbr[b];
       const int s = op->bst[b];
+      if (pd_bond_broken(op, i, s)) continue;
       const double *n = S->nrm + 3 * s;
       const double t = pd_pair_coefficient(op, i, j, s) * pd_extension(n, u, i, j);
       for (int c = 0; c < 3; c++) fi[c] += t * n[c];
@@ -30,6 +31,7 @@ double pd_bond_energy(const struct cupid_pd_operator_private *op, const double *
     const pd_family F = pd_family_of(op, i);
     for (int q = 0; q < F.n; q++) {
       const int s = pd_family_entry(&F, q);
+      if (pd_bond_broken(op, i, s)) continue;
       const cupid_int j = pd_family_node(op, &F, s);
       const double e = pd_extension(S->nrm + 3 * s, u, i, j);
       E += 0.25 * pd_pair_coefficient(op, i, j, s) * e * e;
@@ -48,6 +50,7 @@ void pd_bond_stress(const struct cupid_pd_operator_private *op, const double *u,
     const pd_family F = pd_family_of(op, i);
     for (int q = 0; q < F.n; q++) {
       const int s = pd_family_entry(&F, q);
+      if (pd_bond_broken(op, i, s)) continue;
       const cupid_int j = pd_family_node(op, &F, s);
       const double *n = S->nrm + 3 * s;
       double sfb[4];

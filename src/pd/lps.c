@@ -18,6 +18,7 @@ static inline void lps_dilatation(const struct cupid_pd_operator_private *op, cu
       double t = 0.0;
       for (int q = 0; q < F.n; q++) {
         const int s = pd_family_entry(&F, q);
+        if (pd_bond_broken(op, i, s)) continue;
         t += S->wb[s] * S->x[s] * pd_extension(S->nrm + 3 * s, u, i, pd_family_node(op, &F, s));
       }
       theta[i] = 3.0 * op->V * t / op->m[i];
@@ -30,6 +31,7 @@ static inline void lps_dilatation(const struct cupid_pd_operator_private *op, cu
     for (cupid_int b = op->bptr[i]; b < op->bptr[i + 1]; b++) {
       const cupid_int j = op->bnbr[b];
       const int s = op->bst[b];
+      if (pd_bond_broken(op, i, s)) continue;
       double F[4] = {1.0, 1.0, 1.0, 1.0};
       if (corr) pd_surface_bond(op, i, j, S->nrm + 3 * s, F);
       t += S->wb[s] * S->x[s] * F[0] * pd_extension(S->nrm + 3 * s, u, i, j);
@@ -63,6 +65,7 @@ static inline void lps_apply(const struct cupid_pd_operator_private *op, cupid_i
     for (cupid_int b = op->bptr[i]; b < op->bptr[i + 1]; b++) {
       const cupid_int j = op->bnbr[b];
       const int s = op->bst[b];
+      if (pd_bond_broken(op, i, s)) continue;
       const double *n = S->nrm + 3 * s;
       const double aj = op->kappa[j] * theta[j] / op->m[j], bj = op->mu[j] / op->m[j];
       double F[4] = {1.0, 1.0, 1.0, 1.0};
@@ -94,6 +97,7 @@ double pd_lps_energy(const struct cupid_pd_operator_private *op, const double *u
     const pd_family F = pd_family_of(op, i);
     for (int k = 0; k < F.n; k++) {
       const int s = pd_family_entry(&F, k);
+      if (pd_bond_broken(op, i, s)) continue;
       const cupid_int j = pd_family_node(op, &F, s);
       const double e = pd_extension(S->nrm + 3 * s, u, i, j);
       double sfb[4];
@@ -118,6 +122,7 @@ void pd_lps_stress(const struct cupid_pd_operator_private *op, const double *u, 
     const pd_family F = pd_family_of(op, i);
     for (int k = 0; k < F.n; k++) {
       const int s = pd_family_entry(&F, k);
+      if (pd_bond_broken(op, i, s)) continue;
       const double *n = S->nrm + 3 * s;
       const double x = S->x[s];
       const cupid_int j = pd_family_node(op, &F, s);

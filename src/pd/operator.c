@@ -28,6 +28,7 @@ void cupid_pd_operator_destroy(cupid_pd_operator *op) {
   cupid_free(&o->c);
   cupid_free(&o->gself);
   cupid_free(&o->sf);
+  pd_fracture_free(o);
   cupid_free(op);
 }
 

@@ -136,7 +136,44 @@ struct cupid_pd_operator_private {
   double *gself;          /* sum_j omega beta x D_ij n_ij, 3 per node (LPS: -dtheta_i/du_i m_i/(3V)) */
   cupid_surface_correction surface;
   double *sf;             /* surface factors, PD_SF per node (d[3], g[3], q[3]), or NULL */
+  /* Broken bonds (fracture.c): the families stay the geometric ones and a node with broken
+   * bonds gets a slot (bslot[i] >= 0, else -1) holding a mask of its broken stencil entries
+   * (bwords 64-bit words, bit s = entry s), their count and the sum of their dilatation
+   * weights wxn (3). Kept symmetric: (i, s) is broken iff (j, n-1-s) is. Every family walker
+   * skips broken entries; the stencil kernels sweep the whole stencil and subtract the broken
+   * bonds of the nodes that have some (pd_broken_*). m holds the intact families' sums, and
+   * gself stays the geometric one (the padded kernels' ghost correction needs it; the intact
+   * sum is pd_gself_intact). NULL until a bond is removed. */
+  int32_t *bslot;
+  uint64_t *bmask;
+  double *bgsum;
+  int *bcount;
+  int bwords;
+  int32_t nslots, slot_cap;
+  cupid_int nbroken;      /* bonds (unordered pairs) removed: pre-cracks and breaking */
+  cupid_int gen;          /* bumped when m changes (the stencil work arrays cache mu/m) */
 };
+
+/* 1 if the bond of node i at stencil entry s is broken. */
+static inline int pd_bond_broken(const struct cupid_pd_operator_private *op, cupid_int i, int s) {
+  if (!op->bslot) return 0;
+  const int32_t k = op->bslot[i];
+  if (k < 0) return 0;
+  return (int)((op->bmask[(size_t)k * (size_t)op->bwords + (size_t)(s >> 6)] >> (s & 63)) & 1u);
+}
+
+/* The dilatation self weight of node i over its intact bonds: gself minus the broken
+ * entries' wxn (tmp holds it when they differ). */
+static inline const double *pd_gself_intact(const struct cupid_pd_operator_private *op,
+                                            cupid_int i, double tmp[3]) {
+  if (!op->bslot || op->bslot[i] < 0) return op->gself + 3 * i;
+  const double *b = op->bgsum + 3 * (size_t)op->bslot[i];
+  for (int c = 0; c < 3; c++) tmp[c] = op->gself[3 * i + c] - b[c];
+  return tmp;
+}
+
+/* Fracture state of the operator (fracture.c). */
+void pd_fracture_free(struct cupid_pd_operator_private *op);
 
 /* Surface factors per node: d (dilatation), g and q (deviatoric or pair energy). */
 #define PD_SF 9

@@ -49,7 +49,8 @@
 typedef struct {
   int padded, lead;
   cupid_int base, n, cap;
-  cupid_int filled[4];  /* base, n, lo, hi of the last fill (its zeros and constants hold) */
+  cupid_int filled[5];  /* base, n, lo, hi and op->gen of the last fill (its zeros and
+                           constants hold; gen changes with m when bonds break) */
   double *x, *y, *z; /* displacement components */
   double *a;         /* LPS: kappa theta / m; bond-based: micromodulus c */
   double *b;         /* LPS: mu / m; NULL for bond-based */
@@ -147,6 +148,56 @@ static inline void pair_offsets(const struct cupid_pd_operator_private *op, cons
   }
 }
 
+/* u_j - u_i along n from the work arrays. */
+static inline double work_extension(const pd_work *w, const double *n, cupid_int li,
+                                    cupid_int lj) {
+  return n[0] * (w->x[lj] - w->x[li]) + n[1] * (w->y[lj] - w->y[li]) +
+         n[2] * (w->z[lj] - w->z[li]);
+}
+
+/* Broken bonds (pd_internal.h): the run kernels sweep every stencil entry, so what a node
+ * with broken bonds has lost is subtracted afterwards, term by term with the formulas of
+ * the sweep: sum over its broken entries of g_s.(u_j - u_i) (dilatation), and of the pair
+ * term (LPS: omega beta [(a_i + a_j) x_s + 15 (b_i + b_j) e] n_s, a_i included since the
+ * a_i terms of the intact family no longer cancel; bond-based omega beta/(2 x_s) (c_i + c_j)
+ * e n_s). Few nodes have broken bonds; for the others this costs one test per node. */
+#define PD_FOR_BROKEN(op, i, s, BODY)                                                        \
+  do {                                                                                       \
+    const uint64_t *mask_ = (op)->bmask + (size_t)(op)->bslot[i] * (size_t)(op)->bwords;     \
+    for (int w_ = 0; w_ < (op)->bwords; w_++)                                                \
+      for (uint64_t bits_ = mask_[w_]; bits_; bits_ &= bits_ - 1) {                          \
+        const int s = 64 * w_ + __builtin_ctzll(bits_);                                      \
+        BODY                                                                                 \
+      }                                                                                      \
+  } while (0)
+
+static double broken_dilatation(const struct cupid_pd_operator_private *op, const pd_work *w,
+                                const pd_run *R, cupid_int i) {
+  const cupid_int li = work_index(w, R, i);
+  double acc = 0.0;
+  PD_FOR_BROKEN(op, i, s, {
+    acc += work_extension(w, op->st.wxn + 3 * s, li, work_neighbour(op, w, R, i, s));
+  });
+  return acc;
+}
+
+static void broken_force(const struct cupid_pd_operator_private *op, const pd_work *w,
+                         const pd_run *R, cupid_int i, double g[3]) {
+  const pd_stencil *S = &op->st;
+  const cupid_int li = work_index(w, R, i);
+  const int lps = op->model == CUPID_PD_LPS;
+  g[0] = g[1] = g[2] = 0.0;
+  PD_FOR_BROKEN(op, i, s, {
+    const cupid_int lj = work_neighbour(op, w, R, i, s);
+    const double *n = S->nrm + 3 * s;
+    const double e = work_extension(w, n, li, lj);
+    const double t = lps ? S->wb[s] * ((w->a[li] + w->a[lj]) * S->x[s] +
+                                       15.0 * (w->b[li] + w->b[lj]) * e)
+                         : 0.5 * S->wb[s] / S->x[s] * (w->a[li] + w->a[lj]) * e;
+    for (int k = 0; k < 3; k++) g[k] += t * n[k];
+  });
+}
+
 /* f = -V^2 sum, with the ghost correction k_i G_i + b_i C_i u_i (k_i = a_i for LPS, 0 for
  * bond-based with b_i = c_i) for nodes without a full family. Always inlined: compiled with
  * each kernel instance's instruction set (the store loop vectorises with it). */
@@ -172,6 +223,15 @@ run_store(const struct cupid_pd_operator_private *op, const pd_work *w, const pd
         fy[t] += ai * G[1];
         fz[t] += ai * G[2];
       }
+    }
+  if (op->bslot)
+    for (int t = 0; t < len; t++) {
+      if (op->bslot[i + t] < 0) continue;
+      double g[3];
+      broken_force(op, w, R, i + t, g);
+      fx[t] -= g[0];
+      fy[t] -= g[1];
+      fz[t] -= g[2];
     }
   for (int t = 0; t < len; t++) {
     f[3 * t] = -V2 * fx[t];
@@ -262,12 +322,6 @@ int pd_stencil_kernel_lanes(void) { return kernels_pick()->lanes; }
 /* ---- Near-surface nodes without padding: their stored stencil entries, same formulas
  * and order (work arrays indexed by node). ---- */
 
-static inline double work_extension(const pd_work *w, const double *n, cupid_int li,
-                                    cupid_int lj) {
-  return n[0] * (w->x[lj] - w->x[li]) + n[1] * (w->y[lj] - w->y[li]) +
-         n[2] * (w->z[lj] - w->z[li]);
-}
-
 static void edge_dilatation(const struct cupid_pd_operator_private *op, const pd_work *w,
                             cupid_int i, double *theta) {
   const pd_stencil *S = &op->st;
@@ -276,6 +330,7 @@ static void edge_dilatation(const struct cupid_pd_operator_private *op, const pd
   double acc = 0.0;
   for (int q = 0; q < F.n; q++) {
     const int s = pd_family_entry(&F, q);
+    if (pd_bond_broken(op, i, s)) continue;
     const cupid_int lj = pd_family_node(op, &F, s) - w->base;
     acc += work_extension(w, S->wxn + 3 * s, li, lj);
   }
@@ -293,6 +348,7 @@ static void edge_force(const struct cupid_pd_operator_private *op, const pd_work
   double fi[3] = {0, 0, 0};
   for (int q = 0; q < F.n; q++) {
     const int s = pd_family_entry(&F, q);
+    if (pd_bond_broken(op, i, s)) continue;
     const cupid_int lj = pd_family_node(op, &F, s) - w->base;
     const double *n = S->nrm + 3 * s;
     const double e = work_extension(w, n, li, lj);
@@ -326,7 +382,7 @@ static cupid_int first_run(const struct cupid_pd_operator_private *op, cupid_int
 static void work_fill(const struct cupid_pd_operator_private *op, pd_work *w, cupid_int lo,
                       cupid_int hi, const double *u) {
   const int lps = w->b != NULL;
-  const cupid_int key[4] = {w->base, w->n, lo, hi};
+  const cupid_int key[5] = {w->base, w->n, lo, hi, op->gen};
   const int fresh = memcmp(key, w->filled, sizeof key) != 0;
   if (fresh && w->padded) {
     double *arrays[5] = {w->x, w->y, w->z, w->a, w->b};

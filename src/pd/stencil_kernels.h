@@ -51,6 +51,9 @@ static void PD_KNAME(run_dilatation)(const struct cupid_pd_operator_private *op,
       const double *G = op->gself + 3 * n; /* ghost bonds: -(sum over them of g).(0 - u_i) */
       acc[t] -= G[0] * X[t] + G[1] * Y[t] + G[2] * Z[t];
     }
+  if (op->bslot)
+    for (int t = 0; t < len; t++)
+      if (op->bslot[i + t] >= 0) acc[t] -= broken_dilatation(op, w, R, i + t);
   double *restrict a = w->a + li;
   const double *restrict mi = op->m + i, *restrict ki = op->kappa + i;
   const double V3 = 3.0 * op->V;

@@ -1,0 +1,409 @@
+/* Fracture in the PD operator (docs/theory.md, section Fracture; shared/reference/fracture.md):
+ * bonds removed by pre-cracks or broken by a criterion, the damage of a node, and the energy
+ * a break dissipates.
+ *
+ * A removed bond is a bit in a per-node mask of stencil entries (pd_internal.h), set for both
+ * of its ends; the families stay the geometric ones, so the storage and the stencil sweeps
+ * of the intact body are untouched. Removing bonds recomputes the weighted volume m of the
+ * two nodes over their intact bonds (broken bonds leave the family sums, fracture.md) and
+ * bumps op->gen so that the stencil path refreshes its copies of mu/m. A node left without
+ * any bond gets m = +inf: its dilatation, its a = kappa theta/m and b = mu/m are then 0, and
+ * it carries no force (it flies free, as in every PD code). */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#ifdef _OPENMP
+#include <omp.h>
+#endif
+
+#include "pd/pd_internal.h"
+
+void pd_fracture_free(struct cupid_pd_operator_private *op) {
+  cupid_free(&op->bslot);
+  cupid_free(&op->bmask);
+  cupid_free(&op->bgsum);
+  cupid_free(&op->bcount);
+  op->nslots = op->slot_cap = 0;
+  op->nbroken = 0;
+}
+
+static cupid_status fracture_init(struct cupid_pd_operator_private *op) {
+  if (op->bslot) return CUPID_SUCCESS;
+  CUPID_CHECK(op->surface == CUPID_SURFACE_NONE, CUPID_ERR_UNSUPPORTED,
+              "pre-cracks and bond breaking need surface_correction: none (the correction's "
+              "factors are fitted to the intact families)");
+  CUPID_CALL(cupid_malloc((size_t)op->nnodes, sizeof *op->bslot, "PD broken-bond slots", &op->bslot));
+  for (cupid_int i = 0; i < op->nnodes; i++) op->bslot[i] = -1;
+  op->bwords = (op->st.n + 63) / 64;
+  return CUPID_SUCCESS;
+}
+
+/* The slot of node i, made if it has none (grown by doubling). */
+static cupid_status slot_of(struct cupid_pd_operator_private *op, cupid_int i, int32_t *slot) {
+  if (op->bslot[i] >= 0) {
+    *slot = op->bslot[i];
+    return CUPID_SUCCESS;
+  }
+  if (op->nslots == op->slot_cap) {
+    CUPID_CHECK(op->slot_cap < INT32_MAX / 2, CUPID_ERR_MEMORY, "too many damaged PD nodes");
+    const int32_t cap = op->slot_cap ? 2 * op->slot_cap : 256;
+    const size_t w = (size_t)op->bwords;
+    uint64_t *mask = NULL;
+    double *g = NULL;
+    int *count = NULL;
+    CUPID_CALL(cupid_calloc((size_t)cap * w, sizeof *mask, "PD broken-bond masks", &mask));
+    if (cupid_calloc(3 * (size_t)cap, sizeof *g, "PD broken-bond weights", &g) != CUPID_SUCCESS ||
+        cupid_calloc((size_t)cap, sizeof *count, "PD broken-bond counts", &count) != CUPID_SUCCESS) {
+      cupid_free(&mask);
+      cupid_free(&g);
+      return CUPID_ERR_MEMORY;
+    }
+    if (op->nslots) {
+      memcpy(mask, op->bmask, (size_t)op->nslots * w * sizeof *mask);
+      memcpy(g, op->bgsum, 3 * (size_t)op->nslots * sizeof *g);
+      memcpy(count, op->bcount, (size_t)op->nslots * sizeof *count);
+    }
+    cupid_free(&op->bmask);
+    cupid_free(&op->bgsum);
+    cupid_free(&op->bcount);
+    op->bmask = mask, op->bgsum = g, op->bcount = count;
+    op->slot_cap = cap;
+  }
+  *slot = op->bslot[i] = op->nslots++;
+  return CUPID_SUCCESS;
+}
+
+/* Mark entry s of node i broken (one direction); 0 if it already was. */
+static cupid_status mark_broken(struct cupid_pd_operator_private *op, cupid_int i, int s, int *fresh) {
+  int32_t k = -1;
+  CUPID_CALL(slot_of(op, i, &k));
+  uint64_t *word = op->bmask + (size_t)k * (size_t)op->bwords + (size_t)(s >> 6);
+  const uint64_t bit = (uint64_t)1 << (s & 63);
+  *fresh = !(*word & bit);
+  if (!*fresh) return CUPID_SUCCESS;
+  *word |= bit;
+  op->bcount[k]++;
+  for (int c = 0; c < 3; c++) op->bgsum[3 * (size_t)k + c] += op->st.wxn[3 * s + c];
+  return CUPID_SUCCESS;
+}
+
+/* m_i over the intact family, in stencil order as node_data sums it (operator.c), or +inf
+ * for a node without any intact bond. */
+static void weighted_volume(struct cupid_pd_operator_private *op, cupid_int i) {
+  const pd_stencil *S = &op->st;
+  const pd_family F = pd_family_of(op, i);
+  double m = 0.0;
+  int intact = 0;
+  for (int q = 0; q < F.n; q++) {
+    const int s = pd_family_entry(&F, q);
+    if (pd_bond_broken(op, i, s)) continue;
+    m += S->wb[s] * S->x[s] * S->x[s] * op->V;
+    intact++;
+  }
+  op->m[i] = intact ? m : INFINITY;
+}
+
+/* Remove the bond of node i at stencil entry s (both directions). */
+static cupid_status remove_bond(struct cupid_pd_operator_private *op, cupid_int i, int s,
+                                int *removed) {
+  const pd_family F = pd_family_of(op, i);
+  const cupid_int j = pd_family_node(op, &F, s);
+  int a, b;
+  CUPID_CALL(mark_broken(op, i, s, &a));
+  CUPID_CALL(mark_broken(op, j, op->st.n - 1 - s, &b));
+  *removed = a;
+  if (!a) return CUPID_SUCCESS;
+  op->nbroken++;
+  weighted_volume(op, i);
+  weighted_volume(op, j);
+  op->gen++;
+  return CUPID_SUCCESS;
+}
+
+/* ---- Pre-cracks ---- */
+
+/* 1 if the segment from p to q crosses the rectangle: its ends lie strictly on opposite
+ * sides of the plane, or one lies on it and the other on the positive side (a plane through
+ * a layer of nodes leaves the layer with the negative side, and every bond across is cut
+ * once), and the crossing point lies within the bounds (inclusive). Nodes sit at cell
+ * centres, so a plane between two layers, the usual case, meets none. */
+static int segment_crosses(const cupid_pd_precrack *c, const double *p, const double *q) {
+  const int a = c->normal;
+  const double dp = p[a] - c->at, dq = q[a] - c->at;
+  if ((dp < 0 && dq < 0) || (dp > 0 && dq > 0) || dp == dq) return 0;
+  if ((dp == 0 && dq < 0) || (dq == 0 && dp < 0)) return 0;
+  const double t = dp / (dp - dq);
+  for (int b = 0; b < 3; b++) {
+    if (b == a) continue;
+    const double x = p[b] + t * (q[b] - p[b]);
+    if (x < c->lo[b] || x > c->hi[b]) return 0;
+  }
+  return 1;
+}
+
+cupid_status cupid_pd_operator_precrack(cupid_pd_operator op, const cupid_pd_precrack *crack,
+                                        cupid_int *removed) {
+  CUPID_CHECK(op && crack && removed, CUPID_ERR_ARGUMENT, "precrack needs operator, crack, count");
+  CUPID_CHECK(crack->normal >= 0 && crack->normal < 3 && isfinite(crack->at), CUPID_ERR_ARGUMENT,
+              "a pre-crack needs a normal axis 0, 1 or 2 and a finite position");
+  *removed = 0;
+  CUPID_CALL(fracture_init(op));
+  const double *x = op->grid->coords;
+  const pd_stencil *S = &op->st;
+  const int half = S->n / 2; /* entries s >= half reach higher node indices: each bond once */
+  for (cupid_int i = 0; i < op->nnodes; i++) {
+    const pd_family F = pd_family_of(op, i);
+    for (int q = 0; q < F.n; q++) {
+      const int s = pd_family_entry(&F, q);
+      if (s < half) continue;
+      const cupid_int j = pd_family_node(op, &F, s);
+      if (!segment_crosses(crack, x + 3 * i, x + 3 * j)) continue;
+      int fresh;
+      CUPID_CALL(remove_bond(op, i, s, &fresh));
+      *removed += fresh;
+    }
+  }
+  return CUPID_SUCCESS;
+}
+
+/* ---- Breaking ---- */
+
+/* 1 if the bond i-j may break: neither end protected, and no no-fail box holds both. */
+static int breakable(const cupid_pd_fracture_options *o, cupid_int i, cupid_int j) {
+  if (o->protect && (o->protect[i] || o->protect[j])) return 0;
+  if (o->no_fail && (o->no_fail[i] & o->no_fail[j])) return 0;
+  return 1;
+}
+
+/* Node energy over its intact bonds (the summand of pd_lps_energy / pd_bond_energy), so
+ * that the strain energy a set of breaks removes is the change of its nodes' energies. */
+static double node_energy(const struct cupid_pd_operator_private *op, const double *u, cupid_int i) {
+  const pd_stencil *S = &op->st;
+  const pd_family F = pd_family_of(op, i);
+  double q = 0.0, t = 0.0;
+  for (int k = 0; k < F.n; k++) {
+    const int s = pd_family_entry(&F, k);
+    if (pd_bond_broken(op, i, s)) continue;
+    const cupid_int j = pd_family_node(op, &F, s);
+    const double e = pd_extension(S->nrm + 3 * s, u, i, j);
+    if (op->model == CUPID_PD_BOND) {
+      q += 0.25 * pd_pair_coefficient(op, i, j, s) * e * e;
+    } else {
+      q += S->wb[s] * e * e;
+      t += S->wb[s] * S->x[s] * e;
+    }
+  }
+  if (op->model == CUPID_PD_BOND) return q;
+  if (isinf(op->m[i])) return 0.0;
+  const double theta = 3.0 * op->V * t / op->m[i];
+  return op->V * (op->kappa[i] / 6.0 * theta * theta + 7.5 * op->mu[i] / op->m[i] * q * op->V);
+}
+
+/* The critical-energy test of the LPS bond i-j at entry s (fracture.md: w = 1/4 |t_ij +
+ * t_ji| |e| against 4 G0 / (pi delta^4), t the scalar force states along n, linearised). */
+static double bond_energy_density(const struct cupid_pd_operator_private *op, const double *theta,
+                                  cupid_int i, cupid_int j, int s, double e) {
+  const pd_stencil *S = &op->st;
+  const double om = cupid_pd_influence(op->influence, S->x[s], op->delta);
+  const double ai = op->kappa[i] * theta[i] / op->m[i], aj = op->kappa[j] * theta[j] / op->m[j];
+  const double bi = op->mu[i] / op->m[i], bj = op->mu[j] / op->m[j];
+  const double t = om * ((ai + aj) * S->x[s] + 15.0 * (bi + bj) * e);
+  return 0.25 * fabs(t) * fabs(e);
+}
+
+typedef struct {
+  cupid_int *i;
+  int *s;
+  size_t n, cap;
+} bond_list;
+
+static int list_push(bond_list *L, cupid_int i, int s) {
+  if (L->n == L->cap) {
+    size_t cap = L->cap ? 2 * L->cap : 64;
+    cupid_int *a = realloc(L->i, cap * sizeof *a);
+    if (!a) return 0;
+    L->i = a;
+    int *b = realloc(L->s, cap * sizeof *b);
+    if (!b) return 0;
+    L->s = b;
+    L->cap = cap;
+  }
+  L->i[L->n] = i;
+  L->s[L->n++] = s;
+  return 1;
+}
+
+/* The bonds over their limit, each once (from its lower node), in ascending node order
+ * whatever the thread count: each thread scans a contiguous block of nodes (static schedule)
+ * into its own list and the lists are joined in thread order. */
+static cupid_status find_over(const struct cupid_pd_operator_private *op, const double *u,
+                              const double *theta, const cupid_pd_fracture_options *o,
+                              bond_list *out) {
+  const pd_stencil *S = &op->st;
+  const int half = S->n / 2;
+  int nt = 1;
+#ifdef _OPENMP
+  nt = op->nnodes > PD_OMP_MIN_NODES ? omp_get_max_threads() : 1;
+#endif
+  bond_list *per = calloc((size_t)nt, sizeof *per);
+  CUPID_CHECK(per, CUPID_ERR_MEMORY, "out of memory for the bond check");
+  int failed = 0;
+#pragma omp parallel num_threads(nt)
+  {
+    int tid = 0;
+#ifdef _OPENMP
+    tid = omp_get_thread_num();
+#endif
+    bond_list *L = &per[tid];
+#pragma omp for schedule(static)
+    for (cupid_int i = 0; i < op->nnodes; i++) {
+      const pd_family F = pd_family_of(op, i);
+      for (int q = 0; q < F.n; q++) {
+        const int s = pd_family_entry(&F, q);
+        if (s < half || pd_bond_broken(op, i, s)) continue;
+        const cupid_int j = pd_family_node(op, &F, s);
+        const double e = pd_extension(S->nrm + 3 * s, u, i, j);
+        /* strictly over: a bond at exactly its limit holds */
+        const int over = o->criterion == CUPID_PD_BREAK_STRETCH
+                             ? e > o->critical_stretch * S->x[s]
+                             : bond_energy_density(op, theta, i, j, s, e) > o->critical_energy;
+        if (over && breakable(o, i, j) && !list_push(L, i, s)) failed = 1;
+      }
+    }
+  }
+  cupid_status st = failed ? CUPID_ERROR(CUPID_ERR_MEMORY, "out of memory for broken bonds")
+                           : CUPID_SUCCESS;
+  for (int t = 0; t < nt; t++) {
+    for (size_t k = 0; k < per[t].n && st == CUPID_SUCCESS; k++)
+      if (!list_push(out, per[t].i[k], per[t].s[k]))
+        st = CUPID_ERROR(CUPID_ERR_MEMORY, "out of memory for broken bonds");
+    free(per[t].i);
+    free(per[t].s);
+  }
+  free(per);
+  return st;
+}
+
+static int cmp_int(const void *a, const void *b) {
+  const cupid_int x = *(const cupid_int *)a, y = *(const cupid_int *)b;
+  return (x > y) - (x < y);
+}
+
+/* Break the listed bonds; *dissipated = the strain energy they held (the drop of their
+ * nodes' energies, at u). */
+static cupid_status break_list(struct cupid_pd_operator_private *op, const double *u,
+                               const bond_list *L, double *dissipated) {
+  *dissipated = 0.0;
+  if (L->n == 0) return CUPID_SUCCESS;
+  cupid_int *nodes = malloc(2 * L->n * sizeof *nodes);
+  CUPID_CHECK(nodes, CUPID_ERR_MEMORY, "out of memory for broken bonds");
+  size_t nn = 0;
+  for (size_t k = 0; k < L->n; k++) {
+    const pd_family F = pd_family_of(op, L->i[k]);
+    nodes[nn++] = L->i[k];
+    nodes[nn++] = pd_family_node(op, &F, L->s[k]);
+  }
+  qsort(nodes, nn, sizeof *nodes, cmp_int);
+  size_t u_n = 0;
+  for (size_t k = 0; k < nn; k++)
+    if (u_n == 0 || nodes[u_n - 1] != nodes[k]) nodes[u_n++] = nodes[k];
+  double before = 0.0, after = 0.0;
+  for (size_t k = 0; k < u_n; k++) before += node_energy(op, u, nodes[k]);
+  cupid_status st = CUPID_SUCCESS;
+  for (size_t k = 0; k < L->n && st == CUPID_SUCCESS; k++) {
+    int fresh;
+    st = remove_bond(op, L->i[k], L->s[k], &fresh);
+  }
+  for (size_t k = 0; k < u_n; k++) after += node_energy(op, u, nodes[k]);
+  free(nodes);
+  *dissipated = before - after;
+  return st;
+}
+
+cupid_status cupid_pd_operator_break_bonds(cupid_pd_operator op, const double *u,
+                                           const cupid_pd_fracture_options *o, int only_most,
+                                           cupid_int *broken, double *dissipated) {
+  CUPID_CHECK(op && u && o && broken && dissipated, CUPID_ERR_ARGUMENT,
+              "break_bonds needs operator, displacement, options and outputs");
+  CUPID_CHECK(o->criterion == CUPID_PD_BREAK_STRETCH ? o->critical_stretch > 0
+                                                     : o->critical_energy > 0,
+              CUPID_ERR_ARGUMENT, "break_bonds needs a positive critical value");
+  CUPID_CHECK(o->criterion == CUPID_PD_BREAK_STRETCH || op->model == CUPID_PD_LPS,
+              CUPID_ERR_UNSUPPORTED, "the critical-energy criterion needs the LPS model");
+  *broken = 0;
+  *dissipated = 0.0;
+  CUPID_CALL(fracture_init(op));
+  double *theta = NULL;
+  bond_list L = {0};
+  cupid_status st = CUPID_SUCCESS;
+  if (o->criterion == CUPID_PD_BREAK_ENERGY) {
+    CUPID_TRY(cupid_malloc((size_t)op->nnodes, sizeof *theta, "PD dilatations", &theta));
+    pd_lps_dilatation(op, 0, op->nnodes, u, theta);
+  }
+  CUPID_TRY(find_over(op, u, theta, o, &L));
+  if (only_most && L.n > 1) { /* the most critical one: largest ratio to its limit */
+    size_t best = 0;
+    double worst = -1.0;
+    for (size_t k = 0; k < L.n; k++) {
+      const pd_family F = pd_family_of(op, L.i[k]);
+      const cupid_int j = pd_family_node(op, &F, L.s[k]);
+      const int s = L.s[k];
+      const double e = pd_extension(op->st.nrm + 3 * s, u, L.i[k], j);
+      const double r = o->criterion == CUPID_PD_BREAK_STRETCH
+                           ? e / (op->st.x[s] * o->critical_stretch)
+                           : bond_energy_density(op, theta, L.i[k], j, s, e) / o->critical_energy;
+      if (r > worst) worst = r, best = k; /* first of equals: deterministic */
+    }
+    L.i[0] = L.i[best], L.s[0] = L.s[best], L.n = 1;
+  }
+  CUPID_TRY(break_list(op, u, &L, dissipated));
+  *broken = (cupid_int)L.n;
+cleanup:
+  free(L.i);
+  free(L.s);
+  cupid_free(&theta);
+  return st;
+}
+
+cupid_int cupid_pd_operator_num_broken(const cupid_pd_operator op) { return op ? op->nbroken : 0; }
+
+int cupid_pd_operator_bond_intact(const cupid_pd_operator op, cupid_int i, cupid_int j) {
+  if (!op || i < 0 || j < 0 || i >= op->nnodes || j >= op->nnodes) return 0;
+  const pd_family F = pd_family_of(op, i);
+  for (int q = 0; q < F.n; q++) {
+    const int s = pd_family_entry(&F, q);
+    if (pd_family_node(op, &F, s) == j) return !pd_bond_broken(op, i, s);
+  }
+  return 0;
+}
+
+/* damage_i = 1 - sum over intact bonds of beta V / sum over all bonds of beta V (LAMMPS
+ * compute damage/atom; the contract's definition): beta = (omega beta) / omega. */
+cupid_status cupid_pd_operator_damage(const cupid_pd_operator op, double *damage,
+                                      cupid_int *damaged, double *max_damage) {
+  CUPID_CHECK(op && damage, CUPID_ERR_ARGUMENT, "damage needs operator and output");
+  const pd_stencil *S = &op->st;
+  cupid_int nd = 0;
+  double mx = 0.0;
+#pragma omp parallel for schedule(static) reduction(+ : nd) reduction(max : mx) \
+    if (op->nnodes > PD_OMP_MIN_NODES)
+  for (cupid_int i = 0; i < op->nnodes; i++) {
+    damage[i] = 0.0;
+    if (!op->bslot || op->bslot[i] < 0) continue;
+    const pd_family F = pd_family_of(op, i);
+    double all = 0.0, lost = 0.0;
+    for (int q = 0; q < F.n; q++) {
+      const int s = pd_family_entry(&F, q);
+      const double beta = S->wb[s] / cupid_pd_influence(op->influence, S->x[s], op->delta);
+      all += beta;
+      if (pd_bond_broken(op, i, s)) lost += beta;
+    }
+    damage[i] = all > 0 ? lost / all : 0.0;
+    nd += lost > 0;
+    if (damage[i] > mx) mx = damage[i];
+  }
+  if (damaged) *damaged = nd;
+  if (max_damage) *max_damage = mx;
+  return CUPID_SUCCESS;
+}

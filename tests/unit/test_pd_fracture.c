@@ -1,0 +1,353 @@
+/* Fracture in the PD operator (src/pd/fracture.c): pre-crack geometry against a brute-force
+ * count; the operator of a cracked body (stencil kernels with their broken-bond masks, on a
+ * padded box and on a sparse union, every instruction set) against the bond-list kernels, the
+ * assembled K, the energy and the diagonal; the stretch criterion at and just above s0;
+ * irreversibility, protection and no-fail boxes; damage; the energy a break dissipates;
+ * the same broken bonds for 1 and 2 threads; a node that loses every bond. */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+#ifdef _OPENMP
+#include <omp.h>
+#endif
+
+#include "pd/pd_internal.h"
+#include "testutil.h"
+
+static const cupid_pd_material mats[2] = {{.E = 1000.0, .nu = 0.25}, {.E = 400.0, .nu = 0.3}};
+
+typedef struct {
+  cupid_pd_grid grid;
+  cupid_pd_operator op;
+  cupid_int n;
+} body;
+
+static body make(int n_boxes, const cupid_box *boxes, cupid_pd_model_kind model,
+                 cupid_partial_volume pv, double horizon) {
+  body b = {0};
+  cupid_pd_grid_options go = {.spacing = 1.0, .dimension = 3};
+  int m[4] = {0, 1, 0, 1};
+  CUPID_ASSERT_OK(cupid_pd_grid_create(&go, n_boxes, boxes, m, &b.grid));
+  cupid_pd_operator_options oo = {.horizon = horizon, .model = model,
+                                  .influence = CUPID_INFLUENCE_GAUSSIAN, .partial_volume = pv,
+                                  .materials = mats, .n_materials = 2};
+  CUPID_ASSERT_OK(cupid_pd_operator_create(b.grid, &oo, &b.op));
+  b.n = cupid_pd_grid_num_nodes(b.grid);
+  return b;
+}
+
+static void destroy(body *b) {
+  cupid_pd_operator_destroy(&b->op);
+  cupid_pd_grid_destroy(&b->grid);
+}
+
+static cupid_box box3(double x0, double x1, double y0, double y1, double z0, double z1) {
+  return (cupid_box){.lo = {x0, y0, z0}, .hi = {x1, y1, z1}, .has = {1, 1, 1}};
+}
+
+/* Brute force over all node pairs within the horizon (beta = 1 there: partial volume none). */
+static cupid_int brute_crossings(const body *b, const cupid_pd_precrack *c, double delta) {
+  const double *x = cupid_pd_grid_coords(b->grid);
+  cupid_int count = 0;
+  for (cupid_int i = 0; i < b->n; i++)
+    for (cupid_int j = i + 1; j < b->n; j++) {
+      const double *p = x + 3 * i, *q = x + 3 * j;
+      double r2 = 0;
+      for (int k = 0; k < 3; k++) r2 += (q[k] - p[k]) * (q[k] - p[k]);
+      if (r2 > delta * delta * (1 + 1e-12)) continue;
+      const int a = c->normal;
+      double dp = p[a] - c->at, dq = q[a] - c->at;
+      /* either order: the rule is symmetric in the ends */
+      int cross = (dp < 0 && dq > 0) || (dp > 0 && dq < 0) || (dp == 0 && dq > 0) ||
+                  (dq == 0 && dp > 0);
+      if (!cross) continue;
+      double t = dp / (dp - dq);
+      for (int k = 0; k < 3 && cross; k++)
+        if (k != a) {
+          double y = p[k] + t * (q[k] - p[k]);
+          cross = y >= c->lo[k] && y <= c->hi[k];
+        }
+      count += cross;
+    }
+  return count;
+}
+
+static void test_precrack_count(void **state) {
+  (void)state;
+  cupid_box bx = box3(0, 8, 0, 8, 0, 6);
+  const double delta = 3.0;
+  /* between two layers, through a layer of nodes (y = 3.5), a partial rectangle in x and z,
+   * and a plane normal to x */
+  cupid_pd_precrack cracks[4] = {
+      {.normal = 1, .at = 4.0, .lo = {0, 0, 0}, .hi = {3, 0, 6}},
+      {.normal = 1, .at = 3.5, .lo = {0, 0, 0}, .hi = {8, 0, 6}},
+      {.normal = 1, .at = 4.0, .lo = {2.2, 0, 1.3}, .hi = {5.1, 0, 3.9}},
+      {.normal = 0, .at = 2.0, .lo = {0, 0, 0}, .hi = {0, 5, 6}}};
+  for (int c = 0; c < 4; c++)
+    for (int model = 0; model < 2; model++) {
+      body b = make(1, &bx, (cupid_pd_model_kind)model, CUPID_PARTIAL_NONE, delta);
+      const cupid_int expect = brute_crossings(&b, &cracks[c], delta);
+      cupid_int removed;
+      CUPID_ASSERT_OK(cupid_pd_operator_precrack(b.op, &cracks[c], &removed));
+      print_message("precrack %d model %d: %lld bonds cut (brute force %lld)\n", c, model,
+                    (long long)removed, (long long)expect);
+      assert_true(expect > 0);
+      assert_int_equal(removed, expect);
+      assert_int_equal(cupid_pd_operator_num_broken(b.op), expect);
+      /* again: nothing left to cut */
+      CUPID_ASSERT_OK(cupid_pd_operator_precrack(b.op, &cracks[c], &removed));
+      assert_int_equal(removed, 0);
+      destroy(&b);
+    }
+}
+
+static double max_abs(cupid_int n, const double *x) {
+  double m = 0.0;
+  for (cupid_int i = 0; i < n; i++) m = fmax(m, fabs(x[i]));
+  return m;
+}
+
+/* A cracked body: a pre-crack plus bonds broken by a random field. */
+static void crack_body(body *b, double s0) {
+  cupid_pd_precrack c = {.normal = 1, .at = 4.0, .lo = {0, 0, -1}, .hi = {3, 0, 9}};
+  cupid_int removed, broken;
+  CUPID_ASSERT_OK(cupid_pd_operator_precrack(b->op, &c, &removed));
+  assert_true(removed > 0);
+  double *u = malloc(3 * (size_t)b->n * sizeof *u), diss;
+  uint64_t seed = 3;
+  for (cupid_int i = 0; i < 3 * b->n; i++) u[i] = cupid_test_random(&seed) - 0.5;
+  cupid_pd_fracture_options fo = {.criterion = CUPID_PD_BREAK_STRETCH, .critical_stretch = s0};
+  CUPID_ASSERT_OK(cupid_pd_operator_break_bonds(b->op, u, &fo, 0, &broken, &diss));
+  assert_true(broken > 0);
+  free(u);
+}
+
+/* Stencil path with masks = bond lists = assembled K = energy form = diagonal. */
+static void check_cracked(int n_boxes, const cupid_box *boxes, cupid_pd_model_kind model,
+                          cupid_partial_volume pv, int isa) {
+  body b = make(n_boxes, boxes, model, pv, 3.0);
+  crack_body(&b, 0.3);
+  const cupid_int n = b.n;
+  double *u = malloc(3 * (size_t)n * sizeof *u), *f = malloc(3 * (size_t)n * sizeof *f);
+  double *g = malloc(3 * (size_t)n * sizeof *g), *d = malloc(9 * (size_t)n * sizeof *d);
+  uint64_t seed = 17;
+  for (cupid_int i = 0; i < 3 * n; i++) u[i] = cupid_test_random(&seed) - 0.5;
+  pd_stencil_force_isa(isa);
+  CUPID_ASSERT_OK(cupid_pd_operator_apply(b.op, u, f));
+  pd_stencil_force_isa(0);
+  cupid_csr K = NULL;
+  CUPID_ASSERT_OK(cupid_pd_operator_assemble(b.op, &K));
+  cupid_csr_matvec(K, u, g);
+  const double fm = max_abs(3 * n, g);
+  /* the same sums in another order (sweep minus the broken terms, or rows of K): round-off,
+   * 1e-12 of max |f| (terms O(max |f|), the subtraction adds a few ulps of each) */
+  for (cupid_int i = 0; i < 3 * n; i++) ASSERT_NEAR(f[i], g[i], 1e-12 * fm);
+  double E, uKu = 0;
+  CUPID_ASSERT_OK(cupid_pd_operator_energy(b.op, u, &E));
+  for (cupid_int i = 0; i < 3 * n; i++) uKu += u[i] * g[i];
+  ASSERT_NEAR(E, 0.5 * uKu, 1e-12 * fabs(E));
+  CUPID_ASSERT_OK(cupid_pd_operator_diagonal(b.op, d));
+  for (cupid_int r = 0; r < n; r++) {
+    const double *blk = cupid_csr_find(K, r, r);
+    assert_non_null(blk);
+    for (int k = 0; k < 9; k++) ASSERT_NEAR(d[9 * r + k], blk[k], 1e-12 * fm);
+  }
+  CUPID_ASSERT_OK(pd_operator_use_bond_lists(b.op));
+  CUPID_ASSERT_OK(cupid_pd_operator_apply(b.op, u, g));
+  for (cupid_int i = 0; i < 3 * n; i++) ASSERT_NEAR(f[i], g[i], 1e-12 * fm);
+  /* ranges on the bond lists and on the stencil path */
+  const cupid_int a = n / 4, e = n / 4 + n / 3;
+  CUPID_ASSERT_OK(cupid_pd_operator_apply_range(b.op, a, e, u, g));
+  for (cupid_int i = 0; i < 3 * (e - a); i++) ASSERT_NEAR(g[i], f[3 * a + i], 1e-12 * fm);
+  b.op->stencil_off = 0;
+  CUPID_ASSERT_OK(cupid_pd_operator_apply_range(b.op, a, e, u, g));
+  for (cupid_int i = 0; i < 3 * (e - a); i++) ASSERT_NEAR(g[i], f[3 * a + i], 1e-12 * fm);
+  /* still no force from a rigid motion */
+  for (cupid_int i = 0; i < n; i++) u[3 * i] = 2.0, u[3 * i + 1] = -1.0, u[3 * i + 2] = 0.5;
+  CUPID_ASSERT_OK(cupid_pd_operator_apply(b.op, u, f));
+  assert_true(max_abs(3 * n, f) < 1e-12 * fm);
+  cupid_csr_destroy(&K);
+  free(u), free(f), free(g), free(d);
+  destroy(&b);
+}
+
+static void test_cracked_operator(void **state) {
+  (void)state;
+  const cupid_box box = box3(0, 9, 0, 8, 0, 5);
+  /* two boxes far apart: the padded lattice would be mostly empty, so the operator takes
+   * the unpadded path (full runs by the kernels, near-surface nodes by family walks) */
+  const cupid_box sparse[2] = {box3(0, 9, 0, 8, 0, 5), box3(40, 46, 30, 36, 0, 5)};
+  for (int model = 0; model < 2; model++)
+    for (int isa = 1; isa <= 4; isa += (isa == 1 ? 2 : 1)) {
+      check_cracked(1, &box, (cupid_pd_model_kind)model, CUPID_PARTIAL_PDLAMMPS, isa);
+      check_cracked(2, sparse, (cupid_pd_model_kind)model, CUPID_PARTIAL_NONE, isa);
+    }
+}
+
+/* u_y = s y (s = 1/2, coordinates half-integers: every stretch exact): bonds along y have
+ * stretch exactly s, all others less. At s0 = s none breaks; at u (1 + 2^-10) exactly the
+ * y bonds do; then nothing heals or breaks at u = 0. */
+static void test_stretch_threshold(void **state) {
+  (void)state;
+  cupid_box bx = box3(0, 5, 0, 6, 0, 4);
+  body b = make(1, &bx, CUPID_PD_BOND, CUPID_PARTIAL_NONE, 2.5);
+  const double *x = cupid_pd_grid_coords(b.grid);
+  double *u = calloc(3 * (size_t)b.n, sizeof *u), diss;
+  for (cupid_int i = 0; i < b.n; i++) u[3 * i + 1] = 0.5 * x[3 * i + 1];
+  cupid_pd_fracture_options fo = {.criterion = CUPID_PD_BREAK_STRETCH, .critical_stretch = 0.5};
+  cupid_int broken;
+  CUPID_ASSERT_OK(cupid_pd_operator_break_bonds(b.op, u, &fo, 0, &broken, &diss));
+  assert_int_equal(broken, 0);
+  for (cupid_int i = 0; i < 3 * b.n; i++) u[i] *= 1.0 + 1.0 / 1024.0;
+  CUPID_ASSERT_OK(cupid_pd_operator_break_bonds(b.op, u, &fo, 0, &broken, &diss));
+  /* y bonds: pairs on one (x, z) column at y distance 1 or 2 (<= 2.5) */
+  const cupid_int columns = 5 * 4, expect = columns * (5 + 4);
+  assert_int_equal(broken, expect);
+  assert_true(diss > 0);
+  assert_int_equal(cupid_pd_operator_bond_intact(b.op, 0, 5), 0);  /* (0.5,0.5) - (0.5,1.5) */
+  assert_int_equal(cupid_pd_operator_bond_intact(b.op, 0, 1), 1);  /* along x */
+  memset(u, 0, 3 * (size_t)b.n * sizeof *u);
+  CUPID_ASSERT_OK(cupid_pd_operator_break_bonds(b.op, u, &fo, 0, &broken, &diss));
+  assert_int_equal(broken, 0);
+  assert_int_equal(cupid_pd_operator_num_broken(b.op), expect);
+  assert_int_equal(cupid_pd_operator_bond_intact(b.op, 0, 5), 0); /* irreversible */
+  free(u);
+  destroy(&b);
+}
+
+/* Protected nodes and no-fail boxes; only_most; damage; dissipated energy = energy drop. */
+static void test_protect_damage_energy(void **state) {
+  (void)state;
+  cupid_box bx = box3(0, 6, 0, 6, 0, 4);
+  for (int model = 0; model < 2; model++) {
+    body b = make(1, &bx, (cupid_pd_model_kind)model, CUPID_PARTIAL_PDLAMMPS, 2.5);
+    const double *x = cupid_pd_grid_coords(b.grid);
+    double *u = calloc(3 * (size_t)b.n, sizeof *u), *dmg = calloc((size_t)b.n, sizeof *dmg);
+    uint32_t *nf = calloc((size_t)b.n, sizeof *nf);
+    unsigned char *prot = calloc((size_t)b.n, 1);
+    for (cupid_int i = 0; i < b.n; i++) {
+      u[3 * i + 1] = x[3 * i + 1] > 3 ? 0.1 : 0.0; /* a jump across y = 3 */
+      nf[i] = x[3 * i] < 2 ? 1u : 0u;               /* no-fail box x < 2 */
+      prot[i] = x[3 * i] > 5 ? 1 : 0;               /* protected column x > 5 */
+    }
+    cupid_pd_fracture_options fo = {.criterion = CUPID_PD_BREAK_STRETCH, .critical_stretch = 0.01,
+                                    .protect = prot, .no_fail = nf};
+    cupid_int broken, damaged;
+    double diss, E0, E1, maxd;
+    CUPID_ASSERT_OK(cupid_pd_operator_energy(b.op, u, &E0));
+    CUPID_ASSERT_OK(cupid_pd_operator_break_bonds(b.op, u, &fo, 1, &broken, &diss));
+    assert_int_equal(broken, 1);
+    CUPID_ASSERT_OK(cupid_pd_operator_break_bonds(b.op, u, &fo, 0, &broken, &diss));
+    assert_true(broken > 0);
+    CUPID_ASSERT_OK(cupid_pd_operator_energy(b.op, u, &E1));
+    /* the energy left plus the energy of the second batch: its drop (the first batch's
+     * energy is E0 - E1 - diss, positive) */
+    assert_true(diss > 0 && E0 - E1 > diss);
+    double E2;
+    fo.critical_stretch = 1e-6; /* the rest of the breakable bonds across the jump */
+    CUPID_ASSERT_OK(cupid_pd_operator_break_bonds(b.op, u, &fo, 0, &broken, &diss));
+    CUPID_ASSERT_OK(cupid_pd_operator_energy(b.op, u, &E2));
+    ASSERT_NEAR(E1 - E2, diss, 1e-12 * E0);
+    for (cupid_int i = 0; i < b.n; i++)
+      for (cupid_int j = 0; j < b.n; j++) {
+        const double *p = x + 3 * i, *q = x + 3 * j;
+        if (!((p[1] < 3) && (q[1] > 3))) continue;
+        const int may = !(p[0] < 2 && q[0] < 2) && !(p[0] > 5 || q[0] > 5);
+        double r2 = 0;
+        for (int k = 0; k < 3; k++) r2 += (q[k] - p[k]) * (q[k] - p[k]);
+        if (r2 > 2.4 * 2.4) continue; /* bonded for sure (beta 1 within delta - h/2 = 2) */
+        if (fabs(q[0] - p[0]) > 1e-9 || fabs(q[2] - p[2]) > 1e-9) continue; /* along y */
+        assert_int_equal(cupid_pd_operator_bond_intact(b.op, i, j), !may);
+      }
+    CUPID_ASSERT_OK(cupid_pd_operator_damage(b.op, dmg, &damaged, &maxd));
+    assert_true(damaged > 0 && maxd > 0 && maxd < 1);
+    for (cupid_int i = 0; i < b.n; i++) {
+      const double *p = x + 3 * i;
+      if (p[0] > 5) assert_true(dmg[i] == 0.0); /* protected */
+      if (p[1] < 1 || p[1] > 5) assert_true(dmg[i] == 0.0); /* too far from the jump */
+    }
+    free(u), free(dmg), free(nf), free(prot);
+    destroy(&b);
+  }
+}
+
+/* The same broken bonds for 1 and 2 threads (a large enough body for the parallel scan). */
+static void test_threads(void **state) {
+  (void)state;
+#ifdef _OPENMP
+  cupid_box bx = box3(0, 16, 0, 16, 0, 8);
+  double dmg[2][2048];
+  cupid_int nb[2];
+  const int saved = omp_get_max_threads();
+  for (int t = 0; t < 2; t++) {
+    omp_set_num_threads(t + 1);
+    body b = make(1, &bx, CUPID_PD_LPS, CUPID_PARTIAL_PDLAMMPS, 3.0);
+    assert_true(b.n <= 2048);
+    double *u = malloc(3 * (size_t)b.n * sizeof *u), diss;
+    uint64_t seed = 9;
+    for (cupid_int i = 0; i < 3 * b.n; i++) u[i] = cupid_test_random(&seed) - 0.5;
+    cupid_pd_fracture_options fo = {.criterion = CUPID_PD_BREAK_STRETCH, .critical_stretch = 0.4};
+    CUPID_ASSERT_OK(cupid_pd_operator_break_bonds(b.op, u, &fo, 0, &nb[t], &diss));
+    fo.criterion = CUPID_PD_BREAK_ENERGY;
+    fo.critical_energy = 2.0;
+    cupid_int more;
+    CUPID_ASSERT_OK(cupid_pd_operator_break_bonds(b.op, u, &fo, 0, &more, &diss));
+    nb[t] += more;
+    CUPID_ASSERT_OK(cupid_pd_operator_damage(b.op, dmg[t], NULL, NULL));
+    free(u);
+    destroy(&b);
+  }
+  omp_set_num_threads(saved);
+  assert_true(nb[0] > 0);
+  assert_int_equal(nb[0], nb[1]);
+  assert_memory_equal(dmg[0], dmg[1], sizeof dmg[0]);
+#endif
+}
+
+/* A node that loses every bond: no force on it, nothing non-finite anywhere. */
+static void test_isolated_node(void **state) {
+  (void)state;
+  cupid_box bx = box3(0, 5, 0, 5, 0, 5);
+  for (int model = 0; model < 2; model++) {
+    body b = make(1, &bx, (cupid_pd_model_kind)model, CUPID_PARTIAL_PDLAMMPS, 2.0);
+    double *u = calloc(3 * (size_t)b.n, sizeof *u), *f = malloc(3 * (size_t)b.n * sizeof *f);
+    const cupid_int c = 62; /* (2.5, 2.5, 2.5) */
+    cupid_pd_fracture_options fo = {.criterion = CUPID_PD_BREAK_STRETCH, .critical_stretch = 0.5};
+    cupid_int broken, total = 0;
+    double diss;
+    /* pulled along +-x, +-y, +-z in turn: every bond of c is stretched by one of them
+     * (by 10 |n_k| / x >= 10 / (sqrt 3 * 2) > s0 for its largest component k) */
+    for (int d = 0; d < 6; d++) {
+      u[3 * c] = u[3 * c + 1] = u[3 * c + 2] = 0.0;
+      u[3 * c + d / 2] = d % 2 ? -10.0 : 10.0;
+      CUPID_ASSERT_OK(cupid_pd_operator_break_bonds(b.op, u, &fo, 0, &broken, &diss));
+      total += broken;
+    }
+    assert_true(total > 0);
+    assert_true(isinf(b.op->m[c]));
+    /* the scale: the forces of the same field on the intact body */
+    body intact = make(1, &bx, (cupid_pd_model_kind)model, CUPID_PARTIAL_PDLAMMPS, 2.0);
+    CUPID_ASSERT_OK(cupid_pd_operator_apply(intact.op, u, f));
+    const double scale = max_abs(3 * b.n, f);
+    destroy(&intact);
+    CUPID_ASSERT_OK(cupid_pd_operator_apply(b.op, u, f));
+    for (cupid_int i = 0; i < 3 * b.n; i++) assert_true(isfinite(f[i]));
+    /* c's force is the sweep minus all its bonds, the others rest (u = 0 there): zero to
+     * round-off of the intact forces */
+    assert_true(max_abs(3 * b.n, f) < 1e-13 * scale);
+    double dmg[125];
+    CUPID_ASSERT_OK(cupid_pd_operator_damage(b.op, dmg, NULL, NULL));
+    assert_true(dmg[c] == 1.0);
+    free(u), free(f);
+    destroy(&b);
+  }
+}
+
+int main(void) {
+  const struct CMUnitTest tests[] = {
+      cmocka_unit_test(test_precrack_count),     cmocka_unit_test(test_cracked_operator),
+      cmocka_unit_test(test_stretch_threshold),  cmocka_unit_test(test_protect_damage_energy),
+      cmocka_unit_test(test_threads),            cmocka_unit_test(test_isolated_node),
+  };
+  return cmocka_run_group_tests(tests, NULL, NULL);
+}
