@@ -7,8 +7,9 @@
  *
  * The system is given as global matrices on any DOF layout: PD-only, FE-only, or a coupled
  * [3 per PD node | FE DOFs] system (K then includes the coupling terms). Fixed DOFs of the
- * Dirichlet conditions are held at their (constant) prescribed values with zero velocity and
- * acceleration; the load f is constant in time.
+ * Dirichlet conditions are held at their prescribed values with zero velocity and
+ * acceleration (massless supports); values and load are constant in time unless
+ * cupid_dynamics_hooks.conditions gives them at each step.
  *
  * Damping: C = a M + b K (Rayleigh), modal damping ratio zeta = a / (2 omega) + b omega / 2.
  */
@@ -33,6 +34,24 @@ typedef struct {
   const double *f;               /**< constant external force (n entries), or NULL */
 } cupid_dynamics_system;
 
+/** Optional hooks of a run (cupid_dynamics_options.hooks). */
+typedef struct {
+  /** Time-dependent conditions: at time t, the prescribed values of the fixed DOFs (into
+   *  @p u_fixed: its fixed entries are read) and the whole load (into @p f, n entries). Called
+   *  at t = 0 and at every step's end time. NULL: the constant bc values and f. The support
+   *  reactions R = K u + C v + M a - f on the fixed DOFs then do work as they move (the
+   *  trapezoidal rule), counted in the external work; fixed DOFs carry no kinetic energy. */
+  cupid_status (*conditions)(void *ctx, double t, double *u_fixed, double *f);
+  /** After the forces of every step and at t = 0 (central differences only): e.g. break
+   *  bonds. The strain energy it removes from the system at u goes to *dissipated (added to
+   *  cupid_dynamics_energy.fracture); when not 0, K changed at t_{n+1}: v_{n+1} stands and
+   *  the acceleration is recomputed with the new K, so that what broke does no work after it
+   *  broke and the energy balance stays second order. NULL: none. */
+  cupid_status (*after_forces)(void *ctx, cupid_int step, double t, const double *u,
+                               double *dissipated);
+  void *ctx;
+} cupid_dynamics_hooks;
+
 /** Integration settings (cupid_dynamics_defaults() gives average-acceleration Newmark). */
 typedef struct {
   cupid_integrator integrator;   /**< CUPID_INTEGRATOR_NEWMARK or _CENTRAL */
@@ -42,16 +61,18 @@ typedef struct {
   double beta, gamma;            /**< Newmark parameters (default 1/4, 1/2) */
   double rayleigh_mass;          /**< a in C = a M + b K */
   double rayleigh_stiffness;     /**< b */
+  const cupid_dynamics_hooks *hooks; /**< NULL: constant conditions, nothing after the forces */
 } cupid_dynamics_options;
 
 /** Energies at one instant. With E0 the initial kinetic + strain energy, the balance is
- *  kinetic + strain + damping - external = E0 (drift reported as its residual). */
+ *  kinetic + strain + damping + fracture - external = E0 (drift reported as its residual). */
 typedef struct {
   double kinetic;   /**< v.M v / 2 */
   double strain;    /**< u.K u / 2 */
   double damping;   /**< energy dissipated by C since t = 0 (midpoint rule) */
-  double external;  /**< work of f since t = 0 */
-  double balance;   /**< kinetic + strain + damping - external - E0 */
+  double external;  /**< work of f (and of moving supports) since t = 0 */
+  double fracture;  /**< strain energy removed by hooks->after_forces (broken bonds) */
+  double balance;   /**< kinetic + strain + damping + fracture - external - E0 */
 } cupid_dynamics_energy;
 
 /** What a run did. */

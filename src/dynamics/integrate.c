@@ -41,13 +41,20 @@ typedef struct {
   void *kctx;
   cupid_status kst;                /* first failure of kfn (checked after each step) */
   const cupid_dynamics_options *opt;
+  const cupid_dynamics_hooks *hooks; /* opt->hooks, or NULL */
   double *a, *un, *vn, *an, *w1, *w2, *t1, *t2, *g;
+  /* Time-dependent conditions (hooks->conditions): the load now (f points here, else at
+   * sys->f), the prescribed values, the support reactions of the last step, the fixed DOFs'
+   * increment. */
+  const double *f;
+  double *fcur, *fprev, *ufix, *react, *du;
   cupid_dynamics_energy e;
   double e0, scale, max_balance;
 } dyn_state;
 
 static void state_free(dyn_state *s) {
-  double **arrays[] = {&s->a, &s->un, &s->vn, &s->an, &s->w1, &s->w2, &s->t1, &s->t2, &s->g};
+  double **arrays[] = {&s->a,  &s->un, &s->vn, &s->an,   &s->w1,   &s->w2,    &s->t1,
+                       &s->t2, &s->g,  &s->fcur, &s->fprev, &s->ufix, &s->react, &s->du};
   for (size_t k = 0; k < sizeof arrays / sizeof *arrays; k++) cupid_free(arrays[k]);
 }
 
@@ -55,6 +62,49 @@ static cupid_status state_alloc(dyn_state *s) {
   double **arrays[] = {&s->a, &s->un, &s->vn, &s->an, &s->w1, &s->w2, &s->t1, &s->t2, &s->g};
   for (size_t k = 0; k < sizeof arrays / sizeof *arrays; k++)
     CUPID_CALL(cupid_calloc((size_t)s->n, sizeof(double), "dynamics work vector", arrays[k]));
+  s->f = s->sys->f;
+  if (!(s->hooks && s->hooks->conditions)) return CUPID_SUCCESS;
+  double **more[] = {&s->fcur, &s->fprev, &s->ufix, &s->react, &s->du};
+  for (size_t k = 0; k < sizeof more / sizeof *more; k++)
+    CUPID_CALL(cupid_calloc((size_t)s->n, sizeof(double), "dynamics work vector", more[k]));
+  s->f = s->fcur;
+  return CUPID_SUCCESS;
+}
+
+/* The conditions at time t: the load into fcur (the previous one kept in fprev) and the
+ * prescribed values into ufix. */
+static cupid_status conditions_at(dyn_state *s, double t) {
+  memcpy(s->fprev, s->fcur, sizeof *s->fcur * (size_t)s->n);
+  CUPID_CALL(s->hooks->conditions(s->hooks->ctx, t, s->ufix, s->fcur));
+  for (cupid_int d = 0; d < s->n; d++)
+    CUPID_CHECK(isfinite(s->fcur[d]) && (!dyn_fixed(s->sys->bc, d) || isfinite(s->ufix[d])),
+                CUPID_ERR_NUMERIC, "the %s of DOF %lld is not finite at t = %g",
+                isfinite(s->fcur[d]) ? "prescribed displacement" : "load", (long long)d, t);
+  return CUPID_SUCCESS;
+}
+
+/* Work of the moving supports over a step: the trapezoidal rule on R = K u + C v + M a - f
+ * at the fixed DOFs (r_new holds it at the step's end; react the start's). */
+static void support_work(dyn_state *s, const double *r_new) {
+  const cupid_dirichlet_t *bc = s->sys->bc;
+  double w = 0.0;
+  for (cupid_int d = 0; d < s->n; d++)
+    if (dyn_fixed(bc, d)) {
+      w += 0.5 * (s->react[d] + r_new[d]) * s->du[d];
+      s->react[d] = r_new[d];
+    }
+  s->e.external += w;
+}
+
+/* *changed = 1 when the hook removed energy (K changed: the caller recomputes the forces,
+ * so that what broke exerts none after the step it broke in). */
+static cupid_status after_forces(dyn_state *s, cupid_int step, const double *u, int *changed) {
+  *changed = 0;
+  if (!s->hooks || !s->hooks->after_forces) return CUPID_SUCCESS;
+  double diss = 0.0;
+  CUPID_CALL(s->hooks->after_forces(s->hooks->ctx, step, (double)step * s->opt->dt, u, &diss));
+  s->e.fracture += diss;
+  *changed = diss != 0.0;
   return CUPID_SUCCESS;
 }
 
@@ -88,16 +138,23 @@ static void energies(dyn_state *s, const double *u, const double *v) {
   s->e.kinetic = 0.5 * dyn_dot(s->n, v, s->t1);
   dyn_stiffness(s, u, s->t1);
   s->e.strain = 0.5 * dyn_dot(s->n, u, s->t1);
-  s->e.balance = s->e.kinetic + s->e.strain + s->e.damping - s->e.external - s->e0;
-  double level = fmax(s->e.kinetic + s->e.strain, fmax(s->e.damping, fabs(s->e.external)));
+  s->e.balance = s->e.kinetic + s->e.strain + s->e.damping + s->e.fracture - s->e.external - s->e0;
+  double level = fmax(s->e.kinetic + s->e.strain,
+                      fmax(fmax(s->e.damping, s->e.fracture), fabs(s->e.external)));
   if (level > s->scale) s->scale = level;
   if (fabs(s->e.balance) > s->max_balance) s->max_balance = fabs(s->e.balance);
 }
 
-/* Midpoint-rule increments of the dissipated energy and of the external work. */
+/* Midpoint-rule increments of the dissipated energy and of the external work (a load that
+ * changes over the step: its mean; the supports' share: support_work). */
 static void accumulate(dyn_state *s, const double *u0, const double *u1, const double *vm) {
-  const double *f = s->sys->f;
-  if (f)
+  const double *f = s->f;
+  if (f && s->fprev)
+    for (cupid_int d = 0; d < s->n; d++) {
+      s->e.external += 0.5 * (f[d] + s->fprev[d]) * (u1[d] - u0[d]);
+      s->du[d] = u1[d] - u0[d];
+    }
+  else if (f)
     for (cupid_int d = 0; d < s->n; d++) s->e.external += f[d] * (u1[d] - u0[d]);
   if (s->opt->rayleigh_mass != 0.0 || s->opt->rayleigh_stiffness != 0.0) {
     damping_apply(s, vm, s->t1, s->t2);
@@ -105,13 +162,26 @@ static void accumulate(dyn_state *s, const double *u0, const double *u1, const d
   }
 }
 
-/* r = f - K u - C v on free DOFs, 0 on fixed ones. */
+/* r = f - K u - C v on free DOFs, 0 on fixed ones; with moving supports their reactions
+ * K u + C v - f go to w2 (a lumped mass has no M a term on a fixed DOF). */
 static void residual_force(dyn_state *s, const double *u, const double *v, double *r) {
   const cupid_dirichlet_t *bc = s->sys->bc;
   dyn_stiffness(s, u, r);
   damping_apply(s, v, s->w1, s->t2);
+  const double *f = s->f;
+  for (cupid_int d = 0; d < s->n; d++) {
+    const double rd = (f ? f[d] : 0.0) - r[d] - s->w1[d];
+    if (s->react && dyn_fixed(bc, d)) s->w2[d] = -rd;
+    r[d] = dyn_fixed(bc, d) ? 0.0 : rd;
+  }
+}
+
+/* The supports' reactions at t = 0 (after initial_acceleration: w2 holds K u + C v - f on
+ * the fixed DOFs), with M a. */
+static void initial_reactions(dyn_state *s) {
+  dyn_mass_apply(s->sys, s->n, s->a, s->t1);
   for (cupid_int d = 0; d < s->n; d++)
-    r[d] = dyn_fixed(bc, d) ? 0.0 : (s->sys->f ? s->sys->f[d] : 0.0) - r[d] - s->w1[d];
+    s->react[d] = dyn_fixed(s->sys->bc, d) ? s->w2[d] + s->t1[d] : 0.0;
 }
 
 /* Initial acceleration M a = f - K u - C v on the free DOFs. */
@@ -170,6 +240,7 @@ static cupid_status run_newmark(dyn_state *s, double *u, double *v, cupid_dynami
   cupid_csr Keff = NULL;
   cupid_direct_factor F = NULL;
   CUPID_TRY(initial_acceleration(s, u, v));
+  if (s->react) initial_reactions(s);
   CUPID_TRY(effective_matrix(s, a0 + a1 * ra, 1.0 + a1 * rb, &Keff));
   CUPID_TRY(cupid_direct_factor_create(Keff, bc, &F, &info->factor));
   /* g = K_eff u_c: the prescribed values moved to the right-hand side (constant). */
@@ -178,6 +249,11 @@ static cupid_status run_newmark(dyn_state *s, double *u, double *v, cupid_dynami
   CUPID_TRY(notify(s, fn, ctx, 0, u, v));
   double t0 = cupid_wtime();
   for (cupid_int step = 1; step <= o->steps; step++) {
+    if (s->react) { /* moving supports: g = K_eff u_c at the step's end */
+      CUPID_TRY(conditions_at(s, (double)step * dt));
+      for (cupid_int d = 0; d < s->n; d++) s->t1[d] = dyn_fixed(bc, d) ? s->ufix[d] : 0.0;
+      cupid_csr_matvec(Keff, s->t1, s->g);
+    }
     /* rhs = f + M (w1 + a w2) + b K w2, w1 = a0 u + a2 v + a3 a, w2 = a1 u + a4 v + a5 a */
     for (cupid_int d = 0; d < s->n; d++) {
       s->w2[d] = a1 * u[d] + a4 * v[d] + a5 * s->a[d];
@@ -188,8 +264,11 @@ static cupid_status run_newmark(dyn_state *s, double *u, double *v, cupid_dynami
       cupid_csr_matvec(s->sys->K, s->w2, s->t2);
       for (cupid_int d = 0; d < s->n; d++) s->t1[d] += rb * s->t2[d];
     }
-    for (cupid_int d = 0; d < s->n; d++) s->t1[d] += (s->sys->f ? s->sys->f[d] : 0.0) - s->g[d];
+    for (cupid_int d = 0; d < s->n; d++) s->t1[d] += (s->f ? s->f[d] : 0.0) - s->g[d];
     memcpy(s->un, u, sizeof *u * (size_t)s->n);
+    if (s->react)
+      for (cupid_int d = 0; d < s->n; d++)
+        if (dyn_fixed(bc, d)) s->un[d] = s->ufix[d];
     CUPID_TRY(cupid_direct_factor_solve(F, s->t1, s->un));
     for (cupid_int d = 0; d < s->n; d++) {
       if (dyn_fixed(bc, d)) {
@@ -204,6 +283,14 @@ static cupid_status run_newmark(dyn_state *s, double *u, double *v, cupid_dynami
     memcpy(u, s->un, sizeof *u * (size_t)s->n);
     memcpy(v, s->vn, sizeof *v * (size_t)s->n);
     memcpy(s->a, s->an, sizeof *v * (size_t)s->n);
+    if (s->react) { /* R = K u + C v + M a - f at the step's end */
+      cupid_csr_matvec(s->sys->K, u, s->t1);
+      damping_apply(s, v, s->t2, s->w1);
+      dyn_mass_apply(s->sys, s->n, s->a, s->w1);
+      for (cupid_int d = 0; d < s->n; d++)
+        s->w2[d] = s->t1[d] + s->t2[d] + s->w1[d] - (s->f ? s->f[d] : 0.0);
+      support_work(s, s->w2);
+    }
     CUPID_TRY(notify(s, fn, ctx, step, u, v));
   }
   info->time_step_s = cupid_wtime() - t0;
@@ -251,23 +338,38 @@ static cupid_status run_central(dyn_state *s, double *u, double *v, cupid_dynami
                 (long long)d);
   CUPID_CALL(check_stable(s, info));
   CUPID_CALL(initial_acceleration(s, u, v));
+  if (s->react) initial_reactions(s);
   CUPID_CALL(s->kst);
+  int changed = 0;
+  CUPID_CALL(after_forces(s, 0, u, &changed));
+  if (changed) CUPID_CALL(initial_acceleration(s, u, v));
   CUPID_CALL(notify(s, fn, ctx, 0, u, v));
   double t0 = cupid_wtime();
   for (cupid_int step = 1; step <= o->steps; step++) {
+    if (s->react) CUPID_CALL(conditions_at(s, (double)step * dt));
+    const double *moved = s->react ? s->ufix : u; /* the fixed DOFs' values at the step's end */
     double *vh = s->vn; /* v_{n+1/2} */
     for (cupid_int d = 0; d < s->n; d++) {
       vh[d] = v[d] + 0.5 * dt * s->a[d];
-      s->un[d] = dyn_fixed(bc, d) ? u[d] : u[d] + dt * vh[d];
+      s->un[d] = dyn_fixed(bc, d) ? moved[d] : u[d] + dt * vh[d];
     }
     accumulate(s, u, s->un, vh);
     memcpy(u, s->un, sizeof *u * (size_t)s->n);
     residual_force(s, u, vh, s->t1);
+    if (s->react) support_work(s, s->w2);
     for (cupid_int d = 0; d < s->n; d++) {
       s->a[d] = dyn_fixed(bc, d) ? 0.0 : s->t1[d] / s->sys->m_lumped[d];
       v[d] = dyn_fixed(bc, d) ? 0.0 : vh[d] + 0.5 * dt * s->a[d];
     }
     CUPID_CALL(s->kst);
+    int broke = 0;
+    CUPID_CALL(after_forces(s, step, u, &broke));
+    if (broke) { /* it broke at t_{n+1}: v_{n+1} stands, the next half-kick uses the new K */
+      residual_force(s, u, v, s->t1);
+      for (cupid_int d = 0; d < s->n; d++)
+        s->a[d] = dyn_fixed(bc, d) ? 0.0 : s->t1[d] / s->sys->m_lumped[d];
+      CUPID_CALL(s->kst);
+    }
     CUPID_CALL(notify(s, fn, ctx, step, u, v));
     CUPID_CALL(s->kst);
   }
@@ -292,10 +394,15 @@ static cupid_status run(dyn_state *s, double *u, double *v, cupid_dynamics_monit
   info->dt = opts->dt;
   info->steps = opts->steps;
   cupid_status st = CUPID_SUCCESS;
+  s->hooks = opts->hooks;
+  CUPID_CHECK(!(s->hooks && s->hooks->after_forces) || opts->integrator == CUPID_INTEGRATOR_CENTRAL,
+              CUPID_ERR_ARGUMENT, "an after-forces hook (bond breaking) needs central differences "
+              "(Newmark factors K once)");
   CUPID_TRY(state_alloc(s));
   const cupid_dirichlet_t *bc = sys->bc;
+  if (s->react) CUPID_TRY(conditions_at(s, 0.0));
   for (cupid_int d = 0; d < s->n; d++)
-    if (dyn_fixed(bc, d)) u[d] = bc->value[d], v[d] = 0.0;
+    if (dyn_fixed(bc, d)) u[d] = s->react ? s->ufix[d] : bc->value[d], v[d] = 0.0;
   /* E0: the energy at t = 0, the reference of the balance. */
   dyn_mass_apply(sys, s->n, v, s->t1);
   s->e0 = 0.5 * dyn_dot(s->n, v, s->t1);
