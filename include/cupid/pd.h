@@ -318,7 +318,9 @@ typedef enum {
 /** What breaks and what may not. */
 typedef struct {
   cupid_pd_break_criterion criterion;
-  double critical_stretch;       /**< s0 > 0 (stretch) */
+  double critical_stretch;       /**< s0 > 0 (stretch), unless node_stretch is given */
+  const double *node_stretch;    /**< per node s0 (e.g. from G0 and each node's material), or
+                                      NULL; a bond's limit is the smaller of its ends' (LAMMPS) */
   double critical_energy;        /**< w_c > 0 (energy): 4 G0 / (pi delta^4) in 3D */
   const unsigned char *protect;  /**< per node: 1 = no bond of this node breaks; or NULL */
   const uint32_t *no_fail;       /**< per node: bit b = inside no-fail box b; a bond whose ends

@@ -212,6 +212,10 @@ static double bond_energy_density(const struct cupid_pd_operator_private *op, co
   return 0.25 * fabs(t) * fabs(e);
 }
 
+static inline double stretch_limit(const cupid_pd_fracture_options *o, cupid_int i, cupid_int j) {
+  return o->node_stretch ? fmin(o->node_stretch[i], o->node_stretch[j]) : o->critical_stretch;
+}
+
 typedef struct {
   cupid_int *i;
   int *s;
@@ -266,7 +270,7 @@ static cupid_status find_over(const struct cupid_pd_operator_private *op, const 
         const double e = pd_extension(S->nrm + 3 * s, u, i, j);
         /* strictly over: a bond at exactly its limit holds */
         const int over = o->criterion == CUPID_PD_BREAK_STRETCH
-                             ? e > o->critical_stretch * S->x[s]
+                             ? e > stretch_limit(o, i, j) * S->x[s]
                              : bond_energy_density(op, theta, i, j, s, e) > o->critical_energy;
         if (over && breakable(o, i, j) && !list_push(L, i, s)) failed = 1;
       }
@@ -326,7 +330,7 @@ cupid_status cupid_pd_operator_break_bonds(cupid_pd_operator op, const double *u
                                            cupid_int *broken, double *dissipated) {
   CUPID_CHECK(op && u && o && broken && dissipated, CUPID_ERR_ARGUMENT,
               "break_bonds needs operator, displacement, options and outputs");
-  CUPID_CHECK(o->criterion == CUPID_PD_BREAK_STRETCH ? o->critical_stretch > 0
+  CUPID_CHECK(o->criterion == CUPID_PD_BREAK_STRETCH ? o->critical_stretch > 0 || o->node_stretch
                                                      : o->critical_energy > 0,
               CUPID_ERR_ARGUMENT, "break_bonds needs a positive critical value");
   CUPID_CHECK(o->criterion == CUPID_PD_BREAK_STRETCH || op->model == CUPID_PD_LPS,
@@ -351,7 +355,7 @@ cupid_status cupid_pd_operator_break_bonds(cupid_pd_operator op, const double *u
       const int s = L.s[k];
       const double e = pd_extension(op->st.nrm + 3 * s, u, L.i[k], j);
       const double r = o->criterion == CUPID_PD_BREAK_STRETCH
-                           ? e / (op->st.x[s] * o->critical_stretch)
+                           ? e / (op->st.x[s] * stretch_limit(o, L.i[k], j))
                            : bond_energy_density(op, theta, L.i[k], j, s, e) / o->critical_energy;
       if (r > worst) worst = r, best = k; /* first of equals: deterministic */
     }

@@ -20,7 +20,9 @@
 /* The state of the output during a run. */
 typedef struct {
   cupid_problem_state *prob;
-  cupid_atomic_file history, energies;
+  cupid_atomic_file history, energies, damage;
+  int timed_constraints, timed_loads; /* some value changes with t */
+  cupid_int broken_reported;          /* broken bonds at the last progress line */
   char (*files)[64];
   double *times;
   int n_files, cap_files;
@@ -78,22 +80,34 @@ static int depends_on_time(const cupid_value *v) {
   return 0;
 }
 
+static int load_depends_on_time(const cupid_load *l) {
+  return depends_on_time(&l->value[0]) || depends_on_time(&l->value[1]) ||
+         depends_on_time(&l->value[2]);
+}
+
+static int constraint_depends_on_time(const cupid_constraint *c) {
+  return c->kind == CUPID_CONSTRAINT_DISPLACEMENT &&
+         (depends_on_time(&c->value[0]) || depends_on_time(&c->value[1]) ||
+          depends_on_time(&c->value[2]));
+}
+
+/* Expressions in t are evaluated at every step on the PD nodes (the beam's conditions are
+ * assembled once): a model with a beam keeps its values constant. */
 static cupid_status check_time_independent(const cupid_model_t *m) {
+  if (!m->has_beam) return CUPID_SUCCESS;
   for (int k = 0; k < m->n_loads; k++)
-    for (int c = 0; c < 3; c++)
-      if (depends_on_time(&m->loads[k].value[c]))
-        return cupid_model_error(m, &m->loads[k].mark,
-                                 "time-dependent loads (expressions in t) are not yet supported "
-                                 "by cupid %s; dynamic loads are constant (applied at t = 0)",
-                                 cupid_version());
+    if (load_depends_on_time(&m->loads[k]))
+      return cupid_model_error(m, &m->loads[k].mark,
+                               "loads that change with t are supported on PD-only models in "
+                               "cupid %s; a model with a beam applies its loads at t = 0",
+                               cupid_version());
   for (int k = 0; k < m->n_constraints; k++)
-    for (int c = 0; c < 3; c++)
-      if (m->constraints[k].kind == CUPID_CONSTRAINT_DISPLACEMENT &&
-          depends_on_time(&m->constraints[k].value[c]))
-        return cupid_model_error(m, &m->constraints[k].mark,
-                                 "time-dependent prescribed displacements are not yet supported "
-                                 "by cupid %s; prescribed values are held constant",
-                                 cupid_version());
+    if (constraint_depends_on_time(&m->constraints[k]))
+      return cupid_model_error(m, &m->constraints[k].mark,
+                               "prescribed displacements that change with t are supported on "
+                               "PD-only models in cupid %s; a model with a beam holds them at "
+                               "their t = 0 values",
+                               cupid_version());
   return CUPID_SUCCESS;
 }
 
@@ -141,10 +155,11 @@ static cupid_status write_pd_step(dyn_output *o, const char *path, const double 
   CUPID_TRY(cupid_malloc((size_t)n, sizeof *offs, "VTU offsets", &offs));
   CUPID_TRY(cupid_malloc((size_t)n, sizeof *types, "VTU cell types", &types));
   for (cupid_int i = 0; i < n; i++) conn[i] = i, offs[i] = i + 1, types[i] = CUPID_VTK_VERTEX;
-  cupid_vtu_array pdata[2] = {{"displacement", 3, o->u_out}, {"velocity", 3, v}};
+  cupid_vtu_array pdata[3] = {{"displacement", 3, o->u_out}, {"velocity", 3, v},
+                              {"damage", 1, prob->damage}};
   cupid_vtu_mesh mesh = {.n_points = n, .points = cupid_pd_grid_coords(prob->grid), .n_cells = n,
                          .connectivity = conn, .offsets = offs, .types = types,
-                         .point_data = pdata, .n_point_data = 2};
+                         .point_data = pdata, .n_point_data = prob->damage ? 3 : 2};
   CUPID_TRY(cupid_vtu_write(path, &mesh));
 cleanup:
   cupid_free(&conn);
@@ -253,9 +268,18 @@ static cupid_status monitor(void *ctx, cupid_int step, double t, int output, con
   cupid_status st = monitor_outputs(o, step, t, output, v, e);
   /* every tenth of the run, whatever `every` is (the monitor sees every step) */
   const cupid_int tenth = o->prob->dyn.steps / 10 > 0 ? o->prob->dyn.steps / 10 : 1;
-  if (st == CUPID_SUCCESS && step > 0 && step % tenth == 0)
-    cupid_problem_progress(o->prob, "dynamics: step %lld / %lld, t = %.4g, energy balance %.2e",
-                           (long long)step, (long long)o->prob->dyn.steps, t, e->balance);
+  if (st == CUPID_SUCCESS && step > 0 && step % tenth == 0) {
+    if (o->prob->model->pd.fracture.has_fracture && o->prob->model->has_peridynamics)
+      cupid_problem_progress(o->prob, "dynamics: step %lld / %lld, t = %.4g, %lld broken bonds "
+                             "(+%lld), energy balance %.2e",
+                             (long long)step, (long long)o->prob->dyn.steps, t,
+                             (long long)o->prob->broken_bonds,
+                             (long long)(o->prob->broken_bonds - o->broken_reported), e->balance);
+    else
+      cupid_problem_progress(o->prob, "dynamics: step %lld / %lld, t = %.4g, energy balance %.2e",
+                             (long long)step, (long long)o->prob->dyn.steps, t, e->balance);
+    o->broken_reported = o->prob->broken_bonds;
+  }
   return st;
 }
 
@@ -264,10 +288,22 @@ static cupid_status monitor_outputs(dyn_output *o, cupid_int step, double t, int
   if (o->prob->model->output.n_points) CUPID_CALL(history_row(o, t));
   if (!output) return CUPID_SUCCESS;
   o->out_count++;
-  if (o->energies)
-    fprintf(cupid_atomic_stream(o->energies), "%.10e,%lld,%.10e,%.10e,%.10e,%.10e,%.10e,%.10e\n", t,
-          (long long)step, e->kinetic, e->strain, e->damping, e->external,
-          e->kinetic + e->strain + e->damping - e->external, e->balance);
+  cupid_problem_state *prob = o->prob;
+  if (o->energies) {
+    FILE *f = cupid_atomic_stream(o->energies);
+    fprintf(f, "%.10e,%lld,%.10e,%.10e,%.10e,", t, (long long)step, e->kinetic, e->strain,
+            e->damping);
+    if (o->damage) fprintf(f, "%.10e,", e->fracture);
+    fprintf(f, "%.10e,%.10e,%.10e\n", e->external,
+            e->kinetic + e->strain + e->damping + e->fracture - e->external, e->balance);
+  }
+  if (prob->damage) {
+    CUPID_CALL(cupid_problem_fracture_damage(prob));
+    if (o->damage)
+      fprintf(cupid_atomic_stream(o->damage), "%lld,%.10e,%lld,%lld,%.10e\n", (long long)step, t,
+              (long long)(prob->precrack_bonds + prob->broken_bonds),
+              (long long)prob->damaged_nodes, prob->max_damage);
+  }
   if (o->prob->model->output.vtu && o->prob->writedir) CUPID_CALL(write_vtu_step(o, step, t, v));
   o->prob->dyn.energy = *e;
   return CUPID_SUCCESS;
@@ -278,10 +314,15 @@ static cupid_status open_outputs(dyn_output *o) {
   const cupid_output *out = &prob->model->output;
   char path[4096];
   if (!prob->writedir) return CUPID_SUCCESS; /* an MPI rank other than 0: no files */
+  if (prob->damage) { /* damage.csv (model-format.md, fracture outputs) */
+    CUPID_CALL(out_path(prob, "damage.csv", path, sizeof path));
+    CUPID_CALL(cupid_atomic_open(path, &o->damage));
+    fprintf(cupid_atomic_stream(o->damage), "step,t,broken_bonds,damaged_nodes,max_damage\n");
+  }
   CUPID_CALL(out_path(prob, "energies.csv", path, sizeof path));
   CUPID_CALL(cupid_atomic_open(path, &o->energies));
-  fprintf(cupid_atomic_stream(o->energies),
-          "t,step,kinetic,strain,damping_dissipated,external_work,total,balance\n");
+  fprintf(cupid_atomic_stream(o->energies), "t,step,kinetic,strain,damping_dissipated,%s"
+          "external_work,total,balance\n", o->damage ? "fracture_dissipated," : "");
   if (out->n_points == 0) return CUPID_SUCCESS;
   CUPID_CALL(out_path(prob, "history.csv", path, sizeof path));
   CUPID_CALL(cupid_atomic_open(path, &o->history));
@@ -294,7 +335,7 @@ static cupid_status open_outputs(dyn_output *o) {
   return CUPID_SUCCESS;
 }
 
-static cupid_status plots(const cupid_problem_state *prob) {
+static cupid_status plots(const cupid_problem_state *prob, int damage) {
   const cupid_output *out = &prob->model->output;
   const char *title = prob->model->title[0] ? prob->model->title : "cupid";
   char t[600];
@@ -309,6 +350,13 @@ static cupid_status plots(const cupid_problem_state *prob) {
                                .style = k == 4 ? "lines lw 3 dt 2 lc rgb 'black'" : "lines lw 1.5"};
   snprintf(t, sizeof t, "%s: energies", title);
   CUPID_CALL(cupid_plot(prob->writedir, "energies", t, "t", "energy", 5, ec, &made));
+  if (damage) { /* damage.png: how the crack grows */
+    cupid_plot_curve dc[2] = {
+        {.csv = "damage.csv", .xname = "t", .yname = "broken_bonds", .title = "broken bonds"},
+        {.csv = "damage.csv", .xname = "t", .yname = "damaged_nodes", .title = "damaged nodes"}};
+    snprintf(t, sizeof t, "%s: fracture", title);
+    CUPID_CALL(cupid_plot(prob->writedir, "damage", t, "t", "count", 2, dc, &made));
+  }
   for (int k = 0; k < out->n_points; k++) {
     char stem[512], cols[3][200];
     cupid_plot_curve hc[3];
@@ -338,6 +386,7 @@ static cupid_status finish_outputs(dyn_output *o) {
   char path[4096];
   if (!prob->writedir) return CUPID_SUCCESS;
   if (o->history) CUPID_CALL(cupid_atomic_commit(&o->history));
+  if (o->damage) CUPID_CALL(cupid_atomic_commit(&o->damage));
   CUPID_CALL(cupid_atomic_commit(&o->energies));
   if (o->n_files) {
     const char **names = NULL;
@@ -348,8 +397,35 @@ static cupid_status finish_outputs(dyn_output *o) {
     cupid_free(&names);
     CUPID_CALL(st);
   }
-  if (prob->model->output.plots) CUPID_CALL(plots(prob));
+  if (prob->model->output.plots) CUPID_CALL(plots(prob, o->damage != NULL));
   return CUPID_SUCCESS;
+}
+
+/* hooks->conditions: the values of the model's expressions at t on the PD nodes (a model
+ * with a beam has none that change: check_time_independent). Every constraint is applied
+ * again in the file's order, so that where two overlap the later one wins as at t = 0. */
+static cupid_status conditions_now(void *ctx, double t, double *u_fixed, double *f) {
+  dyn_output *o = ctx;
+  cupid_problem_state *prob = o->prob;
+  const cupid_model_t *m = prob->model;
+  prob->time = t;
+  if (o->timed_constraints)
+    for (int k = 0; k < m->n_constraints; k++)
+      CUPID_CALL(cupid_problem_pd_prescribe(prob, &m->constraints[k]));
+  if (o->timed_loads) {
+    memset(prob->f_ext, 0, sizeof *prob->f_ext * (size_t)prob->ndof);
+    CUPID_CALL(cupid_problem_pd_loads(prob, m->loads, m->n_loads, prob->f_ext));
+  }
+  memcpy(u_fixed, prob->bc->value, sizeof *u_fixed * (size_t)prob->ndof);
+  memcpy(f, prob->f_ext, sizeof *f * (size_t)prob->ndof);
+  return CUPID_SUCCESS;
+}
+
+/* hooks->after_forces: bond breaking (fracture.c). */
+static cupid_status break_bonds(void *ctx, cupid_int step, double t, const double *u,
+                                double *dissipated) {
+  dyn_output *o = ctx;
+  return cupid_problem_fracture_step(o->prob, step, t, u, dissipated);
 }
 
 cupid_status cupid_problem_run_dynamic(cupid_problem_state *prob, const cupid_method_operator *op) {
@@ -377,6 +453,12 @@ cupid_status cupid_problem_run_dynamic(cupid_problem_state *prob, const cupid_me
   opt.gamma = d->newmark_gamma;
   opt.rayleigh_mass = d->rayleigh_mass;
   opt.rayleigh_stiffness = d->rayleigh_stiffness;
+  cupid_dynamics_hooks hooks = {.ctx = &o};
+  for (int k = 0; k < m->n_constraints; k++) o.timed_constraints |= constraint_depends_on_time(&m->constraints[k]);
+  for (int k = 0; k < m->n_loads; k++) o.timed_loads |= load_depends_on_time(&m->loads[k]);
+  if (o.timed_constraints || o.timed_loads) hooks.conditions = conditions_now;
+  if (m->has_peridynamics && m->pd.fracture.has_fracture) hooks.after_forces = break_bonds;
+  if (hooks.conditions || hooks.after_forces) opt.hooks = &hooks;
   prob->dyn.steps = opt.steps;
   prob->dyn.lumped = m_lumped != NULL;
   prob->dyn.matrix_free = mf;
@@ -417,6 +499,7 @@ cupid_status cupid_problem_run_dynamic(cupid_problem_state *prob, const cupid_me
                      (long long)o.out_count, prob->dyn.info.max_balance);
 cleanup:
   cupid_atomic_abort(&o.history);
+  cupid_atomic_abort(&o.damage);
   cupid_atomic_abort(&o.energies);
   cupid_free(&o.files);
   cupid_free(&o.u_view);

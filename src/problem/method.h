@@ -24,6 +24,8 @@ enum {
                                                memory estimate, checked before it runs */
   CUPID_METHOD_CONDITIONS_ASSEMBLE = 1 << 4, /**< its constraints need the assembled system
                                                  (Lagrange's tie): `cupid check` skips them */
+  CUPID_METHOD_FRACTURE = 1 << 5,   /**< pre-cracks and bond breaking on prob->op (the PD
+                                         operator its explicit operator applies) */
 };
 
 /** A matrix-free operator of a whole system for explicit dynamics: y = K x. */
@@ -65,6 +67,9 @@ struct cupid_method_ops {
    *  what it is; 0 when the method has none for this model. */
   int (*estimate_matrix_free)(const cupid_problem_state *prob, double *bytes, double *seconds,
                               const char **what);
+  /** Fracture: flag the PD nodes whose bonds must never break (the coupling zone: overlaps,
+   *  tied or fictitious-node layers), @p protect zeroed, one per PD node. NULL: none. */
+  cupid_status (*fracture_protect)(const cupid_problem_state *prob, unsigned char *protect);
 };
 
 /** dynamic.c: the method's mass, integrate (central differences on @p op when not NULL, else

@@ -97,7 +97,7 @@ static int estimate_matrix_free(const cupid_problem_state *prob, double *bytes, 
 
 const cupid_method_ops cupid_method_none = {
     .name = "none",
-    .caps = CUPID_METHOD_DYNAMIC | CUPID_METHOD_GRID_1D | CUPID_METHOD_SLABS,
+    .caps = CUPID_METHOD_DYNAMIC | CUPID_METHOD_GRID_1D | CUPID_METHOD_SLABS | CUPID_METHOD_FRACTURE,
     .matrix = CUPID_MATRIX_SPD,
     .check = check,
     .constraints = constraints,

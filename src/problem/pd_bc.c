@@ -45,7 +45,8 @@ static cupid_status constraint_on_nodes(cupid_problem_state *prob, const cupid_c
         if (c->value[a].kind == CUPID_VALUE_NONE) continue;
         prob->bc->fixed[d] = 1;
         prob->bc->value[d] =
-            cupid_value_eval(&c->value[a], p[0], p[1], p[2], 0.0, m->materials[mat[i]].density);
+            cupid_value_eval(&c->value[a], p[0], p[1], p[2], prob->time,
+                             m->materials[mat[i]].density);
       } else if (c->kind == CUPID_CONSTRAINT_CLAMP || c->components[a]) {
         prob->bc->fixed[d] = 1;
         prob->bc->value[d] = 0.0;
@@ -53,6 +54,11 @@ static cupid_status constraint_on_nodes(cupid_problem_state *prob, const cupid_c
     }
   }
   return CUPID_SUCCESS;
+}
+
+cupid_status cupid_problem_pd_prescribe(cupid_problem_state *prob, const cupid_constraint *c) {
+  cupid_int count;
+  return constraint_on_nodes(prob, c, &count);
 }
 
 /* A 1D grid is a bar along y: its x and z components carry no stiffness, so they are
@@ -137,7 +143,8 @@ static cupid_status traction_load(cupid_problem_state *prob, const cupid_load *l
     count += cupid_problem_pd_owned(prob, i);
     for (int c = 0; c < 3; c++)
       f[3 * i + c] +=
-          a * cupid_value_eval(&l->value[c], p[0], l->plane_y, p[2], 0.0, m->materials[mat[i]].density);
+          a * cupid_value_eval(&l->value[c], p[0], l->plane_y, p[2], prob->time,
+                               m->materials[mat[i]].density);
   }
   if (cupid_problem_global_count(prob, count) == 0)
     return cupid_model_error(m, &l->mark,
@@ -173,7 +180,7 @@ static cupid_status point_load(cupid_problem_state *prob, const cupid_load *l, d
   if (node < 0) return CUPID_SUCCESS; /* on another rank's slab */
   const int *mat = cupid_pd_grid_materials(prob->grid);
   for (int c = 0; c < 3; c++)
-    f[3 * node + c] += cupid_value_eval(&l->value[c], l->at[0], l->at[1], l->at[2], 0.0,
+    f[3 * node + c] += cupid_value_eval(&l->value[c], l->at[0], l->at[1], l->at[2], prob->time,
                                                  m->materials[mat[node]].density);
   return CUPID_SUCCESS;
 }
@@ -190,7 +197,7 @@ static cupid_status body_load(cupid_problem_state *prob, const cupid_load *l, do
     count += cupid_problem_pd_owned(prob, i);
     double rho = m->materials[mat[i]].density;
     for (int c = 0; c < 3; c++)
-      f[3 * i + c] += vol * cupid_value_eval(&l->value[c], p[0], p[1], p[2], 0.0, rho);
+      f[3 * i + c] += vol * cupid_value_eval(&l->value[c], p[0], p[1], p[2], prob->time, rho);
   }
   if (cupid_problem_global_count(prob, count) == 0)
     return cupid_model_error(m, &l->mark, "the box contains no PD node");

@@ -317,12 +317,14 @@ cupid_status cupid_problem_setup(cupid_problem_state *prob) {
   CUPID_CHECK(prob->stage == CUPID_STAGE_CREATED, CUPID_ERR_ARGUMENT,
               "cupid_problem_setup: the problem is already set up");
   CUPID_CALL(prob->method->check(prob));
+  CUPID_CALL(cupid_problem_fracture_check(prob));
   CUPID_CALL(check_engine_request(prob));
   CUPID_CALL(cupid_problem_guard_size(prob)); /* before anything that scales with the model */
   prob->slab = cupid_problem_slab_wanted(prob);
   if (model->has_peridynamics) CUPID_CALL(agreed(prob, build_pd(prob)));
   if (model->has_beam) CUPID_CALL(cupid_problem_fe_build(prob));
   if (prob->method->prepare) CUPID_CALL(prob->method->prepare(prob));
+  if (model->has_peridynamics) CUPID_CALL(agreed(prob, cupid_problem_fracture_setup(prob)));
   prob->fe_offset = 3 * prob->n_pd;
   prob->ndof = prob->fe_offset + prob->n_fe_dofs;
   CUPID_CALL(prob->slab ? cupid_problem_slab_check_points(prob) : cupid_problem_check_points(prob));
@@ -526,6 +528,10 @@ void cupid_problem_state_free(cupid_problem_state *prob) {
   cupid_output_set_abort(&prob->outputs); /* not published: the previous results stay */
   cupid_free(&prob->region_boxes);
   cupid_free(&prob->region_materials);
+  cupid_free(&prob->protect);
+  cupid_free(&prob->no_fail);
+  cupid_free(&prob->node_stretch);
+  cupid_free(&prob->damage);
 }
 
 cupid_status cupid_problem_create(const cupid_model_t *model, const cupid_run_options *opts,

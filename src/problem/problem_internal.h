@@ -8,6 +8,7 @@
 #include "cupid/coupling.h"
 #include "cupid/cuf.h"
 #include "cupid/dynamics.h"
+#include "cupid/io.h"
 #include "cupid/model.h"
 #include "cupid/pd.h"
 #include "cupid/problem.h"
@@ -117,7 +118,42 @@ typedef struct cupid_problem_private {
   int history_cols;
   cupid_box *region_boxes;      /**< cupid_problem_coupling_options: one per PD region */
   int *region_materials;
+
+  /* Time-dependent conditions (dynamic.c): the time the model's expressions are evaluated at
+   * (0 but during a dynamic run that has expressions in t). */
+  double time;
+
+  /* Fracture (fracture.c): pre-cracks and bond breaking on prob->op. */
+  cupid_int precrack_bonds;         /**< bonds the pre-cracks removed */
+  cupid_pd_fracture_options fracture; /**< the breaking rule (criterion, limits, protection) */
+  unsigned char *protect;           /**< per PD node: its bonds never break (method stage) */
+  uint32_t *no_fail;                /**< per PD node: the no-fail boxes holding it */
+  double *node_stretch;             /**< per PD node s0 (from G0), or NULL */
+  cupid_int broken_bonds;           /**< broken during the run (pre-cracks not counted) */
+  cupid_int first_break_step;       /**< -1: none */
+  double first_break_t, fracture_energy;
+  double *damage;                   /**< per PD node, for the outputs (NULL: no fracture) */
+  cupid_int damaged_nodes;
+  double max_damage;
 } cupid_problem_state;
+
+/* fracture.c */
+/** Model errors of pre-cracks and fracture this version cannot run (before anything is
+ *  built): an analysis, integrator, method or surface correction without bond breaking. */
+cupid_status cupid_problem_fracture_check(const cupid_problem_state *prob);
+/** After prob->op is built: remove the pre-cracks' bonds (a pre-crack that cuts none, or
+ *  reaches a protected node, is a model error) and set up the breaking rule. */
+cupid_status cupid_problem_fracture_setup(cupid_problem_state *prob);
+/** The after-forces stage of a dynamic run: break what is over its limit at u (the PD part of
+ *  a system vector); *dissipated = the energy the broken bonds held. */
+cupid_status cupid_problem_fracture_step(cupid_problem_state *prob, cupid_int step, double t,
+                                         const double *u, double *dissipated);
+/** prob->damage, damaged_nodes, max_damage from the operator's broken bonds (outputs). */
+cupid_status cupid_problem_fracture_damage(cupid_problem_state *prob);
+/** 1 when the model has pre-cracks or fracture (damage is an output). */
+int cupid_problem_has_damage(const cupid_problem_state *prob);
+/** The "fracture" block of summary.json. */
+void cupid_problem_fracture_json(cupid_json js, const cupid_problem_state *prob);
 
 /* problem.c: the stages. */
 void cupid_problem_progress(const cupid_problem_state *prob, const char *fmt, ...)
@@ -146,7 +182,9 @@ cupid_status cupid_problem_pd_options(cupid_problem_state *prob);
 /* pd_bc.c: constraints and loads on PD nodes (volume layers, faces, points). */
 cupid_status cupid_problem_pd_constraints(cupid_problem_state *prob, const cupid_constraint *cons,
                                           int n);
-/** Add the loads to f (3 per PD node, in the layout of prob->f_ext). */
+/** The prescribed values of one constraint on the PD nodes at prob->time, into prob->bc. */
+cupid_status cupid_problem_pd_prescribe(cupid_problem_state *prob, const cupid_constraint *c);
+/** Add the loads to f (3 per PD node, in the layout of prob->f_ext), at prob->time. */
 cupid_status cupid_problem_pd_loads(cupid_problem_state *prob, const cupid_load *loads, int n,
                                     double *f);
 

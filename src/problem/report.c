@@ -89,11 +89,14 @@ static cupid_status write_pd_nodes(cupid_problem_state *prob) {
   CUPID_CALL(cupid_atomic_open(path, &file));
   FILE *out = cupid_atomic_stream(file);
   const double *x = cupid_pd_grid_coords(prob->grid);
-  fprintf(out, "x,y,z,ux,uy,uz,fx,fy,fz\n");
+  const double *dmg = prob->damage; /* a damage column with pre-cracks or fracture */
+  fprintf(out, "x,y,z,ux,uy,uz,fx,fy,fz%s\n", dmg ? ",damage" : "");
   for (cupid_int i = 0; i < prob->n_pd; i++) {
     const double *p = x + 3 * i, *u = prob->u + 3 * i, *f = prob->f_int + 3 * i;
-    fprintf(out, "%.10g,%.10g,%.10g,%.12e,%.12e,%.12e,%.12e,%.12e,%.12e\n", p[0], p[1], p[2], u[0],
+    fprintf(out, "%.10g,%.10g,%.10g,%.12e,%.12e,%.12e,%.12e,%.12e,%.12e", p[0], p[1], p[2], u[0],
             u[1], u[2], f[0], f[1], f[2]);
+    if (dmg) fprintf(out, ",%.10g", dmg[i]);
+    fputc('\n', out);
   }
   return cupid_atomic_commit(&file);
 }
@@ -127,11 +130,16 @@ static cupid_status write_pd_vtu(cupid_problem_state *prob) {
                                   prob->bc->fixed[3 * i + 2])
                        : 0.0;
   }
-  cupid_vtu_array pdata[5] = {{"displacement", 3, prob->u},
+  cupid_vtu_array pdata[6] = {{"displacement", 3, prob->u},
                               {"force", 3, prob->f_int},
                               {"material", 1, mat},
                               {"constrained_components", 1, fixed},
+                              {"damage", 1, prob->damage},
                               {"stress", 6, stress}};
+  int np = 4;
+  if (prob->damage) np++;
+  else pdata[4] = pdata[5];
+  if (prob->pd_stress) np++;
   cupid_vtu_mesh mesh = {.n_points = n,
                          .points = cupid_pd_grid_coords(prob->grid),
                          .n_cells = n,
@@ -139,7 +147,7 @@ static cupid_status write_pd_vtu(cupid_problem_state *prob) {
                          .offsets = offs,
                          .types = types,
                          .point_data = pdata,
-                         .n_point_data = prob->pd_stress ? 5 : 4};
+                         .n_point_data = np};
   CUPID_TRY(join_path(prob->writedir, "pd.vtu", path, sizeof path));
   CUPID_TRY(cupid_vtu_write(path, &mesh));
 cleanup:
@@ -301,6 +309,7 @@ static cupid_status write_summary(cupid_problem_state *prob) {
     cupid_json_number(js, "energy_balance", prob->dyn.info.max_balance);
   }
   if (prob->dyn.done) cupid_problem_dynamic_json(js, prob);
+  cupid_problem_fracture_json(js, prob);
   cupid_json_number(js, "total_time_s", cupid_wtime() - prob->t_start);
   cupid_json_integer(js, "peak_memory_bytes", cupid_peak_memory());
   CUPID_TRY(json_points(js, prob));
@@ -331,6 +340,7 @@ cupid_status cupid_problem_pd_stress(cupid_problem_state *prob) {
 cupid_status cupid_problem_report(cupid_problem_state *prob) {
   const cupid_output *o = &prob->model->output;
   double t0 = cupid_wtime();
+  CUPID_CALL(cupid_problem_fracture_damage(prob));
   if (cupid_problem_needs_stress(prob)) CUPID_CALL(cupid_problem_pd_stress(prob));
   for (int k = 0; k < o->n_lines; k++) CUPID_CALL(write_line(prob, &o->lines[k]));
   if (o->pd_nodes && prob->grid) CUPID_CALL(write_pd_nodes(prob));

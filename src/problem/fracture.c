@@ -1,0 +1,194 @@
+/* Pre-cracks and bond breaking of a model (model-format.md: peridynamics.precracks,
+ * peridynamics.fracture; docs/theory.md, section Fracture): what this version runs, the
+ * pre-cracks removed from prob->op, the breaking rule (critical stretch, given or derived from
+ * G0; critical bond energy), the nodes whose bonds never break (no-fail boxes; the coupling
+ * zone of a coupled model, from its method), the break step of a dynamic run, and the damage
+ * the outputs show. The bonds themselves live in the PD operator (src/pd/fracture.c). */
+#include <math.h>
+#include <string.h>
+
+#include "method.h"
+#include "problem_internal.h"
+
+int cupid_problem_has_damage(const cupid_problem_state *prob) {
+  const cupid_model_t *m = prob->model;
+  return m->has_peridynamics && (m->pd.fracture.has_fracture || m->pd.n_precracks > 0);
+}
+
+cupid_status cupid_problem_fracture_check(const cupid_problem_state *prob) {
+  const cupid_model_t *m = prob->model;
+  if (!cupid_problem_has_damage(prob)) return CUPID_SUCCESS;
+  const cupid_fracture *fr = &m->pd.fracture;
+  const cupid_mark *mk = fr->has_fracture ? &fr->mark : &m->pd.precracks[0].mark;
+  if (m->pd.surface_correction != CUPID_SURFACE_NONE)
+    return cupid_model_error(m, mk,
+                             "pre-cracks and fracture need peridynamics.surface_correction: none "
+                             "(the correction's factors are fitted to the intact families)");
+  if (!(prob->method->caps & CUPID_METHOD_FRACTURE))
+    return cupid_model_error(m, mk,
+                             "pre-cracks and fracture are not supported with coupling method %s "
+                             "in cupid %s (its coupling builds its own PD operator); use "
+                             "`coupling: {method: arlequin}`",
+                             prob->method->name, cupid_version());
+  if (!fr->has_fracture) return CUPID_SUCCESS;
+  const cupid_analysis *a = &m->analysis;
+  if (a->type != CUPID_ANALYSIS_DYNAMIC)
+    return cupid_model_error(m, &fr->mark,
+                             "bond breaking runs in dynamic analyses (type: dynamic, integrator: "
+                             "central) in cupid %s; quasi-static crack growth (type: static with "
+                             "steps) is not supported yet. Pre-cracks alone work in every analysis",
+                             cupid_version());
+  if (a->dynamic.integrator != CUPID_INTEGRATOR_CENTRAL)
+    return cupid_model_error(m, &fr->mark,
+                             "bond breaking needs analysis.dynamic.integrator: central (Newmark "
+                             "factors K once, and every broken bond changes K)");
+  return CUPID_SUCCESS;
+}
+
+/* The bonds the pre-cracks cut; each must cut one. */
+static cupid_status apply_precracks(cupid_problem_state *prob) {
+  const cupid_model_t *m = prob->model;
+  for (int k = 0; k < m->pd.n_precracks; k++) {
+    const cupid_precrack *pc = &m->pd.precracks[k];
+    cupid_pd_precrack c = {.normal = pc->normal, .at = pc->at};
+    for (int b = 0; b < 3; b++) c.lo[b] = pc->rect.lo[b], c.hi[b] = pc->rect.hi[b];
+    cupid_int removed = 0;
+    CUPID_CALL(cupid_pd_operator_precrack(prob->op, &c, &removed));
+    if (cupid_problem_global_count(prob, removed) == 0)
+      return cupid_model_error(m, &pc->mark,
+                               "the pre-crack cuts no bond: no two PD nodes within the horizon "
+                               "lie on opposite sides of its rectangle (nodes sit at cell "
+                               "centres, half a spacing inside the region faces)");
+    prob->precrack_bonds += removed;
+  }
+  return CUPID_SUCCESS;
+}
+
+/* A pre-crack must not reach a node whose bonds never break (the coupling zone). */
+static cupid_status check_protected(cupid_problem_state *prob) {
+  const cupid_model_t *m = prob->model;
+  if (!prob->protect || m->pd.n_precracks == 0) return CUPID_SUCCESS;
+  CUPID_CALL(cupid_problem_fracture_damage(prob));
+  const double *x = cupid_pd_grid_coords(prob->grid);
+  for (cupid_int i = 0; i < prob->n_pd; i++)
+    if (prob->protect[i] && prob->damage[i] > 0)
+      return cupid_model_error(m, &m->pd.precracks[0].mark,
+                               "a pre-crack reaches the coupling zone at the PD node (%g, %g, %g) "
+                               "(coupling method %s: its bonds never break); keep pre-cracks "
+                               "more than a horizon away from it",
+                               x[3 * i], x[3 * i + 1], x[3 * i + 2], prob->method->name);
+  return CUPID_SUCCESS;
+}
+
+/* s0 from G0 per node (fracture.md, docs/theory.md): bond-based sqrt(5 G0 / (9 K delta))
+ * (Silling & Askari 2005), LPS sqrt(G0 / ((3 mu + (3/4)^4 (K - 5 mu / 3)) delta)). */
+static cupid_status node_stretch(cupid_problem_state *prob, double G0) {
+  const cupid_model_t *m = prob->model;
+  const int *mat = cupid_pd_grid_materials(prob->grid);
+  const double delta = m->pd.horizon;
+  CUPID_CALL(cupid_malloc((size_t)prob->n_pd, sizeof *prob->node_stretch, "critical stretches",
+                          &prob->node_stretch));
+  for (cupid_int i = 0; i < prob->n_pd; i++) {
+    const cupid_material *mt = &m->materials[mat[i]];
+    const double K = mt->E / (3.0 * (1.0 - 2.0 * mt->nu)), mu = mt->E / (2.0 * (1.0 + mt->nu));
+    const double q = 0.75 * 0.75 * 0.75 * 0.75;
+    prob->node_stretch[i] = m->pd.model == CUPID_PD_BOND
+                                ? sqrt(5.0 * G0 / (9.0 * K * delta))
+                                : sqrt(G0 / ((3.0 * mu + q * (K - 5.0 * mu / 3.0)) * delta));
+  }
+  return CUPID_SUCCESS;
+}
+
+/* Bit b of no_fail[i]: node i lies in no-fail box b. */
+static cupid_status no_fail_masks(cupid_problem_state *prob) {
+  const cupid_fracture *fr = &prob->model->pd.fracture;
+  if (fr->n_no_fail == 0) return CUPID_SUCCESS;
+  CUPID_CALL(cupid_calloc((size_t)prob->n_pd, sizeof *prob->no_fail, "no-fail flags", &prob->no_fail));
+  const double *x = cupid_pd_grid_coords(prob->grid), h = cupid_pd_grid_spacing(prob->grid);
+  for (cupid_int i = 0; i < prob->n_pd; i++)
+    for (int b = 0; b < fr->n_no_fail; b++)
+      if (cupid_box_contains(&fr->no_fail[b], x + 3 * i, 1e-9 * h)) prob->no_fail[i] |= 1u << b;
+  return CUPID_SUCCESS;
+}
+
+cupid_status cupid_problem_fracture_setup(cupid_problem_state *prob) {
+  const cupid_model_t *m = prob->model;
+  prob->first_break_step = -1;
+  if (!cupid_problem_has_damage(prob)) return CUPID_SUCCESS;
+  CUPID_CALL(cupid_calloc((size_t)prob->n_pd, sizeof *prob->damage, "damage", &prob->damage));
+  if (prob->method->fracture_protect) {
+    CUPID_CALL(cupid_calloc((size_t)prob->n_pd, 1, "protected nodes", &prob->protect));
+    CUPID_CALL(prob->method->fracture_protect(prob, prob->protect));
+  }
+  CUPID_CALL(apply_precracks(prob));
+  CUPID_CALL(check_protected(prob));
+  const cupid_fracture *fr = &m->pd.fracture;
+  if (!fr->has_fracture) return CUPID_SUCCESS;
+  cupid_pd_fracture_options *o = &prob->fracture;
+  o->criterion = fr->criterion == CUPID_FRACTURE_ENERGY ? CUPID_PD_BREAK_ENERGY : CUPID_PD_BREAK_STRETCH;
+  if (fr->criterion == CUPID_FRACTURE_ENERGY) {
+    /* critical bond energy density 4 G0 / (pi delta^4) (3D; fracture.md, after Foster 2011) */
+    const double d = m->pd.horizon;
+    o->critical_energy = 4.0 * fr->energy_release_rate / (3.14159265358979323846 * d * d * d * d);
+  } else if (fr->has_critical_stretch) {
+    o->critical_stretch = fr->critical_stretch;
+  } else {
+    CUPID_CALL(node_stretch(prob, fr->energy_release_rate));
+    o->node_stretch = prob->node_stretch;
+  }
+  CUPID_CALL(no_fail_masks(prob));
+  o->no_fail = prob->no_fail;
+  o->protect = prob->protect;
+  return CUPID_SUCCESS;
+}
+
+cupid_status cupid_problem_fracture_step(cupid_problem_state *prob, cupid_int step, double t,
+                                         const double *u, double *dissipated) {
+  *dissipated = 0.0;
+  if (!prob->model->pd.fracture.has_fracture) return CUPID_SUCCESS;
+  cupid_int broken = 0;
+  CUPID_CALL(cupid_pd_operator_break_bonds(prob->op, u, &prob->fracture, 0, &broken, dissipated));
+  if (broken == 0) return CUPID_SUCCESS;
+  if (prob->first_break_step < 0) {
+    prob->first_break_step = step;
+    prob->first_break_t = t;
+    cupid_problem_progress(prob, "fracture: the first bonds broke at step %lld (t = %.4g): %lld",
+                           (long long)step, t, (long long)broken);
+  }
+  prob->broken_bonds += broken;
+  prob->fracture_energy += *dissipated;
+  return CUPID_SUCCESS;
+}
+
+cupid_status cupid_problem_fracture_damage(cupid_problem_state *prob) {
+  if (!prob->damage) return CUPID_SUCCESS;
+  return cupid_pd_operator_damage(prob->op, prob->damage, &prob->damaged_nodes, &prob->max_damage);
+}
+
+void cupid_problem_fracture_json(cupid_json js, const cupid_problem_state *prob) {
+  const cupid_model_t *m = prob->model;
+  if (!cupid_problem_has_damage(prob)) return;
+  const cupid_fracture *fr = &m->pd.fracture;
+  cupid_json_begin_object(js, "fracture");
+  cupid_json_integer(js, "precracks", m->pd.n_precracks);
+  cupid_json_integer(js, "precrack_bonds_removed", prob->precrack_bonds);
+  if (fr->has_fracture) {
+    cupid_json_string(js, "criterion", fr->criterion == CUPID_FRACTURE_ENERGY ? "energy" : "stretch");
+    if (prob->fracture.criterion == CUPID_PD_BREAK_ENERGY)
+      cupid_json_number(js, "critical_bond_energy", prob->fracture.critical_energy);
+    else if (!prob->node_stretch)
+      cupid_json_number(js, "critical_stretch", prob->fracture.critical_stretch);
+    if (fr->has_energy_release_rate) cupid_json_number(js, "energy_release_rate", fr->energy_release_rate);
+    if (prob->node_stretch && prob->n_pd > 0) /* the first node's: one material is the usual */
+      cupid_json_number(js, "critical_stretch_from_G0", prob->node_stretch[0]);
+    cupid_json_integer(js, "broken_bonds", prob->broken_bonds);
+    if (prob->first_break_step >= 0) {
+      cupid_json_integer(js, "first_break_step", prob->first_break_step);
+      cupid_json_number(js, "first_break_t", prob->first_break_t);
+    }
+    cupid_json_number(js, "dissipated_energy", prob->fracture_energy);
+  }
+  cupid_json_integer(js, "damaged_nodes", prob->damaged_nodes);
+  cupid_json_number(js, "max_damage", prob->max_damage);
+  cupid_json_end_object(js);
+}
