@@ -536,6 +536,12 @@ static cupid_status read_regions(model_reader *rd, yaml_node_t *regions, cupid_p
 
 static const char *const axis_names[] = {"x", "y", "z"};
 
+/* The two axes other than the normal n, in the order x, y, z. */
+static void other_axes(int n, int *u, int *w) {
+  *u = n == 0 ? 1 : 0;
+  *w = n == 2 ? 1 : 2;
+}
+
 /* One side of a precrack's rectangle: [min, max] with min < max (a zero-size rectangle would
  * cut no bond, so it is surely a typo). */
 static cupid_status read_precrack_side(model_reader *rd, yaml_node_t *node, const char *path,
@@ -554,9 +560,8 @@ static cupid_status read_precrack_side(model_reader *rd, yaml_node_t *node, cons
 /* The rectangle's two sides: the axes other than the normal, which itself takes no bounds. */
 static cupid_status read_precrack_rect(model_reader *rd, const mr_map *map, const char *path,
                                        cupid_precrack *c) {
-  const char *n = axis_names[c->normal];
-  const char *u = axis_names[(c->normal + 1) % 3], *w = axis_names[(c->normal + 2) % 3];
-  const char *first = c->normal == 1 ? w : u, *second = c->normal == 1 ? u : w; /* x before z */
+  int u, w;
+  other_axes(c->normal, &u, &w);
   for (int a = 0; a < 3; a++) {
     char p[PATH_SIZE];
     mr_path(p, path, axis_names[a]);
@@ -567,16 +572,16 @@ static cupid_status read_precrack_rect(model_reader *rd, const mr_map *map, cons
     if (a == c->normal) {
       if (v)
         return mr_error(rd, v, p,
-                        "is the crack's normal: a precrack on the plane %s = at is bounded by "
-                        "%s: [min, max] and %s: [min, max] only",
-                        n, first, second);
+                        "is the crack's normal axis: the crack lies on the plane %s = at and "
+                        "takes bounds on %s and %s only",
+                        axis_names[c->normal], axis_names[u], axis_names[w]);
       continue;
     }
     if (!v)
       return mr_error(rd, map->node, path,
                       "missing required key '%s' (a precrack with normal %s needs %s: [min, max] "
                       "and %s: [min, max])",
-                      axis_names[a], n, first, second);
+                      axis_names[a], axis_names[c->normal], axis_names[u], axis_names[w]);
     CUPID_CALL(read_precrack_side(rd, v, p, a, &c->rect));
   }
   return CUPID_SUCCESS;
@@ -591,10 +596,30 @@ static int precrack_touches(const cupid_precrack *c, const cupid_box *region) {
   return 1;
 }
 
+/* A precrack that meets no region cuts no bond: say whether the plane or the rectangle misses. */
+static cupid_status check_precrack_inside(model_reader *rd, const yaml_node_t *node,
+                                          const char *path, const cupid_precrack *c) {
+  const cupid_peridynamics *pd = &rd->model->pd;
+  int n = c->normal, u, w, plane = 0;
+  other_axes(n, &u, &w);
+  for (int r = 0; r < pd->n_regions; r++) {
+    const cupid_box *b = &pd->regions[r].box;
+    if (precrack_touches(c, b)) return CUPID_SUCCESS;
+    plane |= c->at >= b->lo[n] && c->at <= b->hi[n];
+  }
+  if (!plane)
+    return mr_error(rd, node, path, "lies outside every PD region (none of them reaches %s = %g)",
+                    axis_names[n], c->at);
+  return mr_error(rd, node, path,
+                  "lies outside every PD region (on the plane %s = %g, the rectangle %s [%g, %g], "
+                  "%s [%g, %g] overlaps none of them)",
+                  axis_names[n], c->at, axis_names[u], c->rect.lo[u], c->rect.hi[u],
+                  axis_names[w], c->rect.lo[w], c->rect.hi[w]);
+}
+
 static cupid_status read_precrack(model_reader *rd, yaml_node_t *node, const char *path,
                                   cupid_precrack *c) {
   static const char *const keys[] = {"normal", "at", "x", "y", "z"};
-  const cupid_peridynamics *pd = &rd->model->pd;
   mr_map map;
   yaml_node_t *normal, *at;
   char p[PATH_SIZE];
@@ -612,18 +637,13 @@ static cupid_status read_precrack(model_reader *rd, yaml_node_t *node, const cha
   mr_path(p, path, "at");
   CUPID_CALL(mr_number(rd, at, p, &c->at));
   CUPID_CALL(read_precrack_rect(rd, &map, path, c));
-  for (int r = 0; r < pd->n_regions; r++)
-    if (precrack_touches(c, &pd->regions[r].box)) return CUPID_SUCCESS;
-  return mr_error(rd, node, path,
-                  "lies outside every PD region (its plane %s = %g and rectangle meet none of "
-                  "them)",
-                  axis_names[c->normal], c->at);
+  return check_precrack_inside(rd, node, path, c);
 }
 
 static cupid_status read_precracks(model_reader *rd, yaml_node_t *node, cupid_peridynamics *pd) {
   const char *path = "peridynamics.precracks";
   int n;
-  CUPID_CALL(mr_list(rd, node, path, 1, "rectangles {normal: x|y|z, at: .., and two of x, y, z}",
+  CUPID_CALL(mr_list(rd, node, path, 1, "rectangles {normal: y, at: 50, x: [..], z: [..]}",
                      &n));
   /* Every precrack is tested against every region here and every bond later. */
   if (n > MODEL_MAX_PRECRACKS)
@@ -692,7 +712,7 @@ static cupid_status read_fracture_limit(model_reader *rd, const mr_map *map, cup
                     "give critical_stretch (s0) or energy_release_rate (G0), not both");
   } else if (!s0 && !g0) {
     return mr_error(rd, map->node, path,
-                    "missing its limit: give critical_stretch (s0) or energy_release_rate (G0)");
+                    "missing required key: give critical_stretch (s0) or energy_release_rate (G0)");
   }
   if (s0) {
     CUPID_CALL(mr_positive(rd, s0, "peridynamics.fracture.critical_stretch",
