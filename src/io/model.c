@@ -115,6 +115,7 @@ void cupid_model_destroy(cupid_model *model) {
   cupid_free(&b->section_elements);
   cupid_free(&b->section_element_material);
   cupid_free(&m->pd.regions);
+  cupid_free(&m->pd.precracks);
   for (int i = 0; i < m->n_constraints; i++) values_clear(m->constraints[i].value, 3);
   cupid_free(&m->constraints);
   for (int i = 0; i < m->n_loads; i++) values_clear(m->loads[i].value, 3);

@@ -22,6 +22,7 @@
 #define MODEL_MAX_ANCHORS 1000L   /* libyaml registers and resolves anchors by linear search */
 #define MODEL_MAX_ALIASES 100000L
 #define MODEL_MAX_MATERIALS 1000  /* material references are resolved by linear search */
+#define MODEL_MAX_PRECRACKS 1000  /* each is tested against every region, then every bond */
 
 typedef struct {
   yaml_document_t *doc;

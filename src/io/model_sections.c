@@ -517,10 +517,265 @@ static cupid_status read_pd_options(model_reader *rd, const mr_map *map, cupid_p
   return CUPID_SUCCESS;
 }
 
+static cupid_status read_regions(model_reader *rd, yaml_node_t *regions, cupid_peridynamics *pd) {
+  int n;
+  CUPID_CALL(mr_list(rd, regions, "peridynamics.regions", 0, "boxes {x: [..], y: [..], z: [..]}",
+                     &n));
+  if (n == 0) return mr_error(rd, regions, "peridynamics.regions", "must list at least one region");
+  CUPID_CALL(cupid_calloc((size_t)n, sizeof *pd->regions, "PD regions", &pd->regions));
+  pd->n_regions = n;
+  for (int i = 0; i < n; i++) {
+    char p[PATH_SIZE];
+    mr_path_index(p, "peridynamics.regions", i);
+    CUPID_CALL(read_region(rd, mr_item(rd, regions, i), p, &pd->regions[i]));
+  }
+  return CUPID_SUCCESS;
+}
+
+/* ------------------------------------------------------------- precracks and fracture */
+
+static const char *const axis_names[] = {"x", "y", "z"};
+
+/* The two axes other than the normal n, in the order x, y, z. */
+static void other_axes(int n, int *u, int *w) {
+  *u = n == 0 ? 1 : 0;
+  *w = n == 2 ? 1 : 2;
+}
+
+/* One side of a precrack's rectangle: [min, max] with min < max (a zero-size rectangle would
+ * cut no bond, so it is surely a typo). */
+static cupid_status read_precrack_side(model_reader *rd, yaml_node_t *node, const char *path,
+                                       int axis, cupid_box *rect) {
+  double r[2];
+  CUPID_CALL(mr_numbers(rd, node, path, 2, "[min, max]", r));
+  if (!(r[0] < r[1]))
+    return mr_error(rd, node, path, "must be [min, max] with min < max, got [%g, %g]%s", r[0],
+                    r[1], r[0] == r[1] ? " (the rectangle has zero size)" : "");
+  rect->lo[axis] = r[0];
+  rect->hi[axis] = r[1];
+  rect->has[axis] = 1;
+  return CUPID_SUCCESS;
+}
+
+/* The rectangle's two sides: the axes other than the normal, which itself takes no bounds. */
+static cupid_status read_precrack_rect(model_reader *rd, const mr_map *map, const char *path,
+                                       cupid_precrack *c) {
+  int u, w;
+  other_axes(c->normal, &u, &w);
+  for (int a = 0; a < 3; a++) {
+    char p[PATH_SIZE];
+    mr_path(p, path, axis_names[a]);
+    yaml_node_t *v = mr_get(map, axis_names[a]);
+    c->rect.lo[a] = -INFINITY;
+    c->rect.hi[a] = INFINITY;
+    c->rect.has[a] = 0;
+    if (a == c->normal) {
+      if (v)
+        return mr_error(rd, v, p,
+                        "is the crack's normal axis: the crack lies on the plane %s = at and "
+                        "takes bounds on %s and %s only",
+                        axis_names[c->normal], axis_names[u], axis_names[w]);
+      continue;
+    }
+    if (!v)
+      return mr_error(rd, map->node, path,
+                      "missing required key '%s' (a precrack with normal %s needs %s: [min, max] "
+                      "and %s: [min, max])",
+                      axis_names[a], axis_names[c->normal], axis_names[u], axis_names[w]);
+    CUPID_CALL(read_precrack_side(rd, v, p, a, &c->rect));
+  }
+  return CUPID_SUCCESS;
+}
+
+/* The crack plane crosses the region and the rectangle overlaps its face by a positive area. */
+static int precrack_touches(const cupid_precrack *c, const cupid_box *region) {
+  if (!(c->at >= region->lo[c->normal] && c->at <= region->hi[c->normal])) return 0;
+  for (int a = 0; a < 3; a++)
+    if (a != c->normal && !(c->rect.lo[a] < region->hi[a] && c->rect.hi[a] > region->lo[a]))
+      return 0;
+  return 1;
+}
+
+/* A precrack that meets no region cuts no bond: say whether the plane or the rectangle misses. */
+static cupid_status check_precrack_inside(model_reader *rd, const yaml_node_t *node,
+                                          const char *path, const cupid_precrack *c) {
+  const cupid_peridynamics *pd = &rd->model->pd;
+  int n = c->normal, u, w, plane = 0;
+  other_axes(n, &u, &w);
+  for (int r = 0; r < pd->n_regions; r++) {
+    const cupid_box *b = &pd->regions[r].box;
+    if (precrack_touches(c, b)) return CUPID_SUCCESS;
+    plane |= c->at >= b->lo[n] && c->at <= b->hi[n];
+  }
+  if (!plane)
+    return mr_error(rd, node, path, "lies outside every PD region (none of them reaches %s = %g)",
+                    axis_names[n], c->at);
+  return mr_error(rd, node, path,
+                  "lies outside every PD region (on the plane %s = %g, the rectangle %s [%g, %g], "
+                  "%s [%g, %g] overlaps none of them)",
+                  axis_names[n], c->at, axis_names[u], c->rect.lo[u], c->rect.hi[u],
+                  axis_names[w], c->rect.lo[w], c->rect.hi[w]);
+}
+
+static cupid_status read_precrack(model_reader *rd, yaml_node_t *node, const char *path,
+                                  cupid_precrack *c) {
+  static const char *const keys[] = {"normal", "at", "x", "y", "z"};
+  mr_map map;
+  yaml_node_t *normal, *at;
+  char p[PATH_SIZE];
+  mr_mark(node, path, &c->mark);
+  CUPID_CALL(mr_map_open(rd, node, path, keys, COUNT(keys), &map));
+  if (!(normal = mr_get(&map, "normal")))
+    return mr_error(rd, map.node, path,
+                    "missing required key 'normal' (x, y or z: the axis normal to the crack)");
+  mr_path(p, path, "normal");
+  CUPID_CALL(mr_enum(rd, normal, p, axis_names, 3, &c->normal));
+  if (!(at = mr_get(&map, "at")))
+    return mr_error(rd, map.node, path,
+                    "missing required key 'at' (the position of the crack plane along %s)",
+                    axis_names[c->normal]);
+  mr_path(p, path, "at");
+  CUPID_CALL(mr_number(rd, at, p, &c->at));
+  CUPID_CALL(read_precrack_rect(rd, &map, path, c));
+  return check_precrack_inside(rd, node, path, c);
+}
+
+static cupid_status read_precracks(model_reader *rd, yaml_node_t *node, cupid_peridynamics *pd) {
+  const char *path = "peridynamics.precracks";
+  int n;
+  CUPID_CALL(mr_list(rd, node, path, 1, "rectangles {normal: y, at: 50, x: [..], z: [..]}",
+                     &n));
+  /* Every precrack is tested against every region here and every bond later. */
+  if (n > MODEL_MAX_PRECRACKS)
+    return mr_error(rd, node, path, "lists %d precracks, at most %d are allowed", n,
+                    MODEL_MAX_PRECRACKS);
+  CUPID_CALL(cupid_calloc((size_t)n, sizeof *pd->precracks, "precracks", &pd->precracks));
+  pd->n_precracks = n;
+  for (int i = 0; i < n; i++) {
+    char p[PATH_SIZE];
+    mr_path_index(p, path, i);
+    CUPID_CALL(read_precrack(rd, mr_item(rd, node, i), p, &pd->precracks[i]));
+  }
+  return CUPID_SUCCESS;
+}
+
+/* Positive volume in common with a region (an axis the box leaves out is unbounded); a box
+ * that only touches a face holds no node, since nodes sit at cell centres. */
+static int box_overlaps(const cupid_box *box, const cupid_box *region) {
+  for (int a = 0; a < 3; a++)
+    if (!(box->lo[a] < region->hi[a] && box->hi[a] > region->lo[a])) return 0;
+  return 1;
+}
+
+static cupid_status read_no_fail(model_reader *rd, yaml_node_t *node, cupid_fracture *f) {
+  const char *path = "peridynamics.fracture.no_fail";
+  const cupid_peridynamics *pd = &rd->model->pd;
+  int n;
+  CUPID_CALL(mr_list(rd, node, path, 1, "boxes {x: [..], y: [..], z: [..]}", &n));
+  if (n > CUPID_MAX_NO_FAIL)
+    return mr_error(rd, node, path, "lists %d boxes, at most %d are allowed", n,
+                    CUPID_MAX_NO_FAIL);
+  for (int i = 0; i < n; i++) {
+    char p[PATH_SIZE];
+    yaml_node_t *item = mr_item(rd, node, i);
+    mr_path_index(p, path, i);
+    mr_mark(item, p, &f->no_fail_marks[i]);
+    CUPID_CALL(mr_box(rd, item, p, &f->no_fail[i]));
+    int inside = 0;
+    for (int r = 0; r < pd->n_regions && !inside; r++)
+      inside = box_overlaps(&f->no_fail[i], &pd->regions[r].box);
+    if (!inside)
+      return mr_error(rd, item, p, "no_fail box lies outside the body (it overlaps no PD region)");
+  }
+  f->n_no_fail = n;
+  return CUPID_SUCCESS;
+}
+
+/* The limit of a bond: s0 directly or G0 (s0 derived later from G0, the bulk modulus and the
+ * horizon); `stretch` takes exactly one of them, `energy` needs G0. */
+static cupid_status read_fracture_limit(model_reader *rd, const mr_map *map, cupid_fracture *f) {
+  const char *path = "peridynamics.fracture";
+  yaml_node_t *s0 = mr_get(map, "critical_stretch"), *g0 = mr_get(map, "energy_release_rate");
+  if (f->criterion == CUPID_FRACTURE_ENERGY) {
+    if (s0)
+      return mr_error(rd, s0, "peridynamics.fracture.critical_stretch",
+                      "is not used with criterion: energy (the critical bond energy comes from "
+                      "energy_release_rate, G0)");
+    if (!g0)
+      return mr_error(rd, map->node, path,
+                      "missing required key 'energy_release_rate' (criterion energy needs G0)");
+  } else if (s0 && g0) {
+    int g0_later = g0->start_mark.index > s0->start_mark.index;
+    return mr_error(rd, g0_later ? g0 : s0,
+                    g0_later ? "peridynamics.fracture.energy_release_rate"
+                             : "peridynamics.fracture.critical_stretch",
+                    "give critical_stretch (s0) or energy_release_rate (G0), not both");
+  } else if (!s0 && !g0) {
+    return mr_error(rd, map->node, path,
+                    "missing required key: give critical_stretch (s0) or energy_release_rate (G0)");
+  }
+  if (s0) {
+    CUPID_CALL(mr_positive(rd, s0, "peridynamics.fracture.critical_stretch",
+                           &f->critical_stretch));
+    f->has_critical_stretch = 1;
+  }
+  if (g0) {
+    CUPID_CALL(mr_positive(rd, g0, "peridynamics.fracture.energy_release_rate",
+                           &f->energy_release_rate));
+    f->has_energy_release_rate = 1;
+  }
+  return CUPID_SUCCESS;
+}
+
+static cupid_status read_fracture(model_reader *rd, yaml_node_t *node, cupid_peridynamics *pd) {
+  static const char *const keys[] = {"criterion", "critical_stretch", "energy_release_rate",
+                                     "per_iteration", "no_fail"};
+  static const char *const criteria[] = {"stretch", "energy"};
+  static const char *const per_iteration[] = {"all", "one"};
+  cupid_fracture *f = &pd->fracture;
+  mr_map map;
+  yaml_node_t *v;
+  int k;
+  mr_mark(node, "peridynamics.fracture", &f->mark);
+  f->has_fracture = 1;
+  f->criterion = CUPID_FRACTURE_STRETCH;
+  f->per_iteration_all = 1;
+  CUPID_CALL(mr_map_open(rd, node, "peridynamics.fracture", keys, COUNT(keys), &map));
+  if ((v = mr_get(&map, "criterion"))) {
+    CUPID_CALL(mr_enum(rd, v, "peridynamics.fracture.criterion", criteria, COUNT(criteria), &k));
+    f->criterion = (cupid_fracture_criterion)k;
+    /* The bond energy needs the LPS split into dilatation and deviatoric parts. */
+    if (f->criterion == CUPID_FRACTURE_ENERGY && pd->model == CUPID_PD_BOND)
+      return mr_error(rd, v, "peridynamics.fracture.criterion",
+                      "the energy criterion needs model: lps; use criterion: stretch for "
+                      "bond-based");
+  }
+  CUPID_CALL(read_fracture_limit(rd, &map, f));
+  if ((v = mr_get(&map, "per_iteration"))) {
+    CUPID_CALL(mr_enum(rd, v, "peridynamics.fracture.per_iteration", per_iteration,
+                       COUNT(per_iteration), &k));
+    f->per_iteration_all = k == 0;
+  }
+  if ((v = mr_get(&map, "no_fail"))) CUPID_CALL(read_no_fail(rd, v, f));
+  return CUPID_SUCCESS;
+}
+
+/* After the regions and options, so that the order of the keys does not matter. */
+static cupid_status read_pd_fracture(model_reader *rd, const mr_map *map, cupid_peridynamics *pd) {
+  yaml_node_t *precracks = mr_get(map, "precracks"), *fracture = mr_get(map, "fracture");
+  if (pd->dimension == 1 && (precracks || fracture))
+    return mr_error(rd, precracks ? precracks : fracture,
+                    precracks ? "peridynamics.precracks" : "peridynamics.fracture",
+                    "precracks and fracture need dimension: 3");
+  if (precracks) CUPID_CALL(read_precracks(rd, precracks, pd));
+  if (fracture) CUPID_CALL(read_fracture(rd, fracture, pd));
+  return CUPID_SUCCESS;
+}
+
 static cupid_status read_peridynamics(model_reader *rd, yaml_node_t *node) {
   static const char *const keys[] = {"spacing",   "horizon",   "model",    "influence",
                                      "partial_volume", "surface_correction", "dimension",
-                                     "area", "material", "regions"};
+                                     "area", "material", "regions", "precracks", "fracture"};
   cupid_peridynamics *pd = &rd->model->pd;
   mr_map map;
   yaml_node_t *spacing, *horizon, *regions, *material;
@@ -545,18 +800,8 @@ static cupid_status read_peridynamics(model_reader *rd, yaml_node_t *node) {
   if ((material = mr_get(&map, "material")))
     CUPID_CALL(mr_material(rd, material, "peridynamics.material", &pd->material));
   CUPID_CALL(mr_require(rd, &map, "regions", &regions));
-  int n;
-  CUPID_CALL(mr_list(rd, regions, "peridynamics.regions", 0, "boxes {x: [..], y: [..], z: [..]}",
-                     &n));
-  if (n == 0) return mr_error(rd, regions, "peridynamics.regions", "must list at least one region");
-  CUPID_CALL(cupid_calloc((size_t)n, sizeof *pd->regions, "PD regions", &pd->regions));
-  pd->n_regions = n;
-  for (int i = 0; i < n; i++) {
-    char p[PATH_SIZE];
-    mr_path_index(p, "peridynamics.regions", i);
-    CUPID_CALL(read_region(rd, mr_item(rd, regions, i), p, &pd->regions[i]));
-  }
-  return CUPID_SUCCESS;
+  CUPID_CALL(read_regions(rd, regions, pd));
+  return read_pd_fracture(rd, &map, pd);
 }
 
 /* ------------------------------------------------------------------------------- coupling */

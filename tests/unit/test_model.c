@@ -257,6 +257,84 @@ static void test_components(void **state) {
   cupid_model_destroy(&m);
 }
 
+/* precracks and fracture, given before the keys they are checked against (model, regions). */
+static void test_fracture(void **state) {
+  (void)state;
+  cupid_model m = read_good("fracture.yaml");
+  const cupid_peridynamics *pd = &m->pd;
+  assert_int_equal(pd->model, CUPID_PD_LPS);
+  assert_int_equal(pd->n_regions, 2);
+  assert_int_equal(pd->n_precracks, 2);
+  const cupid_precrack *c = &pd->precracks[0];
+  assert_int_equal(c->normal, 1);
+  assert_true(c->at == 20);
+  assert_true(!c->rect.has[1] && c->rect.lo[1] == -INFINITY && c->rect.hi[1] == INFINITY);
+  assert_true(c->rect.has[0] && c->rect.lo[0] == 0 && c->rect.hi[0] == 4);
+  assert_true(c->rect.has[2] && c->rect.lo[2] == 0 && c->rect.hi[2] == 2);
+  assert_mark(&c->mark, 16, 7, "peridynamics.precracks[0]");
+  c = &pd->precracks[1]; /* keys in any order */
+  assert_int_equal(c->normal, 0);
+  assert_true(c->at == 5);
+  assert_true(!c->rect.has[0] && c->rect.has[1] && c->rect.has[2]);
+  assert_true(c->rect.lo[1] == 10 && c->rect.hi[1] == 30 && c->rect.hi[2] == 2);
+  assert_mark(&c->mark, 17, 7, "peridynamics.precracks[1]");
+  const cupid_fracture *f = &pd->fracture;
+  assert_true(f->has_fracture);
+  assert_int_equal(f->criterion, CUPID_FRACTURE_ENERGY);
+  assert_true(f->has_energy_release_rate && f->energy_release_rate == 0.35);
+  assert_false(f->has_critical_stretch);
+  assert_int_equal(f->per_iteration_all, 0);
+  assert_mark(&f->mark, 9, 5, "peridynamics.fracture");
+  assert_int_equal(f->n_no_fail, 2);
+  const cupid_box *b = &f->no_fail[0]; /* axes left out are unbounded */
+  assert_true(b->has[1] && b->lo[1] == 0 && b->hi[1] == 3);
+  assert_true(!b->has[0] && b->lo[0] == -INFINITY && !b->has[2] && b->hi[2] == INFINITY);
+  b = &f->no_fail[1];
+  assert_true(b->has[0] && b->has[1] && b->has[2] && b->lo[1] == 37 && b->hi[0] == 2);
+  assert_mark(&f->no_fail_marks[0], 13, 9, "peridynamics.fracture.no_fail[0]");
+  assert_mark(&f->no_fail_marks[1], 14, 9, "peridynamics.fracture.no_fail[1]");
+  cupid_model_destroy(&m);
+}
+
+/* The defaults of fracture, and a model without it. */
+static void test_fracture_defaults(void **state) {
+  (void)state;
+  const char *text = "materials: {m: {E: 1, nu: 0}}\n"
+                     "peridynamics:\n"
+                     "  fracture: {critical_stretch: 5.0e-4}\n"
+                     "  model: bond\n"
+                     "  precracks:\n"
+                     "  spacing: 1\n  horizon: 3\n"
+                     "  regions: [{x: [0, 4], y: [0, 4], z: [0, 4]}]\n";
+  cupid_model m = NULL;
+  CUPID_ASSERT_OK(cupid_model_read_string(text, strlen(text), "f.yaml", &m));
+  const cupid_fracture *f = &m->pd.fracture;
+  assert_true(f->has_fracture);
+  assert_int_equal(f->criterion, CUPID_FRACTURE_STRETCH);
+  assert_true(f->has_critical_stretch && f->critical_stretch == 5.0e-4);
+  assert_false(f->has_energy_release_rate);
+  assert_int_equal(f->per_iteration_all, 1);
+  assert_int_equal(f->n_no_fail, 0);
+  assert_int_equal(m->pd.n_precracks, 0); /* "precracks:" alone is an empty list */
+  cupid_model_destroy(&m);
+  /* stretch from G0 (bond-based too); per_iteration: all spelt out */
+  text = "materials: {m: {E: 1, nu: 0}}\n"
+         "peridynamics: {spacing: 1, horizon: 3, model: bond, regions: [{x: [0, 4], y: [0, 4], "
+         "z: [0, 4]}], fracture: {energy_release_rate: 2, per_iteration: all}}\n";
+  CUPID_ASSERT_OK(cupid_model_read_string(text, strlen(text), "f.yaml", &m));
+  f = &m->pd.fracture;
+  assert_int_equal(f->criterion, CUPID_FRACTURE_STRETCH);
+  assert_true(f->has_energy_release_rate && f->energy_release_rate == 2);
+  assert_false(f->has_critical_stretch);
+  assert_int_equal(f->per_iteration_all, 1);
+  cupid_model_destroy(&m);
+  m = read_good("pd_only.yaml");
+  assert_false(m->pd.fracture.has_fracture);
+  assert_int_equal(m->pd.n_precracks, 0);
+  assert_null(m->pd.precracks);
+  cupid_model_destroy(&m);
+}
+
 static void test_read_string_and_defaults(void **state) {
   (void)state;
   const char *text = "materials: {m: {E: 1, nu: 0}}\n"
@@ -319,6 +397,8 @@ int main(void) {
       cmocka_unit_test(test_truss_1d_dynamic),
       cmocka_unit_test(test_le_explicit),
       cmocka_unit_test(test_components),
+      cmocka_unit_test(test_fracture),
+      cmocka_unit_test(test_fracture_defaults),
       cmocka_unit_test(test_read_string_and_defaults),
       cmocka_unit_test(test_model_error_and_helpers),
   };

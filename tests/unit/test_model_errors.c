@@ -219,6 +219,48 @@ static const bad_case cases[] = {
     {"flow_duplicate_key.yaml",
      "2:30: materials.resin.E: duplicate key (first given at line 2)",
      NULL},
+    {"fracture_both_limits.yaml",
+     "10:26: peridynamics.fracture.energy_release_rate: give critical_stretch (s0) or "
+     "energy_release_rate (G0), not both",
+     NULL},
+    {"fracture_criterion_bad.yaml",
+     "9:16: peridynamics.fracture.criterion: must be one of stretch | energy, got 'strech'; "
+     "did you mean 'stretch'?",
+     NULL},
+    {"fracture_dimension_1.yaml",
+     "4:13: peridynamics.fracture: precracks and fracture need dimension: 3",
+     NULL},
+    {"fracture_energy_bond.yaml",
+     "9:16: peridynamics.fracture.criterion: the energy criterion needs model: lps; use "
+     "criterion: stretch for bond-based",
+     NULL},
+    {"fracture_energy_no_g0.yaml",
+     "9:5: peridynamics.fracture: missing required key 'energy_release_rate' (criterion "
+     "energy needs G0)",
+     NULL},
+    {"fracture_energy_s0.yaml",
+     "11:23: peridynamics.fracture.critical_stretch: is not used with criterion: energy (the "
+     "critical bond energy comes from energy_release_rate, G0)",
+     NULL},
+    {"fracture_g0_overflow.yaml",
+     "8:35: peridynamics.fracture.energy_release_rate: must be a finite number, got '1e400'",
+     NULL},
+    {"fracture_no_limit.yaml",
+     "9:5: peridynamics.fracture: missing required key: give critical_stretch (s0) or "
+     "energy_release_rate (G0)",
+     NULL},
+    {"fracture_not_map.yaml",
+     "8:13: peridynamics.fracture: must be a mapping (key: value), got 'stretch'",
+     NULL},
+    {"fracture_per_iteration_bad.yaml",
+     "10:20: peridynamics.fracture.per_iteration: must be one of all | one, got 'every'",
+     NULL},
+    {"fracture_s0_zero.yaml",
+     "8:32: peridynamics.fracture.critical_stretch: must be > 0, got 0",
+     NULL},
+    {"fracture_unknown_key.yaml",
+     "10:5: peridynamics.fracture.no_fial: unknown key; did you mean 'no_fail'?",
+     NULL},
     {"horizon_negative.yaml",
      "5:12: peridynamics.horizon: must be larger than spacing (1), got -3",
      NULL},
@@ -303,6 +345,21 @@ static const bad_case cases[] = {
     {"no_beam_no_pd.yaml",
      "1:1: a model needs a beam: section, a peridynamics: section, or both",
      NULL},
+    {"no_fail_empty_box.yaml",
+     "11:9: peridynamics.fracture.no_fail[0]: a box needs at least one of x, y, z, each [min, "
+     "max]",
+     NULL},
+    {"no_fail_not_list.yaml",
+     "10:14: peridynamics.fracture.no_fail: must be a list of boxes {x: [..], y: [..], z: "
+     "[..]}, got a mapping",
+     NULL},
+    {"no_fail_outside.yaml",
+     "12:9: peridynamics.fracture.no_fail[1]: no_fail box lies outside the body (it overlaps "
+     "no PD region)",
+     NULL},
+    {"no_fail_too_many.yaml",
+     "10:14: peridynamics.fracture.no_fail: lists 33 boxes, at most 32 are allowed",
+     NULL},
     {"not_utf8.yaml",
      "1:11: not valid UTF-8 text: invalid trailing UTF-8 octet",
      NULL},
@@ -338,6 +395,57 @@ static const bad_case cases[] = {
      NULL},
     {"points_int_overflow.yaml",
      "10:57: output.lines[0].points: must be an integer from 2 to 10000000, got 2147483648",
+     NULL},
+    {"precrack_at_missing.yaml",
+     "9:7: peridynamics.precracks[0]: missing required key 'at' (the position of the crack "
+     "plane along y)",
+     NULL},
+    {"precrack_at_string.yaml",
+     "9:23: peridynamics.precracks[0].at: must be a number, got 'middle'",
+     NULL},
+    {"precrack_normal_bad.yaml",
+     "9:16: peridynamics.precracks[0].normal: must be one of x | y | z, got 'Y'; did you mean "
+     "'y'?",
+     NULL},
+    {"precrack_normal_bounds.yaml",
+     "9:41: peridynamics.precracks[0].y: is the crack's normal axis: the crack lies on the "
+     "plane y = at and takes bounds on x and z only",
+     NULL},
+    {"precrack_normal_missing.yaml",
+     "9:7: peridynamics.precracks[0]: missing required key 'normal' (x, y or z: the axis "
+     "normal to the crack)",
+     NULL},
+    {"precrack_not_map.yaml",
+     "9:7: peridynamics.precracks[0]: must be a mapping (key: value), got a list",
+     NULL},
+    {"precrack_outside_plane.yaml",
+     "10:7: peridynamics.precracks[1]: lies outside every PD region (none of them reaches y = "
+     "25)",
+     NULL},
+    {"precrack_outside_rect.yaml",
+     "9:7: peridynamics.precracks[0]: lies outside every PD region (on the plane x = 5, the "
+     "rectangle y [0, 20], z [4, 8] overlaps none of them)",
+     NULL},
+    {"precrack_reversed.yaml",
+     "9:40: peridynamics.precracks[0].y: must be [min, max] with min < max, got [12, 8]",
+     NULL},
+    {"precrack_side_missing.yaml",
+     "9:7: peridynamics.precracks[0]: missing required key 'z' (a precrack with normal y "
+     "needs x: [min, max] and z: [min, max])",
+     NULL},
+    {"precrack_unknown_key.yaml",
+     "9:8: peridynamics.precracks[0].nromal: unknown key; did you mean 'normal'?",
+     NULL},
+    {"precrack_zero_size.yaml",
+     "9:30: peridynamics.precracks[0].x: must be [min, max] with min < max, got [4, 4] (the "
+     "rectangle has zero size)",
+     NULL},
+    {"precracks_dimension_1.yaml",
+     "11:5: peridynamics.precracks: precracks and fracture need dimension: 3",
+     NULL},
+    {"precracks_not_list.yaml",
+     "8:14: peridynamics.precracks: must be a list of rectangles {normal: y, at: 50, x: [..], "
+     "z: [..]}, got a mapping",
      NULL},
     {"recursive_alias.yaml",
      "8:9: nested more than 64 levels deep (or an alias refers to itself)",
@@ -564,18 +672,35 @@ static void test_limits(void **state) {
          "loads[0].point.at[2]: must be a number, got '.inf'");
 }
 
+/* At most 1000 precracks: each is checked against every region here and every bond later. */
+static void test_precrack_limit(void **state) {
+  (void)state;
+  char *text = malloc(64000);
+  assert_non_null(text);
+  for (int count = 1000; count <= 1001; count++) {
+    int n = sprintf(text, MAT "peridynamics:\n  spacing: 1\n  horizon: 3\n"
+                              "  regions: [{x: [0, 4], y: [0, 4], z: [0, 4]}]\n"
+                              "  precracks: [&c {normal: y, at: 2, x: [0, 1], z: [0, 1]}");
+    for (int i = 1; i < count; i++) n += sprintf(text + n, ", *c");
+    strcpy(text + n, "]\n");
+    if (count == 1000) assert_int_equal(read_text(text, strlen(text)), CUPID_SUCCESS);
+    else expect(text, "mem.yaml:6:14: peridynamics.precracks: lists 1001 precracks, at most 1000");
+  }
+  free(text);
+}
+
 /* Random mutations of the valid models: the reader must return success or a model error with
  * a position, never crash, hang or leak (run under valgrind or ASan to check the last two). */
 static void test_mutations(void **state) {
   (void)state;
-  static const char *const good[] = {"bar.yaml", "pd_only.yaml", "truss_1d.yaml",
-                                     "le_explicit.yaml", "components.yaml"};
+  static const char *const good[] = {"bar.yaml",         "pd_only.yaml",    "truss_1d.yaml",
+                                     "le_explicit.yaml", "components.yaml", "fracture.yaml"};
   static const char *const snippets[] = {"[", "]", "{", "}", ":", ",", "- ", "&a ", "*a", "\t",
                                          "\n", "\"", "'", "null", "-1", "1e999", "x", "#", "? ",
                                          "\xff", "\xc3", "---\n", "!!str ", "  "};
   uint64_t seed = 2024;
   int accepted = 0, rejected = 0;
-  for (int g = 0; g < 5; g++) {
+  for (int g = 0; g < (int)(sizeof good / sizeof *good); g++) {
     char rel[256];
     snprintf(rel, sizeof rel, "tests/models/good/%s", good[g]);
     FILE *f = fopen(cupid_test_source_path(rel), "rb");
@@ -631,6 +756,7 @@ int main(void) {
       cmocka_unit_test(test_catalogue_complete),
       cmocka_unit_test(test_io_errors),
       cmocka_unit_test(test_limits),
+      cmocka_unit_test(test_precrack_limit),
       cmocka_unit_test(test_mutations),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
