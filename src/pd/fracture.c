@@ -24,6 +24,7 @@ void pd_fracture_free(struct cupid_pd_operator_private *op) {
   cupid_free(&op->bmask);
   cupid_free(&op->bgsum);
   cupid_free(&op->bcount);
+  cupid_free(&op->bpre);
   op->nslots = op->slot_cap = 0;
   op->nbroken = 0;
 }
@@ -51,31 +52,36 @@ static cupid_status slot_of(struct cupid_pd_operator_private *op, cupid_int i, i
     const size_t w = (size_t)op->bwords;
     uint64_t *mask = NULL;
     double *g = NULL;
-    int *count = NULL;
+    int *count = NULL, *pre = NULL;
     CUPID_CALL(cupid_calloc((size_t)cap * w, sizeof *mask, "PD broken-bond masks", &mask));
     if (cupid_calloc(3 * (size_t)cap, sizeof *g, "PD broken-bond weights", &g) != CUPID_SUCCESS ||
-        cupid_calloc((size_t)cap, sizeof *count, "PD broken-bond counts", &count) != CUPID_SUCCESS) {
+        cupid_calloc((size_t)cap, sizeof *count, "PD broken-bond counts", &count) != CUPID_SUCCESS ||
+        cupid_calloc((size_t)cap, sizeof *pre, "PD broken-bond counts", &pre) != CUPID_SUCCESS) {
       cupid_free(&mask);
       cupid_free(&g);
+      cupid_free(&count);
       return CUPID_ERR_MEMORY;
     }
     if (op->nslots) {
       memcpy(mask, op->bmask, (size_t)op->nslots * w * sizeof *mask);
       memcpy(g, op->bgsum, 3 * (size_t)op->nslots * sizeof *g);
       memcpy(count, op->bcount, (size_t)op->nslots * sizeof *count);
+      memcpy(pre, op->bpre, (size_t)op->nslots * sizeof *pre);
     }
     cupid_free(&op->bmask);
     cupid_free(&op->bgsum);
     cupid_free(&op->bcount);
-    op->bmask = mask, op->bgsum = g, op->bcount = count;
+    cupid_free(&op->bpre);
+    op->bmask = mask, op->bgsum = g, op->bcount = count, op->bpre = pre;
     op->slot_cap = cap;
   }
   *slot = op->bslot[i] = op->nslots++;
   return CUPID_SUCCESS;
 }
 
-/* Mark entry s of node i broken (one direction); 0 if it already was. */
-static cupid_status mark_broken(struct cupid_pd_operator_private *op, cupid_int i, int s, int *fresh) {
+/* Mark entry s of node i broken (one direction; pre: by a pre-crack); 0 if it already was. */
+static cupid_status mark_broken(struct cupid_pd_operator_private *op, cupid_int i, int s, int pre,
+                                int *fresh) {
   int32_t k = -1;
   CUPID_CALL(slot_of(op, i, &k));
   uint64_t *word = op->bmask + (size_t)k * (size_t)op->bwords + (size_t)(s >> 6);
@@ -84,6 +90,7 @@ static cupid_status mark_broken(struct cupid_pd_operator_private *op, cupid_int 
   if (!*fresh) return CUPID_SUCCESS;
   *word |= bit;
   op->bcount[k]++;
+  op->bpre[k] += pre;
   for (int c = 0; c < 3; c++) op->bgsum[3 * (size_t)k + c] += op->st.wxn[3 * s + c];
   return CUPID_SUCCESS;
 }
@@ -105,13 +112,13 @@ static void weighted_volume(struct cupid_pd_operator_private *op, cupid_int i) {
 }
 
 /* Remove the bond of node i at stencil entry s (both directions). */
-static cupid_status remove_bond(struct cupid_pd_operator_private *op, cupid_int i, int s,
+static cupid_status remove_bond(struct cupid_pd_operator_private *op, cupid_int i, int s, int pre,
                                 int *removed) {
   const pd_family F = pd_family_of(op, i);
   const cupid_int j = pd_family_node(op, &F, s);
   int a, b;
-  CUPID_CALL(mark_broken(op, i, s, &a));
-  CUPID_CALL(mark_broken(op, j, op->st.n - 1 - s, &b));
+  CUPID_CALL(mark_broken(op, i, s, pre, &a));
+  CUPID_CALL(mark_broken(op, j, op->st.n - 1 - s, pre, &b));
   *removed = a;
   if (!a) return CUPID_SUCCESS;
   op->nbroken++;
@@ -160,7 +167,7 @@ cupid_status cupid_pd_operator_precrack(cupid_pd_operator op, const cupid_pd_pre
       const cupid_int j = pd_family_node(op, &F, s);
       if (!segment_crosses(crack, x + 3 * i, x + 3 * j)) continue;
       int fresh;
-      CUPID_CALL(remove_bond(op, i, s, &fresh));
+      CUPID_CALL(remove_bond(op, i, s, 1, &fresh));
       *removed += fresh;
     }
   }
@@ -317,7 +324,7 @@ static cupid_status break_list(struct cupid_pd_operator_private *op, const doubl
   cupid_status st = CUPID_SUCCESS;
   for (size_t k = 0; k < L->n && st == CUPID_SUCCESS; k++) {
     int fresh;
-    st = remove_bond(op, L->i[k], L->s[k], &fresh);
+    st = remove_bond(op, L->i[k], L->s[k], 0, &fresh);
   }
   for (size_t k = 0; k < u_n; k++) after += node_energy(op, u, nodes[k]);
   free(nodes);
@@ -371,6 +378,12 @@ cleanup:
 }
 
 cupid_int cupid_pd_operator_num_broken(const cupid_pd_operator op) { return op ? op->nbroken : 0; }
+
+cupid_int cupid_pd_operator_nodes_broken(const cupid_pd_operator op) {
+  cupid_int n = 0;
+  for (int32_t k = 0; op && k < op->nslots; k++) n += op->bcount[k] > op->bpre[k];
+  return n;
+}
 
 int cupid_pd_operator_bond_intact(const cupid_pd_operator op, cupid_int i, cupid_int j) {
   if (!op || i < 0 || j < 0 || i >= op->nnodes || j >= op->nnodes) return 0;

@@ -148,6 +148,7 @@ struct cupid_pd_operator_private {
   uint64_t *bmask;
   double *bgsum;
   int *bcount;
+  int *bpre;              /* of bcount, the entries pre-cracks removed */
   int bwords;
   int32_t nslots, slot_cap;
   cupid_int nbroken;      /* bonds (unordered pairs) removed: pre-cracks and breaking */

@@ -300,9 +300,9 @@ static cupid_status monitor_outputs(dyn_output *o, cupid_int step, double t, int
   if (prob->damage) {
     CUPID_CALL(cupid_problem_fracture_damage(prob));
     if (o->damage)
-      fprintf(cupid_atomic_stream(o->damage), "%lld,%.10e,%lld,%lld,%.10e\n", (long long)step, t,
-              (long long)(prob->precrack_bonds + prob->broken_bonds),
-              (long long)prob->damaged_nodes, prob->max_damage);
+      fprintf(cupid_atomic_stream(o->damage), "%lld,%.10e,%lld,%lld,%.10e,%lld\n", (long long)step,
+              t, (long long)prob->broken_bonds, (long long)prob->damaged_nodes, prob->max_damage,
+              (long long)cupid_pd_operator_nodes_broken(prob->op));
   }
   if (o->prob->model->output.vtu && o->prob->writedir) CUPID_CALL(write_vtu_step(o, step, t, v));
   o->prob->dyn.energy = *e;
@@ -317,7 +317,8 @@ static cupid_status open_outputs(dyn_output *o) {
   if (prob->damage) { /* damage.csv (model-format.md, fracture outputs) */
     CUPID_CALL(out_path(prob, "damage.csv", path, sizeof path));
     CUPID_CALL(cupid_atomic_open(path, &o->damage));
-    fprintf(cupid_atomic_stream(o->damage), "step,t,broken_bonds,damaged_nodes,max_damage\n");
+    fprintf(cupid_atomic_stream(o->damage),
+            "step,t,broken_bonds,damaged_nodes,max_damage,nodes_broken\n");
   }
   CUPID_CALL(out_path(prob, "energies.csv", path, sizeof path));
   CUPID_CALL(cupid_atomic_open(path, &o->energies));
