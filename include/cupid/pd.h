@@ -340,8 +340,9 @@ cupid_status cupid_pd_operator_break_bonds(cupid_pd_operator op, const double *u
 /** Bonds (unordered pairs) removed so far: pre-cracks and breaks. */
 cupid_int cupid_pd_operator_num_broken(const cupid_pd_operator op);
 
-/** Nodes that lost a bond to breaking (cupid_pd_operator_break_bonds; pre-cracks aside). */
-cupid_int cupid_pd_operator_nodes_broken(const cupid_pd_operator op);
+/** Nodes that lost a bond to breaking (cupid_pd_operator_break_bonds; pre-cracks aside);
+ *  with @p nodes (room for every node), their indices, ascending. */
+cupid_int cupid_pd_operator_nodes_broken(const cupid_pd_operator op, cupid_int *nodes);
 
 /** 1 if nodes i and j are bonded and the bond is intact; 0 otherwise. */
 int cupid_pd_operator_bond_intact(const cupid_pd_operator op, cupid_int i, cupid_int j);

@@ -379,9 +379,17 @@ cleanup:
 
 cupid_int cupid_pd_operator_num_broken(const cupid_pd_operator op) { return op ? op->nbroken : 0; }
 
-cupid_int cupid_pd_operator_nodes_broken(const cupid_pd_operator op) {
+cupid_int cupid_pd_operator_nodes_broken(const cupid_pd_operator op, cupid_int *nodes) {
   cupid_int n = 0;
-  for (int32_t k = 0; op && k < op->nslots; k++) n += op->bcount[k] > op->bpre[k];
+  if (!op || !op->bslot) return 0;
+  if (!nodes) {
+    for (int32_t k = 0; k < op->nslots; k++) n += op->bcount[k] > op->bpre[k];
+    return n;
+  }
+  for (cupid_int i = 0; i < op->nnodes; i++) {
+    const int32_t k = op->bslot[i];
+    if (k >= 0 && op->bcount[k] > op->bpre[k]) nodes[n++] = i;
+  }
   return n;
 }
 

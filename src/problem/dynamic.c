@@ -302,7 +302,7 @@ static cupid_status monitor_outputs(dyn_output *o, cupid_int step, double t, int
     if (o->damage)
       fprintf(cupid_atomic_stream(o->damage), "%lld,%.10e,%lld,%lld,%.10e,%lld\n", (long long)step,
               t, (long long)prob->broken_bonds, (long long)prob->damaged_nodes, prob->max_damage,
-              (long long)cupid_pd_operator_nodes_broken(prob->op));
+              (long long)cupid_pd_operator_nodes_broken(prob->op, NULL));
   }
   if (o->prob->model->output.vtu && o->prob->writedir) CUPID_CALL(write_vtu_step(o, step, t, v));
   o->prob->dyn.energy = *e;

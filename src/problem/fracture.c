@@ -142,6 +142,20 @@ cupid_status cupid_problem_fracture_setup(cupid_problem_state *prob) {
   return CUPID_SUCCESS;
 }
 
+/* Where the crack started: the centroid of the nodes of the first broken bonds. */
+static cupid_status first_break_place(cupid_problem_state *prob) {
+  cupid_int *nodes = NULL;
+  CUPID_CALL(cupid_malloc((size_t)prob->n_pd, sizeof *nodes, "broken nodes", &nodes));
+  const cupid_int n = cupid_pd_operator_nodes_broken(prob->op, nodes);
+  const double *x = cupid_pd_grid_coords(prob->grid);
+  double *c = prob->first_break_at;
+  c[0] = c[1] = c[2] = 0.0;
+  for (cupid_int k = 0; k < n; k++)
+    for (int a = 0; a < 3; a++) c[a] += x[3 * nodes[k] + a] / (double)n;
+  cupid_free(&nodes);
+  return CUPID_SUCCESS;
+}
+
 cupid_status cupid_problem_fracture_step(cupid_problem_state *prob, cupid_int step, double t,
                                          const double *u, double *dissipated) {
   *dissipated = 0.0;
@@ -152,8 +166,11 @@ cupid_status cupid_problem_fracture_step(cupid_problem_state *prob, cupid_int st
   if (prob->first_break_step < 0) {
     prob->first_break_step = step;
     prob->first_break_t = t;
-    cupid_problem_progress(prob, "fracture: the first bonds broke at step %lld (t = %.4g): %lld",
-                           (long long)step, t, (long long)broken);
+    CUPID_CALL(first_break_place(prob));
+    const double *c = prob->first_break_at;
+    cupid_problem_progress(prob, "fracture: the first bonds broke at step %lld (t = %.4g): %lld, "
+                           "at (%.4g, %.4g, %.4g)",
+                           (long long)step, t, (long long)broken, c[0], c[1], c[2]);
   }
   prob->broken_bonds += broken;
   prob->fracture_energy += *dissipated;
@@ -185,6 +202,9 @@ void cupid_problem_fracture_json(cupid_json js, const cupid_problem_state *prob)
     if (prob->first_break_step >= 0) {
       cupid_json_integer(js, "first_break_step", prob->first_break_step);
       cupid_json_number(js, "first_break_t", prob->first_break_t);
+      cupid_json_begin_array(js, "first_break_at");
+      for (int a = 0; a < 3; a++) cupid_json_number(js, NULL, prob->first_break_at[a]);
+      cupid_json_end_array(js);
     }
     cupid_json_number(js, "dissipated_energy", prob->fracture_energy);
   }

@@ -132,6 +132,7 @@ typedef struct cupid_problem_private {
   cupid_int broken_bonds;           /**< broken during the run (pre-cracks not counted) */
   cupid_int first_break_step;       /**< -1: none */
   double first_break_t, fracture_energy;
+  double first_break_at[3];         /**< centroid of the nodes of the first broken bonds */
   double *damage;                   /**< per PD node, for the outputs (NULL: no fracture) */
   cupid_int damaged_nodes;
   double max_damage;
