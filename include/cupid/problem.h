@@ -100,6 +100,9 @@ typedef enum {
   CUPID_FIELD_PD_STRESS,          /**< sxx syy szz syz sxz sxy, nodal (after solve) */
   CUPID_FIELD_BEAM_POINTS,        /**< x, y, z of the beam's reconstruction points (after setup) */
   CUPID_FIELD_BEAM_DISPLACEMENT,  /**< ux, uy, uz at those points (after solve) */
+  CUPID_FIELD_PD_DAMAGE,          /**< damage per PD node, 1 component (after setup: the
+                                       pre-cracks'; after solve: with the broken bonds); *n = 0
+                                       for a model without pre-cracks or fracture */
   CUPID_FIELD_COUNT
 } cupid_field;
 

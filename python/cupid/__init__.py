@@ -59,7 +59,7 @@ class _Info(ctypes.Structure):  # cupid_problem_info (problem.h)
 
 _SOLVERS = {None: -1, "auto": 0, "direct": 1, "petsc": 2}
 _FIELDS = {"pd_coordinates": 0, "pd_displacement": 1, "pd_force": 2, "pd_load": 3,
-           "pd_stress": 4, "beam_points": 5, "beam_displacement": 6}
+           "pd_stress": 4, "beam_points": 5, "beam_displacement": 6, "pd_damage": 7}
 _REGIONS = {0: "none", 1: "PD", 2: "FE"}
 _PHASES = ("grid", "assembly", "coupling", "factorisation", "solve", "output")
 
@@ -217,7 +217,7 @@ class Problem:
     def field(self, name):
         """A field as a copied (n, components) numpy array: pd_coordinates, pd_displacement,
         pd_force, pd_load, pd_stress (sxx syy szz syz sxz sxy), beam_points,
-        beam_displacement."""
+        beam_displacement, pd_damage (one column; no rows without pre-cracks or fracture)."""
         if name not in _FIELDS:
             raise KeyError("unknown field %r (one of %s)" % (name, ", ".join(_FIELDS)))
         values = ctypes.POINTER(ctypes.c_double)()
@@ -234,6 +234,7 @@ class Problem:
     pd_force = property(lambda self: self.field("pd_force"))
     pd_load = property(lambda self: self.field("pd_load"))
     pd_stress = property(lambda self: self.field("pd_stress"))
+    pd_damage = property(lambda self: self.field("pd_damage"))
     beam_points = property(lambda self: self.field("beam_points"))
     beam_displacement = property(lambda self: self.field("beam_displacement"))
 

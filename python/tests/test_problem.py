@@ -130,3 +130,39 @@ def test_from_text_gives_the_file_and_its_errors():
     with pytest.raises(cupid.Error) as e:
         cupid.Problem.from_text(text.replace("spacing: 2.0", "spacing: -2.0"), "edited.yaml")
     assert "edited.yaml:" in str(e.value) and e.value.exit_code == 1
+
+
+def test_damage_field_of_a_cracking_plate():
+    """Dynamic fracture through the package: a small notched plate pulled by grips moving
+    with t breaks bonds at the notch; pd_damage is one column, 0 far from the crack, and its
+    damaged nodes are those summary.json counts."""
+    model = {
+        "materials": {"glass": {"E": 72000, "nu": 0.25, "density": 2.44e-9}},
+        "peridynamics": {"spacing": 1.0, "horizon": 3.015, "model": "bond",
+                         "influence": "constant", "material": "glass",
+                         "regions": [{"x": [0, 12], "y": [0, 24], "z": [0, 2]}],
+                         "precracks": [{"normal": "y", "at": 12, "x": [0, 4], "z": [0, 2]}],
+                         "fracture": {"criterion": "stretch", "critical_stretch": 1e-3}},
+        "constraints": [
+            {"displacement": {"box": {"y": [21, 24]}, "value": [0, "100*t", 0]}},
+            {"displacement": {"box": {"y": [0, 3]}, "value": [0, "-100*t", 0]}}],
+        "analysis": {"type": "dynamic",
+                     "dynamic": {"integrator": "central", "dt": 5e-8, "duration": 6e-5,
+                                 "every": 100, "lumped": True}},
+        "output": {"vtu": False, "plots": False},
+    }
+    p = cupid.Problem(model)
+    p.setup()
+    d0 = p.pd_damage
+    assert d0.shape == (p.info["pd_nodes"], 1) and d0.max() > 0  # the notch, before solving
+    p.solve()
+    d = p.pd_damage
+    x = p.pd_coordinates
+    assert d.shape == (x.shape[0], 1) and np.all(np.isfinite(d))
+    assert (d[:, 0] > d0[:, 0]).any(), "no bond broke"
+    # off the crack band; the free edge x = 11.5 loses a bond or two at the grips (so does
+    # LAMMPS in tests/verification/fracture_lammps)
+    far = (np.abs(x[:, 1] - 12.0) > 4.0) & (x[:, 0] < 11)
+    assert np.all(d[far, 0] == 0.0)
+    # a model without fracture has no damage rows
+    assert cupid.Problem(pd_bar()).setup().pd_damage.shape[0] == 0

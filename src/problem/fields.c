@@ -45,6 +45,14 @@ cupid_status cupid_problem_get_field(cupid_problem_state *prob, cupid_field fiel
                field == CUPID_FIELD_PD_STRESS || field == CUPID_FIELD_BEAM_DISPLACEMENT;
   CUPID_CALL(need_stage(prob, solved ? CUPID_STAGE_SOLVED : CUPID_STAGE_SET_UP,
                         "cupid_problem_get_field"));
+  if (field == CUPID_FIELD_PD_DAMAGE) {
+    if (!prob->damage || prob->slab) return CUPID_SUCCESS;
+    CUPID_CALL(cupid_problem_fracture_damage(prob));
+    *values = prob->damage;
+    *n = prob->n_pd;
+    *components = 1;
+    return CUPID_SUCCESS;
+  }
   int pd = field <= CUPID_FIELD_PD_STRESS;
   if (pd && (!prob->grid || prob->slab)) return CUPID_SUCCESS; /* no grid (or not rank 0's) */
   if (!pd && !prob->beam) return CUPID_SUCCESS;
