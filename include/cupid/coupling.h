@@ -292,6 +292,9 @@ cupid_status cupid_arlequin_operator_create(cupid_cuf_beam beam, cupid_pd_grid g
                                             cupid_arlequin_operator *A, cupid_arlequin_info *info);
 /** Destroy and set *A to NULL (NULL-safe). */
 void cupid_arlequin_operator_destroy(cupid_arlequin_operator *A);
+/** The operator's weighted PD operator (borrowed): pre-cracks and broken bonds are copied
+ *  onto it with cupid_pd_operator_copy_broken(). */
+cupid_pd_operator cupid_arlequin_operator_pd(const cupid_arlequin_operator A);
 /** Scalar DOFs (3 * PD nodes + the beam's). */
 cupid_int cupid_arlequin_operator_size(const cupid_arlequin_operator A);
 /** Approximate bytes held (the PD operator's bonds and per-node data, the assembled rest). */

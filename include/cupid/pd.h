@@ -337,6 +337,10 @@ cupid_status cupid_pd_operator_break_bonds(cupid_pd_operator op, const double *u
                                            const cupid_pd_fracture_options *opts, int only_most,
                                            cupid_int *broken, double *dissipated);
 
+/** Remove from @p dst every bond removed from @p src that it still has (both operators on one
+ *  grid with the same stencil: e.g. a weighted copy of the operator). */
+cupid_status cupid_pd_operator_copy_broken(cupid_pd_operator dst, const cupid_pd_operator src);
+
 /** Bonds (unordered pairs) removed so far: pre-cracks and breaks. */
 cupid_int cupid_pd_operator_num_broken(const cupid_pd_operator op);
 

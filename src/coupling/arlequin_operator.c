@@ -31,6 +31,10 @@ struct cupid_arlequin_operator_private {
   double *fpd;                   /* work: 3 per PD node */
 };
 
+cupid_pd_operator cupid_arlequin_operator_pd(const cupid_arlequin_operator A) {
+  return A ? A->op : NULL;
+}
+
 cupid_status cupid_arlequin_operator_create(cupid_cuf_beam beam, cupid_pd_grid grid,
                                             const cupid_pd_operator_options *pd,
                                             const cupid_arlequin_options *o,

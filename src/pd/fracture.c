@@ -377,6 +377,27 @@ cleanup:
   return st;
 }
 
+cupid_status cupid_pd_operator_copy_broken(cupid_pd_operator dst, const cupid_pd_operator src) {
+  CUPID_CHECK(dst && src && dst->grid == src->grid && dst->st.n == src->st.n, CUPID_ERR_ARGUMENT,
+              "copy_broken needs two operators on one grid with one stencil");
+  if (!src->bslot || dst->nbroken == src->nbroken) return CUPID_SUCCESS;
+  CUPID_CALL(fracture_init(dst));
+  const int half = src->st.n / 2;
+  for (cupid_int i = 0; i < src->nnodes; i++) {
+    const int32_t k = src->bslot[i];
+    if (k < 0) continue;
+    const uint64_t *mask = src->bmask + (size_t)k * (size_t)src->bwords;
+    for (int w = 0; w < src->bwords; w++)
+      for (uint64_t bits = mask[w]; bits; bits &= bits - 1) {
+        const int s = 64 * w + __builtin_ctzll(bits);
+        if (s < half || pd_bond_broken(dst, i, s)) continue; /* each bond from its lower node */
+        int fresh; /* dst counts them as broken: the copy keeps no pre-crack tally */
+        CUPID_CALL(remove_bond(dst, i, s, 0, &fresh));
+      }
+  }
+  return CUPID_SUCCESS;
+}
+
 cupid_int cupid_pd_operator_num_broken(const cupid_pd_operator op) { return op ? op->nbroken : 0; }
 
 cupid_int cupid_pd_operator_nodes_broken(const cupid_pd_operator op, cupid_int *nodes) {

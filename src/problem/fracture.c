@@ -174,6 +174,7 @@ cupid_status cupid_problem_fracture_step(cupid_problem_state *prob, cupid_int st
   }
   prob->broken_bonds += broken;
   prob->fracture_energy += *dissipated;
+  if (prob->crack_copy) CUPID_CALL(cupid_pd_operator_copy_broken(prob->crack_copy, prob->op));
   return CUPID_SUCCESS;
 }
 

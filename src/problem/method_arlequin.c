@@ -469,6 +469,9 @@ static cupid_status create_operator(cupid_problem_state *prob, cupid_arlequin_op
   double t0 = cupid_wtime();
   /* a slab: every rank's failure stops all of them before the next collective call */
   cupid_status st = cupid_arlequin_operator_create(prob->beam, prob->grid, &prob->pd_options, &o, A, &info);
+  /* its own (weighted) PD operator loses the pre-cracks' bonds as prob->op did */
+  if (st == CUPID_SUCCESS && prob->damage)
+    st = cupid_pd_operator_copy_broken(cupid_arlequin_operator_pd(*A), prob->op);
   if (st == CUPID_SUCCESS && P) st = cupid_arlequin_preconditioner(*A, 1.5, P);
   CUPID_CALL(prob->slab ? cupid_problem_slab_agree(st) : st);
   info.n_tied = cupid_problem_global_count(prob, info.n_tied); /* a slab ties its owned nodes */
@@ -515,6 +518,18 @@ static cupid_status explicit_operator(cupid_problem_state *prob, cupid_method_op
   cupid_arlequin_operator A = NULL;
   CUPID_CALL(create_operator(prob, &A, NULL));
   *op = (cupid_method_operator){.apply = k_apply, .ctx = A, .destroy = destroy_operator};
+  if (prob->damage) prob->crack_copy = cupid_arlequin_operator_pd(A); /* bonds break on both */
+  return CUPID_SUCCESS;
+}
+
+/* The overlaps: their PD nodes are tied to the beam by the penalty and share their energy with
+ * it, so their bonds never break (a crack must stay in the PD-only part of a region). */
+static cupid_status fracture_protect(const cupid_problem_state *prob, unsigned char *protect) {
+  const cupid_coupling *c = &prob->model->coupling;
+  const double *x = cupid_pd_grid_coords(prob->grid), h = cupid_pd_grid_spacing(prob->grid);
+  for (cupid_int i = 0; i < prob->n_pd; i++)
+    for (int s = 0; s < c->n_overlaps && !protect[i]; s++)
+      protect[i] = (unsigned char)cupid_box_contains(&c->overlaps[s], x + 3 * i, 1e-9 * h);
   return CUPID_SUCCESS;
 }
 
@@ -556,7 +571,7 @@ static int estimate_matrix_free(const cupid_problem_state *prob, double *bytes, 
 const cupid_method_ops cupid_method_arlequin = {
     .name = "arlequin",
     .caps = CUPID_METHOD_DYNAMIC | CUPID_METHOD_GRID_1D | CUPID_METHOD_SLABS |
-            CUPID_METHOD_GUARD_MATRIX_FREE,
+            CUPID_METHOD_GUARD_MATRIX_FREE | CUPID_METHOD_FRACTURE,
     .matrix = CUPID_MATRIX_SPD, /* symmetric positive definite once held: CHOLMOD, CG */
     .check = check,
     .prepare = prepare,
@@ -569,4 +584,5 @@ const cupid_method_ops cupid_method_arlequin = {
     .mass = mass,
     .report = report_gap,
     .estimate_matrix_free = estimate_matrix_free,
+    .fracture_protect = fracture_protect,
 };

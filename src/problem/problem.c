@@ -458,6 +458,13 @@ static cupid_status run_dynamic(cupid_problem_state *prob) {
     CUPID_TRY(cupid_problem_estimate(prob, 0)); /* before anything scales with the stiffness */
     CUPID_TRY(prob->method->assemble(prob));
   }
+  /* breaking changes the operator as the run goes: an assembled K could not follow */
+  if (prob->model->has_peridynamics && prob->model->pd.fracture.has_fracture && !op.apply) {
+    st = CUPID_ERROR(CUPID_ERR_UNSUPPORTED, "bond breaking needs the method's matrix-free "
+                     "explicit operator (coupling method %s has none for this model)",
+                     prob->method->name);
+    goto cleanup;
+  }
   CUPID_TRY(begin_outputs(prob)); /* the time series are written as the run goes */
   CUPID_TRY(cupid_problem_run_dynamic(prob, op.apply ? &op : NULL));
   if (prob->method->recover) { /* the eliminated unknowns, and K u with them */
@@ -466,6 +473,7 @@ static cupid_status run_dynamic(cupid_problem_state *prob) {
   }
   if (prob->method->report) CUPID_TRY(prob->method->report(prob));
 cleanup:
+  prob->crack_copy = NULL; /* it goes with the operator */
   if (op.destroy) op.destroy(&op.ctx);
   return st;
 }

@@ -134,6 +134,8 @@ typedef struct cupid_problem_private {
   double first_break_t, fracture_energy;
   double first_break_at[3];         /**< centroid of the nodes of the first broken bonds */
   double *damage;                   /**< per PD node, for the outputs (NULL: no fracture) */
+  cupid_pd_operator crack_copy;     /**< a method's own PD operator that must lose the same
+                                         bonds as prob->op (borrowed, during its run), or NULL */
   cupid_int damaged_nodes;
   double max_damage;
 } cupid_problem_state;

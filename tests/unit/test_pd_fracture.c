@@ -343,11 +343,40 @@ static void test_isolated_node(void **state) {
   }
 }
 
+/* A second operator on the same grid loses the same bonds (the Arlequin operator's copy). */
+static void test_copy_broken(void **state) {
+  (void)state;
+  cupid_box bx = box3(0, 9, 0, 8, 0, 5);
+  body a = make(1, &bx, CUPID_PD_LPS, CUPID_PARTIAL_PDLAMMPS, 3.0);
+  crack_body(&a, 0.3);
+  cupid_pd_operator_options oo = {.horizon = 3.0, .model = CUPID_PD_LPS,
+                                  .influence = CUPID_INFLUENCE_GAUSSIAN,
+                                  .partial_volume = CUPID_PARTIAL_PDLAMMPS, .materials = mats,
+                                  .n_materials = 2};
+  cupid_pd_operator b = NULL;
+  CUPID_ASSERT_OK(cupid_pd_operator_create(a.grid, &oo, &b));
+  CUPID_ASSERT_OK(cupid_pd_operator_copy_broken(b, a.op));
+  assert_int_equal(cupid_pd_operator_num_broken(b), cupid_pd_operator_num_broken(a.op));
+  double *u = malloc(3 * (size_t)a.n * sizeof *u), *f = malloc(3 * (size_t)a.n * sizeof *f);
+  double *g = malloc(3 * (size_t)a.n * sizeof *g);
+  uint64_t seed = 5;
+  for (cupid_int i = 0; i < 3 * a.n; i++) u[i] = cupid_test_random(&seed) - 0.5;
+  CUPID_ASSERT_OK(cupid_pd_operator_apply(a.op, u, f));
+  CUPID_ASSERT_OK(cupid_pd_operator_apply(b, u, g));
+  for (cupid_int i = 0; i < 3 * a.n; i++) ASSERT_NEAR(f[i], g[i], 1e-12 * max_abs(3 * a.n, f));
+  CUPID_ASSERT_OK(cupid_pd_operator_copy_broken(b, a.op)); /* again: nothing new */
+  assert_int_equal(cupid_pd_operator_num_broken(b), cupid_pd_operator_num_broken(a.op));
+  free(u), free(f), free(g);
+  cupid_pd_operator_destroy(&b);
+  destroy(&a);
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_precrack_count),     cmocka_unit_test(test_cracked_operator),
       cmocka_unit_test(test_stretch_threshold),  cmocka_unit_test(test_protect_damage_energy),
       cmocka_unit_test(test_threads),            cmocka_unit_test(test_isolated_node),
+      cmocka_unit_test(test_copy_broken),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -1,0 +1,48 @@
+#!/usr/bin/env bash
+# Dynamic fracture in a coupled CUF-PD model (issue 16, item 5): the notched bar of
+# examples/notched_bar (Arlequin: beam + PD middle, an edge pre-crack, a sudden traction),
+# shortened to 900 steps. The crack must start at the notch tip (the first broken bonds' nodes
+# within one spacing of (3.5, 50)), grow in the PD-only part (every damaged node within 5 of
+# y = 50: never in the overlaps [30, 35] and [65, 70], whose bonds never break), and the run
+# keep its energy balance (kinetic + strain + dissipated = the traction's work) to 1e-3. Also
+# the refusals of what fracture cannot run with (static, Newmark, Lagrange, surface correction,
+# a pre-crack cutting no bond or reaching an overlap).
+. "$(dirname "$0")/../tools/checks.sh"  # CUPID, SRC, $work (cwd), ok, bad, finish
+expect() { # expect CODE PATTERN -- CMD...: CMD exits with CODE and prints PATTERN (grep -E)
+  local code=$1 pattern=$2; shift 3
+  local out rc
+  out=$("$@" 2>&1); rc=$?
+  if [ "$rc" -ne "$code" ]; then bad "$* -> exit $rc, expected $code"; echo "$out" | head -5; return; fi
+  if ! grep -qE -- "$pattern" <<<"$out"; then bad "$* -> output does not match '$pattern'"; echo "$out" | head -5; return; fi
+  ok
+}
+PY=${CUPID_SYSTEM_PYTHON:-/usr/bin/python3}
+E=$SRC/examples/notched_bar/notched_bar_arlequin.yaml
+
+"$CUPID" run "$E" -o bar --quiet --set analysis.dynamic.duration=2.25e-5 && ok || bad "cupid run notched_bar_arlequin.yaml"
+"$PY" - bar <<'PY' && ok || bad "crack start, place, energy"
+import csv, json, sys
+out = sys.argv[1]
+s = json.load(open(out + "/summary.json"))
+fr = s["fracture"]
+x0 = fr["first_break_at"]
+print("first break at step %d at %s; %d broken bonds; balance %.2e" %
+      (fr["first_break_step"], x0, fr["broken_bonds"], s["dynamic"]["max_energy_balance_relative"]))
+assert fr["broken_bonds"] > 100, "the crack did not grow"
+assert abs(x0[0] - 3.5) <= 1.0 and abs(x0[1] - 50.0) <= 1.0, "first break %s not at the notch tip" % x0
+rows = list(csv.DictReader(open(out + "/pd_nodes.csv")))
+ys = [float(r["y"]) for r in rows if float(r["damage"]) > 0]
+assert max(abs(y - 50) for y in ys) <= 5.0, "damage away from the notch plane: y in [%g, %g]" % (min(ys), max(ys))
+assert s["dynamic"]["max_energy_balance_relative"] < 1e-3
+PY
+
+# refusals: what a fracture model cannot run with, each a model error naming its key (exit 1)
+M=$SRC/tests/models/fracture
+expect 1 'static.yaml:[0-9]+:[0-9]+: peridynamics.fracture: bond breaking runs in dynamic analyses' -- "$CUPID" run "$M/static.yaml" -o st
+expect 1 'newmark.yaml:[0-9]+:[0-9]+: peridynamics.fracture: bond breaking needs analysis.dynamic.integrator: central' -- "$CUPID" run "$M/newmark.yaml" -o nm
+expect 1 'lagrange.yaml:[0-9]+:[0-9]+: peridynamics.precracks\[0\]: pre-cracks and fracture are not supported with coupling method lagrange' -- "$CUPID" run "$M/lagrange.yaml" -o lg
+expect 1 'surface.yaml:[0-9]+:[0-9]+: peridynamics.fracture: pre-cracks and fracture need peridynamics.surface_correction: none' -- "$CUPID" run "$M/surface.yaml" -o sc
+expect 1 'no_bond.yaml:[0-9]+:[0-9]+: peridynamics.precracks\[0\]: the pre-crack cuts no bond' -- "$CUPID" check "$M/no_bond.yaml"
+expect 1 'overlap.yaml:[0-9]+:[0-9]+: peridynamics.precracks\[0\]: a pre-crack reaches the coupling zone' -- "$CUPID" check "$M/overlap.yaml"
+
+finish fracture_coupled
