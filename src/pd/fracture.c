@@ -245,14 +245,70 @@ static int list_push(bond_list *L, cupid_int i, int s) {
   return 1;
 }
 
+/* Tests compare the vectorised scan with the plain one (pd_fracture_force_plain_scan). */
+static atomic_int plain_scan;
+
+void pd_fracture_force_plain_scan(int on) { atomic_store(&plain_scan, on); }
+
+/* The neighbour of node i at stencil entry s, or -1 when i's family lacks it. */
+static cupid_int family_neighbour(const struct cupid_pd_operator_private *op, cupid_int i, int s) {
+  const pd_family F = pd_family_of(op, i);
+  if (F.s) {
+    int a = 0, b = F.n; /* the stored entries ascend */
+    while (a < b) {
+      const int m = a + (b - a) / 2;
+      if (F.s[m] < s) a = m + 1;
+      else b = m;
+    }
+    if (a == F.n || F.s[a] != s) return -1;
+  }
+  return pd_family_node(op, &F, s);
+}
+
+/* The stretch criterion through the stencil path's vectorised scan (pd_stencil_stretch_scan):
+ * its candidates, with a margin of 1e-8 below the smallest limit for the rounding of its
+ * shifted copy of u, confirmed one by one on u as the plain scan tests them, so that both give
+ * the same bonds in the same order. *done = 0 when the scan gave up. */
+static cupid_status find_over_scan(const struct cupid_pd_operator_private *op, const double *u,
+                                   const cupid_pd_fracture_options *o, bond_list *out, int *done) {
+  double lim = o->critical_stretch;
+  if (o->node_stretch) {
+    lim = INFINITY;
+    for (cupid_int i = 0; i < op->nnodes; i++) lim = fmin(lim, o->node_stretch[i]);
+  }
+  pd_hit *hits = NULL;
+  cupid_int n = 0;
+  CUPID_CALL(pd_stencil_stretch_scan(op, u, lim * (1.0 - 1e-8), &hits, &n));
+  *done = n >= 0;
+  cupid_status st = CUPID_SUCCESS;
+  for (cupid_int k = 0; k < n && st == CUPID_SUCCESS; k++) {
+    const cupid_int i = hits[k].i;
+    const int s = hits[k].s;
+    const cupid_int j = family_neighbour(op, i, s);
+    if (j < 0 || pd_bond_broken(op, i, s)) continue;
+    const double e = pd_extension(op->st.nrm + 3 * s, u, i, j);
+    if (e > stretch_limit(o, i, j) * op->st.x[s] && breakable(o, i, j) && !list_push(out, i, s))
+      st = CUPID_ERROR(CUPID_ERR_MEMORY, "out of memory for broken bonds");
+  }
+  cupid_free(&hits);
+  return st;
+}
+
 /* The bonds over their limit, each once (from its lower node), in ascending node order
  * whatever the thread count: each thread scans a contiguous block of nodes (static schedule)
- * into its own list and the lists are joined in thread order. */
+ * into its own list and the lists are joined in thread order. The stretch criterion takes the
+ * stencil path's vectorised scan when the operator has one. */
 static cupid_status find_over(const struct cupid_pd_operator_private *op, const double *u,
                               const double *theta, const cupid_pd_fracture_options *o,
                               bond_list *out) {
   const pd_stencil *S = &op->st;
   const int half = S->n / 2;
+  if (o->criterion == CUPID_PD_BREAK_STRETCH && !op->stencil_off && op->dim == 3 &&
+      !atomic_load(&plain_scan)) {
+    int done = 0;
+    CUPID_CALL(find_over_scan(op, u, o, out, &done));
+    if (done) return CUPID_SUCCESS;
+  }
   int nt = 1;
 #ifdef _OPENMP
   nt = op->nnodes > PD_OMP_MIN_NODES ? omp_get_max_threads() : 1;

@@ -175,6 +175,9 @@ static inline const double *pd_gself_intact(const struct cupid_pd_operator_priva
 
 /* Fracture state of the operator (fracture.c). */
 void pd_fracture_free(struct cupid_pd_operator_private *op);
+/* 1: the stretch criterion scans bond by bond instead of the stencil path's vectorised scan
+ * (tests compare the two). */
+void pd_fracture_force_plain_scan(int on);
 
 /* Surface factors per node: d (dilatation), g and q (deviatoric or pair energy). */
 #define PD_SF 9
@@ -261,6 +264,20 @@ cupid_status pd_operator_use_bond_lists(struct cupid_pd_operator_private *op);
  * dilatations computed on the way (the rows' neighbours). */
 cupid_status pd_stencil_apply(const struct cupid_pd_operator_private *op, cupid_int first,
                               cupid_int last, const double *u, double *f, double *theta);
+/* A bond found by a scan: node and stencil entry. */
+typedef struct {
+  cupid_int i;
+  int s;
+} pd_hit;
+
+/* The stretch scan of the stencil path (fracture.c's candidates): the bonds (i, s >= n/2)
+ * whose extension at u, from the kernels' shifted copies, exceeds lim |xi_s|, in ascending
+ * (i, s) order; the list may hold absent neighbours (padded cells) and broken bonds, which the
+ * caller drops while it confirms each on u itself. *hits: cupid_free() it. *n = -1: the scan
+ * gave up (a run with too many candidates): scan bond by bond instead. */
+cupid_status pd_stencil_stretch_scan(const struct cupid_pd_operator_private *op, const double *u,
+                                     double lim, pd_hit **hits, cupid_int *n);
+
 /* Free the kept work arrays (operator destroy). */
 void pd_stencil_work_free(struct cupid_pd_operator_private *op);
 /* The stencil kernels come in one instance per x86-64 instruction set (AVX-512, AVX2,

@@ -27,6 +27,9 @@
 #define _POSIX_C_SOURCE 200809L /* posix_memalign */
 #include <stdlib.h>
 #include <string.h>
+#ifdef _OPENMP
+#include <omp.h>
+#endif
 
 #include "pd/pd_internal.h"
 
@@ -198,6 +201,13 @@ static void broken_force(const struct cupid_pd_operator_private *op, const pd_wo
   });
 }
 
+/* A candidate of the stretch scan: the neighbour exists and the bond is intact. */
+static inline int scan_keeps(const struct cupid_pd_operator_private *op, cupid_int i, int s) {
+  if (pd_bond_broken(op, i, s)) return 0;
+  const int32_t *q = op->grid->ijk + 3 * i, *o = op->st.off + 3 * s;
+  return pd_grid_lookup(op->grid, q[0] + o[0], q[1] + o[1], q[2] + o[2]) >= 0;
+}
+
 /* f = -V^2 sum, with the ghost correction k_i G_i + b_i C_i u_i (k_i = a_i for LPS, 0 for
  * bond-based with b_i = c_i) for nodes without a full family. Always inlined: compiled with
  * each kernel instance's instruction set (the store loop vectorises with it). */
@@ -245,8 +255,12 @@ run_store(const struct cupid_pd_operator_private *op, const pd_work *w, const pd
 
 typedef void (*pd_run_kernel)(const struct cupid_pd_operator_private *op, const pd_work *w,
                               const pd_run *R, cupid_int i, int len, double *restrict out);
+typedef int (*pd_scan_kernel)(const struct cupid_pd_operator_private *op, const pd_work *w,
+                              const pd_run *R, cupid_int i, int len, double lim, pd_hit *hits,
+                              int cap);
 typedef struct {
   pd_run_kernel dilatation, lps_force, bond_force;
+  pd_scan_kernel stretch;
   int lanes;
 } pd_kernel_set;
 
@@ -496,6 +510,137 @@ cupid_status pd_stencil_apply(const struct cupid_pd_operator_private *op, cupid_
     }
   }
 cleanup:
+  work_free(&local);
+  if (kept) atomic_store(&mop->work_busy, 0);
+  return st;
+}
+
+/* ---- The stretch scan (fracture.c): candidates of bond breaking on the work arrays ---- */
+
+static int hit_order(const void *a, const void *b) {
+  const pd_hit *x = a, *y = b;
+  if (x->i != y->i) return (x->i > y->i) - (x->i < y->i);
+  return (x->s > y->s) - (x->s < y->s);
+}
+
+/* A node of an unpadded grid without a full family: its stored entries s >= n/2. */
+static int edge_stretch(const struct cupid_pd_operator_private *op, const pd_work *w, cupid_int i,
+                        double lim, pd_hit *hits, int cap) {
+  const pd_stencil *S = &op->st;
+  const pd_family F = pd_family_of(op, i);
+  const cupid_int li = i - w->base;
+  int nh = 0;
+  for (int q = 0; q < F.n; q++) {
+    const int s = pd_family_entry(&F, q);
+    if (s < S->n / 2) continue;
+    const cupid_int lj = pd_family_node(op, &F, s) - w->base;
+    if (work_extension(w, S->nrm + 3 * s, li, lj) > lim * S->x[s]) {
+      if (nh == cap) return -1;
+      hits[nh++] = (pd_hit){i, s};
+    }
+  }
+  return nh;
+}
+
+typedef struct {
+  pd_hit *h;
+  cupid_int n, cap;
+  int failed;
+} hit_list;
+
+static void hits_add(hit_list *L, const pd_hit *h, int n) {
+  if (L->n + n > L->cap) {
+    cupid_int cap = L->cap ? 2 * L->cap : 1024;
+    while (cap < L->n + n) cap *= 2;
+    pd_hit *p = realloc(L->h, (size_t)cap * sizeof *p);
+    if (!p) {
+      L->failed = 1;
+      return;
+    }
+    L->h = p, L->cap = cap;
+  }
+  memcpy(L->h + L->n, h, (size_t)n * sizeof *h);
+  L->n += n;
+}
+
+cupid_status pd_stencil_stretch_scan(const struct cupid_pd_operator_private *op, const double *u,
+                                     double lim, pd_hit **hits, cupid_int *n) {
+  *hits = NULL, *n = 0;
+  const cupid_int nn = op->nnodes;
+  if (nn == 0) return CUPID_SUCCESS;
+  const int lps = op->model == CUPID_PD_LPS;
+  cupid_int base = 0, len = nn;
+  int lead = 0;
+  if (op->padded) { /* the window of a whole apply (pd_stencil_apply with [0, nn)) */
+    cupid_int mn = 0, mx = 0;
+    for (int s = 0; s < op->st.n; s++) {
+      if (op->pclin[s] < mn) mn = op->pclin[s];
+      if (op->pclin[s] > mx) mx = op->pclin[s];
+    }
+    base = pd_node_pcell(op, 0) + mn;
+    len = pd_node_pcell(op, nn - 1) + mx + 1 - base;
+    lead = (int)(((base - op->pr[0]) % PD_ROW_ALIGN + PD_ROW_ALIGN) % PD_ROW_ALIGN);
+  }
+  struct cupid_pd_operator_private *mop = (struct cupid_pd_operator_private *)op;
+  pd_work local = {0}, *w = &local;
+  const int kept = !atomic_exchange(&mop->work_busy, 1);
+  cupid_status st = CUPID_SUCCESS;
+  int nt = 1;
+#ifdef _OPENMP
+  nt = nn > PD_OMP_MIN_NODES ? omp_get_max_threads() : 1;
+#endif
+  hit_list *per = calloc((size_t)nt, sizeof *per);
+  if (!per) {
+    st = CUPID_ERROR(CUPID_ERR_MEMORY, "out of memory for the bond scan");
+    goto cleanup;
+  }
+  if (kept) {
+    if (!mop->work) CUPID_TRY(cupid_calloc(1, sizeof(pd_work), "PD stencil work", &mop->work));
+    w = mop->work;
+  }
+  const pd_kernel_set *K = kernels_pick();
+  CUPID_TRY(work_reserve(w, op->padded, base, len, lead, lps));
+  work_fill(op, w, 0, nn, u);
+#pragma omp parallel num_threads(nt)
+  {
+    int tid = 0;
+#ifdef _OPENMP
+    tid = omp_get_thread_num();
+#endif
+    pd_hit buf[4096];
+#pragma omp for schedule(dynamic, 16)
+    for (cupid_int r = 0; r < op->nruns; r++) {
+      const pd_run *R = &op->runs[r];
+      int got = 0;
+      if (R->full || w->padded) {
+        got = K->stretch(op, w, R, R->i0, R->len, lim, buf, 4096);
+        if (got > 0) hits_add(&per[tid], buf, got);
+      } else {
+        for (cupid_int i = R->i0; i < R->i0 + R->len; i++) {
+          got = edge_stretch(op, w, i, lim, buf, 4096);
+          if (got > 0) hits_add(&per[tid], buf, got);
+          if (got < 0) break;
+        }
+      }
+      if (got < 0) per[tid].failed = 1; /* more than 4096 in one run: the caller scans */
+    }
+  }
+  cupid_int total = 0;
+  int failed = 0;
+  for (int t = 0; t < nt; t++) total += per[t].n, failed |= per[t].failed;
+  if (failed) { /* a run with too many hits, or no memory: the caller does the plain scan */
+    *n = -1;
+    goto cleanup;
+  }
+  CUPID_TRY(cupid_malloc((size_t)total + 1, sizeof **hits, "bond scan hits", hits));
+  for (int t = 0; t < nt; t++) {
+    memcpy(*hits + *n, per[t].h, (size_t)per[t].n * sizeof **hits);
+    *n += per[t].n;
+  }
+  qsort(*hits, (size_t)*n, sizeof **hits, hit_order); /* the order of the plain scan */
+cleanup:
+  for (int t = 0; per && t < nt; t++) free(per[t].h);
+  free(per);
   work_free(&local);
   if (kept) atomic_store(&mop->work_busy, 0);
   return st;

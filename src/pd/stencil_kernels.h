@@ -10,7 +10,9 @@
 
 #define PD_KVEC PD_KNAME(vec)
 #define PD_KVEC_U PD_KNAME(vec_u)
+#define PD_KIVEC PD_KNAME(ivec)
 typedef double PD_KVEC __attribute__((vector_size(8 * PD_KLANES)));
+typedef long long PD_KIVEC __attribute__((vector_size(8 * PD_KLANES)));
 typedef double PD_KVEC_U __attribute__((vector_size(8 * PD_KLANES), aligned(8), may_alias));
 #define PD_KLOAD(p) (*(const PD_KVEC_U *)(p))
 #define PD_KSTORE(p, v) (*(PD_KVEC_U *)(p) = (v))
@@ -133,11 +135,60 @@ static void PD_KNAME(run_bond_force)(const struct cupid_pd_operator_private *op,
   run_store(op, w, R, i, len, fx, fy, fz, f);
 }
 
+/* The bonds of the run's nodes to their neighbours at the entries s >= n/2 (each bond once,
+ * from its lower node) whose extension e = n_s.(u_j - u_i) exceeds lim x_s: for pair s' < n/2
+ * the entry is n-1-s' (offset -o_s', direction -n_s'), so e = n_s'.(u_i - u_-). The vector
+ * loop only flags the (run, entry) pairs with a lane over the limit; those are walked again
+ * node by node, and only a value over the limit pays for scan_keeps (an absent neighbour's padded cell reads 0; a broken bond stays
+ * over its limit as the crack opens). Returns the count, or -1 if more than cap. */
+static int PD_KNAME(run_stretch)(const struct cupid_pd_operator_private *op, const pd_work *w,
+                                 const pd_run *R, cupid_int i, int len, double lim,
+                                 pd_hit *restrict hits, int cap) {
+  const pd_stencil *S = &op->st;
+  const cupid_int li = work_index(w, R, i);
+  const double *restrict X = w->x + li, *restrict Y = w->y + li, *restrict Z = w->z + li;
+  cupid_int rp[PD_PAIR_CHUNK], rm[PD_PAIR_CHUNK];
+  const int half = S->n / 2;
+  int nh = 0;
+  for (int s0 = 0; s0 < half; s0 += PD_PAIR_CHUNK) {
+    const int s1 = s0 + PD_PAIR_CHUNK < half ? s0 + PD_PAIR_CHUNK : half;
+    pair_offsets(op, w, R, i, s0, s1, rp, rm);
+    for (int s = s0; s < s1; s++) {
+      const cupid_int m = rm[s - s0];
+      const double n0 = S->nrm[3 * s], n1 = S->nrm[3 * s + 1], n2 = S->nrm[3 * s + 2];
+      const double thr = lim * S->x[s];
+      PD_KVEC tv = {0};
+      tv += thr;
+      PD_KIVEC over = {0};
+      for (int t = 0; t < len; t += PD_KLANES) {
+        const PD_KVEC v = n0 * (PD_KLOAD(X + t) - PD_KLOAD(X + m + t)) +
+                          n1 * (PD_KLOAD(Y + t) - PD_KLOAD(Y + m + t)) +
+                          n2 * (PD_KLOAD(Z + t) - PD_KLOAD(Z + m + t));
+        over |= v > tv; /* lanes past the run read the slack: at worst a wasted look below */
+      }
+      int any = 0;
+      for (int l = 0; l < PD_KLANES; l++) any |= over[l] != 0;
+      if (!any) continue;
+      const int entry = S->n - 1 - s;
+      for (int t = 0; t < len; t++) {
+        const double e = n0 * (X[t] - X[m + t]) + n1 * (Y[t] - Y[m + t]) + n2 * (Z[t] - Z[m + t]);
+        if (e > thr && scan_keeps(op, i + t, entry)) {
+          if (nh == cap) return -1;
+          hits[nh++] = (pd_hit){i + t, entry};
+        }
+      }
+    }
+  }
+  return nh;
+}
+
 static const pd_kernel_set PD_KNAME(kernels) = {
-    PD_KNAME(run_dilatation), PD_KNAME(run_lps_force), PD_KNAME(run_bond_force), PD_KLANES};
+    PD_KNAME(run_dilatation), PD_KNAME(run_lps_force), PD_KNAME(run_bond_force),
+    PD_KNAME(run_stretch), PD_KLANES};
 
 #undef PD_KFORCE_PAIRS
 #undef PD_KSTORE
 #undef PD_KLOAD
 #undef PD_KVEC_U
+#undef PD_KIVEC
 #undef PD_KVEC

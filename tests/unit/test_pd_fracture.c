@@ -271,6 +271,46 @@ static void test_protect_damage_energy(void **state) {
   }
 }
 
+/* The vectorised stretch scan of the stencil path and the plain bond-by-bond scan break the
+ * same bonds: a padded box and a sparse union, random fields over several rounds (bonds already
+ * broken must be skipped), the stretch given and per node. */
+static void test_scan_paths(void **state) {
+  (void)state;
+  const cupid_box box = box3(0, 12, 0, 10, 0, 6);
+  const cupid_box sparse[2] = {box3(0, 9, 0, 8, 0, 5), box3(40, 46, 30, 36, 0, 5)};
+  for (int g = 0; g < 2; g++)
+    for (int per_node = 0; per_node < 2; per_node++) {
+      body b[2];
+      double dmg[2][1000];
+      for (int path = 0; path < 2; path++) {
+        b[path] = make(g ? 2 : 1, g ? sparse : &box, CUPID_PD_BOND, CUPID_PARTIAL_PDLAMMPS, 3.0);
+        assert_true(b[path].n <= 1000);
+        double *u = malloc(3 * (size_t)b[path].n * sizeof *u), *ns = malloc((size_t)b[path].n * sizeof *ns);
+        for (cupid_int i = 0; i < b[path].n; i++) ns[i] = 0.3 + 0.1 * (double)(i % 3);
+        cupid_pd_fracture_options fo = {.criterion = CUPID_PD_BREAK_STRETCH, .critical_stretch = 0.35,
+                                        .node_stretch = per_node ? ns : NULL};
+        pd_fracture_force_plain_scan(path);
+        cupid_int total = 0;
+        for (int round = 0; round < 3; round++) {
+          uint64_t seed = 21 + (uint64_t)round;
+          for (cupid_int i = 0; i < 3 * b[path].n; i++) u[i] = 100.0 + cupid_test_random(&seed) - 0.5;
+          cupid_int broken;
+          double diss;
+          CUPID_ASSERT_OK(cupid_pd_operator_break_bonds(b[path].op, u, &fo, 0, &broken, &diss));
+          total += broken;
+        }
+        pd_fracture_force_plain_scan(0);
+        assert_true(total > 0);
+        CUPID_ASSERT_OK(cupid_pd_operator_damage(b[path].op, dmg[path], NULL, NULL));
+        free(u), free(ns);
+      }
+      assert_int_equal(cupid_pd_operator_num_broken(b[0].op), cupid_pd_operator_num_broken(b[1].op));
+      assert_memory_equal(dmg[0], dmg[1], (size_t)b[0].n * sizeof(double));
+      destroy(&b[0]);
+      destroy(&b[1]);
+    }
+}
+
 /* The same broken bonds for 1 and 2 threads (a large enough body for the parallel scan). */
 static void test_threads(void **state) {
   (void)state;
@@ -376,7 +416,7 @@ int main(void) {
       cmocka_unit_test(test_precrack_count),     cmocka_unit_test(test_cracked_operator),
       cmocka_unit_test(test_stretch_threshold),  cmocka_unit_test(test_protect_damage_energy),
       cmocka_unit_test(test_threads),            cmocka_unit_test(test_isolated_node),
-      cmocka_unit_test(test_copy_broken),
+      cmocka_unit_test(test_copy_broken),        cmocka_unit_test(test_scan_paths),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }
