@@ -169,7 +169,9 @@ def render_opengl(panels, lo, hi, table, h, size, path, suptitle):
             txt.SetInput(title)
             tp = txt.GetTextProperty()
             tp.SetColor(0, 0, 0)
-            tp.SetFontSize(16 if n > 1 else 18)
+            # shrink a long title to the panel (a character is about 0.55 font sizes wide)
+            width = (vx1 - vx0) * size[0] - 10
+            tp.SetFontSize(int(min(16 if n > 1 else 18, width / (0.55 * len(title)))))
             tp.SetJustificationToCentered()
             tp.SetVerticalJustificationToTop()
             txt.GetPositionCoordinate().SetCoordinateSystemToNormalizedViewport()
@@ -246,8 +248,11 @@ def text_image(s, size, bold=False):
     return a[ny - dims[1]:, :dims[0]] if dims[0] > 0 and dims[1] > 0 else a
 
 
-def blit_text(canvas, s, size, cx, y, bold=False, anchor="centre"):
+def blit_text(canvas, s, size, cx, y, bold=False, anchor="centre", width=None):
     t = text_image(s, size, bold)
+    while t is not None and width and t.shape[1] > width and size > 8:
+        size -= 1                        # shrink a long title to the room it has
+        t = text_image(s, size, bold)
     if t is None:
         return
     th, tw = t.shape[:2]
@@ -292,7 +297,7 @@ def render_software(panels, lo, hi, table, h, size, path, suptitle):
             y0, y1 = (int(v) for v in np.rint(ey))
             canvas[max(y0, 0):max(y1, 0), max(x0, 0):max(x1, 0)] = col[j]
         if title:
-            blit_text(canvas, title, 16 if n > 1 else 18, k * pw + pw / 2, top + 16)
+            blit_text(canvas, title, 16 if n > 1 else 18, k * pw + pw / 2, top + 16, width=pw - 10)
     # scalar bar
     bx0 = W - bar_w + int(0.12 * bar_w)
     bw = max(int(0.22 * bar_w), 12) if n == 1 else max(int(0.25 * bar_w), 12)
