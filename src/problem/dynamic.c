@@ -386,6 +386,8 @@ static cupid_status finish_outputs(dyn_output *o) {
   cupid_problem_state *prob = o->prob;
   char path[4096];
   if (!prob->writedir) return CUPID_SUCCESS;
+  /* committing closes the handle (sets it NULL): remember whether damage.csv was written */
+  const int damage = o->damage != NULL;
   if (o->history) CUPID_CALL(cupid_atomic_commit(&o->history));
   if (o->damage) CUPID_CALL(cupid_atomic_commit(&o->damage));
   CUPID_CALL(cupid_atomic_commit(&o->energies));
@@ -398,7 +400,7 @@ static cupid_status finish_outputs(dyn_output *o) {
     cupid_free(&names);
     CUPID_CALL(st);
   }
-  if (prob->model->output.plots) CUPID_CALL(plots(prob, o->damage != NULL));
+  if (prob->model->output.plots) CUPID_CALL(plots(prob, damage));
   return CUPID_SUCCESS;
 }
 
