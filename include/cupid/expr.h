@@ -36,6 +36,10 @@ double cupid_expr_eval(const cupid_expr expr, const double *values);
 /** 1 if the expression does not depend on any variable (it folds to a constant). */
 int cupid_expr_is_constant(const cupid_expr expr);
 
+/** 1 if the expression names variable @p var (its index in the create call's list), whatever
+ *  its value does with it ("0*t" uses t). */
+int cupid_expr_uses(const cupid_expr expr, int var);
+
 /** The source text the expression was compiled from. */
 const char *cupid_expr_text(const cupid_expr expr);
 

@@ -533,6 +533,12 @@ int cupid_expr_is_constant(const cupid_expr expr) {
   return expr && expr->n_code == 1 && expr->code[0].op == OP_CONST;
 }
 
+int cupid_expr_uses(const cupid_expr expr, int var) {
+  for (int i = 0; expr && i < expr->n_code; i++)
+    if (expr->code[i].op == OP_VAR && expr->code[i].arg == var) return 1;
+  return 0;
+}
+
 const char *cupid_expr_text(const cupid_expr expr) { return expr ? expr->text : ""; }
 
 void cupid_expr_destroy(cupid_expr *expr) {

@@ -66,18 +66,10 @@ static cupid_status check_density(const cupid_problem_state *prob) {
   return CUPID_SUCCESS;
 }
 
-/* 1 if a value changes with t (sampled: a few points and times; loads and prescribed
- * displacements are assembled once, at t = 0). */
+/* 1 if a value's expression names t (cupid_expr_model_vars: x y z t density): it is then
+ * evaluated at every step. */
 static int depends_on_time(const cupid_value *v) {
-  if (v->kind != CUPID_VALUE_EXPR) return 0;
-  static const double ts[3] = {0.37, 1.9e-3, 41.0}, xs[3] = {0.0, 0.3, 1.7};
-  for (int a = 0; a < 3; a++)
-    for (int k = 0; k < 3; k++) {
-      double p = xs[a], ref = cupid_value_eval(v, p, p, p, 0.0, 1.0), val;
-      val = cupid_value_eval(v, p, p, p, ts[k], 1.0);
-      if (val != ref && !(isnan(val) && isnan(ref))) return 1;
-    }
-  return 0;
+  return v->kind == CUPID_VALUE_EXPR && cupid_expr_uses(v->expr, 3);
 }
 
 static int load_depends_on_time(const cupid_load *l) {

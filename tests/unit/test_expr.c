@@ -127,6 +127,21 @@ static void check_error(const char *text, int column, const char *fragment) {
     fail_msg("'%.40s': message '%s' lacks '%s'", text, cupid_error_message(), fragment);
 }
 
+/* Which variables an expression names (dynamic runs evaluate the ones naming t every step). */
+static void test_uses(void **state) {
+  (void)state;
+  const char *texts[5] = {"100*t", "x*(x-0.3)*(x-1.7)*t", "0*t + y", "sin(z) + density", "3"};
+  const int uses_t[5] = {1, 1, 1, 0, 0}, uses_x[5] = {0, 1, 0, 0, 0};
+  for (int k = 0; k < 5; k++) {
+    cupid_expr e = NULL;
+    CUPID_ASSERT_OK(cupid_expr_create(texts[k], cupid_expr_model_vars, CUPID_EXPR_NVARS, &e, NULL));
+    assert_int_equal(cupid_expr_uses(e, 3), uses_t[k]);
+    assert_int_equal(cupid_expr_uses(e, 0), uses_x[k]);
+    cupid_expr_destroy(&e);
+  }
+  assert_int_equal(cupid_expr_uses(NULL, 3), 0);
+}
+
 static void test_errors(void **state) {
   (void)state;
   static const expr_error_case cases[] = {
@@ -289,6 +304,7 @@ static void test_threads(void **state) {
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_arithmetic),       cmocka_unit_test(test_numbers),
+      cmocka_unit_test(test_uses),
       cmocka_unit_test(test_functions),        cmocka_unit_test(test_variables),
       cmocka_unit_test(test_constant_folding), cmocka_unit_test(test_errors),
       cmocka_unit_test(test_random_bytes),     cmocka_unit_test(test_random_tokens),
