@@ -176,6 +176,7 @@ cupid_status cupid_problem_estimate(const cupid_problem_state *prob, int print) 
              (long long)prob->n_fe_dofs);
     if (prob->grid)
       printf("PD nodes: %lld\nbonds: %lld\n", (long long)prob->n_pd, (long long)prob->n_bonds);
+    if (prob->grid && cupid_problem_has_damage(prob)) cupid_problem_fracture_print(prob);
     printf("DOFs: %lld\n", (long long)prob->ndof);
     printf("stiffness matrix: about %.3g stored 3x3 blocks, %.3g GB\n", e.matrix_blocks,
            e.matrix_bytes / 1e9);

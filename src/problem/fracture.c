@@ -5,6 +5,7 @@
  * zone of a coupled model, from its method), the break step of a dynamic run, and the damage
  * the outputs show. The bonds themselves live in the PD operator (src/pd/fracture.c). */
 #include <math.h>
+#include <stdio.h>
 #include <string.h>
 
 #include "method.h"
@@ -181,6 +182,21 @@ cupid_status cupid_problem_fracture_step(cupid_problem_state *prob, cupid_int st
 cupid_status cupid_problem_fracture_damage(cupid_problem_state *prob) {
   if (!prob->damage) return CUPID_SUCCESS;
   return cupid_pd_operator_damage(prob->op, prob->damage, &prob->damaged_nodes, &prob->max_damage);
+}
+
+void cupid_problem_fracture_print(const cupid_problem_state *prob) {
+  const cupid_model_t *m = prob->model;
+  printf("pre-cracks: %d, %lld bonds removed\n", m->pd.n_precracks, (long long)prob->precrack_bonds);
+  if (!m->pd.fracture.has_fracture) return;
+  const cupid_pd_fracture_options *o = &prob->fracture;
+  if (o->criterion == CUPID_PD_BREAK_ENERGY)
+    printf("fracture: critical bond energy %.6g (from G0 = %g)\n", o->critical_energy,
+           m->pd.fracture.energy_release_rate);
+  else if (prob->node_stretch)
+    printf("fracture: critical stretch %.6g (from G0 = %g; the first node's material)\n",
+           prob->n_pd ? prob->node_stretch[0] : 0.0, m->pd.fracture.energy_release_rate);
+  else
+    printf("fracture: critical stretch %.6g\n", o->critical_stretch);
 }
 
 void cupid_problem_fracture_json(cupid_json js, const cupid_problem_state *prob) {

@@ -155,6 +155,8 @@ cupid_status cupid_problem_fracture_step(cupid_problem_state *prob, cupid_int st
 cupid_status cupid_problem_fracture_damage(cupid_problem_state *prob);
 /** 1 when the model has pre-cracks or fracture (damage is an output). */
 int cupid_problem_has_damage(const cupid_problem_state *prob);
+/** `cupid check`: the pre-cracks' bonds and the breaking rule, on stdout. */
+void cupid_problem_fracture_print(const cupid_problem_state *prob);
 /** The "fracture" block of summary.json. */
 void cupid_problem_fracture_json(cupid_json js, const cupid_problem_state *prob);
 
