@@ -634,6 +634,7 @@ cupid_status pd_stencil_stretch_scan(const struct cupid_pd_operator_private *op,
   }
   CUPID_TRY(cupid_malloc((size_t)total + 1, sizeof **hits, "bond scan hits", hits));
   for (int t = 0; t < nt; t++) {
+    if (per[t].n == 0) continue; /* its list was never allocated: no memcpy from NULL */
     memcpy(*hits + *n, per[t].h, (size_t)per[t].n * sizeof **hits);
     *n += per[t].n;
   }
