@@ -24,8 +24,8 @@ clamped at y = 0 interpolates the Poisson contraction linearly from zero, so its
 node contracts more than the uniaxial value; the PD block cannot follow that FE artefact and
 the non-conservative fictitious-node coupling passes ~0.996 P into the span (1.04 P with the
 h/2 fictitious element of cupid before issue 18; docs/coupling.md).
-The environment's CUPID_FICTITIOUS_FE (removed | adjacent | plane | a length) reaches every
-coupled run: the fictitious FE element's study switch (include/cupid/coupling.h).
+The fictitious FE element of the coupled runs is the models' coupling.fictitious_fe (removed,
+the default | adjacent | plane | a length; docs/coupling.md).
 """
 import argparse, os, subprocess, sys, tempfile
 

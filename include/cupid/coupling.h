@@ -113,9 +113,8 @@ typedef struct {
   const int *region_materials;         /**< material index per region */
   double spacing;                      /**< PD grid spacing h */
   cupid_pd_operator_options pd;        /**< the PD operator of the real grid */
-  /** The fictitious FE element at interfaces normal to the axis (0: the default, REMOVED).
-   *  The environment variable CUPID_FICTITIOUS_FE = removed | adjacent | plane | LENGTH (a
-   *  number, model units) overrides it: a study switch for the command line. Regions over
+  /** The fictitious FE element at interfaces normal to the axis (0: the default, REMOVED;
+   *  the model's coupling.fictitious_fe: removed | adjacent | plane | a length). Regions over
    *  part of the section (partial.c) always use the removed pairs. */
   cupid_fictitious_fe fictitious_fe;
   double fictitious_length;            /**< CUPID_FICTITIOUS_FE_LENGTH only */

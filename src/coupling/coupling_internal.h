@@ -82,9 +82,8 @@ cupid_status cpl_map_extended(cupid_pd_grid ext, cupid_pd_grid grid, cupid_cuf_b
 /** Rows of real PD nodes: K^PD on real columns, K^{f-PD} I^{f-PD} on FE columns (Eq. 38). */
 cupid_status cpl_pd_rows(cpl_rowbuild *rb, const cupid_csr_t *Ke, const ext_map *m,
                          cupid_int n_ext, cupid_int n_pd);
-/** The fictitious FE element asked for: the options', or the environment's
- *  CUPID_FICTITIOUS_FE (removed | adjacent | plane | a length) when set (a study override for
- *  the command line, docs/coupling.md). */
+/** The fictitious FE element the options ask for (the model's coupling.fictitious_fe),
+ *  checked. */
 cupid_status cpl_fictitious_fe_choice(const cupid_coupling_options *o, cupid_fictitious_fe *kind,
                                       double *length);
 /** 1 if region @p b spans the beam's whole cross-section (missing x/z bounds count as spanning). */

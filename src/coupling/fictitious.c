@@ -419,23 +419,6 @@ cupid_status cpl_fictitious_fe_choice(const cupid_coupling_options *o, cupid_fic
                                       double *length) {
   *kind = o->fictitious_fe;
   *length = o->fictitious_length;
-  const char *env = getenv("CUPID_FICTITIOUS_FE");
-  if (env && *env) {
-    char *end;
-    double v = strtod(env, &end);
-    if (!strcmp(env, "adjacent")) *kind = CUPID_FICTITIOUS_FE_ADJACENT;
-    else if (!strcmp(env, "removed")) *kind = CUPID_FICTITIOUS_FE_REMOVED;
-    else if (!strcmp(env, "plane")) *kind = CUPID_FICTITIOUS_FE_PLANE;
-    else if (end != env && *end == '\0' && v > 0.0) {
-      *kind = CUPID_FICTITIOUS_FE_LENGTH;
-      *length = v;
-    }
-    else
-      return CUPID_ERROR(CUPID_ERR_ARGUMENT,
-                         "CUPID_FICTITIOUS_FE=%s: expected removed, adjacent, plane or a "
-                         "length > 0",
-                         env);
-  }
   CUPID_CHECK(*kind >= CUPID_FICTITIOUS_FE_REMOVED && *kind <= CUPID_FICTITIOUS_FE_LENGTH,
               CUPID_ERR_ARGUMENT, "unknown fictitious FE element kind %d", (int)*kind);
   CUPID_CHECK(*kind != CUPID_FICTITIOUS_FE_LENGTH || *length > 0.0, CUPID_ERR_ARGUMENT,

@@ -336,26 +336,20 @@ static void unequal_length_te1_b2(void **state) {
                                    .layout = 3, .fict = CUPID_FICTITIOUS_FE_LENGTH, .flen = 2.5});
 }
 
-/* CUPID_FICTITIOUS_FE overrides the options (the command line's study switch); a value it does
- * not know is an argument error naming the choices. */
-static void environment_override(void **state) {
+/* The options choose the fictitious FE element (the model's coupling.fictitious_fe); a kind
+ * they do not know, or a given length that is not positive, is an argument error. */
+static void fictitious_fe_options(void **state) {
   (void)state;
-  static const struct {
-    const char *value;
-    cupid_fictitious_fe kind;
-  } ok[] = {{"removed", CUPID_FICTITIOUS_FE_REMOVED},
-            {"adjacent", CUPID_FICTITIOUS_FE_ADJACENT},
-            {"plane", CUPID_FICTITIOUS_FE_PLANE},
-            {"2.5", CUPID_FICTITIOUS_FE_LENGTH}};
-  for (size_t i = 0; i < sizeof ok / sizeof ok[0]; i++) {
-    setenv("CUPID_FICTITIOUS_FE", ok[i].value, 1);
+  static const cupid_fictitious_fe kinds[] = {CUPID_FICTITIOUS_FE_REMOVED,
+                                              CUPID_FICTITIOUS_FE_ADJACENT,
+                                              CUPID_FICTITIOUS_FE_PLANE, CUPID_FICTITIOUS_FE_LENGTH};
+  for (size_t i = 0; i < sizeof kinds / sizeof kinds[0]; i++) {
     patch_model m;
     patch_case pc = {.te = 1, .p = 2, .kind = CUPID_PD_BOND, .delta = 1.5, .nu = 0.2,
-                     .layout = 3, .fict = ok[i].kind, .flen = 2.5};
-    build(&m, &pc); /* asserts info.fictitious_fe == ok[i].kind */
+                     .layout = 3, .fict = kinds[i], .flen = 2.5};
+    build(&m, &pc); /* asserts info.fictitious_fe == kinds[i] */
     destroy(&m);
   }
-  setenv("CUPID_FICTITIOUS_FE", "half", 1);
   patch_model m;
   memset(&m, 0, sizeof m);
   tb_init(&m.tb, 1000.0, 0.2);
@@ -384,16 +378,17 @@ static void environment_override(void **state) {
                                       .influence = CUPID_INFLUENCE_GAUSSIAN,
                                       .materials = &m.mat,
                                       .n_materials = 1}};
+  co.fictitious_fe = (cupid_fictitious_fe)7;
   assert_int_equal(cupid_coupling_create(m.beam, m.grid, &co, &m.cpl, &m.K), CUPID_ERR_ARGUMENT);
-  assert_non_null(strstr(cupid_error_message(), "removed, adjacent, plane or a length"));
-  unsetenv("CUPID_FICTITIOUS_FE");
+  assert_non_null(strstr(cupid_error_message(), "unknown fictitious FE element kind 7"));
+  co.fictitious_fe = CUPID_FICTITIOUS_FE_LENGTH;
+  co.fictitious_length = 0.0;
+  assert_int_equal(cupid_coupling_create(m.beam, m.grid, &co, &m.cpl, &m.K), CUPID_ERR_ARGUMENT);
+  assert_non_null(strstr(cupid_error_message(), "the length must be > 0"));
   destroy(&m);
 }
 
 int main(void) {
-  /* The options choose the fictitious FE element; the environment's study switch would
-   * override them. */
-  unsetenv("CUPID_FICTITIOUS_FE");
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(te1_lps),     cmocka_unit_test(te2_b3_lps),
       cmocka_unit_test(te3_b4_bond), cmocka_unit_test(l9_lps),
@@ -401,7 +396,7 @@ int main(void) {
       cmocka_unit_test(two_regions_te2_lps), cmocka_unit_test(touching_regions_l9_bond),
       cmocka_unit_test(unequal_removed_l9_b4), cmocka_unit_test(unequal_adjacent_te2_b4),
       cmocka_unit_test(unequal_plane_l9_b3), cmocka_unit_test(unequal_length_te1_b2),
-      cmocka_unit_test(environment_override),
+      cmocka_unit_test(fictitious_fe_options),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

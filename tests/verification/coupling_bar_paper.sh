@@ -17,7 +17,7 @@
 #    details the paper's Fig. 11 holds and the reconstruction does not), its largest error
 #    within 3 mm of an interface, and its imbalance <= 1e-9 (symmetric, exact equilibrium);
 #  - the cause (issue 18): the same model with the fictitious FE element of cupid before the
-#    issue, the h/2 B2 element to the nearest PD plane (CUPID_FICTITIOUS_FE=plane), still
+#    issue, the h/2 B2 element to the nearest PD plane (--set coupling.fictitious_fe=plane), still
 #    gives the issue's figures: max relative error >= 4% and imbalance >= 3% (observed 5.24%
 #    and 4.20%);
 #  - every run: the clamped end does not move and the solver residual <= 1e-10.
@@ -27,13 +27,12 @@ CUPID=$(realpath "${CUPID:-build/cupid}")
 SRC=$(realpath "${CUPID_SOURCE_DIR:-.}")
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
-unset CUPID_FICTITIOUS_FE
 for m in fe_l9 coupled_l9 coupled_lagrange_l9; do
   "$CUPID" run "$SRC/examples/bar/bar_$m.yaml" -o "$work/$m" --quiet || { echo "FAIL: $m run"; exit 1; }
 done
-CUPID_FICTITIOUS_FE=plane "$CUPID" run "$SRC/examples/bar/bar_coupled_l9.yaml" -o "$work/plane" --quiet ||
+"$CUPID" run "$SRC/examples/bar/bar_coupled_l9.yaml" -o "$work/plane" --quiet --set coupling.fictitious_fe=plane ||
   { echo "FAIL: plane run"; exit 1; }
-python3 - "$work" <<'PY'
+/usr/bin/python3 - "$work" <<'PY'
 import csv, json, os, sys
 w = sys.argv[1]
 def axis(d):
