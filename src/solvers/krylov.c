@@ -395,17 +395,59 @@ cleanup:
   return st;
 }
 
+/* The round-off of the product at x, relative to |b|: |S x - (S (x + z) - S z)| / |b| for z =
+ * x scaled entry by entry by fixed factors in [0.5, 1.5) (as iterative.c's product_noise()). */
+static cupid_status ksp_product_noise(Mat S, Vec b, Vec x, double *noise) {
+  cupid_status st = CUPID_SUCCESS;
+  Vec z = NULL, xz = NULL, y = NULL, t = NULL;
+  PetscInt lo, hi;
+  PetscScalar *za;
+  const PetscScalar *xa;
+  PetscReal en, bn;
+  PTRY(VecDuplicate(x, &z));
+  PTRY(VecDuplicate(x, &xz));
+  PTRY(VecDuplicate(b, &y));
+  PTRY(VecDuplicate(b, &t));
+  PTRY(VecGetOwnershipRange(z, &lo, &hi));
+  PTRY(VecGetArray(z, &za));
+  PTRY(VecGetArrayRead(x, &xa));
+  for (PetscInt i = lo; i < hi; i++) {
+    uint64_t s = 0x9E3779B97F4A7C15ull * (uint64_t)(i + 1);
+    s ^= s >> 29, s *= 0xBF58476D1CE4E5B9ull, s ^= s >> 32;
+    za[i - lo] = xa[i - lo] * (0.5 + (double)(s >> 11) / 9007199254740992.0);
+  }
+  PTRY(VecRestoreArrayRead(x, &xa));
+  PTRY(VecRestoreArray(z, &za));
+  PTRY(VecWAXPY(xz, 1.0, x, z));
+  PTRY(MatMult(S, xz, y));
+  PTRY(MatMult(S, z, t));
+  PTRY(VecAXPY(y, -1.0, t)); /* S (x + z) - S z */
+  PTRY(MatMult(S, x, t));
+  PTRY(VecAXPY(y, -1.0, t));
+  PTRY(VecNorm(y, NORM_2, &en));
+  PTRY(VecNorm(b, NORM_2, &bn));
+  *noise = bn > 0 ? (double)(en / bn) : (double)en;
+cleanup:
+  if (z) VecDestroy(&z);
+  if (xz) VecDestroy(&xz);
+  if (y) VecDestroy(&y);
+  if (t) VecDestroy(&t);
+  return st;
+}
+
 /* After KSPSolve: the Krylov method stops on its own estimate of the residual (GMRES's
  * least-squares residual, CG's recurrence), which drifts from the true one when the
  * preconditioner is applied inexactly: with right preconditioning x = M^{-1} (V y) is
  * preconditioned once more at the end, and an LU whose solves have a backward error eta
  * leaves |b - A x| / |b| ~ eta kappa(M) however small the estimate (the twin of the
  * fictitious-node bar, factored by UMFPACK's threshold pivoting: estimate 5e-12, true residual
- * 1.6e-3). So the true residual is checked; above 2 rtol the solve restarts from x (r = b - A x
- * recomputed exactly: iterative refinement, each pass gaining the inner solve's accuracy) for
- * the absolute target of the first solve, KRYLOV_REFINEMENTS times at most. inf->residual gets
- * the true figure, inf->refinements the restarts; a residual still above max(100 rtol, 1e-10)
- * is reported as DIVERGED_TRUE_RESIDUAL (not_converged() makes it an error). */
+ * 1.6e-3). So the true residual is checked, as the built-in engine does (iterative.c):
+ * at most 2 rtol: converged; at most twice the round-off of the product (ksp_product_noise()):
+ * CONVERGED_ROUNDOFF; else restarts from x (r = b - A x recomputed exactly: iterative
+ * refinement) for the absolute target of the first solve, KRYLOV_REFINEMENTS of them at most
+ * and while each halves the true residual; then converged up to max(100 rtol, 1e-10),
+ * DIVERGED_TRUE_RESIDUAL above (not_converged() makes it an error). inf->refinements counts
+ * the restarts. */
 static cupid_status refine_true_residual(KSP ksp, Mat S, Vec b, Vec x, cupid_solve_info *inf) {
   cupid_status st = CUPID_SUCCESS;
   Vec r = NULL;
@@ -415,11 +457,22 @@ static cupid_status refine_true_residual(KSP ksp, Mat S, Vec b, Vec x, cupid_sol
   PTRY(KSPGetTolerances(ksp, &rtol, &atol, &dtol, &maxit));
   PTRY(VecNorm(b, NORM_2, &bnorm));
   PTRY(VecDuplicate(b, &r));
-  double rel = 0.0, limit = fmax(100.0 * rtol, 1e-10);
+  double rel = 0.0, prev = INFINITY, noise = -1.0, limit = fmax(100.0 * rtol, 1e-10);
   if (strncmp(inf->converged_reason, "CONVERGED", 9)) goto cleanup; /* reported as it is */
   for (int pass = 0;; pass++) {
     CUPID_TRY(ksp_true_residual(S, b, x, r, &rel));
-    if (rel <= 2.0 * rtol || pass == KRYLOV_REFINEMENTS) break;
+    if (rel <= 2.0 * rtol) break;
+    if (noise < 0.0) CUPID_TRY(ksp_product_noise(S, b, x, &noise));
+    if (rel <= 2.0 * noise) {
+      snprintf(inf->converged_reason, sizeof inf->converged_reason, "CONVERGED_ROUNDOFF");
+      break;
+    }
+    if (pass == KRYLOV_REFINEMENTS || rel > 0.5 * prev) {
+      if (rel > limit)
+        snprintf(inf->converged_reason, sizeof inf->converged_reason, "DIVERGED_TRUE_RESIDUAL");
+      break;
+    }
+    prev = rel;
     PTRY(KSPSetTolerances(ksp, 0.0, fmax(atol, 0.5 * rtol * bnorm), dtol, maxit));
     PTRY(KSPSetInitialGuessNonzero(ksp, PETSC_TRUE));
     double t0 = cupid_wtime();
@@ -434,8 +487,6 @@ static cupid_status refine_true_residual(KSP ksp, Mat S, Vec b, Vec x, cupid_sol
       goto cleanup;
     }
   }
-  if (rel > limit)
-    snprintf(inf->converged_reason, sizeof inf->converged_reason, "DIVERGED_TRUE_RESIDUAL");
   PTRY(KSPSetTolerances(ksp, rtol, atol, dtol, maxit));
   PTRY(KSPSetInitialGuessNonzero(ksp, PETSC_FALSE));
 cleanup:
