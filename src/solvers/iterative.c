@@ -94,7 +94,7 @@ cleanup:
 /* The round-off of the product at x, relative to |b|: |A x - (A (x + z) - A z)| / |b| for z =
  * x scaled entry by entry by fixed factors in [0.5, 1.5) (Ax in w). A true residual at this
  * level is as small as b - A x can be computed: the stiffened panel's matrix-free LPS product
- * has 2e-8 of |b| (docs/solvers.md), above rtol 1e-10 however many restarts. */
+ * has 2e-8 of |b| (docs/scale.md), above rtol 1e-10 however many restarts. */
 static cupid_status product_noise(system_free *S, const double *x, const double *w,
                                   double bnorm, double *noise) {
   const cupid_int n = S->nf;
