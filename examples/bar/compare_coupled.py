@@ -21,8 +21,11 @@ out/bar/coupled_comparison_energy.md).
 With --clamp-elements N (N > 1) both the full-FE and the coupled models run (temporary copies)
 with N B2 elements on the clamped span y in [0, 30] instead of one (suffix _cN): one element
 clamped at y = 0 interpolates the Poisson contraction linearly from zero, so its interface
-node contracts ~1.4 times the uniaxial value; the PD block cannot follow that FE artefact and
-the fictitious-node coupling then transmits ~1.04 P into the span (docs/coupling.md).
+node contracts more than the uniaxial value; the PD block cannot follow that FE artefact and
+the non-conservative fictitious-node coupling passes ~0.996 P into the span (1.04 P with the
+h/2 fictitious element of cupid before issue 18; docs/coupling.md).
+The fictitious FE element of the coupled runs is the models' coupling.fictitious_fe (removed,
+the default | adjacent | plane | a length; docs/coupling.md).
 """
 import argparse, os, subprocess, sys, tempfile
 

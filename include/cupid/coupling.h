@@ -16,16 +16,18 @@
  * kept and the fictitious columns are replaced by u_f = I^{f-PD} u_FE (Eqs. 29-30, the CUF
  * expansion at the node, cupid_cuf_shape_at()).
  *
- * Fictitious FE elements (section 4.3). At every interface plane y_I a fictitious B2 beam
- * element (the same cross-section) spans from y_I to the plane of the nearest real PD nodes,
- * y_s = y_I +- h/2. Its far section's DOFs are U^{fs-FE} = [A I^{fs-PD}]^{-1} A U^PD (Eqs.
- * 31-35): I^{fs-PD}_{q,tau} = F_tau(x_q, z_q) over the real PD nodes q on y_s, A the weighted
- * average of Eq. 33 (weights |N_i F_tau|). Its element stiffness adds the real-real block to
- * the interface FE rows and the fictitious columns, through I^{f-FE}, to PD columns (Eq. 38);
- * the rows of the fictitious DOFs are dropped (they would be FE forces in the PD region).
- * The fictitious element is B2 whatever the real elements are: its nodes must lie on the
- * interface and on a PD plane (h/2 away), and a B2 element is exact for the affine fields of
- * the patch test.
+ * Fictitious FE elements (sections 4.1, 4.3). At every interface plane y_I a fictitious beam
+ * element (the same cross-section) reaches into the region: by default the beam element the
+ * region removed next to y_I (its type and length Delta l: section 4.1 puts the fictitious FE
+ * node one element length from the interface); cupid_fictitious_fe lists the others (the h/2
+ * B2 element to the nearest PD plane, cupid's form before issue 18, among them). Each of its
+ * nodes in the region takes U^{fs-FE} = [A I^{fs-PD}]^{-1} A U^PD (Eqs. 31-35) over the real
+ * PD nodes of a PD plane: I^{fs-PD}_{q,tau} = F_tau(x_q, z_q), A the weighted average of Eq. 33
+ * (weights |N_i F_tau|); between two planes the two fits interpolated linearly, within h/2 of
+ * a region face extrapolated from the two outermost planes. Its element stiffness adds the
+ * real-real block to the interface FE rows and the fictitious columns, through I^{f-FE}, to PD
+ * columns (Eq. 38); the rows of the fictitious DOFs are dropped (they would be FE forces in
+ * the PD region). Every form is exact for the affine fields of the patch test.
  *
  * Partial-section regions (section 4.4, Remarks 1-2, Eq. 37). The region's x/z bounds must be
  * section-element edges (no element cut); the section elements inside its x/z box give way over
@@ -73,6 +75,34 @@ extern "C" {
 /** A built coupling (opaque). */
 typedef struct cupid_coupling_private *cupid_coupling_h;
 
+/**
+ * The fictitious FE element at an interface normal to the axis (regions spanning the section;
+ * paper 000 sections 4.1 and 4.3, docs/coupling.md "The fictitious FE element"). Its node on the
+ * interface is the real FE node; its other nodes lie in the PD region and take the section fit
+ * of Eqs. 33-35 of the PD field at their sections (the fits of the two PD planes around a
+ * section interpolated linearly, extrapolated within h/2 of a region face). Every kind is
+ * exact for affine fields (the patch test).
+ */
+typedef enum {
+  /** Default. The beam element the region removed next to the interface, i.e. the full-FE
+   *  mesh continued into the region: section 4.1, "the fictitious FEM node is positioned at a
+   *  distance Delta l (the FE length) from the interface". Its nodes inside the region are
+   *  fictitious, the far one too when it lies on the region's other face (one element across
+   *  the region: the PD field extrapolated there, not the real FE node of the other
+   *  interface). The removed pairs are also the fictitious elements of partial regions. */
+  CUPID_FICTITIOUS_FE_REMOVED = 0,
+  /** A copy of the real beam element next to the interface on the beam's side (its type and
+   *  length Delta l) laid into the region, capped at the region's far face: section 4.1 with
+   *  Delta l the length of the coupled model's own FEs. */
+  CUPID_FICTITIOUS_FE_ADJACENT = 1,
+  /** A B2 element from the interface to the nearest plane of real PD nodes, h/2 away
+   *  (section 4.3 and Fig. 6 read literally; cupid's only form before issue 18). */
+  CUPID_FICTITIOUS_FE_PLANE = 2,
+  /** A B2 element of length cupid_coupling_options.fictitious_length, capped at the region's
+   *  far face (studies). */
+  CUPID_FICTITIOUS_FE_LENGTH = 3
+} cupid_fictitious_fe;
+
 /** What the coupling needs besides the beam and the real PD grid. */
 typedef struct {
   const cupid_beam *beam_def;          /**< the beam's definition (for fictitious elements) */
@@ -83,6 +113,11 @@ typedef struct {
   const int *region_materials;         /**< material index per region */
   double spacing;                      /**< PD grid spacing h */
   cupid_pd_operator_options pd;        /**< the PD operator of the real grid */
+  /** The fictitious FE element at interfaces normal to the axis (0: the default, REMOVED;
+   *  the model's coupling.fictitious_fe: removed | adjacent | plane | a length). Regions over
+   *  part of the section (partial.c) always use the removed pairs. */
+  cupid_fictitious_fe fictitious_fe;
+  double fictitious_length;            /**< CUPID_FICTITIOUS_FE_LENGTH only */
 } cupid_coupling_options;
 
 /** Counts, for summaries. */
@@ -93,6 +128,7 @@ typedef struct {
                                     partial regions: region faces with fictitious PD nodes */
   cupid_int n_fictitious_fe;   /**< fictitious FE nodes (section DOF groups of those elements;
                                     with partial regions: removed-pair nodes inside PD) */
+  cupid_fictitious_fe fictitious_fe; /**< the fictitious FE element used (full-section regions) */
 } cupid_coupling_info;
 
 /**

@@ -180,6 +180,12 @@ typedef struct {
   int n_overlaps;
   cupid_weight weight;   /**< arlequin */
   int has_arlequin;
+  /** fictitious: the fictitious FE element at a normal interface (`fictitious_fe:`): 0 removed
+   *  (default, the beam element the region removed), 1 adjacent (a copy of the real element
+   *  next to the interface), 2 plane (h/2 to the nearest PD plane: cupid before issue 18),
+   *  3 a given length (a number); coupling.h cupid_fictitious_fe */
+  int fictitious_fe;
+  double fictitious_length;
   cupid_mark mark;
 } cupid_coupling;
 

@@ -128,7 +128,7 @@ typedef struct {
   cupid_int failed_dof;    /**< global scalar DOF where factorisation broke down, or -1 */
   double flops_factor;     /**< floating-point operations of the factorisation (0 = unknown) */
   double pivot_ratio;      /**< min/max pivot magnitude (CHOLMOD: L_kk^2; UMFPACK: |U_kk|) */
-  int refinements;         /**< iterative refinement steps done by cupid (0 or 1) */
+  int refinements;         /**< iterative refinement steps done by cupid (direct: 0 or 1; Krylov: restarts from the true residual after the estimate met rtol) */
   double backward_error;   /**< |r|_inf / (|K_ff|_inf |u_f|_inf + |b_f|_inf): the failure test
                                 (the solve fails above 1e-10) */
   /* Iterative (PETSc) solves only (issue 6); zero for the direct solvers. */

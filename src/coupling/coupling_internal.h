@@ -29,16 +29,24 @@ cupid_status cpl_rowbuild_end_row(cpl_rowbuild *rb, cupid_int diag);
 cupid_status cpl_rowbuild_finish(cpl_rowbuild *rb, cupid_csr *K);
 void cpl_rowbuild_free(cpl_rowbuild *rb);
 
-/* One interface plane normal to the axis: the fictitious element and its section fit. */
+/* A node of a fictitious FE element inside the PD region: the section fit of Eqs. 33-35 of
+ * the PD nodes around its section, U^{f-FE} = G U^PD per component (Eq. 36). */
 typedef struct {
-  double y_i, y_s;      /* interface plane and the nearest plane of real PD nodes */
+  cupid_int n_q;        /* real PD nodes that feed it (one plane, or two around its section) */
+  cupid_int *q;         /* their indices */
+  double *G;            /* M x n_q */
+} cpl_fnode;
+
+/* One interface plane normal to the axis: the fictitious element and the fits of its nodes. */
+typedef struct {
+  double y_i;           /* interface plane */
+  int side;             /* 0: the region lies above y_i (its lower bound), 1: below */
   int region;
   cupid_int beam_node;  /* real beam node on the interface */
-  cupid_cuf_beam aux;   /* the fictitious element (a one-element B2 beam from y_i to y_s) */
-  int end_i;            /* node of aux on y_i (0 or 1); the other lies on y_s */
-  cupid_int n_q;        /* real PD nodes on y_s */
-  cupid_int *q;         /* their indices */
-  double *G;            /* M x n_q: U^{fs-FE} = G U^PD per component (Eq. 35) */
+  cupid_cuf_beam aux;   /* the fictitious element (a one-element beam from y_i into the region) */
+  int n_nodes;          /* its nodes (2 for B2, 3, 4) */
+  int end_i;            /* node of aux on y_i; the others lie in the region */
+  cpl_fnode *fn;        /* per node of aux; fn[end_i] is empty */
 } interface_t;
 
 struct cupid_coupling_private {
@@ -53,7 +61,7 @@ struct cupid_coupling_private {
 };
 
 /** The interfaces: region y bounds whose beam node is still used by an active pair
- *  (fills c->iface, c->n_iface; y_s = y_i +- h/2 on the PD side). */
+ *  (fills c->iface, c->n_iface: y_i, side, region, beam node). */
 cupid_status cpl_find_interfaces(cupid_cuf_beam beam, const cupid_coupling_options *o,
                                  cupid_coupling_h c);
 
@@ -74,6 +82,10 @@ cupid_status cpl_map_extended(cupid_pd_grid ext, cupid_pd_grid grid, cupid_cuf_b
 /** Rows of real PD nodes: K^PD on real columns, K^{f-PD} I^{f-PD} on FE columns (Eq. 38). */
 cupid_status cpl_pd_rows(cpl_rowbuild *rb, const cupid_csr_t *Ke, const ext_map *m,
                          cupid_int n_ext, cupid_int n_pd);
+/** The fictitious FE element the options ask for (the model's coupling.fictitious_fe),
+ *  checked. */
+cupid_status cpl_fictitious_fe_choice(const cupid_coupling_options *o, cupid_fictitious_fe *kind,
+                                      double *length);
 /** 1 if region @p b spans the beam's whole cross-section (missing x/z bounds count as spanning). */
 int cpl_region_full(const cupid_cuf_beam beam, const cupid_box *b);
 /* The pieces of Eq. 38 that do not depend on the PD operator: the extended grid (real +

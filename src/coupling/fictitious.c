@@ -1,9 +1,12 @@
 /* The improved PD-CUF coupling with fictitious nodes (paper 000, section 4; see coupling.h):
  * fictitious PD nodes in the beam up to 2 delta from each interface (Eqs. 29-30), one
- * fictitious B2 element per interface whose far section is fitted to the real PD nodes on the
- * nearest PD plane (Eqs. 31-36), and the non-symmetric coupled matrix of Eq. 38. */
+ * fictitious FE element per interface (by default the beam element the region removed next
+ * to it, section 4.1; cupid_fictitious_fe) whose nodes in the region are fitted to the real
+ * PD nodes on the planes around their sections (Eqs. 31-36), and the non-symmetric coupled
+ * matrix of Eq. 38. */
 #include <math.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 
 #include "coupling_internal.h"
@@ -217,45 +220,45 @@ static cupid_status dense_solve(int n, double *B, cupid_int m, double *R) {
   return CUPID_SUCCESS;
 }
 
-/* G = [A I]^{-1} A (Eq. 35) for the real PD nodes on the fictitious section y_s:
- * I_{q,tau} = F_tau(x_q, z_q) (N = 1 on the section), A_{tau,q} = |I_{q,tau}| / sum_q |.|
- * (Eq. 33). With @p signed_weights A uses F_tau itself: then [A I] = I^T I up to row scaling
- * and Eq. 35 is the least-squares fit of the expansion to the PD nodes. TE needs this: its
- * monomials are centred on the section (cuf.h), so an odd term has sum_q |F| F = 0 on a
- * symmetric section and the |F| rows of [A I] coincide (singular). Both are exact for fields
- * in the span of the expansion (the patch test). */
-static cupid_status section_fit(interface_t *it, const double *x, int M, int p,
-                                int signed_weights) {
+/* G = [A I]^{-1} A (Eq. 35) for the n_q real PD nodes q of one PD plane, fitted to the section
+ * of node @p k of the fictitious element @p aux (N_k = 1 there): I_{q,tau} = F_tau(x_q, z_q),
+ * A_{tau,q} = |I_{q,tau}| / sum_q |.| (Eq. 33). With @p signed_weights A uses F_tau itself:
+ * then [A I] = I^T I up to row scaling and Eq. 35 is the least-squares fit of the expansion to
+ * the PD nodes. TE needs this: its monomials are centred on the section (cuf.h), so an odd term
+ * has sum_q |F| F = 0 on a symmetric section and the |F| rows of [A I] coincide (singular).
+ * Both are exact for fields in the span of the expansion (the patch test). *G is M x n_q. */
+static cupid_status section_fit(cupid_cuf_beam aux, int k, double y_k, const double *x,
+                                const cupid_int *q, cupid_int n_q, int M, int p,
+                                int signed_weights, double **G) {
   cupid_status st = CUPID_SUCCESS;
   double *I = NULL, *A = NULL, *B = NULL, *w = NULL;
-  cupid_int *node = NULL, n_q = it->n_q;
+  cupid_int *node = NULL;
   CUPID_TRY(cupid_calloc((size_t)(n_q * M), sizeof *I, "section fit I", &I));
   CUPID_TRY(cupid_calloc((size_t)(n_q * M), sizeof *A, "section fit A", &A));
   CUPID_TRY(cupid_calloc((size_t)(M * M), sizeof *B, "section fit [A I]", &B));
   CUPID_TRY(cupid_malloc((size_t)(M * p), sizeof *w, "shape weights", &w));
   CUPID_TRY(cupid_malloc((size_t)(M * p), sizeof *node, "shape nodes", &node));
-  cupid_int far = 1 - it->end_i;
-  for (cupid_int k = 0; k < n_q; k++) {
-    const double *xq = x + 3 * it->q[k];
+  for (cupid_int j = 0; j < n_q; j++) {
+    const double *xq = x + 3 * q[j];
     int count;
-    CUPID_TRY(cupid_cuf_shape_at(it->aux, xq[0], it->y_s, xq[2], node, w, &count));
+    CUPID_TRY(cupid_cuf_shape_at(aux, xq[0], y_k, xq[2], node, w, &count));
     for (int n = 0; n < count; n++)
-      if (node[n] / M == far) I[k * M + node[n] % M] += w[n];
+      if (node[n] / M == k) I[j * M + node[n] % M] += w[n];
   }
   for (int t = 0; t < M; t++) {
     double s = 0.0;
-    for (cupid_int k = 0; k < n_q; k++) s += fabs(I[k * M + t]);
+    for (cupid_int j = 0; j < n_q; j++) s += fabs(I[j * M + t]);
     CUPID_TRY_CHECK(s > 0.0, CUPID_ERR_MODEL,
                     "fictitious section y = %g: expansion term %d is zero at every PD node of "
-                    "that plane (too few PD nodes for the section mesh)",
-                    it->y_s, t);
-    for (cupid_int k = 0; k < n_q; k++)
-      A[t * n_q + k] = (signed_weights ? I[k * M + t] : fabs(I[k * M + t])) / s;
+                    "the plane that feeds it (too few PD nodes for the section mesh)",
+                    y_k, t);
+    for (cupid_int j = 0; j < n_q; j++)
+      A[t * n_q + j] = (signed_weights ? I[j * M + t] : fabs(I[j * M + t])) / s;
   }
   for (int t = 0; t < M; t++)
     for (int u = 0; u < M; u++) {
       double s = 0.0;
-      for (cupid_int k = 0; k < n_q; k++) s += A[t * n_q + k] * I[k * M + u];
+      for (cupid_int j = 0; j < n_q; j++) s += A[t * n_q + j] * I[j * M + u];
       B[t * M + u] = s;
     }
   /* Solve in place: A becomes G. */
@@ -263,10 +266,10 @@ static cupid_status section_fit(interface_t *it, const double *x, int M, int p,
   if (st != CUPID_SUCCESS) {
     char msg[512];
     snprintf(msg, sizeof msg, "%s", cupid_error_message());
-    st = CUPID_ERROR(st, "fictitious section y = %g: %s", it->y_s, msg);
+    st = CUPID_ERROR(st, "fictitious section y = %g: %s", y_k, msg);
     goto cleanup;
   }
-  it->G = A;
+  *G = A;
   A = NULL;
 cleanup:
   cupid_free(&I);
@@ -277,43 +280,192 @@ cleanup:
   return st;
 }
 
-static cupid_status build_interface(interface_t *it, const cupid_coupling_options *o,
-                                    cupid_pd_grid grid, int M, int p) {
-  cupid_beam def = *o->beam_def;
-  double ys[2] = {fmin(it->y_i, it->y_s), fmax(it->y_i, it->y_s)};
-  int one = 1;
-  def.axis_y = ys;
-  def.axis_elements = &one;
-  def.n_axis = 2;
-  def.element_nodes = 2;
-  CUPID_CALL(cupid_cuf_beam_create_from(&def, o->materials, o->n_materials, &it->aux));
-  it->end_i = it->y_i < it->y_s ? 0 : 1;
-
+/* The real PD nodes of region r on the plane y (*q allocated, *n_q of them). */
+static cupid_status plane_nodes(const cupid_coupling_options *o, cupid_pd_grid grid, int r,
+                                double y, cupid_int **q, cupid_int *n_q) {
   const double *x = cupid_pd_grid_coords(grid);
   cupid_int n = cupid_pd_grid_num_nodes(grid);
   double h = o->spacing;
-  const cupid_box *rb = &o->regions[it->region];
-  it->n_q = 0;
+  const cupid_box *rb = &o->regions[r];
   for (int pass = 0; pass < 2; pass++) {
     cupid_int k = 0;
     for (cupid_int i = 0; i < n; i++) {
       const double *xi = x + 3 * i;
-      if (fabs(xi[1] - it->y_s) > TOL * h) continue;
-      double pt[3] = {xi[0], it->y_s, xi[2]};
+      if (fabs(xi[1] - y) > TOL * h) continue;
+      double pt[3] = {xi[0], y, xi[2]};
       if (!cupid_box_contains(rb, pt, TOL * h)) continue;
-      if (pass) it->q[k] = i;
+      if (pass) (*q)[k] = i;
       k++;
     }
     if (!pass) {
-      CUPID_CHECK(k > 0, CUPID_ERR_MODEL, "no real PD node on the plane y = %g next to the "
-                  "interface y = %g", it->y_s, it->y_i);
-      it->n_q = k;
-      CUPID_CALL(cupid_malloc((size_t)k, sizeof *it->q, "section PD nodes", &it->q));
+      CUPID_CHECK(k > 0, CUPID_ERR_MODEL, "PD region %d: no real PD node on the plane y = %g", r,
+                  y);
+      *n_q = k;
+      CUPID_CALL(cupid_malloc((size_t)k, sizeof **q, "section PD nodes", q));
     }
   }
+  return CUPID_SUCCESS;
+}
+
+/* The first and last planes of real PD nodes of region r (along y). */
+static cupid_status region_planes(const cupid_coupling_options *o, cupid_pd_grid grid, int r,
+                                  double *first, double *last) {
+  const double *x = cupid_pd_grid_coords(grid);
+  cupid_int n = cupid_pd_grid_num_nodes(grid);
+  const cupid_box *rb = &o->regions[r];
+  *first = INFINITY;
+  *last = -INFINITY;
+  for (cupid_int i = 0; i < n; i++)
+    if (cupid_box_contains(rb, x + 3 * i, TOL * o->spacing)) {
+      *first = fmin(*first, x[3 * i + 1]);
+      *last = fmax(*last, x[3 * i + 1]);
+    }
+  CUPID_CHECK(*first <= *last, CUPID_ERR_MODEL, "PD region %d holds no real PD node", r);
+  return CUPID_SUCCESS;
+}
+
+/* Fictitious node k of the interface's element, on the section y_k inside the region: its
+ * DOFs are the section fit (Eqs. 33-35) of the PD field there, U = G U^PD. On a PD plane the
+ * fit of that plane; between two planes the linear interpolation of the fits of the two planes
+ * around it (paper 000 section 4.1: the fictitious node is interpolated from the real PD nodes
+ * around it); within h/2 of a region face, beyond the outermost plane, the linear
+ * extrapolation from the two outermost planes (as for the fictitious FE nodes of partial
+ * regions, partial.c). All three are exact for fields affine in y (the patch test). */
+static cupid_status fit_node(interface_t *it, int k, const cupid_coupling_options *o,
+                             cupid_pd_grid grid, int M, int p, int signed_weights) {
+  const double *x = cupid_pd_grid_coords(grid);
+  double h = o->spacing, first, last, y = cupid_cuf_beam_node_y(it->aux, k);
+  CUPID_CALL(region_planes(o, grid, it->region, &first, &last));
+  CUPID_CHECK(y >= first - 0.5 * h - TOL * h && y <= last + 0.5 * h + TOL * h, CUPID_ERR_MODEL,
+              "fictitious FE node y = %g of the interface y = %g lies outside PD region %d "
+              "(its PD planes span [%g, %g])",
+              y, it->y_i, it->region, first, last);
+  int n_planes = (int)floor((last - first) / h + 0.5) + 1;
+  double t = (y - first) / h;
+  double planes[2], wts[2];
+  int np;
+  double kr = floor(t + 0.5);
+  if (fabs(t - kr) <= 1e-6 && kr >= 0 && kr <= n_planes - 1) {
+    np = 1; /* on a plane */
+    planes[0] = first + kr * h;
+    wts[0] = 1.0;
+  } else {
+    CUPID_CHECK(n_planes >= 2, CUPID_ERR_MODEL,
+                "fictitious FE node y = %g of the interface y = %g: PD region %d has one plane "
+                "of nodes along y, two are needed to interpolate the node's section; make the "
+                "region at least 2 spacings long or use the nearest-plane fictitious element",
+                y, it->y_i, it->region);
+    double k0 = fmin(fmax(floor(t), 0.0), (double)(n_planes - 2)), fr = t - k0;
+    np = 2;
+    planes[0] = first + k0 * h;
+    planes[1] = planes[0] + h;
+    wts[0] = 1.0 - fr;
+    wts[1] = fr;
+  }
+  cupid_status st = CUPID_SUCCESS;
+  cupid_int *qs[2] = {NULL, NULL}, nq[2] = {0, 0};
+  double *Gs[2] = {NULL, NULL};
+  cpl_fnode *fn = &it->fn[k];
+  for (int j = 0; j < np; j++) {
+    CUPID_TRY(plane_nodes(o, grid, it->region, planes[j], &qs[j], &nq[j]));
+    CUPID_TRY(section_fit(it->aux, k, y, x, qs[j], nq[j], M, p, signed_weights, &Gs[j]));
+  }
+  if (np == 1) {
+    fn->q = qs[0];
+    fn->G = Gs[0];
+    fn->n_q = nq[0];
+    qs[0] = NULL;
+    Gs[0] = NULL;
+  } else {
+    fn->n_q = nq[0] + nq[1];
+    CUPID_TRY(cupid_malloc((size_t)fn->n_q, sizeof *fn->q, "section PD nodes", &fn->q));
+    CUPID_TRY(cupid_malloc((size_t)(M * fn->n_q), sizeof *fn->G, "section fit", &fn->G));
+    for (int j = 0, off = 0; j < 2; off += (int)nq[j], j++)
+      for (cupid_int i = 0; i < nq[j]; i++) {
+        fn->q[off + i] = qs[j][i];
+        for (int s = 0; s < M; s++) fn->G[s * fn->n_q + off + i] = wts[j] * Gs[j][s * nq[j] + i];
+      }
+  }
+cleanup:
+  for (int j = 0; j < 2; j++) {
+    cupid_free(&qs[j]);
+    cupid_free(&Gs[j]);
+  }
+  return st;
+}
+
+/* The ends [*y0, *y1] of the beam element next to the interface: on the beam's side (fe_side)
+ * or inside the region (removed). */
+static void element_next_to(const cupid_cuf_beam beam, const interface_t *it, int fe_side,
+                            double *y0, double *y1) {
+  cupid_cuf_info info;
+  cupid_cuf_get_info(beam, &info);
+  double tol = TOL * (info.y_max - info.y_min);
+  /* the region lies above y_i when side == 0 */
+  int want_below = (it->side == 0) == (fe_side != 0);
+  *y0 = *y1 = it->y_i;
+  for (cupid_int e = 0; e < info.n_beam_elements; e++) {
+    cupid_int first;
+    double a, b;
+    cupid_cuf_beam_element(beam, e, &first, &a, &b);
+    if ((want_below && fabs(b - it->y_i) <= tol) || (!want_below && fabs(a - it->y_i) <= tol)) {
+      *y0 = a;
+      *y1 = b;
+    }
+  }
+}
+
+cupid_status cpl_fictitious_fe_choice(const cupid_coupling_options *o, cupid_fictitious_fe *kind,
+                                      double *length) {
+  *kind = o->fictitious_fe;
+  *length = o->fictitious_length;
+  CUPID_CHECK(*kind >= CUPID_FICTITIOUS_FE_REMOVED && *kind <= CUPID_FICTITIOUS_FE_LENGTH,
+              CUPID_ERR_ARGUMENT, "unknown fictitious FE element kind %d", (int)*kind);
+  CUPID_CHECK(*kind != CUPID_FICTITIOUS_FE_LENGTH || *length > 0.0, CUPID_ERR_ARGUMENT,
+              "fictitious FE element of a given length: the length must be > 0 (got %g)",
+              *length);
+  return CUPID_SUCCESS;
+}
+
+/* The fictitious FE element of one interface (paper 000 sections 4.1, 4.3) and the fits of its
+ * nodes inside the region. */
+static cupid_status build_interface(interface_t *it, const cupid_coupling_options *o,
+                                    cupid_cuf_beam beam, cupid_pd_grid grid, int M,
+                                    cupid_fictitious_fe kind, double length) {
+  cupid_cuf_info binfo;
+  cupid_cuf_get_info(beam, &binfo);
+  cupid_beam def = *o->beam_def;
+  double h = o->spacing, dir = it->side ? -1.0 : 1.0, len = 0.5 * h, first, last;
+  int nodes = 2;
+  CUPID_CALL(region_planes(o, grid, it->region, &first, &last));
+  /* the region's extent from the interface to its far face */
+  double room = it->side ? it->y_i - (first - 0.5 * h) : (last + 0.5 * h) - it->y_i;
+  if (kind == CUPID_FICTITIOUS_FE_ADJACENT || kind == CUPID_FICTITIOUS_FE_REMOVED) {
+    double y0, y1;
+    element_next_to(beam, it, kind == CUPID_FICTITIOUS_FE_ADJACENT, &y0, &y1);
+    len = fmin(y1 - y0, room);
+    nodes = binfo.element_nodes;
+  } else if (kind == CUPID_FICTITIOUS_FE_LENGTH) {
+    len = fmin(length, room);
+  }
+  CUPID_CHECK(len > 0.0, CUPID_ERR_MODEL, "interface y = %g: no room for a fictitious element",
+              it->y_i);
+  double ys[2] = {fmin(it->y_i, it->y_i + dir * len), fmax(it->y_i, it->y_i + dir * len)};
+  int one = 1;
+  def.axis_y = ys;
+  def.axis_elements = &one;
+  def.n_axis = 2;
+  def.element_nodes = nodes;
+  CUPID_CALL(cupid_cuf_beam_create_from(&def, o->materials, o->n_materials, &it->aux));
+  it->n_nodes = nodes;
+  it->end_i = it->side ? nodes - 1 : 0;
+  CUPID_CALL(cupid_calloc((size_t)nodes, sizeof *it->fn, "fictitious FE nodes", &it->fn));
   cupid_cuf_info info;
   cupid_cuf_get_info(it->aux, &info);
-  return section_fit(it, x, M, p, info.expansion == CUPID_EXPANSION_TE);
+  int te = info.expansion == CUPID_EXPANSION_TE;
+  for (int k = 0; k < nodes; k++)
+    if (k != it->end_i) CUPID_CALL(fit_node(it, k, o, grid, M, nodes, te));
+  return CUPID_SUCCESS;
 }
 
 /* ----------------------------------------------------------------- fictitious PD nodes */
@@ -342,7 +494,7 @@ static cupid_status extended_grid(const cupid_coupling_options *o, const interfa
   for (int f = 0; f < n_iface; f++) {
     const interface_t *it = &iface[f];
     cupid_box b = o->regions[it->region];
-    if (it->y_s > it->y_i) { /* PD above: fictitious nodes below */
+    if (it->side == 0) { /* PD above: fictitious nodes below */
       double room = h * floor((it->y_i - y_min) / h + TOL);
       b.lo[1] = it->y_i - fmin(L, room);
       b.hi[1] = it->y_i;
@@ -489,13 +641,14 @@ static cupid_status fe_rows(cpl_rowbuild *rb, const cupid_csr_t *Kb, const inter
       for (cupid_int k = Ka->rowptr[row]; k < Ka->rowptr[row + 1]; k++) {
         cupid_int c = Ka->col[k];
         const double *blk = Ka->val + 9 * k;
-        int s = (int)(c % M);
-        if (c / M == it->end_i) {
+        int s = (int)(c % M), node = (int)(c / M);
+        if (node == it->end_i) {
           CUPID_CALL(cpl_rowbuild_add(rb, n_pd + bn * M + s, 1.0, blk));
         } else {
-          for (cupid_int q = 0; q < it->n_q; q++) {
-            double g = it->G[s * it->n_q + q];
-            if (g != 0.0) CUPID_CALL(cpl_rowbuild_add(rb, it->q[q], g, blk));
+          const cpl_fnode *fn = &it->fn[node];
+          for (cupid_int q = 0; q < fn->n_q; q++) {
+            double g = fn->G[s * fn->n_q + q];
+            if (g != 0.0) CUPID_CALL(cpl_rowbuild_add(rb, fn->q[q], g, blk));
           }
         }
       }
@@ -516,7 +669,7 @@ cupid_status cpl_find_interfaces(cupid_cuf_beam beam, const cupid_coupling_optio
       if (bn < 0 || !cupid_cuf_node_used(beam, 0, bn)) continue;
       interface_t *it = &c->iface[c->n_iface++];
       it->y_i = cupid_cuf_beam_node_y(beam, bn);
-      it->y_s = it->y_i + (side ? -0.5 : 0.5) * o->spacing;
+      it->side = side;
       it->region = r;
       it->beam_node = bn;
     }
@@ -534,9 +687,15 @@ static cupid_status full_parts(cupid_cuf_beam beam, cupid_pd_grid grid,
   cupid_cuf_info info;
   cupid_cuf_get_info(beam, &info);
   int M = info.M, pe = info.element_nodes;
-  cupid_int n_pd = p->n_pd;
+  cupid_int n_pd = p->n_pd, n_ffe = 0;
+  cupid_fictitious_fe kind;
+  double length;
+  CUPID_TRY(cpl_fictitious_fe_choice(o, &kind, &length));
   CUPID_TRY(cpl_find_interfaces(beam, o, c));
-  for (int f = 0; f < c->n_iface; f++) CUPID_TRY(build_interface(&c->iface[f], o, grid, M, 2));
+  for (int f = 0; f < c->n_iface; f++) {
+    CUPID_TRY(build_interface(&c->iface[f], o, beam, grid, M, kind, length));
+    n_ffe += (cupid_int)(c->iface[f].n_nodes - 1) * M;
+  }
 
   CUPID_TRY(extended_grid(o, c->iface, c->n_iface, info.y_min, info.y_max, NULL, &p->ext));
   p->n_ext = cupid_pd_grid_num_nodes(p->ext);
@@ -557,7 +716,8 @@ static cupid_status full_parts(cupid_cuf_beam beam, cupid_pd_grid grid,
   c->info = (cupid_coupling_info){.n_real_pd = n_pd,
                                   .n_fictitious_pd = p->n_fict,
                                   .n_interfaces = c->n_iface,
-                                  .n_fictitious_fe = (cupid_int)c->n_iface * M};
+                                  .n_fictitious_fe = n_ffe,
+                                  .fictitious_fe = kind};
 cleanup:
   for (int f = 0; f < n_aux; f++) cupid_csr_destroy(&Kaux[f]);
   cupid_free(&Kaux);
@@ -722,9 +882,13 @@ cleanup:
 void cupid_coupling_destroy(cupid_coupling_h *c) {
   if (!c || !*c) return;
   for (int f = 0; f < (*c)->n_iface; f++) {
-    cupid_cuf_beam_destroy(&(*c)->iface[f].aux);
-    cupid_free(&(*c)->iface[f].q);
-    cupid_free(&(*c)->iface[f].G);
+    interface_t *it = &(*c)->iface[f];
+    cupid_cuf_beam_destroy(&it->aux);
+    for (int k = 0; it->fn && k < it->n_nodes; k++) {
+      cupid_free(&it->fn[k].q);
+      cupid_free(&it->fn[k].G);
+    }
+    cupid_free(&it->fn);
   }
   cupid_free(&(*c)->iface);
   cupid_free(&(*c)->tied);

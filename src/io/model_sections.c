@@ -847,8 +847,30 @@ static cupid_status read_arlequin(model_reader *rd, yaml_node_t *node, cupid_cou
   return CUPID_SUCCESS;
 }
 
+/* coupling.fictitious_fe: removed | adjacent | plane | a length > 0 (model.h). */
+static cupid_status read_fictitious_fe(model_reader *rd, yaml_node_t *node, cupid_coupling *c) {
+  static const char *const kinds[] = {"removed", "adjacent", "plane"};
+  const char *path = "coupling.fictitious_fe";
+  if (mr_is_scalar(node) && node->data.scalar.style == YAML_PLAIN_SCALAR_STYLE) {
+    char *end = NULL;
+    const char *text = (const char *)node->data.scalar.value;
+    double v = strtod(text, &end);
+    if (end != text && *end == '\0') {
+      if (!(v > 0 && isfinite(v)))
+        return mr_error(rd, node, path, "a length must be > 0, got %s", text);
+      c->fictitious_fe = 3;
+      c->fictitious_length = v;
+      return CUPID_SUCCESS;
+    }
+  }
+  int k;
+  CUPID_CALL(mr_enum(rd, node, path, kinds, COUNT(kinds), &k));
+  c->fictitious_fe = k;
+  return CUPID_SUCCESS;
+}
+
 static cupid_status read_coupling(model_reader *rd, yaml_node_t *node) {
-  static const char *const keys[] = {"method", "arlequin"};
+  static const char *const keys[] = {"method", "arlequin", "fictitious_fe"};
   static const char *const methods[] = {"fictitious", "lagrange", "arlequin"};
   cupid_coupling *c = &rd->model->coupling;
   mr_map map;
@@ -861,6 +883,10 @@ static cupid_status read_coupling(model_reader *rd, yaml_node_t *node) {
   CUPID_CALL(mr_enum(rd, method, "coupling.method", methods, COUNT(methods), &k));
   c->method = (cupid_coupling_method)k;
   arlequin = mr_get(&map, "arlequin");
+  yaml_node_t *ffe = mr_get(&map, "fictitious_fe");
+  if (ffe && c->method != CUPID_COUPLING_FICTITIOUS)
+    return mr_error(rd, ffe, "coupling.fictitious_fe", "is only used with method: fictitious");
+  if (ffe) CUPID_CALL(read_fictitious_fe(rd, ffe, c));
   if (c->method == CUPID_COUPLING_ARLEQUIN) {
     if (!arlequin)
       return mr_error(rd, map.node, "coupling",

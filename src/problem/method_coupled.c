@@ -128,7 +128,9 @@ cupid_status cupid_method_coupling_options(const cupid_problem_state *prob,
                                  .regions = *boxes,
                                  .region_materials = *mats,
                                  .spacing = m->pd.spacing,
-                                 .pd = prob->pd_options};
+                                 .pd = prob->pd_options,
+                                 .fictitious_fe = (cupid_fictitious_fe)m->coupling.fictitious_fe,
+                                 .fictitious_length = m->coupling.fictitious_length};
   return CUPID_SUCCESS;
 }
 

@@ -9,6 +9,7 @@
  * the end. GMRES: Saad, Iterative Methods for Sparse Linear Systems, 2nd ed., Alg. 9.5 (right
  * preconditioning) with modified Gram-Schmidt and Givens rotations; CG: Alg. 9.1. */
 #include <math.h>
+#include <stdint.h>
 #include <stdio.h>
 #include <string.h>
 
@@ -90,7 +91,56 @@ cleanup:
   return st;
 }
 
-/* Right-preconditioned restarted GMRES(m): x = M^{-1} (V y), M^{-1} by the twin's factor. */
+/* The round-off of the product at x, relative to |b|: |A x - (A (x + z) - A z)| / |b| for z =
+ * x scaled entry by entry by fixed factors in [0.5, 1.5) (Ax in w). A true residual at this
+ * level is as small as b - A x can be computed: the stiffened panel's matrix-free LPS product
+ * has 2e-8 of |b| (docs/scale.md), above rtol 1e-10 however many restarts. */
+static cupid_status product_noise(system_free *S, const double *x, const double *w,
+                                  double bnorm, double *noise) {
+  const cupid_int n = S->nf;
+  cupid_status st = CUPID_SUCCESS;
+  double *z = NULL, *xz = NULL, *az = NULL, *axz = NULL;
+  CUPID_TRY(cupid_malloc((size_t)n + 1, sizeof *z, "round-off probe", &z));
+  CUPID_TRY(cupid_malloc((size_t)n + 1, sizeof *xz, "round-off probe", &xz));
+  CUPID_TRY(cupid_malloc((size_t)n + 1, sizeof *az, "round-off probe", &az));
+  CUPID_TRY(cupid_malloc((size_t)n + 1, sizeof *axz, "round-off probe", &axz));
+  uint64_t s = 0x9E3779B97F4A7C15ull;
+  for (cupid_int k = 0; k < n; k++) {
+    s ^= s << 13, s ^= s >> 7, s ^= s << 17;
+    z[k] = x[k] * (0.5 + (double)(s >> 11) / 9007199254740992.0);
+    xz[k] = x[k] + z[k];
+  }
+  CUPID_TRY(apply_free(S, z, az));
+  CUPID_TRY(apply_free(S, xz, axz));
+  double e = 0.0;
+  for (cupid_int k = 0; k < n; k++) {
+    const double d = w[k] - (axz[k] - az[k]);
+    e += d * d;
+  }
+  *noise = bnorm > 0 ? sqrt(e) / bnorm : sqrt(e);
+cleanup:
+  cupid_free(&z);
+  cupid_free(&xz);
+  cupid_free(&az);
+  cupid_free(&axz);
+  return st;
+}
+
+/* Restarts from the true residual after GMRES met rtol on its estimate (at most). */
+#define KRYLOV_REFINEMENTS 3
+
+/* Right-preconditioned restarted GMRES(m): x = M^{-1} (V y), M^{-1} by the twin's factor.
+ * A cycle stops on GMRES's own residual estimate |g_{j+1}|, which is the true residual only
+ * if M^{-1} is applied exactly: x = M^{-1} (V y) is one more solve, whose error the estimate
+ * never sees (an LU solve of backward error eta leaves |b - A x| ~ eta kappa |b|). So every
+ * cycle starts from the true residual r = b - A x, and the solve ends only on it:
+ *  - at or below rtol |b| (2 rtol |b| after a cycle that met rtol on its estimate):
+ *    CONVERGED_RTOL;
+ *  - after a cycle that met rtol on its estimate, at most twice the round-off of the product
+ *    (product_noise()): CONVERGED_ROUNDOFF, b - A x cannot be computed closer;
+ *  - else a refinement cycle from r (aiming at rtol / 2), KRYLOV_REFINEMENTS of them at most
+ *    and while each at least halves the true residual; then CONVERGED_RTOL up to
+ *    max(100 rtol, 1e-10), DIVERGED_TRUE_RESIDUAL above. */
 static cupid_status solve_gmres(system_free *S, const double *b, double *x, double rtol,
                                 int max_it, int m, cupid_solve_info *info) {
   const cupid_int n = S->nf;
@@ -104,18 +154,39 @@ static cupid_status solve_gmres(system_free *S, const double *b, double *x, doub
   CUPID_TRY(cupid_calloc((size_t)m + 1, sizeof *y, "GMRES coefficients", &y));
   CUPID_TRY(cupid_calloc((size_t)n + 1, sizeof *w, "GMRES vectors", &w));
   CUPID_TRY(cupid_calloc((size_t)n + 1, sizeof *z, "GMRES vectors", &z));
-  const double bnorm = sqrt(dot(n, b, b));
-  double rnorm = bnorm;
-  int it = 0;
-  while (rnorm > rtol * bnorm && it < max_it) {
+  const double bnorm = sqrt(dot(n, b, b)), limit = fmax(100.0 * rtol, 1e-10);
+  const char *reason = "DIVERGED_ITS";
+  int it = 0, met = 0; /* met: the last cycle reached rtol on its estimate */
+  double prev = INFINITY, noise = -1.0; /* the last cycle's true residual; product round-off */
+  info->refinements = 0;
+  for (;;) {
     /* r = b - A x, v1 = r / |r| */
     CUPID_TRY(apply_free(S, x, w));
     for (cupid_int k = 0; k < n; k++) V[k] = b[k] - w[k];
-    rnorm = sqrt(dot(n, V, V));
-    if (rnorm <= rtol * bnorm) break;
-    for (cupid_int k = 0; k < n; k++) V[k] /= rnorm;
+    const double rnorm0 = sqrt(dot(n, V, V));
+    if (rnorm0 <= rtol * bnorm || (met && rnorm0 <= 2.0 * rtol * bnorm)) {
+      reason = "CONVERGED_RTOL";
+      break;
+    }
+    if (met) {
+      if (noise < 0.0) CUPID_TRY(product_noise(S, x, w, bnorm, &noise));
+      if (rnorm0 <= 2.0 * noise * bnorm) {
+        reason = "CONVERGED_ROUNDOFF";
+        break;
+      }
+      if (info->refinements == KRYLOV_REFINEMENTS || rnorm0 > 0.5 * prev) {
+        reason = rnorm0 <= limit * bnorm ? "CONVERGED_RTOL" : "DIVERGED_TRUE_RESIDUAL";
+        break;
+      }
+    }
+    if (it >= max_it) break;
+    prev = rnorm0;
+    if (met) info->refinements++;
+    const double target = (met ? 0.5 : 1.0) * rtol * bnorm;
+    met = 0;
+    for (cupid_int k = 0; k < n; k++) V[k] /= rnorm0;
     memset(g, 0, (size_t)(m + 2) * sizeof *g);
-    g[0] = rnorm;
+    g[0] = rnorm0;
     int j = 0;
     for (; j < m && it < max_it; j++, it++) {
       double *vj = V + (size_t)j * (size_t)n, *vn = V + (size_t)(j + 1) * (size_t)n;
@@ -143,8 +214,8 @@ static cupid_status solve_gmres(system_free *S, const double *b, double *x, doub
       H[(j + 1) * m + j] = 0.0;
       g[j + 1] = -sn[j] * g[j];
       g[j] = cs[j] * g[j];
-      rnorm = fabs(g[j + 1]);
-      if (rnorm <= rtol * bnorm || hn == 0.0) {
+      if (fabs(g[j + 1]) <= target || hn == 0.0) {
+        met = 1;
         j++;
         it++;
         break;
@@ -162,8 +233,7 @@ static cupid_status solve_gmres(system_free *S, const double *b, double *x, doub
     axpy(n, 1.0, z, x);
   }
   info->iterations = it;
-  snprintf(info->converged_reason, sizeof info->converged_reason, "%s",
-           rnorm <= rtol * bnorm ? "CONVERGED_RTOL" : "DIVERGED_ITS");
+  snprintf(info->converged_reason, sizeof info->converged_reason, "%s", reason);
 cleanup:
   cupid_free(&V);
   cupid_free(&H);
@@ -233,6 +303,12 @@ cupid_status cupid_iterative_solve(const cupid_linear_operator *A, const cupid_c
   for (cupid_int k = 0; k < S.nf; k++)
     CUPID_TRY_CHECK(isfinite(x[k]), CUPID_ERR_NUMERIC,
                     "solver krylov: non-finite solution at DOF %lld", (long long)S.global[k]);
+  CUPID_TRY_CHECK(strcmp(info->converged_reason, "DIVERGED_TRUE_RESIDUAL"), CUPID_ERR_NUMERIC,
+                  "the Krylov solve (%s + %s) met its tolerance on its residual estimate, but "
+                  "the true relative residual is %.2e after %d iterations and %d restarts (rtol "
+                  "%.0e): the preconditioner is inaccurate; use --solver direct",
+                  info->ksp_type, info->pc_type, info->residual, info->iterations,
+                  info->refinements, rtol);
   CUPID_TRY_CHECK(!strncmp(info->converged_reason, "CONVERGED", 9), CUPID_ERR_NUMERIC,
                   "the Krylov solve (%s + %s) did not converge in %d iterations: relative "
                   "residual %.2e (rtol %.0e); use --solver direct",

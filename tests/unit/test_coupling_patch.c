@@ -1,5 +1,9 @@
 /* Patch tests of the fictitious-node coupling (paper 000, section 4): a bar
- * FE [0,6] | PD [6,12] | FE [12,18], section 8 x 8, h = 1.
+ * FE [0,6] | PD [6,12] | FE [12,18], section 8 x 8, h = 1 (and the layouts of patch_case).
+ * Every kind of fictitious FE element (cupid_fictitious_fe: the removed element, the adjacent
+ * element's copy, the h/2 element to the nearest plane, a given length) on a mesh where they
+ * differ (FE [0,4] | PD [4,12] | FE [12,18], B4: fictitious nodes between PD planes and on the
+ * region's far face, where their sections are interpolated / extrapolated from two planes).
  *  - Ghost forces: for an affine field the coupled force on every real PD node equals the
  *    force of an all-PD bar (the fictitious nodes carry the exact field), which is zero on
  *    nodes with complete 2 delta families; for the uniaxial-stress field (traction-free
@@ -9,8 +13,10 @@
  *    field to round-off.
  * Tolerances: 1e-10 relative (round-off of sums of ~1e3 terms of mixed sign, condition of the
  * small systems ~1e4). */
+#define _POSIX_C_SOURCE 200809L /* setenv */
 #include <math.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 
 #include "cupid/coupling.h"
@@ -27,7 +33,10 @@ typedef struct {
   double delta;
   double nu;
   int layout;      /* 0: FE|PD|FE on [0,6,12,18]; 1: two PD regions [3,6] and [12,15] on
-                      [0,3,6,12,15,18]; 2: two touching PD regions [6,9] and [9,12] */
+                      [0,3,6,12,15,18]; 2: two touching PD regions [6,9] and [9,12];
+                      3: FE|PD|FE on [0,4,12,18] (unequal elements) */
+  cupid_fictitious_fe fict; /* the fictitious FE element (0: the default, the removed one) */
+  double flen;              /* its length for CUPID_FICTITIOUS_FE_LENGTH */
 } patch_case;
 
 typedef struct {
@@ -55,15 +64,16 @@ static void build(patch_model *m, const patch_case *pc) {
     tb_le(&m->tb, pc->le_nodes);
     tb_rect(&m->tb, 0, XW, pc->le_n, 0, XW, pc->le_n, -1);
   }
-  static const double axes[3][6] = {{0, 6, 12, YL}, {0, 3, 6, 12, 15, YL}, {0, 6, 9, 12, YL}};
-  static const int n_axis[3] = {4, 6, 5};
-  static const double reg[3][2][2] = {{{6, 12}}, {{3, 6}, {12, 15}}, {{6, 9}, {9, 12}}};
+  static const double axes[4][6] = {
+      {0, 6, 12, YL}, {0, 3, 6, 12, 15, YL}, {0, 6, 9, 12, YL}, {0, 4, 12, YL}};
+  static const int n_axis[4] = {4, 6, 5, 4};
+  static const double reg[4][2][2] = {{{6, 12}}, {{3, 6}, {12, 15}}, {{6, 9}, {9, 12}}, {{4, 12}}};
   int L = pc->layout;
   tb_axis_spans(&m->tb, n_axis[L], axes[L]);
   m->tb.def.element_nodes = pc->p;
   m->beam = tb_create(&m->tb);
 
-  m->n_regions = L == 0 ? 1 : 2;
+  m->n_regions = L == 0 || L == 3 ? 1 : 2;
   for (int r = 0; r < m->n_regions; r++)
     m->region[r] = (cupid_box){.lo = {0, reg[L][r][0], 0}, .hi = {XW, reg[L][r][1], XW}, .has = {1, 1, 1}};
   cupid_pd_grid_options go = {.spacing = 1.0, .dimension = 3};
@@ -87,7 +97,9 @@ static void build(patch_model *m, const patch_case *pc) {
                                .regions = m->region,
                                .region_materials = m->region_mat,
                                .spacing = 1.0,
-                               .pd = m->pdo};
+                               .pd = m->pdo,
+                               .fictitious_fe = pc->fict,
+                               .fictitious_length = pc->flen};
   CUPID_ASSERT_OK(cupid_coupling_create(m->beam, m->grid, &co, &m->cpl, &m->K));
   assert_int_equal(m->K->nrows, m->ndof / 3);
 
@@ -97,6 +109,14 @@ static void build(patch_model *m, const patch_case *pc) {
   cupid_coupling_info ci;
   cupid_coupling_get_info(m->cpl, &ci);
   assert_int_equal(ci.n_interfaces, L == 2 ? 2 : 2 * m->n_regions); /* touching: none between */
+  assert_int_equal(ci.fictitious_fe, pc->fict);
+  /* fictitious FE nodes: p - 1 per interface (one for the B2 kinds), M section DOF groups each */
+  cupid_cuf_info bi;
+  cupid_cuf_get_info(m->beam, &bi);
+  int per = pc->fict == CUPID_FICTITIOUS_FE_REMOVED || pc->fict == CUPID_FICTITIOUS_FE_ADJACENT
+                ? pc->p - 1
+                : 1;
+  assert_int_equal(ci.n_fictitious_fe, (cupid_int)ci.n_interfaces * per * bi.M);
   CUPID_ASSERT_OK(cupid_pd_operator_create(m->full, &m->pdo, &m->full_op));
 }
 
@@ -290,12 +310,93 @@ static void l9_2x2_b4_lps_nu0(void **state) {
       &(patch_case){.le_nodes = 9, .le_n = 2, .p = 4, .kind = CUPID_PD_LPS, .delta = 2.0, .nu = 0.0});
 }
 
+/* The kinds of fictitious FE element on unequal elements (FE [0,4] | PD [4,12] | FE [12,18]):
+ * removed (length 8, B4: nodes at 6.67 and 9.33 between PD planes, the far node on the other
+ * face, extrapolated), adjacent (B4 copies of lengths 4 and 6), nearest plane (B2, h/2) and a
+ * given length (B2, 2.5: its node between two planes). */
+static void unequal_removed_l9_b4(void **state) {
+  (void)state;
+  check_ghost_forces(&(patch_case){.le_nodes = 9, .le_n = 1, .p = 4, .kind = CUPID_PD_LPS,
+                                   .delta = 1.5, .nu = 0.2, .layout = 3});
+}
+static void unequal_adjacent_te2_b4(void **state) {
+  (void)state;
+  check_ghost_forces(&(patch_case){.te = 2, .p = 4, .kind = CUPID_PD_LPS, .delta = 1.5, .nu = 0.3,
+                                   .layout = 3, .fict = CUPID_FICTITIOUS_FE_ADJACENT});
+}
+static void unequal_plane_l9_b3(void **state) {
+  (void)state;
+  check_ghost_forces(&(patch_case){.le_nodes = 9, .le_n = 1, .p = 3, .kind = CUPID_PD_LPS,
+                                   .delta = 1.5, .nu = 0.2, .layout = 3,
+                                   .fict = CUPID_FICTITIOUS_FE_PLANE});
+}
+static void unequal_length_te1_b2(void **state) {
+  (void)state;
+  check_ghost_forces(&(patch_case){.te = 1, .p = 2, .kind = CUPID_PD_BOND, .delta = 2.0, .nu = 0.25,
+                                   .layout = 3, .fict = CUPID_FICTITIOUS_FE_LENGTH, .flen = 2.5});
+}
+
+/* The options choose the fictitious FE element (the model's coupling.fictitious_fe); a kind
+ * they do not know, or a given length that is not positive, is an argument error. */
+static void fictitious_fe_options(void **state) {
+  (void)state;
+  static const cupid_fictitious_fe kinds[] = {CUPID_FICTITIOUS_FE_REMOVED,
+                                              CUPID_FICTITIOUS_FE_ADJACENT,
+                                              CUPID_FICTITIOUS_FE_PLANE, CUPID_FICTITIOUS_FE_LENGTH};
+  for (size_t i = 0; i < sizeof kinds / sizeof kinds[0]; i++) {
+    patch_model m;
+    patch_case pc = {.te = 1, .p = 2, .kind = CUPID_PD_BOND, .delta = 1.5, .nu = 0.2,
+                     .layout = 3, .fict = kinds[i], .flen = 2.5};
+    build(&m, &pc); /* asserts info.fictitious_fe == kinds[i] */
+    destroy(&m);
+  }
+  patch_model m;
+  memset(&m, 0, sizeof m);
+  tb_init(&m.tb, 1000.0, 0.2);
+  tb_te(&m.tb, 1);
+  tb_rect(&m.tb, 0, XW, 1, 0, XW, 1, -1);
+  static const double axes[4] = {0, 6, 12, YL};
+  tb_axis_spans(&m.tb, 4, axes);
+  m.tb.def.element_nodes = 2;
+  m.beam = tb_create(&m.tb);
+  cupid_box region = {.lo = {0, 6, 0}, .hi = {XW, 12, XW}, .has = {1, 1, 1}};
+  int mat = 0;
+  cupid_pd_grid_options go = {.spacing = 1.0, .dimension = 3};
+  CUPID_ASSERT_OK(cupid_pd_grid_create(&go, 1, &region, &mat, &m.grid));
+  CUPID_ASSERT_OK(cupid_coupling_deactivate(m.beam, 1, &region));
+  CUPID_ASSERT_OK(cupid_cuf_set_dof_offset(m.beam, 3 * cupid_pd_grid_num_nodes(m.grid)));
+  m.mat = (cupid_pd_material){.E = 1000.0, .nu = 0.2};
+  cupid_coupling_options co = {.beam_def = &m.tb.def,
+                               .materials = m.tb.mat,
+                               .n_materials = m.tb.n_mat,
+                               .n_regions = 1,
+                               .regions = &region,
+                               .region_materials = &mat,
+                               .spacing = 1.0,
+                               .pd = {.horizon = 1.5,
+                                      .model = CUPID_PD_BOND,
+                                      .influence = CUPID_INFLUENCE_GAUSSIAN,
+                                      .materials = &m.mat,
+                                      .n_materials = 1}};
+  co.fictitious_fe = (cupid_fictitious_fe)7;
+  assert_int_equal(cupid_coupling_create(m.beam, m.grid, &co, &m.cpl, &m.K), CUPID_ERR_ARGUMENT);
+  assert_non_null(strstr(cupid_error_message(), "unknown fictitious FE element kind 7"));
+  co.fictitious_fe = CUPID_FICTITIOUS_FE_LENGTH;
+  co.fictitious_length = 0.0;
+  assert_int_equal(cupid_coupling_create(m.beam, m.grid, &co, &m.cpl, &m.K), CUPID_ERR_ARGUMENT);
+  assert_non_null(strstr(cupid_error_message(), "the length must be > 0"));
+  destroy(&m);
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(te1_lps),     cmocka_unit_test(te2_b3_lps),
       cmocka_unit_test(te3_b4_bond), cmocka_unit_test(l9_lps),
       cmocka_unit_test(l4_2x2_bond), cmocka_unit_test(l9_2x2_b4_lps_nu0),
       cmocka_unit_test(two_regions_te2_lps), cmocka_unit_test(touching_regions_l9_bond),
+      cmocka_unit_test(unequal_removed_l9_b4), cmocka_unit_test(unequal_adjacent_te2_b4),
+      cmocka_unit_test(unequal_plane_l9_b3), cmocka_unit_test(unequal_length_te1_b2),
+      cmocka_unit_test(fictitious_fe_options),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

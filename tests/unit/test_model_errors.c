@@ -480,6 +480,8 @@ static const bad_case cases[] = {
     {"simple_key_too_long.yaml",
      "1:2001: YAML syntax error: mapping values are not allowed in this context",
      NULL},
+    {"fictitious_fe_unknown.yaml",
+     "28:47: coupling.fictitious_fe: must be one of removed | adjacent | plane, got 'half'", NULL},
     {"solver_typo.yaml",
      "9:11: analysis.solver: must be one of auto | direct | petsc | krylov, got 'Direct'; did you mean",
      NULL},

@@ -4,11 +4,12 @@
 # convergence.py give the m = 3 figures (docs/coupling.md).
 # Checked, each with the bound observed when the test was written (docs/coupling.md):
 #  - fictitious nodes: largest |u_y - u_y^FE| along the axis <= 1% of the tip displacement
-#    (observed 0.68%); equilibrium imbalance |R + P| / P <= 2.5% (observed 1.87%: the method
-#    is not momentum-conserving, and the PD bar is stiffer than E through its surface effect);
+#    (observed 0.46%; 0.68% with the h/2 fictitious element before issue 18); equilibrium
+#    imbalance |R + P| / P <= 2.5% (observed 0.44%; 1.87% before: the method is not
+#    momentum-conserving, docs/coupling.md "The fictitious FE element (issue 18)");
 #  - Lagrange multipliers: imbalance <= 1e-9 (symmetric, exact equilibrium); the largest error
 #    within 3 mm of an interface is larger than with fictitious nodes (observed 12.5% against
-#    0.68% of the tip displacement: the truncated PD families at the interfaces);
+#    0.46% of the tip displacement: the truncated PD families at the interfaces);
 #  - both: the clamped end does not move (u_y(0) = 0) and the solver residual <= 1e-10.
 #  - Arlequin (paper 004; overlaps [30, 35] and [65, 70], linear weight, kappa 1e5, LPS energy
 #    weighted node by node): imbalance <= 1e-9 (symmetric and momentum-conserving). Unlike the
@@ -20,14 +21,14 @@
 # The issue's acceptance (paper 000: max relative error 0.69%) on the same bar with the clamped
 # span y in [0, 30] cut into 3 B2 elements (full-FE and coupled alike) and the PD surface
 # correction (fict_c3e against fe_c3): max |u_y - u_y^FE| / |u_y^FE| over y > 0 <= 0.7%
-# (observed 0.045%) and imbalance <= 0.2% (observed 0.04%). Why the refined span: one B2
-# element clamped at y = 0 interpolates the section's Poisson contraction linearly from zero,
-# so its node at the interface contracts ~1.4 times the uniaxial value (an FE artefact the
-# full-FE model shares through its next element, but the PD block cannot follow); the
-# non-conservative fictitious-node method then passes ~1.02-1.04 P into the clamped span
-# (docs/coupling.md, "The coupled bar"). The check that this is the cause: the same model
-# without the correction (fict_c3) has an imbalance below 1/5 of the one-element model's
-# (observed 0.25% against 1.87%).
+# (observed 0.011%; 0.045% before issue 18) and imbalance <= 0.2% (observed 7e-5%; 0.04%).
+# The paper's own configuration (one clamped B2, m = 3) is verification.coupling_bar_paper.
+# One B2 element clamped at y = 0 interpolates the section's Poisson contraction linearly from
+# zero, so its node at the interface contracts more than the uniaxial value; the
+# non-conservative fictitious-node method turns the interfaces' different contractions into
+# an imbalance. The check that the clamped element drives what is left of it: the same model
+# without the correction and with 3 clamped elements (fict_c3) has an imbalance below 1/5 of
+# the one-element model's (observed 0.03% against 0.44%; 0.25% against 1.87% before).
 set -u
 CUPID=$(realpath "${CUPID:-build/cupid}")
 SRC=$(realpath "${CUPID_SOURCE_DIR:-.}")

@@ -4,10 +4,12 @@
 # fictitious nodes, the README's configuration (3 B2 elements on the clamped span, PD surface
 # correction), against its full-FE twin (bar_fe_te2 with the same clamped span), through
 # examples/bar/convergence.py, which prints the table. Checks:
-#  - the largest relative error of u_y along the axis falls at every step (observed 0.16%,
-#    0.11%, 0.09%) and stays within the issue's 0.7% bar target;
-#  - the equilibrium imbalance stays below 0.1% of the load (observed 0.06%: Eq. 38 is not
-#    momentum-conserving, the bound is the one observed at h = 1, docs/coupling.md).
+#  - the largest relative error of u_y along the axis falls at every step (observed 0.05%,
+#    0.03%, 0.02%; 0.16%, 0.11%, 0.09% with the h/2 fictitious element before issue 18) and
+#    stays within the issue's 0.7% bar target;
+#  - the equilibrium imbalance stays below 0.1% of the load (observed 0.00%, 0.06% before
+#    issue 18: Eq. 38 is not momentum-conserving, the bound is the one observed at h = 1 then,
+#    docs/coupling.md).
 # The two finer cases need the matrix-free path (a direct LU of the 32,000-node case would
 # take ~50 GB): skipped (77) without PETSc. ~15 s on 2 cores.
 if [ "${CUPID_HAVE_PETSC:-0}" != 1 ]; then
