@@ -243,6 +243,9 @@ typedef struct {
 typedef struct {
   cupid_analysis_type type;
   cupid_solver_kind solver;
+  int steps;            /**< static: load steps (loads and prescribed values ramp as k/steps);
+                             0 when not given (one step) */
+  cupid_mark steps_mark;
   cupid_value field[3]; /**< evaluate */
   cupid_dynamic dynamic;
   cupid_mark mark;

@@ -341,6 +341,22 @@ cupid_status cupid_pd_operator_break_bonds(cupid_pd_operator op, const double *u
  *  grid with the same stencil: e.g. a weighted copy of the operator). */
 cupid_status cupid_pd_operator_copy_broken(cupid_pd_operator dst, const cupid_pd_operator src);
 
+/** The largest ratio of an intact, breakable bond's criterion to its limit at u (stretch:
+ *  e / (s0 |xi|); energy: sqrt(w / w_c), both linear in u): a linear solution scaled by
+ *  1 / ratio brings the first bond exactly to its limit. 0 when no bond is stretched. */
+cupid_status cupid_pd_operator_max_ratio(const cupid_pd_operator op, const double *u,
+                                         const cupid_pd_fracture_options *opts, double *ratio);
+
+/**
+ * Nodes that lost their support: those with at most 2 intact bonds (a mechanism; Peridigm's
+ * rule) and those that no @p anchored node (a node with a constrained DOF, or tied to a beam)
+ * reaches over intact bonds (a fragment cut off). @p release: one flag per node, nonzero on
+ * entry for nodes released before (left alone); newly released ones are set to 2 and counted
+ * in *count. A static solve holds released nodes instead of going singular.
+ */
+cupid_status cupid_pd_operator_unsupported(const cupid_pd_operator op, const unsigned char *anchored,
+                                           unsigned char *release, cupid_int *count);
+
 /** Bonds (unordered pairs) removed so far: pre-cracks and breaks. */
 cupid_int cupid_pd_operator_num_broken(const cupid_pd_operator op);
 

@@ -1168,7 +1168,7 @@ static cupid_status read_dynamic(model_reader *rd, yaml_node_t *node, cupid_dyna
 }
 
 static cupid_status read_analysis(model_reader *rd, yaml_node_t *node) {
-  static const char *const keys[] = {"type", "solver", "field", "dynamic"};
+  static const char *const keys[] = {"type", "solver", "steps", "field", "dynamic"};
   static const char *const types[] = {"static", "dynamic", "evaluate"};
   static const char *const solvers[] = {"auto", "direct", "petsc", "krylov"};
   cupid_analysis *a = &rd->model->analysis;
@@ -1184,6 +1184,12 @@ static cupid_status read_analysis(model_reader *rd, yaml_node_t *node) {
   if ((v = mr_get(&map, "solver"))) {
     CUPID_CALL(mr_enum(rd, v, "analysis.solver", solvers, COUNT(solvers), &k));
     a->solver = (cupid_solver_kind)k;
+  }
+  if ((v = mr_get(&map, "steps"))) {
+    if (a->type != CUPID_ANALYSIS_STATIC)
+      return mr_error(rd, v, "analysis.steps", "is only used with type: static (load steps)");
+    CUPID_CALL(mr_integer(rd, v, "analysis.steps", 1, 1000000L, &a->steps));
+    mr_mark(v, "analysis.steps", &a->steps_mark);
   }
   v = mr_get(&map, "field");
   if (a->type == CUPID_ANALYSIS_EVALUATE) {

@@ -456,6 +456,117 @@ cupid_status cupid_pd_operator_copy_broken(cupid_pd_operator dst, const cupid_pd
 
 cupid_int cupid_pd_operator_num_broken(const cupid_pd_operator op) { return op ? op->nbroken : 0; }
 
+cupid_status cupid_pd_operator_max_ratio(const cupid_pd_operator op, const double *u,
+                                         const cupid_pd_fracture_options *o, double *ratio) {
+  CUPID_CHECK(op && u && o && ratio, CUPID_ERR_ARGUMENT, "max_ratio needs its arguments");
+  const pd_stencil *S = &op->st;
+  double *theta = NULL;
+  if (o->criterion == CUPID_PD_BREAK_ENERGY) {
+    CUPID_CALL(cupid_malloc((size_t)op->nnodes, sizeof *theta, "PD dilatations", &theta));
+    pd_lps_dilatation(op, 0, op->nnodes, u, theta);
+  }
+  double r = 0.0;
+#pragma omp parallel for schedule(static) reduction(max : r) if (op->nnodes > PD_OMP_MIN_NODES)
+  for (cupid_int i = 0; i < op->nnodes; i++) {
+    const pd_family F = pd_family_of(op, i);
+    for (int q = 0; q < F.n; q++) {
+      const int s = pd_family_entry(&F, q);
+      if (s < S->n / 2 || pd_bond_broken(op, i, s)) continue;
+      const cupid_int j = pd_family_node(op, &F, s);
+      if (!breakable(o, i, j)) continue;
+      const double e = pd_extension(S->nrm + 3 * s, u, i, j);
+      /* the stretch's ratio is linear in u; the energy's quadratic: its square root is */
+      const double q_ = o->criterion == CUPID_PD_BREAK_STRETCH
+                            ? e / (stretch_limit(o, i, j) * S->x[s])
+                            : sqrt(bond_energy_density(op, theta, i, j, s, e) / o->critical_energy);
+      if (q_ > r) r = q_;
+    }
+  }
+  cupid_free(&theta);
+  *ratio = r;
+  return CUPID_SUCCESS;
+}
+
+/* The smallest eigenvalue of a symmetric 3x3 matrix (xx yy zz yz xz xy), closed form. */
+static double min_eigenvalue(const double a[6]) {
+  const double p1 = a[3] * a[3] + a[4] * a[4] + a[5] * a[5];
+  const double q = (a[0] + a[1] + a[2]) / 3.0;
+  const double p2 = (a[0] - q) * (a[0] - q) + (a[1] - q) * (a[1] - q) + (a[2] - q) * (a[2] - q) +
+                    2.0 * p1;
+  if (p2 <= 0.0) return q;
+  const double p = sqrt(p2 / 6.0);
+  const double b0 = (a[0] - q) / p, b1 = (a[1] - q) / p, b2 = (a[2] - q) / p;
+  const double b3 = a[3] / p, b4 = a[4] / p, b5 = a[5] / p;
+  const double det = b0 * (b1 * b2 - b3 * b3) - b5 * (b5 * b2 - b3 * b4) + b4 * (b5 * b3 - b1 * b4);
+  double r = det / 2.0;
+  r = r < -1.0 ? -1.0 : r > 1.0 ? 1.0 : r;
+  const double phi = acos(r) / 3.0;
+  return q + 2.0 * p * cos(phi + 2.0 * 3.14159265358979323846 / 3.0);
+}
+
+/* 1 when node i's intact bonds hold it weakly in some direction: the smallest eigenvalue of
+ * sum omega beta n n^T over them below 1e-3 of the same sum's mean over its whole family (or
+ * at most 2 bonds left). */
+static int weakly_held(const struct cupid_pd_operator_private *op, cupid_int i) {
+  const pd_stencil *S = &op->st;
+  const pd_family F = pd_family_of(op, i);
+  double a[6] = {0, 0, 0, 0, 0, 0}, all = 0.0;
+  int intact = 0;
+  for (int q = 0; q < F.n; q++) {
+    const int s = pd_family_entry(&F, q);
+    const double *n = S->nrm + 3 * s, w = S->wb[s];
+    all += w;
+    if (pd_bond_broken(op, i, s)) continue;
+    intact++;
+    a[0] += w * n[0] * n[0], a[1] += w * n[1] * n[1], a[2] += w * n[2] * n[2];
+    a[3] += w * n[1] * n[2], a[4] += w * n[0] * n[2], a[5] += w * n[0] * n[1];
+  }
+  return intact <= 2 || min_eigenvalue(a) < 1e-3 * all / 3.0;
+}
+
+cupid_status cupid_pd_operator_unsupported(const cupid_pd_operator op, const unsigned char *anchored,
+                                           unsigned char *release, cupid_int *count) {
+  CUPID_CHECK(op && anchored && release && count, CUPID_ERR_ARGUMENT,
+              "unsupported needs its arguments");
+  const cupid_int nn = op->nnodes;
+  cupid_int *queue = NULL;
+  unsigned char *seen = NULL;
+  CUPID_CALL(cupid_malloc((size_t)nn + 1, sizeof *queue, "node queue", &queue));
+  cupid_status st = cupid_calloc((size_t)nn + 1, 1, "node flags", &seen);
+  if (st != CUPID_SUCCESS) {
+    cupid_free(&queue);
+    return st;
+  }
+  /* nodes whose intact bonds no longer hold them in every direction: at most 2 left (a
+   * mechanism: Peridigm's RANK_DEFICIENT_NODES), or all of them (nearly) in one plane */
+  for (cupid_int i = 0; i < nn; i++)
+    if (!release[i] && op->bslot && op->bslot[i] >= 0 && weakly_held(op, i)) release[i] = 2;
+  /* what an anchored node reaches over intact bonds between kept nodes holds; the rest is a
+   * fragment cut off from every support */
+  cupid_int head = 0, tail = 0;
+  for (cupid_int i = 0; i < nn; i++)
+    if (anchored[i] && !release[i]) seen[i] = 1, queue[tail++] = i;
+  while (head < tail) {
+    const cupid_int i = queue[head++];
+    const pd_family F = pd_family_of(op, i);
+    for (int q = 0; q < F.n; q++) {
+      const int s = pd_family_entry(&F, q);
+      if (pd_bond_broken(op, i, s)) continue;
+      const cupid_int j = pd_family_node(op, &F, s);
+      if (!seen[j] && !release[j]) seen[j] = 1, queue[tail++] = j;
+    }
+  }
+  cupid_int n = 0;
+  for (cupid_int i = 0; i < nn; i++) {
+    if (!release[i] && !seen[i]) release[i] = 2;
+    n += release[i] == 2;
+  }
+  *count = n;
+  cupid_free(&queue);
+  cupid_free(&seen);
+  return CUPID_SUCCESS;
+}
+
 cupid_int cupid_pd_operator_nodes_broken(const cupid_pd_operator op, cupid_int *nodes) {
   cupid_int n = 0;
   if (!op || !op->bslot) return 0;

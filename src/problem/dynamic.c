@@ -420,7 +420,7 @@ static cupid_status conditions_now(void *ctx, double t, double *u_fixed, double 
 static cupid_status break_bonds(void *ctx, cupid_int step, double t, const double *u,
                                 double *dissipated) {
   dyn_output *o = ctx;
-  return cupid_problem_fracture_step(o->prob, step, t, u, dissipated);
+  return cupid_problem_fracture_step(o->prob, step, t, u, 0, NULL, dissipated);
 }
 
 cupid_status cupid_problem_run_dynamic(cupid_problem_state *prob, const cupid_method_operator *op) {

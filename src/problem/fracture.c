@@ -33,13 +33,11 @@ cupid_status cupid_problem_fracture_check(const cupid_problem_state *prob) {
                              prob->method->name, cupid_version());
   if (!fr->has_fracture) return CUPID_SUCCESS;
   const cupid_analysis *a = &m->analysis;
-  if (a->type != CUPID_ANALYSIS_DYNAMIC)
+  if (a->type == CUPID_ANALYSIS_EVALUATE)
     return cupid_model_error(m, &fr->mark,
-                             "bond breaking runs in dynamic analyses (type: dynamic, integrator: "
-                             "central) in cupid %s; quasi-static crack growth (type: static with "
-                             "steps) is not supported yet. Pre-cracks alone work in every analysis",
-                             cupid_version());
-  if (a->dynamic.integrator != CUPID_INTEGRATOR_CENTRAL)
+                             "bond breaking needs type: static (crack growth over load steps) or "
+                             "dynamic (integrator: central); type evaluate breaks nothing");
+  if (a->type == CUPID_ANALYSIS_DYNAMIC && a->dynamic.integrator != CUPID_INTEGRATOR_CENTRAL)
     return cupid_model_error(m, &fr->mark,
                              "bond breaking needs analysis.dynamic.integrator: central (Newmark "
                              "factors K once, and every broken bond changes K)");
@@ -158,20 +156,26 @@ static cupid_status first_break_place(cupid_problem_state *prob) {
 }
 
 cupid_status cupid_problem_fracture_step(cupid_problem_state *prob, cupid_int step, double t,
-                                         const double *u, double *dissipated) {
+                                         const double *u, int only_most, cupid_int *n_broken,
+                                         double *dissipated) {
   *dissipated = 0.0;
-  if (!prob->model->pd.fracture.has_fracture) return CUPID_SUCCESS;
   cupid_int broken = 0;
-  CUPID_CALL(cupid_pd_operator_break_bonds(prob->op, u, &prob->fracture, 0, &broken, dissipated));
+  if (n_broken) *n_broken = 0;
+  if (!prob->model->pd.fracture.has_fracture) return CUPID_SUCCESS;
+  CUPID_CALL(cupid_pd_operator_break_bonds(prob->op, u, &prob->fracture, only_most, &broken,
+                                           dissipated));
+  if (n_broken) *n_broken = broken;
   if (broken == 0) return CUPID_SUCCESS;
   if (prob->first_break_step < 0) {
     prob->first_break_step = step;
     prob->first_break_t = t;
     CUPID_CALL(first_break_place(prob));
     const double *c = prob->first_break_at;
-    cupid_problem_progress(prob, "fracture: the first bonds broke at step %lld (t = %.4g): %lld, "
+    cupid_problem_progress(prob, "fracture: the first bonds broke at step %lld (%s = %.4g): %lld, "
                            "at (%.4g, %.4g, %.4g)",
-                           (long long)step, t, (long long)broken, c[0], c[1], c[2]);
+                           (long long)step,
+                           prob->model->analysis.type == CUPID_ANALYSIS_STATIC ? "load factor" : "t",
+                           t, (long long)broken, c[0], c[1], c[2]);
   }
   prob->broken_bonds += broken;
   prob->fracture_energy += *dissipated;
@@ -216,9 +220,11 @@ void cupid_problem_fracture_json(cupid_json js, const cupid_problem_state *prob)
     if (prob->node_stretch && prob->n_pd > 0) /* the first node's: one material is the usual */
       cupid_json_number(js, "critical_stretch_from_G0", prob->node_stretch[0]);
     cupid_json_integer(js, "broken_bonds", prob->broken_bonds);
+    if (prob->first_break_load > 0) cupid_json_number(js, "first_break_load_factor", prob->first_break_load);
     if (prob->first_break_step >= 0) {
       cupid_json_integer(js, "first_break_step", prob->first_break_step);
-      cupid_json_number(js, "first_break_t", prob->first_break_t);
+      if (m->analysis.type == CUPID_ANALYSIS_DYNAMIC)
+        cupid_json_number(js, "first_break_t", prob->first_break_t);
       cupid_json_begin_array(js, "first_break_at");
       for (int a = 0; a < 3; a++) cupid_json_number(js, NULL, prob->first_break_at[a]);
       cupid_json_end_array(js);

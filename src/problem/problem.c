@@ -415,8 +415,17 @@ static cupid_status require_constraints(const cupid_problem_state *prob) {
 }
 
 /* `static`: the method's matrix-free solve, or its assembled K through the engine. */
+static cupid_status begin_outputs(cupid_problem_state *prob);
+
 static cupid_status run_static(cupid_problem_state *prob) {
   CUPID_CALL(require_constraints(prob));
+  const cupid_model_t *m = prob->model;
+  if (m->analysis.steps > 0 || (m->has_peridynamics && m->pd.fracture.has_fracture)) {
+    /* load steps, crack growth: assembled K and the direct path, re-solved as bonds break */
+    CUPID_CALL(cupid_problem_estimate(prob, 0));
+    CUPID_CALL(begin_outputs(prob)); /* the steps' rows are written as the run goes */
+    return cupid_problem_run_growth(prob);
+  }
   if (prob->method->matrix_free(prob, prob->engine)) {
     /* the memory guard where the matrix-free path's estimate is calibrated */
     if (prob->method->caps & CUPID_METHOD_GUARD_MATRIX_FREE) CUPID_CALL(cupid_problem_estimate(prob, 0));

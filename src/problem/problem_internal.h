@@ -133,12 +133,17 @@ typedef struct cupid_problem_private {
   cupid_int first_break_step;       /**< -1: none */
   double first_break_t, fracture_energy;
   double first_break_at[3];         /**< centroid of the nodes of the first broken bonds */
+  double first_break_load;          /**< static growth: the load factor of the first break,
+                                         found by scaling the linear solution (0: none) */
   double *damage;                   /**< per PD node, for the outputs (NULL: no fracture) */
   cupid_pd_operator crack_copy;     /**< a method's own PD operator that must lose the same
                                          bonds as prob->op (borrowed, during its run), or NULL */
   cupid_int damaged_nodes;
   double max_damage;
 } cupid_problem_state;
+
+/* growth.c: `type: static` with load steps or fracture (sequentially linear growth). */
+cupid_status cupid_problem_run_growth(cupid_problem_state *prob);
 
 /* fracture.c */
 /** Model errors of pre-cracks and fracture this version cannot run (before anything is
@@ -150,7 +155,8 @@ cupid_status cupid_problem_fracture_setup(cupid_problem_state *prob);
 /** The after-forces stage of a dynamic run: break what is over its limit at u (the PD part of
  *  a system vector); *dissipated = the energy the broken bonds held. */
 cupid_status cupid_problem_fracture_step(cupid_problem_state *prob, cupid_int step, double t,
-                                         const double *u, double *dissipated);
+                                         const double *u, int only_most, cupid_int *n_broken,
+                                         double *dissipated);
 /** prob->damage, damaged_nodes, max_damage from the operator's broken bonds (outputs). */
 cupid_status cupid_problem_fracture_damage(cupid_problem_state *prob);
 /** 1 when the model has pre-cracks or fracture (damage is an output). */

@@ -5,7 +5,7 @@
 # within one spacing of (3.5, 50)), grow in the PD-only part (every damaged node within 5 of
 # y = 50: never in the overlaps [30, 35] and [65, 70], whose bonds never break), and the run
 # keep its energy balance (kinetic + strain + dissipated = the traction's work) to 1e-3. Also
-# the refusals of what fracture cannot run with (static, Newmark, Lagrange, surface correction,
+# the refusals of what fracture cannot run with (evaluate, Newmark, Lagrange, surface correction,
 # a pre-crack cutting no bond or reaching an overlap).
 . "$(dirname "$0")/../tools/checks.sh"  # CUPID, SRC, $work (cwd), ok, bad, finish
 expect() { # expect CODE PATTERN -- CMD...: CMD exits with CODE and prints PATTERN (grep -E)
@@ -38,7 +38,7 @@ PY
 
 # refusals: what a fracture model cannot run with, each a model error naming its key (exit 1)
 M=$SRC/tests/models/fracture
-expect 1 'static.yaml:[0-9]+:[0-9]+: peridynamics.fracture: bond breaking runs in dynamic analyses' -- "$CUPID" run "$M/static.yaml" -o st
+expect 1 'evaluate.yaml:[0-9]+:[0-9]+: peridynamics.fracture: bond breaking needs type: static' -- "$CUPID" run "$M/evaluate.yaml" -o ev
 expect 1 'newmark.yaml:[0-9]+:[0-9]+: peridynamics.fracture: bond breaking needs analysis.dynamic.integrator: central' -- "$CUPID" run "$M/newmark.yaml" -o nm
 expect 1 'lagrange.yaml:[0-9]+:[0-9]+: peridynamics.precracks\[0\]: pre-cracks and fracture are not supported with coupling method lagrange' -- "$CUPID" run "$M/lagrange.yaml" -o lg
 expect 1 'surface.yaml:[0-9]+:[0-9]+: peridynamics.fracture: pre-cracks and fracture need peridynamics.surface_correction: none' -- "$CUPID" run "$M/surface.yaml" -o sc

@@ -1,0 +1,342 @@
+/* Load steps and quasi-static crack growth (`analysis: {type: static, steps: N}`,
+ * model-format.md; shared/reference/fracture.md, "Quasi-static crack growth"; issue 17).
+ *
+ * Every load and prescribed value ramps as k/N over N steps. Without fracture each step is one
+ * linear solve. With fracture the scheme is sequentially linear (Ni, Zaccariotto, Zhu,
+ * Galvanetto 2019): at each step solve, break the bonds over their limit (all of them, or the
+ * most critical one: `fracture.per_iteration`), solve again at the same load, until none is
+ * over; the stiffness is secant (intact bonds only). Nodes that lose their support (at most 2
+ * intact bonds, or a fragment cut off from every support) are released: held where they are,
+ * counted and reported, so that a run does not end in a singular matrix because of fracture.
+ * The load factor of the first break is found exactly by scaling (each solve is linear).
+ * Outputs: damage.csv one row per step (load factor, iterations, counts, the reaction of every
+ * constraint), its plot, and the fracture block of summary.json. */
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+
+#include "method.h"
+#include "problem_internal.h"
+
+/* The run's state. */
+typedef struct {
+  cupid_problem_state *prob;
+  double *f_full, *g_full;      /* the load and the prescribed values at load factor 1 */
+  unsigned char *fixed0;        /* the model's constrained DOFs */
+  unsigned char *anchored, *release;
+  double *masks;                /* per constraint k: 3 ndof translation-weighted DOF flags */
+  double *u1;                   /* without fracture: u and K u at load factor 1 */
+  double u0[3];                 /* the first output point's displacement, last step */
+  cupid_atomic_file csv;
+  cupid_int released;
+} growth_run;
+
+static void growth_free(growth_run *g) {
+  cupid_free(&g->f_full);
+  cupid_free(&g->g_full);
+  cupid_free(&g->fixed0);
+  cupid_free(&g->anchored);
+  cupid_free(&g->release);
+  cupid_free(&g->masks);
+  cupid_free(&g->u1);
+  cupid_atomic_abort(&g->csv);
+}
+
+/* The DOFs each constraint fixes, weighted by the unit translations: the reaction of
+ * constraint k along c is sum over its DOFs d of (f_int - f_ext)[d] T_c[d]. The constraint is
+ * applied alone to a scratch copy of the conditions (its PD part; a beam's through the beam). */
+static cupid_status constraint_masks(growth_run *g) {
+  cupid_problem_state *prob = g->prob;
+  const cupid_model_t *m = prob->model;
+  const size_t n = (size_t)prob->ndof, nk = (size_t)m->n_constraints;
+  double *T = NULL;
+  cupid_dirichlet scratch = NULL, saved = prob->bc;
+  cupid_status st = CUPID_SUCCESS;
+  CUPID_TRY(cupid_calloc(3 * n * (nk ? nk : 1), sizeof *g->masks, "constraint masks", &g->masks));
+  CUPID_TRY(cupid_calloc(3 * n, sizeof *T, "translation vectors", &T));
+  CUPID_TRY(cupid_problem_translations(prob, T));
+  for (size_t k = 0; k < nk; k++) {
+    CUPID_TRY(cupid_dirichlet_create(prob->ndof, &scratch));
+    prob->bc = scratch;
+    if (prob->grid) st = cupid_problem_pd_prescribe(prob, &m->constraints[k]);
+    if (st == CUPID_SUCCESS && prob->beam &&
+        cupid_cuf_constraint_apply(prob->beam, m, &m->constraints[k], scratch) != CUPID_SUCCESS)
+      cupid_error_clear(); /* a constraint on PD nodes only: nothing of the beam */
+    prob->bc = saved;
+    CUPID_TRY(st);
+    for (size_t d = 0; d < n; d++)
+      if (scratch->fixed[d])
+        for (int c = 0; c < 3; c++) g->masks[(3 * k + (size_t)c) * n + d] = T[(size_t)c * n + d];
+    cupid_dirichlet_destroy(&scratch);
+  }
+cleanup:
+  prob->bc = saved;
+  cupid_dirichlet_destroy(&scratch);
+  cupid_free(&T);
+  return st;
+}
+
+/* The file of the steps: damage.csv with pre-cracks or fracture (model-format.md), else
+ * load_steps.csv; the output points' displacements make the load-displacement curves. */
+static const char *csv_name(const cupid_problem_state *prob) {
+  return cupid_problem_has_damage(prob) ? "damage.csv" : "load_steps.csv";
+}
+
+static cupid_status open_csv(growth_run *g) {
+  cupid_problem_state *prob = g->prob;
+  const cupid_model_t *m = prob->model;
+  if (!prob->writedir) return CUPID_SUCCESS;
+  char path[4096];
+  int len = snprintf(path, sizeof path, "%s/%s", prob->writedir, csv_name(prob));
+  CUPID_CHECK(len > 0 && (size_t)len < sizeof path, CUPID_ERR_IO, "output path too long");
+  CUPID_CALL(cupid_atomic_open(path, &g->csv));
+  FILE *f = cupid_atomic_stream(g->csv);
+  fprintf(f, "step,t,load_factor,iterations");
+  if (cupid_problem_has_damage(prob))
+    fprintf(f, ",broken_bonds,damaged_nodes,max_damage,nodes_broken,released_nodes");
+  for (int k = 0; k < m->n_constraints; k++)
+    fprintf(f, ",reaction_%d_x,reaction_%d_y,reaction_%d_z", k, k, k);
+  for (int k = 0; k < m->output.n_points; k++) {
+    const char *p = m->output.points[k].name;
+    fprintf(f, ",%s_ux,%s_uy,%s_uz", p, p, p);
+  }
+  fputc('\n', f);
+  return CUPID_SUCCESS;
+}
+
+static cupid_status write_row(growth_run *g, int step, double lambda, int iterations) {
+  cupid_problem_state *prob = g->prob;
+  if (!g->csv) return CUPID_SUCCESS;
+  const cupid_model_t *m = prob->model;
+  CUPID_CALL(cupid_problem_fracture_damage(prob));
+  FILE *f = cupid_atomic_stream(g->csv);
+  /* t is the load factor: the contract's columns step,t,... read as a pseudo-time */
+  fprintf(f, "%d,%.10e,%.10e,%d", step, lambda, lambda, iterations);
+  if (cupid_problem_has_damage(prob))
+    fprintf(f, ",%lld,%lld,%.10e,%lld,%lld", (long long)prob->broken_bonds,
+            (long long)prob->damaged_nodes, prob->max_damage,
+            (long long)cupid_pd_operator_nodes_broken(prob->op, NULL), (long long)g->released);
+  const size_t n = (size_t)prob->ndof;
+  for (int k = 0; k < m->n_constraints; k++)
+    for (int c = 0; c < 3; c++) {
+      const double *w = g->masks + (3 * (size_t)k + (size_t)c) * n;
+      double r = 0.0;
+      for (size_t d = 0; d < n; d++) r += (prob->f_int[d] - prob->f_ext[d]) * w[d];
+      fprintf(f, ",%.10e", r);
+    }
+  for (int k = 0; k < m->output.n_points; k++) {
+    double u[3];
+    cupid_region_kind region;
+    CUPID_CALL(cupid_problem_sample_point(prob, prob->u, m->output.points[k].at, u, NULL, &region));
+    if (k == 0)
+      for (int c = 0; c < 3; c++) g->u0[c] = u[c];
+    fprintf(f, ",%.10e,%.10e,%.10e", u[0], u[1], u[2]);
+  }
+  fputc('\n', f);
+  return CUPID_SUCCESS;
+}
+
+/* damage.png (broken bonds and damaged nodes against the load factor) and, with an output
+ * point, load_displacement.png: the reactions of the first constraint against the point's
+ * displacement along the axis it moves most. */
+static cupid_status plots(const growth_run *g) {
+  const cupid_problem_state *prob = g->prob;
+  const cupid_model_t *m = prob->model;
+  if (!prob->writedir || !m->output.plots) return CUPID_SUCCESS;
+  const char *title = m->title[0] ? m->title : "cupid", *csv = csv_name(prob);
+  char t[600];
+  int made = 0;
+  if (cupid_problem_has_damage(prob)) {
+    cupid_plot_curve dc[2] = {
+        {.csv = csv, .xname = "load_factor", .yname = "broken_bonds", .title = "broken bonds"},
+        {.csv = csv, .xname = "load_factor", .yname = "damaged_nodes", .title = "damaged nodes"}};
+    snprintf(t, sizeof t, "%s: fracture", title);
+    CUPID_CALL(cupid_plot(prob->writedir, "damage", t, "load factor", "count", 2, dc, &made));
+  }
+  if (m->output.n_points == 0 || m->n_constraints == 0) return CUPID_SUCCESS;
+  int c = 0;
+  for (int a = 1; a < 3; a++)
+    if (fabs(g->u0[a]) > fabs(g->u0[c])) c = a;
+  char xname[200], xlabel[240], ynames[3][40], ytitles[3][60];
+  snprintf(xname, sizeof xname, "%s_u%c", m->output.points[0].name, "xyz"[c]);
+  snprintf(xlabel, sizeof xlabel, "u_%c at '%s'", "xyz"[c], m->output.points[0].name);
+  cupid_plot_curve rc[3];
+  for (int a = 0; a < 3; a++) {
+    snprintf(ynames[a], sizeof ynames[a], "reaction_0_%c", "xyz"[a]);
+    snprintf(ytitles[a], sizeof ytitles[a], "reaction of constraint 0, %c", "xyz"[a]);
+    rc[a] = (cupid_plot_curve){.csv = csv, .xname = xname, .yname = ynames[a],
+                               .title = ytitles[a], .style = "linespoints pt 7 ps 0.6"};
+  }
+  snprintf(t, sizeof t, "%s: load-displacement", title);
+  return cupid_plot(prob->writedir, "load_displacement", t, xlabel, "force", 3, rc, &made);
+}
+
+/* Anchored PD nodes: a constrained DOF, or the coupling zone (tied to the beam). */
+static void anchor(growth_run *g) {
+  cupid_problem_state *prob = g->prob;
+  for (cupid_int i = 0; i < prob->n_pd; i++)
+    g->anchored[i] = (unsigned char)(g->fixed0[3 * i] || g->fixed0[3 * i + 1] ||
+                                     g->fixed0[3 * i + 2] || (prob->protect && prob->protect[i]));
+}
+
+/* Release the nodes that lost their support: held at their displacement now. */
+static cupid_status release_unsupported(growth_run *g, int step) {
+  cupid_problem_state *prob = g->prob;
+  cupid_int fresh = 0;
+  CUPID_CALL(cupid_pd_operator_unsupported(prob->op, g->anchored, g->release, &fresh));
+  if (fresh == 0) return CUPID_SUCCESS;
+  const double *x = cupid_pd_grid_coords(prob->grid);
+  for (cupid_int i = 0; i < prob->n_pd; i++) {
+    if (g->release[i] != 2) continue;
+    g->release[i] = 1;
+    for (int c = 0; c < 3; c++) CUPID_CALL(cupid_dirichlet_fix(prob->bc, 3 * i + c, prob->u[3 * i + c]));
+    if (fresh <= 3)
+      cupid_problem_progress(prob, "growth: step %d: node (%g, %g, %g) lost its support: held",
+                             step, x[3 * i], x[3 * i + 1], x[3 * i + 2]);
+  }
+  g->released += fresh;
+  if (fresh > 3)
+    cupid_problem_progress(prob, "growth: step %d: %lld nodes lost their support: held", step,
+                           (long long)fresh);
+  return cupid_dirichlet_finalize(prob->bc);
+}
+
+/* A factorisation that broke down at a PD node after bonds broke: that node lost its support
+ * in a way the checks of cupid_pd_operator_unsupported() miss (a mechanism of several nodes):
+ * it is held too. *held = 0 when the failure names no such node. */
+static cupid_status hold_singular_node(growth_run *g, int step, int *held) {
+  cupid_problem_state *prob = g->prob;
+  const cupid_int dof = prob->solve.failed_dof;
+  *held = 0;
+  if (!prob->grid || dof < 0 || dof >= 3 * prob->n_pd || g->release[dof / 3]) return CUPID_SUCCESS;
+  const cupid_int i = dof / 3;
+  cupid_error_clear();
+  g->release[i] = 1;
+  g->released++;
+  for (int c = 0; c < 3; c++) CUPID_CALL(cupid_dirichlet_fix(prob->bc, 3 * i + c, prob->u[3 * i + c]));
+  CUPID_CALL(cupid_dirichlet_finalize(prob->bc));
+  const double *x = cupid_pd_grid_coords(prob->grid) + 3 * i;
+  cupid_problem_progress(prob, "growth: step %d: node (%g, %g, %g) left singular: held", step,
+                         x[0], x[1], x[2]);
+  *held = 1;
+  return CUPID_SUCCESS;
+}
+
+/* Solve at the current load (K assembled again when bonds broke). */
+static cupid_status solve(cupid_problem_state *prob, int reassemble) {
+  if (reassemble) cupid_csr_destroy(&prob->K);
+  CUPID_CALL(prob->method->assemble(prob));
+  CUPID_CALL(cupid_problem_linear_solve(prob, prob->method->matrix));
+  if (prob->method->recover) prob->method->recover(prob, prob->u);
+  cupid_csr_matvec(prob->K, prob->u, prob->f_int);
+  return CUPID_SUCCESS;
+}
+
+/* One load step: solve, break, solve again until nothing is over its limit. */
+static cupid_status load_step(growth_run *g, int k, double lambda, int *iterations) {
+  cupid_problem_state *prob = g->prob;
+  const cupid_model_t *m = prob->model;
+  const int fracture = m->has_peridynamics && m->pd.fracture.has_fracture;
+  const int only_most = fracture && !m->pd.fracture.per_iteration_all;
+  int reassemble = 0; /* K holds the intact bonds of the last solve */
+  *iterations = 0;
+  for (;;) {
+    const int quiet = prob->quiet; /* the first solve reports its assembly; the others would
+                                      repeat it per broken bond */
+    if (k > 1 || *iterations > 0) prob->quiet = 1;
+    cupid_status st = solve(prob, reassemble);
+    prob->quiet = quiet;
+    if (st == CUPID_ERR_NUMERIC && prob->broken_bonds > 0) { /* what breaking left loose */
+      int held = 0;
+      CUPID_CALL(hold_singular_node(g, k, &held));
+      if (held) {
+        reassemble = 1;
+        continue;
+      }
+    }
+    CUPID_CALL(st);
+    (*iterations)++;
+    if (!fracture) return CUPID_SUCCESS;
+    if (prob->first_break_step < 0) { /* the exact load of the first break, by scaling */
+      double r = 0.0;
+      CUPID_CALL(cupid_pd_operator_max_ratio(prob->op, prob->u, &prob->fracture, &r));
+      if (r > 1.0) prob->first_break_load = lambda / r;
+    }
+    cupid_int broken = 0;
+    double diss = 0.0;
+    CUPID_CALL(cupid_problem_fracture_step(prob, k, lambda, prob->u, only_most, &broken, &diss));
+    if (broken == 0) return CUPID_SUCCESS;
+    CUPID_CALL(release_unsupported(g, k));
+    reassemble = 1;
+    CUPID_CHECK(*iterations < 1000000, CUPID_ERR_NUMERIC,
+                "growth: load step %d did not settle in 10^6 re-solves", k);
+  }
+}
+
+static cupid_status setup_run(growth_run *g) {
+  cupid_problem_state *prob = g->prob;
+  const size_t n = (size_t)prob->ndof;
+  CUPID_CALL(cupid_malloc(n, sizeof *g->f_full, "full load", &g->f_full));
+  CUPID_CALL(cupid_malloc(n, sizeof *g->g_full, "full prescribed values", &g->g_full));
+  CUPID_CALL(cupid_malloc(n, 1, "constrained flags", &g->fixed0));
+  memcpy(g->f_full, prob->f_ext, n * sizeof *g->f_full);
+  memcpy(g->g_full, prob->bc->value, n * sizeof *g->g_full);
+  memcpy(g->fixed0, prob->bc->fixed, n);
+  if (prob->grid) {
+    CUPID_CALL(cupid_calloc((size_t)prob->n_pd + 1, 1, "anchored nodes", &g->anchored));
+    CUPID_CALL(cupid_calloc((size_t)prob->n_pd + 1, 1, "released nodes", &g->release));
+    anchor(g);
+  }
+  CUPID_CALL(constraint_masks(g));
+  return open_csv(g);
+}
+
+cupid_status cupid_problem_run_growth(cupid_problem_state *prob) {
+  const cupid_model_t *m = prob->model;
+  const int N = m->analysis.steps > 0 ? m->analysis.steps : 1;
+  growth_run g = {.prob = prob};
+  cupid_status st = CUPID_SUCCESS;
+  CUPID_TRY(setup_run(&g));
+  const size_t n = (size_t)prob->ndof;
+  double t0 = cupid_wtime();
+  const int fracture = m->has_peridynamics && m->pd.fracture.has_fracture;
+  if (!fracture) { /* linear: one solve at load factor 1 (one factorisation), each step its
+                      multiple: the last step's is the solution */
+    CUPID_TRY(solve(prob, 0));
+    CUPID_TRY(cupid_malloc(2 * n, sizeof *g.u1, "the unit solution", &g.u1));
+    memcpy(g.u1, prob->u, n * sizeof *g.u1);
+    memcpy(g.u1 + n, prob->f_int, n * sizeof *g.u1);
+  }
+  for (int k = 1; k <= N && !fracture; k++) {
+    const double lambda = (double)k / N;
+    for (size_t d = 0; d < n; d++) {
+      prob->u[d] = lambda * g.u1[d];
+      prob->f_int[d] = lambda * g.u1[n + d];
+      prob->f_ext[d] = lambda * g.f_full[d];
+    }
+    CUPID_TRY(write_row(&g, k, lambda, k == 1));
+  }
+  for (int k = 1; k <= N && fracture; k++) {
+    const double lambda = (double)k / N;
+    for (size_t d = 0; d < n; d++) {
+      prob->f_ext[d] = lambda * g.f_full[d];
+      if (g.fixed0[d]) prob->bc->value[d] = lambda * g.g_full[d];
+    }
+    const cupid_int before = prob->broken_bonds;
+    int it = 0;
+    CUPID_TRY(load_step(&g, k, lambda, &it));
+    CUPID_TRY(write_row(&g, k, lambda, it));
+    cupid_problem_progress(prob, "growth: step %d / %d, load factor %.4g: %d solve%s, %lld bonds "
+                           "broken (+%lld), %lld nodes held",
+                           k, N, lambda, it, it == 1 ? "" : "s", (long long)prob->broken_bonds,
+                           (long long)(prob->broken_bonds - before), (long long)g.released);
+  }
+  prob->solved = 1;
+  prob->phases[CUPID_PHASE_SOLVE] = (cupid_phase_record){cupid_wtime() - t0, cupid_peak_memory(), 1};
+  if (g.csv) CUPID_TRY(cupid_atomic_commit(&g.csv));
+  CUPID_TRY(plots(&g));
+  if (prob->method->report) CUPID_TRY(prob->method->report(prob));
+cleanup:
+  growth_free(&g);
+  return st;
+}
