@@ -461,6 +461,20 @@ static void sweep(const struct cupid_pd_operator_private *op, const pd_work *w,
   }
 }
 
+/* The padded work window of the nodes [s0, s1) swept: every stencil cell of them (base,
+ * length) and the lead that aligns the cells of x = 0 (see pd_work). */
+static void padded_window(const struct cupid_pd_operator_private *op, cupid_int s0, cupid_int s1,
+                          cupid_int *base, cupid_int *len, int *lead) {
+  cupid_int mn = 0, mx = 0;
+  for (int s = 0; s < op->st.n; s++) {
+    if (op->pclin[s] < mn) mn = op->pclin[s];
+    if (op->pclin[s] > mx) mx = op->pclin[s];
+  }
+  *base = pd_node_pcell(op, s0) + mn;
+  *len = pd_node_pcell(op, s1 - 1) + mx + 1 - *base;
+  *lead = (int)(((*base - op->pr[0]) % PD_ROW_ALIGN + PD_ROW_ALIGN) % PD_ROW_ALIGN);
+}
+
 cupid_status pd_stencil_apply(const struct cupid_pd_operator_private *op, cupid_int first,
                               cupid_int last, const double *u, double *f, double *theta) {
   if (first == last) return CUPID_SUCCESS;
@@ -476,17 +490,7 @@ cupid_status pd_stencil_apply(const struct cupid_pd_operator_private *op, cupid_
    * ([lo1, hi1) for LPS, [first, last) else; they hold the nodes [lo, hi)). */
   cupid_int base = lo, len = hi - lo;
   int lead = 0;
-  if (op->padded) {
-    cupid_int mn = 0, mx = 0;
-    for (int s = 0; s < op->st.n; s++) {
-      if (op->pclin[s] < mn) mn = op->pclin[s];
-      if (op->pclin[s] > mx) mx = op->pclin[s];
-    }
-    const cupid_int s0 = lps ? lo1 : first, s1 = lps ? hi1 : last;
-    base = pd_node_pcell(op, s0) + mn;
-    len = pd_node_pcell(op, s1 - 1) + mx + 1 - base;
-    lead = (int)(((base - op->pr[0]) % PD_ROW_ALIGN + PD_ROW_ALIGN) % PD_ROW_ALIGN);
-  }
+  if (op->padded) padded_window(op, lps ? lo1 : first, lps ? hi1 : last, &base, &len, &lead);
   /* The kept arrays if free, else (a concurrent apply) our own. The operator object is
    * not const (only the handle's users see it so): the cache is its private state. */
   struct cupid_pd_operator_private *mop = (struct cupid_pd_operator_private *)op;
@@ -571,16 +575,7 @@ cupid_status pd_stencil_stretch_scan(const struct cupid_pd_operator_private *op,
   const int lps = op->model == CUPID_PD_LPS;
   cupid_int base = 0, len = nn;
   int lead = 0;
-  if (op->padded) { /* the window of a whole apply (pd_stencil_apply with [0, nn)) */
-    cupid_int mn = 0, mx = 0;
-    for (int s = 0; s < op->st.n; s++) {
-      if (op->pclin[s] < mn) mn = op->pclin[s];
-      if (op->pclin[s] > mx) mx = op->pclin[s];
-    }
-    base = pd_node_pcell(op, 0) + mn;
-    len = pd_node_pcell(op, nn - 1) + mx + 1 - base;
-    lead = (int)(((base - op->pr[0]) % PD_ROW_ALIGN + PD_ROW_ALIGN) % PD_ROW_ALIGN);
-  }
+  if (op->padded) padded_window(op, 0, nn, &base, &len, &lead); /* a whole apply's window */
   struct cupid_pd_operator_private *mop = (struct cupid_pd_operator_private *)op;
   pd_work local = {0}, *w = &local;
   const int kept = !atomic_exchange(&mop->work_busy, 1);
