@@ -24,7 +24,8 @@ typedef struct {
   double *f_full, *g_full;      /* the load and the prescribed values at load factor 1 */
   unsigned char *fixed0;        /* the model's constrained DOFs */
   unsigned char *anchored, *release;
-  double *masks;                /* per constraint k: 3 ndof translation-weighted DOF flags */
+  unsigned char *masks;         /* per constraint k: ndof flags, the DOFs it fixes */
+  double *T;                    /* the unit translations, 3 ndof (cupid_problem_translations) */
   double *u1;                   /* without fracture: u and K u at load factor 1 */
   double u0[3];                 /* the first output point's displacement, last step */
   cupid_atomic_file csv;
@@ -38,23 +39,24 @@ static void growth_free(growth_run *g) {
   cupid_free(&g->anchored);
   cupid_free(&g->release);
   cupid_free(&g->masks);
+  cupid_free(&g->T);
   cupid_free(&g->u1);
   cupid_atomic_abort(&g->csv);
 }
 
-/* The DOFs each constraint fixes, weighted by the unit translations: the reaction of
- * constraint k along c is sum over its DOFs d of (f_int - f_ext)[d] T_c[d]. The constraint is
- * applied alone to a scratch copy of the conditions (its PD part; a beam's through the beam). */
+/* The DOFs each constraint fixes (one byte a DOF and constraint), and the unit translations:
+ * the reaction of constraint k along c is sum over its DOFs d of (f_int - f_ext)[d] T_c[d]. The
+ * constraint is applied alone to a scratch copy of the conditions (its PD part; a beam's through
+ * the beam). */
 static cupid_status constraint_masks(growth_run *g) {
   cupid_problem_state *prob = g->prob;
   const cupid_model_t *m = prob->model;
   const size_t n = (size_t)prob->ndof, nk = (size_t)m->n_constraints;
-  double *T = NULL;
   cupid_dirichlet scratch = NULL, saved = prob->bc;
   cupid_status st = CUPID_SUCCESS;
-  CUPID_TRY(cupid_calloc(3 * n * (nk ? nk : 1), sizeof *g->masks, "constraint masks", &g->masks));
-  CUPID_TRY(cupid_calloc(3 * n, sizeof *T, "translation vectors", &T));
-  CUPID_TRY(cupid_problem_translations(prob, T));
+  CUPID_TRY(cupid_calloc(n * (nk ? nk : 1), 1, "constraint masks", &g->masks));
+  CUPID_TRY(cupid_calloc(3 * n, sizeof *g->T, "translation vectors", &g->T));
+  CUPID_TRY(cupid_problem_translations(prob, g->T));
   for (size_t k = 0; k < nk; k++) {
     CUPID_TRY(cupid_dirichlet_create(prob->ndof, &scratch));
     prob->bc = scratch;
@@ -64,15 +66,12 @@ static cupid_status constraint_masks(growth_run *g) {
       cupid_error_clear(); /* a constraint on PD nodes only: nothing of the beam */
     prob->bc = saved;
     CUPID_TRY(st);
-    for (size_t d = 0; d < n; d++)
-      if (scratch->fixed[d])
-        for (int c = 0; c < 3; c++) g->masks[(3 * k + (size_t)c) * n + d] = T[(size_t)c * n + d];
+    memcpy(g->masks + k * n, scratch->fixed, n);
     cupid_dirichlet_destroy(&scratch);
   }
 cleanup:
   prob->bc = saved;
   cupid_dirichlet_destroy(&scratch);
-  cupid_free(&T);
   return st;
 }
 
@@ -117,13 +116,14 @@ static cupid_status write_row(growth_run *g, int step, double lambda, int iterat
             (long long)prob->damaged_nodes, prob->max_damage,
             (long long)cupid_pd_operator_nodes_broken(prob->op, NULL), (long long)g->released);
   const size_t n = (size_t)prob->ndof;
-  for (int k = 0; k < m->n_constraints; k++)
-    for (int c = 0; c < 3; c++) {
-      const double *w = g->masks + (3 * (size_t)k + (size_t)c) * n;
-      double r = 0.0;
-      for (size_t d = 0; d < n; d++) r += (prob->f_int[d] - prob->f_ext[d]) * w[d];
-      fprintf(f, ",%.10e", r);
-    }
+  for (int k = 0; k < m->n_constraints; k++) {
+    const unsigned char *fixed = g->masks + (size_t)k * n;
+    double r[3] = {0, 0, 0};
+    for (size_t d = 0; d < n; d++)
+      if (fixed[d])
+        for (int c = 0; c < 3; c++) r[c] += (prob->f_int[d] - prob->f_ext[d]) * g->T[(size_t)c * n + d];
+    fprintf(f, ",%.10e,%.10e,%.10e", r[0], r[1], r[2]);
+  }
   for (int k = 0; k < m->output.n_points; k++) {
     double u[3];
     cupid_region_kind region;
