@@ -10,13 +10,13 @@
 # bond breaking (`fracture:` removed). Reported figures, not a timed test.
 #
 #   bench/fracture_lammps.sh [n (40)] [steps (200)] [repeats (3)] [cores (1 2)]
-# Needs build/cupid (scripts/build.sh) and the Debian package lammps (lmp). Prints a markdown
+# Needs build/cupid (scripts/build.sh) and lmp (scripts/install-deps.sh --with-lammps). Prints a markdown
 # table: steps/s per case and core count, cupid/LAMMPS per core, fracture/no-fracture.
 set -euo pipefail
 n=${1:-40}; steps=${2:-200}; reps=${3:-3}; cores=${4:-"1 2"}
 root=$(cd "$(dirname "$0")/.." && pwd)
 cupid=$root/build/cupid
-command -v lmp >/dev/null || { echo "needs lmp (apt-get install lammps)"; exit 2; }
+command -v lmp >/dev/null || { echo "needs lmp: scripts/install-deps.sh --with-lammps"; exit 2; }
 [ -x "$cupid" ] || { echo "needs $cupid (scripts/build.sh)"; exit 2; }
 work=$(mktemp -d); trap 'rm -rf "$work"' EXIT
 cd "$work"
