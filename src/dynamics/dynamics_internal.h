@@ -4,6 +4,10 @@
 
 #include "cupid/dynamics.h"
 
+/* Vectors longer than this are swept by OpenMP threads (shorter ones: the start-up costs
+ * more than the sweep). */
+#define DYN_OMP_MIN 100000
+
 /* 1 if scalar DOF d is fixed. */
 static inline int dyn_fixed(const cupid_dirichlet_t *bc, cupid_int d) {
   return bc && bc->fixed[d];

@@ -105,11 +105,14 @@ cupid_status dyn_lambda_max_fn(cupid_dynamics_stiffness_fn apply, void *ctx, cup
   if (!(nq > 0.0)) goto cleanup;
   for (cupid_int d = 0; d < n; d++) q[d] /= nq;
   for (int k = 0; k < iterations; k++) {
+#pragma omp parallel for schedule(static) if (n > DYN_OMP_MIN)
     for (cupid_int d = 0; d < n; d++) y[d] = dinv[d] * q[d];
     if (part) CUPID_TRY(part->exchange(part->ctx, y));
     CUPID_TRY(apply(ctx, y, w));
+#pragma omp parallel for schedule(static) if (n > DYN_OMP_MIN)
     for (cupid_int d = 0; d < n; d++) w[d] = dinv[d] * w[d] - beta * qp[d];
     const double alpha = part_dot(part, n, w, q);
+#pragma omp parallel for schedule(static) if (n > DYN_OMP_MIN)
     for (cupid_int d = 0; d < n; d++) w[d] -= alpha * q[d];
     al[k] = alpha;
     beta = sqrt(part_dot(part, n, w, w));
@@ -123,6 +126,7 @@ cupid_status dyn_lambda_max_fn(cupid_dynamics_stiffness_fn apply, void *ctx, cup
     ritz[k % 10] = theta;
     if (k >= 10 && theta - ritz[(k + 1) % 10] <= 1e-4 * fabs(theta)) break;
     if (!(beta > 1e-14 * fabs(theta))) break;
+#pragma omp parallel for schedule(static) if (n > DYN_OMP_MIN)
     for (cupid_int d = 0; d < n; d++) {
       qp[d] = q[d];
       q[d] = w[d] / beta;

@@ -22,13 +22,13 @@ void dyn_mass_apply(const cupid_dynamics_system *sys, cupid_int n, const double 
     cupid_csr_matvec(sys->M, x, y);
     return;
   }
-#pragma omp parallel for schedule(static) if (n > 100000)
+#pragma omp parallel for schedule(static) if (n > DYN_OMP_MIN)
   for (cupid_int d = 0; d < n; d++) y[d] = sys->m_lumped[d] * x[d];
 }
 
 double dyn_dot(cupid_int n, const double *x, const double *y) {
   double s = 0.0;
-#pragma omp parallel for reduction(+ : s) schedule(static) if (n > 100000)
+#pragma omp parallel for reduction(+ : s) schedule(static) if (n > DYN_OMP_MIN)
   for (cupid_int d = 0; d < n; d++) s += x[d] * y[d];
   return s;
 }
@@ -95,7 +95,10 @@ static cupid_status refresh(const dyn_state *s, double *x) {
 /* The conditions at time t: the load into fcur (the previous one kept in fprev) and the
  * prescribed values into ufix. */
 static cupid_status conditions_at(dyn_state *s, double t) {
-  memcpy(s->fprev, s->fcur, sizeof *s->fcur * (size_t)s->n);
+  double *keep = s->fprev; /* the current load becomes the previous one: swap, not copy */
+  s->fprev = s->fcur;
+  s->fcur = keep;
+  s->f = s->fcur;
   CUPID_CALL(s->hooks->conditions(s->hooks->ctx, t, s->ufix, s->fcur));
   cupid_int bad = -1;
   for (cupid_int d = 0; d < s->n && bad < 0; d++)
@@ -376,11 +379,14 @@ static void central_drift(dyn_state *s, double *u, const double *v, const double
   const cupid_dirichlet_t *bc = s->sys->bc;
   const double dt = s->opt->dt, *f = s->f, *fp = s->fprev;
   double w = 0.0;
-  for (cupid_int d = 0; d < s->n; d++) {
+  const cupid_int n = s->n, lo = s->lo, hi = s->hi;
+  double *du = s->du;
+#pragma omp parallel for reduction(+ : w) schedule(static) if (n > DYN_OMP_MIN)
+  for (cupid_int d = 0; d < n; d++) {
     vh[d] = v[d] + 0.5 * dt * s->a[d];
-    const double un = dyn_fixed(bc, d) ? moved[d] : u[d] + dt * vh[d], du = un - u[d];
-    if (f && d >= s->lo && d < s->hi) w += (fp ? 0.5 * (f[d] + fp[d]) : f[d]) * du;
-    if (s->du) s->du[d] = du;
+    const double un = dyn_fixed(bc, d) ? moved[d] : u[d] + dt * vh[d], step = un - u[d];
+    if (f && d >= lo && d < hi) w += (fp ? 0.5 * (f[d] + fp[d]) : f[d]) * step;
+    if (du) du[d] = step;
     u[d] = un;
   }
   s->e.external += w;
@@ -388,6 +394,7 @@ static void central_drift(dyn_state *s, double *u, const double *v, const double
 
 /* a = M^-1 r on the free DOFs, 0 on the fixed ones. */
 static void accelerations(dyn_state *s, const double *r) {
+#pragma omp parallel for schedule(static) if (s->n > DYN_OMP_MIN)
   for (cupid_int d = 0; d < s->n; d++) s->a[d] = r[d] * s->minv[d];
 }
 
@@ -398,10 +405,22 @@ static void central_kick(dyn_state *s, const double *u, const double *vh, double
   const cupid_dirichlet_t *bc = s->sys->bc;
   const double hdt = 0.5 * s->opt->dt;
   dyn_stiffness(s, u, s->g);
-  residual_of(s, s->g, vh, s->t1);
+  if (s->opt->rayleigh_mass != 0.0 || s->opt->rayleigh_stiffness != 0.0) {
+    residual_of(s, s->g, vh, s->t1);
+    for (cupid_int d = 0; d < s->n; d++) {
+      s->a[d] = s->t1[d] * s->minv[d];
+      v[d] = dyn_fixed(bc, d) ? 0.0 : vh[d] + hdt * s->a[d];
+    }
+    return;
+  }
+  /* undamped: residual, reactions, acceleration and velocity in one pass */
+  const double *f = s->f;
+#pragma omp parallel for schedule(static) if (s->n > DYN_OMP_MIN)
   for (cupid_int d = 0; d < s->n; d++) {
     const int fixed = dyn_fixed(bc, d);
-    s->a[d] = s->t1[d] * s->minv[d];
+    const double rd = (f ? f[d] : 0.0) - s->g[d];
+    if (s->react && fixed) s->w2[d] = -rd;
+    s->a[d] = fixed ? 0.0 : rd * s->minv[d];
     v[d] = fixed ? 0.0 : vh[d] + hdt * s->a[d];
   }
 }

@@ -26,6 +26,7 @@
  * (K u)_i = -V^2 sum_s omega beta / x_s (c_i + c_j)/2 e_ij n_s. */
 #define _POSIX_C_SOURCE 200809L /* posix_memalign */
 #include <stdlib.h>
+#include <math.h>
 #include <string.h>
 #ifdef _OPENMP
 #include <omp.h>
@@ -567,6 +568,29 @@ static void hits_add(hit_list *L, const pd_hit *h, int n) {
   L->n += n;
 }
 
+/* The scan reads absent padded cells as NaN, which no comparison finds over a limit: else
+ * their zeros (the force kernels' ghost convention) make every lane block at a surface look
+ * stretched as soon as |u| exceeds the limit, and each such block is walked node by node
+ * (most of the scan's time on the 40^3 bar of bench/fracture_lammps.sh). The next fill
+ * starts fresh (zeros and constants again). */
+static void scan_absent_nan(const struct cupid_pd_operator_private *op, pd_work *w) {
+  const cupid_int n = w->n;
+  unsigned char *present = NULL;
+  if (cupid_calloc((size_t)n + 1, 1, "PD scan cells", &present) != CUPID_SUCCESS) return;
+  for (cupid_int r = 0; r < op->nruns; r++) {
+    const pd_run *R = &op->runs[r];
+    const cupid_int q = work_index(w, R, R->i0);
+    memset(present + q, 1, (size_t)R->len);
+  }
+  double *arrays[3] = {w->x, w->y, w->z};
+#pragma omp parallel for schedule(static) if (n > 8 * PD_OMP_MIN_NODES)
+  for (int k = 0; k < 3; k++)
+    for (cupid_int c = 0; c < n; c++)
+      if (!present[c]) arrays[k][c] = NAN;
+  cupid_free(&present);
+  w->filled[4] = -1; /* no generation: the next work_fill zeroes and refills everything */
+}
+
 cupid_status pd_stencil_stretch_scan(const struct cupid_pd_operator_private *op, const double *u,
                                      double lim, pd_hit **hits, cupid_int *n) {
   *hits = NULL, *n = 0;
@@ -596,6 +620,7 @@ cupid_status pd_stencil_stretch_scan(const struct cupid_pd_operator_private *op,
   const pd_kernel_set *K = kernels_pick();
   CUPID_TRY(work_reserve(w, op->padded, base, len, lead, lps));
   work_fill(op, w, 0, nn, u);
+  if (w->padded) scan_absent_nan(op, w);
 #pragma omp parallel num_threads(nt)
   {
     int tid = 0;
