@@ -100,9 +100,11 @@ static cupid_status conditions_at(dyn_state *s, double t) {
   s->fcur = keep;
   s->f = s->fcur;
   CUPID_CALL(s->hooks->conditions(s->hooks->ctx, t, s->ufix, s->fcur));
-  cupid_int bad = -1;
-  for (cupid_int d = 0; d < s->n && bad < 0; d++)
+  cupid_int bad = s->n; /* the first DOF whose value is not finite */
+#pragma omp parallel for reduction(min : bad) schedule(static) if (s->n > DYN_OMP_MIN)
+  for (cupid_int d = 0; d < s->n; d++)
     if (!(isfinite(s->fcur[d]) && (!dyn_fixed(s->sys->bc, d) || isfinite(s->ufix[d])))) bad = d;
+  if (bad == s->n) bad = -1;
   if (!any_process(s, bad >= 0)) return CUPID_SUCCESS;
   CUPID_CHECK(bad < 0, CUPID_ERR_NUMERIC, "the %s of DOF %lld is not finite at t = %g",
               isfinite(s->fcur[bad]) ? "prescribed displacement" : "load", (long long)bad, t);
@@ -115,7 +117,9 @@ static cupid_status conditions_at(dyn_state *s, double t) {
 static void support_work(dyn_state *s, const double *r_new) {
   const cupid_dirichlet_t *bc = s->sys->bc;
   double w = 0.0;
-  for (cupid_int d = s->lo; d < s->hi; d++)
+  const cupid_int lo = s->lo, hi = s->hi;
+#pragma omp parallel for reduction(+ : w) schedule(static) if (hi - lo > DYN_OMP_MIN)
+  for (cupid_int d = lo; d < hi; d++)
     if (dyn_fixed(bc, d)) {
       w += 0.5 * (s->react[d] + r_new[d]) * s->du[d];
       s->react[d] = r_new[d];

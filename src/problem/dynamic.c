@@ -470,8 +470,9 @@ static cupid_status conditions_now(void *ctx, double t, double *u_fixed, double 
     memset(prob->f_ext, 0, sizeof *prob->f_ext * (size_t)prob->ndof);
     CUPID_CALL(cupid_problem_pd_loads(prob, m->loads, m->n_loads, prob->f_ext));
   }
-  memcpy(u_fixed, prob->bc->value, sizeof *u_fixed * (size_t)prob->ndof);
-  memcpy(f, prob->f_ext, sizeof *f * (size_t)prob->ndof);
+  const double *value = prob->bc->value, *f_ext = prob->f_ext;
+#pragma omp parallel for schedule(static) if (prob->ndof > 100000)
+  for (cupid_int d = 0; d < prob->ndof; d++) u_fixed[d] = value[d], f[d] = f_ext[d];
   return CUPID_SUCCESS;
 }
 

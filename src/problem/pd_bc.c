@@ -83,6 +83,8 @@ cupid_status cupid_problem_pd_constraint_nodes(const cupid_problem_state *prob,
 
 void cupid_problem_pd_prescribe_nodes(cupid_problem_state *prob, const cupid_constraint *c,
                                       const cupid_int *nodes, cupid_int n) {
+  /* distinct nodes, thread-safe expressions (a stack each): one node a thread at a time */
+#pragma omp parallel for schedule(static) if (n > 4096)
   for (cupid_int k = 0; k < n; k++) prescribe_node(prob, c, nodes[k]);
 }
 
