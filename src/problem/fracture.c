@@ -306,6 +306,17 @@ void cupid_problem_fracture_json(cupid_json js, const cupid_problem_state *prob)
       cupid_json_end_array(js);
     }
     cupid_json_number(js, "dissipated_energy", prob->fracture_energy);
+    if (prob->growth.resolve) { /* static growth: how the re-solves went (growth.c) */
+      cupid_json_begin_object(js, "solves");
+      cupid_json_string(js, "resolve", prob->growth.resolve);
+      cupid_json_integer(js, "solves", prob->growth.solves);
+      cupid_json_integer(js, "factorisations", prob->growth.factorisations);
+      cupid_json_integer(js, "cg_solves", prob->growth.cg_solves);
+      cupid_json_integer(js, "cg_iterations", prob->growth.cg_iterations);
+      cupid_json_number(js, "factorisation_s", prob->growth.factor_s);
+      cupid_json_number(js, "cg_s", prob->growth.cg_s);
+      cupid_json_end_object(js);
+    }
   }
   cupid_json_integer(js, "damaged_nodes", prob->damaged_nodes);
   cupid_json_number(js, "max_damage", prob->max_damage);

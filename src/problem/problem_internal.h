@@ -144,6 +144,12 @@ typedef struct cupid_problem_private {
                                          bonds as prob->op (borrowed, during its run), or NULL */
   cupid_int damaged_nodes;
   double max_damage;
+  /* static growth (growth.c): how the solves went, for summary.json's fracture block */
+  struct {
+    const char *resolve;            /**< "krylov" (CG on the last factor) or "factor" */
+    cupid_int solves, factorisations, cg_solves, cg_iterations;
+    double factor_s, cg_s;
+  } growth;
 } cupid_problem_state;
 
 /* growth.c: `type: static` with load steps or fracture (sequentially linear growth). */
