@@ -44,11 +44,16 @@ typedef struct {
   cupid_status (*conditions)(void *ctx, double t, double *u_fixed, double *f);
   /** After the forces of every step and at t = 0 (central differences only): e.g. break
    *  bonds. The strain energy it removes from the system at u goes to *dissipated (added to
-   *  cupid_dynamics_energy.fracture); when not 0, K changed at t_{n+1}: v_{n+1} stands and
-   *  the acceleration is recomputed with the new K, so that what broke does no work after it
-   *  broke and the energy balance stays second order. NULL: none. */
-  cupid_status (*after_forces)(void *ctx, cupid_int step, double t, const double *u,
-                               double *dissipated);
+   *  cupid_dynamics_energy.fracture). When it changes K it sets *changed: K changed at
+   *  t_{n+1}, v_{n+1} stands and the acceleration is recomputed with the new K, so that what
+   *  broke does no work after it broke and the energy balance stays second order. @p ku holds
+   *  K u at u (the old K): *changed = 1 says the hook updated it to the new K's product
+   *  (e.g. subtracted the broken bonds' forces: no new product of K), 2 that the integrator
+   *  must recompute it. In a distributed run (cupid_dynamics_partition) u's copies are
+   *  current, ku is meaningful on the owned DOFs and *dissipated is this process's share.
+   *  NULL: none. */
+  cupid_status (*after_forces)(void *ctx, cupid_int step, double t, const double *u, double *ku,
+                               double *dissipated, int *changed);
   void *ctx;
 } cupid_dynamics_hooks;
 
@@ -79,8 +84,9 @@ typedef struct {
 typedef struct {
   cupid_int steps;
   double dt;
-  double omega_max;      /**< estimate of the largest free frequency (power iteration on
-                              M^-1 K; central differences only, else 0) */
+  double omega_max;      /**< estimate of the largest free frequency (Lanczos on
+                              M^-1/2 K M^-1/2; central differences only, else 0) */
+  int lanczos_steps;     /**< products of K the estimate took */
   double dt_critical;    /**< stable step 2/omega_max, reduced for damping (central only) */
   double dt_bound;       /**< guaranteed-stable step from a Gershgorin bound (central only) */
   cupid_solve_info factor; /**< the factorisation of K + a0 M + a1 C (Newmark) */
@@ -122,21 +128,40 @@ cupid_status cupid_dynamics_run(const cupid_dynamics_system *sys, const cupid_dy
 /** A matrix-free stiffness: y = K x (n entries each), e.g. cupid_pd_operator_apply. */
 typedef cupid_status (*cupid_dynamics_stiffness_fn)(void *ctx, const double *x, double *y);
 
+/** A distributed explicit run: this process holds the DOFs [0, n) of its share of a grid
+ *  split over MPI ranks, of which it owns [owned_first, owned_last); the others are copies of
+ *  DOFs other processes own (a halo that apply reads). The integrator updates every DOF it
+ *  holds, refreshes the copies of u (and of the vectors it applies K to) through exchange,
+ *  and sums energies and scalar products over the processes through sum, so that every
+ *  process sees the same energies, stable step and monitor values. */
+typedef struct {
+  cupid_int owned_first, owned_last; /**< owned DOFs */
+  cupid_int global_first;            /**< global index of DOF 0 (a start vector that does
+                                          not depend on the split) */
+  /** Overwrite x's copies with their owners' values (collective). */
+  cupid_status (*exchange)(void *ctx, double *x);
+  /** Sum values[0..count) over the processes, in place (collective). */
+  void (*sum)(void *ctx, double *values, int count);
+  void *ctx;
+} cupid_dynamics_partition;
+
 /** The system of an explicit run with a matrix-free K and a lumped mass. */
 typedef struct {
   cupid_int n;                        /**< scalar DOFs */
-  cupid_dynamics_stiffness_fn apply;  /**< y = K x, symmetric positive semi-definite */
+  cupid_dynamics_stiffness_fn apply;  /**< y = K x, symmetric positive semi-definite (in a
+                                           distributed run: correct on the owned rows) */
   void *ctx;                          /**< passed to apply */
   const double *m_lumped;             /**< diagonal mass (n entries) */
   const cupid_dirichlet_t *bc;        /**< finalized conditions, or NULL */
   const double *f;                    /**< constant external force (n entries), or NULL */
+  const cupid_dynamics_partition *part; /**< NULL: one process holds every DOF */
 } cupid_dynamics_explicit_system;
 
 /**
  * Central differences (opts->integrator must be CUPID_INTEGRATOR_CENTRAL) as in
  * cupid_dynamics_run(), with K only through products: no assembly, memory O(n) besides what
  * apply needs. Same steps, energies, damping (b K v through apply), monitor and stable-step
- * check, with two differences: the critical step comes from the power iteration alone and
+ * check, with two differences: the critical step comes from the Lanczos estimate alone and
  * info->dt_bound is 0 (the Gershgorin bound needs the entries of K). With apply the product
  * of an assembled K, the results equal cupid_dynamics_run()'s to round-off. An apply failure
  * stops the run with its status.
@@ -147,8 +172,9 @@ cupid_status cupid_dynamics_run_explicit(const cupid_dynamics_explicit_system *s
                                          cupid_dynamics_info *info);
 
 /**
- * Largest eigenvalue lambda of M^-1 K on the free DOFs, for a lumped mass: power iteration
- * (*estimate, a lower bound converging from below; @p iterations steps) and the Gershgorin
+ * Largest eigenvalue lambda of M^-1 K on the free DOFs, for a lumped mass: Lanczos on
+ * M^-1/2 K M^-1/2 (*estimate, the largest Ritz value, a lower bound converging from below;
+ * at most @p iterations products, fewer once it is stable to 1e-7) and the Gershgorin
  * bound of M^-1/2 K M^-1/2 (*bound, an upper bound). Either pointer may be NULL.
  */
 cupid_status cupid_dynamics_lambda_max(const cupid_csr_t *K, const double *m_lumped,

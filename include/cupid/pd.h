@@ -325,6 +325,18 @@ typedef struct {
   const unsigned char *protect;  /**< per node: 1 = no bond of this node breaks; or NULL */
   const uint32_t *no_fail;       /**< per node: bit b = inside no-fail box b; a bond whose ends
                                       share a bit never breaks; or NULL */
+  double *ku;                    /**< optional: K u at the u of break_bonds (3 per node). For
+                                      the bond-based model break_bonds subtracts the forces of
+                                      the bonds it breaks (an explicit step then needs no new
+                                      product); LPS leaves it (a break changes the dilatations
+                                      of both families: recompute). */
+  cupid_int count_first, count_last; /**< a slab of a distributed grid: *broken counts the
+                                      bonds whose lower node is in [count_first, count_last),
+                                      *dissipated the energies of those nodes; 0, 0: all */
+  int owned_only;                /**< decide only the bonds whose lower node is counted: their
+                                      owner decides, and cupid_pd_operator_unpack_broken()
+                                      brings the others (a criterion that reads dilatations,
+                                      which a slab's outer halo does not have right) */
 } cupid_pd_fracture_options;
 
 /**
@@ -336,6 +348,20 @@ typedef struct {
 cupid_status cupid_pd_operator_break_bonds(cupid_pd_operator op, const double *u,
                                            const cupid_pd_fracture_options *opts, int only_most,
                                            cupid_int *broken, double *dissipated);
+
+/** Words per node (32-bit integers held in doubles, exact) of the broken-bond bits a node
+ *  owns: its stencil entries towards higher node indices (each bond once). */
+int cupid_pd_operator_broken_words(const cupid_pd_operator op);
+/** The bits of the nodes [first, last) into words (broken_words per node). */
+void cupid_pd_operator_pack_broken(const cupid_pd_operator op, cupid_int first, cupid_int last,
+                                   double *words);
+/** Break the bonds of the nodes [first, last) that @p words (as packed) mark and this
+ *  operator still has: *added of them, *dissipated the energy they held at u on the counted
+ *  nodes of @p opts (a slab receiving the decisions of the ranks that own those nodes). */
+cupid_status cupid_pd_operator_unpack_broken(cupid_pd_operator op, cupid_int first,
+                                             cupid_int last, const double *words,
+                                             const double *u, const cupid_pd_fracture_options *opts,
+                                             cupid_int *added, double *dissipated);
 
 /** Remove from @p dst every bond removed from @p src that it still has (both operators on one
  *  grid with the same stencil: e.g. a weighted copy of the operator). */

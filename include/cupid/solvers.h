@@ -239,6 +239,8 @@ int cupid_petsc_max_int(int v);
 int cupid_petsc_has_option(const char *name);
 /** Sums over all ranks of @p n doubles, in place (collective; nothing when not initialised). */
 void cupid_petsc_sum_doubles(double *v, int n);
+/** Maxima over all ranks of @p n doubles, in place (collective; nothing when not initialised). */
+void cupid_petsc_max_doubles(double *v, int n);
 /**
  * Concatenate every rank's @p count doubles on rank 0, in rank order (MPI_Gatherv; collective):
  * rank 0 passes @p root with room for the total, the others NULL. Without PETSc (or one rank)
@@ -247,6 +249,17 @@ void cupid_petsc_sum_doubles(double *v, int n);
 cupid_status cupid_petsc_gather_root(const double *local, cupid_int count, double *root);
 /** Abort every rank with exit status @p code (MPI_Abort; plain exit when not initialised). */
 void cupid_petsc_abort(int code);
+
+/** The copies (halo) of a distributed vector: each rank holds n local entries, owns
+ *  [owned_first, owned_last) of them, and local entry d is global entry global_first + d; the
+ *  owned ranges follow the rank order (as the slabs of a grid do). */
+typedef struct cupid_petsc_halo_s *cupid_petsc_halo;
+/** Create the exchange (collective; CUPID_ERR_UNSUPPORTED without PETSc). */
+cupid_status cupid_petsc_halo_create(cupid_int n, cupid_int owned_first, cupid_int owned_last,
+                                     cupid_int global_first, cupid_petsc_halo *h);
+/** Overwrite x's entries outside the owned range with their owners' values (collective). */
+cupid_status cupid_petsc_halo_update(cupid_petsc_halo h, double *x);
+void cupid_petsc_halo_destroy(cupid_petsc_halo *h);
 
 /** Options of the PETSc solves (zero-initialise; every field optional). */
 typedef struct {

@@ -22,13 +22,13 @@ void dyn_mass_apply(const cupid_dynamics_system *sys, cupid_int n, const double 
     cupid_csr_matvec(sys->M, x, y);
     return;
   }
-#pragma omp parallel for schedule(static) if (n > 100000)
+#pragma omp parallel for schedule(static) if (n > DYN_OMP_MIN)
   for (cupid_int d = 0; d < n; d++) y[d] = sys->m_lumped[d] * x[d];
 }
 
 double dyn_dot(cupid_int n, const double *x, const double *y) {
   double s = 0.0;
-#pragma omp parallel for reduction(+ : s) schedule(static) if (n > 100000)
+#pragma omp parallel for reduction(+ : s) schedule(static) if (n > DYN_OMP_MIN)
   for (cupid_int d = 0; d < n; d++) s += x[d] * y[d];
   return s;
 }
@@ -42,19 +42,23 @@ typedef struct {
   cupid_status kst;                /* first failure of kfn (checked after each step) */
   const cupid_dynamics_options *opt;
   const cupid_dynamics_hooks *hooks; /* opt->hooks, or NULL */
+  const cupid_dynamics_partition *part; /* a distributed run, or NULL */
+  cupid_int lo, hi;                  /* the DOFs whose energies this process counts */
   double *a, *un, *vn, *an, *w1, *w2, *t1, *t2, *g;
+  double *minv; /* central differences: 1 / the lumped mass (0 on fixed DOFs) */
   /* Time-dependent conditions (hooks->conditions): the load now (f points here, else at
    * sys->f), the prescribed values, the support reactions of the last step, the fixed DOFs'
    * increment. */
   const double *f;
   double *fcur, *fprev, *ufix, *react, *du;
-  cupid_dynamics_energy e;
+  cupid_dynamics_energy e;  /* this process's damping, external and fracture shares */
+  cupid_dynamics_energy eg; /* the whole system's energies (monitor, balance) */
   double e0, scale, max_balance;
 } dyn_state;
 
 static void state_free(dyn_state *s) {
   double **arrays[] = {&s->a,  &s->un, &s->vn, &s->an,   &s->w1,   &s->w2,    &s->t1,
-                       &s->t2, &s->g,  &s->fcur, &s->fprev, &s->ufix, &s->react, &s->du};
+                       &s->t2, &s->g,  &s->fcur, &s->fprev, &s->ufix, &s->react, &s->du, &s->minv};
   for (size_t k = 0; k < sizeof arrays / sizeof *arrays; k++) cupid_free(arrays[k]);
 }
 
@@ -71,16 +75,41 @@ static cupid_status state_alloc(dyn_state *s) {
   return CUPID_SUCCESS;
 }
 
+/* Sum over the processes of a distributed run (nothing on one process). */
+static void reduce(const dyn_state *s, double *v, int n) {
+  if (s->part) s->part->sum(s->part->ctx, v, n);
+}
+
+/* A failure that one process found stops every process: 1 if any found one. */
+static int any_process(const dyn_state *s, int bad) {
+  double b = bad ? 1.0 : 0.0;
+  reduce(s, &b, 1);
+  return b > 0.0;
+}
+
+/* x's copies from their owners (a distributed run). */
+static cupid_status refresh(const dyn_state *s, double *x) {
+  return s->part ? s->part->exchange(s->part->ctx, x) : CUPID_SUCCESS;
+}
+
 /* The conditions at time t: the load into fcur (the previous one kept in fprev) and the
  * prescribed values into ufix. */
 static cupid_status conditions_at(dyn_state *s, double t) {
-  memcpy(s->fprev, s->fcur, sizeof *s->fcur * (size_t)s->n);
+  double *keep = s->fprev; /* the current load becomes the previous one: swap, not copy */
+  s->fprev = s->fcur;
+  s->fcur = keep;
+  s->f = s->fcur;
   CUPID_CALL(s->hooks->conditions(s->hooks->ctx, t, s->ufix, s->fcur));
+  cupid_int bad = s->n; /* the first DOF whose value is not finite */
+#pragma omp parallel for reduction(min : bad) schedule(static) if (s->n > DYN_OMP_MIN)
   for (cupid_int d = 0; d < s->n; d++)
-    CUPID_CHECK(isfinite(s->fcur[d]) && (!dyn_fixed(s->sys->bc, d) || isfinite(s->ufix[d])),
-                CUPID_ERR_NUMERIC, "the %s of DOF %lld is not finite at t = %g",
-                isfinite(s->fcur[d]) ? "prescribed displacement" : "load", (long long)d, t);
-  return CUPID_SUCCESS;
+    if (!(isfinite(s->fcur[d]) && (!dyn_fixed(s->sys->bc, d) || isfinite(s->ufix[d])))) bad = d;
+  if (bad == s->n) bad = -1;
+  if (!any_process(s, bad >= 0)) return CUPID_SUCCESS;
+  CUPID_CHECK(bad < 0, CUPID_ERR_NUMERIC, "the %s of DOF %lld is not finite at t = %g",
+              isfinite(s->fcur[bad]) ? "prescribed displacement" : "load", (long long)bad, t);
+  return CUPID_ERROR(CUPID_ERR_NUMERIC, "another process found a value that is not finite at "
+                     "t = %g", t);
 }
 
 /* Work of the moving supports over a step: the trapezoidal rule on R = K u + C v + M a - f
@@ -88,7 +117,9 @@ static cupid_status conditions_at(dyn_state *s, double t) {
 static void support_work(dyn_state *s, const double *r_new) {
   const cupid_dirichlet_t *bc = s->sys->bc;
   double w = 0.0;
-  for (cupid_int d = 0; d < s->n; d++)
+  const cupid_int lo = s->lo, hi = s->hi;
+#pragma omp parallel for reduction(+ : w) schedule(static) if (hi - lo > DYN_OMP_MIN)
+  for (cupid_int d = lo; d < hi; d++)
     if (dyn_fixed(bc, d)) {
       w += 0.5 * (s->react[d] + r_new[d]) * s->du[d];
       s->react[d] = r_new[d];
@@ -96,15 +127,16 @@ static void support_work(dyn_state *s, const double *r_new) {
   s->e.external += w;
 }
 
-/* *changed = 1 when the hook removed energy (K changed: the caller recomputes the forces,
- * so that what broke exerts none after the step it broke in). */
-static cupid_status after_forces(dyn_state *s, cupid_int step, const double *u, int *changed) {
+/* hooks->after_forces at u (K u of the old K in ku): *changed as the hook says (0: K is as
+ * it was; 1: ku is the new K's product; 2: recompute it). */
+static cupid_status after_forces(dyn_state *s, cupid_int step, const double *u, double *ku,
+                                 int *changed) {
   *changed = 0;
   if (!s->hooks || !s->hooks->after_forces) return CUPID_SUCCESS;
   double diss = 0.0;
-  CUPID_CALL(s->hooks->after_forces(s->hooks->ctx, step, (double)step * s->opt->dt, u, &diss));
+  CUPID_CALL(s->hooks->after_forces(s->hooks->ctx, step, (double)step * s->opt->dt, u, ku, &diss,
+                                    changed));
   s->e.fracture += diss;
-  *changed = diss != 0.0;
   return CUPID_SUCCESS;
 }
 
@@ -132,17 +164,23 @@ static void damping_apply(dyn_state *s, const double *x, double *y, double *t) {
   }
 }
 
-/* Kinetic and strain energy of (u, v); damping and external are accumulated by the steppers. */
+/* The energies of (u, v) (kinetic and strain over the DOFs this process counts; damping,
+ * external and fracture from its shares), summed over the processes into eg. */
 static void energies(dyn_state *s, const double *u, const double *v) {
+  const cupid_int lo = s->lo, len = s->hi - s->lo;
   dyn_mass_apply(s->sys, s->n, v, s->t1);
-  s->e.kinetic = 0.5 * dyn_dot(s->n, v, s->t1);
+  double sums[5] = {0.5 * dyn_dot(len, v + lo, s->t1 + lo), 0.0, s->e.damping, s->e.external,
+                    s->e.fracture};
   dyn_stiffness(s, u, s->t1);
-  s->e.strain = 0.5 * dyn_dot(s->n, u, s->t1);
-  s->e.balance = s->e.kinetic + s->e.strain + s->e.damping + s->e.fracture - s->e.external - s->e0;
-  double level = fmax(s->e.kinetic + s->e.strain,
-                      fmax(fmax(s->e.damping, s->e.fracture), fabs(s->e.external)));
+  sums[1] = 0.5 * dyn_dot(len, u + lo, s->t1 + lo);
+  reduce(s, sums, 5);
+  cupid_dynamics_energy *g = &s->eg;
+  g->kinetic = sums[0], g->strain = sums[1], g->damping = sums[2], g->external = sums[3];
+  g->fracture = sums[4];
+  g->balance = g->kinetic + g->strain + g->damping + g->fracture - g->external - s->e0;
+  double level = fmax(g->kinetic + g->strain, fmax(fmax(g->damping, g->fracture), fabs(g->external)));
   if (level > s->scale) s->scale = level;
-  if (fabs(s->e.balance) > s->max_balance) s->max_balance = fabs(s->e.balance);
+  if (fabs(g->balance) > s->max_balance) s->max_balance = fabs(g->balance);
 }
 
 /* Midpoint-rule increments of the dissipated energy and of the external work (a load that
@@ -150,27 +188,36 @@ static void energies(dyn_state *s, const double *u, const double *v) {
 static void accumulate(dyn_state *s, const double *u0, const double *u1, const double *vm) {
   const double *f = s->f;
   if (f && s->fprev)
-    for (cupid_int d = 0; d < s->n; d++) {
+    for (cupid_int d = s->lo; d < s->hi; d++) {
       s->e.external += 0.5 * (f[d] + s->fprev[d]) * (u1[d] - u0[d]);
       s->du[d] = u1[d] - u0[d];
     }
   else if (f)
-    for (cupid_int d = 0; d < s->n; d++) s->e.external += f[d] * (u1[d] - u0[d]);
+    for (cupid_int d = s->lo; d < s->hi; d++) s->e.external += f[d] * (u1[d] - u0[d]);
   if (s->opt->rayleigh_mass != 0.0 || s->opt->rayleigh_stiffness != 0.0) {
     damping_apply(s, vm, s->t1, s->t2);
-    s->e.damping += s->opt->dt * dyn_dot(s->n, vm, s->t1);
+    s->e.damping += s->opt->dt * dyn_dot(s->hi - s->lo, vm + s->lo, s->t1 + s->lo);
   }
 }
+
+static void residual_of(dyn_state *s, const double *ku, const double *v, double *r);
 
 /* r = f - K u - C v on free DOFs, 0 on fixed ones; with moving supports their reactions
  * K u + C v - f go to w2 (a lumped mass has no M a term on a fixed DOF). */
 static void residual_force(dyn_state *s, const double *u, const double *v, double *r) {
-  const cupid_dirichlet_t *bc = s->sys->bc;
   dyn_stiffness(s, u, r);
-  damping_apply(s, v, s->w1, s->t2);
+  residual_of(s, r, v, r);
+}
+
+/* r = f - ku - C v on free DOFs, 0 on fixed ones, from ku = K u (r may be ku); with moving
+ * supports their reactions go to w2. */
+static void residual_of(dyn_state *s, const double *ku, const double *v, double *r) {
+  const cupid_dirichlet_t *bc = s->sys->bc;
+  const int damped = s->opt->rayleigh_mass != 0.0 || s->opt->rayleigh_stiffness != 0.0;
+  if (damped) damping_apply(s, v, s->w1, s->t2);
   const double *f = s->f;
   for (cupid_int d = 0; d < s->n; d++) {
-    const double rd = (f ? f[d] : 0.0) - r[d] - s->w1[d];
+    const double rd = (f ? f[d] : 0.0) - ku[d] - (damped ? s->w1[d] : 0.0);
     if (s->react && dyn_fixed(bc, d)) s->w2[d] = -rd;
     r[d] = dyn_fixed(bc, d) ? 0.0 : rd;
   }
@@ -209,7 +256,7 @@ static cupid_status notify(dyn_state *s, cupid_dynamics_monitor fn, void *ctx, c
   int out = step % s->opt->every == 0 || step == s->opt->steps;
   if (out) energies(s, u, v);
   if (!fn) return CUPID_SUCCESS;
-  return fn(ctx, step, (double)step * s->opt->dt, out, u, v, s->a, &s->e);
+  return fn(ctx, step, (double)step * s->opt->dt, out, u, v, s->a, &s->eg);
 }
 
 /* K_eff = (1 + a1 b) K + (a0 + a1 a) M. */
@@ -310,19 +357,91 @@ static double critical_step(double lambda, double a, double b) {
 static cupid_status check_stable(dyn_state *s, cupid_dynamics_info *info) {
   const cupid_dynamics_options *o = s->opt;
   double est = 0.0, bound = 0.0;
-  if (s->kfn) /* matrix-free: power iteration only, no Gershgorin bound (dt_bound = 0) */
-    CUPID_CALL(dyn_lambda_max_fn(s->kfn, s->kctx, s->n, s->sys->m_lumped, s->sys->bc, 200, &est));
+  int steps = 0;
+  if (s->kfn) /* matrix-free: Lanczos only, no Gershgorin bound (dt_bound = 0) */
+    CUPID_CALL(dyn_lambda_max_fn(s->kfn, s->kctx, s->n, s->sys->m_lumped, s->sys->bc, s->part,
+                                 200, &est, &steps));
   else
     CUPID_CALL(cupid_dynamics_lambda_max(s->sys->K, s->sys->m_lumped, s->sys->bc, 200, &est, &bound));
   info->omega_max = sqrt(est);
+  info->lanczos_steps = steps;
   info->dt_critical = critical_step(est, o->rayleigh_mass, o->rayleigh_stiffness);
   info->dt_bound = s->kfn ? 0.0 : critical_step(bound, o->rayleigh_mass, o->rayleigh_stiffness);
   CUPID_CHECK(o->dt <= info->dt_critical, CUPID_ERR_ARGUMENT,
               "central differences are unstable with dt = %g: the critical step is about %g "
-              "(omega_max = %g by power iteration; guaranteed stable below %g); use a smaller "
-              "dt or the newmark integrator",
+              "(omega_max = %g by a Lanczos estimate; guaranteed stable below %g); use a "
+              "smaller dt or the newmark integrator",
               o->dt, info->dt_critical, info->omega_max, info->dt_bound);
   return CUPID_SUCCESS;
+}
+
+/* The drift of a step: v_{n+1/2} = v_n + dt/2 a_n into vh, u_{n+1} = u_n + dt v_{n+1/2} (the
+ * fixed DOFs at their values at the step's end, moved), in place, with the external work of
+ * the step (the load's mean over the step when it changes) and the fixed DOFs' increments. */
+static void central_drift(dyn_state *s, double *u, const double *v, const double *moved,
+                          double *vh) {
+  const cupid_dirichlet_t *bc = s->sys->bc;
+  const double dt = s->opt->dt, *f = s->f, *fp = s->fprev;
+  double w = 0.0;
+  const cupid_int n = s->n, lo = s->lo, hi = s->hi;
+  double *du = s->du;
+#pragma omp parallel for reduction(+ : w) schedule(static) if (n > DYN_OMP_MIN)
+  for (cupid_int d = 0; d < n; d++) {
+    vh[d] = v[d] + 0.5 * dt * s->a[d];
+    const double un = dyn_fixed(bc, d) ? moved[d] : u[d] + dt * vh[d], step = un - u[d];
+    if (f && d >= lo && d < hi) w += (fp ? 0.5 * (f[d] + fp[d]) : f[d]) * step;
+    if (du) du[d] = step;
+    u[d] = un;
+  }
+  s->e.external += w;
+}
+
+/* a = M^-1 r on the free DOFs, 0 on the fixed ones. */
+static void accelerations(dyn_state *s, const double *r) {
+#pragma omp parallel for schedule(static) if (s->n > DYN_OMP_MIN)
+  for (cupid_int d = 0; d < s->n; d++) s->a[d] = r[d] * s->minv[d];
+}
+
+/* The kick that ends a step: a_{n+1} = M^-1 (f - K u_{n+1} - C v_{n+1/2}) and v_{n+1} =
+ * v_{n+1/2} + dt/2 a_{n+1} (zero on the fixed DOFs; the supports' reactions in w2); K u_{n+1}
+ * stays in g for the after-forces hook. */
+static void central_kick(dyn_state *s, const double *u, const double *vh, double *v) {
+  const cupid_dirichlet_t *bc = s->sys->bc;
+  const double hdt = 0.5 * s->opt->dt;
+  dyn_stiffness(s, u, s->g);
+  if (s->opt->rayleigh_mass != 0.0 || s->opt->rayleigh_stiffness != 0.0) {
+    residual_of(s, s->g, vh, s->t1);
+    for (cupid_int d = 0; d < s->n; d++) {
+      s->a[d] = s->t1[d] * s->minv[d];
+      v[d] = dyn_fixed(bc, d) ? 0.0 : vh[d] + hdt * s->a[d];
+    }
+    return;
+  }
+  /* undamped: residual, reactions, acceleration and velocity in one pass */
+  const double *f = s->f;
+#pragma omp parallel for schedule(static) if (s->n > DYN_OMP_MIN)
+  for (cupid_int d = 0; d < s->n; d++) {
+    const int fixed = dyn_fixed(bc, d);
+    const double rd = (f ? f[d] : 0.0) - s->g[d];
+    if (s->react && fixed) s->w2[d] = -rd;
+    s->a[d] = fixed ? 0.0 : rd * s->minv[d];
+    v[d] = fixed ? 0.0 : vh[d] + hdt * s->a[d];
+  }
+}
+
+/* The after-forces hook at t_{n+1} (K u_{n+1} in g): if K changed, v_{n+1} stands and the
+ * next half-kick uses the new K's acceleration (from the hook's updated K u when it gave
+ * one and there is no stiffness damping, else from a new product). */
+static cupid_status after_break(dyn_state *s, cupid_int step, const double *u, const double *v) {
+  int changed = 0;
+  if (!s->hooks || !s->hooks->after_forces) return CUPID_SUCCESS;
+  if (step == 0) dyn_stiffness(s, u, s->g); /* initial_acceleration kept no K u */
+  CUPID_CALL(after_forces(s, step, u, s->g, &changed));
+  if (!changed) return CUPID_SUCCESS;
+  if (changed == 1 && s->opt->rayleigh_stiffness == 0.0) residual_of(s, s->g, v, s->t1);
+  else residual_force(s, u, v, s->t1);
+  accelerations(s, s->t1);
+  return s->kst;
 }
 
 static cupid_status run_central(dyn_state *s, double *u, double *v, cupid_dynamics_monitor fn,
@@ -332,44 +451,39 @@ static cupid_status run_central(dyn_state *s, double *u, double *v, cupid_dynami
   double dt = o->dt;
   CUPID_CHECK(s->sys->m_lumped && !s->sys->M, CUPID_ERR_ARGUMENT,
               "central differences need a lumped (diagonal) mass");
-  for (cupid_int d = 0; d < s->n; d++)
-    CUPID_CHECK(dyn_fixed(bc, d) || s->sys->m_lumped[d] > 0.0, CUPID_ERR_ARGUMENT,
+  cupid_int massless = -1;
+  for (cupid_int d = 0; d < s->n && massless < 0; d++)
+    if (!(dyn_fixed(bc, d) || s->sys->m_lumped[d] > 0.0)) massless = d;
+  if (any_process(s, massless >= 0)) {
+    CUPID_CHECK(massless < 0, CUPID_ERR_ARGUMENT,
                 "free DOF %lld has no mass (central differences need a positive lumped mass)",
-                (long long)d);
+                (long long)massless);
+    return CUPID_ERROR(CUPID_ERR_ARGUMENT, "another process found a free DOF without mass");
+  }
+  CUPID_CALL(cupid_calloc((size_t)s->n + 1, sizeof *s->minv, "inverse masses", &s->minv));
+  for (cupid_int d = 0; d < s->n; d++) s->minv[d] = dyn_fixed(bc, d) ? 0.0 : 1.0 / s->sys->m_lumped[d];
   CUPID_CALL(check_stable(s, info));
   CUPID_CALL(initial_acceleration(s, u, v));
   if (s->react) initial_reactions(s);
   CUPID_CALL(s->kst);
-  int changed = 0;
-  CUPID_CALL(after_forces(s, 0, u, &changed));
-  if (changed) CUPID_CALL(initial_acceleration(s, u, v));
+  CUPID_CALL(after_break(s, 0, u, v));
   CUPID_CALL(notify(s, fn, ctx, 0, u, v));
   double t0 = cupid_wtime();
+  const int stiff_damping = o->rayleigh_stiffness != 0.0;
   for (cupid_int step = 1; step <= o->steps; step++) {
     if (s->react) CUPID_CALL(conditions_at(s, (double)step * dt));
-    const double *moved = s->react ? s->ufix : u; /* the fixed DOFs' values at the step's end */
     double *vh = s->vn; /* v_{n+1/2} */
-    for (cupid_int d = 0; d < s->n; d++) {
-      vh[d] = v[d] + 0.5 * dt * s->a[d];
-      s->un[d] = dyn_fixed(bc, d) ? moved[d] : u[d] + dt * vh[d];
+    central_drift(s, u, v, s->react ? s->ufix : u, vh);
+    CUPID_CALL(refresh(s, u));
+    if (stiff_damping) CUPID_CALL(refresh(s, vh)); /* b K v_{n+1/2} reads its copies */
+    if (o->rayleigh_mass != 0.0 || stiff_damping) { /* the damping's work over the step */
+      damping_apply(s, vh, s->t1, s->t2);
+      s->e.damping += dt * dyn_dot(s->hi - s->lo, vh + s->lo, s->t1 + s->lo);
     }
-    accumulate(s, u, s->un, vh);
-    memcpy(u, s->un, sizeof *u * (size_t)s->n);
-    residual_force(s, u, vh, s->t1);
+    central_kick(s, u, vh, v);
     if (s->react) support_work(s, s->w2);
-    for (cupid_int d = 0; d < s->n; d++) {
-      s->a[d] = dyn_fixed(bc, d) ? 0.0 : s->t1[d] / s->sys->m_lumped[d];
-      v[d] = dyn_fixed(bc, d) ? 0.0 : vh[d] + 0.5 * dt * s->a[d];
-    }
     CUPID_CALL(s->kst);
-    int broke = 0;
-    CUPID_CALL(after_forces(s, step, u, &broke));
-    if (broke) { /* it broke at t_{n+1}: v_{n+1} stands, the next half-kick uses the new K */
-      residual_force(s, u, v, s->t1);
-      for (cupid_int d = 0; d < s->n; d++)
-        s->a[d] = dyn_fixed(bc, d) ? 0.0 : s->t1[d] / s->sys->m_lumped[d];
-      CUPID_CALL(s->kst);
-    }
+    CUPID_CALL(after_break(s, step, u, v));
     CUPID_CALL(notify(s, fn, ctx, step, u, v));
     CUPID_CALL(s->kst);
   }
@@ -404,11 +518,12 @@ static cupid_status run(dyn_state *s, double *u, double *v, cupid_dynamics_monit
   for (cupid_int d = 0; d < s->n; d++)
     if (dyn_fixed(bc, d)) u[d] = s->react ? s->ufix[d] : bc->value[d], v[d] = 0.0;
   /* E0: the energy at t = 0, the reference of the balance. */
-  dyn_mass_apply(sys, s->n, v, s->t1);
-  s->e0 = 0.5 * dyn_dot(s->n, v, s->t1);
-  dyn_stiffness(s, u, s->t1);
+  CUPID_TRY(refresh(s, u));
+  CUPID_TRY(refresh(s, v));
+  energies(s, u, v);
   CUPID_TRY(s->kst);
-  s->e0 += 0.5 * dyn_dot(s->n, u, s->t1);
+  s->e0 = s->eg.kinetic + s->eg.strain;
+  s->scale = s->max_balance = 0.0;
   if (opts->integrator == CUPID_INTEGRATOR_NEWMARK)
     CUPID_TRY(run_newmark(s, u, v, monitor, ctx, info));
   else
@@ -427,6 +542,7 @@ cupid_status cupid_dynamics_run(const cupid_dynamics_system *sys, const cupid_dy
   CUPID_CHECK(!sys->M != !sys->m_lumped, CUPID_ERR_ARGUMENT,
               "cupid_dynamics_run: give exactly one of a consistent and a lumped mass");
   dyn_state s = {.n = sys->K->nrows * sys->K->bs, .sys = sys, .opt = opts};
+  s.hi = s.n;
   return run(&s, u, v, monitor, ctx, info);
 }
 
@@ -440,6 +556,12 @@ cupid_status cupid_dynamics_run_explicit(const cupid_dynamics_explicit_system *s
               "a matrix-free stiffness needs the central-difference integrator (Newmark "
               "factors K)");
   const cupid_dynamics_system full = {.m_lumped = sys->m_lumped, .bc = sys->bc, .f = sys->f};
-  dyn_state s = {.n = sys->n, .sys = &full, .opt = opts, .kfn = sys->apply, .kctx = sys->ctx};
+  const cupid_dynamics_partition *p = sys->part;
+  CUPID_CHECK(!p || (p->exchange && p->sum && p->owned_first >= 0 &&
+                     p->owned_first <= p->owned_last && p->owned_last <= sys->n),
+              CUPID_ERR_ARGUMENT, "cupid_dynamics_run_explicit: a partition needs exchange, sum "
+              "and owned DOFs within [0, n)");
+  dyn_state s = {.n = sys->n, .sys = &full, .opt = opts, .kfn = sys->apply, .kctx = sys->ctx,
+                 .part = p, .lo = p ? p->owned_first : 0, .hi = p ? p->owned_last : sys->n};
   return run(&s, u, v, monitor, ctx, info);
 }

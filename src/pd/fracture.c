@@ -176,6 +176,11 @@ cupid_status cupid_pd_operator_precrack(cupid_pd_operator op, const cupid_pd_pre
 
 /* ---- Breaking ---- */
 
+/* 1 if node i's share is counted (cupid_pd_fracture_options.count_first/last). */
+static int counted(const cupid_pd_fracture_options *o, cupid_int i) {
+  return o->count_last <= o->count_first || (i >= o->count_first && i < o->count_last);
+}
+
 /* 1 if the bond i-j may break: neither end protected, and no no-fail box holds both. */
 static int breakable(const cupid_pd_fracture_options *o, cupid_int i, cupid_int j) {
   if (o->protect && (o->protect[i] || o->protect[j])) return 0;
@@ -287,6 +292,7 @@ static cupid_status find_over_scan(const struct cupid_pd_operator_private *op, c
     const cupid_int j = family_neighbour(op, i, s);
     if (j < 0 || pd_bond_broken(op, i, s)) continue;
     const double e = pd_extension(op->st.nrm + 3 * s, u, i, j);
+    if (o->owned_only && !counted(o, i)) continue;
     if (e > stretch_limit(o, i, j) * op->st.x[s] && breakable(o, i, j) && !list_push(out, i, s))
       st = CUPID_ERROR(CUPID_ERR_MEMORY, "out of memory for broken bonds");
   }
@@ -325,6 +331,7 @@ static cupid_status find_over(const struct cupid_pd_operator_private *op, const 
     bond_list *L = &per[tid];
 #pragma omp for schedule(static)
     for (cupid_int i = 0; i < op->nnodes; i++) {
+      if (o->owned_only && !counted(o, i)) continue;
       const pd_family F = pd_family_of(op, i);
       for (int q = 0; q < F.n; q++) {
         const int s = pd_family_entry(&F, q);
@@ -357,10 +364,26 @@ static int cmp_int(const void *a, const void *b) {
   return (x > y) - (x < y);
 }
 
+/* K u without the bond i-j at entry s (bond-based): its energy C e^2 / 2 (node_energy) has
+ * the gradient -C e n at u_i and +C e n at u_j. In list order, so the same in any thread
+ * count. */
+static void subtract_bond_force(const struct cupid_pd_operator_private *op, const double *u,
+                                cupid_int i, int s, double *ku) {
+  const pd_family F = pd_family_of(op, i);
+  const cupid_int j = pd_family_node(op, &F, s);
+  const double *n = op->st.nrm + 3 * s;
+  const double ce = pd_pair_coefficient(op, i, j, s) * pd_extension(n, u, i, j);
+  for (int a = 0; a < 3; a++) {
+    ku[3 * i + a] += ce * n[a];
+    ku[3 * j + a] -= ce * n[a];
+  }
+}
+
 /* Break the listed bonds; *dissipated = the strain energy they held (the drop of their
- * nodes' energies, at u). */
+ * counted nodes' energies, at u). */
 static cupid_status break_list(struct cupid_pd_operator_private *op, const double *u,
-                               const bond_list *L, double *dissipated) {
+                               const bond_list *L, const cupid_pd_fracture_options *o,
+                               double *dissipated) {
   *dissipated = 0.0;
   if (L->n == 0) return CUPID_SUCCESS;
   cupid_int *nodes = malloc(2 * L->n * sizeof *nodes);
@@ -374,7 +397,9 @@ static cupid_status break_list(struct cupid_pd_operator_private *op, const doubl
   qsort(nodes, nn, sizeof *nodes, cmp_int);
   size_t u_n = 0;
   for (size_t k = 0; k < nn; k++)
-    if (u_n == 0 || nodes[u_n - 1] != nodes[k]) nodes[u_n++] = nodes[k];
+    if ((u_n == 0 || nodes[u_n - 1] != nodes[k]) && counted(o, nodes[k])) nodes[u_n++] = nodes[k];
+  if (o->ku && op->model == CUPID_PD_BOND)
+    for (size_t k = 0; k < L->n; k++) subtract_bond_force(op, u, L->i[k], L->s[k], o->ku);
   double before = 0.0, after = 0.0;
   for (size_t k = 0; k < u_n; k++) before += node_energy(op, u, nodes[k]);
   cupid_status st = CUPID_SUCCESS;
@@ -424,12 +449,66 @@ cupid_status cupid_pd_operator_break_bonds(cupid_pd_operator op, const double *u
     }
     L.i[0] = L.i[best], L.s[0] = L.s[best], L.n = 1;
   }
-  CUPID_TRY(break_list(op, u, &L, dissipated));
-  *broken = (cupid_int)L.n;
+  CUPID_TRY(break_list(op, u, &L, o, dissipated));
+  for (size_t k = 0; k < L.n; k++) *broken += counted(o, L.i[k]);
 cleanup:
   free(L.i);
   free(L.s);
   cupid_free(&theta);
+  return st;
+}
+
+/* ---- The broken bonds of a slab's nodes, exchanged between MPI ranks ---- */
+
+int cupid_pd_operator_broken_words(const cupid_pd_operator op) {
+  return op ? (op->st.n - op->st.n / 2 + 31) / 32 : 0;
+}
+
+void cupid_pd_operator_pack_broken(const cupid_pd_operator op, cupid_int first, cupid_int last,
+                                   double *words) {
+  const int half = op->st.n / 2, nw = cupid_pd_operator_broken_words(op);
+  for (cupid_int i = first; i < last; i++) {
+    double *w = words + (size_t)(i - first) * (size_t)nw;
+    for (int k = 0; k < nw; k++) w[k] = 0.0;
+    if (!op->bslot || op->bslot[i] < 0) continue;
+    uint32_t bits[8] = {0};
+    for (int s = half; s < op->st.n; s++)
+      if (pd_bond_broken(op, i, s)) bits[(s - half) >> 5] |= (uint32_t)1 << ((s - half) & 31);
+    for (int k = 0; k < nw; k++) w[k] = (double)bits[k]; /* exact: 32-bit integers */
+  }
+}
+
+cupid_status cupid_pd_operator_unpack_broken(cupid_pd_operator op, cupid_int first,
+                                             cupid_int last, const double *words,
+                                             const double *u, const cupid_pd_fracture_options *o,
+                                             cupid_int *added, double *dissipated) {
+  CUPID_CHECK(op && words && u && o && added && dissipated, CUPID_ERR_ARGUMENT,
+              "unpack_broken needs operator, words, displacement, options and outputs");
+  CUPID_CHECK(op->st.n - op->st.n / 2 <= 256, CUPID_ERR_UNSUPPORTED,
+              "unpack_broken: more than 512 stencil entries");
+  *added = 0, *dissipated = 0.0;
+  CUPID_CALL(fracture_init(op));
+  const int half = op->st.n / 2, nw = cupid_pd_operator_broken_words(op);
+  bond_list L = {0};
+  cupid_status st = CUPID_SUCCESS;
+  for (cupid_int i = first; i < last && st == CUPID_SUCCESS; i++) {
+    const double *w = words + (size_t)(i - first) * (size_t)nw;
+    int any = 0;
+    for (int k = 0; k < nw; k++) any |= w[k] != 0.0;
+    if (!any) continue;
+    const pd_family F = pd_family_of(op, i);
+    for (int q = 0; q < F.n; q++) {
+      const int s = pd_family_entry(&F, q);
+      if (s < half || pd_bond_broken(op, i, s)) continue;
+      const uint32_t bits = (uint32_t)w[(s - half) >> 5];
+      if ((bits >> ((s - half) & 31)) & 1u)
+        if (!list_push(&L, i, s)) st = CUPID_ERROR(CUPID_ERR_MEMORY, "out of memory for broken bonds");
+    }
+  }
+  if (st == CUPID_SUCCESS) st = break_list(op, u, &L, o, dissipated);
+  *added = (cupid_int)L.n;
+  free(L.i);
+  free(L.s);
   return st;
 }
 

@@ -26,6 +26,7 @@
  * (K u)_i = -V^2 sum_s omega beta / x_s (c_i + c_j)/2 e_ij n_s. */
 #define _POSIX_C_SOURCE 200809L /* posix_memalign */
 #include <stdlib.h>
+#include <math.h>
 #include <string.h>
 #ifdef _OPENMP
 #include <omp.h>
@@ -58,10 +59,16 @@ typedef struct {
   double *a;         /* LPS: kappa theta / m; bond-based: micromodulus c */
   double *b;         /* LPS: mu / m; NULL for bond-based */
   double *raw[5];    /* the blocks of x, y, z, a and b (b is NULL for bond-based) */
+  cupid_int *absent;      /* the stretch scan: the window's cells without a node, */
+  cupid_int n_absent;     /* for the window absent_key (base, n, lead) */
+  cupid_int absent_key[3];
 } pd_work;
 
 static void work_free(pd_work *w) {
   for (int k = 0; k < 5; k++) cupid_free(&w->raw[k]);
+  cupid_free(&w->absent);
+  w->n_absent = 0;
+  w->absent_key[1] = -1;
   w->x = w->y = w->z = w->a = w->b = NULL;
   w->cap = 0;
 }
@@ -567,6 +574,46 @@ static void hits_add(hit_list *L, const pd_hit *h, int n) {
   L->n += n;
 }
 
+/* The scan reads absent padded cells as NaN, which no comparison finds over a limit: else
+ * their zeros (the force kernels' ghost convention) make every lane block at a surface look
+ * stretched as soon as |u| exceeds the limit, and each such block is walked node by node
+ * (most of the scan's time on the 40^3 bar of bench/fracture_lammps.sh). The cells are listed
+ * once per window; scan_absent_zero puts the zeros back, so the next apply's fill stays a copy
+ * of u. */
+static cupid_status scan_absent_nan(const struct cupid_pd_operator_private *op, pd_work *w) {
+  const cupid_int key[3] = {w->base, w->n, w->lead};
+  if (memcmp(key, w->absent_key, sizeof key) != 0) {
+    unsigned char *present = NULL;
+    cupid_free(&w->absent);
+    w->n_absent = 0;
+    CUPID_CALL(cupid_calloc((size_t)w->n + 1, 1, "PD scan cells", &present));
+    for (cupid_int r = 0; r < op->nruns; r++) {
+      const pd_run *R = &op->runs[r];
+      memset(present + work_index(w, R, R->i0), 1, (size_t)R->len);
+    }
+    cupid_int count = 0;
+    for (cupid_int c = 0; c < w->n; c++) count += !present[c];
+    cupid_status st = cupid_malloc((size_t)count + 1, sizeof *w->absent, "PD scan cells", &w->absent);
+    for (cupid_int c = 0; c < w->n && st == CUPID_SUCCESS; c++)
+      if (!present[c]) w->absent[w->n_absent++] = c;
+    cupid_free(&present);
+    CUPID_CALL(st);
+    memcpy(w->absent_key, key, sizeof key);
+  }
+  for (cupid_int k = 0; k < w->n_absent; k++) {
+    const cupid_int c = w->absent[k];
+    w->x[c] = w->y[c] = w->z[c] = NAN;
+  }
+  return CUPID_SUCCESS;
+}
+
+static void scan_absent_zero(pd_work *w) {
+  for (cupid_int k = 0; k < w->n_absent; k++) {
+    const cupid_int c = w->absent[k];
+    w->x[c] = w->y[c] = w->z[c] = 0.0;
+  }
+}
+
 cupid_status pd_stencil_stretch_scan(const struct cupid_pd_operator_private *op, const double *u,
                                      double lim, pd_hit **hits, cupid_int *n) {
   *hits = NULL, *n = 0;
@@ -580,7 +627,7 @@ cupid_status pd_stencil_stretch_scan(const struct cupid_pd_operator_private *op,
   pd_work local = {0}, *w = &local;
   const int kept = !atomic_exchange(&mop->work_busy, 1);
   cupid_status st = CUPID_SUCCESS;
-  int nt = 1;
+  int nt = 1, nan_cells = 0;
 #ifdef _OPENMP
   nt = nn > PD_OMP_MIN_NODES ? omp_get_max_threads() : 1;
 #endif
@@ -596,6 +643,10 @@ cupid_status pd_stencil_stretch_scan(const struct cupid_pd_operator_private *op,
   const pd_kernel_set *K = kernels_pick();
   CUPID_TRY(work_reserve(w, op->padded, base, len, lead, lps));
   work_fill(op, w, 0, nn, u);
+  if (w->padded) {
+    CUPID_TRY(scan_absent_nan(op, w));
+    nan_cells = 1;
+  }
 #pragma omp parallel num_threads(nt)
   {
     int tid = 0;
@@ -635,6 +686,7 @@ cupid_status pd_stencil_stretch_scan(const struct cupid_pd_operator_private *op,
   }
   qsort(*hits, (size_t)*n, sizeof **hits, hit_order); /* the order of the plain scan */
 cleanup:
+  if (nan_cells) scan_absent_zero(w);
   for (int t = 0; per && t < nt; t++) free(per[t].h);
   free(per);
   work_free(&local);

@@ -137,10 +137,12 @@ static void PD_KNAME(run_bond_force)(const struct cupid_pd_operator_private *op,
 
 /* The bonds of the run's nodes to their neighbours at the entries s >= n/2 (each bond once,
  * from its lower node) whose extension e = n_s.(u_j - u_i) exceeds lim x_s: for pair s' < n/2
- * the entry is n-1-s' (offset -o_s', direction -n_s'), so e = n_s'.(u_i - u_-). The vector
- * loop only flags the (run, entry) pairs with a lane over the limit; those are walked again
- * node by node, and only a value over the limit pays for scan_keeps (an absent neighbour's padded cell reads 0; a broken bond stays
- * over its limit as the crack opens). Returns the count, or -1 if more than cap. */
+ * the entry is n-1-s' (offset -o_s', direction -n_s'), so e = n_s'.(u_i - u_-). Per lane
+ * block the node's own displacement is loaded once and every pair of the chunk compared (as
+ * the force kernels walk: three loads a pair, not six); a block with a lane over the limit
+ * is walked again node by node, and only a value over the limit pays for scan_keeps (an
+ * absent neighbour's padded cell reads 0; a broken bond stays over its limit as the crack
+ * opens). Returns the count, or -1 if more than cap. */
 static int PD_KNAME(run_stretch)(const struct cupid_pd_operator_private *op, const pd_work *w,
                                  const pd_run *R, cupid_int i, int len, double lim,
                                  pd_hit *restrict hits, int cap) {
@@ -148,33 +150,40 @@ static int PD_KNAME(run_stretch)(const struct cupid_pd_operator_private *op, con
   const cupid_int li = work_index(w, R, i);
   const double *restrict X = w->x + li, *restrict Y = w->y + li, *restrict Z = w->z + li;
   cupid_int rp[PD_PAIR_CHUNK], rm[PD_PAIR_CHUNK];
+  double thr[PD_PAIR_CHUNK];
   const int half = S->n / 2;
   int nh = 0;
   for (int s0 = 0; s0 < half; s0 += PD_PAIR_CHUNK) {
     const int s1 = s0 + PD_PAIR_CHUNK < half ? s0 + PD_PAIR_CHUNK : half;
     pair_offsets(op, w, R, i, s0, s1, rp, rm);
-    for (int s = s0; s < s1; s++) {
-      const cupid_int m = rm[s - s0];
-      const double n0 = S->nrm[3 * s], n1 = S->nrm[3 * s + 1], n2 = S->nrm[3 * s + 2];
-      const double thr = lim * S->x[s];
-      PD_KVEC tv = {0};
-      tv += thr;
+    for (int s = s0; s < s1; s++) thr[s - s0] = lim * S->x[s];
+    for (int t = 0; t < len; t += PD_KLANES) {
+      const PD_KVEC xt = PD_KLOAD(X + t), yt = PD_KLOAD(Y + t), zt = PD_KLOAD(Z + t);
       PD_KIVEC over = {0};
-      for (int t = 0; t < len; t += PD_KLANES) {
-        const PD_KVEC v = n0 * (PD_KLOAD(X + t) - PD_KLOAD(X + m + t)) +
-                          n1 * (PD_KLOAD(Y + t) - PD_KLOAD(Y + m + t)) +
-                          n2 * (PD_KLOAD(Z + t) - PD_KLOAD(Z + m + t));
+      for (int s = s0; s < s1; s++) {
+        const cupid_int m = rm[s - s0] + t;
+        const double n0 = S->nrm[3 * s], n1 = S->nrm[3 * s + 1], n2 = S->nrm[3 * s + 2];
+        const PD_KVEC v = n0 * (xt - PD_KLOAD(X + m)) + n1 * (yt - PD_KLOAD(Y + m)) +
+                          n2 * (zt - PD_KLOAD(Z + m));
+        PD_KVEC tv = {0};
+        tv += thr[s - s0];
         over |= v > tv; /* lanes past the run read the slack: at worst a wasted look below */
       }
       int any = 0;
       for (int l = 0; l < PD_KLANES; l++) any |= over[l] != 0;
       if (!any) continue;
-      const int entry = S->n - 1 - s;
-      for (int t = 0; t < len; t++) {
-        const double e = n0 * (X[t] - X[m + t]) + n1 * (Y[t] - Y[m + t]) + n2 * (Z[t] - Z[m + t]);
-        if (e > thr && scan_keeps(op, i + t, entry)) {
-          if (nh == cap) return -1;
-          hits[nh++] = (pd_hit){i + t, entry};
+      const int end = t + PD_KLANES < len ? t + PD_KLANES : len;
+      for (int s = s0; s < s1; s++) {
+        const cupid_int m = rm[s - s0];
+        const double n0 = S->nrm[3 * s], n1 = S->nrm[3 * s + 1], n2 = S->nrm[3 * s + 2];
+        const int entry = S->n - 1 - s;
+        for (int q = t; q < end; q++) {
+          const double e =
+              n0 * (X[q] - X[m + q]) + n1 * (Y[q] - Y[m + q]) + n2 * (Z[q] - Z[m + q]);
+          if (e > thr[s - s0] && scan_keeps(op, i + q, entry)) {
+            if (nh == cap) return -1;
+            hits[nh++] = (pd_hit){i + q, entry};
+          }
         }
       }
     }

@@ -29,6 +29,9 @@ typedef struct {
   cupid_int out_count;
   double *velocity; /* for the PD VTU */
   double *u_view;   /* Lagrange: u with the tied PD nodes recovered from the beam (outputs) */
+  cupid_int **cnodes, *n_cnodes; /* timed constraints: the PD nodes of each constraint */
+  /* a slab run (slab.c): rank 0's whole grid (coordinates only) for the VTU series */
+  cupid_pd_grid whole;
   const double *u_out; /* the displacements the outputs of this step show (u or u_view) */
 } dyn_output;
 
@@ -137,26 +140,42 @@ static cupid_status initial_state(cupid_problem_state *prob, double *v) {
   return CUPID_SUCCESS;
 }
 
-/* PD nodes as VTK vertices with displacement and velocity. */
-static cupid_status write_pd_step(dyn_output *o, const char *path, const double *v) {
-  cupid_problem_state *prob = o->prob;
+/* PD nodes as VTK vertices with displacement, velocity and (with fracture) damage. */
+static cupid_status write_pd_vertices(const char *path, cupid_pd_grid grid, const double *u,
+                                      const double *v, const double *damage) {
   cupid_status st = CUPID_SUCCESS;
-  cupid_int n = prob->n_pd, *conn = NULL, *offs = NULL;
+  cupid_int n = cupid_pd_grid_num_nodes(grid), *conn = NULL, *offs = NULL;
   unsigned char *types = NULL;
   CUPID_TRY(cupid_malloc((size_t)n, sizeof *conn, "VTU connectivity", &conn));
   CUPID_TRY(cupid_malloc((size_t)n, sizeof *offs, "VTU offsets", &offs));
   CUPID_TRY(cupid_malloc((size_t)n, sizeof *types, "VTU cell types", &types));
   for (cupid_int i = 0; i < n; i++) conn[i] = i, offs[i] = i + 1, types[i] = CUPID_VTK_VERTEX;
-  cupid_vtu_array pdata[3] = {{"displacement", 3, o->u_out}, {"velocity", 3, v},
-                              {"damage", 1, prob->damage}};
-  cupid_vtu_mesh mesh = {.n_points = n, .points = cupid_pd_grid_coords(prob->grid), .n_cells = n,
+  cupid_vtu_array pdata[3] = {{"displacement", 3, u}, {"velocity", 3, v}, {"damage", 1, damage}};
+  cupid_vtu_mesh mesh = {.n_points = n, .points = cupid_pd_grid_coords(grid), .n_cells = n,
                          .connectivity = conn, .offsets = offs, .types = types,
-                         .point_data = pdata, .n_point_data = prob->damage ? 3 : 2};
+                         .point_data = pdata, .n_point_data = damage ? 3 : 2};
   CUPID_TRY(cupid_vtu_write(path, &mesh));
 cleanup:
   cupid_free(&conn);
   cupid_free(&offs);
   cupid_free(&types);
+  return st;
+}
+
+/* The step's PD file: a slab run gathers u, v and damage on rank 0, which writes them on the
+ * whole grid (collective). */
+static cupid_status write_pd_step(dyn_output *o, const char *path, const double *v) {
+  cupid_problem_state *prob = o->prob;
+  if (!prob->slab) return write_pd_vertices(path, prob->grid, o->u_out, v, prob->damage);
+  double *g[3] = {NULL, NULL, NULL};
+  cupid_status st = CUPID_SUCCESS;
+  CUPID_TRY(cupid_problem_slab_gather(prob, o->u_out, 3, &g[0]));
+  CUPID_TRY(cupid_problem_slab_gather(prob, v, 3, &g[1]));
+  if (prob->damage) CUPID_TRY(cupid_problem_slab_gather(prob, prob->damage, 1, &g[2]));
+  if (o->whole) st = write_pd_vertices(path, o->whole, g[0], g[1], g[2]);
+  CUPID_TRY(cupid_problem_slab_agree(st));
+cleanup:
+  for (int k = 0; k < 3; k++) cupid_free(&g[k]);
   return st;
 }
 
@@ -190,7 +209,7 @@ static cupid_status record_file(dyn_output *o, const char *name, double t) {
  * part the model has (a coupled model both: model.pvd names them as blocks "beam" and "pd"). */
 static cupid_status write_vtu_step(dyn_output *o, cupid_int step, double t, const double *v) {
   cupid_problem_state *prob = o->prob;
-  char name[64], path[4096];
+  char name[64], path[4096] = "";
   if (prob->beam) {
     snprintf(name, sizeof name, "beam_%06lld.vtu", (long long)step);
     CUPID_CALL(out_path(prob, name, path, sizeof path));
@@ -199,9 +218,9 @@ static cupid_status write_vtu_step(dyn_output *o, cupid_int step, double t, cons
   }
   if (prob->grid) {
     snprintf(name, sizeof name, "pd_%06lld.vtu", (long long)step);
-    CUPID_CALL(out_path(prob, name, path, sizeof path));
+    if (prob->writedir) CUPID_CALL(out_path(prob, name, path, sizeof path));
     CUPID_CALL(write_pd_step(o, path, v));
-    CUPID_CALL(record_file(o, name, t));
+    if (prob->writedir) CUPID_CALL(record_file(o, name, t));
   }
   return CUPID_SUCCESS;
 }
@@ -225,6 +244,31 @@ static cupid_status history_grow(cupid_problem_state *prob, double **row) {
   return CUPID_SUCCESS;
 }
 
+/* The output points' values on a slab run: each point is sampled by the rank that owns the
+ * node whose cell holds it (its neighbours' copies are current), and summed over the ranks. */
+static cupid_status slab_points(const cupid_problem_state *prob, double *u) {
+  const cupid_output *out = &prob->model->output;
+  const int np = out->n_points;
+  double *buf = NULL;
+  CUPID_CALL(cupid_calloc((size_t)(4 * np) + 1, sizeof *buf, "output points", &buf));
+  double o[3], h = cupid_pd_grid_spacing(prob->grid);
+  cupid_pd_grid_origin(prob->grid, o);
+  for (int k = 0; k < np; k++) {
+    const double *p = out->points[k].at;
+    cupid_int ijk[3];
+    for (int a = 0; a < 3; a++) ijk[a] = (cupid_int)floor((p[a] - o[a]) / h);
+    const cupid_int node = cupid_pd_grid_node_at(prob->grid, ijk[0], ijk[1], ijk[2]);
+    const int mine = node >= 0 && cupid_problem_pd_owned(prob, node) && u[3 * k] == u[3 * k];
+    for (int c = 0; c < 3 && mine; c++) buf[3 * k + c] = u[3 * k + c];
+    buf[3 * np + k] = mine;
+  }
+  cupid_petsc_sum_doubles(buf, 4 * np);
+  for (int k = 0; k < np; k++)
+    for (int c = 0; c < 3; c++) u[3 * k + c] = buf[3 * np + k] > 0 ? buf[3 * k + c] : NAN;
+  cupid_free(&buf);
+  return CUPID_SUCCESS;
+}
+
 /* The output points at time t: in the problem's history and, on the rank that writes the
  * files, in history.csv. */
 static cupid_status history_row(dyn_output *o, double t) {
@@ -238,7 +282,11 @@ static cupid_status history_row(dyn_output *o, double t) {
     double *u = row + 1 + 3 * k;
     cupid_region_kind region;
     CUPID_CALL(cupid_problem_sample_point(o->prob, o->u_out, out->points[k].at, u, NULL, &region));
-    if (f) fprintf(f, ",%.10e,%.10e,%.10e", u[0], u[1], u[2]);
+  }
+  if (o->prob->slab) CUPID_CALL(slab_points(o->prob, row + 1));
+  for (int k = 0; k < out->n_points && f; k++) {
+    const double *u = row + 1 + 3 * k;
+    fprintf(f, ",%.10e,%.10e,%.10e", u[0], u[1], u[2]);
   }
   if (f) fputc('\n', f);
   return CUPID_SUCCESS;
@@ -289,14 +337,16 @@ static cupid_status monitor_outputs(dyn_output *o, cupid_int step, double t, int
     fprintf(f, "%.10e,%.10e,%.10e\n", e->external,
             e->kinetic + e->strain + e->damping + e->fracture - e->external, e->balance);
   }
-  if (prob->damage) {
+  if (prob->damage) { /* collective on a slab run: every rank counts, rank 0 writes */
     CUPID_CALL(cupid_problem_fracture_damage(prob));
+    const cupid_int nodes_broken = cupid_problem_fracture_nodes_broken(prob);
     if (o->damage)
       fprintf(cupid_atomic_stream(o->damage), "%lld,%.10e,%lld,%lld,%.10e,%lld\n", (long long)step,
               t, (long long)prob->broken_bonds, (long long)prob->damaged_nodes, prob->max_damage,
-              (long long)cupid_pd_operator_nodes_broken(prob->op, NULL));
+              (long long)nodes_broken);
   }
-  if (o->prob->model->output.vtu && o->prob->writedir) CUPID_CALL(write_vtu_step(o, step, t, v));
+  if (prob->model->output.vtu && (prob->writedir || prob->slab))
+    CUPID_CALL(write_vtu_step(o, step, t, v));
   o->prob->dyn.energy = *e;
   return CUPID_SUCCESS;
 }
@@ -404,23 +454,54 @@ static cupid_status conditions_now(void *ctx, double t, double *u_fixed, double 
   cupid_problem_state *prob = o->prob;
   const cupid_model_t *m = prob->model;
   prob->time = t;
+  if (o->timed_constraints && !o->cnodes) { /* the nodes of every constraint, once */
+    CUPID_CALL(cupid_calloc((size_t)m->n_constraints + 1, sizeof *o->cnodes, "constraint nodes",
+                            &o->cnodes));
+    CUPID_CALL(cupid_calloc((size_t)m->n_constraints + 1, sizeof *o->n_cnodes,
+                            "constraint nodes", &o->n_cnodes));
+    for (int k = 0; k < m->n_constraints; k++)
+      CUPID_CALL(cupid_problem_pd_constraint_nodes(prob, &m->constraints[k], &o->cnodes[k],
+                                                   &o->n_cnodes[k]));
+  }
   if (o->timed_constraints)
     for (int k = 0; k < m->n_constraints; k++)
-      CUPID_CALL(cupid_problem_pd_prescribe(prob, &m->constraints[k]));
+      cupid_problem_pd_prescribe_nodes(prob, &m->constraints[k], o->cnodes[k], o->n_cnodes[k]);
   if (o->timed_loads) {
     memset(prob->f_ext, 0, sizeof *prob->f_ext * (size_t)prob->ndof);
     CUPID_CALL(cupid_problem_pd_loads(prob, m->loads, m->n_loads, prob->f_ext));
   }
-  memcpy(u_fixed, prob->bc->value, sizeof *u_fixed * (size_t)prob->ndof);
-  memcpy(f, prob->f_ext, sizeof *f * (size_t)prob->ndof);
+  const double *value = prob->bc->value, *f_ext = prob->f_ext;
+#pragma omp parallel for schedule(static) if (prob->ndof > 100000)
+  for (cupid_int d = 0; d < prob->ndof; d++) u_fixed[d] = value[d], f[d] = f_ext[d];
   return CUPID_SUCCESS;
 }
 
-/* hooks->after_forces: bond breaking (fracture.c). */
-static cupid_status break_bonds(void *ctx, cupid_int step, double t, const double *u,
-                                double *dissipated) {
+/* hooks->after_forces: bond breaking at u_{n+1} (fracture.c); the bond-based model takes the
+ * broken bonds' forces out of ku itself, LPS asks for a new product. */
+static cupid_status break_bonds(void *ctx, cupid_int step, double t, const double *u, double *ku,
+                                double *dissipated, int *changed) {
   dyn_output *o = ctx;
-  return cupid_problem_fracture_step(o->prob, step, t, u, 0, NULL, dissipated);
+  cupid_problem_state *prob = o->prob;
+  const cupid_int before = cupid_pd_operator_num_broken(prob->op); /* this rank's bonds */
+  prob->fracture.ku = prob->model->pd.model == CUPID_PD_BOND ? ku : NULL;
+  cupid_status st = cupid_problem_fracture_step(prob, step, t, u, 0, NULL, dissipated);
+  prob->fracture.ku = NULL;
+  const int broke = cupid_pd_operator_num_broken(prob->op) != before;
+  *changed = broke ? (prob->model->pd.model == CUPID_PD_BOND ? 1 : 2) : 0;
+  return st;
+}
+
+/* A slab's stiffness product: its owned rows (the halo's rows are not needed, and not
+ * right: their families reach beyond the slab). */
+static cupid_status slab_apply(void *ctx, const double *x, double *y) {
+  const cupid_problem_state *prob = ctx;
+  const cupid_int a = prob->part.owned_first, b = prob->part.owned_last;
+  return cupid_pd_operator_apply_range(prob->op, a, b, x, y + 3 * a);
+}
+
+/* A status that one rank of a slab run found, agreed by all. */
+static cupid_status agreed(const cupid_problem_state *prob, cupid_status st) {
+  return prob->slab ? cupid_problem_slab_agree(st) : st;
 }
 
 cupid_status cupid_problem_run_dynamic(cupid_problem_state *prob, const cupid_method_operator *op) {
@@ -431,12 +512,21 @@ cupid_status cupid_problem_run_dynamic(cupid_problem_state *prob, const cupid_me
   double *m_lumped = NULL, *v = NULL, t0 = cupid_wtime();
   dyn_output o = {.prob = prob};
   const int mf = op != NULL;
-  CUPID_TRY(prob->method->mass(prob, &M, &m_lumped));
+  cupid_petsc_halo halo = NULL;
+  cupid_dynamics_partition part;
+  CUPID_TRY(agreed(prob, prob->method->mass(prob, &M, &m_lumped)));
   cupid_problem_phase_end(prob, CUPID_PHASE_ASSEMBLY, t0);
-  CUPID_TRY(cupid_calloc((size_t)prob->ndof, sizeof *v, "velocities", &v));
-  CUPID_TRY(initial_state(prob, v));
-  CUPID_TRY(cupid_problem_check_finite(prob, prob->u, &d->mark, "the initial displacement"));
-  CUPID_TRY(cupid_problem_check_finite(prob, v, &d->mark, "the initial velocity"));
+  CUPID_TRY(agreed(prob, cupid_calloc((size_t)prob->ndof + 1, sizeof *v, "velocities", &v)));
+  CUPID_TRY(agreed(prob, initial_state(prob, v)));
+  CUPID_TRY(agreed(prob, cupid_problem_check_finite(prob, prob->u, &d->mark,
+                                                    "the initial displacement")));
+  CUPID_TRY(agreed(prob, cupid_problem_check_finite(prob, v, &d->mark, "the initial velocity")));
+  if (prob->slab) { /* the halo exchange, and rank 0's whole grid for the VTU series */
+    CUPID_TRY(cupid_problem_slab_partition(prob, &halo, &part));
+    if (prob->writedir && m->output.vtu)
+      st = cupid_pd_grid_create_from_model(m, &o.whole);
+    CUPID_TRY(cupid_problem_slab_agree(st));
+  }
 
   cupid_dynamics_options opt = cupid_dynamics_defaults();
   opt.integrator = d->integrator;
@@ -471,6 +561,7 @@ cupid_status cupid_problem_run_dynamic(cupid_problem_state *prob, const cupid_me
                                          .apply = mf ? op->apply : NULL,
                                          .ctx = mf ? op->ctx : NULL,
                                          .m_lumped = m_lumped, .bc = prob->bc, .f = prob->f_ext};
+  if (prob->slab) esys.apply = slab_apply, esys.ctx = prob, esys.part = &part;
   st = mf ? cupid_dynamics_run_explicit(&esys, &opt, prob->u, v, monitor, &o, &prob->dyn.info)
           : cupid_dynamics_run(&sys, &opt, prob->u, v, monitor, &o, &prob->dyn.info);
   if (st == CUPID_ERR_ARGUMENT && d->integrator == CUPID_INTEGRATOR_CENTRAL &&
@@ -484,8 +575,9 @@ cupid_status cupid_problem_run_dynamic(cupid_problem_state *prob, const cupid_me
     prob->solve = prob->dyn.info.factor;
     prob->solved = 1;
   }
-  if (mf) CUPID_TRY(esys.apply(esys.ctx, prob->u, prob->f_int));
+  if (mf) CUPID_TRY(agreed(prob, esys.apply(esys.ctx, prob->u, prob->f_int)));
   else cupid_csr_matvec(prob->K, prob->u, prob->f_int);
+  if (prob->slab) CUPID_TRY(cupid_problem_slab_collect(prob)); /* rank 0: the whole model */
   t0 = cupid_wtime();
   CUPID_TRY(finish_outputs(&o));
   cupid_problem_phase_end(prob, CUPID_PHASE_OUTPUT, t0);
@@ -496,12 +588,17 @@ cleanup:
   cupid_atomic_abort(&o.history);
   cupid_atomic_abort(&o.damage);
   cupid_atomic_abort(&o.energies);
+  for (int k = 0; o.cnodes && k < m->n_constraints; k++) cupid_free(&o.cnodes[k]);
+  cupid_free(&o.cnodes);
+  cupid_free(&o.n_cnodes);
   cupid_free(&o.files);
   cupid_free(&o.u_view);
   cupid_free(&o.times);
   cupid_csr_destroy(&M);
   cupid_free(&m_lumped);
   cupid_free(&v);
+  cupid_petsc_halo_destroy(&halo);
+  cupid_pd_grid_destroy(&o.whole);
   return st;
 }
 
@@ -524,6 +621,7 @@ void cupid_problem_dynamic_json(cupid_json js, const cupid_problem_state *prob) 
     cupid_json_number(js, "omega_max", in->omega_max);
     cupid_json_number(js, "dt_critical", in->dt_critical);
     cupid_json_number(js, "dt_guaranteed_stable", in->dt_bound);
+    if (prob->dyn.matrix_free) cupid_json_integer(js, "lanczos_steps", in->lanczos_steps);
   }
   cupid_json_number(js, "rayleigh_mass", d->rayleigh_mass);
   cupid_json_number(js, "rayleigh_stiffness", d->rayleigh_stiffness);
@@ -535,5 +633,11 @@ void cupid_problem_dynamic_json(cupid_json js, const cupid_problem_state *prob) 
   cupid_json_number(js, "external_work", prob->dyn.energy.external);
   cupid_json_end_object(js);
   cupid_json_number(js, "max_energy_balance_relative", in->max_balance);
+  if (prob->slab_ranks > 1) { /* the PD grid was stepped in z slabs, one per rank */
+    cupid_json_begin_object(js, "pd_slabs");
+    cupid_json_integer(js, "ranks", prob->slab_ranks);
+    cupid_json_integer(js, "largest_slab_nodes", prob->slab_nodes_max);
+    cupid_json_end_object(js);
+  }
   cupid_json_end_object(js);
 }

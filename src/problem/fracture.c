@@ -110,6 +110,41 @@ static cupid_status no_fail_masks(cupid_problem_state *prob) {
   return CUPID_SUCCESS;
 }
 
+/* The critical-energy test reads the dilatations of both ends, and a slab's outer halo has
+ * them wrong (its families are cut), as it then has the bonds decided there, and so on
+ * inwards step by step. So on a slab each bond is decided by the rank that owns its lower
+ * node (where both ends' dilatations are right: halo of two horizons), and its bit goes to
+ * every rank that holds the node (one exchange a step). The stretch test reads u alone,
+ * which every rank has right: each rank decides its slab's bonds itself, as the whole grid
+ * would, and nothing is exchanged. */
+static cupid_status break_exchange_setup(cupid_problem_state *prob) {
+  const cupid_pd_grid_partition *p = &prob->part;
+  const cupid_int nw = cupid_pd_operator_broken_words(prob->op);
+  prob->fracture.owned_only = 1;
+  CUPID_CALL(cupid_calloc((size_t)(nw * prob->n_pd) + 1, sizeof *prob->break_words,
+                          "broken-bond bits", &prob->break_words));
+  return cupid_petsc_halo_create(nw * prob->n_pd, nw * p->owned_first, nw * p->owned_last,
+                                 nw * p->first_global, &prob->break_halo);
+}
+
+/* After this rank's decisions: the other ranks' decisions on the nodes it holds as halo,
+ * their energies on its owned nodes added to *dissipated (collective). */
+static cupid_status break_exchange(cupid_problem_state *prob, const double *u, double *dissipated) {
+  const cupid_pd_grid_partition *p = &prob->part;
+  const cupid_int nw = cupid_pd_operator_broken_words(prob->op);
+  double *w = prob->break_words, more = 0.0, extra = 0.0;
+  cupid_int added = 0;
+  cupid_pd_operator_pack_broken(prob->op, p->owned_first, p->owned_last, w + nw * p->owned_first);
+  CUPID_CALL(cupid_petsc_halo_update(prob->break_halo, w));
+  CUPID_CALL(cupid_pd_operator_unpack_broken(prob->op, 0, p->owned_first, w, u, &prob->fracture,
+                                             &added, &more));
+  CUPID_CALL(cupid_pd_operator_unpack_broken(prob->op, p->owned_last, prob->n_pd,
+                                             w + nw * p->owned_last, u, &prob->fracture, &added,
+                                             &extra));
+  *dissipated += more + extra;
+  return CUPID_SUCCESS;
+}
+
 cupid_status cupid_problem_fracture_setup(cupid_problem_state *prob) {
   const cupid_model_t *m = prob->model;
   prob->first_break_step = -1;
@@ -138,21 +173,41 @@ cupid_status cupid_problem_fracture_setup(cupid_problem_state *prob) {
   CUPID_CALL(no_fail_masks(prob));
   o->no_fail = prob->no_fail;
   o->protect = prob->protect;
+  if (prob->slab) { /* each bond and energy counted by one rank: its lower node's owner */
+    o->count_first = prob->part.owned_first;
+    o->count_last = prob->part.owned_last;
+  }
+  if (prob->slab && o->criterion == CUPID_PD_BREAK_ENERGY) CUPID_CALL(break_exchange_setup(prob));
   return CUPID_SUCCESS;
 }
 
-/* Where the crack started: the centroid of the nodes of the first broken bonds. */
+/* Where the crack started: the centroid of the nodes of the first broken bonds (over the
+ * ranks of a slab run: each its owned nodes). */
 static cupid_status first_break_place(cupid_problem_state *prob) {
   cupid_int *nodes = NULL;
-  CUPID_CALL(cupid_malloc((size_t)prob->n_pd, sizeof *nodes, "broken nodes", &nodes));
+  CUPID_CALL(cupid_malloc((size_t)prob->n_pd + 1, sizeof *nodes, "broken nodes", &nodes));
   const cupid_int n = cupid_pd_operator_nodes_broken(prob->op, nodes);
   const double *x = cupid_pd_grid_coords(prob->grid);
-  double *c = prob->first_break_at;
-  c[0] = c[1] = c[2] = 0.0;
-  for (cupid_int k = 0; k < n; k++)
-    for (int a = 0; a < 3; a++) c[a] += x[3 * nodes[k] + a] / (double)n;
+  double sum[4] = {0, 0, 0, 0};
+  for (cupid_int k = 0; k < n; k++) {
+    if (!cupid_problem_pd_owned(prob, nodes[k])) continue;
+    for (int a = 0; a < 3; a++) sum[a] += x[3 * nodes[k] + a];
+    sum[3] += 1.0;
+  }
   cupid_free(&nodes);
+  if (prob->slab) cupid_petsc_sum_doubles(sum, 4);
+  for (int a = 0; a < 3; a++) prob->first_break_at[a] = sum[3] > 0 ? sum[a] / sum[3] : 0.0;
   return CUPID_SUCCESS;
+}
+
+cupid_int cupid_problem_fracture_nodes_broken(const cupid_problem_state *prob) {
+  if (!prob->slab) return cupid_pd_operator_nodes_broken(prob->op, NULL);
+  cupid_int *nodes = NULL, owned = 0;
+  cupid_status st = cupid_malloc((size_t)prob->n_pd + 1, sizeof *nodes, "broken nodes", &nodes);
+  const cupid_int n = st == CUPID_SUCCESS ? cupid_pd_operator_nodes_broken(prob->op, nodes) : 0;
+  for (cupid_int k = 0; k < n; k++) owned += cupid_problem_pd_owned(prob, nodes[k]);
+  cupid_free(&nodes);
+  return cupid_problem_global_count(prob, owned);
 }
 
 cupid_status cupid_problem_fracture_step(cupid_problem_state *prob, cupid_int step, double t,
@@ -164,6 +219,10 @@ cupid_status cupid_problem_fracture_step(cupid_problem_state *prob, cupid_int st
   if (!prob->model->pd.fracture.has_fracture) return CUPID_SUCCESS;
   CUPID_CALL(cupid_pd_operator_break_bonds(prob->op, u, &prob->fracture, only_most, &broken,
                                            dissipated));
+  if (prob->break_halo) CUPID_CALL(cupid_problem_slab_agree(break_exchange(prob, u, dissipated)));
+  double total[2] = {(double)broken, *dissipated}; /* a slab's shares: summed over the ranks */
+  if (prob->slab) cupid_petsc_sum_doubles(total, 2);
+  broken = (cupid_int)total[0];
   if (n_broken) *n_broken = broken;
   if (broken == 0) return CUPID_SUCCESS;
   if (prob->first_break_step < 0) {
@@ -178,14 +237,31 @@ cupid_status cupid_problem_fracture_step(cupid_problem_state *prob, cupid_int st
                            t, (long long)broken, c[0], c[1], c[2]);
   }
   prob->broken_bonds += broken;
-  prob->fracture_energy += *dissipated;
+  prob->fracture_energy += total[1];
   if (prob->crack_copy) CUPID_CALL(cupid_pd_operator_copy_broken(prob->crack_copy, prob->op));
   return CUPID_SUCCESS;
 }
 
 cupid_status cupid_problem_fracture_damage(cupid_problem_state *prob) {
   if (!prob->damage) return CUPID_SUCCESS;
-  return cupid_pd_operator_damage(prob->op, prob->damage, &prob->damaged_nodes, &prob->max_damage);
+  if (prob->op)
+    CUPID_CALL(cupid_pd_operator_damage(prob->op, prob->damage, &prob->damaged_nodes,
+                                        &prob->max_damage));
+  if (prob->op && !prob->slab) return CUPID_SUCCESS;
+  /* a slab (its owned nodes, over the ranks), or rank 0's gathered field after a slab run */
+  double count = 0.0, top = 0.0;
+  for (cupid_int i = 0; i < prob->n_pd; i++) {
+    if (!cupid_problem_pd_owned(prob, i)) continue;
+    count += prob->damage[i] > 0.0;
+    top = fmax(top, prob->damage[i]);
+  }
+  if (prob->slab) {
+    cupid_petsc_sum_doubles(&count, 1);
+    cupid_petsc_max_doubles(&top, 1);
+  }
+  prob->damaged_nodes = (cupid_int)count;
+  prob->max_damage = top;
+  return CUPID_SUCCESS;
 }
 
 void cupid_problem_fracture_print(const cupid_problem_state *prob) {
@@ -230,6 +306,17 @@ void cupid_problem_fracture_json(cupid_json js, const cupid_problem_state *prob)
       cupid_json_end_array(js);
     }
     cupid_json_number(js, "dissipated_energy", prob->fracture_energy);
+    if (prob->growth.resolve) { /* static growth: how the re-solves went (growth.c) */
+      cupid_json_begin_object(js, "solves");
+      cupid_json_string(js, "resolve", prob->growth.resolve);
+      cupid_json_integer(js, "solves", prob->growth.solves);
+      cupid_json_integer(js, "factorisations", prob->growth.factorisations);
+      cupid_json_integer(js, "cg_solves", prob->growth.cg_solves);
+      cupid_json_integer(js, "cg_iterations", prob->growth.cg_iterations);
+      cupid_json_number(js, "factorisation_s", prob->growth.factor_s);
+      cupid_json_number(js, "cg_s", prob->growth.cg_s);
+      cupid_json_end_object(js);
+    }
   }
   cupid_json_integer(js, "damaged_nodes", prob->damaged_nodes);
   cupid_json_number(js, "max_damage", prob->max_damage);

@@ -13,6 +13,7 @@
  * constraint), its plot, and the fracture block of summary.json. */
 #include <math.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 
 #include "method.h"
@@ -30,6 +31,15 @@ typedef struct {
   double u0[3];                 /* the first output point's displacement, last step */
   cupid_atomic_file csv;
   cupid_int released;
+  /* Re-solves after breaks (resolve.c of this file, below): the factor of the last
+   * factorised K, reused as the preconditioner of CG on the current K. */
+  cupid_direct_factor F;
+  int krylov;                   /* 0: refactorise after every break (CUPID_GROWTH_RESOLVE) */
+  double *w[4];                 /* CG work vectors */
+  cupid_int factorisations, cg_solves, cg_iterations;
+  cupid_int bonds_at_factor;    /* broken bonds when F was made */
+  double last_factor_s;         /* the last factorisation's time */
+  double t_factor, t_cg;
 } growth_run;
 
 static void growth_free(growth_run *g) {
@@ -42,6 +52,8 @@ static void growth_free(growth_run *g) {
   cupid_free(&g->T);
   cupid_free(&g->u1);
   cupid_atomic_abort(&g->csv);
+  cupid_direct_factor_destroy(&g->F);
+  for (int k = 0; k < 4; k++) cupid_free(&g->w[k]);
 }
 
 /* The DOFs each constraint fixes (one byte a DOF and constraint), and the unit translations:
@@ -222,11 +234,135 @@ static cupid_status hold_singular_node(growth_run *g, int step, int *held) {
   return CUPID_SUCCESS;
 }
 
-/* Solve at the current load (K assembled again when bonds broke). */
-static cupid_status solve(cupid_problem_state *prob, int reassemble) {
+/* ---- Re-solves after bonds break (issue 17, item 3) ----
+ * A break changes K by a few bonds (bond-based: a rank-one term each; LPS: the dilatation
+ * terms of both families), so the factor of the K of the last factorisation stays a close
+ * preconditioner: CG on the current K (assembled again, cheap next to a factorisation)
+ * preconditioned by that factor converges in about as many iterations as the rank of the
+ * change, and the factor is renewed when a CG solve took longer than the last factorisation
+ * (or needed more than CG_REFACTOR iterations): at worst about the cost of refactorising
+ * every time (bench/growth.sh measures both ways). Nodes held since the factorisation are fixed in the
+ * current system: the preconditioner is the factor restricted to the current free DOFs
+ * (P F^-1 P^T, still symmetric positive definite). Each load step after a break starts with
+ * a new factor: a mechanism of several nodes that cupid_pd_operator_unsupported() does not
+ * see takes no load, and CG would leave it where the preconditioner puts it, where the
+ * factorisation finds it singular and the node is held (hold_singular_node). The scalar products are summed in one
+ * thread, so the iterates, hence the bonds that break, do not depend on the thread count. */
+#define CG_RTOL 1e-12
+#define CG_REFACTOR 60
+
+static double dot_free(const cupid_dirichlet_t *bc, cupid_int n, const double *a, const double *b) {
+  double s = 0.0;
+  for (cupid_int d = 0; d < n; d++)
+    if (!bc->fixed[d]) s += a[d] * b[d];
+  return s;
+}
+
+/* z = P F^-1 P^T r: r's free entries through the factor, z zero on the fixed DOFs. */
+static cupid_status precondition(growth_run *g, const double *r, double *z) {
+  const cupid_dirichlet_t *bc = g->prob->bc;
+  const cupid_int n = g->prob->ndof;
+  double *t = g->w[3];
+  for (cupid_int d = 0; d < n; d++) t[d] = bc->fixed[d] ? 0.0 : r[d];
+  CUPID_CALL(cupid_direct_factor_solve(g->F, t, z));
+  for (cupid_int d = 0; d < n; d++)
+    if (bc->fixed[d]) z[d] = 0.0;
+  return CUPID_SUCCESS;
+}
+
+/* Factorise the current K and solve (u: the prescribed values on the fixed DOFs). */
+static cupid_status factor_solve(growth_run *g) {
+  cupid_problem_state *prob = g->prob;
+  const cupid_dirichlet_t *bc = prob->bc;
+  const cupid_int n = prob->ndof;
+  double t0 = cupid_wtime(), *t = g->w[0], *r = g->w[1];
+  cupid_direct_factor_destroy(&g->F);
+  cupid_solve_info info;
+  memset(&info, 0, sizeof info);
+  cupid_status st = cupid_direct_factor_create(prob->K, bc, &g->F, &info);
+  prob->solve = info;
+  if (st != CUPID_SUCCESS) return st;
+  g->factorisations++;
+  g->bonds_at_factor = prob->broken_bonds;
+  g->last_factor_s = cupid_wtime() - t0;
+  g->t_factor += g->last_factor_s;
+  for (cupid_int d = 0; d < n; d++) t[d] = bc->fixed[d] ? bc->value[d] : 0.0;
+  cupid_csr_matvec(prob->K, t, r); /* b = f - K_fc u_c */
+  for (cupid_int d = 0; d < n; d++) r[d] = bc->fixed[d] ? 0.0 : prob->f_ext[d] - r[d];
+  CUPID_CALL(cupid_direct_factor_solve(g->F, r, prob->u));
+  for (cupid_int d = 0; d < n; d++)
+    if (bc->fixed[d]) prob->u[d] = bc->value[d];
+  return CUPID_SUCCESS;
+}
+
+/* CG on the current K from the last u, preconditioned by the factor; *done = 0 when it did
+ * not reach CG_RTOL within CG_REFACTOR iterations (u then as it was). */
+static cupid_status cg_solve(growth_run *g, int *done) {
+  cupid_problem_state *prob = g->prob;
+  const cupid_dirichlet_t *bc = prob->bc;
+  const cupid_int n = prob->ndof;
+  double t0 = cupid_wtime(), *x = g->w[0], *r = g->w[1], *z = g->w[2], *p = prob->f_int;
+  double *q = g->w[3];
+  *done = 0;
+  for (cupid_int d = 0; d < n; d++) x[d] = bc->fixed[d] ? bc->value[d] : prob->u[d];
+  cupid_csr_matvec(prob->K, x, r);
+  for (cupid_int d = 0; d < n; d++) r[d] = bc->fixed[d] ? 0.0 : prob->f_ext[d] - r[d];
+  /* the scale: |b| = |f_f - K_fc u_c| would need a product more; |f_f| + |K x|_f bounds it */
+  double fn = 0.0;
+  for (cupid_int d = 0; d < n; d++)
+    if (!bc->fixed[d]) fn += prob->f_ext[d] * prob->f_ext[d];
+  const double r0 = sqrt(dot_free(bc, n, r, r)), scale = fmax(sqrt(fn), r0);
+  int it = 0;
+  if (r0 > CG_RTOL * scale) {
+    CUPID_CALL(precondition(g, r, z));
+    memcpy(p, z, (size_t)n * sizeof *p);
+    double rz = dot_free(bc, n, r, z);
+    for (it = 1; it <= CG_REFACTOR; it++) {
+      cupid_csr_matvec(prob->K, p, q);
+      const double pq = dot_free(bc, n, p, q);
+      if (!(pq > 0.0)) break; /* not positive definite on the free DOFs: refactorise */
+      const double alpha = rz / pq;
+      for (cupid_int d = 0; d < n; d++)
+        if (!bc->fixed[d]) x[d] += alpha * p[d], r[d] -= alpha * q[d];
+      if (sqrt(dot_free(bc, n, r, r)) <= CG_RTOL * scale) break;
+      CUPID_CALL(precondition(g, r, z));
+      const double rz1 = dot_free(bc, n, r, z), beta = rz1 / rz;
+      rz = rz1;
+      for (cupid_int d = 0; d < n; d++) p[d] = bc->fixed[d] ? 0.0 : z[d] + beta * p[d];
+    }
+    if (it > CG_REFACTOR || sqrt(dot_free(bc, n, r, r)) > CG_RTOL * scale) return CUPID_SUCCESS;
+  }
+  memcpy(prob->u, x, (size_t)n * sizeof *x);
+  g->cg_solves++;
+  g->cg_iterations += it;
+  const double took = cupid_wtime() - t0;
+  g->t_cg += took;
+  prob->solve.iterations = it;
+  *done = 1;
+  /* the factor has drifted so far from K that CG costs more than a new one: renew it */
+  if (took > g->last_factor_s) cupid_direct_factor_destroy(&g->F);
+  return CUPID_SUCCESS;
+}
+
+/* Solve at the current load (K assembled again when bonds broke): CG preconditioned by the
+ * last factor when there is one (growth by Krylov re-solves), else a factorisation. A
+ * non-symmetric method or an iterative engine takes the engine's solve every time. */
+static cupid_status solve(growth_run *g, int reassemble) {
+  cupid_problem_state *prob = g->prob;
   if (reassemble) cupid_csr_destroy(&prob->K);
   CUPID_CALL(prob->method->assemble(prob));
-  CUPID_CALL(cupid_problem_linear_solve(prob, prob->method->matrix));
+  const int own = prob->method->matrix == CUPID_MATRIX_SPD && !prob->engine->iterative;
+  int done = 0;
+  if (own && g->F && g->krylov) CUPID_CALL(cg_solve(g, &done));
+  if (own && !done) {
+    cupid_status st = factor_solve(g);
+    /* a singular K: the engine's solve again, for its message naming the node */
+    if (st == CUPID_ERR_NUMERIC) cupid_error_clear();
+    else CUPID_CALL(st);
+    done = st == CUPID_SUCCESS;
+  }
+  if (!done) CUPID_CALL(cupid_problem_linear_solve(prob, prob->method->matrix));
+  prob->growth.solves++;
   if (prob->method->recover) prob->method->recover(prob, prob->u);
   cupid_csr_matvec(prob->K, prob->u, prob->f_int);
   return CUPID_SUCCESS;
@@ -240,11 +376,12 @@ static cupid_status load_step(growth_run *g, int k, double lambda, int *iteratio
   const int only_most = fracture && !m->pd.fracture.per_iteration_all;
   int reassemble = 0; /* K holds the intact bonds of the last solve */
   *iterations = 0;
+  if (g->F && g->bonds_at_factor != prob->broken_bonds) cupid_direct_factor_destroy(&g->F);
   for (;;) {
     const int quiet = prob->quiet; /* the first solve reports its assembly; the others would
                                       repeat it per broken bond */
     if (k > 1 || *iterations > 0) prob->quiet = 1;
-    cupid_status st = solve(prob, reassemble);
+    cupid_status st = solve(g, reassemble);
     prob->quiet = quiet;
     if (st == CUPID_ERR_NUMERIC && prob->broken_bonds > 0) { /* what breaking left loose */
       int held = 0;
@@ -288,6 +425,10 @@ static cupid_status setup_run(growth_run *g) {
     anchor(g);
   }
   CUPID_CALL(constraint_masks(g));
+  for (int k = 0; k < 4; k++)
+    CUPID_CALL(cupid_calloc(n + 1, sizeof(double), "growth work vectors", &g->w[k]));
+  const char *how = getenv("CUPID_GROWTH_RESOLVE"); /* bench/growth.sh: factor | krylov */
+  g->krylov = !(how && strcmp(how, "factor") == 0);
   return open_csv(g);
 }
 
@@ -302,7 +443,7 @@ cupid_status cupid_problem_run_growth(cupid_problem_state *prob) {
   const int fracture = m->has_peridynamics && m->pd.fracture.has_fracture;
   if (!fracture) { /* linear: one solve at load factor 1 (one factorisation), each step its
                       multiple: the last step's is the solution */
-    CUPID_TRY(solve(prob, 0));
+    CUPID_TRY(solve(&g, 0));
     CUPID_TRY(cupid_malloc(2 * n, sizeof *g.u1, "the unit solution", &g.u1));
     memcpy(g.u1, prob->u, n * sizeof *g.u1);
     memcpy(g.u1 + n, prob->f_int, n * sizeof *g.u1);
@@ -333,6 +474,12 @@ cupid_status cupid_problem_run_growth(cupid_problem_state *prob) {
   }
   prob->solved = 1;
   prob->phases[CUPID_PHASE_SOLVE] = (cupid_phase_record){cupid_wtime() - t0, cupid_peak_memory(), 1};
+  prob->growth.resolve = g.krylov ? "krylov" : "factor";
+  prob->growth.factorisations = g.factorisations;
+  prob->growth.cg_solves = g.cg_solves;
+  prob->growth.cg_iterations = g.cg_iterations;
+  prob->growth.factor_s = g.t_factor;
+  prob->growth.cg_s = g.t_cg;
   if (g.csv) CUPID_TRY(cupid_atomic_commit(&g.csv));
   CUPID_TRY(plots(&g));
   if (prob->method->report) CUPID_TRY(prob->method->report(prob));

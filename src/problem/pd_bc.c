@@ -25,33 +25,41 @@ static void node_lattice(const cupid_problem_state *prob, cupid_int node, cupid_
   if (cupid_pd_grid_dimension(prob->grid) == 1) ijk[0] = ijk[2] = 0;
 }
 
+/* 1 if PD node i is one the constraint holds. */
+static int in_constraint(const cupid_problem_state *prob, const cupid_constraint *c, cupid_int i) {
+  const double *p = cupid_pd_grid_coords(prob->grid) + 3 * i;
+  const double h = cupid_pd_grid_spacing(prob->grid);
+  const double layer = c->layer > 0 ? c->layer : prob->model->pd.horizon;
+  return c->kind == CUPID_CONSTRAINT_CLAMP ? fabs(p[1] - c->plane_y) < layer
+                                           : cupid_box_contains(&c->box, p, CUPID_LATTICE_TOL * h);
+}
+
+/* The constraint's values on node i, at the problem's time. */
+static void prescribe_node(cupid_problem_state *prob, const cupid_constraint *c, cupid_int i) {
+  const cupid_model_t *m = prob->model;
+  const double *p = cupid_pd_grid_coords(prob->grid) + 3 * i;
+  const int *mat = cupid_pd_grid_materials(prob->grid);
+  for (int a = 0; a < 3; a++) {
+    cupid_int d = 3 * i + a;
+    if (c->kind == CUPID_CONSTRAINT_DISPLACEMENT) {
+      if (c->value[a].kind == CUPID_VALUE_NONE) continue;
+      prob->bc->fixed[d] = 1;
+      prob->bc->value[d] =
+          cupid_value_eval(&c->value[a], p[0], p[1], p[2], prob->time, m->materials[mat[i]].density);
+    } else if (c->kind == CUPID_CONSTRAINT_CLAMP || c->components[a]) {
+      prob->bc->fixed[d] = 1;
+      prob->bc->value[d] = 0.0;
+    }
+  }
+}
+
 static cupid_status constraint_on_nodes(cupid_problem_state *prob, const cupid_constraint *c,
                                         cupid_int *count) {
-  const cupid_model_t *m = prob->model;
-  const double *x = cupid_pd_grid_coords(prob->grid);
-  const int *mat = cupid_pd_grid_materials(prob->grid);
-  double h = cupid_pd_grid_spacing(prob->grid);
-  double layer = c->layer > 0 ? c->layer : m->pd.horizon;
   *count = 0;
   for (cupid_int i = 0; i < prob->n_pd; i++) {
-    const double *p = x + 3 * i;
-    int in = c->kind == CUPID_CONSTRAINT_CLAMP ? fabs(p[1] - c->plane_y) < layer
-                                               : cupid_box_contains(&c->box, p, CUPID_LATTICE_TOL * h);
-    if (!in) continue;
+    if (!in_constraint(prob, c, i)) continue;
     *count += cupid_problem_pd_owned(prob, i);
-    for (int a = 0; a < 3; a++) {
-      cupid_int d = 3 * i + a;
-      if (c->kind == CUPID_CONSTRAINT_DISPLACEMENT) {
-        if (c->value[a].kind == CUPID_VALUE_NONE) continue;
-        prob->bc->fixed[d] = 1;
-        prob->bc->value[d] =
-            cupid_value_eval(&c->value[a], p[0], p[1], p[2], prob->time,
-                             m->materials[mat[i]].density);
-      } else if (c->kind == CUPID_CONSTRAINT_CLAMP || c->components[a]) {
-        prob->bc->fixed[d] = 1;
-        prob->bc->value[d] = 0.0;
-      }
-    }
+    prescribe_node(prob, c, i);
   }
   return CUPID_SUCCESS;
 }
@@ -59,6 +67,25 @@ static cupid_status constraint_on_nodes(cupid_problem_state *prob, const cupid_c
 cupid_status cupid_problem_pd_prescribe(cupid_problem_state *prob, const cupid_constraint *c) {
   cupid_int count;
   return constraint_on_nodes(prob, c, &count);
+}
+
+cupid_status cupid_problem_pd_constraint_nodes(const cupid_problem_state *prob,
+                                               const cupid_constraint *c, cupid_int **nodes,
+                                               cupid_int *n) {
+  *nodes = NULL, *n = 0;
+  cupid_int count = 0;
+  for (cupid_int i = 0; i < prob->n_pd; i++) count += in_constraint(prob, c, i);
+  CUPID_CALL(cupid_malloc((size_t)count + 1, sizeof **nodes, "constrained nodes", nodes));
+  for (cupid_int i = 0; i < prob->n_pd; i++)
+    if (in_constraint(prob, c, i)) (*nodes)[(*n)++] = i;
+  return CUPID_SUCCESS;
+}
+
+void cupid_problem_pd_prescribe_nodes(cupid_problem_state *prob, const cupid_constraint *c,
+                                      const cupid_int *nodes, cupid_int n) {
+  /* distinct nodes, thread-safe expressions (a stack each): one node a thread at a time */
+#pragma omp parallel for schedule(static) if (n > 4096)
+  for (cupid_int k = 0; k < n; k++) prescribe_node(prob, c, nodes[k]);
 }
 
 /* A 1D grid is a bar along y: its x and z components carry no stiffness, so they are

@@ -548,6 +548,8 @@ void cupid_problem_state_free(cupid_problem_state *prob) {
   cupid_free(&prob->protect);
   cupid_free(&prob->no_fail);
   cupid_free(&prob->node_stretch);
+  cupid_petsc_halo_destroy(&prob->break_halo);
+  cupid_free(&prob->break_words);
   cupid_free(&prob->damage);
 }
 

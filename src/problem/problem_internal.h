@@ -129,6 +129,10 @@ typedef struct cupid_problem_private {
   unsigned char *protect;           /**< per PD node: its bonds never break (method stage) */
   uint32_t *no_fail;                /**< per PD node: the no-fail boxes holding it */
   double *node_stretch;             /**< per PD node s0 (from G0), or NULL */
+  /* A slab run with the critical-energy criterion (fracture.c): each rank decides the bonds
+   * of its owned nodes and sends their bits to the ranks that hold them as halo. */
+  cupid_petsc_halo break_halo;
+  double *break_words;              /**< the bits of every slab node (broken_words each) */
   cupid_int broken_bonds;           /**< broken during the run (pre-cracks not counted) */
   cupid_int first_break_step;       /**< -1: none */
   double first_break_t, fracture_energy;
@@ -140,6 +144,12 @@ typedef struct cupid_problem_private {
                                          bonds as prob->op (borrowed, during its run), or NULL */
   cupid_int damaged_nodes;
   double max_damage;
+  /* static growth (growth.c): how the solves went, for summary.json's fracture block */
+  struct {
+    const char *resolve;            /**< "krylov" (CG on the last factor) or "factor" */
+    cupid_int solves, factorisations, cg_solves, cg_iterations;
+    double factor_s, cg_s;
+  } growth;
 } cupid_problem_state;
 
 /* growth.c: `type: static` with load steps or fracture (sequentially linear growth). */
@@ -157,8 +167,12 @@ cupid_status cupid_problem_fracture_setup(cupid_problem_state *prob);
 cupid_status cupid_problem_fracture_step(cupid_problem_state *prob, cupid_int step, double t,
                                          const double *u, int only_most, cupid_int *n_broken,
                                          double *dissipated);
-/** prob->damage, damaged_nodes, max_damage from the operator's broken bonds (outputs). */
+/** prob->damage, damaged_nodes, max_damage from the operator's broken bonds (outputs); on a
+ *  slab the counts are the whole grid's (collective), and after a slab run rank 0 counts its
+ *  gathered field. */
 cupid_status cupid_problem_fracture_damage(cupid_problem_state *prob);
+/** Nodes that lost a bond to breaking, over the whole grid (collective on a slab). */
+cupid_int cupid_problem_fracture_nodes_broken(const cupid_problem_state *prob);
 /** 1 when the model has pre-cracks or fracture (damage is an output). */
 int cupid_problem_has_damage(const cupid_problem_state *prob);
 /** `cupid check`: the pre-cracks' bonds and the breaking rule, on stdout. */
@@ -195,6 +209,13 @@ cupid_status cupid_problem_pd_constraints(cupid_problem_state *prob, const cupid
                                           int n);
 /** The prescribed values of one constraint on the PD nodes at prob->time, into prob->bc. */
 cupid_status cupid_problem_pd_prescribe(cupid_problem_state *prob, const cupid_constraint *c);
+/* The PD nodes a constraint holds (*nodes allocated, ascending), and its values on them at
+ * prob->time: a time loop finds the nodes once and evaluates only there. */
+cupid_status cupid_problem_pd_constraint_nodes(const cupid_problem_state *prob,
+                                               const cupid_constraint *c, cupid_int **nodes,
+                                               cupid_int *n);
+void cupid_problem_pd_prescribe_nodes(cupid_problem_state *prob, const cupid_constraint *c,
+                                      const cupid_int *nodes, cupid_int n);
 /** Add the loads to f (3 per PD node, in the layout of prob->f_ext), at prob->time. */
 cupid_status cupid_problem_pd_loads(cupid_problem_state *prob, const cupid_load *loads, int n,
                                     double *f);
@@ -214,7 +235,8 @@ cupid_status cupid_problem_sample_point(const cupid_problem_state *prob, const d
                                         double u[3], double sigma[6], cupid_region_kind *region);
 
 /* slab.c (issue 6): PD models split into z slabs over the MPI ranks. */
-/** Several ranks, 3D, static, solver petsc or auto, a method that runs on slabs. */
+/** Several ranks, 3D, a method that runs on slabs, and a static solve by a distributed engine
+ *  (petsc or auto; no load steps, no crack growth) or explicit dynamics of a PD-only model. */
 int cupid_problem_slab_wanted(const cupid_problem_state *prob);
 /** The status of every rank agreed (collective): an error on any rank is an error on all, so
  *  that none waits alone in the next collective call (the failing rank keeps its message). */
@@ -229,6 +251,14 @@ cupid_status cupid_problem_slab_check_points(cupid_problem_state *prob);
 /** After the solve: stresses of the slab, every owned field gathered on rank 0, which then
  *  holds the whole grid and fields (prob->slab = 0 there) for the outputs (collective). */
 cupid_status cupid_problem_slab_collect(cupid_problem_state *prob);
+/** n_per_node values of every owned node of every rank into *whole on rank 0 (allocated
+ *  there; NULL on the others), in global node order (collective). */
+cupid_status cupid_problem_slab_gather(const cupid_problem_state *prob, const double *local,
+                                       int n_per_node, double **whole);
+/** The partition of an explicit run on this rank's slab: owned DOFs, the halo exchange
+ *  (*halo, destroyed by the caller) and sums over the ranks (collective). */
+cupid_status cupid_problem_slab_partition(const cupid_problem_state *prob, cupid_petsc_halo *halo,
+                                          cupid_dynamics_partition *part);
 
 /* report.c: every file of output (summary.json, lines, pd_nodes.csv, VTU, plots). */
 /** The outputs need nodal PD stresses (VTU, or a point with stress). */

@@ -20,9 +20,16 @@ int cupid_problem_slab_wanted(const cupid_problem_state *prob) {
    * Lagrange multipliers and the assembled paths (--assembled) keep the replicated model, and
    * --replicate keeps the whole model on every rank */
   int slabs = (prob->method->caps & CUPID_METHOD_SLABS) && !(m->has_beam && prob->opts->assembled);
+  const cupid_analysis *a = &m->analysis;
+  /* static: the matrix-free solve of a distributed engine (load steps and crack growth
+   * assemble K on one process); dynamic: central differences on a PD-only model, each rank
+   * stepping its slab with the stencil operator and a halo exchange a step */
+  const int solve = a->type == CUPID_ANALYSIS_STATIC && a->steps == 0 &&
+                    !m->pd.fracture.has_fracture && (!engine || engine->distributed);
+  const int explicit_pd = a->type == CUPID_ANALYSIS_DYNAMIC && !m->has_beam &&
+                          a->dynamic.integrator == CUPID_INTEGRATOR_CENTRAL;
   return slabs && !prob->opts->replicate && cupid_petsc_size() > 1 && !prob->opts->check_only &&
-         m->has_peridynamics && m->pd.dimension == 3 &&
-         m->analysis.type == CUPID_ANALYSIS_STATIC && (!engine || engine->distributed);
+         m->has_peridynamics && m->pd.dimension == 3 && (solve || explicit_pd);
 }
 
 int cupid_problem_pd_owned(const cupid_problem_state *prob, cupid_int node) {
@@ -68,6 +75,33 @@ static cupid_status gather_nodes(const cupid_problem_state *prob, const double *
                                  *whole);
 }
 
+cupid_status cupid_problem_slab_gather(const cupid_problem_state *prob, const double *local,
+                                       int n_per_node, double **whole) {
+  *whole = NULL;
+  return gather_nodes(prob, local, n_per_node, whole);
+}
+
+static cupid_status halo_exchange(void *ctx, double *x) { return cupid_petsc_halo_update(ctx, x); }
+
+static void sum_over_ranks(void *ctx, double *values, int count) {
+  (void)ctx;
+  cupid_petsc_sum_doubles(values, count);
+}
+
+cupid_status cupid_problem_slab_partition(const cupid_problem_state *prob, cupid_petsc_halo *halo,
+                                          cupid_dynamics_partition *part) {
+  const cupid_pd_grid_partition *p = &prob->part;
+  CUPID_CALL(cupid_problem_slab_agree(cupid_petsc_halo_create(
+      prob->ndof, 3 * p->owned_first, 3 * p->owned_last, 3 * p->first_global, halo)));
+  *part = (cupid_dynamics_partition){.owned_first = 3 * p->owned_first,
+                                     .owned_last = 3 * p->owned_last,
+                                     .global_first = 3 * p->first_global,
+                                     .exchange = halo_exchange,
+                                     .sum = sum_over_ranks,
+                                     .ctx = *halo};
+  return CUPID_SUCCESS;
+}
+
 /* The Dirichlet flags and values as doubles (MPI moves one type here). */
 static cupid_status bc_as_doubles(const cupid_problem_state *prob, double **flags, double **values) {
   const cupid_int nd = prob->ndof;
@@ -82,7 +116,7 @@ static cupid_status bc_as_doubles(const cupid_problem_state *prob, double **flag
 
 /* Rank 0 becomes a whole-grid prob: the whole grid (no operator), the gathered fields (and
  * the beam, for a coupled model). */
-static cupid_status become_whole(cupid_problem_state *prob, double *g[6]) {
+static cupid_status become_whole(cupid_problem_state *prob, double *g[7]) {
   double *u = g[0], *f_ext = g[1], *f_int = g[2], *flags = g[3], *values = g[4], *stress = g[5];
   cupid_pd_operator_destroy(&prob->op);
   cupid_pd_grid_destroy(&prob->grid);
@@ -107,12 +141,17 @@ static cupid_status become_whole(cupid_problem_state *prob, double *g[6]) {
   cupid_free(&prob->pd_stress);
   prob->u = u, prob->f_ext = f_ext, prob->f_int = f_int, prob->pd_stress = stress;
   g[0] = g[1] = g[2] = g[5] = NULL; /* now the prob's */
+  if (prob->damage) { /* the gathered damage (cupid_problem_fracture_damage reads it now) */
+    cupid_free(&prob->damage);
+    prob->damage = g[6];
+    g[6] = NULL;
+  }
   return CUPID_SUCCESS;
 }
 
 cupid_status cupid_problem_slab_collect(cupid_problem_state *prob) {
   cupid_status st = CUPID_SUCCESS;
-  double *g[6] = {NULL, NULL, NULL, NULL, NULL, NULL}, *flags = NULL, *values = NULL;
+  double *g[7] = {NULL, NULL, NULL, NULL, NULL, NULL, NULL}, *flags = NULL, *values = NULL;
   /* Bonds and slab sizes for the summary, summed and maximised over the ranks. */
   double sums[2] = {(double)cupid_pd_operator_num_bonds_range(prob->op, prob->part.owned_first,
                                                                prob->part.owned_last), 0.0};
@@ -132,12 +171,16 @@ cupid_status cupid_problem_slab_collect(cupid_problem_state *prob) {
   CUPID_TRY(gather_nodes(prob, flags, 3, &g[3]));
   CUPID_TRY(gather_nodes(prob, values, 3, &g[4]));
   if (prob->pd_stress) CUPID_TRY(gather_nodes(prob, prob->pd_stress, 6, &g[5]));
+  if (prob->damage) {
+    CUPID_TRY(cupid_problem_slab_agree(cupid_problem_fracture_damage(prob)));
+    CUPID_TRY(gather_nodes(prob, prob->damage, 1, &g[6]));
+  }
   if (cupid_petsc_rank() == 0) {
     CUPID_TRY(become_whole(prob, g));
     prob->slab = 0; /* rank 0 now holds the whole model; the others stop here */
   }
 cleanup:
-  for (int k = 0; k < 6; k++) cupid_free(&g[k]);
+  for (int k = 0; k < 7; k++) cupid_free(&g[k]);
   cupid_free(&flags);
   cupid_free(&values);
   return st;

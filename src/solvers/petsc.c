@@ -103,6 +103,10 @@ void cupid_petsc_sum_doubles(double *v, int n) {
   if (g_initialized && n > 0) MPI_Allreduce(MPI_IN_PLACE, v, n, MPI_DOUBLE, MPI_SUM, PETSC_COMM_WORLD);
 }
 
+void cupid_petsc_max_doubles(double *v, int n) {
+  if (g_initialized && n > 0) MPI_Allreduce(MPI_IN_PLACE, v, n, MPI_DOUBLE, MPI_MAX, PETSC_COMM_WORLD);
+}
+
 cupid_status cupid_petsc_gather_root(const double *local, cupid_int count, double *root) {
   int size = cupid_petsc_size(), rank = cupid_petsc_rank();
   if (size == 1) {
@@ -137,6 +141,78 @@ cleanup:
 void cupid_petsc_abort(int code) {
   if (g_initialized) MPI_Abort(PETSC_COMM_WORLD, code);
   exit(code);
+}
+
+/* The copies of a process's local vector: a global PETSc vector of the owned entries (in rank
+ * order, as the slabs are) and one scatter from it to the entries this process holds but does
+ * not own. */
+struct cupid_petsc_halo_s {
+  cupid_int n, owned_first, owned_last;
+  cupid_int n_copies;
+  cupid_int *copies; /* local indices of the copies, ascending */
+  Vec global, local;
+  VecScatter scatter;
+};
+
+void cupid_petsc_halo_destroy(cupid_petsc_halo *h) {
+  if (!h || !*h) return;
+  if ((*h)->scatter) VecScatterDestroy(&(*h)->scatter);
+  if ((*h)->global) VecDestroy(&(*h)->global);
+  if ((*h)->local) VecDestroy(&(*h)->local);
+  cupid_free(&(*h)->copies);
+  cupid_free(h);
+}
+
+cupid_status cupid_petsc_halo_create(cupid_int n, cupid_int owned_first, cupid_int owned_last,
+                                     cupid_int global_first, cupid_petsc_halo *out) {
+  CUPID_CHECK(out && owned_first >= 0 && owned_first <= owned_last && owned_last <= n,
+              CUPID_ERR_ARGUMENT, "cupid_petsc_halo_create: owned range outside [0, n)");
+  CUPID_CHECK(g_initialized, CUPID_ERR_ARGUMENT, "cupid_petsc_halo_create: PETSc not initialised");
+  *out = NULL;
+  cupid_petsc_halo h = NULL;
+  PetscInt *idx = NULL;
+  IS from = NULL;
+  cupid_status st = CUPID_SUCCESS;
+  CUPID_CALL(cupid_calloc(1, sizeof *h, "halo", &h));
+  h->n = n, h->owned_first = owned_first, h->owned_last = owned_last;
+  h->n_copies = n - (owned_last - owned_first);
+  CUPID_TRY(cupid_malloc((size_t)h->n_copies + 1, sizeof *h->copies, "halo indices", &h->copies));
+  CUPID_TRY(cupid_malloc((size_t)h->n_copies + 1, sizeof *idx, "halo indices", &idx));
+  cupid_int k = 0;
+  for (cupid_int d = 0; d < n; d++)
+    if (d < owned_first || d >= owned_last) h->copies[k] = d, idx[k++] = (PetscInt)(global_first + d);
+  PTRY(VecCreateMPI(PETSC_COMM_WORLD, (PetscInt)(owned_last - owned_first), PETSC_DETERMINE,
+                    &h->global));
+  PetscInt lo = 0;
+  PTRY(VecGetOwnershipRange(h->global, &lo, NULL));
+  CUPID_TRY_CHECK(lo == (PetscInt)(global_first + owned_first), CUPID_ERR_ARGUMENT,
+                  "cupid_petsc_halo_create: the owned ranges are not in rank order");
+  PTRY(VecCreateSeq(PETSC_COMM_SELF, (PetscInt)h->n_copies, &h->local));
+  PTRY(ISCreateGeneral(PETSC_COMM_SELF, (PetscInt)h->n_copies, idx, PETSC_USE_POINTER, &from));
+  PTRY(VecScatterCreate(h->global, from, h->local, NULL, &h->scatter));
+  *out = h;
+  h = NULL;
+cleanup:
+  if (from) ISDestroy(&from);
+  cupid_free(&idx);
+  cupid_petsc_halo_destroy(&h);
+  return st;
+}
+
+cupid_status cupid_petsc_halo_update(cupid_petsc_halo h, double *x) {
+  cupid_status st = CUPID_SUCCESS;
+  PetscScalar *g = NULL;
+  const PetscScalar *l = NULL;
+  PTRY(VecGetArray(h->global, &g));
+  memcpy(g, x + h->owned_first, sizeof *x * (size_t)(h->owned_last - h->owned_first));
+  PTRY(VecRestoreArray(h->global, &g));
+  PTRY(VecScatterBegin(h->scatter, h->global, h->local, INSERT_VALUES, SCATTER_FORWARD));
+  PTRY(VecScatterEnd(h->scatter, h->global, h->local, INSERT_VALUES, SCATTER_FORWARD));
+  PTRY(VecGetArrayRead(h->local, &l));
+  for (cupid_int k = 0; k < h->n_copies; k++) x[h->copies[k]] = l[k];
+  PTRY(VecRestoreArrayRead(h->local, &l));
+cleanup:
+  return st;
 }
 
 /* ------------------------------------------------------------------ the distributed layout */
@@ -770,11 +846,26 @@ void cupid_petsc_sum_doubles(double *v, int n) {
   (void)v;
   (void)n;
 }
+void cupid_petsc_max_doubles(double *v, int n) {
+  (void)v;
+  (void)n;
+}
 cupid_status cupid_petsc_gather_root(const double *local, cupid_int count, double *root) {
   if (count > 0) memcpy(root, local, (size_t)count * sizeof *root);
   return CUPID_SUCCESS;
 }
 void cupid_petsc_abort(int code) { exit(code); }
+
+cupid_status cupid_petsc_halo_create(cupid_int n, cupid_int owned_first, cupid_int owned_last,
+                                     cupid_int global_first, cupid_petsc_halo *out) {
+  (void)n, (void)owned_first, (void)owned_last, (void)global_first, (void)out;
+  return NO_PETSC;
+}
+cupid_status cupid_petsc_halo_update(cupid_petsc_halo h, double *x) {
+  (void)h, (void)x;
+  return NO_PETSC;
+}
+void cupid_petsc_halo_destroy(cupid_petsc_halo *h) { (void)h; }
 
 cupid_status cupid_petsc_solve(const cupid_csr_t *K, cupid_matrix_kind kind, const double *f,
                                const cupid_dirichlet_t *bc, double *u,

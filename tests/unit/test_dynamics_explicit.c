@@ -137,24 +137,33 @@ static void test_bond(void **state) {
 }
 
 /* A failing product stops the run with its status, and at once: in the stable-step check
- * (call 3: E0, then the 200 power iterations), in the time loop (call 205: E0, 200
- * iterations, the initial acceleration, the energies of step 0, the residual and the
- * energies of step 1), or never (the run succeeds). */
+ * (call 2: E0, then the first Lanczos product), in the time loop (call L + 4: E0, the L
+ * Lanczos products of a run that succeeds, the initial acceleration, the energies of step 0,
+ * the forces of step 1), or never (the run succeeds). */
+static cupid_status run_failing(int fail_at, int *calls_made, cupid_dynamics_info *info) {
+  double m[3] = {1, 1, 1}, u[3] = {0}, v[3] = {0};
+  int calls[2] = {0, fail_at};
+  cupid_dynamics_explicit_system es = {.n = 3, .apply = failing_apply, .ctx = calls, .m_lumped = m};
+  cupid_dynamics_options o = cupid_dynamics_defaults();
+  o.integrator = CUPID_INTEGRATOR_CENTRAL;
+  o.dt = 0.1;
+  o.steps = 5;
+  cupid_status st = cupid_dynamics_run_explicit(&es, &o, u, v, NULL, NULL, info);
+  *calls_made = calls[0];
+  return st;
+}
+
 static void test_apply_failure(void **state) {
   (void)state;
-  const int limits[3] = {3, 205, 1000};
-  for (int k = 0; k < 3; k++) {
-    double m[3] = {1, 1, 1}, u[3] = {0}, v[3] = {0};
-    int calls[2] = {0, limits[k]};
-    cupid_dynamics_explicit_system es = {.n = 3, .apply = failing_apply, .ctx = calls, .m_lumped = m};
-    cupid_dynamics_options o = cupid_dynamics_defaults();
-    o.integrator = CUPID_INTEGRATOR_CENTRAL;
-    o.dt = 0.1;
-    o.steps = 5;
-    assert_int_equal(cupid_dynamics_run_explicit(&es, &o, u, v, NULL, NULL, NULL),
-                     k < 2 ? CUPID_ERR_NUMERIC : CUPID_SUCCESS);
-    if (k == 1) assert_int_equal(calls[0], 205);
-  }
+  cupid_dynamics_info info;
+  int calls = 0;
+  CUPID_ASSERT_OK(run_failing(1000, &calls, &info)); /* K = I: Lanczos ends after 1 product */
+  assert_int_equal(info.lanczos_steps, 1);
+  assert_int_equal(run_failing(2, &calls, NULL), CUPID_ERR_NUMERIC);
+  assert_int_equal(calls, 2);
+  const int in_loop = info.lanczos_steps + 4;
+  assert_int_equal(run_failing(in_loop, &calls, NULL), CUPID_ERR_NUMERIC);
+  assert_int_equal(calls, in_loop);
 }
 
 int main(void) {

@@ -1,0 +1,36 @@
+#!/usr/bin/env bash
+# Quasi-static crack growth (issue 17, item 3): the re-solves after bonds break by CG
+# preconditioned by the last factorisation (the default) against a new factorisation every
+# time (CUPID_GROWTH_RESOLVE=factor). The model: the notched plate of
+# tests/models/growth/plate.yaml at twice the size (24 x 48 x 3 mm, h = 1 mm: 3,456 nodes,
+# bond-based, notch x in [0, 6] at y = 24), the top layers pulled 0.04 mm in 10 load steps,
+# every bond over its limit breaking at once (per_iteration: all). Prints, for each way,
+# the whole run's seconds, the solves, factorisations, CG solves and iterations, the seconds
+# in factorisations and in CG, and the broken bonds (which must agree). Reported figures,
+# not a timed test.
+#
+#   bench/growth.sh        needs build/cupid (scripts/build.sh)
+set -euo pipefail
+root=$(cd "$(dirname "$0")/.." && pwd)
+cupid=$root/build/cupid
+[ -x "$cupid" ] || { echo "needs $cupid (scripts/build.sh)"; exit 2; }
+work=$(mktemp -d); trap 'rm -rf "$work"' EXIT
+cd "$work"
+sed -e 's/x: \[0, 12\], y: \[0, 24\], z: \[0, 2\]/x: [0, 24], y: [0, 48], z: [0, 3]/' \
+    -e 's/at: 12, x: \[0, 3\], z: \[0, 2\]/at: 24, x: [0, 6], z: [0, 3]/' \
+    -e 's/y: \[21, 24\]/y: [45, 48]/' -e 's/value: \[0, 0.02, 0\]/value: [0, 0.04, 0]/' \
+    -e 's/at: \[6, 22.5, 1\]/at: [12, 46.5, 1.5]/' "$root/tests/models/growth/plate.yaml" > plate.yaml
+echo "| re-solves | run s | solves | factorisations | CG solves | CG iterations | factorisation s | CG s | broken bonds |"
+echo "|---|---|---|---|---|---|---|---|---|"
+for how in krylov factor; do
+  t0=$(date +%s.%N)
+  CUPID_GROWTH_RESOLVE=$how "$cupid" run plate.yaml -o "$how" --quiet
+  t1=$(date +%s.%N)
+  python3 - "$how" "$(awk -v a="$t0" -v b="$t1" 'BEGIN{printf "%.1f", b-a}')" <<'PY'
+import json, sys
+f = json.load(open(sys.argv[1] + "/summary.json"))["fracture"]
+s = f["solves"]
+print(f"| {s['resolve']} | {sys.argv[2]} | {s['solves']} | {s['factorisations']} | {s['cg_solves']} | "
+      f"{s['cg_iterations']} | {s['factorisation_s']:.1f} | {s['cg_s']:.1f} | {f['broken_bonds']} |")
+PY
+done
