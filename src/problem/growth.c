@@ -38,7 +38,8 @@ typedef struct {
   double *w[4];                 /* CG work vectors */
   cupid_int factorisations, cg_solves, cg_iterations;
   cupid_int bonds_at_factor;    /* broken bonds when F was made */
-  double last_factor_s;         /* the last factorisation's time */
+  double factor_flops;          /* the last factorisation's operations, and those of one */
+  double cg_iteration_flops;    /* CG iteration with its factor (two triangular solves, K x) */
   double t_factor, t_cg;
 } growth_run;
 
@@ -239,9 +240,10 @@ static cupid_status hold_singular_node(growth_run *g, int step, int *held) {
  * terms of both families), so the factor of the K of the last factorisation stays a close
  * preconditioner: CG on the current K (assembled again, cheap next to a factorisation)
  * preconditioned by that factor converges in about as many iterations as the rank of the
- * change, and the factor is renewed when a CG solve took longer than the last factorisation
- * (or needed more than CG_REFACTOR iterations): at worst about the cost of refactorising
- * every time (bench/growth.sh measures both ways). Nodes held since the factorisation are fixed in the
+ * change, and the factor is renewed when a CG solve cost more operations than the last
+ * factorisation (CHOLMOD's count; a CG iteration: two triangular solves and a product) or
+ * needed more than CG_REFACTOR iterations: at worst about the cost of refactorising every
+ * time (bench/growth.sh measures both ways). Nodes held since the factorisation are fixed in the
  * current system: the preconditioner is the factor restricted to the current free DOFs
  * (P F^-1 P^T, still symmetric positive definite). Each load step after a break starts with
  * a new factor: a mechanism of several nodes that cupid_pd_operator_unsupported() does not
@@ -284,8 +286,10 @@ static cupid_status factor_solve(growth_run *g) {
   if (st != CUPID_SUCCESS) return st;
   g->factorisations++;
   g->bonds_at_factor = prob->broken_bonds;
-  g->last_factor_s = cupid_wtime() - t0;
-  g->t_factor += g->last_factor_s;
+  g->factor_flops = info.flops_factor;
+  const double nnz_k = (double)prob->K->rowptr[prob->K->nrows] * prob->K->bs * prob->K->bs;
+  g->cg_iteration_flops = 4.0 * info.nnz_factor + 2.0 * nnz_k;
+  g->t_factor += cupid_wtime() - t0;
   for (cupid_int d = 0; d < n; d++) t[d] = bc->fixed[d] ? bc->value[d] : 0.0;
   cupid_csr_matvec(prob->K, t, r); /* b = f - K_fc u_c */
   for (cupid_int d = 0; d < n; d++) r[d] = bc->fixed[d] ? 0.0 : prob->f_ext[d] - r[d];
@@ -335,12 +339,13 @@ static cupid_status cg_solve(growth_run *g, int *done) {
   memcpy(prob->u, x, (size_t)n * sizeof *x);
   g->cg_solves++;
   g->cg_iterations += it;
-  const double took = cupid_wtime() - t0;
-  g->t_cg += took;
+  g->t_cg += cupid_wtime() - t0;
   prob->solve.iterations = it;
   *done = 1;
-  /* the factor has drifted so far from K that CG costs more than a new one: renew it */
-  if (took > g->last_factor_s) cupid_direct_factor_destroy(&g->F);
+  /* the factor has drifted so far from K that CG costs more than a new one: renew it. By
+   * operation counts, not clocks: the choice changes the iterates (to round-off), so it must
+   * not depend on the machine's load (the bonds that break are the same in every run) */
+  if ((double)it * g->cg_iteration_flops > g->factor_flops) cupid_direct_factor_destroy(&g->F);
   return CUPID_SUCCESS;
 }
 
