@@ -16,8 +16,11 @@ test -n "$pc" || { echo "FAIL: no cupid.pc installed"; exit 1; }
 flags=$(PKG_CONFIG_PATH=$pc pkg-config --cflags --libs cupid)
 # A sanitized library (the CI's ASan stage) needs its runtime first: the program is built
 # with the same sanitizers.
+# (ldd's output is read whole first: under pipefail, `ldd | grep -q` fails whenever grep exits
+# before ldd has written everything, and the program was then built without the runtime.)
 san=""
-if ldd "$(find "$tmp/inst" -name 'libcupid.so' | head -n1)" | grep -q libasan; then
+libs=$(ldd "$(find "$tmp/inst" -name 'libcupid.so' | head -n1)")
+if grep -q libasan <<<"$libs"; then
   san="-fsanitize=address,undefined"
 fi
 cc -std=c17 -Wall -Wextra -Werror $san "$SRC/examples/c/run_model.c" $flags -lm -o "$tmp/run_model"
