@@ -40,6 +40,7 @@ typedef struct {
   cupid_int bonds_at_factor;    /* broken bonds when F was made */
   double factor_flops;          /* the last factorisation's operations, and those of one */
   double cg_iteration_flops;    /* CG iteration with its factor (two triangular solves, K x) */
+  cupid_int cg_since_factor;    /* CG iterations since the last factorisation */
   double t_factor, t_cg;
 } growth_run;
 
@@ -240,10 +241,10 @@ static cupid_status hold_singular_node(growth_run *g, int step, int *held) {
  * terms of both families), so the factor of the K of the last factorisation stays a close
  * preconditioner: CG on the current K (assembled again, cheap next to a factorisation)
  * preconditioned by that factor converges in about as many iterations as the rank of the
- * change, and the factor is renewed when a CG solve cost more operations than the last
- * factorisation (CHOLMOD's count; a CG iteration: two triangular solves and a product) or
- * needed more than CG_REFACTOR iterations: at worst about the cost of refactorising every
- * time (bench/growth.sh measures both ways). Nodes held since the factorisation are fixed in the
+ * change, and the factor is renewed once the CG iterations since it cost as much as it did
+ * (CHOLMOD's operation count against two triangular solves and a product per iteration,
+ * weighted) or a solve needs more than CG_REFACTOR iterations: at worst about twice the cost
+ * of the best sequence of factorisations (bench/growth.sh measures both ways). Nodes held since the factorisation are fixed in the
  * current system: the preconditioner is the factor restricted to the current free DOFs
  * (P F^-1 P^T, still symmetric positive definite). Each load step after a break starts with
  * a new factor: a mechanism of several nodes that cupid_pd_operator_unsupported() does not
@@ -252,6 +253,7 @@ static cupid_status hold_singular_node(growth_run *g, int step, int *held) {
  * thread, so the iterates, hence the bonds that break, do not depend on the thread count. */
 #define CG_RTOL 1e-12
 #define CG_REFACTOR 60
+#define CG_FLOP_WEIGHT 5.0
 
 static double dot_free(const cupid_dirichlet_t *bc, cupid_int n, const double *a, const double *b) {
   double s = 0.0;
@@ -289,6 +291,7 @@ static cupid_status factor_solve(growth_run *g) {
   g->factor_flops = info.flops_factor;
   const double nnz_k = (double)prob->K->rowptr[prob->K->nrows] * prob->K->bs * prob->K->bs;
   g->cg_iteration_flops = 4.0 * info.nnz_factor + 2.0 * nnz_k;
+  g->cg_since_factor = 0;
   g->t_factor += cupid_wtime() - t0;
   for (cupid_int d = 0; d < n; d++) t[d] = bc->fixed[d] ? bc->value[d] : 0.0;
   cupid_csr_matvec(prob->K, t, r); /* b = f - K_fc u_c */
@@ -342,10 +345,16 @@ static cupid_status cg_solve(growth_run *g, int *done) {
   g->t_cg += cupid_wtime() - t0;
   prob->solve.iterations = it;
   *done = 1;
-  /* the factor has drifted so far from K that CG costs more than a new one: renew it. By
-   * operation counts, not clocks: the choice changes the iterates (to round-off), so it must
-   * not depend on the machine's load (the bonds that break are the same in every run) */
-  if ((double)it * g->cg_iteration_flops > g->factor_flops) cupid_direct_factor_destroy(&g->F);
+  /* Renew the factor once the CG iterations since it cost as much as it did (the rule of
+   * renting until the rent paid equals the price: never more than twice the best choice in
+   * hindsight). By operation counts, not clocks: the choice changes the iterates (to
+   * round-off), so it must not depend on the machine's load, or the bonds that break would
+   * not be the same in every run. A triangular solve's operation is memory-bound, about
+   * CG_FLOP_WEIGHT times the time of one in the factorisation's dense blocks (measured on the
+   * plate of bench/growth.sh: 1.35 against 6.6 Gflop/s). */
+  g->cg_since_factor += it;
+  if ((double)g->cg_since_factor * CG_FLOP_WEIGHT * g->cg_iteration_flops > g->factor_flops)
+    cupid_direct_factor_destroy(&g->F);
   return CUPID_SUCCESS;
 }
 
