@@ -31,8 +31,8 @@ typedef struct {
   double u0[3];                 /* the first output point's displacement, last step */
   cupid_atomic_file csv;
   cupid_int released;
-  /* Re-solves after breaks (resolve.c of this file, below): the factor of the last
-   * factorised K, reused as the preconditioner of CG on the current K. */
+  /* Re-solves after breaks (below): the factor of the last factorised K, reused as the
+   * preconditioner of CG on the current K. */
   cupid_direct_factor F;
   int krylov;                   /* 0: refactorise after every break (CUPID_GROWTH_RESOLVE) */
   double *w[4];                 /* CG work vectors */
@@ -244,12 +244,15 @@ static cupid_status hold_singular_node(growth_run *g, int step, int *held) {
  * change, and the factor is renewed once the CG iterations since it cost as much as it did
  * (CHOLMOD's operation count against two triangular solves and a product per iteration,
  * weighted) or a solve needs more than CG_REFACTOR iterations: at worst about twice the cost
- * of the best sequence of factorisations (bench/growth.sh measures both ways). Nodes held since the factorisation are fixed in the
- * current system: the preconditioner is the factor restricted to the current free DOFs
- * (P F^-1 P^T, still symmetric positive definite). Each load step after a break starts with
- * a new factor: a mechanism of several nodes that cupid_pd_operator_unsupported() does not
- * see takes no load, and CG would leave it where the preconditioner puts it, where the
- * factorisation finds it singular and the node is held (hold_singular_node). The scalar products are summed in one
+ * of the best sequence of factorisations (bench/growth.sh measures both ways).
+ * Nodes held since the factorisation are fixed in the current system: the preconditioner is
+ * the factor restricted to the current free DOFs (P F^-1 P^T, still symmetric positive
+ * definite). Each load step after a break starts with a new factor: a mechanism of several
+ * nodes that cupid_pd_operator_unsupported() does not see takes no load, and CG would leave
+ * it where the preconditioner puts it, where the factorisation finds it singular and the
+ * node is held (hold_singular_node). A solve by a new factor is checked the same way as a CG
+ * solve (its residual to CG_RTOL, refined by CG if not), and one that fails goes to the
+ * engine's solve, with its refinement and messages. The scalar products are summed in one
  * thread, so the iterates, hence the bonds that break, do not depend on the thread count. */
 #define CG_RTOL 1e-12
 #define CG_REFACTOR 60
@@ -274,6 +277,18 @@ static cupid_status precondition(growth_run *g, const double *r, double *z) {
   return CUPID_SUCCESS;
 }
 
+/* b = f - K u_c on the free DOFs (u_c: the prescribed values), 0 on the fixed ones, into b
+ * (t: scratch); returns |b|. */
+static double lifted_rhs(growth_run *g, double *t, double *b) {
+  const cupid_problem_state *prob = g->prob;
+  const cupid_dirichlet_t *bc = prob->bc;
+  const cupid_int n = prob->ndof;
+  for (cupid_int d = 0; d < n; d++) t[d] = bc->fixed[d] ? bc->value[d] : 0.0;
+  cupid_csr_matvec(prob->K, t, b);
+  for (cupid_int d = 0; d < n; d++) b[d] = bc->fixed[d] ? 0.0 : prob->f_ext[d] - b[d];
+  return sqrt(dot_free(bc, n, b, b));
+}
+
 /* Factorise the current K and solve (u: the prescribed values on the fixed DOFs). */
 static cupid_status factor_solve(growth_run *g) {
   cupid_problem_state *prob = g->prob;
@@ -293,17 +308,16 @@ static cupid_status factor_solve(growth_run *g) {
   g->cg_iteration_flops = 4.0 * info.nnz_factor + 2.0 * nnz_k;
   g->cg_since_factor = 0;
   g->t_factor += cupid_wtime() - t0;
-  for (cupid_int d = 0; d < n; d++) t[d] = bc->fixed[d] ? bc->value[d] : 0.0;
-  cupid_csr_matvec(prob->K, t, r); /* b = f - K_fc u_c */
-  for (cupid_int d = 0; d < n; d++) r[d] = bc->fixed[d] ? 0.0 : prob->f_ext[d] - r[d];
+  lifted_rhs(g, t, r);
   CUPID_CALL(cupid_direct_factor_solve(g->F, r, prob->u));
   for (cupid_int d = 0; d < n; d++)
     if (bc->fixed[d]) prob->u[d] = bc->value[d];
   return CUPID_SUCCESS;
 }
 
-/* CG on the current K from the last u, preconditioned by the factor; *done = 0 when it did
- * not reach CG_RTOL within CG_REFACTOR iterations (u then as it was). */
+/* CG on the current K from the last u, preconditioned by the factor, to a residual of CG_RTOL
+ * |f_f - K_fc u_c|; *done = 0 when it did not get there within CG_REFACTOR iterations (u then
+ * as it was). A u already there costs one product and counts as no CG solve. */
 static cupid_status cg_solve(growth_run *g, int *done) {
   cupid_problem_state *prob = g->prob;
   const cupid_dirichlet_t *bc = prob->bc;
@@ -311,14 +325,11 @@ static cupid_status cg_solve(growth_run *g, int *done) {
   double t0 = cupid_wtime(), *x = g->w[0], *r = g->w[1], *z = g->w[2], *p = prob->f_int;
   double *q = g->w[3];
   *done = 0;
+  const double scale = lifted_rhs(g, x, r);
   for (cupid_int d = 0; d < n; d++) x[d] = bc->fixed[d] ? bc->value[d] : prob->u[d];
   cupid_csr_matvec(prob->K, x, r);
   for (cupid_int d = 0; d < n; d++) r[d] = bc->fixed[d] ? 0.0 : prob->f_ext[d] - r[d];
-  /* the scale: |b| = |f_f - K_fc u_c| would need a product more; |f_f| + |K x|_f bounds it */
-  double fn = 0.0;
-  for (cupid_int d = 0; d < n; d++)
-    if (!bc->fixed[d]) fn += prob->f_ext[d] * prob->f_ext[d];
-  const double r0 = sqrt(dot_free(bc, n, r, r)), scale = fmax(sqrt(fn), r0);
+  const double r0 = sqrt(dot_free(bc, n, r, r));
   int it = 0;
   if (r0 > CG_RTOL * scale) {
     CUPID_CALL(precondition(g, r, z));
@@ -340,11 +351,13 @@ static cupid_status cg_solve(growth_run *g, int *done) {
     if (it > CG_REFACTOR || sqrt(dot_free(bc, n, r, r)) > CG_RTOL * scale) return CUPID_SUCCESS;
   }
   memcpy(prob->u, x, (size_t)n * sizeof *x);
+  prob->solve.residual = scale > 0.0 ? sqrt(dot_free(bc, n, r, r)) / scale : 0.0;
+  *done = 1;
+  if (it == 0) return CUPID_SUCCESS;
   g->cg_solves++;
   g->cg_iterations += it;
   g->t_cg += cupid_wtime() - t0;
   prob->solve.iterations = it;
-  *done = 1;
   /* Renew the factor once the CG iterations since it cost as much as it did (the rule of
    * renting until the rent paid equals the price: never more than twice the best choice in
    * hindsight). By operation counts, not clocks: the choice changes the iterates (to
@@ -373,7 +386,7 @@ static cupid_status solve(growth_run *g, int reassemble) {
     /* a singular K: the engine's solve again, for its message naming the node */
     if (st == CUPID_ERR_NUMERIC) cupid_error_clear();
     else CUPID_CALL(st);
-    done = st == CUPID_SUCCESS;
+    if (st == CUPID_SUCCESS) CUPID_CALL(cg_solve(g, &done)); /* checked, refined if need be */
   }
   if (!done) CUPID_CALL(cupid_problem_linear_solve(prob, prob->method->matrix));
   prob->growth.solves++;
@@ -493,6 +506,8 @@ cupid_status cupid_problem_run_growth(cupid_problem_state *prob) {
   prob->growth.cg_solves = g.cg_solves;
   prob->growth.cg_iterations = g.cg_iterations;
   prob->growth.factor_s = g.t_factor;
+  prob->phases[CUPID_PHASE_FACTORISATION] =
+      (cupid_phase_record){g.t_factor, cupid_peak_memory(), g.factorisations > 0};
   prob->growth.cg_s = g.t_cg;
   if (g.csv) CUPID_TRY(cupid_atomic_commit(&g.csv));
   CUPID_TRY(plots(&g));
