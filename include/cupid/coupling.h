@@ -415,6 +415,41 @@ void cupid_coupling_cheap_options(const cupid_pd_operator_options *fine, double 
 cupid_status cupid_coupling_preconditioner(const cupid_coupling_operator A, double horizon_factor,
                                            cupid_csr *P);
 
+/** z = A^T w (a whole grid; the PD operator is symmetric): for the balanced coupling. */
+cupid_status cupid_coupling_operator_apply_transpose(const cupid_coupling_operator A,
+                                                     const double *w, double *z);
+/** The FE rows of Eq. 38 (real and fictitious FE elements; block columns over [PD | FE]). */
+const cupid_csr_t *cupid_coupling_operator_fe_rows(const cupid_coupling_operator A);
+
+/* ---- The balanced fictitious-node coupling (issue 18; src/coupling/balance.c) ----
+ * Eq. 38's K conserves neither linear nor angular momentum (R^T K != 0 for the six rigid
+ * modes R). `coupling.balance: momentum` solves with K' = K - W C^T, C = K^T R,
+ * W = D R (R^T D R)^-1, D = diag(K) on the interface FE DOFs (the real FE nodes of the
+ * fictitious elements): R^T K' = 0 (reactions balance the load), K' R = 0, and K' x = K x for
+ * every x whose K x has no resultant or moment (the patch test's fields). Never assembled. */
+#define CUPID_BALANCE_MODES 6
+typedef struct cupid_coupling_balance_private *cupid_coupling_balance;
+/** From the rigid modes R and C = K^T R (CUPID_BALANCE_MODES columns of n each, mode k at
+ *  offset k n) and the weights d (n; > 0 on the DOFs that take the correction). CUPID_ERR_MODEL
+ *  when those DOFs do not span the rigid modes. */
+cupid_status cupid_coupling_balance_create(cupid_int n, const double *R, const double *C,
+                                           const double *d, cupid_coupling_balance *B);
+void cupid_coupling_balance_destroy(cupid_coupling_balance *B);
+/** y -= W (C^T x): turns y = K x into K' x. */
+void cupid_coupling_balance_correct(const cupid_coupling_balance B, const double *x, double *y);
+/** u with K'_ff u_f = f_f - K'_fc u_c (u_c = bc's values) from the factor F of K_ff
+ *  (Sherman-Morrison-Woodbury: CUPID_BALANCE_MODES more solves). */
+cupid_status cupid_coupling_balance_solve(const cupid_coupling_balance B, const cupid_csr_t *K,
+                                          cupid_direct_factor F, const cupid_dirichlet_t *bc,
+                                          const double *f, double *u);
+/** *out: the operator K' around the matrix-free K of @p L (kept by B; whole grids only:
+ *  CUPID_ERR_UNSUPPORTED on a slab). */
+cupid_status cupid_coupling_balance_linear(cupid_coupling_balance B, const cupid_linear_operator *L,
+                                           cupid_linear_operator *out);
+/** The weights d of the FE rows @p Kfe (block rows of FE nodes, block columns [PD | FE], n_pd
+ *  PD nodes first): diag(K) on the rows that read PD columns, 0 elsewhere (3 (n_pd + rows)). */
+cupid_status cupid_coupling_balance_weights(const cupid_csr_t *Kfe, cupid_int n_pd, double *d);
+
 /**
  * Solve A u = f with the Dirichlet conditions @p bc (finalized; fixed DOFs take bc->value) by
  * GMRES on the free DOFs, A matrix-free (a PETSc MATSHELL), preconditioned by @p P (the

@@ -186,6 +186,9 @@ typedef struct {
    *  3 a given length (a number); coupling.h cupid_fictitious_fe */
   int fictitious_fe;
   double fictitious_length;
+  /** fictitious: `balance:` 0 none (paper 000's Eq. 38), 1 momentum (the balanced operator
+   *  K - W C^T that conserves linear and angular momentum; coupling.h, docs/coupling.md) */
+  int balance;
   cupid_mark mark;
 } cupid_coupling;
 

@@ -136,6 +136,37 @@ cupid_status cupid_coupling_operator_apply(const cupid_coupling_operator A, cons
   return CUPID_SUCCESS;
 }
 
+/* z = A^T w: the PD operator is symmetric, so the PD rows' transpose is the operator applied to
+ * w_PD on the real nodes (0 on the fictitious ones), its real rows kept and its fictitious
+ * rows sent to the FE DOFs by the transpose of Eq. 29's interpolation; the FE rows' by Kfe^T. */
+cupid_status cupid_coupling_operator_apply_transpose(const cupid_coupling_operator A,
+                                                     const double *w, double *z) {
+  const cupid_int n_ext = A->parts.n_ext, n_pd = A->parts.n_pd;
+  CUPID_CHECK(A->part.parts <= 1,
+              CUPID_ERR_UNSUPPORTED, "the transpose of the coupled operator needs the whole grid");
+  const ext_map *m = &A->parts.map;
+  memset(A->ue, 0, (size_t)(3 * n_ext) * sizeof *A->ue);
+  for (cupid_int r = 0; r < n_pd; r++)
+    for (int c = 0; c < 3; c++) A->ue[3 * A->ext_of[r] + c] = w[3 * r + c];
+  CUPID_CALL(cupid_pd_operator_apply(A->op, A->ue, A->fe));
+  cupid_csr_matvec_transpose(A->parts.Kfe, w + 3 * n_pd, z);
+  for (cupid_int i = 0; i < n_ext; i++) {
+    const double *g = A->fe + 3 * i;
+    cupid_int r = m->real[i];
+    if (r >= 0) {
+      for (int c = 0; c < 3; c++) z[3 * r + c] += g[c];
+      continue;
+    }
+    for (cupid_int k = m->fptr[i]; k < m->fptr[i + 1]; k++)
+      for (int c = 0; c < 3; c++) z[3 * (n_pd + m->fnode[k]) + c] += m->fw[k] * g[c];
+  }
+  return CUPID_SUCCESS;
+}
+
+const cupid_csr_t *cupid_coupling_operator_fe_rows(const cupid_coupling_operator A) {
+  return A->parts.Kfe;
+}
+
 cupid_status cupid_coupling_operator_apply_rows(const cupid_coupling_operator A, const double *x,
                                                 cupid_int d0, cupid_int d1, double *y) {
   cupid_int n_pd = A->parts.n_pd, n = cupid_coupling_operator_size(A);

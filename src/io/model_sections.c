@@ -870,7 +870,8 @@ static cupid_status read_fictitious_fe(model_reader *rd, yaml_node_t *node, cupi
 }
 
 static cupid_status read_coupling(model_reader *rd, yaml_node_t *node) {
-  static const char *const keys[] = {"method", "arlequin", "fictitious_fe"};
+  static const char *const keys[] = {"method", "arlequin", "fictitious_fe", "balance"};
+  static const char *const balances[] = {"none", "momentum"};
   static const char *const methods[] = {"fictitious", "lagrange", "arlequin"};
   cupid_coupling *c = &rd->model->coupling;
   mr_map map;
@@ -887,6 +888,12 @@ static cupid_status read_coupling(model_reader *rd, yaml_node_t *node) {
   if (ffe && c->method != CUPID_COUPLING_FICTITIOUS)
     return mr_error(rd, ffe, "coupling.fictitious_fe", "is only used with method: fictitious");
   if (ffe) CUPID_CALL(read_fictitious_fe(rd, ffe, c));
+  yaml_node_t *balance = mr_get(&map, "balance");
+  if (balance && c->method != CUPID_COUPLING_FICTITIOUS)
+    return mr_error(rd, balance, "coupling.balance",
+                    "is only used with method: fictitious (lagrange and arlequin conserve "
+                    "momentum already)");
+  if (balance) CUPID_CALL(mr_enum(rd, balance, "coupling.balance", balances, COUNT(balances), &c->balance));
   if (c->method == CUPID_COUPLING_ARLEQUIN) {
     if (!arlequin)
       return mr_error(rd, map.node, "coupling",

@@ -12,6 +12,13 @@ static cupid_status check(const cupid_problem_state *prob) {
     return cupid_model_error(m, &m->pd.mark,
                              "a coupled model needs a 3D peridynamic grid (dimension: 3) with "
                              "method fictitious (1D grids: methods lagrange and arlequin)");
+  if (m->coupling.balance && (m->analysis.type != CUPID_ANALYSIS_STATIC || m->analysis.steps > 0))
+    return cupid_model_error(m, &m->coupling.mark,
+                             "balance: momentum runs one static solve in this version, "
+                             "not %s; use balance: none there",
+                             m->analysis.type == CUPID_ANALYSIS_STATIC ? "load steps"
+                             : m->analysis.type == CUPID_ANALYSIS_DYNAMIC ? "type dynamic"
+                                                                          : "type evaluate");
   if (m->analysis.type == CUPID_ANALYSIS_DYNAMIC)
     return cupid_model_error(m, &m->analysis.mark,
                              "type dynamic is not supported with coupling method fictitious: its "
@@ -59,6 +66,7 @@ static cupid_status solve_matrix_free(cupid_problem_state *prob) {
   int *mats = NULL;
   cupid_coupling_options co;
   cupid_coupling_operator A = NULL;
+  cupid_coupling_balance B = NULL;
   cupid_csr P = NULL;
   double t0 = cupid_wtime();
   CUPID_TRY(cupid_method_coupling_options(prob, &co, &boxes, &mats));
@@ -79,10 +87,13 @@ static cupid_status solve_matrix_free(cupid_problem_state *prob) {
                          (double)cupid_csr_bytes(P) / 1e6, prob->slab ? " (rank 0's slab)" : "");
   cupid_linear_operator L;
   cupid_coupling_operator_linear(A, &L); /* on a slab: its rows (cupid_krylov_solve) */
+  if (cupid_problem_balanced(prob)) /* K' = K - W C^T around L (P stays K's twin) */
+    CUPID_TRY(cupid_problem_balanced_operator(prob, A, &L, &B, &L));
   cupid_method_operator owner = {.ctx = A, .destroy = destroy_operator};
   st = cupid_method_krylov_solve(prob, &L, &P, &owner);
   A = owner.ctx; /* NULL once a slab freed it */
 cleanup:
+  cupid_coupling_balance_destroy(&B);
   cupid_csr_destroy(&P);
   cupid_coupling_operator_destroy(&A);
   cupid_free(&boxes);

@@ -5,6 +5,7 @@
 #include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 #include <unistd.h>
 
@@ -436,6 +437,10 @@ static cupid_status run_static(cupid_problem_state *prob) {
   }
   CUPID_CALL(cupid_problem_estimate(prob, 0)); /* before anything scales with the stiffness */
   CUPID_CALL(prob->method->assemble(prob));
+  if (cupid_problem_balanced(prob)) { /* K' = K - W C^T: factor of K_ff and six more solves */
+    CUPID_CALL(cupid_problem_balanced_direct_solve(prob));
+    return prob->method->report ? prob->method->report(prob) : CUPID_SUCCESS;
+  }
   CUPID_CALL(cupid_problem_patch_test_assembled(prob));
   CUPID_CALL(cupid_problem_linear_solve(prob, prob->method->matrix));
   prob->solved = 1;

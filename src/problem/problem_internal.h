@@ -185,6 +185,16 @@ void cupid_problem_quality_report(cupid_problem_state *prob);
 /** The "coupling_quality" block of summary.json (coupled models). */
 void cupid_problem_quality_json(cupid_json js, const cupid_problem_state *prob);
 
+/* balance.c: `coupling.balance: momentum` (the balanced fictitious-node operator). */
+/** The model asks for the balanced operator (and is coupled). */
+int cupid_problem_balanced(const cupid_problem_state *prob);
+/** The assembled path: patch test, factor of K_ff, the balanced solve, f_int = K' u. */
+cupid_status cupid_problem_balanced_direct_solve(cupid_problem_state *prob);
+/** The matrix-free path: *out = K' around L (the operator of A); *B is the caller's. */
+cupid_status cupid_problem_balanced_operator(cupid_problem_state *prob, cupid_coupling_operator A,
+                                             const cupid_linear_operator *L,
+                                             cupid_coupling_balance *B, cupid_linear_operator *out);
+
 /* growth.c: `type: static` with load steps or fracture (sequentially linear growth). */
 cupid_status cupid_problem_run_growth(cupid_problem_state *prob);
 

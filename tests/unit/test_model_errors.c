@@ -482,6 +482,11 @@ static const bad_case cases[] = {
      NULL},
     {"fictitious_fe_unknown.yaml",
      "28:47: coupling.fictitious_fe: must be one of removed | adjacent | plane, got 'half'", NULL},
+    {"balance_unknown.yaml",
+     "28:41: coupling.balance: must be one of none | momentum, got 'yes'", NULL},
+    {"balance_lagrange.yaml",
+     "28:39: coupling.balance: is only used with method: fictitious (lagrange and arlequin "
+     "conserve momentum already)", NULL},
     {"solver_typo.yaml",
      "9:11: analysis.solver: must be one of auto | direct | petsc | krylov, got 'Direct'; did you mean",
      NULL},

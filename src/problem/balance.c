@@ -1,0 +1,144 @@
+/* The balanced fictitious-node coupling at the problem level (`coupling.balance: momentum`;
+ * src/coupling/balance.c has the operator and docs/coupling.md the measurements): the six
+ * rigid modes of the model's layout, C = K^T R from the assembled K or the matrix-free
+ * operator, and the two solves (the factor of K_ff with Sherman-Morrison-Woodbury, or the
+ * Krylov solve of the wrapped operator). */
+#include <math.h>
+#include <string.h>
+
+#include "method.h"
+
+typedef struct {
+  int k;          /* 0-2: translation along k; 3-5: rotation about axis k - 3 */
+  double p0[3];   /* the rotations' centre */
+} rigid_mode;
+
+static void rigid_eval(const rigid_mode *m, const double p[3], double u[3]) {
+  u[0] = u[1] = u[2] = 0.0;
+  if (m->k < 3) {
+    u[m->k] = 1.0;
+    return;
+  }
+  const int a = m->k - 3, b = (a + 1) % 3, c = (a + 2) % 3; /* u = e_a x (p - p0) */
+  u[c] = p[b] - m->p0[b];
+  u[b] = -(p[c] - m->p0[c]);
+}
+
+static void rigid_fn(void *ctx, const double p[3], double density, double out[3]) {
+  (void)density;
+  rigid_eval(ctx, p, out);
+}
+
+/* R: the rigid modes in the system's layout (inactive FE nodes 0, as the solve holds them),
+ * rotations about the middle of the beam's axis (any centre spans the same space; the middle
+ * keeps the columns' scales alike). */
+static cupid_status rigid_modes(const cupid_problem_state *prob, double *R) {
+  const double *x = cupid_pd_grid_coords(prob->grid);
+  rigid_mode m = {0, {0.0, 0.5 * (prob->fe_info.y_min + prob->fe_info.y_max), 0.0}};
+  for (m.k = 0; m.k < CUPID_BALANCE_MODES; m.k++) {
+    double *r = R + (size_t)m.k * (size_t)prob->ndof;
+    for (cupid_int i = 0; i < prob->n_pd; i++) rigid_eval(&m, x + 3 * i, r + 3 * i);
+    CUPID_CALL(cupid_cuf_interpolate(prob->beam, rigid_fn, &m, r));
+    for (cupid_int n = 0; n < prob->fe_info.n_fe_nodes; n++)
+      if (!cupid_cuf_node_used(prob->beam, (int)(n % prob->fe_info.M), n / prob->fe_info.M))
+        for (int c = 0; c < 3; c++) r[prob->fe_offset + 3 * n + c] = 0.0;
+  }
+  return CUPID_SUCCESS;
+}
+
+int cupid_problem_balanced(const cupid_problem_state *prob) {
+  return prob->model->coupling.balance == 1 && prob->beam && prob->grid;
+}
+
+typedef cupid_status (*transpose_fn)(void *ctx, const double *w, double *z);
+
+/* B from R, C = K^T R (by @p transpose) and the weights of the FE rows @p fe_rows. */
+static cupid_status balance_create(const cupid_problem_state *prob, transpose_fn transpose,
+                                   void *ctx, const cupid_csr_t *fe_rows, cupid_coupling_balance *B) {
+  const size_t n = (size_t)prob->ndof, sz = CUPID_BALANCE_MODES * n;
+  double *R = NULL, *C = NULL, *d = NULL;
+  cupid_status st = CUPID_SUCCESS;
+  CUPID_TRY(cupid_calloc(sz, sizeof *R, "rigid modes", &R));
+  CUPID_TRY(cupid_calloc(sz, sizeof *C, "K^T R", &C));
+  CUPID_TRY(cupid_calloc(n, sizeof *d, "balance weights", &d));
+  CUPID_TRY(rigid_modes(prob, R));
+  for (int k = 0; k < CUPID_BALANCE_MODES; k++) CUPID_TRY(transpose(ctx, R + k * n, C + k * n));
+  CUPID_TRY(cupid_coupling_balance_weights(fe_rows, prob->n_pd, d));
+  CUPID_TRY(cupid_coupling_balance_create(prob->ndof, R, C, d, B));
+cleanup:
+  cupid_free(&R);
+  cupid_free(&C);
+  cupid_free(&d);
+  return st;
+}
+
+static cupid_status csr_transpose(void *ctx, const double *w, double *z) {
+  cupid_csr_matvec_transpose(ctx, w, z);
+  return CUPID_SUCCESS;
+}
+
+static cupid_status operator_transpose(void *ctx, const double *w, double *z) {
+  return cupid_coupling_operator_apply_transpose(ctx, w, z);
+}
+
+typedef struct {
+  const cupid_csr_t *K;
+  cupid_coupling_balance B;
+} balanced_csr;
+
+static cupid_status balanced_csr_apply(void *ctx, const double *x, double *y) {
+  const balanced_csr *b = ctx;
+  cupid_csr_matvec(b->K, x, y);
+  cupid_coupling_balance_correct(b->B, x, y);
+  return CUPID_SUCCESS;
+}
+
+cupid_status cupid_problem_balanced_direct_solve(cupid_problem_state *prob) {
+  cupid_coupling_balance B = NULL;
+  cupid_direct_factor F = NULL;
+  cupid_status st = CUPID_SUCCESS;
+  const cupid_csr_t *K = prob->K;
+  /* K's FE rows: block rows n_pd.. (rowptr holds absolute offsets into col and val) */
+  cupid_csr_t fe = {.nrows = K->nrows - prob->n_pd, .ncols = K->ncols, .bs = K->bs,
+                    .rowptr = K->rowptr + prob->n_pd, .col = K->col, .val = K->val};
+  CUPID_TRY(balance_create(prob, csr_transpose, (void *)K, &fe, &B));
+  balanced_csr bk = {K, B};
+  CUPID_TRY(cupid_problem_patch_test(prob, balanced_csr_apply, &bk));
+  cupid_solve_info si = {0};
+  double t0 = cupid_wtime();
+  CUPID_TRY(cupid_direct_factor_create_kind(K, prob->method->matrix, prob->bc, &F, &si));
+  double t1 = cupid_wtime();
+  CUPID_TRY(cupid_coupling_balance_solve(B, K, F, prob->bc, prob->f_ext, prob->u));
+  si.time_solve = cupid_wtime() - t1;
+  si.time_factor = t1 - t0;
+  CUPID_TRY(balanced_csr_apply(&bk, prob->u, prob->f_int));
+  /* the residual of the balanced system on the free DOFs */
+  double rn = 0.0, fn = 0.0;
+  for (cupid_int d = 0; d < prob->ndof; d++)
+    if (!prob->bc->fixed[d]) {
+      double r = prob->f_ext[d] - prob->f_int[d];
+      rn += r * r;
+      fn += prob->f_ext[d] * prob->f_ext[d];
+    }
+  si.residual = fn > 0 ? sqrt(rn / fn) : sqrt(rn);
+  prob->solve = si;
+  prob->solved = 1;
+  cupid_problem_record_solve(prob);
+  cupid_problem_progress(prob, "solve: %s with the momentum balance (6 rigid modes, "
+                         "Sherman-Morrison-Woodbury), %lld equations, residual %.2e",
+                         si.method, (long long)si.n, si.residual);
+cleanup:
+  cupid_direct_factor_destroy(&F);
+  cupid_coupling_balance_destroy(&B);
+  return st;
+}
+
+cupid_status cupid_problem_balanced_operator(cupid_problem_state *prob, cupid_coupling_operator A,
+                                             const cupid_linear_operator *L,
+                                             cupid_coupling_balance *B, cupid_linear_operator *out) {
+  CUPID_CHECK(!prob->slab, CUPID_ERR_UNSUPPORTED,
+              "coupling.balance: momentum is not available on PD slabs under mpirun yet (its "
+              "correction needs the whole K^T R); run on one rank or with balance: none");
+  CUPID_CALL(balance_create(prob, operator_transpose, A, cupid_coupling_operator_fe_rows(A), B));
+  return cupid_coupling_balance_linear(*B, L, out);
+}

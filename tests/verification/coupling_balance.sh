@@ -1,0 +1,85 @@
+#!/usr/bin/env bash
+# The balanced fictitious-node coupling, `coupling.balance: momentum` (issue 18 item 3;
+# docs/coupling.md, "The balanced fictitious-node coupling"; the algebra in
+# unit.coupling_balance):
+#  1. The small bar tests/models/coupling/quality_bar.yaml in the form before issue 18 (h/2
+#     fictitious element, one B2 per span, delta = 3): 32% imbalance with paper 000's operator;
+#     balanced, the reactions equal the load to the solve's tolerance (direct: 1e-10; Krylov,
+#     GMRES to 1e-10 relative: 1e-8), and the direct and the matrix-free paths give the same tip
+#     displacement (1e-7 relative: two solves to 1e-10 on a system of condition ~1e3).
+#  2. The C-beam of paper 000 (section 5.2) with PD around the web-flange corner
+#     (examples/cbeam/cbeam_corner.yaml) and over the web (cbeam_pd_l9.yaml), matrix-free,
+#     against full L9 (cbeam_fe_l9.yaml) at A and B: balanced within 0.5% (measured 0.01%) with
+#     an imbalance <= 1e-6 of the load; paper 000's operator misses the corner by > 2% with a
+#     > 10% imbalance (the cause the balance removes). 0.5% is a quarter of the issue's 2%: room
+#     for the solver's tolerance, and still far below the unbalanced 2.6%.
+#  3. What this version does not balance is refused with a clear message (load steps,
+#     type evaluate).
+set -u
+CUPID=$(realpath "${CUPID:-build/cupid}")
+SRC=$(realpath "${CUPID_SOURCE_DIR:-.}")
+work=$(mktemp -d)
+trap 'rm -rf "$work"' EXIT
+fail=0; pass=0
+Q="$SRC/tests/models/coupling/quality_bar.yaml"
+OLD=(--set peridynamics.horizon=3 --set coupling.fictitious_fe=plane --set beam.axis.type=B2 --set 'beam.axis.elements=[1,1,1]')
+ok() { if "$@"; then pass=$((pass+1)); else fail=$((fail+1)); echo "FAIL: $*"; fi; }
+run() { "$CUPID" run "$@" --quiet || { echo "FAIL: cupid run $*"; fail=$((fail+1)); }; }
+
+# 1. the small bar
+run "$Q" -o "$work/none" "${OLD[@]}" --solver direct
+run "$Q" -o "$work/direct" "${OLD[@]}" --solver direct --set coupling.balance=momentum
+run "$Q" -o "$work/krylov" "${OLD[@]}" --solver krylov --set coupling.balance=momentum
+ok python3 - "$work" <<'PY'
+import json, sys
+w = sys.argv[1]
+s = {k: json.load(open(f"{w}/{k}/summary.json")) for k in ("none", "direct", "krylov")}
+imb = {k: s[k]["coupling_quality"]["imbalance"] for k in s}
+tip = {k: [s[k]["points"][0][c] for c in ("ux", "uy", "uz")] for k in s}
+scale = max(abs(v) for v in tip["direct"])
+diff = max(abs(a - b) for a, b in zip(tip["direct"], tip["krylov"])) / scale
+print(f"small bar: imbalance none {imb['none']:.3e}, direct {imb['direct']:.3e}, krylov {imb['krylov']:.3e}; "
+      f"tip direct vs krylov {diff:.2e}")
+sys.exit(0 if imb["none"] > 0.1 and imb["direct"] <= 1e-10 and imb["krylov"] <= 1e-8 and diff <= 1e-7 else 1)
+PY
+
+# 2. the C-beam against full L9
+E="$SRC/examples/cbeam"
+run "$E/cbeam_fe_l9.yaml" -o "$work/fe"
+run "$E/cbeam_corner.yaml" -o "$work/corner" --solver krylov
+run "$E/cbeam_corner.yaml" -o "$work/corner_none" --solver krylov --set coupling.balance=none
+run "$E/cbeam_pd_l9.yaml" -o "$work/web" --solver krylov --set coupling.balance=momentum
+ok python3 - "$work" <<'PY'
+import json, sys
+w = sys.argv[1]
+def pts(k):
+    s = json.load(open(f"{w}/{k}/summary.json"))
+    return {p["name"]: p["uz"] for p in s["points"]}, s.get("coupling_quality", {}).get("imbalance", 0.0)
+fe, _ = pts("fe")
+good = True
+for k, tol, want_small in (("corner", 0.005, True), ("web", 0.005, True), ("corner_none", 0.02, False)):
+    p, imb = pts(k)
+    err = max(abs(p[n] / fe[n] - 1) for n in ("A", "B"))
+    print(f"{k}: A {p['A']:.5f} ({(p['A'] / fe['A'] - 1) * 100:+.3f}%), B {p['B']:.5f} "
+          f"({(p['B'] / fe['B'] - 1) * 100:+.3f}%), imbalance {imb:.2e}")
+    if want_small:
+        good &= err <= tol and imb <= 1e-6
+    else:
+        good &= err > tol and imb > 0.1
+sys.exit(0 if good else 1)
+PY
+
+# 3. refusals
+for case in "load steps" "type evaluate"; do
+  if [ "$case" = "load steps" ]; then args=(--set analysis.steps=2); else
+    args=(--set analysis.type=evaluate --set 'analysis.field=[0, "1e-3*y", 0]'); fi
+  out=$("$CUPID" run "$Q" -o "$work/refused" --set coupling.balance=momentum "${args[@]}" 2>&1)
+  rc=$?
+  if [ "$rc" -eq 1 ] && grep -q "quality_bar.yaml:30:3: coupling: balance: momentum runs one static solve in this version, not $case" <<<"$out"; then
+    pass=$((pass+1))
+  else
+    echo "FAIL: $case: rc $rc: $out"; fail=$((fail+1))
+  fi
+done
+echo "coupling_balance: $pass passed, $fail failed"
+[ "$fail" -eq 0 ]
