@@ -39,8 +39,7 @@ static cupid_status check(const cupid_problem_state *prob) {
 
 /* The options of the run: the layout built by cupid_problem_arlequin_prepare(). */
 static cupid_arlequin_options options(const cupid_problem_state *prob) {
-  const cupid_coupling *c = &prob->model->coupling;
-  return (cupid_arlequin_options){.penalty = c->penalty,
+  return (cupid_arlequin_options){.penalty = prob->arlequin_penalty,
                                   .n_regions = prob->n_arlequin_regions,
                                   .regions = prob->arlequin_regions};
 }
@@ -293,6 +292,42 @@ static int merge_cores(cupid_box *core, int *who, int n, double tol) {
   return n;
 }
 
+/* The penalty: the model's kappa, or with `penalty: auto` CUPID_ARLEQUIN_AUTO_PENALTY times
+ * k_node, the stiffest PD node's diagonal stiffness (its family's springs; the largest over
+ * the slabs of a partitioned grid). A tie softer than k_node adds its compliance to every
+ * tied node's (paper 004's kappa = 1e9 N/m on its truss is 0.025 k_node: the wave arrives 5 %
+ * of a period late by the second period, 1 k_node keeps it within 0.7 % over five); one much
+ * stiffer shortens the explicit stable step as 1/sqrt(kappa), that of the lightest tied node
+ * on its spring, 2 sqrt(w_min rho V / kappa) (docs/coupling.md, "The penalty"). Both are
+ * printed, and recorded in summary.json. */
+static cupid_status choose_penalty(cupid_problem_state *prob) {
+  const cupid_coupling *c = &prob->model->coupling;
+  double k = 0.0;
+  CUPID_CALL(cupid_arlequin_node_stiffness(prob->op, prob->grid, &k));
+  if (prob->slab) { /* the max over the slabs: each adds its own in its slot */
+    int parts = prob->part.parts, me = prob->part.part;
+    double *all = NULL;
+    CUPID_CALL(cupid_calloc((size_t)parts, sizeof *all, "slab stiffnesses", &all));
+    all[me] = k;
+    cupid_petsc_sum_doubles(all, parts);
+    for (int i = 0; i < parts; i++) k = fmax(k, all[i]);
+    cupid_free(&all);
+  }
+  if (!(k > 0.0))
+    return cupid_model_error(prob->model, &c->mark,
+                             "method arlequin: the PD nodes have no stiffness (k_node = %g): "
+                             "no penalty can be scaled to it",
+                             k);
+  prob->arlequin_node_stiffness = k;
+  prob->arlequin_penalty = c->penalty_auto ? CUPID_ARLEQUIN_AUTO_PENALTY * k : c->penalty;
+  cupid_problem_progress(prob,
+                         "Arlequin penalty: kappa = %g N/m%s, %.3g x the PD node stiffness "
+                         "k_node = %g N/m",
+                         prob->arlequin_penalty, c->penalty_auto ? " (auto)" : "",
+                         prob->arlequin_penalty / k, k);
+  return CUPID_SUCCESS;
+}
+
 /* The regions, their overlaps against the built beam, and the cores where the beam gives
  * way. Stored in prob->arlequin_regions. */
 static cupid_status prepare(cupid_problem_state *prob) {
@@ -306,6 +341,7 @@ static cupid_status prepare(cupid_problem_state *prob) {
       return cupid_model_error(m, &c->overlap_marks[s],
                                "a 1D peridynamic grid overlaps the beam along y only");
   CUPID_CALL(regions_disjoint(prob));
+  CUPID_CALL(choose_penalty(prob));
   double tol = ARL_TOL * model_scale(prob);
   for (int s = 0; s < c->n_overlaps; s++) { /* every slab starts on a face of some region */
     int axis = 1, on_face = 0;
