@@ -341,7 +341,6 @@ static cupid_status prepare(cupid_problem_state *prob) {
       return cupid_model_error(m, &c->overlap_marks[s],
                                "a 1D peridynamic grid overlaps the beam along y only");
   CUPID_CALL(regions_disjoint(prob));
-  CUPID_CALL(choose_penalty(prob));
   double tol = ARL_TOL * model_scale(prob);
   for (int s = 0; s < c->n_overlaps; s++) { /* every slab starts on a face of some region */
     int axis = 1, on_face = 0;
@@ -360,6 +359,7 @@ static cupid_status prepare(cupid_problem_state *prob) {
   prob->n_arlequin_regions = m->pd.n_regions;
   for (int r = 0; r < m->pd.n_regions; r++)
     CUPID_CALL(build_region(prob, r, &prob->arlequin_regions[r]));
+  CUPID_CALL(choose_penalty(prob));
   CUPID_TRY(cupid_calloc((size_t)m->pd.n_regions, sizeof *core, "Arlequin cores", &core));
   CUPID_TRY(cupid_calloc((size_t)m->pd.n_regions, sizeof *who, "Arlequin cores", &who));
   for (int r = 0; r < m->pd.n_regions; r++) {
