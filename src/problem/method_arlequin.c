@@ -258,8 +258,11 @@ static cupid_status regions_disjoint(const cupid_problem_state *prob) {
   return CUPID_SUCCESS;
 }
 
-/* 1 if the union of boxes a and b is a box: the same extent on two axes, touching or
- * overlapping on the third. Then *a becomes the union. */
+/* 1 if the union of boxes a and b is a box stacked along y: the same extent along x and z,
+ * touching or overlapping along y. Then *a becomes the union. Only along y: cores side by side
+ * across the section stay apart, so that cupid_coupling_deactivate() checks their shared x or
+ * z bound against the section-element edges (the beam's weight is integrated on either side
+ * of it, and a section Gauss point on it would count in both regions). */
 static int merge_boxes(cupid_box *a, const cupid_box *b, double tol) {
   int differ = -1;
   for (int k = 0; k < 3; k++) {
@@ -269,6 +272,7 @@ static int merge_boxes(cupid_box *a, const cupid_box *b, double tol) {
     differ = k;
   }
   if (differ < 0) return 1;
+  if (differ != 1) return 0;
   if (a->hi[differ] < b->lo[differ] - tol || b->hi[differ] < a->lo[differ] - tol) return 0;
   a->lo[differ] = fmin(a->lo[differ], b->lo[differ]);
   a->hi[differ] = fmax(a->hi[differ], b->hi[differ]);
