@@ -17,6 +17,10 @@ Penalty sweep: kappa = 1e5 .. 1e13 N/m on truss_arlequin.yaml (FE 40 + PD 40 nod
 Overlap sweep: one spacing dx = 0.0125 m for both models, overlap [0.5 - w/2, 0.5 + w/2] with
 w = 2, 4, 8, 16 dx (FE on [0, 0.5 + w/2], PD on [0.5 - w/2, 1]; 81 + w/dx nodes), kappa 1e9
 and 1e11.
+Penalty against k_node (the PD node stiffness that `penalty: auto` takes, read from the auto
+run's summary.json): kappa = 1e-3 .. 100 k_node (and the paper's 1e9), the phase lag and tip
+RMS as above and the central-difference critical step (lumped masses, one step of 1e-8 s:
+the Lanczos estimate on the coupled operator) against the FE-only truss's.
 """
 import argparse
 import json

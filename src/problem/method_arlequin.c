@@ -4,7 +4,10 @@
  * the truss) or part of it (LE: a C-beam web, a panel's stringers). Every face of a region
  * where the beam continues beyond it is an interface and needs an overlap: a slab along one
  * axis inside the region, starting on that face (`overlap: [{y: [30, 35]}, {z: [15, 30]},
- * ..]`; one slab serves every region with a face on one of its edges). Both models live in the
+ * ..]`; one slab serves every region with a face on one of its edges). Regions may touch (an
+ * L-shaped PD zone of two boxes is one body: a face meeting another region is no interface)
+ * but not share a volume. `penalty: auto` takes kappa from the PD node stiffness
+ * (choose_penalty()). Both models live in the
  * overlaps, with the energy weights of paper 004 Eqs. 8-9 ramping across them; inside the
  * rest of the region (its core) the beam gives way (cupid_coupling_deactivate(): those pairs
  * are inactive, their FE nodes held at zero). The weights' kinks must fall on element
