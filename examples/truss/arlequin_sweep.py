@@ -17,6 +17,10 @@ Penalty sweep: kappa = 1e5 .. 1e13 N/m on truss_arlequin.yaml (FE 40 + PD 40 nod
 Overlap sweep: one spacing dx = 0.0125 m for both models, overlap [0.5 - w/2, 0.5 + w/2] with
 w = 2, 4, 8, 16 dx (FE on [0, 0.5 + w/2], PD on [0.5 - w/2, 1]; 81 + w/dx nodes), kappa 1e9
 and 1e11.
+Penalty against k_node (the PD node stiffness that `penalty: auto` takes, read from the auto
+run's summary.json): kappa = 1e-3 .. 100 k_node (and the paper's 1e9), the phase lag and tip
+RMS as above and the central-difference critical step (lumped masses, one step of 1e-8 s:
+the Lanczos estimate on the coupled operator) against the FE-only truss's.
 """
 import argparse
 import json
@@ -70,6 +74,26 @@ def run(text, out, name):
     return hist, info, dyn
 
 
+def run_coupling(text, out, name):
+    """The model text run through the CLI-equivalent Problem; the summary's coupling and
+    dynamic blocks (empty dicts when absent)."""
+    path = os.path.join(out, name + ".yaml")
+    with open(path, "w") as f:
+        f.write(text)
+    with cupid.Problem(path, output_dir=os.path.join(out, name)) as p:
+        p.solve().write_outputs()
+        with open(os.path.join(p.output_dir, "summary.json")) as f:
+            s = json.load(f)
+    return None, s.get("dynamic", {}), s.get("coupling", {})
+
+
+def central(text):
+    """The model by central differences with lumped masses, one step of 1e-8 s."""
+    t = text.replace("integrator: newmark", "integrator: central\n    lumped: true")
+    t = re.sub(r"dt: [0-9.e-]+", "dt: 1.0e-8", t)
+    return re.sub(r"duration: [0-9.e-]+", "duration: 1.0e-8", t)
+
+
 def fmt(v):
     return " ".join("%+.2f" % x for x in v)
 
@@ -108,6 +132,25 @@ def main():
             amp, ph, rms = metrics(h, fe)
             out.append("| %d dx = %g m | %d | %.0e | %.2f | %s | %s |" % (
                 w, w * 0.0125, info["pd_nodes"] + info["fe_nodes"], kappa, rms, fmt(amp), fmt(ph)))
+    # penalty relative to the PD node stiffness (`penalty: auto` is CUPID_ARLEQUIN_AUTO_PENALTY
+    # k_node): Newmark accuracy and the central-difference critical step (lumped masses; one
+    # step at dt = 1e-8 reads dt_critical from the Lanczos estimate on the coupled operator)
+    _, _, kn = run_coupling(base.replace("penalty: 1.0e9", "penalty: auto"), a.out, "auto")
+    k_node = kn["pd_node_stiffness"]
+    crit = lambda text, name: run_coupling(central(text), a.out, name)[1]["dt_critical"]
+    dt_fe = crit(open(os.path.join(HERE, "truss_fe.yaml")).read(), "fe_central")
+    dt_pd = crit(open(os.path.join(HERE, "truss_pd.yaml")).read(), "pd_central")
+    out += ["", "## Penalty against the PD node stiffness k_node = %.4g N/m (`penalty: auto` = %g k_node)"
+            % (k_node, kn["penalty_over_node_stiffness"]), "",
+            "Critical step of central differences (lumped): FE-only truss %.3e s, PD-only truss %.3e s." % (dt_fe, dt_pd), "",
+            "| kappa / k_node | kappa (N/m) | tip RMS vs FE, 1st period (%) | phase lag at crossing k (% T1, cumulative) | dt_critical (s) | dt_critical / FE-only's |",
+            "|---|---|---|---|---|---|"]
+    for c in (1e-3, 1e9 / k_node, 0.1, 0.3, 1, 3, 10, 100):
+        text = base.replace("penalty: 1.0e9", "penalty: %.6g" % (c * k_node))
+        h, _, _ = run(text, a.out, "c%.3g" % c)
+        amp, ph, rms = metrics(h, fe)
+        dt = crit(text, "c%.3g_central" % c)
+        out.append("| %.3g | %.3g | %.2f | %s | %.3e | %.2f |" % (c, c * k_node, rms, fmt(ph), dt, dt / dt_fe))
     # PD-only for reference
     h, _, _ = run(open(os.path.join(HERE, "truss_pd.yaml")).read(), a.out, "pd")
     amp, ph, rms = metrics(h, fe)

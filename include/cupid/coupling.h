@@ -283,6 +283,20 @@ typedef struct {
   double pd_weight_min; /**< smallest PD nodal weight 1 - alpha_i */
 } cupid_arlequin_info;
 
+/** `penalty: auto` (issue 18): kappa = CUPID_ARLEQUIN_AUTO_PENALTY x k_node, k_node the
+ *  stiffness of a PD node's family (cupid_arlequin_node_stiffness()). The factor is measured on
+ *  paper 004's truss (docs/coupling.md, "The penalty"). */
+#define CUPID_ARLEQUIN_AUTO_PENALTY 1.0
+
+/** k_node: the largest diagonal stiffness of a PD node of @p op (N/m), over the grid's owned
+ *  nodes: the yy entry of its 3x3 diagonal block on a 1D grid (the tied component), the mean
+ *  of the three diagonal entries on a 3D one: the springs of its family, which a tie must
+ *  match. 1D bond-based, constant influence, no partial volumes (micromodulus calibrated on
+ *  the lattice sums): 4 H_m / (m (m + 1)) x E A / h, m = delta / h, H_m the harmonic number
+ *  (11/18 E A / h at m = 3, E A / h at m = 2); 3D bond-based at delta = 1.5 h: 2.52 E h. On
+ *  a slab of a partitioned grid the caller takes the maximum over the slabs. */
+cupid_status cupid_arlequin_node_stiffness(cupid_pd_operator op, cupid_pd_grid grid, double *k_node);
+
 /**
  * The coupled stiffness: weighted PD (@p op on @p grid, LPS or bond-based) + weighted beam + the
  * penalty K_z = kappa [I, -N; -N^T, N^T N] (Eq. 18, sign as coupling.md 7.2). The beam's DOF

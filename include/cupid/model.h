@@ -172,7 +172,8 @@ typedef enum { CUPID_WEIGHT_LINEAR = 0, CUPID_WEIGHT_CONSTANT = 1, CUPID_WEIGHT_
 
 typedef struct {
   cupid_coupling_method method;
-  double penalty;        /**< arlequin */
+  double penalty;        /**< arlequin: kappa, N/m per tied node and component; 0 with penalty_auto */
+  int penalty_auto;      /**< arlequin `penalty: auto`: kappa from the PD stiffness (method_arlequin.c) */
   /** arlequin: the overlaps, each a slab along one axis ({y: [..]}, {x: [..]} or {z: [..]})
    *  inside a PD region next to one of its faces (`overlap:` a box or a list of them) */
   cupid_box overlaps[CUPID_MAX_OVERLAPS];

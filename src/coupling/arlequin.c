@@ -462,3 +462,22 @@ cupid_status cupid_arlequin_gap(cupid_cuf_beam beam, cupid_pd_grid grid,
   tied_free(&t);
   return CUPID_SUCCESS;
 }
+
+cupid_status cupid_arlequin_node_stiffness(cupid_pd_operator op, cupid_pd_grid grid, double *k_node) {
+  CUPID_CHECK(op && grid && k_node, CUPID_ERR_ARGUMENT, "cupid_arlequin_node_stiffness: NULL argument");
+  cupid_int n = cupid_pd_grid_num_nodes(grid);
+  cupid_pd_grid_partition part;
+  cupid_pd_grid_get_partition(grid, &part);
+  double *blk = NULL;
+  CUPID_CALL(cupid_malloc(9 * (size_t)n + 1, sizeof *blk, "PD diagonal blocks", &blk));
+  cupid_status st = cupid_pd_operator_diagonal(op, blk);
+  const int one_d = cupid_pd_grid_dimension(grid) == 1;
+  *k_node = 0.0;
+  for (cupid_int i = part.owned_first; st == CUPID_SUCCESS && i < part.owned_last; i++) {
+    const double *b = blk + 9 * i;
+    double k = one_d ? b[4] : (b[0] + b[4] + b[8]) / 3.0;
+    if (k > *k_node) *k_node = k;
+  }
+  cupid_free(&blk);
+  return st;
+}

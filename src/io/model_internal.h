@@ -93,6 +93,9 @@ cupid_status mr_number(const model_reader *rd, const yaml_node_t *node, const ch
 /** A number > 0. */
 cupid_status mr_positive(const model_reader *rd, const yaml_node_t *node, const char *path,
                          double *out);
+/** A number > 0 or the word auto (*is_auto 1, *out 0). */
+cupid_status mr_positive_or_auto(const model_reader *rd, const yaml_node_t *node,
+                                const char *path, int *is_auto, double *out);
 /** A number >= 0. */
 cupid_status mr_nonnegative(const model_reader *rd, const yaml_node_t *node, const char *path,
                             double *out);

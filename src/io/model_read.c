@@ -304,6 +304,19 @@ cupid_status mr_positive(const model_reader *rd, const yaml_node_t *node, const 
   return CUPID_SUCCESS;
 }
 
+cupid_status mr_positive_or_auto(const model_reader *rd, const yaml_node_t *node,
+                                const char *path, int *is_auto, double *out) {
+  char got[64];
+  *is_auto = mr_is_scalar(node) && !mr_is_null(node) && !strcmp(scalar(node), "auto");
+  *out = 0.0;
+  if (*is_auto) return CUPID_SUCCESS;
+  if (!mr_is_scalar(node) || mr_is_null(node) ||
+      !parse_number(scalar(node), node->data.scalar.length, out) || !isfinite(*out) || !(*out > 0))
+    return mr_error(rd, node, path, "must be a positive number or auto, got %s",
+                    mr_describe(node, got, sizeof got));
+  return CUPID_SUCCESS;
+}
+
 cupid_status mr_nonnegative(const model_reader *rd, const yaml_node_t *node, const char *path,
                             double *out) {
   CUPID_CALL(mr_number(rd, node, path, out));

@@ -813,7 +813,9 @@ static cupid_status read_arlequin(model_reader *rd, yaml_node_t *node, cupid_cou
   yaml_node_t *penalty, *overlap, *weight;
   CUPID_CALL(mr_map_open(rd, node, "coupling.arlequin", keys, COUNT(keys), &map));
   CUPID_CALL(mr_require(rd, &map, "penalty", &penalty));
-  CUPID_CALL(mr_positive(rd, penalty, "coupling.arlequin.penalty", &c->penalty));
+  /* a number (N/m per tied node and component) or `auto` (chosen from the PD stiffness) */
+  CUPID_CALL(mr_positive_or_auto(rd, penalty, "coupling.arlequin.penalty", &c->penalty_auto,
+                                 &c->penalty));
   CUPID_CALL(mr_require(rd, &map, "overlap", &overlap));
   int n = 1;
   if (overlap->type == YAML_SEQUENCE_NODE) {

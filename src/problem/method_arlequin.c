@@ -4,7 +4,10 @@
  * the truss) or part of it (LE: a C-beam web, a panel's stringers). Every face of a region
  * where the beam continues beyond it is an interface and needs an overlap: a slab along one
  * axis inside the region, starting on that face (`overlap: [{y: [30, 35]}, {z: [15, 30]},
- * ..]`; one slab serves every region with a face on one of its edges). Both models live in the
+ * ..]`; one slab serves every region with a face on one of its edges). Regions may touch (an
+ * L-shaped PD zone of two boxes is one body: a face meeting another region is no interface)
+ * but not share a volume. `penalty: auto` takes kappa from the PD node stiffness
+ * (choose_penalty()). Both models live in the
  * overlaps, with the energy weights of paper 004 Eqs. 8-9 ramping across them; inside the
  * rest of the region (its core) the beam gives way (cupid_coupling_deactivate(): those pairs
  * are inactive, their FE nodes held at zero). The weights' kinks must fall on element
@@ -39,8 +42,7 @@ static cupid_status check(const cupid_problem_state *prob) {
 
 /* The options of the run: the layout built by cupid_problem_arlequin_prepare(). */
 static cupid_arlequin_options options(const cupid_problem_state *prob) {
-  const cupid_coupling *c = &prob->model->coupling;
-  return (cupid_arlequin_options){.penalty = c->penalty,
+  return (cupid_arlequin_options){.penalty = prob->arlequin_penalty,
                                   .n_regions = prob->n_arlequin_regions,
                                   .regions = prob->arlequin_regions};
 }
@@ -67,24 +69,32 @@ static double model_scale(const cupid_problem_state *prob) {
   return s;
 }
 
-/* 1 if the beam continues beyond face (axis k, side: 0 lo, 1 hi) of box b: some point of a
- * 9 x 9 sample of the face, moved just outside it, lies in the beam. Axes the box leaves
- * open are sampled over the model's extent. */
-static int face_is_interface(const cupid_problem_state *prob, const cupid_box *b, int k, int side) {
+/* What lies just beyond face (axis k, side: 0 lo, 1 hi) of region r, on a 9 x 9 sample of the
+ * face moved just outside it: *beam, some point in the beam and in no other PD region (an
+ * interface); *pd, some point in another PD region (the regions touch there: one PD body,
+ * the lattice and its bonds run on through the face). Axes the box leaves open are sampled
+ * over the model's extent. */
+static void face_meets(const cupid_problem_state *prob, int r, int k, int side, int *beam, int *pd) {
+  const cupid_pd_region *regions = prob->model->pd.regions;
+  const cupid_box *b = &regions[r].box;
   double lo[3], hi[3], eps = 1e-6 * model_scale(prob);
   model_extent(prob, lo, hi);
   for (int a = 0; a < 3; a++)
     if (b->has[a]) lo[a] = fmax(lo[a], b->lo[a]), hi[a] = fmin(hi[a], b->hi[a]);
   int a1 = (k + 1) % 3, a2 = (k + 2) % 3;
+  *beam = *pd = 0;
   for (int i = 0; i < 9; i++)
     for (int j = 0; j < 9; j++) {
       double p[3];
       p[k] = side ? b->hi[k] + eps : b->lo[k] - eps;
       p[a1] = lo[a1] + (i + 0.5) / 9.0 * (hi[a1] - lo[a1]);
       p[a2] = lo[a2] + (j + 0.5) / 9.0 * (hi[a2] - lo[a2]);
-      if (cupid_cuf_contains(prob->beam, p[0], p[1], p[2])) return 1;
+      int other = 0;
+      for (int q = 0; q < prob->model->pd.n_regions && !other; q++)
+        other = q != r && cupid_box_contains(&regions[q].box, p, 0.0);
+      if (other) *pd = 1;
+      else if (cupid_cuf_contains(prob->beam, p[0], p[1], p[2])) *beam = 1;
     }
-  return 0;
 }
 
 /* v along x or z (axis k) must not cut a section element that reaches into [olo, ohi] along
@@ -164,17 +174,26 @@ static cupid_status build_region(cupid_problem_state *prob, int r, cupid_arlequi
   for (int k = 0; k < 3; k++)
     for (int side = 0; side < 2; side++) {
       if (!b->has[k]) continue;
-      int slab = -1, interface = face_is_interface(prob, b, k, side);
+      int slab = -1, interface, touches;
+      face_meets(prob, r, k, side, &interface, &touches);
+      double f = side ? b->hi[k] : b->lo[k];
+      if (interface && touches)
+        return cupid_model_error(m, &m->pd.regions[r].mark,
+                                 "the face %c = %g of this PD region meets another PD region on "
+                                 "part of it and the beam on the rest: an overlap cannot start "
+                                 "on part of a face; split the regions so that each face meets "
+                                 "either the beam or other PD regions (a re-entrant corner of "
+                                 "the PD zone must not face the beam)",
+                                 AXIS[k], f);
       for (int s = 0; s < c->n_overlaps; s++) {
-        int axis, f = slab_face(&c->overlaps[s], b, tol, &axis);
-        if (axis != k || f != side) continue;
+        int axis, on = slab_face(&c->overlaps[s], b, tol, &axis);
+        if (axis != k || on != side) continue;
         if (slab >= 0)
           return cupid_model_error(m, &c->overlap_marks[s],
                                    "two overlaps on the face %c = %g of the PD region %d",
                                    AXIS[k], side ? b->hi[k] : b->lo[k], r);
         slab = s;
       }
-      double f = side ? b->hi[k] : b->lo[k];
       if (slab < 0 && interface)
         return cupid_model_error(m, &m->pd.regions[r].mark,
                                  "the face %c = %g of this PD region meets the beam: give it an "
@@ -185,10 +204,10 @@ static cupid_status build_region(cupid_problem_state *prob, int r, cupid_arlequi
       if (!interface)
         return cupid_model_error(m, &c->overlap_marks[slab],
                                  "the overlap %c in [%g, %g] lies on the face %c = %g of PD region "
-                                 "%d, where the beam does not continue (a free surface): an "
-                                 "overlap belongs on a face the beam meets",
+                                 "%d, where the beam does not continue (%s): an overlap belongs "
+                                 "on a face the beam meets",
                                  AXIS[k], c->overlaps[slab].lo[k], c->overlaps[slab].hi[k], AXIS[k],
-                                 f, r);
+                                 f, r, touches ? "another PD region touches it there" : "a free surface");
       CUPID_CALL(slab_bounds_ok(prob, b, k, slab));
       out->ramps[out->n_ramps++] = (cupid_arlequin_ramp){
           .axis = k,
@@ -215,16 +234,120 @@ static int region_core(const cupid_problem_state *prob, const cupid_arlequin_reg
   return 1;
 }
 
+/* 1 if boxes a and b share a volume (open axes overlap everything): touching on a face is no
+ * overlap. */
+static int boxes_share_volume(const cupid_box *a, const cupid_box *b, double tol) {
+  for (int k = 0; k < 3; k++)
+    if (a->has[k] && b->has[k] && (a->hi[k] <= b->lo[k] + tol || b->hi[k] <= a->lo[k] + tol)) return 0;
+  return 1;
+}
+
+/* Regions may touch (an L-shaped PD zone of two boxes: the grid is their union, one lattice
+ * with its bonds across the shared face, and each PD node lies in one box), but not share a
+ * volume: the energies are weighted region by region (alpha = 1 - sum_r w_r), and a node in
+ * two boxes would count twice. */
+static cupid_status regions_disjoint(const cupid_problem_state *prob) {
+  const cupid_model_t *m = prob->model;
+  double tol = ARL_TOL * model_scale(prob);
+  for (int r = 0; r < m->pd.n_regions; r++)
+    for (int q = 0; q < r; q++)
+      if (boxes_share_volume(&m->pd.regions[q].box, &m->pd.regions[r].box, tol))
+        return cupid_model_error(m, &m->pd.regions[r].mark,
+                                 "this PD region shares a volume with PD region %d: with method "
+                                 "arlequin the regions may touch (share a face) but not overlap "
+                                 "(their energies are weighted region by region); split them "
+                                 "into boxes that only touch",
+                                 q);
+  return CUPID_SUCCESS;
+}
+
+/* 1 if the union of boxes a and b is a box stacked along y: the same extent along x and z,
+ * touching or overlapping along y. Then *a becomes the union. Only along y: cores side by side
+ * across the section stay apart, so that cupid_coupling_deactivate() checks their shared x or
+ * z bound against the section-element edges (the beam's weight is integrated on either side
+ * of it, and a section Gauss point on it would count in both regions). */
+static int merge_boxes(cupid_box *a, const cupid_box *b, double tol) {
+  int differ = -1;
+  for (int k = 0; k < 3; k++) {
+    if (a->has[k] != b->has[k]) return 0;
+    if (!a->has[k] || (fabs(a->lo[k] - b->lo[k]) <= tol && fabs(a->hi[k] - b->hi[k]) <= tol)) continue;
+    if (differ >= 0) return 0;
+    differ = k;
+  }
+  if (differ < 0) return 1;
+  if (differ != 1) return 0;
+  if (a->hi[differ] < b->lo[differ] - tol || b->hi[differ] < a->lo[differ] - tol) return 0;
+  a->lo[differ] = fmin(a->lo[differ], b->lo[differ]);
+  a->hi[differ] = fmax(a->hi[differ], b->hi[differ]);
+  return 1;
+}
+
+/* The cores, touching ones merged where their union is a box (two boxes stacked along y: the
+ * beam gives way across the shared face, which need not be an element end). n: the cores;
+ * who[i]: the first region of core i. */
+static int merge_cores(cupid_box *core, int *who, int n, double tol) {
+  for (int again = 1; again;) {
+    again = 0;
+    for (int i = 0; i < n && !again; i++)
+      for (int j = i + 1; j < n && !again; j++)
+        if (merge_boxes(&core[i], &core[j], tol)) {
+          core[j] = core[n - 1], who[j] = who[n - 1];
+          n--;
+          again = 1;
+        }
+  }
+  return n;
+}
+
+/* The penalty: the model's kappa, or with `penalty: auto` CUPID_ARLEQUIN_AUTO_PENALTY times
+ * k_node, the stiffest PD node's diagonal stiffness (its family's springs; the largest over
+ * the slabs of a partitioned grid). A tie softer than k_node adds its compliance to every
+ * tied node's (paper 004's kappa = 1e9 N/m on its truss is 0.025 k_node: the wave arrives 5 %
+ * of a period late by the second period, 1 k_node keeps it within 0.7 % over five); one much
+ * stiffer shortens the explicit stable step as 1/sqrt(kappa), that of the lightest tied node
+ * on its spring, 2 sqrt(w_min rho V / kappa) (docs/coupling.md, "The penalty"). Both are
+ * printed, and recorded in summary.json. */
+static cupid_status choose_penalty(cupid_problem_state *prob) {
+  const cupid_coupling *c = &prob->model->coupling;
+  double k = 0.0;
+  CUPID_CALL(cupid_arlequin_node_stiffness(prob->op, prob->grid, &k));
+  if (prob->slab) { /* the max over the slabs: each adds its own in its slot */
+    int parts = prob->part.parts, me = prob->part.part;
+    double *all = NULL;
+    CUPID_CALL(cupid_calloc((size_t)parts, sizeof *all, "slab stiffnesses", &all));
+    all[me] = k;
+    cupid_petsc_sum_doubles(all, parts);
+    for (int i = 0; i < parts; i++) k = fmax(k, all[i]);
+    cupid_free(&all);
+  }
+  if (!(k > 0.0))
+    return cupid_model_error(prob->model, &c->mark,
+                             "method arlequin: the PD nodes have no stiffness (k_node = %g): "
+                             "no penalty can be scaled to it",
+                             k);
+  prob->arlequin_node_stiffness = k;
+  prob->arlequin_penalty = c->penalty_auto ? CUPID_ARLEQUIN_AUTO_PENALTY * k : c->penalty;
+  cupid_problem_progress(prob,
+                         "Arlequin penalty: kappa = %g N/m%s, %.3g x the PD node stiffness "
+                         "k_node = %g N/m",
+                         prob->arlequin_penalty, c->penalty_auto ? " (auto)" : "",
+                         prob->arlequin_penalty / k, k);
+  return CUPID_SUCCESS;
+}
+
 /* The regions, their overlaps against the built beam, and the cores where the beam gives
  * way. Stored in prob->arlequin_regions. */
 static cupid_status prepare(cupid_problem_state *prob) {
   const cupid_model_t *m = prob->model;
   const cupid_coupling *c = &m->coupling;
   cupid_status st = CUPID_SUCCESS;
+  cupid_box *core = NULL;
+  int *who = NULL, n = 0;
   for (int s = 0; s < c->n_overlaps; s++)
     if (!c->overlaps[s].has[1] && m->pd.dimension != 3)
       return cupid_model_error(m, &c->overlap_marks[s],
                                "a 1D peridynamic grid overlaps the beam along y only");
+  CUPID_CALL(regions_disjoint(prob));
   double tol = ARL_TOL * model_scale(prob);
   for (int s = 0; s < c->n_overlaps; s++) { /* every slab starts on a face of some region */
     int axis = 1, on_face = 0;
@@ -243,21 +366,34 @@ static cupid_status prepare(cupid_problem_state *prob) {
   prob->n_arlequin_regions = m->pd.n_regions;
   for (int r = 0; r < m->pd.n_regions; r++)
     CUPID_CALL(build_region(prob, r, &prob->arlequin_regions[r]));
+  CUPID_CALL(choose_penalty(prob));
+  CUPID_TRY(cupid_calloc((size_t)m->pd.n_regions, sizeof *core, "Arlequin cores", &core));
+  CUPID_TRY(cupid_calloc((size_t)m->pd.n_regions, sizeof *who, "Arlequin cores", &who));
   for (int r = 0; r < m->pd.n_regions; r++) {
-    cupid_box core;
-    if (!region_core(prob, &prob->arlequin_regions[r], &core)) continue;
-    st = cupid_coupling_deactivate(prob->beam, 1, &core);
-    if (st != CUPID_SUCCESS)
-      return cupid_model_error(m, &m->pd.regions[r].mark,
-                               "the beam cannot give way inside this region, off its overlaps "
-                               "(x [%g, %g], y [%g, %g], z [%g, %g]): %s",
-                               core.lo[0], core.hi[0], core.lo[1], core.hi[1], core.lo[2],
-                               core.hi[2], cupid_error_message());
-    cupid_problem_progress(prob, "Arlequin: region %d: %d overlaps; the beam gives way on y in [%g, %g]%s",
-                       r, prob->arlequin_regions[r].n_ramps, core.lo[1], core.hi[1],
-                       core.has[0] || core.has[2] ? " over part of the section" : "");
+    if (!region_core(prob, &prob->arlequin_regions[r], &core[n])) continue;
+    cupid_problem_progress(prob, "Arlequin: region %d: %d overlaps", r,
+                           prob->arlequin_regions[r].n_ramps);
+    who[n++] = r;
   }
-  return CUPID_SUCCESS;
+  n = merge_cores(core, who, n, tol);
+  for (int i = 0; i < n; i++) {
+    const cupid_box *b = &core[i];
+    st = cupid_coupling_deactivate(prob->beam, 1, b);
+    if (st != CUPID_SUCCESS) {
+      st = cupid_model_error(m, &m->pd.regions[who[i]].mark,
+                             "the beam cannot give way inside this region, off its overlaps "
+                             "(x [%g, %g], y [%g, %g], z [%g, %g]): %s",
+                             b->lo[0], b->hi[0], b->lo[1], b->hi[1], b->lo[2], b->hi[2],
+                             cupid_error_message());
+      goto cleanup;
+    }
+    cupid_problem_progress(prob, "Arlequin: the beam gives way on y in [%g, %g]%s", b->lo[1], b->hi[1],
+                           b->has[0] || b->has[2] ? " over part of the section" : "");
+  }
+cleanup:
+  cupid_free(&core);
+  cupid_free(&who);
+  return st;
 }
 
 /* --------------------------------------------------------------- constraints and loads */

@@ -105,6 +105,8 @@ typedef struct cupid_problem_private {
   cupid_coupling_h coupling;
   cupid_arlequin_region *arlequin_regions; /**< method arlequin: the layout (owned) */
   int n_arlequin_regions;
+  double arlequin_penalty;       /**< method arlequin: kappa in use (given, or `auto`'s choice) */
+  double arlequin_node_stiffness; /**< method arlequin: k_node (cupid_arlequin_node_stiffness) */
   cupid_int n_fictitious;  /**< fictitious PD nodes */
 
   double load_sum[3], reaction_sum[3];

@@ -299,6 +299,16 @@ static cupid_status write_summary(cupid_problem_state *prob) {
   json_counts(js, prob);
   json_phases(js, prob);
   json_solver(js, prob);
+  if (prob->arlequin_penalty > 0) { /* method arlequin: the penalty in use and its scale */
+    cupid_json_begin_object(js, "coupling");
+    cupid_json_string(js, "method", "arlequin");
+    cupid_json_number(js, "penalty", prob->arlequin_penalty);
+    cupid_json_string(js, "penalty_choice", m->coupling.penalty_auto ? "auto" : "given");
+    cupid_json_number(js, "pd_node_stiffness", prob->arlequin_node_stiffness);
+    cupid_json_number(js, "penalty_over_node_stiffness",
+                      prob->arlequin_penalty / prob->arlequin_node_stiffness);
+    cupid_json_end_object(js);
+  }
   json_vec3(js, "applied_load_sum", prob->load_sum);
   json_vec3(js, "reaction_sum", prob->reaction_sum);
   if (m->analysis.type != CUPID_ANALYSIS_DYNAMIC) { /* a static balance; dynamics: the energy's */

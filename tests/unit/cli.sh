@@ -52,6 +52,10 @@ expect 1 'point_outside.yaml:[0-9]+:[0-9]+: output.points\[0\].*outside' -- "$CU
 expect 1 'traction_no_face.yaml:[0-9]+:[0-9]+: loads\[0\].*no free PD surface' -- "$CUPID" run "$M/traction_no_face.yaml" -o o6
 expect 1 'point_load_outside.yaml:[0-9]+:[0-9]+: loads\[0\].*outside every PD region' -- "$CUPID" run "$M/point_load_outside.yaml" -o o7
 expect 1 'off_lattice.yaml:[0-9]+:[0-9]+: peridynamics.regions\[1\]' -- "$CUPID" run "$M/off_lattice.yaml" -o o8
+# Arlequin: PD regions may touch but not share a volume, and no face may meet the beam and
+# another region (a re-entrant corner facing the beam)
+expect 1 'arlequin_regions_overlap.yaml:[0-9]+:[0-9]+: peridynamics.regions\[1\]: this PD region shares a volume with PD region 0' -- "$CUPID" run "$M/arlequin_regions_overlap.yaml" -o o8
+expect 1 'arlequin_reentrant_face.yaml:[0-9]+:[0-9]+: peridynamics.regions\[0\]: the face y = 16 of this PD region meets another PD region on part of it and the beam on the rest' -- "$CUPID" run "$M/arlequin_reentrant_face.yaml" -o o8
 # `cupid check` resolves constraints and loads through the run's code (issue 19): what run
 # refuses for a model error, check refuses too, with the same message.
 expect 1 'constraint_empty.yaml:[0-9]+:[0-9]+: constraints\[0\].*no PD node' -- "$CUPID" check "$M/constraint_empty.yaml"

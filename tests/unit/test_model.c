@@ -175,7 +175,7 @@ static void test_truss_1d_dynamic(void **state) {
   assert_true(pd->regions[0].box.lo[1] == 0.4 && pd->regions[0].box.hi[1] == 1.0);
   const cupid_coupling *c = &m->coupling;
   assert_int_equal(c->method, CUPID_COUPLING_ARLEQUIN);
-  assert_true(c->has_arlequin && c->penalty == 1e9);
+  assert_true(c->has_arlequin && c->penalty == 1e9 && !c->penalty_auto);
   assert_int_equal(c->weight, CUPID_WEIGHT_LINEAR);
   assert_true(c->n_overlaps == 1 && c->overlaps[0].has[1] && c->overlaps[0].lo[1] == 0.4 && c->overlaps[0].hi[1] == 0.6);
   assert_true(m->constraints[0].layer == 0.0375);
@@ -335,6 +335,23 @@ static void test_fracture_defaults(void **state) {
   cupid_model_destroy(&m);
 }
 
+/* coupling.arlequin.penalty: auto (kappa chosen at run time, method_arlequin.c) and two PD
+ * regions that touch (one body for Arlequin) are read as given. */
+static void test_arlequin_penalty_auto(void **state) {
+  (void)state;
+  const char *text = "materials: {m: {E: 1, nu: 0.25}}\n"
+                     "beam: {material: m, axis: {y: [0, 8], elements: [8]},\n"
+                     "       section: {expansion: TE1, components: [{x: [0, 2], z: [0, 2]}]}}\n"
+                     "peridynamics: {spacing: 1, horizon: 1.5, model: bond, material: m,\n"
+                     "  regions: [{x: [0, 2], y: [4, 6], z: [0, 2]}, {x: [0, 2], y: [6, 9], z: [0, 2]}]}\n"
+                     "coupling: {method: arlequin, arlequin: {penalty: auto, overlap: {y: [4, 5]}}}\n";
+  cupid_model m = NULL;
+  CUPID_ASSERT_OK(cupid_model_read_string(text, strlen(text), "f.yaml", &m));
+  assert_true(m->coupling.has_arlequin && m->coupling.penalty_auto && m->coupling.penalty == 0.0);
+  assert_int_equal(m->pd.n_regions, 2);
+  cupid_model_destroy(&m);
+}
+
 static void test_read_string_and_defaults(void **state) {
   (void)state;
   const char *text = "materials: {m: {E: 1, nu: 0}}\n"
@@ -399,6 +416,7 @@ int main(void) {
       cmocka_unit_test(test_components),
       cmocka_unit_test(test_fracture),
       cmocka_unit_test(test_fracture_defaults),
+      cmocka_unit_test(test_arlequin_penalty_auto),
       cmocka_unit_test(test_read_string_and_defaults),
       cmocka_unit_test(test_model_error_and_helpers),
   };
