@@ -2,7 +2,7 @@
 """FE-mesh and horizon study of the coupled stiffened panel (examples/panel/README.md).
 
 usage: examples/panel/study.py [VARIANT ...] [--library build/libcupid.so] [--solver petsc]
-                               [--against fine] [--list]
+                               [--against fine] [--balance momentum] [--list]
 
 Each variant is panel_pd_l9.yaml with another beam mesh (axis breakpoints / elements / type),
 section mesh (skin x, stringer z breakpoints) or PD horizon / surface correction, run with its
@@ -42,6 +42,7 @@ SKIN_B = "0,12,24,36,42,46,48,52,54,58,64,76,88,100,112,124,136,142,146,148,152,
 SKIN_X2 = SKIN_B.replace("48,52", "48,50,52").replace("148,152", "148,150,152")
 SKIN_X4 = SKIN_B.replace("48,52", "48,49,50,51,52").replace("148,152", "148,149,150,151,152")
 H05 = dict(h="0.5")
+BALANCE = ["none"]  # coupling.balance of the coupled models (--balance)
 
 # name: (description, overrides of the example's parameters)
 VARIANTS = {
@@ -139,7 +140,7 @@ def models(p, d):
 
     return (model("panel study, full FE", d + "/fe", {}),
             model("panel study, coupled", d + "/pd",
-                  {"peridynamics": pd, "coupling": {"method": "fictitious"},
+                  {"peridynamics": pd, "coupling": {"method": "fictitious", "balance": BALANCE[0]},
                    "analysis": {"type": "static", "solver": "direct"}}))
 
 
@@ -190,8 +191,11 @@ def main():
     ap.add_argument("--solver", help="solver of the coupled runs (e.g. petsc)")
     ap.add_argument("--against", choices=sorted(REFERENCES),
                     help="also compare with this converged full-FE reference")
+    ap.add_argument("--balance", choices=("none", "momentum"), default="none",
+                    help="coupling.balance of the coupled models (docs/coupling.md)")
     ap.add_argument("--list", action="store_true")
     a = ap.parse_args()
+    BALANCE[0] = a.balance
     if a.list:
         for k, (desc, _) in VARIANTS.items():
             print(f"{k:20s} {desc}")
@@ -204,7 +208,7 @@ def main():
                                                  "libcupid.so"))
     if lib:  # read when the first problem is made
         os.environ["CUPID_LIBRARY"] = os.path.abspath(lib)
-    base = os.path.join("out", "panel", "study")
+    base = os.path.join("out", "panel", "study" + ("_" + a.balance if a.balance != "none" else ""))
     ref = None
     if a.against:
         d = os.path.abspath(os.path.join(base, "ref_" + a.against))

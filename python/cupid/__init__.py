@@ -58,7 +58,7 @@ class _Info(ctypes.Structure):  # cupid_problem_info (problem.h)
                 ("ghost_force", ctypes.c_double), ("quality_warnings", ctypes.c_int)]
 
 
-_SOLVERS = {None: -1, "auto": 0, "direct": 1, "petsc": 2}
+_SOLVERS = {None: -1, "auto": 0, "direct": 1, "petsc": 2, "krylov": 3}
 _FIELDS = {"pd_coordinates": 0, "pd_displacement": 1, "pd_force": 2, "pd_load": 3,
            "pd_stress": 4, "beam_points": 5, "beam_displacement": 6, "pd_damage": 7}
 _REGIONS = {0: "none", 1: "PD", 2: "FE"}
@@ -148,7 +148,7 @@ class Problem:
     """A model being set up, solved and reported (include/cupid/problem.h).
 
     model: a path to a model file, or a dict with the model file's keys (model-format.md).
-    output_dir, solver ("auto", "direct", "petsc"), threads, max_memory_gb, quiet: as the
+    output_dir, solver ("auto", "direct", "krylov", "petsc"), threads, max_memory_gb, quiet: as the
     command line's -o, --solver, --threads, --max-memory, --quiet.
     """
 
@@ -161,7 +161,7 @@ class Problem:
                  quiet=True):
         lib = _load()
         if solver not in _SOLVERS:
-            raise ValueError("solver must be one of auto, direct, petsc")
+            raise ValueError("solver must be one of auto, direct, krylov, petsc")
         self._out = output_dir.encode() if output_dir else None
         opts = _RunOptions(output_dir=self._out, solver=_SOLVERS[solver], threads=int(threads),
                            max_memory_gb=float(max_memory_gb), quiet=1 if quiet else 0)
