@@ -15,6 +15,7 @@ typedef struct {
   double L;
   int point;           /* 1: point load at the centre; 0: uniform traction on the end face */
   int poisson;         /* beam.poisson_correction: 0 auto (on for TE0/TE1), 2 off */
+  double *stress;      /* if set: the stress (xx yy zz yz xz xy) at (0, L/2, H/2) */
 } cant;
 
 static double tip_w(const cant *c) {
@@ -51,6 +52,7 @@ static double tip_w(const cant *c) {
   double *u = tb_solve(b, f, bc, NULL);
   double d[3];
   CUPID_ASSERT_OK(cupid_cuf_displacement_at(b, u, 0, c->L, 0, d));
+  if (c->stress) CUPID_ASSERT_OK(cupid_cuf_stress_at(b, u, 0, c->L / 2, H / 2, c->stress));
   cupid_free(&u);
   cupid_free(&f);
   cupid_dirichlet_destroy(&bc);
@@ -86,10 +88,19 @@ static void test_published(void **state) {
   {
     double G = E / (2 * (1 + NU)), I = H * H * H * H / 12, A = H * H;
     double ref = P / (3 * E * I) + P / (G * A);
-    cant c = {.te = 1, .N = 1, .nsec = 1, .p = 4, .ne = 5, .L = 1.0, .point = 1};
+    double sg[6];
+    cant c = {.te = 1, .N = 1, .nsec = 1, .p = 4, .ne = 5, .L = 1.0, .point = 1, .stress = sg};
     double w = tip_w(&c);
     printf("  %-8s %12.5e %12.5e %8.5f%%  (EB + P L / (G A))\n", "TE1", w, ref, 100 * (w / ref - 1));
     if (!(fabs(w / ref - 1) <= 1e-9)) fail_msg("TE1 corrected: tip w %.8e vs %.8e", w, ref);
+    /* and its stress is the beam's: sigma_yy = M z / I at (0, L/2, h/2), M = -P L/2 (the
+     * moment is linear in y, held exactly), sigma_xx = sigma_zz = 0 (1e-9 of sigma_yy) */
+    double syy = -P * 0.5 * (H / 2) / I;
+    printf("  TE1 stress at (0, L/2, h/2): xx %.3e yy %.6e (M z / I %.6e) zz %.3e\n", sg[0], sg[1],
+           syy, sg[2]);
+    ASSERT_NEAR(sg[1], syy, 1e-9 * fabs(syy));
+    ASSERT_NEAR(sg[0], 0.0, 1e-9 * fabs(syy));
+    ASSERT_NEAR(sg[2], 0.0, 1e-9 * fabs(syy));
   }
   /* higher orders (not in the table): TE order and LE refinement approach the same value */
   double prev = 0;
