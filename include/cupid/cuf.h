@@ -40,12 +40,14 @@
  * - Poisson locking (beam.poisson_correction, default auto = on for TE0 and TE1): a TE0 section
  *   cannot contract and a TE1 section only uniformly, so with nu != 0 the 3D law makes the rod
  *   stiffer (TE0: E(1-nu)/((1+nu)(1-2nu)) instead of E) and the TE1 beam stiffer in bending
- *   (tip deflection -26 % at nu = 0.3, cuf.md 1.4). The correction replaces C by the law with
- *   the in-section normal stresses suppressed, sigma_xx = sigma_zz = 0 (Carrera, Giunta,
- *   Petrolo 2011, "Beam Structures", the Poisson-locking correction; derived in docs/theory.md):
- *   the compliance restricted to the other four stresses is inverted, so sigma_yy = E_y eps_yy,
- *   the shears keep their moduli, and eps_xx, eps_zz carry no stress. Stiffness and stress
- *   output both use it.
+ *   (tip deflection -26 % at nu = 0.3, cuf.md 1.4). The correction (the CUF literature's
+ *   reduced coefficients for N <= 1, Carrera & Giunta 2010, Carrera, Giunta & Petrolo 2011;
+ *   cupid's form is derived in docs/theory.md) imposes sigma_xx = sigma_zz = 0: C~ = the
+ *   compliance restricted to the other four stresses, inverted (sigma_yy = E_y eps_yy, shears
+ *   unchanged). TE0 uses C~. TE1 uses C~ plus the rest of the 3D law, R = C - C~, on eps_xx,
+ *   eps_zz and the constant-term part of eps_yy only: uniform tension keeps its exact 3D
+ *   solution (contraction included), bending gets E I, and no zero-energy mode appears.
+ *   Stiffness and stress output use the same law.
  * - Stresses are returned in the order xx yy zz yz xz xy, computed as C eps(x,y,z) from the
  *   3D strain of the expansion (for reduced/MITC the untied strain is used). The VTU array
  *   uses VTK's symmetric-tensor order xx yy zz xy yz xz instead, so ParaView names them right.
