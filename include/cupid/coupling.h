@@ -307,6 +307,11 @@ cupid_status cupid_arlequin_mass(cupid_cuf_beam beam, cupid_pd_grid grid,
                                  cupid_csr M, double *lumped);
 
 /** Largest constraint gap max_q |d_q - N(x_q) u_FE| over the tied nodes and components. */
+/** The forces @p f (system layout) under a tie held exactly (kappa -> infinity): the tied PD
+ *  nodes' components go to the beam through the tie, f_FE += N^T f_tied, and are zeroed (the
+ *  patch test of the tied problem; issue 18). */
+cupid_status cupid_arlequin_tie_forces(cupid_cuf_beam beam, cupid_pd_grid grid,
+                                      const cupid_arlequin_options *o, double *f);
 cupid_status cupid_arlequin_gap(cupid_cuf_beam beam, cupid_pd_grid grid,
                                 const cupid_arlequin_options *o, const double *u, double *gap);
 

@@ -151,6 +151,11 @@ typedef struct {
   double phase_seconds[6];      /**< grid, assembly, coupling, factorisation, solve, output */
   double total_seconds;
   int64_t peak_memory_bytes;
+  /* The coupling's quality (coupled models; docs/coupling.md, "The quality report of a coupled
+   * run"): */
+  double ghost_force;           /**< patch test: the largest ghost force over its scale (-1:
+                                     not run: uncoupled, materials differ, or not solved) */
+  int quality_warnings;         /**< bits: 1 ghost force over 1e-2, 2 imbalance over 1e-2 */
 } cupid_problem_info;
 
 cupid_status cupid_problem_get_info(cupid_problem p, cupid_problem_info *info);

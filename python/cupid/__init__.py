@@ -54,7 +54,8 @@ class _Info(ctypes.Structure):  # cupid_problem_info (problem.h)
                 ("iterations", ctypes.c_int), ("residual", ctypes.c_double),
                 ("load_sum", ctypes.c_double * 3), ("reaction_sum", ctypes.c_double * 3),
                 ("imbalance", ctypes.c_double), ("phase_seconds", ctypes.c_double * 6),
-                ("total_seconds", ctypes.c_double), ("peak_memory_bytes", _c_int64)]
+                ("total_seconds", ctypes.c_double), ("peak_memory_bytes", _c_int64),
+                ("ghost_force", ctypes.c_double), ("quality_warnings", ctypes.c_int)]
 
 
 _SOLVERS = {None: -1, "auto": 0, "direct": 1, "petsc": 2}
@@ -301,7 +302,8 @@ class Problem:
 
     @property
     def info(self):
-        """Counts, solver, resultants, imbalance and phase times as a dict."""
+        """Counts, solver, resultants, imbalance, phase times and, for a coupled model, the
+        patch test's ghost force (-1 when not run) and the quality warnings, as a dict."""
         i = _Info()
         _check(_lib.cupid_problem_get_info(self._p, ctypes.byref(i)))
         d = {}
@@ -313,5 +315,7 @@ class Problem:
                 v = list(v)
             elif name == "phase_seconds":
                 v = dict(zip(_PHASES, v))
+            elif name == "quality_warnings":
+                v = [w for bit, w in ((1, "ghost_force"), (2, "imbalance")) if v & bit]
             d[name] = v
         return d

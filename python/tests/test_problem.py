@@ -44,6 +44,10 @@ def test_counts_and_resultants_equal_the_cli(bar):
     assert np.allclose(info["load_sum"], summary["applied_load_sum"], rtol=0, atol=1e-12 * scale)
     assert np.allclose(info["reaction_sum"], summary["reaction_sum"], rtol=0, atol=1e-12 * scale)
     assert info["coupling"] == "fictitious" and info["stage"] == 2
+    # the coupling's quality report (docs/coupling.md): the same figures as summary.json's
+    q = summary["coupling_quality"]
+    assert info["ghost_force"] == q["patch_test"]["ghost_force"] and 0 <= info["ghost_force"] < 1e-12
+    assert info["quality_warnings"] == q["warnings"] == []
 
 
 def test_fields_have_the_model_shape(bar):

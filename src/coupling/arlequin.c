@@ -428,6 +428,23 @@ cupid_status cupid_arlequin_mass(cupid_cuf_beam beam, cupid_pd_grid grid,
   return cupid_cuf_mass_weight_add(beam, &wfe, M);
 }
 
+cupid_status cupid_arlequin_tie_forces(cupid_cuf_beam beam, cupid_pd_grid grid,
+                                      const cupid_arlequin_options *o, double *f) {
+  CUPID_CALL(check_options(beam, grid, o));
+  tied_t t;
+  CUPID_CALL(tied_build(beam, grid, o, &t));
+  cupid_int off = 3 * cupid_pd_grid_num_nodes(grid);
+  int c0 = t.comps == 1 ? 1 : 0, c1 = t.comps == 1 ? 2 : 3;
+  for (cupid_int k = 0; k < t.n; k++)
+    for (int c = c0; c < c1; c++) {
+      double *fq = &f[3 * t.node[k] + c];
+      for (cupid_int a = t.ptr[k]; a < t.ptr[k + 1]; a++) f[off + 3 * t.fe[a] + c] += t.w[a] * *fq;
+      *fq = 0.0;
+    }
+  tied_free(&t);
+  return CUPID_SUCCESS;
+}
+
 cupid_status cupid_arlequin_gap(cupid_cuf_beam beam, cupid_pd_grid grid,
                                 const cupid_arlequin_options *o, const double *u, double *gap) {
   CUPID_CALL(check_options(beam, grid, o));

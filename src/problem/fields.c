@@ -128,6 +128,8 @@ cupid_status cupid_problem_get_info(cupid_problem_state *prob, cupid_problem_inf
     info->phase_seconds[p] = prob->phases[p].used ? prob->phases[p].seconds : 0.0;
   info->total_seconds = cupid_wtime() - prob->t_start;
   info->peak_memory_bytes = cupid_peak_memory();
+  info->ghost_force = prob->quality.patch_done ? prob->quality.ghost : -1.0;
+  info->quality_warnings = prob->quality.ghost_warning | prob->quality.imbalance_warning << 1;
   return CUPID_SUCCESS;
 }
 

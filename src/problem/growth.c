@@ -378,6 +378,7 @@ static cupid_status solve(growth_run *g, int reassemble) {
   cupid_problem_state *prob = g->prob;
   if (reassemble) cupid_csr_destroy(&prob->K);
   CUPID_CALL(prob->method->assemble(prob));
+  CUPID_CALL(cupid_problem_patch_test_assembled(prob)); /* the first K: once */
   const int own = prob->method->matrix == CUPID_MATRIX_SPD && !prob->engine->iterative;
   int done = 0;
   if (own && g->F && g->krylov) CUPID_CALL(cg_solve(g, &done));

@@ -67,6 +67,11 @@ struct cupid_method_ops {
    *  what it is; 0 when the method has none for this model. */
   int (*estimate_matrix_free)(const cupid_problem_state *prob, double *bytes, double *seconds,
                               const char **what);
+  /** The patch test (quality.c): move the forces @p r of DOFs the method ties to others onto
+   *  those (a penalty tie held exactly), so that what is left is what the tied problem
+   *  leaves. NULL: every DOF is independent (fictitious; Lagrange's K is already the tied
+   *  system). */
+  cupid_status (*patch_tie)(const cupid_problem_state *prob, double *r);
   /** Fracture: flag the PD nodes whose bonds must never break (the coupling zone: overlaps,
    *  tied or fictitious-node layers), @p protect zeroed, one per PD node. NULL: none. */
   cupid_status (*fracture_protect)(const cupid_problem_state *prob, unsigned char *protect);

@@ -522,6 +522,12 @@ static cupid_status explicit_operator(cupid_problem_state *prob, cupid_method_op
   return CUPID_SUCCESS;
 }
 
+/* The patch test with the tie held exactly: the overlap's PD forces act on the beam. */
+static cupid_status patch_tie(const cupid_problem_state *prob, double *r) {
+  cupid_arlequin_options o = options(prob);
+  return cupid_arlequin_tie_forces(prob->beam, prob->grid, &o, r);
+}
+
 /* The overlaps: their PD nodes are tied to the beam by the penalty and share their energy with
  * it, so their bonds never break (a crack must stay in the PD-only part of a region). */
 static cupid_status fracture_protect(const cupid_problem_state *prob, unsigned char *protect) {
@@ -585,4 +591,5 @@ const cupid_method_ops cupid_method_arlequin = {
     .report = report_gap,
     .estimate_matrix_free = estimate_matrix_free,
     .fracture_protect = fracture_protect,
+    .patch_tie = patch_tie,
 };

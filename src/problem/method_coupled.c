@@ -162,12 +162,17 @@ static void record_krylov(cupid_problem_state *prob, const cupid_solve_info *si)
   cupid_problem_record_solve(prob);
 }
 
+static cupid_status linear_apply(void *ctx, const double *x, double *y) {
+  return cupid_krylov_apply(ctx, x, y);
+}
+
 cupid_status cupid_method_krylov_solve(cupid_problem_state *prob, const cupid_linear_operator *L,
                                        cupid_csr *P, cupid_method_operator *owner) {
   /* MUMPS: PETSc's UMFPACK interface has 32-bit indices and ran out of them at 10^5 PD
    * nodes (bench/README_coupled.md); -pc_factor_mat_solver_type overrides it. */
   cupid_krylov_options ko = {.factor_package = "mumps"};
   cupid_solve_info ki = {0};
+  CUPID_CALL(cupid_problem_patch_test(prob, linear_apply, (void *)L)); /* collective */
   CUPID_CHECK(prob->engine->solve_operator, CUPID_ERR_UNSUPPORTED,
               "solver %s has no matrix-free solve", prob->engine->name);
   cupid_status st = prob->engine->solve_operator(L, *P, prob->bc, prob->f_ext, prob->u, &ko, &ki);

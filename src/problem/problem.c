@@ -385,6 +385,7 @@ static cupid_status run_evaluate(cupid_problem_state *prob) {
       if (!cupid_cuf_node_used(prob->beam, (int)(n % prob->fe_info.M), n / prob->fe_info.M))
         for (int c = 0; c < 3; c++) prob->u[prob->fe_offset + 3 * n + c] = 0.0;
     CUPID_CALL(prob->method->assemble(prob));
+    CUPID_CALL(cupid_problem_patch_test_assembled(prob));
     cupid_csr_matvec(prob->K, prob->u, prob->f_int);
   }
   cupid_problem_phase_end(prob, CUPID_PHASE_SOLVE, t0);
@@ -435,6 +436,7 @@ static cupid_status run_static(cupid_problem_state *prob) {
   }
   CUPID_CALL(cupid_problem_estimate(prob, 0)); /* before anything scales with the stiffness */
   CUPID_CALL(prob->method->assemble(prob));
+  CUPID_CALL(cupid_problem_patch_test_assembled(prob));
   CUPID_CALL(cupid_problem_linear_solve(prob, prob->method->matrix));
   prob->solved = 1;
   if (prob->method->recover) prob->method->recover(prob, prob->u);
@@ -467,6 +469,8 @@ static cupid_status run_dynamic(cupid_problem_state *prob) {
     CUPID_TRY(cupid_problem_estimate(prob, 0)); /* before anything scales with the stiffness */
     CUPID_TRY(prob->method->assemble(prob));
   }
+  CUPID_TRY(op.apply ? cupid_problem_patch_test(prob, op.apply, op.ctx)
+                     : cupid_problem_patch_test_assembled(prob));
   /* breaking changes the operator as the run goes: an assembled K could not follow */
   if (prob->model->has_peridynamics && prob->model->pd.fracture.has_fracture && !op.apply) {
     st = CUPID_ERROR(CUPID_ERR_UNSUPPORTED, "bond breaking needs the method's matrix-free "
@@ -521,7 +525,9 @@ cupid_status cupid_problem_solve(cupid_problem_state *prob) {
   CUPID_CALL(cupid_problem_check_finite(prob, prob->u, NULL,
                                         "the displacement (the analysis diverged or overflowed)"));
   CUPID_CALL(cupid_problem_check_finite(prob, prob->f_int, NULL, "the internal force"));
-  return cupid_problem_force_sums(prob, prob->load_sum, prob->reaction_sum);
+  CUPID_CALL(cupid_problem_force_sums(prob, prob->load_sum, prob->reaction_sum));
+  cupid_problem_quality_report(prob);
+  return CUPID_SUCCESS;
 }
 
 /* -------------------------------------------------------------------- the life cycle */

@@ -43,6 +43,22 @@ typedef struct {
 
 typedef struct cupid_method_ops cupid_method_ops; /* method.h */
 
+/* The quality of a coupled run (quality.c; docs/coupling.md "The quality report of a coupled
+ * run"). Bounds: the patch test's ghost forces are round-off (< 1e-12) for a consistent
+ * coupling, so 1e-6 flags a real one with room for ill-conditioned products; 1% of the load
+ * is the imbalance issue 18 asks of a coupling (paper 000's bar: 0.43%). */
+#define CUPID_QUALITY_GHOST_BOUND 1e-2
+#define CUPID_QUALITY_IMBALANCE_BOUND 1e-2
+typedef struct {
+  int patch_done;             /**< the patch test ran */
+  const char *patch_skipped;  /**< why it did not (NULL: not asked yet) */
+  double strain, ghost_fe, ghost_pd, ghost, patch_seconds;
+  cupid_int fe_checked, pd_checked;
+  int has_imbalance;          /**< a static solve with loads */
+  double imbalance;
+  int ghost_warning, imbalance_warning;
+} cupid_problem_quality;
+
 /** The stages a problem has passed (cupid_problem_info.stage). */
 enum { CUPID_STAGE_CREATED = 0, CUPID_STAGE_SET_UP = 1, CUPID_STAGE_SOLVED = 2 };
 
@@ -92,6 +108,7 @@ typedef struct cupid_problem_private {
   cupid_int n_fictitious;  /**< fictitious PD nodes */
 
   double load_sum[3], reaction_sum[3];
+  cupid_problem_quality quality; /**< coupled models (quality.c) */
   cupid_phase_record phases[CUPID_PHASE_COUNT];
   double t_start;
 
@@ -151,6 +168,22 @@ typedef struct cupid_problem_private {
     double factor_s, cg_s;
   } growth;
 } cupid_problem_state;
+
+/* quality.c: the coupling's patch test and imbalance, against their bounds. */
+/** y = K x for the whole system's layout (a slab: its owned PD rows and the FE rows). */
+typedef cupid_status (*cupid_system_apply)(void *ctx, const double *x, double *y);
+/** 1 for a model with both a beam and a PD grid. */
+int cupid_problem_is_coupled(const cupid_problem_state *prob);
+/** The patch test on the coupled operator @p apply (once; nothing for an uncoupled model):
+ *  collective on a slab. */
+cupid_status cupid_problem_patch_test(cupid_problem_state *prob, cupid_system_apply apply,
+                                      void *ctx);
+/** The same on the assembled prob->K (nothing when there is none). */
+cupid_status cupid_problem_patch_test_assembled(cupid_problem_state *prob);
+/** After the solve and the force sums: the imbalance, the figures on stderr, the warnings. */
+void cupid_problem_quality_report(cupid_problem_state *prob);
+/** The "coupling_quality" block of summary.json (coupled models). */
+void cupid_problem_quality_json(cupid_json js, const cupid_problem_state *prob);
 
 /* growth.c: `type: static` with load steps or fracture (sequentially linear growth). */
 cupid_status cupid_problem_run_growth(cupid_problem_state *prob);

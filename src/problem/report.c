@@ -324,6 +324,7 @@ static cupid_status write_summary(cupid_problem_state *prob) {
   } else {
     cupid_json_number(js, "energy_balance", prob->dyn.info.max_balance);
   }
+  cupid_problem_quality_json(js, prob);
   if (prob->dyn.done) cupid_problem_dynamic_json(js, prob);
   cupid_problem_fracture_json(js, prob);
   cupid_json_number(js, "total_time_s", cupid_wtime() - prob->t_start);
