@@ -37,6 +37,17 @@
  *   rows to the others.
  * - Materials: isotropic or orthotropic with material axes = x y z; nu_ij is the Poisson ratio
  *   for a stress along i (S_ij = -nu_ij / E_i).
+ * - Poisson locking (beam.poisson_correction, default auto = on for TE0 and TE1): a TE0 section
+ *   cannot contract and a TE1 section only uniformly, so with nu != 0 the 3D law makes the rod
+ *   stiffer (TE0: E(1-nu)/((1+nu)(1-2nu)) instead of E) and the TE1 beam stiffer in bending
+ *   (tip deflection -26 % at nu = 0.3, cuf.md 1.4). The correction (the CUF literature's
+ *   reduced coefficients for N <= 1, Carrera & Giunta 2010, Carrera, Giunta & Petrolo 2011;
+ *   cupid's form is derived in docs/theory.md) imposes sigma_xx = sigma_zz = 0: C~ = the
+ *   compliance restricted to the other four stresses, inverted (sigma_yy = E_y eps_yy, shears
+ *   unchanged). TE0 uses C~. TE1 uses C~ plus the rest of the 3D law, R = C - C~, on eps_xx,
+ *   eps_zz and the constant-term part of eps_yy only: uniform tension keeps its exact 3D
+ *   solution (contraction included), bending gets E I, and no zero-energy mode appears.
+ *   Stiffness and stress output use the same law.
  * - Stresses are returned in the order xx yy zz yz xz xy, computed as C eps(x,y,z) from the
  *   3D strain of the expansion (for reduced/MITC the untied strain is used). The VTU array
  *   uses VTK's symmetric-tensor order xx yy zz xy yz xz instead, so ParaView names them right.
@@ -64,12 +75,17 @@ typedef struct cupid_cuf_beam_private *cupid_cuf_beam;
 /** Integration rules along the axis (values of cupid_beam.integration). */
 enum { CUPID_CUF_FULL = 0, CUPID_CUF_REDUCED = 1, CUPID_CUF_MITC = 2 };
 
+/** Poisson-locking correction (values of cupid_beam.poisson_correction): AUTO applies it to
+ *  TE0 and TE1 and not otherwise; ON is refused (CUPID_ERR_MODEL) for TE2 and up and LE. */
+enum { CUPID_CUF_POISSON_AUTO = 0, CUPID_CUF_POISSON_ON = 1, CUPID_CUF_POISSON_OFF = 2 };
+
 /** Counts and settings of a beam (for summaries). */
 typedef struct {
   cupid_expansion expansion;
   int te_order;              /**< TE order N (TE only) */
   int le_nodes;              /**< 4, 9, 16 (LE only; 0 for TE) */
   int integration;           /**< CUPID_CUF_FULL / REDUCED / MITC */
+  int poisson_corrected;     /**< 1: the reduced (sigma_xx = sigma_zz = 0) law is in use */
   int M;                     /**< expansion functions per beam node (TE terms or LE nodes) */
   int element_nodes;         /**< 2, 3, 4 (B2, B3, B4) */
   cupid_int n_beam_nodes, n_beam_elements;

@@ -72,6 +72,7 @@ typedef struct {
   int n_axis;
   int element_nodes;             /**< 2, 3 or 4 (B2, B3, B4) */
   int integration;               /**< 0 full (default), 1 reduced, 2 mitc; see cuf.h */
+  int poisson_correction;        /**< 0 auto (default: on for TE0/TE1), 1 on, 2 off; see cuf.h */
   cupid_expansion expansion;
   int te_order;                  /**< TE order N (0 allowed: a rod; at most 20) */
   int le_nodes;                  /**< 4, 9 or 16 (L4, L9, L16); 0 when `element:` is absent (TE) */

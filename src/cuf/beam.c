@@ -73,6 +73,31 @@ static cupid_status beam_create(const cupid_beam *def, const cupid_material *mat
     goto cleanup;
   }
   b->integration = def->integration;
+  /* Poisson locking: TE0/TE1 sections cannot follow the lateral contraction (cuf.h) */
+  int low_order = b->expansion == CUPID_EXPANSION_TE && b->te_order <= 1;
+  if (def->poisson_correction < CUPID_CUF_POISSON_AUTO ||
+      def->poisson_correction > CUPID_CUF_POISSON_OFF) {
+    st = cupid_model_error(model, &def->mark, "poisson_correction must be 0 (auto), 1 (on) or 2 (off)");
+    goto cleanup;
+  }
+  if (def->poisson_correction == CUPID_CUF_POISSON_ON && !low_order) {
+    st = cupid_model_error(model, &def->mark,
+                           "poisson_correction: on applies to TE0 and TE1 only (TE2 and up and LE "
+                           "sections contract freely and need no correction)");
+    goto cleanup;
+  }
+  b->poisson_corrected = def->poisson_correction == CUPID_CUF_POISSON_ON ||
+                         (def->poisson_correction == CUPID_CUF_POISSON_AUTO && low_order);
+  /* TE0 drops the contraction part R of the law; TE1 keeps it on the section-constant
+   * strains, which it can contract with (docs/theory.md, "Poisson locking") */
+  b->poisson_split = b->poisson_corrected && b->te_order == 1;
+  for (int k = 0; k < n_materials && b->poisson_corrected; k++) {
+    st = cuf_poisson_correct(b->mat[k].C, b->mat[k].R);
+    if (st != CUPID_SUCCESS) {
+      st = cupid_model_error(model, &materials[k].mark, "%s", cupid_error_message());
+      goto cleanup;
+    }
+  }
   CUPID_TRY(cuf_axis_build(b, def, model));
   CUPID_TRY(cuf_section_build(b, def, model));
   if (b->expansion == CUPID_EXPANSION_TE) {
@@ -130,6 +155,7 @@ void cupid_cuf_get_info(const cupid_cuf_beam b, cupid_cuf_info *info) {
   info->te_order = b->te_order;
   info->le_nodes = b->expansion == CUPID_EXPANSION_LE ? b->quad.npe : 0;
   info->integration = b->integration;
+  info->poisson_corrected = b->poisson_corrected;
   info->M = b->M;
   info->element_nodes = b->p;
   info->n_beam_nodes = b->n_bnodes;

@@ -29,7 +29,8 @@ typedef struct {
 } cuf_quad;
 
 typedef struct {
-  double C[36];  /* 6x6, Voigt order above */
+  double C[36];  /* 6x6, Voigt order above (the corrected law when poisson_corrected) */
+  double R[36];  /* Poisson correction: C_3D - C, the contraction part (docs/theory.md) */
   double density;
 } cuf_material;
 
@@ -70,6 +71,8 @@ struct cupid_cuf_beam_private {
   double *by;         /* y of each beam node */
   double ymin, ymax;
   int integration;
+  int poisson_corrected; /* 1: every C is the corrected law (cuf_poisson_correct) */
+  int poisson_split;     /* TE1: R acts on the constant-term axial strain (docs/theory.md) */
   int n_parts;
   cuf_part parts[4];
   /* coupling hooks */
@@ -133,6 +136,10 @@ void cuf_axis_shape(const struct cupid_cuf_beam_private *b, cupid_int e, double 
 
 /* ---- nucleus.c ---- */
 cupid_status cuf_material_stiffness(const cupid_material *m, double C[36]);
+/* Replace C by the Poisson-locking-corrected law (sigma_xx = sigma_zz = 0 imposed) and
+ * return the remainder R = C_3D - C_corrected (symmetric positive semi-definite, zero on the
+ * strains with sigma_xx = sigma_zz = 0). */
+cupid_status cuf_poisson_correct(double C[36], double R[36]);
 void cuf_parts_init(struct cupid_cuf_beam_private *b);
 /* Axis integrals of beam element e for every part: I[((P * 4) + 2 dt + dr) p p + j p + i]
  * = int H_dt(N_j) H_dr(N_i) dy, H_0 = N, H_1 = dN/dy (tilde functions for MITC parts). */

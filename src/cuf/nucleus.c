@@ -54,6 +54,62 @@ cupid_status cuf_material_stiffness(const cupid_material *m, double C[36]) {
   return CUPID_SUCCESS;
 }
 
+/* Invert the n x n matrix A (row-major, n <= 6) in place by Gauss-Jordan with partial
+ * pivoting; 0 if it is singular to working precision. */
+static int invert_small(int n, double *A) {
+  double W[6][12];
+  for (int i = 0; i < n; i++)
+    for (int j = 0; j < 2 * n; j++) W[i][j] = j < n ? A[n * i + j] : (double)(j - n == i);
+  for (int c = 0; c < n; c++) {
+    int piv = c;
+    for (int r = c + 1; r < n; r++)
+      if (fabs(W[r][c]) > fabs(W[piv][c])) piv = r;
+    if (!(fabs(W[piv][c]) > 0.0)) return 0;
+    for (int j = 0; j < 2 * n; j++) {
+      double t = W[c][j];
+      W[c][j] = W[piv][j];
+      W[piv][j] = t;
+    }
+    double d = W[c][c];
+    for (int j = 0; j < 2 * n; j++) W[c][j] /= d;
+    for (int r = 0; r < n; r++) {
+      if (r == c || W[r][c] == 0.0) continue;
+      double f = W[r][c];
+      for (int j = 0; j < 2 * n; j++) W[r][j] -= f * W[c][j];
+    }
+  }
+  for (int i = 0; i < n; i++)
+    for (int j = 0; j < n; j++) A[n * i + j] = W[i][n + j];
+  return 1;
+}
+
+/* The Poisson-locking correction (docs/theory.md, "Poisson locking"): the in-section normal
+ * stresses sigma_xx = sigma_zz = 0 are imposed on the 3D law, so the remaining stresses
+ * (yy, yz, xz, xy) follow from the compliance S = C^-1 restricted to them, inverted; eps_xx and
+ * eps_zz then carry no stress. Isotropic: sigma_yy = E eps_yy, shears G. Orthotropic (axes
+ * x y z): sigma_yy = E_y eps_yy, shears unchanged. Any symmetric positive definite C works. */
+cupid_status cuf_poisson_correct(double C[36], double R[36]) {
+  static const int keep[4] = {CUF_YY, CUF_YZ, CUF_XZ, CUF_XY};
+  double S[36], Sk[16];
+  memcpy(S, C, sizeof S);
+  CUPID_CHECK(invert_small(6, S), CUPID_ERR_MODEL, "Poisson correction: singular material stiffness");
+  for (int i = 0; i < 4; i++)
+    for (int j = 0; j < 4; j++) Sk[4 * i + j] = S[6 * keep[i] + keep[j]];
+  CUPID_CHECK(invert_small(4, Sk), CUPID_ERR_MODEL, "Poisson correction: singular reduced compliance");
+  memcpy(R, C, 36 * sizeof *R);
+  memset(C, 0, 36 * sizeof *C);
+  for (int i = 0; i < 4; i++)
+    for (int j = 0; j < 4; j++) {
+      /* symmetrise: the two halves of Sk^-1 differ by round-off only */
+      C[6 * keep[i] + keep[j]] = 0.5 * (Sk[4 * i + j] + Sk[4 * j + i]);
+    }
+  /* R = C_3D - C = [C_D; C_KD] C_DD^-1 [C_DD C_DK] (D = xx, zz): positive semi-definite */
+  for (int k = 0; k < 36; k++) R[k] -= C[k];
+  for (int i = 0; i < 6; i++)
+    for (int j = 0; j < i; j++) R[6 * i + j] = R[6 * j + i] = 0.5 * (R[6 * i + j] + R[6 * j + i]);
+  return CUPID_SUCCESS;
+}
+
 /* The transverse-shear strains, which contain d/dy and lock (cuf.md section 4). */
 static const int tied[6] = {0, 0, 0, 1, 0, 1};
 
@@ -155,6 +211,19 @@ void cuf_pair_matrix(const beam_t *b, int m, const double *E, int mat, const dou
             nonzero[d][dd] |= v != 0.0;
           }
       }
+    /* TE1 Poisson correction (docs/theory.md): the contraction part R of the 3D law acts on
+     * eps_xx, eps_zz and the constant-term (tau = 0) part of eps_yy only; the yy row (test,
+     * u_y along d/dy) needs s = 0, the yy column t = 0. */
+    double QR[3][3][9];
+    int split = b->poisson_split && b->parts[P].cmask[6 * CUF_YY + CUF_YY];
+    for (int d = 0; d < 3 && split; d++)
+      for (int dd = 0; dd < 3; dd++)
+        for (int k = 0; k < 3; k++)
+          for (int h = 0; h < 3; h++) {
+            int r = cuf_vidx[k][d], c = cuf_vidx[h][dd];
+            QR[d][dd][3 * k + h] = b->parts[P].cmask[6 * r + c] ? b->mat[mat].R[6 * r + c] : 0.0;
+            if (QR[d][dd][3 * k + h] != 0.0) nonzero[d][dd] = 1;
+          }
     const double *IP = I + (size_t)P * 4 * p * p;
     for (int s = 0; s < m; s++)
       for (int t = 0; t < m; t++) {
@@ -168,6 +237,13 @@ void cuf_pair_matrix(const beam_t *b, int m, const double *E, int mat, const dou
             any = 1;
             double *w = W[2 * (d == 1) + (dd == 1)];
             for (int q = 0; q < 9; q++) w[q] += Q[d][dd][q] * e;
+            if (!split) continue;
+            for (int k = 0; k < 3; k++)
+              for (int h = 0; h < 3; h++) {
+                if ((s != 0 && cuf_vidx[k][d] == CUF_YY) || (t != 0 && cuf_vidx[h][dd] == CUF_YY))
+                  continue;
+                w[3 * k + h] += QR[d][dd][3 * k + h] * e;
+              }
           }
         if (!any) continue;
         for (int j = 0; j < p; j++)

@@ -60,15 +60,16 @@ cleanup:
   return st;
 }
 
-/* Displacement and its gradient g[k][d] = du_k/dx_d at a located point. */
+/* g[3][3] is followed by g0, the constant-term (tau = 0) part of du_y/dy (TE1 Poisson
+ * correction), in a gradient of 10 entries. */
 static void evaluate(const beam_t *b, const double *u, cupid_int be, cupid_int se, double xi,
                      double r, double s, double *F, double *Fx, double *Fz, double out[3],
-                     double g[3][3]) {
+                     double g[10]) {
   double N[CUF_MAX_P], dN[CUF_MAX_P];
   int m = cuf_local_m(b);
   cuf_section_functions(b, se, r, s, F, Fx, Fz, NULL, NULL, NULL);
   cuf_axis_shape(b, be, xi, N, dN);
-  memset(g, 0, 9 * sizeof **g);
+  memset(g, 0, 10 * sizeof *g);
   out[0] = out[1] = out[2] = 0;
   for (int j = 0; j < b->p; j++)
     for (int a = 0; a < m; a++) {
@@ -76,29 +77,37 @@ static void evaluate(const beam_t *b, const double *u, cupid_int be, cupid_int s
       double v = N[j] * F[a], vx = N[j] * Fx[a], vy = dN[j] * F[a], vz = N[j] * Fz[a];
       for (int k = 0; k < 3; k++) {
         out[k] += v * q[k];
-        g[k][0] += vx * q[k];
-        g[k][1] += vy * q[k];
-        g[k][2] += vz * q[k];
+        g[3 * k + 0] += vx * q[k];
+        g[3 * k + 1] += vy * q[k];
+        g[3 * k + 2] += vz * q[k];
       }
+      if (b->poisson_split && a == 0) g[9] += vy * q[1]; /* TE: term 0 is F = 1 */
     }
 }
 
-static void stress_from_gradient(const beam_t *b, int mat, double g[3][3], double sig[6]) {
+/* sigma = C eps; with the TE1 Poisson correction plus R eps0, eps0 = eps with eps_yy replaced
+ * by its constant-term part (the law of the stiffness, cuf_pair_matrix). */
+static void stress_from_gradient(const beam_t *b, int mat, const double g[10], double sig[6]) {
   double eps[6] = {0};
   for (int k = 0; k < 3; k++)
-    for (int d = 0; d < 3; d++) eps[cuf_vidx[k][d]] += g[k][d]; /* engineering shears */
+    for (int d = 0; d < 3; d++) eps[cuf_vidx[k][d]] += g[3 * k + d]; /* engineering shears */
   const double *C = b->mat[mat].C;
   for (int i = 0; i < 6; i++) {
     sig[i] = 0;
     for (int j = 0; j < 6; j++) sig[i] += C[6 * i + j] * eps[j];
   }
+  if (!b->poisson_split) return;
+  eps[CUF_YY] = g[9];
+  const double *R = b->mat[mat].R;
+  for (int i = 0; i < 6; i++)
+    for (int j = 0; j < 6; j++) sig[i] += R[6 * i + j] * eps[j];
 }
 
 static cupid_status at_point(const beam_t *b, const double *u, double x, double y, double z,
                              double disp[3], double sig[6]) {
   cupid_status st = CUPID_SUCCESS;
   cupid_int be, se;
-  double xi, r, s, g[3][3], d[3], *F = NULL;
+  double xi, r, s, g[10], d[3], *F = NULL;
   CUPID_CHECK(cuf_locate(b, x, y, z, &be, &se, &xi, &r, &s), CUPID_ERR_MODEL,
               "point (%g, %g, %g) is outside the beam", x, y, z);
   int m = cuf_local_m(b);
@@ -200,7 +209,7 @@ cupid_status cupid_cuf_vtu_build(const cupid_cuf_beam b, const double *u, int su
           for (int j = 0; j <= ns; j++)
             for (int i = 0; i <= ns; i++) {
               cupid_int pt = p0 + (a * (ns + 1) + j) * (ns + 1) + i;
-              double x, z, g[3][3];
+              double x, z, g[10];
               cuf_section_map(b, se, sg[i], sg[j], &x, &z, NULL);
               double *X = v->points + 3 * pt;
               X[0] = x;

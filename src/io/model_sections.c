@@ -393,11 +393,13 @@ static cupid_status read_section(model_reader *rd, yaml_node_t *node, cupid_beam
 }
 
 static cupid_status read_beam(model_reader *rd, yaml_node_t *node) {
-  static const char *const keys[] = {"material", "axis", "section", "integration"};
+  static const char *const keys[] = {"material", "axis", "section", "integration",
+                                     "poisson_correction"};
   static const char *const integrations[] = {"full", "reduced", "mitc"};
+  static const char *const corrections[] = {"auto", "on", "off"}; /* CUPID_CUF_POISSON_* */
   cupid_beam *b = &rd->model->beam;
   mr_map map;
-  yaml_node_t *axis, *section, *integration;
+  yaml_node_t *axis, *section, *integration, *poisson;
   mr_mark(node, "beam", &b->mark);
   rd->model->has_beam = 1;
   CUPID_CALL(mr_map_open(rd, node, "beam", keys, COUNT(keys), &map));
@@ -409,6 +411,16 @@ static cupid_status read_beam(model_reader *rd, yaml_node_t *node) {
   if ((integration = mr_get(&map, "integration")))
     CUPID_CALL(mr_enum(rd, integration, "beam.integration", integrations, COUNT(integrations),
                        &b->integration));
+  if ((poisson = mr_get(&map, "poisson_correction"))) {
+    CUPID_CALL(mr_enum(rd, poisson, "beam.poisson_correction", corrections, COUNT(corrections),
+                       &b->poisson_correction));
+    /* TE2 and up and LE sections contract freely: nothing to correct (docs/theory.md) */
+    if (b->poisson_correction == 1 && !(b->expansion == CUPID_EXPANSION_TE && b->te_order <= 1))
+      return mr_error(rd, poisson, "beam.poisson_correction",
+                      "'on' applies to TE0 and TE1 only: %s sections contract freely and have no "
+                      "Poisson locking (use auto or off)",
+                      b->expansion == CUPID_EXPANSION_LE ? "LE" : "TE2 and higher");
+  }
   return CUPID_SUCCESS;
 }
 

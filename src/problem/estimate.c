@@ -171,9 +171,12 @@ cupid_status cupid_problem_estimate(const cupid_problem_state *prob, int print) 
     }
     putchar('\n');
     if (prob->beam)
-      printf("beam: %lld nodes, %lld FE nodes, %lld FE DOFs\n",
+      printf("beam: %lld nodes, %lld FE nodes, %lld FE DOFs%s\n",
              (long long)prob->fe_info.n_beam_nodes, (long long)prob->fe_info.n_fe_nodes,
-             (long long)prob->n_fe_dofs);
+             (long long)prob->n_fe_dofs,
+             prob->fe_info.poisson_corrected ? "; Poisson-locking correction on (TE0/TE1, "
+                                               "sigma_xx = sigma_zz = 0; beam.poisson_correction)"
+                                             : "");
     if (prob->grid)
       printf("PD nodes: %lld\nbonds: %lld\n", (long long)prob->n_pd, (long long)prob->n_bonds);
     if (prob->grid && cupid_problem_has_damage(prob)) cupid_problem_fracture_print(prob);

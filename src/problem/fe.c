@@ -13,8 +13,9 @@ cupid_status cupid_problem_fe_build(cupid_problem_state *prob) {
   cupid_cuf_get_info(prob->beam, &prob->fe_info);
   prob->n_fe_dofs = prob->fe_info.n_dofs;
   cupid_problem_phase_end(prob, CUPID_PHASE_GRID, t0);
-  cupid_problem_progress(prob, "beam: %lld FE nodes, %lld DOFs", (long long)prob->fe_info.n_fe_nodes,
-                     (long long)prob->n_fe_dofs);
+  cupid_problem_progress(prob, "beam: %lld FE nodes, %lld DOFs%s", (long long)prob->fe_info.n_fe_nodes,
+                     (long long)prob->n_fe_dofs,
+                     prob->fe_info.poisson_corrected ? ", Poisson-locking correction on" : "");
   return CUPID_SUCCESS;
 }
 

@@ -203,6 +203,21 @@ static void json_counts(cupid_json js, const cupid_problem_state *prob) {
   cupid_json_end_object(js);
 }
 
+/* The beam's model (only with a beam): expansion, integration and whether the Poisson-locking
+ * correction is on (docs/theory.md; auto turns it on for TE0 and TE1). */
+static void json_beam(cupid_json js, const cupid_problem_state *prob) {
+  static const char *integrations[3] = {"full", "reduced", "mitc"};
+  const cupid_cuf_info *fi = &prob->fe_info;
+  char expansion[32];
+  if (fi->expansion == CUPID_EXPANSION_TE) snprintf(expansion, sizeof expansion, "TE%d", fi->te_order);
+  else snprintf(expansion, sizeof expansion, "LE (L%d)", fi->le_nodes);
+  cupid_json_begin_object(js, "beam");
+  cupid_json_string(js, "expansion", expansion);
+  cupid_json_string(js, "integration", integrations[fi->integration]);
+  cupid_json_bool(js, "poisson_correction", fi->poisson_corrected);
+  cupid_json_end_object(js);
+}
+
 static void json_phases(cupid_json js, const cupid_problem_state *prob) {
   cupid_json_begin_object(js, "phases");
   for (int p = 0; p < CUPID_PHASE_COUNT; p++) {
@@ -297,6 +312,7 @@ static cupid_status write_summary(cupid_problem_state *prob) {
   cupid_json_string(js, "analysis", types[m->analysis.type]);
   cupid_json_integer(js, "threads", cupid_num_threads());
   json_counts(js, prob);
+  if (prob->beam) json_beam(js, prob);
   json_phases(js, prob);
   json_solver(js, prob);
   if (prob->arlequin_penalty > 0) { /* method arlequin: the penalty in use and its scale */

@@ -105,6 +105,18 @@ expect 3 'summary.json' -- "$CUPID" run "$M/good_small.yaml" -o busy
 leftovers=$(find . -name '*.tmp*' | wc -l)
 if [ "$leftovers" -eq 0 ]; then pass=$((pass+1)); else echo "FAIL: $leftovers temporary files left"; find . -name '*.tmp*'; fail=$((fail+1)); fi
 
+# The Poisson-locking correction (beam.poisson_correction): cupid check names it when it is on
+# (TE0/TE1 under auto), summary.json's beam block records it, --set beam.poisson_correction=off
+# turns it off, and 'on' with TE2 is refused at the key.
+T=$SRC/examples/truss/truss_fe.yaml
+expect 0 'Poisson-locking correction on' -- "$CUPID" check "$T"
+expect 0 '' -- "$CUPID" run "$T" -o pc_auto --quiet --set analysis.dynamic.duration=1e-4 --set output.vtu=false --set output.plots=false
+expect 0 '' -- "$CUPID" run "$T" -o pc_off --quiet --set analysis.dynamic.duration=1e-4 --set output.vtu=false --set output.plots=false --set beam.poisson_correction=off
+expect 0 '"poisson_correction": true' -- cat pc_auto/summary.json
+expect 0 '"poisson_correction": false' -- cat pc_off/summary.json
+expect 0 '"expansion": "TE0"' -- cat pc_off/summary.json
+expect 1 "beam.poisson_correction: 'on' applies to TE0 and TE1 only" -- "$CUPID" check "$SRC/examples/bar/bar_fe_te2.yaml" --set beam.poisson_correction=on
+
 # Every malformed model of the catalogue: exit 1 with file:line:col, never a crash, no output.
 for f in "$SRC"/tests/models/bad/*.yaml; do
   [ -e "$f" ] || continue

@@ -8,7 +8,9 @@
 #include "cuf/cuf_internal.h"
 
 /* Brute force: int over the element of (B a_test e_k)^T C (B b_trial e_h) with the 3D strain
- * operator written out (cuf.md 1.1), ng points per section direction and nga along the axis. */
+ * operator written out (cuf.md 1.1), ng points per section direction and nga along the axis.
+ * With the TE1 Poisson correction also + (B0 a e_k)^T R (B0 b e_h), B0 the strain with eps_yy
+ * kept only for the constant term (docs/theory.md, "Poisson locking"). */
 static void brute_force(const struct cupid_cuf_beam_private *b, cupid_int be, cupid_int se,
                         int ng, int nga, double *Kb) {
   int m = cuf_local_m(b), p = b->p, n = 3 * m * p;
@@ -17,7 +19,7 @@ static void brute_force(const struct cupid_cuf_beam_private *b, cupid_int be, cu
   cuf_gauss(ng, gx, gw);
   cuf_gauss(nga, ax, aw);
   double y0 = b->by[be * (p - 1)], y1 = b->by[(be + 1) * (p - 1)], J = 0.5 * (y1 - y0);
-  const double *C = b->mat[b->smat[se]].C;
+  const double *C = b->mat[b->smat[se]].C, *R = b->mat[b->smat[se]].R;
   for (int ga = 0; ga < nga; ga++)
     for (int gi = 0; gi < ng; gi++)
       for (int gj = 0; gj < ng; gj++) {
@@ -40,14 +42,19 @@ static void brute_force(const struct cupid_cuf_beam_private *b, cupid_int be, cu
             memcpy(z, bw, sizeof bw);
           }
         for (int r = 0; r < n; r++) {
-          double CB[6];
+          double CB[6], RB[6], B0r[6];
+          memcpy(B0r, Bc[r], sizeof B0r);
+          if (r / (3 * p) != 0) B0r[CUF_YY] = 0; /* local function a = r / (3 p) */
           for (int i = 0; i < 6; i++) {
-            CB[i] = 0;
+            CB[i] = RB[i] = 0;
             for (int k = 0; k < 6; k++) CB[i] += C[6 * i + k] * Bc[r][k];
+            for (int k = 0; k < 6 && b->poisson_split; k++) RB[i] += R[6 * i + k] * B0r[k];
           }
           for (int c = 0; c < n; c++) {
             double v = 0;
             for (int i = 0; i < 6; i++) v += Bc[c][i] * CB[i];
+            for (int i = 0; i < 6 && b->poisson_split; i++)
+              v += (i == CUF_YY && c / (3 * p) != 0 ? 0.0 : Bc[c][i]) * RB[i];
             Kb[(size_t)c * n + r] += w * v; /* row = test (c), column = trial (r) */
           }
         }
@@ -91,6 +98,8 @@ static void check_pair(tb_beam *t, int orthotropic, int distort, uint64_t seed) 
   cupid_cuf_beam b = tb_create(t);
   uint64_t rng = seed;
   random_C(b->mat[0].C, &rng, orthotropic);
+  /* TE1 (Poisson correction on by default): the corrected law of this C and its remainder */
+  if (b->poisson_corrected) CUPID_ASSERT_OK(cuf_poisson_correct(b->mat[0].C, b->mat[0].R));
   if (distort) { /* move the interior nodes of the single LE element: a curved, non-affine map */
     for (cupid_int v = 0; v < b->n_snodes; v++) {
       double *p = b->sxz + 2 * v;
@@ -118,7 +127,7 @@ static void check_pair(tb_beam *t, int orthotropic, int distort, uint64_t seed) 
   /* 1e-13 relative: both are sums of O(100) products of O(1) terms; round-off only */
   if (!(err <= 1e-13 * scale && asym <= 1e-13 * scale))
     fail_msg("nucleus vs brute force: err %.3g, asym %.3g, scale %.3g", err, asym, scale);
-  if (orthotropic && !distort) {
+  if (orthotropic && !distort && !b->poisson_split) {
     /* the published component (cuf.md 1.3, convention A): K_xy = C12 E^{tau s,x} I^{i,y j}
      * + C66 E^{tau,x s} I^{i j,y}, checked for every (tau, s, i, j) */
     const double *C = b->mat[0].C;

@@ -47,6 +47,7 @@ static void test_bar(void **state) {
   for (int i = 0; i < 3; i++) assert_int_equal(b->axis_elements[i], 1);
   assert_int_equal(b->element_nodes, 2);
   assert_int_equal(b->integration, 0);
+  assert_int_equal(b->poisson_correction, 0); /* auto */
   assert_int_equal(b->expansion, CUPID_EXPANSION_TE);
   assert_int_equal(b->te_order, 2);
   assert_int_equal(b->n_components, 1);
@@ -208,6 +209,7 @@ static void test_le_explicit(void **state) {
   const cupid_beam *b = &m->beam;
   assert_int_equal(b->element_nodes, 4);
   assert_int_equal(b->integration, 1);
+  assert_int_equal(b->poisson_correction, 2); /* off */
   assert_int_equal(b->axis_elements[0], 4);
   assert_int_equal(b->axis_elements[1], 2);
   assert_int_equal(b->expansion, CUPID_EXPANSION_LE);

@@ -399,6 +399,13 @@ static const bad_case cases[] = {
     {"points_int_overflow.yaml",
      "10:57: output.lines[0].points: must be an integer from 2 to 10000000, got 2147483648",
      NULL},
+    {"poisson_correction_bad.yaml",
+     "10:23: beam.poisson_correction: must be one of auto | on | off, got 'true'",
+     NULL},
+    {"poisson_correction_te2.yaml",
+     "10:23: beam.poisson_correction: 'on' applies to TE0 and TE1 only: TE2 and higher sections "
+     "contract freely",
+     NULL},
     {"precrack_at_missing.yaml",
      "9:7: peridynamics.precracks[0]: missing required key 'at' (the position of the crack "
      "plane along y)",

@@ -14,6 +14,8 @@ typedef struct {
   int graded, ne;      /* graded: [0, 2H] with ne elements, [2H, L] with ne elements */
   double L;
   int point;           /* 1: point load at the centre; 0: uniform traction on the end face */
+  int poisson;         /* beam.poisson_correction: 0 auto (on for TE0/TE1), 2 off */
+  double *stress;      /* if set: the stress (xx yy zz yz xz xy) at (0, L/2, H/2) */
 } cant;
 
 static double tip_w(const cant *c) {
@@ -29,6 +31,7 @@ static double tip_w(const cant *c) {
     t.def.n_axis = 3;
   }
   t.def.integration = c->integ;
+  t.def.poisson_correction = c->poisson;
   tb_rect(&t, -H / 2, H / 2, c->nsec, -H / 2, H / 2, c->nsec, -1);
   cupid_cuf_beam b = tb_create(&t);
   cupid_int n = cupid_cuf_num_dofs(b);
@@ -49,6 +52,7 @@ static double tip_w(const cant *c) {
   double *u = tb_solve(b, f, bc, NULL);
   double d[3];
   CUPID_ASSERT_OK(cupid_cuf_displacement_at(b, u, 0, c->L, 0, d));
+  if (c->stress) CUPID_ASSERT_OK(cupid_cuf_stress_at(b, u, 0, c->L / 2, H / 2, c->stress));
   cupid_free(&u);
   cupid_free(&f);
   cupid_dirichlet_destroy(&bc);
@@ -58,20 +62,45 @@ static double tip_w(const cant *c) {
 
 /* The published tip deflections (cuf.md 1.4). Tolerance 0.05 %: the table gives 4 digits
  * (half a unit of the last digit is <= 0.012 %) and the models are the same (5 B4, full
- * integration, clamp of the whole section, point load at the centre). */
+ * integration, clamp of the whole section, point load at the centre). The published TE1 is
+ * the Poisson-locked one (poisson_correction: off). */
 static void test_published(void **state) {
   (void)state;
   struct { const char *name; int te, N, ln, nsec; double ref; } rows[] = {
-      {"TE1", 1, 1, 0, 1, 4.282e-4}, {"TE2", 1, 2, 0, 1, 5.674e-4}, {"TE4", 1, 4, 0, 1, 5.685e-4},
+      {"TE1 off", 1, 1, 0, 1, 4.282e-4}, {"TE2", 1, 2, 0, 1, 5.674e-4}, {"TE4", 1, 4, 0, 1, 5.685e-4},
       {"L9 2x2", 0, 0, 9, 2, 5.689e-4}};
   printf("  cantilever 0.1 x 0.1 x 1 m, 5 B4, tip load 1 kN (Timoshenko 5.759e-4, EB 5.714e-4)\n");
   printf("  %-8s %12s %12s %9s\n", "model", "tip w [m]", "published", "diff");
   for (size_t k = 0; k < sizeof rows / sizeof rows[0]; k++) {
     cant c = {.te = rows[k].te, .N = rows[k].N, .ln = rows[k].ln, .nsec = rows[k].nsec, .p = 4,
-              .ne = 5, .L = 1.0, .point = 1};
+              .ne = 5, .L = 1.0, .point = 1, .poisson = CUPID_CUF_POISSON_OFF};
+    if (rows[k].N != 1) c.poisson = CUPID_CUF_POISSON_AUTO; /* off and auto agree there */
     double w = tip_w(&c);
     printf("  %-8s %12.5e %12.4e %8.3f%%\n", rows[k].name, w, rows[k].ref, 100 * (w / rows[k].ref - 1));
     if (!(fabs(w / rows[k].ref - 1) <= 5e-4)) fail_msg("%s: tip w %.5e vs published %.4e", rows[k].name, w, rows[k].ref);
+  }
+  /* TE1 with the Poisson correction (the default): bending stiffness E I and, its shear strain
+   * being constant over the section, shear stiffness G A (Timoshenko with k = 1):
+   * w = P L^3 / (3 E I) + P L / (G A) = 5.7514e-4 (Timoshenko k = 5/6: 5.7591e-4). The beam
+   * solution is cubic, which 5 B4 elements hold exactly, and the clamp restrains nothing more
+   * (the corrected law does not couple eps_xx, eps_zz to the axial strain): equal to the
+   * solver's round-off, 1e-9. */
+  {
+    double G = E / (2 * (1 + NU)), I = H * H * H * H / 12, A = H * H;
+    double ref = P / (3 * E * I) + P / (G * A);
+    double sg[6];
+    cant c = {.te = 1, .N = 1, .nsec = 1, .p = 4, .ne = 5, .L = 1.0, .point = 1, .stress = sg};
+    double w = tip_w(&c);
+    printf("  %-8s %12.5e %12.5e %8.5f%%  (EB + P L / (G A))\n", "TE1", w, ref, 100 * (w / ref - 1));
+    if (!(fabs(w / ref - 1) <= 1e-9)) fail_msg("TE1 corrected: tip w %.8e vs %.8e", w, ref);
+    /* and its stress is the beam's: sigma_yy = M z / I at (0, L/2, h/2), M = -P L/2 (the
+     * moment is linear in y, held exactly), sigma_xx = sigma_zz = 0 (1e-9 of sigma_yy) */
+    double syy = -P * 0.5 * (H / 2) / I;
+    printf("  TE1 stress at (0, L/2, h/2): xx %.3e yy %.6e (M z / I %.6e) zz %.3e\n", sg[0], sg[1],
+           syy, sg[2]);
+    ASSERT_NEAR(sg[1], syy, 1e-9 * fabs(syy));
+    ASSERT_NEAR(sg[0], 0.0, 1e-9 * fabs(syy));
+    ASSERT_NEAR(sg[2], 0.0, 1e-9 * fabs(syy));
   }
   /* higher orders (not in the table): TE order and LE refinement approach the same value */
   double prev = 0;
@@ -89,19 +118,26 @@ static void test_published(void **state) {
 
 /* Slender limit: the 3D models tend to Euler-Bernoulli as L/h grows. The difference decays
  * like h/L, not (h/L)^2 as Timoshenko's shear term does, because clamping the whole section
- * also restrains the Poisson contraction at the root (a 3D effect of order h/L). TE1 tends to
- * the Poisson-locked beam, EB with C_yyyy in place of E (cuf.md 2). */
+ * also restrains the Poisson contraction at the root (a 3D effect of order h/L). TE1 without
+ * the Poisson correction tends to the Poisson-locked beam, EB with C_yyyy in place of E
+ * (cuf.md 2); with it (the default) it is EB + P L / (G A) at every L/h. */
 static void test_slender(void **state) {
   (void)state;
   double G = E / (2 * (1 + NU)), I = H * H * H * H / 12, A = H * H;
   double locked = (1 + NU) * (1 - 2 * NU) / (1 - NU);
   double prev4 = 1;
-  printf("  %6s %10s %10s %10s %10s %10s\n", "L/h", "TE1/EBlock", "TE2/EB", "TE4/EB", "L9/EB", "Timo/EB");
+  printf("  %6s %10s %10s %10s %10s %10s %10s\n", "L/h", "TE1off/EBl", "TE1/EBk1", "TE2/EB", "TE4/EB", "L9/EB", "Timo/EB");
   for (double r = 5; r <= 80; r *= 2) {
     double L = r * H, eb = P * L * L * L / (3 * E * I), timo = eb + P * L / (5.0 / 6 * G * A);
-    cant c = {.te = 1, .nsec = 1, .p = 4, .ne = 4, .graded = 10, .L = L, .point = 0};
+    double ebk1 = eb + P * L / (G * A);
+    cant c = {.te = 1, .nsec = 1, .p = 4, .ne = 4, .graded = 10, .L = L, .point = 0,
+              .poisson = CUPID_CUF_POISSON_OFF};
     c.N = 1;
     double w1 = tip_w(&c);
+    c.poisson = CUPID_CUF_POISSON_AUTO;
+    double w1c = tip_w(&c);
+    /* corrected TE1: Timoshenko with k = 1, held exactly by B4 (see test_published) */
+    if (!(fabs(w1c / ebk1 - 1) <= 1e-9)) fail_msg("L/h %g: TE1 corrected %.8e vs %.8e", r, w1c, ebk1);
     c.N = 2;
     double w2 = tip_w(&c);
     c.N = 4;
@@ -112,7 +148,8 @@ static void test_slender(void **state) {
       cant l = {.ln = 9, .nsec = 2, .p = 4, .ne = 4, .graded = 10, .L = L, .point = 0};
       w9 = tip_w(&l);
     }
-    printf("  %6.0f %10.6f %10.6f %10.6f %10.6f %10.6f\n", r, w1 / (eb * locked), w2 / eb, w4 / eb, w9 / eb, timo / eb);
+    printf("  %6.0f %10.6f %10.6f %10.6f %10.6f %10.6f %10.6f\n", r, w1 / (eb * locked), w1c / ebk1,
+           w2 / eb, w4 / eb, w9 / eb, timo / eb);
     /* monotone approach to EB from L/h = 20 on: below, the shear term (+) and the root
      * restraint (-) have opposite signs and cancel near L/h = 10 */
     if (r >= 40) assert_true(fabs(w4 / eb - 1) < prev4);

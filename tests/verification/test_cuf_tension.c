@@ -106,6 +106,97 @@ static void test_tension_te(void **state) {
       }
 }
 
+/* Poisson locking of a TE0 rod (nu = 0.25, paper 004's truss material): the tip of the bar
+ * under the end traction SIG moves SIG L / E with the correction (the default) and
+ * SIG L (1 + nu)(1 - 2 nu) / ((1 - nu) E) without; stresses: sigma_yy = SIG in both,
+ * sigma_xx = sigma_zz = 0 with the correction, nu / (1 - nu) SIG (the lateral stress of the
+ * restrained contraction) without. Exact for a linear field: round-off, 1e-12. */
+static void test_rod_poisson(void **state) {
+  (void)state;
+  const double nu = 0.25, E = 1e4, eps = SIG / E;
+  for (int off = 0; off < 2; off++)
+    for (int p = 2; p <= 4; p++) {
+      bar_case c;
+      bar_init(&c, nu, p, 0);
+      c.t.def.poisson_correction = off ? CUPID_CUF_POISSON_OFF : CUPID_CUF_POISSON_AUTO;
+      tb_te(&c.t, 0);
+      tb_rect(&c.t, 0, 10, 1, 0, 10, 2, -1);
+      c.model.beam = c.t.def;
+      cupid_cuf_beam b = NULL;
+      CUPID_ASSERT_OK(cupid_cuf_beam_create(&c.model, &b));
+      cupid_int n = cupid_cuf_num_dofs(b);
+      double *f = NULL;
+      CUPID_ASSERT_OK(cupid_calloc((size_t)n, sizeof *f, "f", &f));
+      CUPID_ASSERT_OK(cupid_cuf_load_vector(b, &c.model, f));
+      cupid_dirichlet bc = NULL;
+      CUPID_ASSERT_OK(cupid_dirichlet_create(n, &bc));
+      CUPID_ASSERT_OK(cupid_cuf_clamp_node(b, 0, bc));
+      double *u = tb_solve(b, f, bc, NULL);
+      double d[3], s[6]; /* stresses xx yy zz yz xz xy */
+      CUPID_ASSERT_OK(cupid_cuf_displacement_at(b, u, 3, 100, 7, d));
+      CUPID_ASSERT_OK(cupid_cuf_stress_at(b, u, 3, 55, 7, s));
+      double ref = off ? eps * 100 * (1 + nu) * (1 - 2 * nu) / (1 - nu) : eps * 100;
+      double lat = off ? nu / (1 - nu) * SIG : 0.0;
+      printf("  TE0 B%d nu %.2f correction %-4s tip u_y %.12e (expected %.12e), sxx %.6g szz %.6g syy %.6g\n",
+             p, nu, off ? "off" : "on", d[1], ref, s[0], s[2], s[1]);
+      ASSERT_NEAR(d[1], ref, 1e-12 * ref);
+      ASSERT_NEAR(s[1], SIG, 1e-12 * SIG);
+      ASSERT_NEAR(s[0], lat, 1e-12 * SIG);
+      ASSERT_NEAR(s[2], lat, 1e-12 * SIG);
+      cupid_free(&u);
+      cupid_free(&f);
+      cupid_dirichlet_destroy(&bc);
+      cupid_cuf_beam_destroy(&b);
+    }
+  /* orthotropic (axes x y z): the corrected rod stretches SIG L / E_y, sigma_xx = sigma_zz = 0 */
+  for (int N = 0; N <= 1; N++) {
+    bar_case c;
+    bar_init(&c, nu, 3, 0);
+    cupid_material *m = &c.t.mat[0];
+    m->orthotropic = 1;
+    m->Ex = 3e4, m->Ey = 1e4, m->Ez = 2e4;
+    m->nu_xy = 0.35, m->nu_xz = 0.3, m->nu_yz = 0.2;
+    m->Gxy = 5e3, m->Gxz = 8e3, m->Gyz = 4e3;
+    tb_te(&c.t, N);
+    tb_rect(&c.t, 0, 10, 1, 0, 10, 2, -1);
+    c.model.beam = c.t.def;
+    cupid_cuf_beam b = NULL;
+    CUPID_ASSERT_OK(cupid_cuf_beam_create(&c.model, &b));
+    cupid_int n = cupid_cuf_num_dofs(b);
+    double *f = NULL;
+    CUPID_ASSERT_OK(cupid_calloc((size_t)n, sizeof *f, "f", &f));
+    CUPID_ASSERT_OK(cupid_cuf_load_vector(b, &c.model, f));
+    /* u_y = 0 over the section at y = 0 and the rigid motions, the lateral faces free (as
+     * test_tension_te): the exact solution, contraction included for TE1 */
+    cupid_dirichlet bc = NULL;
+    CUPID_ASSERT_OK(cupid_dirichlet_create(n, &bc));
+    c.cons[0].kind = CUPID_CONSTRAINT_FIX;
+    c.cons[0].box = box3(-1, 11, 0, 0, -1, 11);
+    c.cons[0].components[1] = 1;
+    c.model.constraints = c.cons;
+    c.model.n_constraints = 1;
+    CUPID_ASSERT_OK(cupid_cuf_apply_constraints(b, &c.model, bc));
+    bc->fixed[cupid_cuf_dof(b, 0, 0, 0)] = 1;
+    bc->fixed[cupid_cuf_dof(b, 0, 0, 2)] = 1;
+    if (N == 1) bc->fixed[cupid_cuf_dof(b, 2, 0, 0)] = 1;
+    double *u = tb_solve(b, f, bc, NULL);
+    double d[3], s[6];
+    CUPID_ASSERT_OK(cupid_cuf_displacement_at(b, u, 5, 100, 5, d));
+    CUPID_ASSERT_OK(cupid_cuf_stress_at(b, u, 3, 85, 7, s));
+    double ref = SIG / 1e4 * 100;
+    printf("  orthotropic TE%d: tip u_y %.12e (SIG L / E_y %.12e), sxx %.3g szz %.3g syy %.12g\n", N,
+           d[1], ref, s[0], s[2], s[1]);
+    ASSERT_NEAR(d[1], ref, 1e-12 * ref);
+    ASSERT_NEAR(s[1], SIG, 1e-12 * SIG);
+    ASSERT_NEAR(s[0], 0.0, 1e-12 * SIG);
+    ASSERT_NEAR(s[2], 0.0, 1e-12 * SIG);
+    cupid_free(&u);
+    cupid_free(&f);
+    cupid_dirichlet_destroy(&bc);
+    cupid_cuf_beam_destroy(&b);
+  }
+}
+
 static void test_tension_le(void **state) {
   (void)state;
   char what[64];
@@ -186,7 +277,9 @@ static void test_body_force(void **state) {
 }
 
 int main(void) {
-  const struct CMUnitTest tests[] = {cmocka_unit_test(test_tension_te), cmocka_unit_test(test_tension_le),
+  const struct CMUnitTest tests[] = {cmocka_unit_test(test_tension_te),
+                                     cmocka_unit_test(test_rod_poisson),
+                                     cmocka_unit_test(test_tension_le),
                                      cmocka_unit_test(test_body_force)};
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -22,14 +22,19 @@ static const double E = 1e9, RHO = 7800.0, L = 1.0;
 
 /* A fixed-free TE0 rod (u = u(y), section 1 x 1) with ne elements of p nodes; x and z
  * components are fixed so only the axial motion remains. */
-static cupid_cuf_beam rod(tb_beam *t, int ne, int p) {
-  tb_init(t, E, 0.0);
+static cupid_cuf_beam rod_nu(tb_beam *t, int ne, int p, double nu, int poisson) {
+  tb_init(t, E, nu);
+  t->def.poisson_correction = poisson;
   t->mat[0].density = RHO;
   t->mat[0].has_density = 1;
   tb_te(t, 0);
   tb_axis(t, 0.0, L, ne, p);
   tb_rect(t, -0.5, 0.5, 1, -0.5, 0.5, 1, -1);
   return tb_create(t);
+}
+
+static cupid_cuf_beam rod(tb_beam *t, int ne, int p) {
+  return rod_nu(t, ne, p, 0.0, CUPID_CUF_POISSON_AUTO);
 }
 
 static cupid_dirichlet axial_bc(cupid_cuf_beam b) {
@@ -93,15 +98,56 @@ static void test_rod_frequencies(void **state) {
   cupid_cuf_beam_destroy(&b);
 }
 
+/* Poisson locking of the rod (paper 004's truss material, nu = 0.25): with the correction (the
+ * default for TE0) the fixed-free rod has the frequencies of c = sqrt(E / rho); without it
+ * those of c' = sqrt(C_yyyy / rho), C_yyyy = E (1 - nu) / ((1 + nu)(1 - 2 nu)) = 1.2 E, so
+ * every frequency is sqrt(1.2) = 1.0954 times higher (the period 8.7 % short). B4 x 10,
+ * consistent mass: the discretisation error is relative, the same for both laws (measured
+ * 7e-11, 5e-8, 1.1e-6 in test_rod_frequencies): tolerances 1e-9, 1e-6, 1e-5, from above. */
+static void test_rod_poisson(void **state) {
+  (void)state;
+  const double nu = 0.25, locked = (1 - nu) / ((1 + nu) * (1 - 2 * nu));
+  const double tol[3] = {1e-9, 1e-6, 1e-5};
+  double c = sqrt(E / RHO);
+  printf("\n| mode | exact c (rad/s) | corrected rel. err | off: omega / exact | sqrt(C_yyyy/E) |\n"
+         "|---|---|---|---|---|\n");
+  double omega[2][3];
+  for (int off = 0; off < 2; off++) {
+    tb_beam t;
+    cupid_cuf_beam b = rod_nu(&t, 10, 4, nu, off ? CUPID_CUF_POISSON_OFF : CUPID_CUF_POISSON_AUTO);
+    cupid_cuf_info info;
+    cupid_cuf_get_info(b, &info);
+    assert_int_equal(info.poisson_corrected, !off);
+    cupid_csr K = NULL, M = NULL;
+    CUPID_ASSERT_OK(cupid_cuf_assemble(b, &K));
+    CUPID_ASSERT_OK(cupid_cuf_mass_assemble(b, &M));
+    cupid_dirichlet bc = axial_bc(b);
+    CUPID_ASSERT_OK(cupid_dynamics_eigen_dense(K, M, NULL, bc, 3, omega[off], NULL));
+    cupid_csr_destroy(&K);
+    cupid_csr_destroy(&M);
+    cupid_dirichlet_destroy(&bc);
+    cupid_cuf_beam_destroy(&b);
+  }
+  for (int k = 0; k < 3; k++) {
+    double exact = c * (2 * k + 1) * M_PI / (2 * L);
+    double rc = omega[0][k] / exact - 1, ro = omega[1][k] / (exact * sqrt(locked)) - 1;
+    printf("| %d | %.6f | %.2e | %.6f | %.6f |\n", k + 1, exact, rc, omega[1][k] / exact, sqrt(locked));
+    assert_true(rc >= -1e-12 && rc < tol[k]);
+    assert_true(ro >= -1e-12 && ro < tol[k]);
+  }
+}
+
 /* Cantilever L = 5, square 0.1 x 0.1 (L/h = 50), TE1 nu = 0, B4 x 10, consistent mass: the
  * first bending pair (x and z) against Euler-Bernoulli beta1 = 1.8751, beta2 = 4.6941. Shear
  * and rotary inertia lower the frequency by ~(r/L)^2 beta^2 (1 + E/G) / 2 (Timoshenko):
  * 1.7e-4 for mode 1, 1.1e-3 for mode 2 (measured -2.3e-4 and -1.6e-3: TE1 has no shear
- * correction factor and B4 x 10 adds a little). Tolerances 5e-4 and 2e-3 relative. */
-static void test_cantilever_bending(void **state) {
+ * correction factor and B4 x 10 adds a little). Tolerances 5e-4 and 2e-3 relative at nu = 0,
+ * scaled with (1 + Eb/G) otherwise (cantilever_bending). */
+static void cantilever_bending(double nu, int poisson) {
   tb_beam t;
   double Lc = 5.0, h = 0.1;
-  tb_init(&t, E, 0.0);
+  tb_init(&t, E, nu);
+  t.def.poisson_correction = poisson;
   t.mat[0].density = RHO;
   t.mat[0].has_density = 1;
   tb_te(&t, 1);
@@ -117,18 +163,37 @@ static void test_cantilever_bending(void **state) {
   CUPID_ASSERT_OK(cupid_dirichlet_finalize(bc));
   double omega[4];
   CUPID_ASSERT_OK(cupid_dynamics_eigen_dense(K, M, NULL, bc, 4, omega, NULL));
-  double I = pow(h, 4) / 12, A = h * h, base = sqrt(E * I / (RHO * A * pow(Lc, 4)));
+  /* the bending modulus: E, or C_yyyy for the Poisson-locked TE1 (poisson_correction off) */
+  double Eb = poisson == CUPID_CUF_POISSON_OFF ? E * (1 - nu) / ((1 + nu) * (1 - 2 * nu)) : E;
+  double I = pow(h, 4) / 12, A = h * h, base = sqrt(Eb * I / (RHO * A * pow(Lc, 4)));
   double eb1 = pow(1.875104068711961, 2) * base, eb2 = pow(4.694091132974175, 2) * base;
-  printf("\ncantilever: omega = %.6f %.6f %.6f %.6f; EB %.6f %.6f; rel %.2e %.2e\n", omega[0],
-         omega[1], omega[2], omega[3], eb1, eb2, omega[0] / eb1 - 1, omega[2] / eb2 - 1);
-  ASSERT_NEAR(omega[0] / eb1, 1.0, 5e-4);
-  ASSERT_NEAR(omega[1] / eb1, 1.0, 5e-4); /* the other bending plane */
-  ASSERT_NEAR(omega[2] / eb2, 1.0, 2e-3);
-  ASSERT_NEAR(omega[3] / eb2, 1.0, 2e-3);
+  printf("\ncantilever nu = %g, correction %s: omega = %.6f %.6f %.6f %.6f; EB(%s) %.6f %.6f; "
+         "rel %.2e %.2e\n", nu, poisson == CUPID_CUF_POISSON_OFF ? "off" : "auto", omega[0],
+         omega[1], omega[2], omega[3], Eb == E ? "E" : "C_yyyy", eb1, eb2, omega[0] / eb1 - 1,
+         omega[2] / eb2 - 1);
+  /* Timoshenko's lowering (r/L)^2 beta^2 (1 + Eb/G) / 2, with margins 3 and 1.8 (nu = 0: the
+   * 5e-4 and 2e-3 of the header; TE1 has no shear factor and B4 x 10 adds a little) */
+  double G = E / (2 * (1 + nu)), rl2 = I / A / (Lc * Lc);
+  double tol1 = 3.0 * rl2 * pow(1.875104068711961, 2) * (1 + Eb / G) / 2;
+  double tol2 = 1.8 * rl2 * pow(4.694091132974175, 2) * (1 + Eb / G) / 2;
+  ASSERT_NEAR(omega[0] / eb1, 1.0, tol1);
+  ASSERT_NEAR(omega[1] / eb1, 1.0, tol1); /* the other bending plane */
+  ASSERT_NEAR(omega[2] / eb2, 1.0, tol2);
+  ASSERT_NEAR(omega[3] / eb2, 1.0, tol2);
   cupid_csr_destroy(&K);
   cupid_csr_destroy(&M);
   cupid_dirichlet_destroy(&bc);
   cupid_cuf_beam_destroy(&b);
+}
+
+/* nu = 0; and nu = 0.3 with the Poisson correction (EB with E: the shear term grows with
+ * E/G = 2(1 + nu), to about -3e-4 for mode 1) and without (EB with C_yyyy = 1.35 E: the
+ * locked TE1 is 16 % too stiff in frequency). */
+static void test_cantilever_bending(void **state) {
+  (void)state;
+  cantilever_bending(0.0, CUPID_CUF_POISSON_AUTO);
+  cantilever_bending(0.3, CUPID_CUF_POISSON_AUTO);
+  cantilever_bending(0.3, CUPID_CUF_POISSON_OFF);
 }
 
 /* Observer: energy balance, and the tip displacement against the exact triangle wave. */
@@ -337,7 +402,8 @@ static void test_pd_bar(void **state) {
 
 int main(void) {
   const struct CMUnitTest tests[] = {
-      cmocka_unit_test(test_rod_frequencies), cmocka_unit_test(test_cantilever_bending),
+      cmocka_unit_test(test_rod_frequencies), cmocka_unit_test(test_rod_poisson),
+      cmocka_unit_test(test_cantilever_bending),
       cmocka_unit_test(test_released_bar), cmocka_unit_test(test_rayleigh_mode),
       cmocka_unit_test(test_pd_bar)};
   return cmocka_run_group_tests(tests, NULL, NULL);
