@@ -77,6 +77,9 @@ VARIANTS = {
     "adj10_energy": ("adj10, surface correction", dict(ADJ, sc=SC)),
     "adj10_m2_energy": ("adj10, m = 2, surface correction", dict(ADJ, delta="2.0", sc=SC)),
     "adj10_m1.5_energy": ("adj10, m = 1.5, surface correction", dict(ADJ, delta="1.5", sc=SC)),
+    "x2": ("skin split beside the stringers and in 2 through its thickness, stringers in 2 "
+           "elements across their thickness (h0.5_x2's FE mesh at h = 1)",
+           dict(skin_x=SKIN_X2, skin_z="0,1,2", str_x="0,2,4")),
     "h0.5": ("the example, h = 0.5 (8 x 40 x 40 PD nodes per stringer)", H05),
     "h0.5_skin": ("h = 0.5, skin split beside the stringers and in 2 through its thickness",
                   dict(H05, skin_x=SKIN_B, skin_z="0,1,2")),
