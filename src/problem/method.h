@@ -51,6 +51,9 @@ struct cupid_method_ops {
   cupid_status (*loads)(cupid_problem_state *prob);
   /** prob->K: the whole system's stiffness with the coupling terms (unless already built). */
   cupid_status (*assemble)(cupid_problem_state *prob);
+  /** The static solve of the assembled K (prob->u, f_int, solve, solved). NULL: the engine's
+   *  solve (cupid_problem_assembled_solve). */
+  cupid_status (*solve_assembled)(cupid_problem_state *prob);
   /** 1 when the static solve with @p engine takes the matrix-free path. */
   int (*matrix_free)(const cupid_problem_state *prob, const cupid_solver_type *engine);
   /** The matrix-free static solve: prob->u, f_int, solve, phases, solved. */

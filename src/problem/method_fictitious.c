@@ -47,6 +47,13 @@ static cupid_status assemble(cupid_problem_state *prob) {
   return CUPID_SUCCESS;
 }
 
+/* `balance: momentum`: K' = K - W C^T by the factor of K_ff and six more solves (balance.c);
+ * else the engine's solve of Eq. 38. */
+static cupid_status solve_assembled(cupid_problem_state *prob) {
+  return cupid_problem_balanced(prob) ? cupid_problem_balanced_direct_solve(prob)
+                                      : cupid_problem_assembled_solve(prob);
+}
+
 /* An iterative engine (krylov, petsc), static, 3D: matrix-free unless --assembled asks for
  * Eq. 38 assembled (PETSc: its rows split over the ranks, GMRES + block Jacobi/ILU). */
 static int matrix_free(const cupid_problem_state *prob, const cupid_solver_type *engine) {
@@ -128,6 +135,7 @@ const cupid_method_ops cupid_method_fictitious = {
     .constraints = constraints,
     .loads = cupid_method_split_loads,
     .assemble = assemble,
+    .solve_assembled = solve_assembled,
     .matrix_free = matrix_free,
     .solve_matrix_free = solve_matrix_free,
     .report = cupid_method_print_equilibrium,

@@ -437,10 +437,12 @@ static cupid_status run_static(cupid_problem_state *prob) {
   }
   CUPID_CALL(cupid_problem_estimate(prob, 0)); /* before anything scales with the stiffness */
   CUPID_CALL(prob->method->assemble(prob));
-  if (cupid_problem_balanced(prob)) { /* K' = K - W C^T: factor of K_ff and six more solves */
-    CUPID_CALL(cupid_problem_balanced_direct_solve(prob));
-    return prob->method->report ? prob->method->report(prob) : CUPID_SUCCESS;
-  }
+  CUPID_CALL(prob->method->solve_assembled ? prob->method->solve_assembled(prob)
+                                           : cupid_problem_assembled_solve(prob));
+  return prob->method->report ? prob->method->report(prob) : CUPID_SUCCESS;
+}
+
+cupid_status cupid_problem_assembled_solve(cupid_problem_state *prob) {
   CUPID_CALL(cupid_problem_patch_test_assembled(prob));
   CUPID_CALL(cupid_problem_linear_solve(prob, prob->method->matrix));
   prob->solved = 1;
@@ -448,7 +450,7 @@ static cupid_status run_static(cupid_problem_state *prob) {
   cupid_csr_matvec(prob->K, prob->u, prob->f_int);
   cupid_problem_progress(prob, "solve: %s, %lld equations, residual %.2e", prob->solve.method,
                          (long long)prob->solve.n, prob->solve.residual);
-  return prob->method->report ? prob->method->report(prob) : CUPID_SUCCESS;
+  return CUPID_SUCCESS;
 }
 
 /* The run's files go to a staging folder beside the output folder until write_outputs

@@ -231,6 +231,9 @@ void cupid_problem_progress(const cupid_problem_state *prob, const char *fmt, ..
 void cupid_problem_phase_end(cupid_problem_state *prob, cupid_phase phase, double t0);
 /** The factorisation and solve phases from prob->solve (a linear solve just done). */
 void cupid_problem_record_solve(cupid_problem_state *prob);
+/** The static solve of the assembled prob->K (a method's default): the patch test, the engine's
+ *  solve, the eliminated unknowns, f_int = K u. */
+cupid_status cupid_problem_assembled_solve(cupid_problem_state *prob);
 /** Solve prob->K u = f_ext with prob->bc by the chosen engine into prob->u and prob->solve;
  *  a breakdown names the node (PD) or beam node and expansion term (FE). */
 cupid_status cupid_problem_linear_solve(cupid_problem_state *prob, cupid_matrix_kind kind);
