@@ -201,6 +201,8 @@ cupid_status cupid_coupling_balance_linear(cupid_coupling_balance B, const cupid
 }
 
 cupid_status cupid_coupling_balance_weights(const cupid_csr_t *Kfe, cupid_int n_pd, double *d) {
+  CUPID_CHECK(Kfe->bs == 3, CUPID_ERR_ARGUMENT, "balance weights: FE rows in 3 x 3 blocks, got %d",
+              Kfe->bs);
   memset(d, 0, (size_t)(3 * (n_pd + Kfe->nrows)) * sizeof *d);
   for (cupid_int i = 0; i < Kfe->nrows; i++) {
     int reads_pd = 0;

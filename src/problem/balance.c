@@ -13,7 +13,9 @@ typedef struct {
   double p0[3];   /* the rotations' centre */
 } rigid_mode;
 
-static void rigid_eval(const rigid_mode *m, const double p[3], double u[3]) {
+static void rigid_fn(void *ctx, const double p[3], double density, double u[3]) {
+  const rigid_mode *m = ctx;
+  (void)density;
   u[0] = u[1] = u[2] = 0.0;
   if (m->k < 3) {
     u[m->k] = 1.0;
@@ -24,25 +26,13 @@ static void rigid_eval(const rigid_mode *m, const double p[3], double u[3]) {
   u[b] = -(p[c] - m->p0[c]);
 }
 
-static void rigid_fn(void *ctx, const double p[3], double density, double out[3]) {
-  (void)density;
-  rigid_eval(ctx, p, out);
-}
-
 /* R: the rigid modes in the system's layout (inactive FE nodes 0, as the solve holds them),
  * rotations about the middle of the beam's axis (any centre spans the same space; the middle
  * keeps the columns' scales alike). */
 static cupid_status rigid_modes(const cupid_problem_state *prob, double *R) {
-  const double *x = cupid_pd_grid_coords(prob->grid);
   rigid_mode m = {0, {0.0, 0.5 * (prob->fe_info.y_min + prob->fe_info.y_max), 0.0}};
-  for (m.k = 0; m.k < CUPID_BALANCE_MODES; m.k++) {
-    double *r = R + (size_t)m.k * (size_t)prob->ndof;
-    for (cupid_int i = 0; i < prob->n_pd; i++) rigid_eval(&m, x + 3 * i, r + 3 * i);
-    CUPID_CALL(cupid_cuf_interpolate(prob->beam, rigid_fn, &m, r));
-    for (cupid_int n = 0; n < prob->fe_info.n_fe_nodes; n++)
-      if (!cupid_cuf_node_used(prob->beam, (int)(n % prob->fe_info.M), n / prob->fe_info.M))
-        for (int c = 0; c < 3; c++) r[prob->fe_offset + 3 * n + c] = 0.0;
-  }
+  for (m.k = 0; m.k < CUPID_BALANCE_MODES; m.k++)
+    CUPID_CALL(cupid_problem_system_field(prob, rigid_fn, &m, R + (size_t)m.k * (size_t)prob->ndof));
   return CUPID_SUCCESS;
 }
 

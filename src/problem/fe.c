@@ -36,6 +36,18 @@ static void unit_field(void *ctx, const double p[3], double density, double out[
   for (int c = 0; c < 3; c++) out[c] = c == *k ? 1.0 : 0.0;
 }
 
+cupid_status cupid_problem_system_field(const cupid_problem_state *prob, cupid_cuf_field_fn fn,
+                                        void *ctx, double *x) {
+  const double *xp = prob->grid ? cupid_pd_grid_coords(prob->grid) : NULL;
+  for (cupid_int i = 0; i < prob->n_pd; i++) fn(ctx, xp + 3 * i, 0.0, x + 3 * i);
+  if (!prob->beam) return CUPID_SUCCESS;
+  CUPID_CALL(cupid_cuf_interpolate(prob->beam, fn, ctx, x));
+  for (cupid_int n = 0; n < prob->fe_info.n_fe_nodes; n++)
+    if (!cupid_cuf_node_used(prob->beam, (int)(n % prob->fe_info.M), n / prob->fe_info.M))
+      for (int c = 0; c < 3; c++) x[prob->fe_offset + 3 * n + c] = 0.0;
+  return CUPID_SUCCESS;
+}
+
 cupid_status cupid_problem_translations(const cupid_problem_state *prob, double *t) {
   for (int k = 0; k < 3; k++) {
     double *tk = t + (size_t)k * (size_t)prob->ndof;

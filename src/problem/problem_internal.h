@@ -323,6 +323,11 @@ cupid_status cupid_problem_check_points(const cupid_problem_state *prob);
 /* fe.c: the CUF beam of a model: creation, constraints, loads, sampling, VTU. */
 cupid_status cupid_problem_fe_build(cupid_problem_state *prob);
 cupid_status cupid_problem_fe_impose_field(cupid_problem_state *prob);
+/** The vector field @p fn on every DOF of the system: its value at each PD node, the beam's
+ *  generalised DOFs (cupid_cuf_interpolate), 0 on the FE nodes where the beam gave way (as the
+ *  solve holds them). */
+cupid_status cupid_problem_system_field(const cupid_problem_state *prob, cupid_cuf_field_fn fn,
+                                        void *ctx, double *x);
 /** Unit-translation vectors: t[k * ndof + d] = generalised DOF d of the field e_k. */
 cupid_status cupid_problem_translations(const cupid_problem_state *prob, double *t);
 cupid_status cupid_problem_fe_write_vtu(const cupid_problem_state *prob, const double *sol,
