@@ -20,22 +20,17 @@
 #     (h = 1: 2.5e-3, h = 0.5: 5.2e-4, h = 0.25: 2.7e-4 measured; checked: at least halved from
 #     h = 1 to 0.5), and the balanced operator keeps the patch test on that bar (ghost force
 #     <= 1e-10 of the nodal force scale; measured 5e-14).
-set -u
-CUPID=$(realpath "${CUPID:-build/cupid}")
-SRC=$(realpath "${CUPID_SOURCE_DIR:-.}")
-work=$(mktemp -d)
-trap 'rm -rf "$work"' EXIT
-fail=0; pass=0
+. "$(dirname "$0")/../tools/checks.sh"  # CUPID, SRC, $work (cwd), ok, bad, finish
 Q="$SRC/tests/models/coupling/quality_bar.yaml"
 OLD=(--set peridynamics.horizon=3 --set coupling.fictitious_fe=plane --set beam.axis.type=B2 --set 'beam.axis.elements=[1,1,1]')
-ok() { if "$@"; then pass=$((pass+1)); else fail=$((fail+1)); echo "FAIL: $*"; fi; }
-run() { "$CUPID" run "$@" --quiet || { echo "FAIL: cupid run $*"; fail=$((fail+1)); }; }
+check() { if "$@"; then ok; else bad "$*"; fi; }
+run() { "$CUPID" run "$@" --quiet || bad "cupid run $*"; }
 
 # 1. the small bar
 run "$Q" -o "$work/none" "${OLD[@]}" --solver direct
 run "$Q" -o "$work/direct" "${OLD[@]}" --solver direct --set coupling.balance=momentum
 run "$Q" -o "$work/krylov" "${OLD[@]}" --solver krylov --set coupling.balance=momentum
-ok python3 - "$work" <<'PY'
+check python3 - "$work" <<'PY'
 import json, sys
 w = sys.argv[1]
 s = {k: json.load(open(f"{w}/{k}/summary.json")) for k in ("none", "direct", "krylov")}
@@ -58,7 +53,7 @@ run "$E/cbeam_corner.yaml" -o "$work/corner" --solver krylov
 run "$E/cbeam_corner.yaml" -o "$work/corner_none" --solver krylov --set coupling.balance=none
 run "$E/cbeam_pd_l9.yaml" -o "$work/web" --solver krylov --set coupling.balance=momentum
 run "$SRC/tests/models/coupling/cbeam_web_height.yaml" -o "$work/height" --solver krylov
-ok python3 - "$work" <<'PY'
+check python3 - "$work" <<'PY'
 import json, sys
 w = sys.argv[1]
 def pts(k):
@@ -86,20 +81,19 @@ for case in "load steps" "type evaluate"; do
   out=$("$CUPID" run "$Q" -o "$work/refused" --set coupling.balance=momentum "${args[@]}" 2>&1)
   rc=$?
   if [ "$rc" -eq 1 ] && grep -q "quality_bar.yaml:30:3: coupling: balance: momentum runs one static solve in this version, not $case" <<<"$out"; then
-    pass=$((pass+1))
+    ok
   else
-    echo "FAIL: $case: rc $rc: $out"; fail=$((fail+1))
+    bad "$case: rc $rc: $out"
   fi
 done
 # 4. the paper's imbalance against h at fixed m
 run "$Q" -o "$work/h1" --solver krylov
 run "$Q" -o "$work/h05" --solver krylov --set peridynamics.spacing=0.5 --set peridynamics.horizon=0.75
-ok python3 - "$work" <<'PY'
+check python3 - "$work" <<'PY'
 import json, sys
 w = sys.argv[1]
 i1, i05 = (json.load(open(f"{w}/{k}/summary.json"))["coupling_quality"]["imbalance"] for k in ("h1", "h05"))
 print(f"paper 000's operator, m = 1.5: imbalance {i1:.2e} at h = 1, {i05:.2e} at h = 0.5")
 sys.exit(0 if 0 < i05 <= 0.5 * i1 else 1)
 PY
-echo "coupling_balance: $pass passed, $fail failed"
-[ "$fail" -eq 0 ]
+finish coupling_balance

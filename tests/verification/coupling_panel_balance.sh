@@ -13,9 +13,7 @@
 #  - paper 000's operator (balance: none) on the refined mesh misses the converged L9 by more
 #    than 2% (the issue's finding: it gets worse as the FE mesh near the regions is refined).
 # ~1 minute on 2 cores (the converged reference has 251,370 FE DOFs).
-set -u
-CUPID=$(realpath "${CUPID:-build/cupid}")
-SRC=$(realpath "${CUPID_SOURCE_DIR:-.}")
+. "$(dirname "$0")/../tools/checks.sh"  # CUPID, SRC, $work (cwd)
 export CUPID_LIBRARY="${CUPID_LIBRARY:-$(dirname "$CUPID")/libcupid.so}"
 # A sanitizer build's library needs its runtime loaded first in Python (as unit.python has it),
 # and Python's own allocations are no leak of cupid's. ldd's output is read whole first (an
@@ -25,9 +23,6 @@ asan=$(awk '/libasan/ {print $3; exit}' <<<"$libs")
 if [ -n "$asan" ]; then
   export LD_PRELOAD="$asan" ASAN_OPTIONS="${ASAN_OPTIONS:+$ASAN_OPTIONS:}detect_leaks=0"
 fi
-work=$(mktemp -d)
-trap 'rm -rf "$work"' EXIT
-cd "$work"
 PY=/usr/bin/python3
 "$PY" "$SRC/examples/panel/study.py" example x2 --solver krylov --against fine --balance momentum \
   > balanced.md || { echo "FAIL: study.py (balanced)"; exit 1; }

@@ -13,19 +13,14 @@
 #     before issue 18): the reactions miss the load by more than 1%: the imbalance warning.
 #  5. --quiet: nothing on stderr (the figures are in summary.json).
 #  6. an uncoupled (beam-only) model has no coupling_quality block.
-set -u
-CUPID=$(realpath "${CUPID:-build/cupid}")
-SRC=$(realpath "${CUPID_SOURCE_DIR:-.}")
+. "$(dirname "$0")/../tools/checks.sh"  # CUPID, SRC, $work (cwd), ok, bad, finish
 MODEL="$SRC/tests/models/coupling/quality_bar.yaml"
-work=$(mktemp -d)
-trap 'rm -rf "$work"' EXIT
-fail=0; pass=0
 run_case() { # name, python check, cupid arguments...
   local name=$1 check=$2; shift 2
   if ! "$CUPID" run "$MODEL" -o "$work/$name" "$@" 2> "$work/$name.err"; then
-    echo "FAIL $name: cupid exited non-zero"; cat "$work/$name.err"; fail=$((fail+1)); return
+    cat "$work/$name.err"; bad "$name: cupid exited non-zero"; return
   fi
-  if python3 - "$work/$name/summary.json" "$work/$name.err" "$check" <<'PY'; then pass=$((pass+1)); else fail=$((fail+1)); echo "FAIL $name"; fi
+  if python3 - "$work/$name/summary.json" "$work/$name.err" "$check" <<'PY'; then ok; else bad "$name"; fi
 import json, sys
 s = json.load(open(sys.argv[1])); err = open(sys.argv[2]).read(); check = sys.argv[3]
 q = s.get("coupling_quality")
@@ -78,5 +73,4 @@ loads: [{traction: {y: 32, value: [0, 100, -5]}}]
 analysis: {type: static}
 YAML
 MODEL="$work/beam_only.yaml" run_case beam_only none
-echo "coupling_quality: $pass passed, $fail failed"
-[ "$fail" -eq 0 ]
+finish coupling_quality
