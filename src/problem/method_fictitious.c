@@ -50,8 +50,13 @@ static cupid_status assemble(cupid_problem_state *prob) {
 /* `balance: momentum`: K' = K - W C^T by the factor of K_ff and six more solves (balance.c);
  * else the engine's solve of Eq. 38. */
 static cupid_status solve_assembled(cupid_problem_state *prob) {
-  return cupid_problem_balanced(prob) ? cupid_problem_balanced_direct_solve(prob)
-                                      : cupid_problem_assembled_solve(prob);
+  if (!cupid_problem_balanced(prob)) return cupid_problem_assembled_solve(prob);
+  /* the balanced solve reuses a SuiteSparse factor; an iterative engine's assembled path
+   * (--assembled) has none, and silently factoring instead would not be what was asked */
+  CUPID_CHECK(!prob->engine->iterative, CUPID_ERR_UNSUPPORTED,
+              "coupling.balance: momentum runs on the direct solver or the matrix-free path of "
+              "solver %s, not on its assembled path (--assembled)", prob->engine->name);
+  return cupid_problem_balanced_direct_solve(prob);
 }
 
 /* An iterative engine (krylov, petsc), static, 3D: matrix-free unless --assembled asks for
