@@ -194,6 +194,19 @@ cupid_status cupid_direct_factor_solve_free(cupid_direct_factor F, const double 
  */
 cupid_status cupid_direct_factor_solve(cupid_direct_factor F, const double *b, double *x);
 
+/**
+ * Downdate an SPD factor (CHOLMOD's cholmod_updown): afterwards F factors K_ff - C_f C_f^T,
+ * where C is n_full x r, given by columns (colptr[r + 1], rows: global DOFs, vals) and C_f its
+ * free rows (rows on fixed DOFs are dropped). Each downdate costs about the length of the
+ * elimination-tree paths of C's rows, far below a factorisation: a broken bond-based bond is a
+ * rank-one term (quasi-static crack growth, src/problem/growth.c). The first call converts the
+ * factor to simplicial LDL'. CUPID_ERR_NUMERIC when the result is not positive definite to the
+ * CUPID_DIRECT_PIVOT_TOL bound (the factor must then be destroyed); CUPID_ERR_ARGUMENT for an
+ * LU factor.
+ */
+cupid_status cupid_direct_factor_downdate(cupid_direct_factor F, cupid_int r, const cupid_int *colptr,
+                                          const cupid_int *rows, const double *vals);
+
 /** Destroy and set *F to NULL (NULL-safe). */
 void cupid_direct_factor_destroy(cupid_direct_factor *F);
 /* ---- end of the reusable factorisation block ---- */

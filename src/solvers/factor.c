@@ -29,6 +29,7 @@ struct cupid_direct_factor_private {
   void *symbolic, *numeric; /* UMFPACK (GENERAL) */
   double control[UMFPACK_CONTROL];
   double *work, *work2; /* n: right-hand side / solution in free numbering */
+  cupid_int *pivot_of;  /* downdates: global DOF -> its row in the permuted factor, -1 fixed */
 };
 
 /* The rows of K_ff in compressed form, in free numbering (free DOFs are numbered in increasing
@@ -326,6 +327,68 @@ cupid_status cupid_direct_factor_solve_free(cupid_direct_factor F, const double 
   return CUPID_SUCCESS;
 }
 
+/* Row indices ascending within each column (insertion sort: a column holds a few entries). */
+static void sort_column(SuiteSparse_long *i, double *x, SuiteSparse_long n) {
+  for (SuiteSparse_long a = 1; a < n; a++)
+    for (SuiteSparse_long b = a; b > 0 && i[b - 1] > i[b]; b--) {
+      SuiteSparse_long ti = i[b];
+      double tx = x[b];
+      i[b] = i[b - 1], x[b] = x[b - 1];
+      i[b - 1] = ti, x[b - 1] = tx;
+    }
+}
+
+cupid_status cupid_direct_factor_downdate(cupid_direct_factor F, cupid_int r, const cupid_int *colptr,
+                                          const cupid_int *rows, const double *vals) {
+  CUPID_CHECK(F && (r == 0 || (colptr && rows && vals)), CUPID_ERR_ARGUMENT,
+              "cupid_direct_factor_downdate: NULL argument");
+  CUPID_CHECK(F->kind == CUPID_MATRIX_SPD, CUPID_ERR_ARGUMENT,
+              "cupid_direct_factor_downdate: only a Cholesky factor can be downdated");
+  if (r == 0) return CUPID_SUCCESS;
+  if (!F->pivot_of) { /* CHOLMOD wants C's rows in the factor's permuted order */
+    CUPID_CALL(cupid_malloc((size_t)F->n_full, sizeof *F->pivot_of, "factor row map", &F->pivot_of));
+    for (cupid_int d = 0; d < F->n_full; d++) F->pivot_of[d] = -1;
+    const SuiteSparse_long *perm = F->L->Perm;
+    for (cupid_int k = 0; k < F->n; k++) F->pivot_of[F->global[perm ? perm[k] : k]] = k;
+  }
+  cholmod_common *c = &F->cc;
+  cholmod_sparse *C = cholmod_l_allocate_sparse((size_t)F->n, (size_t)r, (size_t)colptr[r], 1, 1, 0,
+                                                CHOLMOD_REAL, c);
+  CUPID_CHECK(C, CUPID_ERR_MEMORY, "CHOLMOD could not allocate the downdate (%lld columns)",
+              (long long)r);
+  SuiteSparse_long *cp = C->p, *ci = C->i, t = 0;
+  double *cx = C->x;
+  for (cupid_int k = 0; k < r; k++) {
+    cp[k] = t;
+    for (cupid_int q = colptr[k]; q < colptr[k + 1]; q++) {
+      cupid_int row = rows[q];
+      if (row < 0 || row >= F->n_full || F->pivot_of[row] < 0) continue; /* a fixed DOF */
+      ci[t] = F->pivot_of[row];
+      cx[t++] = vals[q];
+    }
+    sort_column(ci + cp[k], cx + cp[k], t - cp[k]);
+  }
+  cp[r] = t;
+  const int ok = cholmod_l_updown(0, C, F->L, c);
+  cholmod_l_free_sparse(&C, c);
+  CUPID_CHECK(ok && c->status >= CHOLMOD_OK, c->status == CHOLMOD_NOT_POSDEF ? CUPID_ERR_NUMERIC : CUPID_ERR_INTERNAL,
+              "CHOLMOD downdate failed (status %d)", c->status);
+  /* a downdate that removes all support of some DOF leaves a pivot of D at round-off, or
+   * negative (which pivot_ratio's |d| would hide) */
+  const SuiteSparse_long *perm = F->L->Perm, *lp = F->L->p;
+  const double *lx = F->L->x;
+  for (cupid_int k = 0; k < F->n && !F->L->is_ll; k++)
+    CUPID_CHECK(lx[lp[k]] > 0.0, CUPID_ERR_NUMERIC,
+                "the downdated matrix is not positive definite (pivot %.3g at DOF %lld)", lx[lp[k]],
+                (long long)F->global[perm ? perm[k] : k]);
+  cupid_int kmin;
+  const double ratio = pivot_ratio(F->L, &kmin);
+  CUPID_CHECK(ratio >= CUPID_DIRECT_PIVOT_TOL * (double)(F->n > 64 ? F->n : 64), CUPID_ERR_NUMERIC,
+              "the downdated matrix is singular to round-off (pivot ratio %.3g at DOF %lld)", ratio,
+              (long long)F->global[perm ? perm[kmin] : kmin]);
+  return CUPID_SUCCESS;
+}
+
 void cupid_direct_factor_destroy(cupid_direct_factor *F) {
   if (!F || !*F) return;
   cupid_direct_factor f = *F;
@@ -336,6 +399,7 @@ void cupid_direct_factor_destroy(cupid_direct_factor *F) {
   if (f->numeric) umfpack_dl_free_numeric(&f->numeric);
   if (f->symbolic) umfpack_dl_free_symbolic(&f->symbolic);
   cupid_free(&f->global);
+  cupid_free(&f->pivot_of);
   cupid_free(&f->work);
   cupid_free(&f->work2);
   cupid_free(&f->p);

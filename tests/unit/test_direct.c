@@ -417,6 +417,89 @@ static void test_random_spd(void **state) {
   free(V);
 }
 
+/* Add the 3 x 3 block M to block (i, j) of K (in its pattern). */
+static void add_block(cupid_csr K, cupid_int i, cupid_int j, const double *M, double scale) {
+  for (cupid_int q = K->rowptr[i]; q < K->rowptr[i + 1]; q++)
+    if (K->col[q] == j) {
+      for (int e = 0; e < 9; e++) K->val[9 * q + e] += scale * M[e];
+      return;
+    }
+  fail_msg("block (%lld, %lld) is not in the pattern", (long long)i, (long long)j);
+}
+
+/*
+ * cupid_direct_factor_downdate (growth's re-solves after broken bonds): the factor of
+ * K = A + sum_b v_b v_b^T downdated by the v_b (bond terms: w at node i, -w at node j, some
+ * on fixed DOFs, which are dropped) solves A u = f like a factor of A. Tolerance 1e-10 on the
+ * relative error as test_random_spd: cond(A_ff) of this grid is below ~1e3 and a downdate is
+ * backward stable; a wrong permutation or sign gives O(1). A downdate that leaves the matrix
+ * indefinite is CUPID_ERR_NUMERIC; an LU factor cannot be downdated.
+ */
+static void test_factor_downdate(void **state) {
+  (void)state;
+  const grid_spec g = {6, 5, 4, 3, B_SPD, 0.05, 0.0, 0};
+  cupid_csr A = grid_matrix(&g), K = grid_matrix(&g);
+  const cupid_int nn = (cupid_int)g.nx * g.ny * g.nz, n = 3 * nn;
+  enum { NB = 12 };
+  cupid_int colptr[NB + 1], rows[6 * NB];
+  double vals[6 * NB];
+  uint64_t seed = 7;
+  for (int b = 0; b < NB; b++) { /* a bond along +x from node i (ix 0 .. 4, some on the face) */
+    const int ix = b % 5, iy = (b * 3) % g.ny, iz = (b * 7) % g.nz;
+    const cupid_int i = node_of(&g, ix, iy, iz), j = node_of(&g, ix + 1, iy, iz);
+    double w[3], M[9];
+    for (int a = 0; a < 3; a++) w[a] = cupid_test_random(&seed);
+    for (int a = 0; a < 3; a++)
+      for (int c = 0; c < 3; c++) M[3 * a + c] = w[a] * w[c];
+    add_block(K, i, i, M, 1.0), add_block(K, j, j, M, 1.0);
+    add_block(K, i, j, M, -1.0), add_block(K, j, i, M, -1.0);
+    colptr[b] = 6 * b;
+    for (int a = 0; a < 3; a++) {
+      rows[6 * b + a] = 3 * i + a, vals[6 * b + a] = w[a];
+      rows[6 * b + 3 + a] = 3 * j + a, vals[6 * b + 3 + a] = -w[a];
+    }
+  }
+  colptr[NB] = 6 * NB;
+  double *ue = malloc((size_t)n * sizeof *ue), *f = malloc((size_t)n * sizeof *f);
+  double *u = malloc((size_t)n * sizeof *u);
+  assert_non_null(ue), assert_non_null(f), assert_non_null(u);
+  for (cupid_int k = 0; k < n; k++) ue[k] = cupid_test_random(&seed);
+  cupid_dirichlet bc = face_bc(&g, ue, 0);
+  for (cupid_int k = 0; k < n; k++) ue[k] = bc->fixed[k] ? 0.0 : ue[k]; /* homogeneous */
+  cupid_csr_matvec(A, ue, f);
+  cupid_direct_factor F = NULL;
+  CUPID_ASSERT_OK(cupid_direct_factor_create(K, bc, &F, NULL));
+  CUPID_ASSERT_OK(cupid_direct_factor_solve(F, f, u));
+  double e0 = 0.0;
+  for (cupid_int k = 0; k < n; k++) u[k] = bc->fixed[k] ? 0.0 : u[k];
+  e0 = rel_error(n, u, ue);
+  assert_true(e0 > 1e-3); /* the bonds matter: K's solve is not A's */
+  /* downdated in two calls (5 then 7 columns): as one */
+  CUPID_ASSERT_OK(cupid_direct_factor_downdate(F, 5, colptr, rows, vals));
+  cupid_int colptr2[NB - 5 + 1];
+  for (int b = 0; b <= NB - 5; b++) colptr2[b] = colptr[5 + b] - colptr[5];
+  CUPID_ASSERT_OK(cupid_direct_factor_downdate(F, NB - 5, colptr2, rows + colptr[5], vals + colptr[5]));
+  CUPID_ASSERT_OK(cupid_direct_factor_solve(F, f, u));
+  for (cupid_int k = 0; k < n; k++) u[k] = bc->fixed[k] ? 0.0 : u[k];
+  assert_true(rel_error(n, u, ue) < 1e-10);
+  /* a term larger than the matrix: indefinite */
+  double big[6];
+  for (int a = 0; a < 6; a++) big[a] = 100.0 * vals[6 + a];
+  cupid_int one[2] = {0, 6};
+  assert_int_equal(cupid_direct_factor_downdate(F, 1, one, rows + 6, big), CUPID_ERR_NUMERIC);
+  cupid_error_clear();
+  cupid_direct_factor_destroy(&F);
+  /* LU: refused */
+  CUPID_ASSERT_OK(cupid_direct_factor_create_kind(A, CUPID_MATRIX_GENERAL, bc, &F, NULL));
+  assert_int_equal(cupid_direct_factor_downdate(F, 1, one, rows + 6, vals + 6), CUPID_ERR_ARGUMENT);
+  cupid_error_clear();
+  cupid_direct_factor_destroy(&F);
+  cupid_dirichlet_destroy(&bc);
+  cupid_csr_destroy(&A);
+  cupid_csr_destroy(&K);
+  free(ue), free(f), free(u);
+}
+
 /* Every DOF prescribed: u = prescribed values, nothing factored. Empty matrix: nothing to do. */
 static void test_all_fixed_and_empty(void **state) {
   (void)state;
@@ -643,6 +726,7 @@ int main(void) {
                                      cmocka_unit_test(test_spd_not_symmetric),
                                      cmocka_unit_test(test_non_finite),
                                      cmocka_unit_test(test_random_spd),
+                                     cmocka_unit_test(test_factor_downdate),
                                      cmocka_unit_test(test_all_fixed_and_empty),
                                      cmocka_unit_test(test_bad_arguments),
                                      cmocka_unit_test(test_reactions),
