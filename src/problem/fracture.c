@@ -306,6 +306,25 @@ void cupid_problem_fracture_json(cupid_json js, const cupid_problem_state *prob)
       cupid_json_end_array(js);
     }
     cupid_json_number(js, "dissipated_energy", prob->fracture_energy);
+    if (prob->growth.peak) { /* static growth: the envelope's peak of each constraint */
+      cupid_json_begin_array(js, "peak_reactions");
+      for (int k = 0; k < m->n_constraints; k++) {
+        const double *p = prob->growth.peak + 6 * k;
+        cupid_json_begin_object(js, NULL);
+        cupid_json_integer(js, "constraint", k);
+        cupid_json_number(js, "load_factor", p[1]);
+        cupid_json_integer(js, "step", (cupid_int)p[2]);
+        cupid_json_begin_array(js, "reaction");
+        for (int a = 0; a < 3; a++) cupid_json_number(js, NULL, p[3 + a]);
+        cupid_json_end_array(js);
+        cupid_json_end_object(js);
+      }
+      cupid_json_end_array(js);
+    }
+    if (prob->growth.stopped_step) {
+      cupid_json_integer(js, "stopped_step", prob->growth.stopped_step);
+      cupid_json_string(js, "stopped", prob->growth.stopped);
+    }
     if (prob->growth.resolve) { /* static growth: how the re-solves went (growth.c) */
       cupid_json_begin_object(js, "solves");
       cupid_json_string(js, "resolve", prob->growth.resolve);
@@ -315,6 +334,9 @@ void cupid_problem_fracture_json(cupid_json js, const cupid_problem_state *prob)
       cupid_json_integer(js, "cg_iterations", prob->growth.cg_iterations);
       cupid_json_number(js, "factorisation_s", prob->growth.factor_s);
       cupid_json_number(js, "cg_s", prob->growth.cg_s);
+      cupid_json_integer(js, "downdates", prob->growth.downdates);
+      cupid_json_integer(js, "downdate_columns", prob->growth.downdate_columns);
+      cupid_json_number(js, "downdate_s", prob->growth.downdate_s);
       cupid_json_end_object(js);
     }
   }

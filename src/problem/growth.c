@@ -29,12 +29,19 @@ typedef struct {
   double *T;                    /* the unit translations, 3 ndof (cupid_problem_translations) */
   double *u1;                   /* without fracture: u and K u at load factor 1 */
   double u0[3];                 /* the first output point's displacement, last step */
+  double next_ratio;            /* fracture: the settled step's largest ratio (next_break) */
   cupid_atomic_file csv;
   cupid_int released;
   /* Re-solves after breaks (below): the factor of the last factorised K, reused as the
    * preconditioner of CG on the current K. */
   cupid_direct_factor F;
   int krylov;                   /* 0: refactorise after every break (CUPID_GROWTH_RESOLVE) */
+  int downdate;                 /* 1: downdate F by the broken bonds (bond-based), so that it
+                                   stays the factor of the current K; 0 after a K change that
+                                   is no sum of bond terms (LPS), or CUPID_GROWTH_RESOLVE */
+  cupid_growth_downdate dd;
+  cupid_int downdates, downdate_columns;
+  double t_downdate;
   double *w[4];                 /* CG work vectors */
   cupid_int factorisations, cg_solves, cg_iterations;
   cupid_int bonds_at_factor;    /* broken bonds when F was made */
@@ -55,6 +62,7 @@ static void growth_free(growth_run *g) {
   cupid_free(&g->u1);
   cupid_atomic_abort(&g->csv);
   cupid_direct_factor_destroy(&g->F);
+  cupid_growth_downdate_free(&g->dd);
   for (int k = 0; k < 4; k++) cupid_free(&g->w[k]);
 }
 
@@ -107,6 +115,7 @@ static cupid_status open_csv(growth_run *g) {
   fprintf(f, "step,t,load_factor,iterations");
   if (cupid_problem_has_damage(prob))
     fprintf(f, ",broken_bonds,damaged_nodes,max_damage,nodes_broken,released_nodes");
+  if (m->has_peridynamics && m->pd.fracture.has_fracture) fprintf(f, ",next_break_load_factor");
   for (int k = 0; k < m->n_constraints; k++)
     fprintf(f, ",reaction_%d_x,reaction_%d_y,reaction_%d_z", k, k, k);
   for (int k = 0; k < m->output.n_points; k++) {
@@ -117,10 +126,50 @@ static cupid_status open_csv(growth_run *g) {
   return CUPID_SUCCESS;
 }
 
+/* The reaction of constraint k: the work of (f_int - f_ext) on its DOFs against the unit
+ * translations. */
+static void reaction(const growth_run *g, int k, double r[3]) {
+  const cupid_problem_state *prob = g->prob;
+  const size_t n = (size_t)prob->ndof;
+  const unsigned char *fixed = g->masks + (size_t)k * n;
+  r[0] = r[1] = r[2] = 0.0;
+  for (size_t d = 0; d < n; d++)
+    if (fixed[d])
+      for (int c = 0; c < 3; c++) r[c] += (prob->f_int[d] - prob->f_ext[d]) * g->T[(size_t)c * n + d];
+}
+
+/* The load factor at which the next bond breaks, the crack as it is: each solve is linear, so
+ * the settled solution at lambda scaled by 1 / ratio brings the most critical bond exactly to
+ * its limit, and the reactions scale with it. These are the tops of the sawtooth of
+ * sequentially linear analysis (Rots et al.), so the peak load does not hang on the step size.
+ * Exact while no node is held (a held node keeps its displacement as the load scales).
+ * 0 when no breakable bond is stretched. */
+static double next_break(const growth_run *g, double lambda) {
+  return g->next_ratio > 0.0 ? lambda / g->next_ratio : 0.0;
+}
+
+/* Keep each constraint's largest reaction of the envelope (by magnitude). */
+static void track_peaks(growth_run *g, int step, double lambda) {
+  cupid_problem_state *prob = g->prob;
+  const double lc = next_break(g, lambda);
+  if (!prob->growth.peak || lc <= 0.0 || lambda <= 0.0) return;
+  for (int k = 0; k < prob->model->n_constraints; k++) {
+    double r[3];
+    reaction(g, k, r);
+    for (int c = 0; c < 3; c++) r[c] *= lc / lambda;
+    double *p = prob->growth.peak + 6 * k;
+    const double mag = sqrt(r[0] * r[0] + r[1] * r[1] + r[2] * r[2]);
+    if (mag <= p[0]) continue;
+    p[0] = mag, p[1] = lc, p[2] = step;
+    for (int c = 0; c < 3; c++) p[3 + c] = r[c];
+  }
+}
+
 static cupid_status write_row(growth_run *g, int step, double lambda, int iterations) {
   cupid_problem_state *prob = g->prob;
-  if (!g->csv) return CUPID_SUCCESS;
   const cupid_model_t *m = prob->model;
+  track_peaks(g, step, lambda);
+  if (!g->csv) return CUPID_SUCCESS;
   CUPID_CALL(cupid_problem_fracture_damage(prob));
   FILE *f = cupid_atomic_stream(g->csv);
   /* t is the load factor: the contract's columns step,t,... read as a pseudo-time */
@@ -129,13 +178,10 @@ static cupid_status write_row(growth_run *g, int step, double lambda, int iterat
     fprintf(f, ",%lld,%lld,%.10e,%lld,%lld", (long long)prob->broken_bonds,
             (long long)prob->damaged_nodes, prob->max_damage,
             (long long)cupid_pd_operator_nodes_broken(prob->op, NULL), (long long)g->released);
-  const size_t n = (size_t)prob->ndof;
+  if (m->has_peridynamics && m->pd.fracture.has_fracture) fprintf(f, ",%.10e", next_break(g, lambda));
   for (int k = 0; k < m->n_constraints; k++) {
-    const unsigned char *fixed = g->masks + (size_t)k * n;
-    double r[3] = {0, 0, 0};
-    for (size_t d = 0; d < n; d++)
-      if (fixed[d])
-        for (int c = 0; c < 3; c++) r[c] += (prob->f_int[d] - prob->f_ext[d]) * g->T[(size_t)c * n + d];
+    double r[3];
+    reaction(g, k, r);
     fprintf(f, ",%.10e,%.10e,%.10e", r[0], r[1], r[2]);
   }
   for (int k = 0; k < m->output.n_points; k++) {
@@ -371,13 +417,50 @@ static cupid_status cg_solve(growth_run *g, int *done) {
   return CUPID_SUCCESS;
 }
 
+/* Bring the factor to the K that broken bonds left (Kold: the K it factors): downdated by the
+ * bonds' rank-one terms, it is that K's factor again, and CG on it converges at once. A change
+ * that is no sum of bond terms (LPS) turns downdating off for the run (CG on the stale factor
+ * as before); a downdate that leaves it indefinite (a node or fragment lost its support)
+ * drops the factor: the next factorisation finds and holds the node. */
+static cupid_status downdate_factor(growth_run *g, const cupid_csr_t *Kold) {
+  cupid_problem_state *prob = g->prob;
+  double t0 = cupid_wtime();
+  int ok = 0;
+  CUPID_CALL(cupid_growth_downdate_terms(Kold, prob->K, &g->dd, &ok));
+  if (!ok) {
+    g->downdate = 0;
+    cupid_problem_progress(prob, "growth: the broken bonds changed K by more than a rank-one term "
+                           "each (LPS): re-solves by CG on the last factor, no downdates");
+    return CUPID_SUCCESS;
+  }
+  cupid_status st = cupid_direct_factor_downdate(g->F, g->dd.r, g->dd.colptr, g->dd.rows, g->dd.vals);
+  if (st == CUPID_ERR_NUMERIC) {
+    if (getenv("CUPID_DEBUG")) fprintf(stderr, "downdate: %s\n", cupid_error_message());
+    cupid_error_clear();
+    cupid_direct_factor_destroy(&g->F);
+  } else {
+    CUPID_CALL(st);
+    g->bonds_at_factor = prob->broken_bonds;
+  }
+  g->downdates++;
+  g->downdate_columns += g->dd.r;
+  g->t_downdate += cupid_wtime() - t0;
+  return CUPID_SUCCESS;
+}
+
 /* Solve at the current load (K assembled again when bonds broke): CG preconditioned by the
- * last factor when there is one (growth by Krylov re-solves), else a factorisation. A
- * non-symmetric method or an iterative engine takes the engine's solve every time. */
+ * last factor when there is one (downdated to the current K where it can be: growth by
+ * downdates, else by Krylov re-solves), else a factorisation. A non-symmetric method or an
+ * iterative engine takes the engine's solve every time. */
 static cupid_status solve(growth_run *g, int reassemble) {
   cupid_problem_state *prob = g->prob;
+  cupid_csr Kold = NULL;
+  if (reassemble && g->F && g->downdate) Kold = prob->K, prob->K = NULL;
   if (reassemble) cupid_csr_destroy(&prob->K);
-  CUPID_CALL(prob->method->assemble(prob));
+  cupid_status st0 = prob->method->assemble(prob);
+  if (st0 == CUPID_SUCCESS && Kold) st0 = downdate_factor(g, Kold);
+  cupid_csr_destroy(&Kold);
+  CUPID_CALL(st0);
   CUPID_CALL(cupid_problem_patch_test_assembled(prob)); /* the first K: once */
   const int own = prob->method->matrix == CUPID_MATRIX_SPD && !prob->engine->iterative;
   int done = 0;
@@ -397,7 +480,34 @@ static cupid_status solve(growth_run *g, int reassemble) {
 }
 
 /* One load step: solve, break, solve again until nothing is over its limit. */
-static cupid_status load_step(growth_run *g, int k, double lambda, int *iterations) {
+/* A crack that reached the coupling zone (whose bonds never break: the PD nodes there share
+ * the load with the beam): bonds over their limit there stop the growth, named and placed;
+ * *stop = 1. The steps before it stand (written), this one is not. */
+static cupid_status check_blocked(growth_run *g, int k, double lambda, int *stop) {
+  cupid_problem_state *prob = g->prob;
+  cupid_int count = 0, node = -1;
+  double ratio = 0.0;
+  *stop = 0;
+  if (!prob->protect) return CUPID_SUCCESS;
+  CUPID_CALL(cupid_pd_operator_blocked(prob->op, prob->u, &prob->fracture, &count, &node, &ratio));
+  if (count == 0) return CUPID_SUCCESS;
+  char zone[256];
+  snprintf(zone, sizeof zone, "the coupling zone of method %s", prob->method->name);
+  if (prob->method->protected_zone) prob->method->protected_zone(prob, node, zone, sizeof zone);
+  const double *x = cupid_pd_grid_coords(prob->grid) + 3 * node;
+  snprintf(prob->growth.stopped, sizeof prob->growth.stopped,
+           "crack growth stopped at load step %d (load factor %.6g): the crack reached %s at "
+           "(%g, %g, %g): %lld bond%s over the limit there (up to %.3g times) cannot break, "
+           "because the PD nodes of a coupling zone share their load with the beam; extend the "
+           "PD region, or move the overlap, away from the crack's path (the steps before it are "
+           "in the steps' file, the fields written are this solve's)",
+           k, lambda, zone, x[0], x[1], x[2], (long long)count, count == 1 ? "" : "s", ratio);
+  prob->growth.stopped_step = k;
+  *stop = 1;
+  return CUPID_SUCCESS;
+}
+
+static cupid_status load_step(growth_run *g, int k, double lambda, int *iterations, int *stop) {
   cupid_problem_state *prob = g->prob;
   const cupid_model_t *m = prob->model;
   const int fracture = m->has_peridynamics && m->pd.fracture.has_fracture;
@@ -422,6 +532,8 @@ static cupid_status load_step(growth_run *g, int k, double lambda, int *iteratio
     CUPID_CALL(st);
     (*iterations)++;
     if (!fracture) return CUPID_SUCCESS;
+    CUPID_CALL(check_blocked(g, k, lambda, stop));
+    if (*stop) return CUPID_SUCCESS;
     if (prob->first_break_step < 0) { /* the exact load of the first break, by scaling */
       double r = 0.0;
       CUPID_CALL(cupid_pd_operator_max_ratio(prob->op, prob->u, &prob->fracture, &r));
@@ -430,7 +542,8 @@ static cupid_status load_step(growth_run *g, int k, double lambda, int *iteratio
     cupid_int broken = 0;
     double diss = 0.0;
     CUPID_CALL(cupid_problem_fracture_step(prob, k, lambda, prob->u, only_most, &broken, &diss));
-    if (broken == 0) return CUPID_SUCCESS;
+    if (broken == 0) /* settled: the next break's load factor from this solution */
+      return cupid_pd_operator_max_ratio(prob->op, prob->u, &prob->fracture, &g->next_ratio);
     CUPID_CALL(release_unsupported(g, k));
     reassemble = 1;
     CUPID_CHECK(*iterations < 1000000, CUPID_ERR_NUMERIC,
@@ -455,8 +568,10 @@ static cupid_status setup_run(growth_run *g) {
   CUPID_CALL(constraint_masks(g));
   for (int k = 0; k < 4; k++)
     CUPID_CALL(cupid_calloc(n + 1, sizeof(double), "growth work vectors", &g->w[k]));
-  const char *how = getenv("CUPID_GROWTH_RESOLVE"); /* bench/growth.sh: factor | krylov */
+  /* bench/growth.sh: factor | krylov | downdate (the default) */
+  const char *how = getenv("CUPID_GROWTH_RESOLVE");
   g->krylov = !(how && strcmp(how, "factor") == 0);
+  g->downdate = g->krylov && !(how && strcmp(how, "krylov") == 0);
   return open_csv(g);
 }
 
@@ -485,15 +600,22 @@ cupid_status cupid_problem_run_growth(cupid_problem_state *prob) {
     }
     CUPID_TRY(write_row(&g, k, lambda, k == 1));
   }
-  for (int k = 1; k <= N && fracture; k++) {
+  if (fracture)
+    CUPID_TRY(cupid_calloc(6 * (size_t)(m->n_constraints ? m->n_constraints : 1), sizeof(double),
+                           "peak reactions", &prob->growth.peak));
+  for (int k = 1; k <= N && fracture && !prob->growth.stopped_step; k++) {
     const double lambda = (double)k / N;
     for (size_t d = 0; d < n; d++) {
       prob->f_ext[d] = lambda * g.f_full[d];
       if (g.fixed0[d]) prob->bc->value[d] = lambda * g.g_full[d];
     }
     const cupid_int before = prob->broken_bonds;
-    int it = 0;
-    CUPID_TRY(load_step(&g, k, lambda, &it));
+    int it = 0, stop = 0;
+    CUPID_TRY(load_step(&g, k, lambda, &it, &stop));
+    if (stop) {
+      fprintf(stderr, "cupid: %s\n", prob->growth.stopped);
+      break;
+    }
     CUPID_TRY(write_row(&g, k, lambda, it));
     cupid_problem_progress(prob, "growth: step %d / %d, load factor %.4g: %d solve%s, %lld bonds "
                            "broken (+%lld), %lld nodes held",
@@ -502,7 +624,10 @@ cupid_status cupid_problem_run_growth(cupid_problem_state *prob) {
   }
   prob->solved = 1;
   prob->phases[CUPID_PHASE_SOLVE] = (cupid_phase_record){cupid_wtime() - t0, cupid_peak_memory(), 1};
-  prob->growth.resolve = g.krylov ? "krylov" : "factor";
+  prob->growth.resolve = g.downdates ? "downdate" : g.krylov ? "krylov" : "factor";
+  prob->growth.downdates = g.downdates;
+  prob->growth.downdate_columns = g.downdate_columns;
+  prob->growth.downdate_s = g.t_downdate;
   prob->growth.factorisations = g.factorisations;
   prob->growth.cg_solves = g.cg_solves;
   prob->growth.cg_iterations = g.cg_iterations;

@@ -165,9 +165,16 @@ typedef struct cupid_problem_private {
   double max_damage;
   /* static growth (growth.c): how the solves went, for summary.json's fracture block */
   struct {
-    const char *resolve;            /**< "krylov" (CG on the last factor) or "factor" */
-    cupid_int solves, factorisations, cg_solves, cg_iterations;
-    double factor_s, cg_s;
+    const char *resolve;            /**< "downdate" (the last factor downdated by the broken
+                                         bonds), "krylov" (CG on the last factor), "factor" */
+    cupid_int solves, factorisations, cg_solves, cg_iterations, downdates, downdate_columns;
+    double factor_s, cg_s, downdate_s;
+    /* per constraint k, peak[6 k ..]: the largest reaction (by magnitude) of the sawtooth
+     * envelope, its load factor, step, and x, y, z (growth.c, next_break) */
+    double *peak;
+    int stopped_step;               /**< the step a crack reaching a coupling zone stopped
+                                         (0: ran to the end) */
+    char stopped[1024];              /**< then: why, for the message and summary.json */
   } growth;
 } cupid_problem_state;
 
@@ -199,6 +206,18 @@ cupid_status cupid_problem_balanced_operator(cupid_problem_state *prob, cupid_co
 
 /* growth.c: `type: static` with load steps or fracture (sequentially linear growth). */
 cupid_status cupid_problem_run_growth(cupid_problem_state *prob);
+
+/* growth_downdate.c: the change Kold - Knew that broken bonds made, as the rank-one columns of
+ * C (Kold - Knew = C C^T, columns of 6 entries: w at node i, -w at node j), for
+ * cupid_direct_factor_downdate(); *ok = 0 when the change is no such sum (LPS). */
+typedef struct {
+  cupid_int r, cap;
+  cupid_int *colptr, *rows;
+  double *vals;
+} cupid_growth_downdate;
+cupid_status cupid_growth_downdate_terms(const cupid_csr_t *Kold, const cupid_csr_t *Knew,
+                                         cupid_growth_downdate *u, int *ok);
+void cupid_growth_downdate_free(cupid_growth_downdate *u);
 
 /* fracture.c */
 /** Model errors of pre-cracks and fracture this version cannot run (before anything is
