@@ -373,6 +373,13 @@ cupid_status cupid_pd_operator_copy_broken(cupid_pd_operator dst, const cupid_pd
 cupid_status cupid_pd_operator_max_ratio(const cupid_pd_operator op, const double *u,
                                          const cupid_pd_fracture_options *opts, double *ratio);
 
+/** The bonds over their limit at u that only the protection (opts->protect: a coupling zone)
+ *  keeps from breaking (no-fail boxes excluded): *count of them, *node the protected end of the
+ *  one most over (-1: none), *ratio its ratio (the largest among such bonds, over 1 or not). */
+cupid_status cupid_pd_operator_blocked(const cupid_pd_operator op, const double *u,
+                                       const cupid_pd_fracture_options *opts, cupid_int *count,
+                                       cupid_int *node, double *ratio);
+
 /**
  * Nodes that lost their support: those with at most 2 intact bonds (a mechanism; Peridigm's
  * rule) and those that no @p anchored node (a node with a constrained DOF, or tied to a beam)

@@ -156,6 +156,14 @@ typedef struct {
   double ghost_force;           /**< patch test: the largest ghost force over its scale (-1:
                                      not run: uncoupled, materials differ, or not solved) */
   int quality_warnings;         /**< bits: 1 ghost force over 1e-2, 2 imbalance over 1e-2 */
+  /* Static crack growth (analysis.steps with fracture): */
+  const char *stopped;          /**< why the growth stopped before its last step (a crack
+                                     reached a coupling zone, whose bonds never break), or
+                                     NULL when it ran to the end; the results are written and
+                                     the command line exits with status 2 */
+  double peak_load_factor;      /**< the load factor of the largest reaction of constraint 0
+                                     on the sawtooth envelope (growth.c), 0 when none */
+  double peak_reaction[3];      /**< that reaction */
 } cupid_problem_info;
 
 cupid_status cupid_problem_get_info(cupid_problem p, cupid_problem_info *info);

@@ -55,7 +55,9 @@ class _Info(ctypes.Structure):  # cupid_problem_info (problem.h)
                 ("load_sum", ctypes.c_double * 3), ("reaction_sum", ctypes.c_double * 3),
                 ("imbalance", ctypes.c_double), ("phase_seconds", ctypes.c_double * 6),
                 ("total_seconds", ctypes.c_double), ("peak_memory_bytes", _c_int64),
-                ("ghost_force", ctypes.c_double), ("quality_warnings", ctypes.c_int)]
+                ("ghost_force", ctypes.c_double), ("quality_warnings", ctypes.c_int),
+                ("stopped", ctypes.c_char_p), ("peak_load_factor", ctypes.c_double),
+                ("peak_reaction", ctypes.c_double * 3)]
 
 
 _SOLVERS = {None: -1, "auto": 0, "direct": 1, "petsc": 2, "krylov": 3}
@@ -303,7 +305,9 @@ class Problem:
     @property
     def info(self):
         """Counts, solver, resultants, imbalance, phase times and, for a coupled model, the
-        patch test's ghost force (-1 when not run) and the quality warnings, as a dict."""
+        patch test's ghost force (-1 when not run) and the quality warnings, and for static
+        crack growth why it stopped early (None: it did not) and the peak of constraint 0's
+        reaction on the sawtooth envelope with its load factor, as a dict."""
         i = _Info()
         _check(_lib.cupid_problem_get_info(self._p, ctypes.byref(i)))
         d = {}
@@ -311,7 +315,7 @@ class Problem:
             v = getattr(i, name)
             if isinstance(v, bytes):
                 v = v.decode()
-            elif name in ("load_sum", "reaction_sum"):
+            elif name in ("load_sum", "reaction_sum", "peak_reaction"):
                 v = list(v)
             elif name == "phase_seconds":
                 v = dict(zip(_PHASES, v))

@@ -535,9 +535,36 @@ cupid_status cupid_pd_operator_copy_broken(cupid_pd_operator dst, const cupid_pd
 
 cupid_int cupid_pd_operator_num_broken(const cupid_pd_operator op) { return op ? op->nbroken : 0; }
 
-cupid_status cupid_pd_operator_max_ratio(const cupid_pd_operator op, const double *u,
-                                         const cupid_pd_fracture_options *o, double *ratio) {
-  CUPID_CHECK(op && u && o && ratio, CUPID_ERR_ARGUMENT, "max_ratio needs its arguments");
+/* The criterion's ratio to its limit of the intact bond (i, s) to j at u (theta: the
+ * dilatations, energy criterion only): linear in u for both criteria (the energy's square root). */
+static double bond_ratio(const struct cupid_pd_operator_private *op, const double *theta,
+                         const cupid_pd_fracture_options *o, const double *u, cupid_int i,
+                         cupid_int j, int s) {
+  const pd_stencil *S = &op->st;
+  const double e = pd_extension(S->nrm + 3 * s, u, i, j);
+  return o->criterion == CUPID_PD_BREAK_STRETCH
+             ? e / (stretch_limit(o, i, j) * S->x[s])
+             : sqrt(bond_energy_density(op, theta, i, j, s, e) / o->critical_energy);
+}
+
+/* Over every intact bond (each once) that `want` accepts: the largest ratio, the count over
+ * 1 and the node of the largest (its protected end when want_blocked). */
+typedef struct {
+  double ratio;
+  cupid_int over, node;
+} ratio_scan;
+
+/* The bonds a scan reads: the breakable ones, or (blocked) those that only the protection (a
+ * coupling zone) keeps, not a no-fail box. */
+static int scanned(const cupid_pd_fracture_options *o, int blocked, cupid_int i, cupid_int j) {
+  if (!blocked) return breakable(o, i, j);
+  if (!o->protect || !(o->protect[i] || o->protect[j])) return 0;
+  return !(o->no_fail && (o->no_fail[i] & o->no_fail[j]));
+}
+
+static cupid_status scan_ratios(const cupid_pd_operator op, const double *u,
+                                const cupid_pd_fracture_options *o, int want_blocked,
+                                ratio_scan *out) {
   const pd_stencil *S = &op->st;
   double *theta = NULL;
   if (o->criterion == CUPID_PD_BREAK_ENERGY) {
@@ -545,24 +572,57 @@ cupid_status cupid_pd_operator_max_ratio(const cupid_pd_operator op, const doubl
     pd_lps_dilatation(op, 0, op->nnodes, u, theta);
   }
   double r = 0.0;
-#pragma omp parallel for schedule(static) reduction(max : r) if (op->nnodes > PD_OMP_MIN_NODES)
+  cupid_int over = 0;
+#pragma omp parallel for schedule(static) reduction(max : r) reduction(+ : over) if (op->nnodes > PD_OMP_MIN_NODES)
   for (cupid_int i = 0; i < op->nnodes; i++) {
     const pd_family F = pd_family_of(op, i);
     for (int q = 0; q < F.n; q++) {
       const int s = pd_family_entry(&F, q);
       if (s < S->n / 2 || pd_bond_broken(op, i, s)) continue;
       const cupid_int j = pd_family_node(op, &F, s);
-      if (!breakable(o, i, j)) continue;
-      const double e = pd_extension(S->nrm + 3 * s, u, i, j);
-      /* the stretch's ratio is linear in u; the energy's quadratic: its square root is */
-      const double q_ = o->criterion == CUPID_PD_BREAK_STRETCH
-                            ? e / (stretch_limit(o, i, j) * S->x[s])
-                            : sqrt(bond_energy_density(op, theta, i, j, s, e) / o->critical_energy);
+      if (!scanned(o, want_blocked, i, j)) continue;
+      const double q_ = bond_ratio(op, theta, o, u, i, j, s);
+      if (q_ > 1.0) over++;
       if (q_ > r) r = q_;
     }
   }
+  /* the node of the largest: a second pass, serial, so that ties resolve the same way on any
+   * thread count (the lowest node index) */
+  cupid_int node = -1;
+  for (cupid_int i = 0; i < op->nnodes && r > 0.0 && node < 0; i++) {
+    const pd_family F = pd_family_of(op, i);
+    for (int q = 0; q < F.n && node < 0; q++) {
+      const int s = pd_family_entry(&F, q);
+      if (s < S->n / 2 || pd_bond_broken(op, i, s)) continue;
+      const cupid_int j = pd_family_node(op, &F, s);
+      if (!scanned(o, want_blocked, i, j)) continue;
+      if (bond_ratio(op, theta, o, u, i, j, s) == r) node = want_blocked && !o->protect[i] ? j : i;
+    }
+  }
   cupid_free(&theta);
-  *ratio = r;
+  *out = (ratio_scan){r, over, node};
+  return CUPID_SUCCESS;
+}
+
+cupid_status cupid_pd_operator_max_ratio(const cupid_pd_operator op, const double *u,
+                                         const cupid_pd_fracture_options *o, double *ratio) {
+  CUPID_CHECK(op && u && o && ratio, CUPID_ERR_ARGUMENT, "max_ratio needs its arguments");
+  ratio_scan sc;
+  CUPID_CALL(scan_ratios(op, u, o, 0, &sc));
+  *ratio = sc.ratio;
+  return CUPID_SUCCESS;
+}
+
+cupid_status cupid_pd_operator_blocked(const cupid_pd_operator op, const double *u,
+                                       const cupid_pd_fracture_options *o, cupid_int *count,
+                                       cupid_int *node, double *ratio) {
+  CUPID_CHECK(op && u && o && count && node && ratio, CUPID_ERR_ARGUMENT,
+              "blocked needs its arguments");
+  ratio_scan sc = {0.0, 0, -1};
+  if (o->protect) CUPID_CALL(scan_ratios(op, u, o, 1, &sc));
+  *count = sc.over;
+  *node = sc.over > 0 ? sc.node : -1;
+  *ratio = sc.ratio;
   return CUPID_SUCCESS;
 }
 

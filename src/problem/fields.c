@@ -130,6 +130,11 @@ cupid_status cupid_problem_get_info(cupid_problem_state *prob, cupid_problem_inf
   info->peak_memory_bytes = cupid_peak_memory();
   info->ghost_force = prob->quality.patch_done ? prob->quality.ghost : -1.0;
   info->quality_warnings = prob->quality.ghost_warning | prob->quality.imbalance_warning << 1;
+  info->stopped = prob->growth.stopped_step ? prob->growth.stopped : NULL;
+  if (prob->growth.peak && prob->model->n_constraints > 0) {
+    info->peak_load_factor = prob->growth.peak[1];
+    for (int c = 0; c < 3; c++) info->peak_reaction[c] = prob->growth.peak[3 + c];
+  }
   return CUPID_SUCCESS;
 }
 

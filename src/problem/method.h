@@ -78,6 +78,9 @@ struct cupid_method_ops {
   /** Fracture: flag the PD nodes whose bonds must never break (the coupling zone: overlaps,
    *  tied or fictitious-node layers), @p protect zeroed, one per PD node. NULL: none. */
   cupid_status (*fracture_protect)(const cupid_problem_state *prob, unsigned char *protect);
+  /** Fracture: name the protected zone holding PD node @p i for a message (e.g. "the Arlequin
+   *  overlap {y: [29, 34]} (coupling.arlequin.overlap[0], line 40)"). NULL: the method's name. */
+  void (*protected_zone)(const cupid_problem_state *prob, cupid_int i, char *buf, size_t len);
 };
 
 /** dynamic.c: the method's mass, integrate (central differences on @p op when not NULL, else

@@ -675,6 +675,23 @@ static cupid_status fracture_protect(const cupid_problem_state *prob, unsigned c
   return CUPID_SUCCESS;
 }
 
+/* The overlap holding PD node i, for the message of a crack that reached it. */
+static void protected_zone(const cupid_problem_state *prob, cupid_int i, char *buf, size_t len) {
+  const cupid_coupling *c = &prob->model->coupling;
+  const double *x = cupid_pd_grid_coords(prob->grid) + 3 * i, h = cupid_pd_grid_spacing(prob->grid);
+  snprintf(buf, len, "an Arlequin overlap");
+  for (int s = 0; s < c->n_overlaps; s++) {
+    if (!cupid_box_contains(&c->overlaps[s], x, 1e-9 * h)) continue;
+    const cupid_box *b = &c->overlaps[s];
+    int a = 0; /* the overlap's axis: the one it bounds (a slab along one axis) */
+    for (int k = 0; k < 3; k++)
+      if (b->has[k]) a = k;
+    snprintf(buf, len, "the Arlequin overlap {%c: [%g, %g]} (%s, line %d)", "xyz"[a], b->lo[a],
+             b->hi[a], c->overlap_marks[s].key, c->overlap_marks[s].line);
+    return;
+  }
+}
+
 /* The weighted mass (paper 004 Eq. 14): *M in K's pattern (consistent) or *m_lumped. */
 static cupid_status mass(cupid_problem_state *prob, cupid_csr *M, double **m_lumped) {
   const cupid_model_t *m = prob->model;
@@ -727,5 +744,6 @@ const cupid_method_ops cupid_method_arlequin = {
     .report = report_gap,
     .estimate_matrix_free = estimate_matrix_free,
     .fracture_protect = fracture_protect,
+    .protected_zone = protected_zone,
     .patch_tie = patch_tie,
 };

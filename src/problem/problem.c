@@ -563,6 +563,7 @@ void cupid_problem_state_free(cupid_problem_state *prob) {
   cupid_petsc_halo_destroy(&prob->break_halo);
   cupid_free(&prob->break_words);
   cupid_free(&prob->damage);
+  cupid_free(&prob->growth.peak);
 }
 
 cupid_status cupid_problem_create(const cupid_model_t *model, const cupid_run_options *opts,
