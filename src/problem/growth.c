@@ -303,6 +303,7 @@ static cupid_status hold_singular_node(growth_run *g, int step, int *held) {
 #define CG_RTOL 1e-12
 #define CG_REFACTOR 60
 #define CG_FLOP_WEIGHT 5.0
+#define DOWNDATE_MAX_SHARE 50 /* a round of more than n / 50 broken bonds refactorises */
 
 static double dot_free(const cupid_dirichlet_t *bc, cupid_int n, const double *a, const double *b) {
   double s = 0.0;
@@ -433,6 +434,16 @@ static cupid_status downdate_factor(growth_run *g, const cupid_csr_t *Kold) {
                            "each (LPS): re-solves by CG on the last factor, no downdates");
     return CUPID_SUCCESS;
   }
+  /* A round that broke very many bonds (a crack running through) is cheaper to factorise
+   * afresh: a downdate costs 8-10 ms a bond on the examples' factors, a factorisation 3.5 s
+   * (9,000-node SENB, 27,000 equations) to 10 s (the notched C-beam, 45,000): break-even at
+   * about n / 50 bonds in both. Counted, not timed, so that the choice is the same in every
+   * run. */
+  if (g->dd.r > cupid_direct_factor_size(g->F) / DOWNDATE_MAX_SHARE) {
+    cupid_direct_factor_destroy(&g->F);
+    g->t_downdate += cupid_wtime() - t0;
+    return CUPID_SUCCESS;
+  }
   cupid_status st = cupid_direct_factor_downdate(g->F, g->dd.r, g->dd.colptr, g->dd.rows, g->dd.vals);
   if (st == CUPID_ERR_NUMERIC) {
     if (getenv("CUPID_DEBUG")) fprintf(stderr, "downdate: %s\n", cupid_error_message());
@@ -496,12 +507,12 @@ static cupid_status check_blocked(growth_run *g, int k, double lambda, int *stop
   if (prob->method->protected_zone) prob->method->protected_zone(prob, node, zone, sizeof zone);
   const double *x = cupid_pd_grid_coords(prob->grid) + 3 * node;
   snprintf(prob->growth.stopped, sizeof prob->growth.stopped,
-           "crack growth stopped at load step %d (load factor %.6g): the crack reached %s at "
-           "(%g, %g, %g): %lld bond%s over the limit there (up to %.3g times) cannot break, "
-           "because the PD nodes of a coupling zone share their load with the beam; extend the "
-           "PD region, or move the overlap, away from the crack's path (the steps before it are "
-           "in the steps' file, the fields written are this solve's)",
-           k, lambda, zone, x[0], x[1], x[2], (long long)count, count == 1 ? "" : "s", ratio);
+           "crack growth stopped at load step %d (load factor %.6g): %lld bond%s of %s reached "
+           "the breaking limit (up to %.3g times) near (%g, %g, %g), where a crack cannot go: "
+           "the bonds of a coupling zone never break (its PD nodes share their load with the "
+           "beam). Extend the PD region, or move the overlap, away from where the crack runs; "
+           "the steps before are in the steps' file, the fields written are this solve's",
+           k, lambda, (long long)count, count == 1 ? "" : "s", zone, ratio, x[0], x[1], x[2]);
   prob->growth.stopped_step = k;
   *stop = 1;
   return CUPID_SUCCESS;
@@ -624,7 +635,8 @@ cupid_status cupid_problem_run_growth(cupid_problem_state *prob) {
   }
   prob->solved = 1;
   prob->phases[CUPID_PHASE_SOLVE] = (cupid_phase_record){cupid_wtime() - t0, cupid_peak_memory(), 1};
-  prob->growth.resolve = g.downdates ? "downdate" : g.krylov ? "krylov" : "factor";
+  const int own = prob->method->matrix == CUPID_MATRIX_SPD && !prob->engine->iterative;
+  prob->growth.resolve = !own ? "engine" : g.downdates ? "downdate" : g.krylov ? "krylov" : "factor";
   prob->growth.downdates = g.downdates;
   prob->growth.downdate_columns = g.downdate_columns;
   prob->growth.downdate_s = g.t_downdate;

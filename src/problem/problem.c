@@ -105,6 +105,19 @@ cupid_status cupid_problem_auto_engine(const cupid_problem_state *prob,
   cupid_solver_cost factor, krylov;
   CUPID_CALL(cupid_problem_costs(prob, &factor, &krylov));
   const double limit = cupid_problem_memory_limit(prob);
+  const cupid_model_t *m = prob->model;
+  if (!first->iterative && (m->analysis.steps > 0 || (m->has_peridynamics && m->pd.fracture.has_fracture))) {
+    /* load steps and crack growth solve many times with one K, changed by few bonds: one
+     * factorisation serves them all (downdated as bonds break, growth.c), where an iterative
+     * engine would start every solve from nothing */
+    const cupid_solver_cost *c = path_cost(prob, first, &factor, &krylov);
+    if (c->bytes <= AUTO_MEMORY_SHARE * limit) {
+      snprintf(why, len, "auto: %s (%s; load steps reuse one factorisation), estimate %.3g s and "
+               "%.3g GB", first->name, c->what, c->seconds, c->bytes / 1e9);
+      *engine = first;
+      return CUPID_SUCCESS;
+    }
+  }
   const cupid_solver_cost *best = NULL, *least = NULL;
   for (int k = 0; cupid_solver_type_at(k); k++) {
     const cupid_solver_type *e = cupid_solver_type_at(k);

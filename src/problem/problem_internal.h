@@ -166,7 +166,8 @@ typedef struct cupid_problem_private {
   /* static growth (growth.c): how the solves went, for summary.json's fracture block */
   struct {
     const char *resolve;            /**< "downdate" (the last factor downdated by the broken
-                                         bonds), "krylov" (CG on the last factor), "factor" */
+                                         bonds), "krylov" (CG on the last factor), "factor",
+                                         or "engine" (every solve by an iterative engine) */
     cupid_int solves, factorisations, cg_solves, cg_iterations, downdates, downdate_columns;
     double factor_s, cg_s, downdate_s;
     /* per constraint k, peak[6 k ..]: the largest reaction (by magnitude) of the sawtooth
