@@ -170,3 +170,23 @@ def test_damage_field_of_a_cracking_plate():
     assert np.all(d[far, 0] == 0.0)
     # a model without fracture has no damage rows
     assert cupid.Problem(pd_bar()).setup().pd_damage.shape[0] == 0
+
+
+def test_crack_growth_peak_and_stop(tmp_path):
+    """Quasi-static growth through the package: the plate of tests/models/growth/plate.yaml runs
+    to its end (stopped is None) with the envelope's peak equal to summary.json's; the SENB whose
+    crack reaches an Arlequin overlap stops (info names the overlap, solve still succeeds and
+    the files are written: the command line turns this into exit status 2)."""
+    plate = os.path.join(SRC, "tests", "models", "growth", "plate.yaml")
+    p = cupid.Problem(plate, output_dir=str(tmp_path / "plate"))
+    p.solve()
+    p.write_outputs()
+    info = p.info
+    peak = json.load(open(tmp_path / "plate" / "summary.json"))["fracture"]["peak_reactions"][0]
+    assert info["stopped"] is None
+    assert info["peak_load_factor"] == peak["load_factor"] > 0
+    assert info["peak_reaction"] == peak["reaction"]
+    stop = os.path.join(SRC, "tests", "models", "growth", "senb_interface.yaml")
+    q = cupid.Problem(stop, output_dir=str(tmp_path / "stop"))
+    q.solve()
+    assert "Arlequin overlap {x: [8, 12]}" in q.info["stopped"]

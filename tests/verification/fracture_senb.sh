@@ -1,0 +1,117 @@
+#!/usr/bin/env bash
+# The single-edge-notched beam in three-point bending (examples/fracture; issue 17): quasi-static
+# crack growth against LEFM, and the coupled model against the PD-only one.
+#  1. LEFM: the PD-only beam's peak load (the sawtooth envelope's, summary.json) at three
+#     horizons, delta = 5.03, 3.77, 3.02 (h = 5/3, 1.25, 1 at m = 3), against ASTM E399's
+#     P_c = 31.5 N (plane stress, fracture.md). The error must fall as delta shrinks, and each
+#     peak must lie between 0.5 and 1 of P_c: the thickness B = 5 is within a horizon or two of
+#     both faces, whose truncated families hold a fraction of G0 and of the stiffness (the
+#     discrete fraction of G0 is 0.63, 0.72, 0.78 at these horizons: examples/fracture/README.md),
+#     so a peak at or above P_c, or below half of it (a wrong s0 of G0, say), is a fault.
+#  2. Coupled (CUF beam + PD around the notch, Arlequin) against PD-only at h = 1.25 and 1: the
+#     peak loads within the PD-only model's own discretisation change between its two finest
+#     horizons (|P(1) - P(1.25)| / P(1)); the crack path the same: the highest damaged node
+#     above the notch and the widest damaged node off the notch plane within one spacing.
+#  3. The envelope: every step's next-break load factor is at or above its own load factor
+#     (a settled step has no bond over its limit), and the peak is at or above every step's
+#     reaction.
+#  4. A crack that reaches an Arlequin overlap stops the run: exit status 2, the message names
+#     the overlap with its line and the step, the steps before it are written, summary.json
+#     says where it stopped.
+# About 2 minutes on 2 cores.
+. "$(dirname "$0")/../tools/checks.sh"  # CUPID, SRC, $work (cwd), ok, bad, finish
+PY=${CUPID_SYSTEM_PYTHON:-/usr/bin/python3}
+EX=$SRC/examples/fracture
+short=(--set analysis.steps=20 --set "constraints[0].displacement.value=[-0.03, null, null]")
+
+for h in 5/3 1.25 1; do
+  hv=$("$PY" -c "from fractions import Fraction as F; print(repr(float(F('$h'))))")
+  dv=$("$PY" -c "print(repr(3.015 * $hv))")
+  tag=${h//\//_}
+  "$CUPID" run "$EX/senb_pd.yaml" -o "pd_$tag" --quiet "${short[@]}" \
+    --set peridynamics.spacing="$hv" --set peridynamics.horizon="$dv" && ok || bad "PD-only run, h = $h"
+  if [ "$h" != 5/3 ]; then
+    "$CUPID" run "$EX/senb_coupled.yaml" -o "cp_$tag" --quiet "${short[@]}" \
+      --set peridynamics.spacing="$hv" --set peridynamics.horizon="$dv" && ok || bad "coupled run, h = $h"
+  fi
+done
+
+"$PY" - <<'PY' && ok || bad "SENB: LEFM trend, coupled against PD-only, the envelope"
+import csv, json, math
+
+W, S, B, A, E, G0 = 20.0, 80.0, 5.0, 10.0, 22350.0, 0.01006
+a = A / W
+f = 3 * math.sqrt(a) * (1.99 - a * (1 - a) * (2.15 - 3.93 * a + 2.7 * a * a)) / (2 * (1 + 2 * a) * (1 - a) ** 1.5)
+Pc = math.sqrt(E * G0) * B * W ** 1.5 / (S * f)
+assert abs(Pc - 31.5) < 0.05, Pc  # fracture.md's figure
+
+def load(d):
+    s = json.load(open(d + "/summary.json"))["fracture"]
+    rows = list(csv.DictReader(open(d + "/damage.csv")))
+    nodes = list(csv.DictReader(open(d + "/pd_nodes.csv")))
+    return s, rows, nodes
+
+def peak(s):
+    return -s["peak_reactions"][0]["reaction"][0]
+
+def path(nodes, h):
+    """the highest damaged node above the notch, the widest off the plane y = 45"""
+    hit = [(float(n["x"]), abs(float(n["y"]) - 45)) for n in nodes
+           if float(n["damage"]) > 0.3 and float(n["x"]) > 10]
+    return max(x for x, _ in hit), max(dy for _, dy in hit)
+
+runs = {}
+for tag, h in (("5_3", 5 / 3), ("1.25", 1.25), ("1", 1.0)):
+    runs["pd", tag] = load("pd_" + tag) + (h,)
+    if tag != "5_3":
+        runs["cp", tag] = load("cp_" + tag) + (h,)
+
+# 3. the envelope
+for key, (s, rows, nodes, h) in runs.items():
+    for r in rows:
+        lf, nb = float(r["load_factor"]), float(r["next_break_load_factor"])
+        assert nb >= lf * (1 - 1e-12), (key, r["step"], lf, nb)
+    top = max(-float(r["reaction_0_x"]) for r in rows)
+    assert peak(s) >= top * (1 - 1e-12), (key, peak(s), top)
+
+# 1. LEFM: the error falls with delta
+errs = []
+for tag in ("5_3", "1.25", "1"):
+    s, rows, nodes, h = runs["pd", tag]
+    P = peak(s)
+    errs.append(P / Pc - 1)
+    print("PD only, h = %-5s delta = %.3f: peak %.2f N, E399 %.2f N: %+.1f%%" % (tag, 3.015 * h, P, Pc, 100 * errs[-1]))
+    assert 0.5 * Pc < P < Pc, (tag, P)
+assert errs[0] < errs[1] < errs[2], errs
+
+# 2. coupled against PD-only
+tol = abs(peak(runs["pd", "1"][0]) - peak(runs["pd", "1.25"][0])) / peak(runs["pd", "1"][0])
+print("tolerance from the PD-only horizon study: %.1f%%" % (100 * tol))
+for tag in ("1.25", "1"):
+    sp, _, np_, h = runs["pd", tag]
+    sc, _, nc, _ = runs["cp", tag]
+    d = peak(sc) / peak(sp) - 1
+    xp, yp = path(np_, h)
+    xc, yc = path(nc, h)
+    print("h = %s: coupled peak %.2f N against PD-only %.2f N (%+.2f%%); crack top %.2f / %.2f, "
+          "width %.2f / %.2f" % (tag, peak(sc), peak(sp), 100 * d, xc, xp, yc, yp))
+    assert abs(d) <= tol, (tag, d, tol)
+    assert abs(xc - xp) <= h + 1e-9 and abs(yc - yp) <= h + 1e-9, (tag, xc, xp, yc, yp)
+PY
+
+# 4. a crack into an Arlequin overlap
+out=$("$CUPID" run "$SRC/tests/models/growth/senb_interface.yaml" -o stop --quiet 2>&1); rc=$?
+[ $rc -eq 2 ] && ok || bad "a crack into the overlap: exit $rc (want 2)"
+grep -q "crack growth stopped at load step [0-9]* (load factor [0-9.e-]*): [0-9]* bonds of the Arlequin overlap {x: \[8, 12\]} (coupling.arlequin.overlap\[2\], line 35) reached the breaking limit" <<<"$out" \
+  && ok || bad "the stop message: $out"
+"$PY" - stop <<'PY' && ok || bad "the stopped run's files"
+import csv, json, sys
+s = json.load(open(sys.argv[1] + "/summary.json"))["fracture"]
+rows = list(csv.DictReader(open(sys.argv[1] + "/damage.csv")))
+k = s["stopped_step"]
+assert k > 1 and "Arlequin overlap" in s["stopped"], s
+assert [int(r["step"]) for r in rows] == list(range(1, k)), (k, len(rows))
+assert int(rows[-1]["broken_bonds"]) > 0  # the crack grew before it got there
+PY
+
+finish fracture_senb
