@@ -1,12 +1,14 @@
 #!/usr/bin/env bash
-# Quasi-static crack growth (issue 17, item 3): the re-solves after bonds break by CG
-# preconditioned by the last factorisation (the default) against a new factorisation every
-# time (CUPID_GROWTH_RESOLVE=factor). The model: the notched plate of
+# Quasi-static crack growth (issue 17, item 3): the re-solves after bonds break with the last
+# factorisation downdated by the broken bonds (the default), by CG preconditioned by the last
+# factorisation without downdates (CUPID_GROWTH_RESOLVE=krylov), and with a new factorisation
+# every time (CUPID_GROWTH_RESOLVE=factor). The model: the notched plate of
 # tests/models/growth/plate.yaml at twice the size (24 x 48 x 3 mm, h = 1 mm: 3,456 nodes,
 # bond-based, notch x in [0, 6] at y = 24), the top layers pulled 0.04 mm in 10 load steps,
 # every bond over its limit breaking at once (per_iteration: all). Prints, for each way,
-# the whole run's seconds, the solves, factorisations, CG solves and iterations, the seconds
-# in factorisations and in CG, and the broken bonds (which must agree). Reported figures,
+# the whole run's seconds, the solves, factorisations, downdates (and the bonds in them), CG
+# solves and iterations, the seconds in factorisations, downdates and CG, and the broken bonds
+# (which must agree). Reported figures,
 # not a timed test.
 #
 #   bench/growth.sh        needs build/cupid (scripts/build.sh)
@@ -20,9 +22,9 @@ sed -e 's/x: \[0, 12\], y: \[0, 24\], z: \[0, 2\]/x: [0, 24], y: [0, 48], z: [0,
     -e 's/at: 12, x: \[0, 3\], z: \[0, 2\]/at: 24, x: [0, 6], z: [0, 3]/' \
     -e 's/y: \[21, 24\]/y: [45, 48]/' -e 's/value: \[0, 0.02, 0\]/value: [0, 0.04, 0]/' \
     -e 's/at: \[6, 22.5, 1\]/at: [12, 46.5, 1.5]/' "$root/tests/models/growth/plate.yaml" > plate.yaml
-echo "| re-solves | run s | solves | factorisations | CG solves | CG iterations | factorisation s | CG s | broken bonds |"
-echo "|---|---|---|---|---|---|---|---|---|"
-for how in krylov factor; do
+echo "| re-solves | run s | solves | factorisations | downdates (bonds) | CG solves | CG iterations | factorisation s | downdate s | CG s | broken bonds |"
+echo "|---|---|---|---|---|---|---|---|---|---|---|"
+for how in downdate krylov factor; do
   t0=$(date +%s.%N)
   CUPID_GROWTH_RESOLVE=$how "$cupid" run plate.yaml -o "$how" --quiet
   t1=$(date +%s.%N)
@@ -30,7 +32,8 @@ for how in krylov factor; do
 import json, sys
 f = json.load(open(sys.argv[1] + "/summary.json"))["fracture"]
 s = f["solves"]
-print(f"| {s['resolve']} | {sys.argv[2]} | {s['solves']} | {s['factorisations']} | {s['cg_solves']} | "
-      f"{s['cg_iterations']} | {s['factorisation_s']:.1f} | {s['cg_s']:.1f} | {f['broken_bonds']} |")
+print(f"| {s['resolve']} | {sys.argv[2]} | {s['solves']} | {s['factorisations']} | "
+      f"{s['downdates']} ({s['downdate_columns']}) | {s['cg_solves']} | {s['cg_iterations']} | "
+      f"{s['factorisation_s']:.1f} | {s['downdate_s']:.1f} | {s['cg_s']:.1f} | {f['broken_bonds']} |")
 PY
 done
