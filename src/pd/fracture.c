@@ -547,8 +547,8 @@ static double bond_ratio(const struct cupid_pd_operator_private *op, const doubl
              : sqrt(bond_energy_density(op, theta, i, j, s, e) / o->critical_energy);
 }
 
-/* Over every intact bond (each once) that `want` accepts: the largest ratio, the count over
- * 1 and the node of the largest (its protected end when want_blocked). */
+/* Over every intact bond (each once) that scanned() reads: the largest ratio, the count over
+ * 1 and, for the blocked bonds, the protected end of the largest. */
 typedef struct {
   double ratio;
   cupid_int over, node;
@@ -586,17 +586,17 @@ static cupid_status scan_ratios(const cupid_pd_operator op, const double *u,
       if (q_ > r) r = q_;
     }
   }
-  /* the node of the largest: a second pass, serial, so that ties resolve the same way on any
-   * thread count (the lowest node index) */
+  /* the node of the largest (blocked bonds over their limit only, for the message): a second
+   * pass, serial, so that ties resolve the same way on any thread count (the lowest index) */
   cupid_int node = -1;
-  for (cupid_int i = 0; i < op->nnodes && r > 0.0 && node < 0; i++) {
+  for (cupid_int i = 0; i < op->nnodes && want_blocked && over > 0 && node < 0; i++) {
     const pd_family F = pd_family_of(op, i);
     for (int q = 0; q < F.n && node < 0; q++) {
       const int s = pd_family_entry(&F, q);
       if (s < S->n / 2 || pd_bond_broken(op, i, s)) continue;
       const cupid_int j = pd_family_node(op, &F, s);
       if (!scanned(o, want_blocked, i, j)) continue;
-      if (bond_ratio(op, theta, o, u, i, j, s) == r) node = want_blocked && !o->protect[i] ? j : i;
+      if (bond_ratio(op, theta, o, u, i, j, s) == r) node = o->protect[i] ? i : j;
     }
   }
   cupid_free(&theta);

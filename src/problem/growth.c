@@ -446,7 +446,6 @@ static cupid_status downdate_factor(growth_run *g, const cupid_csr_t *Kold) {
   }
   cupid_status st = cupid_direct_factor_downdate(g->F, g->dd.r, g->dd.colptr, g->dd.rows, g->dd.vals);
   if (st == CUPID_ERR_NUMERIC) {
-    if (getenv("CUPID_DEBUG")) fprintf(stderr, "downdate: %s\n", cupid_error_message());
     cupid_error_clear();
     cupid_direct_factor_destroy(&g->F);
   } else {
@@ -490,7 +489,6 @@ static cupid_status solve(growth_run *g, int reassemble) {
   return CUPID_SUCCESS;
 }
 
-/* One load step: solve, break, solve again until nothing is over its limit. */
 /* A crack that reached the coupling zone (whose bonds never break: the PD nodes there share
  * the load with the beam): bonds over their limit there stop the growth, named and placed;
  * *stop = 1. The steps before it stand (written), this one is not. */
@@ -518,6 +516,8 @@ static cupid_status check_blocked(growth_run *g, int k, double lambda, int *stop
   return CUPID_SUCCESS;
 }
 
+/* One load step: solve, break, solve again until nothing is over its limit; *stop = 1 when a
+ * coupling zone stopped it (check_blocked). */
 static cupid_status load_step(growth_run *g, int k, double lambda, int *iterations, int *stop) {
   cupid_problem_state *prob = g->prob;
   const cupid_model_t *m = prob->model;

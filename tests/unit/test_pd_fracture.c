@@ -259,6 +259,26 @@ static void test_protect_damage_energy(void **state) {
         if (fabs(q[0] - p[0]) > 1e-9 || fabs(q[2] - p[2]) > 1e-9) continue; /* along y */
         assert_int_equal(cupid_pd_operator_bond_intact(b.op, i, j), !may);
       }
+    /* what is left over its limit: only bonds the protection keeps (cupid_pd_operator_blocked,
+     * the growth's stop at a coupling zone), none the criterion may break (max_ratio) */
+    double r = -1.0;
+    CUPID_ASSERT_OK(cupid_pd_operator_max_ratio(b.op, u, &fo, &r));
+    assert_true(r == 0.0);
+    cupid_int blocked = 0, node = -1, expect = 0;
+    CUPID_ASSERT_OK(cupid_pd_operator_blocked(b.op, u, &fo, &blocked, &node, &r));
+    for (cupid_int i = 0; i < b.n; i++)
+      for (cupid_int j = i + 1; j < b.n; j++) {
+        const double *p = x + 3 * i, *q = x + 3 * j;
+        const int across = (p[1] < 3) != (q[1] < 3);
+        expect += across && (p[0] > 5 || q[0] > 5) && cupid_pd_operator_bond_intact(b.op, i, j);
+      }
+    assert_true(expect > 0);
+    assert_int_equal(blocked, expect);
+    assert_true(node >= 0 && x[3 * node] > 5 && r > 1.0);
+    fo.protect = NULL; /* nothing protected: nothing blocked */
+    CUPID_ASSERT_OK(cupid_pd_operator_blocked(b.op, u, &fo, &blocked, &node, &r));
+    assert_true(blocked == 0 && node == -1);
+    fo.protect = prot;
     CUPID_ASSERT_OK(cupid_pd_operator_damage(b.op, dmg, &damaged, &maxd));
     assert_true(damaged > 0 && maxd > 0 && maxd < 1);
     for (cupid_int i = 0; i < b.n; i++) {
