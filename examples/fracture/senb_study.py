@@ -108,8 +108,8 @@ def side_view(info, out):
     beam = ""
     if info["model"] == "coupled":  # the beam's outline and the overlaps, where PD is not alone
         beam = ("set object 1 rect from 0, 0 to 90, 20 fs empty border lc rgb 'gray' dt 2\n"
-                "set object 2 rect from 25, 0 to 30, 20 fc rgb '#e0e0e0' fs solid noborder behind\n"
-                "set object 3 rect from 60, 0 to 65, 20 fc rgb '#e0e0e0' fs solid noborder behind\n"
+                "set object 2 rect from 30, 0 to 35, 20 fc rgb '#e0e0e0' fs solid noborder behind\n"
+                "set object 3 rect from 55, 0 to 60, 20 fc rgb '#e0e0e0' fs solid noborder behind\n"
                 "set label 1 'CUF beam' at 10, 10 tc rgb 'gray'\n"
                 "set label 2 'CUF beam' at 72, 10 tc rgb 'gray'\n")
     gnuplot("""set terminal pngcairo size 1000,330 font ",10"
