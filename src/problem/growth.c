@@ -412,7 +412,8 @@ static cupid_status cg_solve(growth_run *g, int *done) {
    * not be the same in every run. A triangular solve's operation is memory-bound, about
    * CG_FLOP_WEIGHT times the time of one in the factorisation's dense blocks (measured on the
    * plate of bench/growth.sh: 1.35 against 6.6 Gflop/s). */
-  g->cg_since_factor += it;
+  /* a downdated factor is the current K's: its one iteration is the check, not rent */
+  g->cg_since_factor += g->downdate ? it - 1 : it;
   if ((double)g->cg_since_factor * CG_FLOP_WEIGHT * g->cg_iteration_flops > g->factor_flops)
     cupid_direct_factor_destroy(&g->F);
   return CUPID_SUCCESS;
