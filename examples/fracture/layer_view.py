@@ -32,7 +32,6 @@ def main():
     if not os.path.exists(path):
         sys.exit("%s: no pd_nodes.csv (run with output.pd_nodes: true)" % a.run)
     rows = list(csv.DictReader(open(path)))
-    n = "xyz".index(a.normal)
     u, v = [c for c in "xyz" if c != a.normal]
     layer = min({float(r[a.normal]) for r in rows}, key=lambda c: abs(c - a.at))
     dat = os.path.join(a.run, "layer_%s.dat" % a.normal)

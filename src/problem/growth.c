@@ -459,6 +459,12 @@ static cupid_status downdate_factor(growth_run *g, const cupid_csr_t *Kold) {
   return CUPID_SUCCESS;
 }
 
+/* The growth solves with its own CHOLMOD factor (downdates, CG): an SPD method on a direct
+ * engine; otherwise every solve is the engine's. */
+static int own_factor(const cupid_problem_state *prob) {
+  return prob->method->matrix == CUPID_MATRIX_SPD && !prob->engine->iterative;
+}
+
 /* Solve at the current load (K assembled again when bonds broke): CG preconditioned by the
  * last factor when there is one (downdated to the current K where it can be: growth by
  * downdates, else by Krylov re-solves), else a factorisation. A non-symmetric method or an
@@ -473,7 +479,7 @@ static cupid_status solve(growth_run *g, int reassemble) {
   cupid_csr_destroy(&Kold);
   CUPID_CALL(st0);
   CUPID_CALL(cupid_problem_patch_test_assembled(prob)); /* the first K: once */
-  const int own = prob->method->matrix == CUPID_MATRIX_SPD && !prob->engine->iterative;
+  const int own = own_factor(prob);
   int done = 0;
   if (own && g->F && g->krylov) CUPID_CALL(cg_solve(g, &done));
   if (own && !done) {
@@ -546,16 +552,20 @@ static cupid_status load_step(growth_run *g, int k, double lambda, int *iteratio
     if (!fracture) return CUPID_SUCCESS;
     CUPID_CALL(check_blocked(g, k, lambda, stop));
     if (*stop) return CUPID_SUCCESS;
+    double r = -1.0; /* the largest ratio of this solution, when scanned */
     if (prob->first_break_step < 0) { /* the exact load of the first break, by scaling */
-      double r = 0.0;
       CUPID_CALL(cupid_pd_operator_max_ratio(prob->op, prob->u, &prob->fracture, &r));
       if (r > 1.0) prob->first_break_load = lambda / r;
     }
     cupid_int broken = 0;
     double diss = 0.0;
     CUPID_CALL(cupid_problem_fracture_step(prob, k, lambda, prob->u, only_most, &broken, &diss));
-    if (broken == 0) /* settled: the next break's load factor from this solution */
-      return cupid_pd_operator_max_ratio(prob->op, prob->u, &prob->fracture, &g->next_ratio);
+    if (broken == 0) { /* settled: the next break's load factor from this solution (nothing
+                          broke, so a ratio scanned above still holds) */
+      if (r >= 0.0) g->next_ratio = r;
+      else CUPID_CALL(cupid_pd_operator_max_ratio(prob->op, prob->u, &prob->fracture, &g->next_ratio));
+      return CUPID_SUCCESS;
+    }
     CUPID_CALL(release_unsupported(g, k));
     reassemble = 1;
     CUPID_CHECK(*iterations < 1000000, CUPID_ERR_NUMERIC,
@@ -636,8 +646,7 @@ cupid_status cupid_problem_run_growth(cupid_problem_state *prob) {
   }
   prob->solved = 1;
   prob->phases[CUPID_PHASE_SOLVE] = (cupid_phase_record){cupid_wtime() - t0, cupid_peak_memory(), 1};
-  const int own = prob->method->matrix == CUPID_MATRIX_SPD && !prob->engine->iterative;
-  prob->growth.resolve = !own ? "engine" : g.downdates ? "downdate" : g.krylov ? "krylov" : "factor";
+  prob->growth.resolve = !own_factor(prob) ? "engine" : g.downdates ? "downdate" : g.krylov ? "krylov" : "factor";
   prob->growth.downdates = g.downdates;
   prob->growth.downdate_columns = g.downdate_columns;
   prob->growth.downdate_s = g.t_downdate;
