@@ -85,7 +85,8 @@ typedef struct {
   cupid_int steps;
   double dt;
   double omega_max;      /**< estimate of the largest free frequency (Lanczos on
-                              M^-1/2 K M^-1/2; central differences only, else 0) */
+                              M^-1/2 K M^-1/2; central differences only, else 0; NaN
+                              when a guaranteed bound made it unnecessary) */
   int lanczos_steps;     /**< products of K the estimate took */
   double dt_critical;    /**< stable step 2/omega_max, reduced for damping (central only) */
   double dt_bound;       /**< guaranteed-stable step from a Gershgorin bound (central only) */
@@ -155,14 +156,21 @@ typedef struct {
   const cupid_dirichlet_t *bc;        /**< finalized conditions, or NULL */
   const double *f;                    /**< constant external force (n entries), or NULL */
   const cupid_dynamics_partition *part; /**< NULL: one process holds every DOF */
+  /** Optional (one process only): a guaranteed bound of K's rows, n entries, such that every
+   *  eigenvalue of M^-1 K on the free DOFs is at most max over them of row_bound[d] /
+   *  m_lumped[d] (e.g. cupid_pd_operator_row_bound()). When dt is stable by this bound the
+   *  Lanczos estimate is skipped. */
+  const double *row_bound;
 } cupid_dynamics_explicit_system;
 
 /**
  * Central differences (opts->integrator must be CUPID_INTEGRATOR_CENTRAL) as in
  * cupid_dynamics_run(), with K only through products: no assembly, memory O(n) besides what
  * apply needs. Same steps, energies, damping (b K v through apply), monitor and stable-step
- * check, with two differences: the critical step comes from the Lanczos estimate alone and
- * info->dt_bound is 0 (the Gershgorin bound needs the entries of K). With apply the product
+ * check, with two differences: the critical step comes from the Lanczos estimate, and
+ * info->dt_bound is 0 (the Gershgorin bound needs the entries of K) unless sys->row_bound
+ * gives one; then a dt within that bound is stable without the estimate (info->omega_max and
+ * dt_critical NaN, lanczos_steps 0), and only a larger dt runs Lanczos. With apply the product
  * of an assembled K, the results equal cupid_dynamics_run()'s to round-off. An apply failure
  * stops the run with its status.
  */

@@ -251,6 +251,16 @@ cupid_status cupid_pd_operator_energy(const cupid_pd_operator op, const double *
 /** The 3x3 diagonal blocks of K (9 per node, row-major), e.g. for block Jacobi. */
 cupid_status cupid_pd_operator_diagonal(const cupid_pd_operator op, double *blocks);
 
+/**
+ * A guaranteed bound of K's rows for the stable step of explicit dynamics, without K: r (3 per
+ * node, each of node i's DOFs the same value) >= sum_j |K_ij|_2 over the 3x3 blocks of row
+ * block i (block Gershgorin: with a mass equal on a node's three DOFs, every eigenvalue of
+ * M^-1 K is at most max_i r_i / m_i). From the intact bonds, in O(nodes x stencil), no
+ * product of K. LPS: the pair term and the dilatation term bounded apart (|kappa| for
+ * nu < 1/4, where 3K - 5mu < 0).
+ */
+cupid_status cupid_pd_operator_row_bound(const cupid_pd_operator op, double *r);
+
 /** Predicted sizes of an operator and its assembled matrix (for `cupid check`). */
 typedef struct {
   cupid_int nodes;

@@ -39,6 +39,7 @@ typedef struct {
   const cupid_dynamics_system *sys;
   cupid_dynamics_stiffness_fn kfn; /* matrix-free K (sys->K is NULL), else NULL */
   void *kctx;
+  const double *row_bound;         /* matrix-free, one process: a Gershgorin bound of K's rows */
   cupid_status kst;                /* first failure of kfn (checked after each step) */
   const cupid_dynamics_options *opt;
   const cupid_dynamics_hooks *hooks; /* opt->hooks, or NULL */
@@ -354,11 +355,33 @@ static double critical_step(double lambda, double a, double b) {
   return 2.0 / w * (sqrt(1.0 + xi * xi) - xi);
 }
 
+/* The Gershgorin bound of M^-1 K from the rows' bound (max over the free DOFs of
+ * row_bound / m), or 0 without one. */
+static double row_bound_lambda(const dyn_state *s) {
+  double b = 0.0;
+  if (!s->row_bound) return 0.0;
+  for (cupid_int d = 0; d < s->n; d++) {
+    const double q = s->row_bound[d] * s->minv[d]; /* minv is 0 on the fixed DOFs */
+    if (q > b || q != q) b = q; /* a NaN wins: no bound */
+  }
+  return b;
+}
+
 static cupid_status check_stable(dyn_state *s, cupid_dynamics_info *info) {
   const cupid_dynamics_options *o = s->opt;
   double est = 0.0, bound = 0.0;
   int steps = 0;
-  if (s->kfn) /* matrix-free: Lanczos only, no Gershgorin bound (dt_bound = 0) */
+  if (s->row_bound) { /* matrix-free with a guaranteed bound: when dt is below its step, the
+                         Lanczos estimate (tens of products of K) has nothing to check */
+    bound = row_bound_lambda(s);
+    info->dt_bound = bound == bound ? critical_step(bound, o->rayleigh_mass, o->rayleigh_stiffness) : 0.0;
+    if (o->dt <= info->dt_bound) {
+      info->omega_max = info->dt_critical = NAN;
+      info->lanczos_steps = 0;
+      return CUPID_SUCCESS;
+    }
+  }
+  if (s->kfn) /* matrix-free: Lanczos (dt_bound from the row bound if there is one, else 0) */
     CUPID_CALL(dyn_lambda_max_fn(s->kfn, s->kctx, s->n, s->sys->m_lumped, s->sys->bc, s->part,
                                  200, &est, &steps));
   else
@@ -366,7 +389,8 @@ static cupid_status check_stable(dyn_state *s, cupid_dynamics_info *info) {
   info->omega_max = sqrt(est);
   info->lanczos_steps = steps;
   info->dt_critical = critical_step(est, o->rayleigh_mass, o->rayleigh_stiffness);
-  info->dt_bound = s->kfn ? 0.0 : critical_step(bound, o->rayleigh_mass, o->rayleigh_stiffness);
+  if (!s->kfn) info->dt_bound = critical_step(bound, o->rayleigh_mass, o->rayleigh_stiffness);
+  else if (!s->row_bound) info->dt_bound = 0.0;
   CUPID_CHECK(o->dt <= info->dt_critical, CUPID_ERR_ARGUMENT,
               "central differences are unstable with dt = %g: the critical step is about %g "
               "(omega_max = %g by a Lanczos estimate; guaranteed stable below %g); use a "
@@ -561,7 +585,10 @@ cupid_status cupid_dynamics_run_explicit(const cupid_dynamics_explicit_system *s
                      p->owned_first <= p->owned_last && p->owned_last <= sys->n),
               CUPID_ERR_ARGUMENT, "cupid_dynamics_run_explicit: a partition needs exchange, sum "
               "and owned DOFs within [0, n)");
+  CUPID_CHECK(!p || !sys->row_bound, CUPID_ERR_ARGUMENT,
+              "cupid_dynamics_run_explicit: row_bound is for one process (no partition)");
   dyn_state s = {.n = sys->n, .sys = &full, .opt = opts, .kfn = sys->apply, .kctx = sys->ctx,
-                 .part = p, .lo = p ? p->owned_first : 0, .hi = p ? p->owned_last : sys->n};
+                 .row_bound = sys->row_bound, .part = p, .lo = p ? p->owned_first : 0,
+                 .hi = p ? p->owned_last : sys->n};
   return run(&s, u, v, monitor, ctx, info);
 }

@@ -355,3 +355,102 @@ cupid_status cupid_pd_operator_diagonal(const cupid_pd_operator op, double *bloc
   }
   return CUPID_SUCCESS;
 }
+
+/* The sum of the 2-norms of g_p's blocks: |g_p[p]| + sum_j |g_p[j]| (g_p as in the header). */
+static double dilatation_gradient_norm(const struct cupid_pd_operator_private *op, cupid_int p,
+                                       double wx_full) {
+  const pd_stencil *S = &op->st;
+  const pd_family F = pd_family_of(op, p);
+  double gp[3], sum = 0.0;
+  const double *self = pd_gself_intact(op, p, gp);
+  const int intact = !op->bslot || op->bslot[p] < 0;
+  if (!op->sf && intact && !F.s) sum = wx_full; /* a full, intact family: the stencil's sum */
+  else
+    for (int q = 0; q < F.n; q++) {
+      const int s = pd_family_entry(&F, q);
+      if (pd_bond_broken(op, p, s)) continue;
+      double D = 1.0;
+      if (op->sf) {
+        double sfb[4];
+        pd_surface_bond(op, p, pd_family_node(op, &F, s), S->nrm + 3 * s, sfb);
+        D = sfb[0];
+      }
+      sum += S->wb[s] * S->x[s] * fabs(D);
+    }
+  return 3.0 * op->V / op->m[p] * (sum + sqrt(self[0] * self[0] + self[1] * self[1] + self[2] * self[2]));
+}
+
+/* Row i's bound with surface factors: every bond's coefficients through pd_surface_bond. */
+static double row_bound_corrected(const struct cupid_pd_operator_private *op, cupid_int i,
+                                  const double *G) {
+  const pd_stencil *S = &op->st;
+  const pd_family F = pd_family_of(op, i);
+  double sum = 0.0;
+  for (int q = 0; q < F.n; q++) {
+    const int s = pd_family_entry(&F, q);
+    if (pd_bond_broken(op, i, s)) continue;
+    const cupid_int j = pd_family_node(op, &F, s);
+    sum += 2.0 * fabs(pd_pair_coefficient(op, i, j, s));
+    if (!G) continue;
+    double sfb[4]; /* sfb[1]: the factor of bond j -> i in theta_j */
+    pd_surface_bond(op, i, j, S->nrm + 3 * s, sfb);
+    sum += fabs(op->kappa[j]) * op->V * op->V / op->m[j] * S->wb[s] * S->x[s] * fabs(sfb[1]) * G[j];
+  }
+  return sum;
+}
+
+/* Block Gershgorin (the header's K = K_pair + sum_p c_p g_p g_p^T, each block's 2-norm
+ * bounded by the triangle inequality): row i of K_pair has |K_ii| + sum_j |K_ij| <= 2 sum_j
+ * |w_ij| (|n n^T| = 1); row i of c_p g_p g_p^T has sum_k |c_p| |g_p[i]| |g_p[k]| = |c_p|
+ * |g_p[i]| G_p, G_p = sum_k |g_p[k]|, non-zero for p = i and p in i's family, where
+ * |c_j g_j[i]| = |kappa_j| V^2 / m_j omega beta x D_ji. Without surface factors the per-node
+ * parts are tabled first (pair: 15 mu/m V^2 LPS, c V^2 / 2 bond-based; dilatation: |kappa|
+ * V^2 G / m), so a bond costs two look-ups. */
+cupid_status cupid_pd_operator_row_bound(const cupid_pd_operator op, double *r) {
+  CUPID_CHECK(op && r, CUPID_ERR_ARGUMENT, "row bound needs an operator and an output");
+  const pd_stencil *S = &op->st;
+  const cupid_int nn = op->nnodes;
+  const int lps = op->model != CUPID_PD_BOND;
+  const double V2 = op->V * op->V;
+  double *G = NULL, *pq = NULL, *kq = NULL, wx_full = 0.0;
+  for (int s = 0; s < S->n; s++) wx_full += S->wb[s] * S->x[s];
+  cupid_status st = CUPID_SUCCESS;
+  if (lps) CUPID_TRY(cupid_malloc((size_t)nn + 1, sizeof *G, "dilatation gradient norms", &G));
+  CUPID_TRY(cupid_malloc((size_t)nn + 1, sizeof *pq, "row bound terms", &pq));
+  CUPID_TRY(cupid_malloc((size_t)nn + 1, sizeof *kq, "row bound terms", &kq));
+#pragma omp parallel for schedule(static) if (nn > PD_OMP_MIN_NODES)
+  for (cupid_int p = 0; p < nn; p++) {
+    if (lps) G[p] = dilatation_gradient_norm(op, p, wx_full);
+    pq[p] = lps ? 15.0 * op->mu[p] / op->m[p] * V2 : 0.5 * op->c[p] * V2;
+    kq[p] = lps ? fabs(op->kappa[p]) * V2 / op->m[p] * G[p] : 0.0;
+  }
+#pragma omp parallel for schedule(static) if (nn > PD_OMP_MIN_NODES)
+  for (cupid_int i = 0; i < nn; i++) {
+    double sum = 0.0;
+    if (lps) { /* p = i: |c_i| |g_i[i]| G_i */
+      double gi[3];
+      const double *self = pd_gself_intact(op, i, gi);
+      sum += kq[i] * sqrt(self[0] * self[0] + self[1] * self[1] + self[2] * self[2]);
+    }
+    if (op->sf) sum += row_bound_corrected(op, i, G);
+    else {
+      const pd_family F = pd_family_of(op, i);
+      double pair = 0.0, dil = 0.0;
+      for (int q = 0; q < F.n; q++) {
+        const int s = pd_family_entry(&F, q);
+        if (pd_bond_broken(op, i, s)) continue;
+        const cupid_int j = pd_family_node(op, &F, s);
+        const double wp = lps ? S->wb[s] : S->wb[s] / S->x[s];
+        pair += wp * (pq[i] + pq[j]);
+        dil += S->wb[s] * S->x[s] * kq[j];
+      }
+      sum += 2.0 * pair + dil;
+    }
+    r[3 * i] = r[3 * i + 1] = r[3 * i + 2] = sum;
+  }
+cleanup:
+  cupid_free(&G);
+  cupid_free(&pq);
+  cupid_free(&kq);
+  return st;
+}

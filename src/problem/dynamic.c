@@ -509,7 +509,7 @@ cupid_status cupid_problem_run_dynamic(cupid_problem_state *prob, const cupid_me
   const cupid_dynamic *d = &m->analysis.dynamic;
   cupid_status st = CUPID_SUCCESS;
   cupid_csr M = NULL;
-  double *m_lumped = NULL, *v = NULL, t0 = cupid_wtime();
+  double *m_lumped = NULL, *v = NULL, *rbound = NULL, t0 = cupid_wtime();
   dyn_output o = {.prob = prob};
   const int mf = op != NULL;
   cupid_petsc_halo halo = NULL;
@@ -562,6 +562,11 @@ cupid_status cupid_problem_run_dynamic(cupid_problem_state *prob, const cupid_me
                                          .ctx = mf ? op->ctx : NULL,
                                          .m_lumped = m_lumped, .bc = prob->bc, .f = prob->f_ext};
   if (prob->slab) esys.apply = slab_apply, esys.ctx = prob, esys.part = &part;
+  else if (mf && op->row_bound && d->integrator == CUPID_INTEGRATOR_CENTRAL) {
+    CUPID_TRY(cupid_malloc((size_t)prob->ndof + 1, sizeof *rbound, "row bounds of K", &rbound));
+    CUPID_TRY(op->row_bound(op->ctx, rbound));
+    esys.row_bound = rbound;
+  }
   st = mf ? cupid_dynamics_run_explicit(&esys, &opt, prob->u, v, monitor, &o, &prob->dyn.info)
           : cupid_dynamics_run(&sys, &opt, prob->u, v, monitor, &o, &prob->dyn.info);
   if (st == CUPID_ERR_ARGUMENT && d->integrator == CUPID_INTEGRATOR_CENTRAL &&
@@ -597,6 +602,7 @@ cleanup:
   cupid_csr_destroy(&M);
   cupid_free(&m_lumped);
   cupid_free(&v);
+  cupid_free(&rbound);
   cupid_petsc_halo_destroy(&halo);
   cupid_pd_grid_destroy(&o.whole);
   return st;
@@ -622,6 +628,7 @@ void cupid_problem_dynamic_json(cupid_json js, const cupid_problem_state *prob) 
     cupid_json_number(js, "dt_critical", in->dt_critical);
     cupid_json_number(js, "dt_guaranteed_stable", in->dt_bound);
     if (prob->dyn.matrix_free) cupid_json_integer(js, "lanczos_steps", in->lanczos_steps);
+    cupid_json_string(js, "stable_step_check", in->omega_max == in->omega_max ? "lanczos" : "bound");
   }
   cupid_json_number(js, "rayleigh_mass", d->rayleigh_mass);
   cupid_json_number(js, "rayleigh_stiffness", d->rayleigh_stiffness);

@@ -33,6 +33,9 @@ typedef struct {
   cupid_status (*apply)(void *ctx, const double *x, double *y);
   void *ctx;
   void (*destroy)(void **ctx); /**< NULL: borrowed */
+  /** Optional: a guaranteed bound of K's rows (cupid_dynamics_explicit_system.row_bound),
+   *  ndof entries, so that a stable dt needs no Lanczos estimate; one process only. */
+  cupid_status (*row_bound)(void *ctx, double *r);
 } cupid_method_operator;
 
 struct cupid_method_ops {

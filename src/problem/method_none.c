@@ -71,9 +71,12 @@ static cupid_status pd_apply(void *op, const double *x, double *y) {
   return cupid_pd_operator_apply(op, x, y);
 }
 
+static cupid_status pd_row_bound(void *op, double *r) { return cupid_pd_operator_row_bound(op, r); }
+
 /* PD only: the PD operator (borrowed); a beam alone has none (its K is assembled). */
 static cupid_status explicit_operator(cupid_problem_state *prob, cupid_method_operator *op) {
-  if (prob->grid && !prob->beam) *op = (cupid_method_operator){.apply = pd_apply, .ctx = prob->op};
+  if (prob->grid && !prob->beam)
+    *op = (cupid_method_operator){.apply = pd_apply, .ctx = prob->op, .row_bound = pd_row_bound};
   return CUPID_SUCCESS;
 }
 

@@ -33,6 +33,14 @@ static cupid_status failing_apply(void *ctx, const double *x, double *y) {
   return ++calls[0] >= calls[1] ? CUPID_ERR_NUMERIC : CUPID_SUCCESS;
 }
 
+/* A partition of one process (exchange and sum do nothing). */
+static cupid_status no_exchange(void *ctx, double *x) {
+  (void)ctx, (void)x;
+  return CUPID_SUCCESS;
+}
+
+static void no_sum(void *ctx, double *values, int count) { (void)ctx, (void)values, (void)count; }
+
 static double max_abs(cupid_int n, const double *x) {
   double m = 0.0;
   for (cupid_int i = 0; i < n; i++) m = fmax(m, fabs(x[i]));
@@ -58,9 +66,10 @@ static void compare(cupid_pd_model_kind model) {
   CUPID_ASSERT_OK(cupid_pd_operator_assemble(op, &K));
   cupid_dirichlet bc = NULL;
   CUPID_ASSERT_OK(cupid_dirichlet_create(n, &bc));
-  double *m = NULL, *f = NULL, *u0 = NULL, *v0 = NULL, *u1 = NULL, *v1 = NULL;
-  double **arrays[] = {&m, &f, &u0, &v0, &u1, &v1};
-  for (int k = 0; k < 6; k++) CUPID_ASSERT_OK(cupid_calloc((size_t)n, sizeof(double), "t", arrays[k]));
+  double *m = NULL, *f = NULL, *u0 = NULL, *v0 = NULL, *u1 = NULL, *v1 = NULL, *ui = NULL,
+         *vi = NULL, *rbound = NULL;
+  double **arrays[] = {&m, &f, &u0, &v0, &u1, &v1, &ui, &vi, &rbound};
+  for (int k = 0; k < 9; k++) CUPID_ASSERT_OK(cupid_calloc((size_t)n, sizeof(double), "t", arrays[k]));
   for (cupid_int i = 0; i < nn; i++) {
     const double *p = x + 3 * i;
     for (int c = 0; c < 3; c++) {
@@ -75,6 +84,8 @@ static void compare(cupid_pd_model_kind model) {
   CUPID_ASSERT_OK(cupid_dirichlet_finalize(bc));
   memcpy(u1, u0, (size_t)n * sizeof *u1);
   memcpy(v1, v0, (size_t)n * sizeof *v1);
+  memcpy(ui, u0, (size_t)n * sizeof *ui);
+  memcpy(vi, v0, (size_t)n * sizeof *vi);
 
   cupid_dynamics_options o = cupid_dynamics_defaults();
   o.integrator = CUPID_INTEGRATOR_CENTRAL;
@@ -119,7 +130,38 @@ static void compare(cupid_pd_model_kind model) {
   o.integrator = CUPID_INTEGRATOR_NEWMARK;
   o.dt = 0.5 * ib.dt_critical;
   assert_int_equal(cupid_dynamics_run_explicit(&es, &o, u1, v1, NULL, NULL, NULL), CUPID_ERR_ARGUMENT);
-  for (int k = 0; k < 6; k++) cupid_free(arrays[k]);
+  o.integrator = CUPID_INTEGRATOR_CENTRAL;
+  /* With the operator's row bound (cupid_pd_operator_row_bound): its guaranteed step lies
+   * below the estimate; a dt within it runs without Lanczos and steps exactly as the run
+   * without the bound; a dt above it, below the estimate, runs Lanczos; one above both is
+   * refused. A partition and a row bound together are refused. */
+  CUPID_ASSERT_OK(cupid_pd_operator_row_bound(op, rbound));
+  cupid_dynamics_explicit_system eb = es;
+  eb.row_bound = rbound;
+  cupid_dynamics_info ic, id;
+  o.dt = 1.01 * ib.dt_critical;
+  assert_int_equal(cupid_dynamics_run_explicit(&eb, &o, u1, v1, NULL, NULL, &ic), CUPID_ERR_ARGUMENT);
+  const double dtb = ic.dt_bound;
+  assert_true(dtb > 0.1 * ib.dt_critical && dtb <= ib.dt_critical);
+  o.dt = 0.99 * dtb;
+  memcpy(u0, ui, (size_t)n * sizeof *u0), memcpy(v0, vi, (size_t)n * sizeof *v0);
+  memcpy(u1, ui, (size_t)n * sizeof *u1), memcpy(v1, vi, (size_t)n * sizeof *v1);
+  CUPID_ASSERT_OK(cupid_dynamics_run_explicit(&es, &o, u0, v0, NULL, NULL, &ic));
+  CUPID_ASSERT_OK(cupid_dynamics_run_explicit(&eb, &o, u1, v1, NULL, NULL, &id));
+  assert_true(ic.lanczos_steps > 0 && id.lanczos_steps == 0);
+  assert_true(isnan(id.omega_max) && isnan(id.dt_critical) && id.dt_bound == dtb);
+  assert_memory_equal(u0, u1, (size_t)n * sizeof *u0);
+  assert_memory_equal(v0, v1, (size_t)n * sizeof *v0);
+  o.dt = 0.5 * (dtb + ib.dt_critical);
+  CUPID_ASSERT_OK(cupid_dynamics_run_explicit(&eb, &o, u1, v1, NULL, NULL, &id));
+  assert_true(id.lanczos_steps > 0 && id.dt_bound == dtb);
+  ASSERT_NEAR(id.omega_max, ib.omega_max, 1e-9 * ib.omega_max);
+  cupid_dynamics_partition part = {.owned_first = 0, .owned_last = n, .exchange = no_exchange,
+                                   .sum = no_sum};
+  eb.part = &part;
+  assert_int_equal(cupid_dynamics_run_explicit(&eb, &o, u1, v1, NULL, NULL, NULL), CUPID_ERR_ARGUMENT);
+  assert_non_null(strstr(cupid_error_message(), "row_bound"));
+  for (int k = 0; k < 9; k++) cupid_free(arrays[k]);
   cupid_dirichlet_destroy(&bc);
   cupid_csr_destroy(&K);
   cupid_pd_operator_destroy(&op);
