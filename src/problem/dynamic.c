@@ -295,6 +295,25 @@ static cupid_status history_row(dyn_output *o, double t) {
 static cupid_status monitor_outputs(dyn_output *o, cupid_int step, double t, int output,
                                     const double *v, const cupid_dynamics_energy *e);
 
+/* How central differences knew dt is stable (the integrator's check ran before step 0). */
+static void stable_step_progress(cupid_problem_state *prob) {
+  const cupid_dynamics_info *in = &prob->dyn.info;
+  if (prob->model->analysis.dynamic.integrator != CUPID_INTEGRATOR_CENTRAL) return;
+  if (in->omega_max != in->omega_max) { /* NaN: the bound sufficed */
+    cupid_problem_progress(prob, "dynamics: dt is stable: a bound of K guarantees steps up to "
+                           "%.4g (no Lanczos estimate needed)", in->dt_bound);
+    return;
+  }
+  char products[48] = ""; /* the matrix-free estimate counts its products */
+  if (in->lanczos_steps > 0) snprintf(products, sizeof products, ", %d products", in->lanczos_steps);
+  if (in->dt_bound > 0.0)
+    cupid_problem_progress(prob, "dynamics: critical step %.4g (Lanczos estimate%s); guaranteed "
+                           "stable up to %.4g", in->dt_critical, products, in->dt_bound);
+  else
+    cupid_problem_progress(prob, "dynamics: critical step %.4g (Lanczos estimate%s)",
+                           in->dt_critical, products);
+}
+
 static cupid_status monitor(void *ctx, cupid_int step, double t, int output, const double *u,
                             const double *v, const double *a, const cupid_dynamics_energy *e) {
   (void)a;
@@ -306,6 +325,7 @@ static cupid_status monitor(void *ctx, cupid_int step, double t, int output, con
     o->u_out = o->u_view;
   }
   cupid_status st = monitor_outputs(o, step, t, output, v, e);
+  if (step == 0) stable_step_progress(o->prob);
   /* every tenth of the run, whatever `every` is (the monitor sees every step) */
   const cupid_int tenth = o->prob->dyn.steps / 10 > 0 ? o->prob->dyn.steps / 10 : 1;
   if (st == CUPID_SUCCESS && step > 0 && step % tenth == 0) {
