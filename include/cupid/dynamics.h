@@ -144,6 +144,9 @@ typedef struct {
   /** Sum values[0..count) over the processes, in place (collective). */
   void (*sum)(void *ctx, double *values, int count);
   void *ctx;
+  /** Optional: the maximum of values[0..count) over the processes, in place (collective);
+   *  a row_bound (cupid_dynamics_explicit_system) needs it in a distributed run. */
+  void (*max)(void *ctx, double *values, int count);
 } cupid_dynamics_partition;
 
 /** The system of an explicit run with a matrix-free K and a lumped mass. */
@@ -156,10 +159,11 @@ typedef struct {
   const cupid_dirichlet_t *bc;        /**< finalized conditions, or NULL */
   const double *f;                    /**< constant external force (n entries), or NULL */
   const cupid_dynamics_partition *part; /**< NULL: one process holds every DOF */
-  /** Optional (one process only): a guaranteed bound of K's rows, n entries, such that every
-   *  eigenvalue of M^-1 K on the free DOFs is at most max over them of row_bound[d] /
-   *  m_lumped[d] (e.g. cupid_pd_operator_row_bound()). When dt is stable by this bound the
-   *  Lanczos estimate is skipped. */
+  /** Optional: a guaranteed bound of K's rows, n entries, such that every eigenvalue of
+   *  M^-1 K on the free DOFs is at most max over them of row_bound[d] / m_lumped[d] (e.g.
+   *  cupid_pd_operator_row_bound()). When dt is stable by this bound the Lanczos estimate is
+   *  skipped. In a distributed run only the owned DOFs' entries are read, and part->max must
+   *  be given. */
   const double *row_bound;
 } cupid_dynamics_explicit_system;
 

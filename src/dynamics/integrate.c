@@ -39,7 +39,7 @@ typedef struct {
   const cupid_dynamics_system *sys;
   cupid_dynamics_stiffness_fn kfn; /* matrix-free K (sys->K is NULL), else NULL */
   void *kctx;
-  const double *row_bound;         /* matrix-free, one process: a Gershgorin bound of K's rows */
+  const double *row_bound;         /* matrix-free: a Gershgorin bound of K's rows (owned DOFs) */
   cupid_status kst;                /* first failure of kfn (checked after each step) */
   const cupid_dynamics_options *opt;
   const cupid_dynamics_hooks *hooks; /* opt->hooks, or NULL */
@@ -355,15 +355,15 @@ static double critical_step(double lambda, double a, double b) {
   return 2.0 / w * (sqrt(1.0 + xi * xi) - xi);
 }
 
-/* The Gershgorin bound of M^-1 K from the rows' bound (max over the free DOFs of
- * row_bound / m), or 0 without one. */
+/* The Gershgorin bound of M^-1 K from the rows' bound: the max over the free owned DOFs (of
+ * every process) of row_bound / m; +inf (no bound) if one is not a number. */
 static double row_bound_lambda(const dyn_state *s) {
   double b = 0.0;
-  if (!s->row_bound) return 0.0;
-  for (cupid_int d = 0; d < s->n; d++) {
+  for (cupid_int d = s->lo; d < s->hi; d++) {
     const double q = s->row_bound[d] * s->minv[d]; /* minv is 0 on the fixed DOFs */
-    if (q > b || q != q) b = q; /* a NaN wins: no bound */
+    if (!(q <= b)) b = q == q ? q : INFINITY;
   }
+  if (s->part) s->part->max(s->part->ctx, &b, 1);
   return b;
 }
 
@@ -374,7 +374,7 @@ static cupid_status check_stable(dyn_state *s, cupid_dynamics_info *info) {
   if (s->row_bound) { /* matrix-free with a guaranteed bound: when dt is below its step, the
                          Lanczos estimate (tens of products of K) has nothing to check */
     bound = row_bound_lambda(s);
-    info->dt_bound = bound == bound ? critical_step(bound, o->rayleigh_mass, o->rayleigh_stiffness) : 0.0;
+    info->dt_bound = bound < INFINITY ? critical_step(bound, o->rayleigh_mass, o->rayleigh_stiffness) : 0.0;
     if (o->dt <= info->dt_bound) {
       info->omega_max = info->dt_critical = NAN;
       info->lanczos_steps = 0;
@@ -585,8 +585,9 @@ cupid_status cupid_dynamics_run_explicit(const cupid_dynamics_explicit_system *s
                      p->owned_first <= p->owned_last && p->owned_last <= sys->n),
               CUPID_ERR_ARGUMENT, "cupid_dynamics_run_explicit: a partition needs exchange, sum "
               "and owned DOFs within [0, n)");
-  CUPID_CHECK(!p || !sys->row_bound, CUPID_ERR_ARGUMENT,
-              "cupid_dynamics_run_explicit: row_bound is for one process (no partition)");
+  CUPID_CHECK(!p || !sys->row_bound || p->max, CUPID_ERR_ARGUMENT,
+              "cupid_dynamics_run_explicit: a row_bound in a distributed run needs the "
+              "partition's max");
   dyn_state s = {.n = sys->n, .sys = &full, .opt = opts, .kfn = sys->apply, .kctx = sys->ctx,
                  .row_bound = sys->row_bound, .part = p, .lo = p ? p->owned_first : 0,
                  .hi = p ? p->owned_last : sys->n};

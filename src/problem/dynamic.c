@@ -300,8 +300,11 @@ static void stable_step_progress(cupid_problem_state *prob) {
   const cupid_dynamics_info *in = &prob->dyn.info;
   if (prob->model->analysis.dynamic.integrator != CUPID_INTEGRATOR_CENTRAL) return;
   if (in->omega_max != in->omega_max) { /* NaN: the bound sufficed */
-    cupid_problem_progress(prob, "dynamics: dt is stable: a bound of K guarantees steps up to "
-                           "%.4g (no Lanczos estimate needed)", in->dt_bound);
+    if (isinf(in->dt_bound)) /* K = 0 on the free DOFs */
+      cupid_problem_progress(prob, "dynamics: dt is stable: K vanishes on the free DOFs");
+    else
+      cupid_problem_progress(prob, "dynamics: dt is stable: a bound of K guarantees steps up to "
+                             "%.4g (no Lanczos estimate needed)", in->dt_bound);
     return;
   }
   char products[48] = ""; /* the matrix-free estimate counts its products */
@@ -582,9 +585,11 @@ cupid_status cupid_problem_run_dynamic(cupid_problem_state *prob, const cupid_me
                                          .ctx = mf ? op->ctx : NULL,
                                          .m_lumped = m_lumped, .bc = prob->bc, .f = prob->f_ext};
   if (prob->slab) esys.apply = slab_apply, esys.ctx = prob, esys.part = &part;
-  else if (mf && op->row_bound && d->integrator == CUPID_INTEGRATOR_CENTRAL) {
-    CUPID_TRY(cupid_malloc((size_t)prob->ndof + 1, sizeof *rbound, "row bounds of K", &rbound));
-    CUPID_TRY(op->row_bound(op->ctx, rbound));
+  if (mf && op->row_bound && d->integrator == CUPID_INTEGRATOR_CENTRAL) {
+    /* a slab's operator gives its owned rows exactly (cupid_pd_operator_halo_layers) */
+    CUPID_TRY(agreed(prob, cupid_malloc((size_t)prob->ndof + 1, sizeof *rbound, "row bounds of K",
+                                        &rbound)));
+    CUPID_TRY(agreed(prob, op->row_bound(op->ctx, rbound)));
     esys.row_bound = rbound;
   }
   st = mf ? cupid_dynamics_run_explicit(&esys, &opt, prob->u, v, monitor, &o, &prob->dyn.info)

@@ -34,7 +34,8 @@ typedef struct {
   void *ctx;
   void (*destroy)(void **ctx); /**< NULL: borrowed */
   /** Optional: a guaranteed bound of K's rows (cupid_dynamics_explicit_system.row_bound),
-   *  ndof entries, so that a stable dt needs no Lanczos estimate; one process only. */
+   *  ndof entries (on a slab: right on the owned rows), so that a stable dt needs no Lanczos
+   *  estimate. */
   cupid_status (*row_bound)(void *ctx, double *r);
 } cupid_method_operator;
 

@@ -88,6 +88,11 @@ static void sum_over_ranks(void *ctx, double *values, int count) {
   cupid_petsc_sum_doubles(values, count);
 }
 
+static void max_over_ranks(void *ctx, double *values, int count) {
+  (void)ctx;
+  cupid_petsc_max_doubles(values, count);
+}
+
 cupid_status cupid_problem_slab_partition(const cupid_problem_state *prob, cupid_petsc_halo *halo,
                                           cupid_dynamics_partition *part) {
   const cupid_pd_grid_partition *p = &prob->part;
@@ -98,7 +103,8 @@ cupid_status cupid_problem_slab_partition(const cupid_problem_state *prob, cupid
                                      .global_first = 3 * p->first_global,
                                      .exchange = halo_exchange,
                                      .sum = sum_over_ranks,
-                                     .ctx = *halo};
+                                     .ctx = *halo,
+                                     .max = max_over_ranks};
   return CUPID_SUCCESS;
 }
 

@@ -33,7 +33,7 @@ static cupid_status failing_apply(void *ctx, const double *x, double *y) {
   return ++calls[0] >= calls[1] ? CUPID_ERR_NUMERIC : CUPID_SUCCESS;
 }
 
-/* A partition of one process (exchange and sum do nothing). */
+/* A partition of one process (exchange, sum and max do nothing). */
 static cupid_status no_exchange(void *ctx, double *x) {
   (void)ctx, (void)x;
   return CUPID_SUCCESS;
@@ -134,7 +134,7 @@ static void compare(cupid_pd_model_kind model) {
   /* With the operator's row bound (cupid_pd_operator_row_bound): its guaranteed step lies
    * below the estimate; a dt within it runs without Lanczos and steps exactly as the run
    * without the bound; a dt above it, below the estimate, runs Lanczos; one above both is
-   * refused. A partition and a row bound together are refused. */
+   * refused. */
   CUPID_ASSERT_OK(cupid_pd_operator_row_bound(op, rbound));
   cupid_dynamics_explicit_system eb = es;
   eb.row_bound = rbound;
@@ -156,11 +156,18 @@ static void compare(cupid_pd_model_kind model) {
   CUPID_ASSERT_OK(cupid_dynamics_run_explicit(&eb, &o, u1, v1, NULL, NULL, &id));
   assert_true(id.lanczos_steps > 0 && id.dt_bound == dtb);
   ASSERT_NEAR(id.omega_max, ib.omega_max, 1e-9 * ib.omega_max);
+  /* A partition (here of one process) needs max for the bound; with it, the same run. */
   cupid_dynamics_partition part = {.owned_first = 0, .owned_last = n, .exchange = no_exchange,
                                    .sum = no_sum};
   eb.part = &part;
   assert_int_equal(cupid_dynamics_run_explicit(&eb, &o, u1, v1, NULL, NULL, NULL), CUPID_ERR_ARGUMENT);
   assert_non_null(strstr(cupid_error_message(), "row_bound"));
+  part.max = no_sum;
+  o.dt = 0.99 * dtb;
+  memcpy(u1, ui, (size_t)n * sizeof *u1), memcpy(v1, vi, (size_t)n * sizeof *v1);
+  CUPID_ASSERT_OK(cupid_dynamics_run_explicit(&eb, &o, u1, v1, NULL, NULL, &id));
+  assert_true(id.lanczos_steps == 0 && id.dt_bound == dtb);
+  assert_memory_equal(u0, u1, (size_t)n * sizeof *u0);
   for (int k = 0; k < 9; k++) cupid_free(arrays[k]);
   cupid_dirichlet_destroy(&bc);
   cupid_csr_destroy(&K);

@@ -13,7 +13,8 @@
  *  - with a lumped mass, max r_i / m_i >= the Lanczos estimate of lambda_max(M^-1 K) (the
  *    ratio printed: Gershgorin's own gap, up to ~5 on these small grids).
  * Every model, influence and partial-volume rule, two materials (nu = 0.2: 3K - 5mu < 0), a
- * surface correction, pre-cracks (broken bonds change m and the families), a 1D bar. */
+ * surface correction, pre-cracks (broken bonds change m and the families), nodes with the
+ * full stencil, a 1D bar. */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -207,6 +208,25 @@ static void test_against_assembled(void **state) {
                 worst_ratio, worst_lambda_ratio);
 }
 
+/* An 8 x 8 x 8 lattice (delta = 3.015 h): its 8 middle nodes have the full stencil, the
+ * shortcut of the bound for full, intact families without surface factors. */
+static void test_full_stencil(void **state) {
+  (void)state;
+  cupid_box box = box3(0, 8, 0, 8, 0, 8);
+  int mat = 0;
+  cupid_pd_grid_options go = {.spacing = 1.0, .dimension = 3};
+  cupid_pd_grid g = NULL;
+  CUPID_ASSERT_OK(cupid_pd_grid_create(&go, 1, &box, &mat, &g));
+  assert_int_equal(cupid_pd_grid_num_nodes(g), 512);
+  for (int model = 0; model < 2; model++) {
+    cupid_pd_operator op = make_op(g, model, CUPID_INFLUENCE_INVERSE, CUPID_PARTIAL_PDLAMMPS,
+                                   3.015, CUPID_SURFACE_NONE);
+    check_bound(g, op, model == 0 ? "8^3 LPS" : "8^3 bond-based", model == 0, materials);
+    cupid_pd_operator_destroy(&op);
+  }
+  cupid_pd_grid_destroy(&g);
+}
+
 /* A 1D bond-based bar (3 DOFs a node, motion along y). */
 static void test_bar(void **state) {
   (void)state;
@@ -224,6 +244,7 @@ static void test_bar(void **state) {
 
 int main(void) {
   const struct CMUnitTest tests[] = {cmocka_unit_test(test_against_assembled),
+                                     cmocka_unit_test(test_full_stencil),
                                      cmocka_unit_test(test_bar)};
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -11,7 +11,10 @@
 #  3. LPS with the critical bond-energy criterion (plate_slabs_lps.yaml): the same damage.csv
 #     on 1, 2 and 3 ranks. The test reads the dilatations of both ends, which the slab's outer
 #     halo has wrong: without the exchange of the owners' decisions (src/problem/fracture.c)
-#     2 ranks break other bonds from step ~950 on.
+#     2 ranks break other bonds from step ~950 on;
+#  4. the stable step: the guaranteed bound of K's rows (cupid_pd_operator_row_bound, the
+#     maximum over the slabs' owned rows) makes dt stable without Lanczos on 1 and 2 ranks,
+#     the same bound to 1e-12 (a maximum of the same rows' values).
 # Skipped (77) without PETSc. ~40 s on 2 cores.
 if [ "${CUPID_HAVE_PETSC:-0}" != 1 ]; then
   echo "SKIP: cupid was built without PETSc (scripts/build.sh --with-petsc builds build-petsc/)"
@@ -68,6 +71,14 @@ for k in ("broken_bonds", "first_break_step", "damaged_nodes"):
         print(f"FAIL: fracture.{k}: {s1['fracture'][k]} vs {s2['fracture'][k]}"); good = False
 print(f"PMB: {s1['fracture']['broken_bonds']} bonds broken, first at step "
       f"{s1['fracture']['first_break_step']}, in both")
+for case in ("pmb", "el"): # the stable step from the row bound, over the slabs' owned rows
+    d1, d2 = (json.load(open(f"{case}{r}/summary.json"))["dynamic"] for r in (1, 2))
+    b1, b2 = d1["dt_guaranteed_stable"], d2["dt_guaranteed_stable"]
+    print(f"{case}: stable step by {d1['stable_step_check']} / {d2['stable_step_check']}, "
+          f"guaranteed up to {b1:.10g} / {b2:.10g}")
+    if d1["stable_step_check"] != "bound" or d2["stable_step_check"] != "bound" or \
+            not abs(b1 - b2) <= 1e-12 * b1:
+        print(f"FAIL: {case}: the bound differs between 1 and 2 ranks, or Lanczos ran"); good = False
 if s2["dynamic"].get("pd_slabs", {}).get("ranks") != 2 or "pd_slabs" in s1["dynamic"]:
     print("FAIL: the 2-rank run was not split into 2 slabs"); good = False
 if s1["fracture"]["broken_bonds"] < 1000:
