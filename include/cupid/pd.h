@@ -347,7 +347,16 @@ typedef struct {
                                       owner decides, and cupid_pd_operator_unpack_broken()
                                       brings the others (a criterion that reads dilatations,
                                       which a slab's outer halo does not have right) */
+  double most_top;               /**< only_most on a slab: the largest ratio (max_ratio's) over
+                                      every rank, so that near-ties are judged against the
+                                      whole grid's; 0: this operator's own */
 } cupid_pd_fracture_options;
+
+/** only_most's near-ties: bonds whose ratios are within this fraction of the largest are
+ *  equal, and the first (lowest lower node, then stencil entry) breaks. A symmetric model has
+ *  mirror bonds whose ratios differ by round-off alone, and different solvers' round-off would
+ *  otherwise pick different mirrors (the direct and PETSc paths differ by ~1e-10). */
+#define CUPID_PD_TIE 1e-8
 
 /**
  * Break every intact bond over its limit at u (only_most: only the one furthest over it,
@@ -379,7 +388,8 @@ cupid_status cupid_pd_operator_copy_broken(cupid_pd_operator dst, const cupid_pd
 
 /** The largest ratio of an intact, breakable bond's criterion to its limit at u (stretch:
  *  e / (s0 |xi|); energy: sqrt(w / w_c), both linear in u): a linear solution scaled by
- *  1 / ratio brings the first bond exactly to its limit. 0 when no bond is stretched. */
+ *  1 / ratio brings the first bond exactly to its limit. 0 when no bond is stretched. With
+ *  opts->owned_only, the bonds whose lower node is counted (a slab's share). */
 cupid_status cupid_pd_operator_max_ratio(const cupid_pd_operator op, const double *u,
                                          const cupid_pd_fracture_options *opts, double *ratio);
 
@@ -399,6 +409,19 @@ cupid_status cupid_pd_operator_blocked(const cupid_pd_operator op, const double 
  */
 cupid_status cupid_pd_operator_unsupported(const cupid_pd_operator op, const unsigned char *anchored,
                                            unsigned char *release, cupid_int *count);
+
+/** The first check of cupid_pd_operator_unsupported() on nodes [first, last) alone: those
+ *  whose intact bonds no longer hold them in every direction get release = 2 (*count: how
+ *  many). A slab of a distributed grid decides its owned nodes (their families are whole). */
+cupid_status cupid_pd_operator_weakly_held(const cupid_pd_operator op, cupid_int first,
+                                           cupid_int last, unsigned char *release,
+                                           cupid_int *count);
+
+/** The second: from every node with seen = 1 and release = 0, mark seen = 1 on each node
+ *  with release = 0 that it reaches over intact bonds (*added: how many were new). On a slab,
+ *  rounds of this and an exchange of the flags between ranks find what the whole grid would. */
+cupid_status cupid_pd_operator_reach(const cupid_pd_operator op, const unsigned char *release,
+                                     unsigned char *seen, cupid_int *added);
 
 /** Bonds (unordered pairs) removed so far: pre-cracks and breaks. */
 cupid_int cupid_pd_operator_num_broken(const cupid_pd_operator op);

@@ -417,6 +417,29 @@ cupid_status cupid_petsc_solve_nodes(const cupid_node_operator *A, const double 
                                      const cupid_dirichlet_t *bc, double *u,
                                      cupid_solve_info *info);
 
+/**
+ * The same solve kept for a sequence of systems whose operator changes a little between them
+ * (crack growth: bonds break, nodes are held): the shell, the preconditioner matrix and GAMG
+ * are built once by _create and reused by every _solve (the operator's product and @p bc are
+ * read at each solve, so broken bonds and newly fixed DOFs count at once; the preconditioner
+ * stays the intact grid's, which keeps it symmetric positive definite). @p A is copied; @p bc
+ * must outlive the solver. _solve starts CG from u (guess != 0: its owned values, the
+ * prescribed ones on fixed DOFs) or from 0, to the same absolute target |b - K u| <= rtol |b|
+ * either way; info->time_factor of the first solve is the set-up. A solve that does not
+ * converge (CUPID_ERR_NUMERIC) leaves CG's last iterate in u: a part of the model that lost
+ * its support shows there as the displacement that ran away. Collective.
+ */
+typedef struct cupid_petsc_nodes_solver_private *cupid_petsc_nodes_solver;
+cupid_status cupid_petsc_nodes_solver_create(const cupid_node_operator *A,
+                                             const cupid_dirichlet_t *bc,
+                                             cupid_petsc_nodes_solver *out);
+cupid_status cupid_petsc_nodes_solver_solve(cupid_petsc_nodes_solver S, const double *f, int guess,
+                                            double *u, cupid_solve_info *info);
+/** Lower the solves' iteration limit (the default or -ksp_max_it) to @p max_iterations: a
+ *  re-solve that needs far more than the first did is on a mechanism, not converging. */
+void cupid_petsc_nodes_solver_limit(cupid_petsc_nodes_solver S, int max_iterations);
+void cupid_petsc_nodes_solver_destroy(cupid_petsc_nodes_solver *S);
+
 /* ---- Solver engines as a table (src/solvers/engine.c) ----
  * Each engine fills one cupid_solver_type; the problem (problem.h) picks one by name or by cost
  * (`auto`) and solves through it, so no code outside the table asks which engine it is. */

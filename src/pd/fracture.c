@@ -413,6 +413,30 @@ static cupid_status break_list(struct cupid_pd_operator_private *op, const doubl
   return st;
 }
 
+static double bond_ratio(const struct cupid_pd_operator_private *op, const double *theta,
+                         const cupid_pd_fracture_options *o, const double *u, cupid_int i,
+                         cupid_int j, int s);
+
+/* only_most: keep the most critical bond of the list (largest ratio to its limit), the first
+ * in list order (ascending nodes) among those within CUPID_PD_TIE of the largest, which is
+ * o->most_top when given (a slab's share of a whole grid). */
+static cupid_status keep_most_critical(const struct cupid_pd_operator_private *op,
+                                       const double *theta, const cupid_pd_fracture_options *o,
+                                       const double *u, bond_list *L) {
+  double *r = NULL, top = o->most_top;
+  CUPID_CALL(cupid_malloc(L->n, sizeof *r, "bond ratios", &r));
+  for (size_t k = 0; k < L->n; k++) {
+    const pd_family F = pd_family_of(op, L->i[k]);
+    r[k] = bond_ratio(op, theta, o, u, L->i[k], pd_family_node(op, &F, L->s[k]), L->s[k]);
+    if (r[k] > top) top = r[k];
+  }
+  size_t best = 0;
+  while (best + 1 < L->n && !(r[best] >= top * (1.0 - CUPID_PD_TIE))) best++;
+  cupid_free(&r);
+  L->i[0] = L->i[best], L->s[0] = L->s[best], L->n = 1;
+  return CUPID_SUCCESS;
+}
+
 cupid_status cupid_pd_operator_break_bonds(cupid_pd_operator op, const double *u,
                                            const cupid_pd_fracture_options *o, int only_most,
                                            cupid_int *broken, double *dissipated) {
@@ -434,21 +458,7 @@ cupid_status cupid_pd_operator_break_bonds(cupid_pd_operator op, const double *u
     pd_lps_dilatation(op, 0, op->nnodes, u, theta);
   }
   CUPID_TRY(find_over(op, u, theta, o, &L));
-  if (only_most && L.n > 1) { /* the most critical one: largest ratio to its limit */
-    size_t best = 0;
-    double worst = -1.0;
-    for (size_t k = 0; k < L.n; k++) {
-      const pd_family F = pd_family_of(op, L.i[k]);
-      const cupid_int j = pd_family_node(op, &F, L.s[k]);
-      const int s = L.s[k];
-      const double e = pd_extension(op->st.nrm + 3 * s, u, L.i[k], j);
-      const double r = o->criterion == CUPID_PD_BREAK_STRETCH
-                           ? e / (op->st.x[s] * stretch_limit(o, L.i[k], j))
-                           : bond_energy_density(op, theta, L.i[k], j, s, e) / o->critical_energy;
-      if (r > worst) worst = r, best = k; /* first of equals: deterministic */
-    }
-    L.i[0] = L.i[best], L.s[0] = L.s[best], L.n = 1;
-  }
+  if (only_most && L.n > 0) CUPID_TRY(keep_most_critical(op, theta, o, u, &L));
   CUPID_TRY(break_list(op, u, &L, o, dissipated));
   for (size_t k = 0; k < L.n; k++) *broken += counted(o, L.i[k]);
 cleanup:
@@ -575,6 +585,7 @@ static cupid_status scan_ratios(const cupid_pd_operator op, const double *u,
   cupid_int over = 0;
 #pragma omp parallel for schedule(static) reduction(max : r) reduction(+ : over) if (op->nnodes > PD_OMP_MIN_NODES)
   for (cupid_int i = 0; i < op->nnodes; i++) {
+    if (o->owned_only && !counted(o, i)) continue;
     const pd_family F = pd_family_of(op, i);
     for (int q = 0; q < F.n; q++) {
       const int s = pd_family_entry(&F, q);
@@ -590,6 +601,7 @@ static cupid_status scan_ratios(const cupid_pd_operator op, const double *u,
    * pass, serial, so that ties resolve the same way on any thread count (the lowest index) */
   cupid_int node = -1;
   for (cupid_int i = 0; i < op->nnodes && want_blocked && over > 0 && node < 0; i++) {
+    if (o->owned_only && !counted(o, i)) continue;
     const pd_family F = pd_family_of(op, i);
     for (int q = 0; q < F.n && node < 0; q++) {
       const int s = pd_family_entry(&F, q);
@@ -663,28 +675,28 @@ static int weakly_held(const struct cupid_pd_operator_private *op, cupid_int i) 
   return intact <= 2 || min_eigenvalue(a) < 1e-3 * all / 3.0;
 }
 
-cupid_status cupid_pd_operator_unsupported(const cupid_pd_operator op, const unsigned char *anchored,
-                                           unsigned char *release, cupid_int *count) {
-  CUPID_CHECK(op && anchored && release && count, CUPID_ERR_ARGUMENT,
-              "unsupported needs its arguments");
-  const cupid_int nn = op->nnodes;
-  cupid_int *queue = NULL;
-  unsigned char *seen = NULL;
-  CUPID_CALL(cupid_malloc((size_t)nn + 1, sizeof *queue, "node queue", &queue));
-  cupid_status st = cupid_calloc((size_t)nn + 1, 1, "node flags", &seen);
-  if (st != CUPID_SUCCESS) {
-    cupid_free(&queue);
-    return st;
-  }
+cupid_status cupid_pd_operator_weakly_held(const cupid_pd_operator op, cupid_int first,
+                                           cupid_int last, unsigned char *release,
+                                           cupid_int *count) {
+  CUPID_CHECK(op && release && count && first >= 0 && last <= op->nnodes, CUPID_ERR_ARGUMENT,
+              "weakly_held needs its arguments and a range of nodes");
   /* nodes whose intact bonds no longer hold them in every direction: at most 2 left (a
    * mechanism: Peridigm's RANK_DEFICIENT_NODES), or all of them (nearly) in one plane */
+  cupid_int n = 0;
+  for (cupid_int i = first; i < last; i++)
+    if (!release[i] && op->bslot && op->bslot[i] >= 0 && weakly_held(op, i)) release[i] = 2, n++;
+  *count = n;
+  return CUPID_SUCCESS;
+}
+
+cupid_status cupid_pd_operator_reach(const cupid_pd_operator op, const unsigned char *release,
+                                     unsigned char *seen, cupid_int *added) {
+  CUPID_CHECK(op && release && seen && added, CUPID_ERR_ARGUMENT, "reach needs its arguments");
+  const cupid_int nn = op->nnodes;
+  cupid_int *queue = NULL, head = 0, tail = 0, n = 0;
+  CUPID_CALL(cupid_malloc((size_t)nn + 1, sizeof *queue, "node queue", &queue));
   for (cupid_int i = 0; i < nn; i++)
-    if (!release[i] && op->bslot && op->bslot[i] >= 0 && weakly_held(op, i)) release[i] = 2;
-  /* what an anchored node reaches over intact bonds between kept nodes holds; the rest is a
-   * fragment cut off from every support */
-  cupid_int head = 0, tail = 0;
-  for (cupid_int i = 0; i < nn; i++)
-    if (anchored[i] && !release[i]) seen[i] = 1, queue[tail++] = i;
+    if (seen[i] && !release[i]) queue[tail++] = i;
   while (head < tail) {
     const cupid_int i = queue[head++];
     const pd_family F = pd_family_of(op, i);
@@ -692,18 +704,35 @@ cupid_status cupid_pd_operator_unsupported(const cupid_pd_operator op, const uns
       const int s = pd_family_entry(&F, q);
       if (pd_bond_broken(op, i, s)) continue;
       const cupid_int j = pd_family_node(op, &F, s);
-      if (!seen[j] && !release[j]) seen[j] = 1, queue[tail++] = j;
+      if (!seen[j] && !release[j]) seen[j] = 1, queue[tail++] = j, n++;
     }
   }
+  *added = n;
+  cupid_free(&queue);
+  return CUPID_SUCCESS;
+}
+
+cupid_status cupid_pd_operator_unsupported(const cupid_pd_operator op, const unsigned char *anchored,
+                                           unsigned char *release, cupid_int *count) {
+  CUPID_CHECK(op && anchored && release && count, CUPID_ERR_ARGUMENT,
+              "unsupported needs its arguments");
+  const cupid_int nn = op->nnodes;
+  unsigned char *seen = NULL;
+  cupid_int weak = 0, added = 0;
+  CUPID_CALL(cupid_calloc((size_t)nn + 1, 1, "node flags", &seen));
+  cupid_status st = cupid_pd_operator_weakly_held(op, 0, nn, release, &weak);
+  /* what an anchored node reaches over intact bonds between kept nodes holds; the rest is a
+   * fragment cut off from every support */
+  for (cupid_int i = 0; i < nn; i++) seen[i] = anchored[i] && !release[i];
+  if (st == CUPID_SUCCESS) st = cupid_pd_operator_reach(op, release, seen, &added);
   cupid_int n = 0;
-  for (cupid_int i = 0; i < nn; i++) {
+  for (cupid_int i = 0; i < nn && st == CUPID_SUCCESS; i++) {
     if (!release[i] && !seen[i]) release[i] = 2;
     n += release[i] == 2;
   }
   *count = n;
-  cupid_free(&queue);
   cupid_free(&seen);
-  return CUPID_SUCCESS;
+  return st;
 }
 
 cupid_int cupid_pd_operator_nodes_broken(const cupid_pd_operator op, cupid_int *nodes) {

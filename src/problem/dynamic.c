@@ -244,31 +244,6 @@ static cupid_status history_grow(cupid_problem_state *prob, double **row) {
   return CUPID_SUCCESS;
 }
 
-/* The output points' values on a slab run: each point is sampled by the rank that owns the
- * node whose cell holds it (its neighbours' copies are current), and summed over the ranks. */
-static cupid_status slab_points(const cupid_problem_state *prob, double *u) {
-  const cupid_output *out = &prob->model->output;
-  const int np = out->n_points;
-  double *buf = NULL;
-  CUPID_CALL(cupid_calloc((size_t)(4 * np) + 1, sizeof *buf, "output points", &buf));
-  double o[3], h = cupid_pd_grid_spacing(prob->grid);
-  cupid_pd_grid_origin(prob->grid, o);
-  for (int k = 0; k < np; k++) {
-    const double *p = out->points[k].at;
-    cupid_int ijk[3];
-    for (int a = 0; a < 3; a++) ijk[a] = (cupid_int)floor((p[a] - o[a]) / h);
-    const cupid_int node = cupid_pd_grid_node_at(prob->grid, ijk[0], ijk[1], ijk[2]);
-    const int mine = node >= 0 && cupid_problem_pd_owned(prob, node) && u[3 * k] == u[3 * k];
-    for (int c = 0; c < 3 && mine; c++) buf[3 * k + c] = u[3 * k + c];
-    buf[3 * np + k] = mine;
-  }
-  cupid_petsc_sum_doubles(buf, 4 * np);
-  for (int k = 0; k < np; k++)
-    for (int c = 0; c < 3; c++) u[3 * k + c] = buf[3 * np + k] > 0 ? buf[3 * k + c] : NAN;
-  cupid_free(&buf);
-  return CUPID_SUCCESS;
-}
-
 /* The output points at time t: in the problem's history and, on the rank that writes the
  * files, in history.csv. */
 static cupid_status history_row(dyn_output *o, double t) {
@@ -283,7 +258,7 @@ static cupid_status history_row(dyn_output *o, double t) {
     cupid_region_kind region;
     CUPID_CALL(cupid_problem_sample_point(o->prob, o->u_out, out->points[k].at, u, NULL, &region));
   }
-  if (o->prob->slab) CUPID_CALL(slab_points(o->prob, row + 1));
+  if (o->prob->slab) CUPID_CALL(cupid_problem_slab_points(o->prob, row + 1));
   for (int k = 0; k < out->n_points && f; k++) {
     const double *u = row + 1 + 3 * k;
     fprintf(f, ",%.10e,%.10e,%.10e", u[0], u[1], u[2]);

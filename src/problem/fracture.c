@@ -177,7 +177,32 @@ cupid_status cupid_problem_fracture_setup(cupid_problem_state *prob) {
     o->count_first = prob->part.owned_first;
     o->count_last = prob->part.owned_last;
   }
-  if (prob->slab && o->criterion == CUPID_PD_BREAK_ENERGY) CUPID_CALL(break_exchange_setup(prob));
+  /* the energy test, and static growth (whose `per_iteration: one` breaks one bond of the
+   * whole grid): each bond decided by one rank, its bit sent to the others */
+  if (prob->slab && (o->criterion == CUPID_PD_BREAK_ENERGY || m->analysis.type == CUPID_ANALYSIS_STATIC))
+    CUPID_CALL(break_exchange_setup(prob));
+  return CUPID_SUCCESS;
+}
+
+cupid_status cupid_problem_max_ratio(const cupid_problem_state *prob, const double *u, double *r) {
+  CUPID_CALL(cupid_pd_operator_max_ratio(prob->op, u, &prob->fracture, r));
+  if (prob->slab) cupid_petsc_max_doubles(r, 1); /* each rank its owned bonds (owned_only) */
+  return CUPID_SUCCESS;
+}
+
+/* `per_iteration: one` on a slab run: 1 on the rank that breaks the bond, the most critical of
+ * the whole grid (the lowest rank among near-equals, CUPID_PD_TIE: it holds the lower nodes,
+ * as the whole grid's scan takes the first of them); *top the whole grid's largest ratio. */
+static cupid_status breaks_most_here(const cupid_problem_state *prob, const double *u, int *here,
+                                     double *top) {
+  double r = 0.0;
+  CUPID_CALL(cupid_pd_operator_max_ratio(prob->op, u, &prob->fracture, &r));
+  *top = r;
+  cupid_petsc_max_doubles(top, 1);
+  const int size = cupid_petsc_size(), rank = cupid_petsc_rank();
+  const int near = *top > 1.0 && r >= *top * (1.0 - CUPID_PD_TIE);
+  const int first = size - cupid_petsc_max_int(near ? size - rank : 0);
+  *here = first == rank;
   return CUPID_SUCCESS;
 }
 
@@ -217,8 +242,14 @@ cupid_status cupid_problem_fracture_step(cupid_problem_state *prob, cupid_int st
   cupid_int broken = 0;
   if (n_broken) *n_broken = 0;
   if (!prob->model->pd.fracture.has_fracture) return CUPID_SUCCESS;
-  CUPID_CALL(cupid_pd_operator_break_bonds(prob->op, u, &prob->fracture, only_most, &broken,
-                                           dissipated));
+  int here = 1;
+  cupid_pd_fracture_options o = prob->fracture;
+  if (prob->slab && only_most)
+    CUPID_CALL(cupid_problem_slab_agree(breaks_most_here(prob, u, &here, &o.most_top)));
+  cupid_status st = here ? cupid_pd_operator_break_bonds(prob->op, u, &o, only_most, &broken,
+                                                         dissipated)
+                         : CUPID_SUCCESS;
+  CUPID_CALL(prob->slab ? cupid_problem_slab_agree(st) : st);
   if (prob->break_halo) CUPID_CALL(cupid_problem_slab_agree(break_exchange(prob, u, dissipated)));
   double total[2] = {(double)broken, *dissipated}; /* a slab's shares: summed over the ranks */
   if (prob->slab) cupid_petsc_sum_doubles(total, 2);

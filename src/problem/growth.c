@@ -49,6 +49,9 @@ typedef struct {
   double cg_iteration_flops;    /* CG iteration with its factor (two triangular solves, K x) */
   cupid_int cg_since_factor;    /* CG iterations since the last factorisation */
   double t_factor, t_cg;
+  double *react;                /* 3 per constraint: the reactions of the last solution */
+  double *points;               /* 3 per output point */
+  cupid_growth_slab slab;       /* a slab run (growth_slab.c) */
 } growth_run;
 
 static void growth_free(growth_run *g) {
@@ -64,6 +67,9 @@ static void growth_free(growth_run *g) {
   cupid_direct_factor_destroy(&g->F);
   cupid_growth_downdate_free(&g->dd);
   for (int k = 0; k < 4; k++) cupid_free(&g->w[k]);
+  cupid_free(&g->react);
+  cupid_free(&g->points);
+  cupid_growth_slab_free(&g->slab);
 }
 
 /* The DOFs each constraint fixes (one byte a DOF and constraint), and the unit translations:
@@ -126,16 +132,23 @@ static cupid_status open_csv(growth_run *g) {
   return CUPID_SUCCESS;
 }
 
-/* The reaction of constraint k: the work of (f_int - f_ext) on its DOFs against the unit
- * translations. */
-static void reaction(const growth_run *g, int k, double r[3]) {
+/* The reaction of each constraint k into g->react[3 k ..]: the work of (f_int - f_ext) on its
+ * DOFs against the unit translations (a slab: on its owned DOFs, summed over the ranks). */
+static void reactions(growth_run *g) {
   const cupid_problem_state *prob = g->prob;
   const size_t n = (size_t)prob->ndof;
-  const unsigned char *fixed = g->masks + (size_t)k * n;
-  r[0] = r[1] = r[2] = 0.0;
-  for (size_t d = 0; d < n; d++)
-    if (fixed[d])
-      for (int c = 0; c < 3; c++) r[c] += (prob->f_int[d] - prob->f_ext[d]) * g->T[(size_t)c * n + d];
+  const int nk = prob->model->n_constraints;
+  const size_t d0 = prob->slab ? 3 * (size_t)prob->part.owned_first : 0;
+  const size_t d1 = prob->slab ? 3 * (size_t)prob->part.owned_last : n;
+  for (int k = 0; k < nk; k++) {
+    const unsigned char *fixed = g->masks + (size_t)k * n;
+    double *r = g->react + 3 * k;
+    r[0] = r[1] = r[2] = 0.0;
+    for (size_t d = d0; d < d1; d++)
+      if (fixed[d])
+        for (int c = 0; c < 3; c++) r[c] += (prob->f_int[d] - prob->f_ext[d]) * g->T[(size_t)c * n + d];
+  }
+  if (prob->slab) cupid_petsc_sum_doubles(g->react, 3 * nk);
 }
 
 /* The load factor at which the next bond breaks, the crack as it is: each solve is linear, so
@@ -155,8 +168,7 @@ static void track_peaks(growth_run *g, int step, double lambda) {
   if (!prob->growth.peak || lc <= 0.0 || lambda <= 0.0) return;
   for (int k = 0; k < prob->model->n_constraints; k++) {
     double r[3];
-    reaction(g, k, r);
-    for (int c = 0; c < 3; c++) r[c] *= lc / lambda;
+    for (int c = 0; c < 3; c++) r[c] = g->react[3 * k + c] * lc / lambda;
     double *p = prob->growth.peak + 6 * k;
     const double mag = sqrt(r[0] * r[0] + r[1] * r[1] + r[2] * r[2]);
     if (mag <= p[0]) continue;
@@ -165,31 +177,38 @@ static void track_peaks(growth_run *g, int step, double lambda) {
   }
 }
 
+/* The step's row: every rank of a slab run takes part in the sums, rank 0 writes. */
 static cupid_status write_row(growth_run *g, int step, double lambda, int iterations) {
   cupid_problem_state *prob = g->prob;
   const cupid_model_t *m = prob->model;
+  reactions(g);
   track_peaks(g, step, lambda);
-  if (!g->csv) return CUPID_SUCCESS;
+  if (!g->csv && !prob->slab) return CUPID_SUCCESS;
   CUPID_CALL(cupid_problem_fracture_damage(prob));
+  const int damage = cupid_problem_has_damage(prob);
+  const cupid_int nodes_broken = damage ? cupid_problem_fracture_nodes_broken(prob) : 0;
+  for (int k = 0; k < m->output.n_points; k++) {
+    cupid_region_kind region;
+    CUPID_CALL(cupid_problem_sample_point(prob, prob->u, m->output.points[k].at, g->points + 3 * k,
+                                          NULL, &region));
+  }
+  if (prob->slab) CUPID_CALL(cupid_problem_slab_points(prob, g->points));
+  for (int c = 0; c < 3 && m->output.n_points > 0; c++) g->u0[c] = g->points[c];
+  if (!g->csv) return CUPID_SUCCESS;
   FILE *f = cupid_atomic_stream(g->csv);
   /* t is the load factor: the contract's columns step,t,... read as a pseudo-time */
   fprintf(f, "%d,%.10e,%.10e,%d", step, lambda, lambda, iterations);
-  if (cupid_problem_has_damage(prob))
+  if (damage)
     fprintf(f, ",%lld,%lld,%.10e,%lld,%lld", (long long)prob->broken_bonds,
-            (long long)prob->damaged_nodes, prob->max_damage,
-            (long long)cupid_pd_operator_nodes_broken(prob->op, NULL), (long long)g->released);
+            (long long)prob->damaged_nodes, prob->max_damage, (long long)nodes_broken,
+            (long long)g->released);
   if (m->has_peridynamics && m->pd.fracture.has_fracture) fprintf(f, ",%.10e", next_break(g, lambda));
   for (int k = 0; k < m->n_constraints; k++) {
-    double r[3];
-    reaction(g, k, r);
+    const double *r = g->react + 3 * k;
     fprintf(f, ",%.10e,%.10e,%.10e", r[0], r[1], r[2]);
   }
   for (int k = 0; k < m->output.n_points; k++) {
-    double u[3];
-    cupid_region_kind region;
-    CUPID_CALL(cupid_problem_sample_point(prob, prob->u, m->output.points[k].at, u, NULL, &region));
-    if (k == 0)
-      for (int c = 0; c < 3; c++) g->u0[c] = u[c];
+    const double *u = g->points + 3 * k;
     fprintf(f, ",%.10e,%.10e,%.10e", u[0], u[1], u[2]);
   }
   fputc('\n', f);
@@ -243,31 +262,46 @@ static void anchor(growth_run *g) {
 static cupid_status release_unsupported(growth_run *g, int step) {
   cupid_problem_state *prob = g->prob;
   cupid_int fresh = 0;
-  CUPID_CALL(cupid_pd_operator_unsupported(prob->op, g->anchored, g->release, &fresh));
+  if (prob->slab)
+    CUPID_CALL(cupid_growth_slab_unsupported(prob, &g->slab, g->anchored, g->release, &fresh));
+  else
+    CUPID_CALL(cupid_pd_operator_unsupported(prob->op, g->anchored, g->release, &fresh));
   if (fresh == 0) return CUPID_SUCCESS;
   const double *x = cupid_pd_grid_coords(prob->grid);
   for (cupid_int i = 0; i < prob->n_pd; i++) {
     if (g->release[i] != 2) continue;
     g->release[i] = 1;
     for (int c = 0; c < 3; c++) CUPID_CALL(cupid_dirichlet_fix(prob->bc, 3 * i + c, prob->u[3 * i + c]));
-    if (fresh <= 3)
+    if (fresh <= 3 && !prob->slab) /* a slab run: the count below */
       cupid_problem_progress(prob, "growth: step %d: node (%g, %g, %g) lost its support: held",
                              step, x[3 * i], x[3 * i + 1], x[3 * i + 2]);
   }
   g->released += fresh;
-  if (fresh > 3)
-    cupid_problem_progress(prob, "growth: step %d: %lld nodes lost their support: held", step,
-                           (long long)fresh);
+  if (fresh > 3 || prob->slab)
+    cupid_problem_progress(prob, "growth: step %d: %lld node%s lost their support: held", step,
+                           (long long)fresh, fresh == 1 ? "" : "s");
   return cupid_dirichlet_finalize(prob->bc);
 }
 
 /* A factorisation that broke down at a PD node after bonds broke: that node lost its support
  * in a way the checks of cupid_pd_operator_unsupported() miss (a mechanism of several nodes):
- * it is held too. *held = 0 when the failure names no such node. */
+ * it is held too. A slab run has no factorisation: CG on a mechanism diverges, and the node
+ * its iterate moved furthest is held (growth_slab.c). *held = 0 when the failure names no such
+ * node (the solve's error then stands). */
 static cupid_status hold_singular_node(growth_run *g, int step, int *held) {
   cupid_problem_state *prob = g->prob;
   const cupid_int dof = prob->solve.failed_dof;
   *held = 0;
+  if (prob->slab) { /* no factorisation to name it: where CG's iterate ran away */
+    double x[3];
+    CUPID_CALL(cupid_growth_slab_hold_runaway(prob, &g->slab, g->release, x, held));
+    if (!*held) return CUPID_SUCCESS;
+    cupid_error_clear();
+    g->released++;
+    cupid_problem_progress(prob, "growth: step %d: node (%g, %g, %g) ran away in the PETSc solve "
+                           "(a mechanism): held", step, x[0], x[1], x[2]);
+    return CUPID_SUCCESS;
+  }
   if (!prob->grid || dof < 0 || dof >= 3 * prob->n_pd || g->release[dof / 3]) return CUPID_SUCCESS;
   const cupid_int i = dof / 3;
   cupid_error_clear();
@@ -462,7 +496,7 @@ static cupid_status downdate_factor(growth_run *g, const cupid_csr_t *Kold) {
 /* The growth solves with its own CHOLMOD factor (downdates, CG): an SPD method on a direct
  * engine; otherwise every solve is the engine's. */
 static int own_factor(const cupid_problem_state *prob) {
-  return prob->method->matrix == CUPID_MATRIX_SPD && !prob->engine->iterative;
+  return prob->method->matrix == CUPID_MATRIX_SPD && !prob->engine->iterative && !prob->slab;
 }
 
 /* Solve at the current load (K assembled again when bonds broke): CG preconditioned by the
@@ -471,6 +505,11 @@ static int own_factor(const cupid_problem_state *prob) {
  * iterative engine takes the engine's solve every time. */
 static cupid_status solve(growth_run *g, int reassemble) {
   cupid_problem_state *prob = g->prob;
+  if (prob->slab) { /* no K: the kept matrix-free solve (growth_slab.c) */
+    CUPID_CALL(cupid_growth_slab_solve(prob, &g->slab));
+    prob->growth.solves++;
+    return CUPID_SUCCESS;
+  }
   cupid_csr Kold = NULL;
   if (reassemble && g->F && g->downdate) Kold = prob->K, prob->K = NULL;
   if (reassemble) cupid_csr_destroy(&prob->K);
@@ -554,7 +593,7 @@ static cupid_status load_step(growth_run *g, int k, double lambda, int *iteratio
     if (*stop) return CUPID_SUCCESS;
     double r = -1.0; /* the largest ratio of this solution, when scanned */
     if (prob->first_break_step < 0) { /* the exact load of the first break, by scaling */
-      CUPID_CALL(cupid_pd_operator_max_ratio(prob->op, prob->u, &prob->fracture, &r));
+      CUPID_CALL(cupid_problem_max_ratio(prob, prob->u, &r));
       if (r > 1.0) prob->first_break_load = lambda / r;
     }
     cupid_int broken = 0;
@@ -563,7 +602,7 @@ static cupid_status load_step(growth_run *g, int k, double lambda, int *iteratio
     if (broken == 0) { /* settled: the next break's load factor from this solution (nothing
                           broke, so a ratio scanned above still holds) */
       if (r >= 0.0) g->next_ratio = r;
-      else CUPID_CALL(cupid_pd_operator_max_ratio(prob->op, prob->u, &prob->fracture, &g->next_ratio));
+      else CUPID_CALL(cupid_problem_max_ratio(prob, prob->u, &g->next_ratio));
       return CUPID_SUCCESS;
     }
     CUPID_CALL(release_unsupported(g, k));
@@ -590,6 +629,10 @@ static cupid_status setup_run(growth_run *g) {
   CUPID_CALL(constraint_masks(g));
   for (int k = 0; k < 4; k++)
     CUPID_CALL(cupid_calloc(n + 1, sizeof(double), "growth work vectors", &g->w[k]));
+  CUPID_CALL(cupid_calloc(3 * (size_t)prob->model->n_constraints + 1, sizeof(double), "reactions",
+                          &g->react));
+  CUPID_CALL(cupid_calloc(3 * (size_t)prob->model->output.n_points + 1, sizeof(double),
+                          "output points", &g->points));
   /* bench/growth.sh: factor | krylov | downdate (the default) */
   const char *how = getenv("CUPID_GROWTH_RESOLVE");
   g->krylov = !(how && strcmp(how, "factor") == 0);
@@ -646,7 +689,11 @@ cupid_status cupid_problem_run_growth(cupid_problem_state *prob) {
   }
   prob->solved = 1;
   prob->phases[CUPID_PHASE_SOLVE] = (cupid_phase_record){cupid_wtime() - t0, cupid_peak_memory(), 1};
-  prob->growth.resolve = !own_factor(prob) ? "engine" : g.downdates ? "downdate" : g.krylov ? "krylov" : "factor";
+  prob->growth.resolve = prob->slab          ? "matrix-free"
+                         : !own_factor(prob) ? "engine"
+                         : g.downdates       ? "downdate"
+                         : g.krylov          ? "krylov"
+                                             : "factor";
   prob->growth.downdates = g.downdates;
   prob->growth.downdate_columns = g.downdate_columns;
   prob->growth.downdate_s = g.t_downdate;
@@ -657,6 +704,14 @@ cupid_status cupid_problem_run_growth(cupid_problem_state *prob) {
   prob->phases[CUPID_PHASE_FACTORISATION] =
       (cupid_phase_record){g.t_factor, cupid_peak_memory(), g.factorisations > 0};
   prob->growth.cg_s = g.t_cg;
+  if (prob->slab) { /* the CG + GAMG solves; then rank 0 gathers the whole model */
+    prob->growth.cg_solves = prob->growth.solves;
+    prob->growth.cg_iterations = g.slab.iterations;
+    prob->growth.cg_s = g.slab.solve_s;
+    prob->growth.factor_s = g.slab.setup_s;
+    CUPID_TRY(cupid_problem_slab_collect(prob));
+    if (prob->slab) goto cleanup; /* a rank other than 0 */
+  }
   if (g.csv) CUPID_TRY(cupid_atomic_commit(&g.csv));
   CUPID_TRY(plots(&g));
   if (prob->method->report) CUPID_TRY(prob->method->report(prob));

@@ -435,8 +435,9 @@ static cupid_status run_static(cupid_problem_state *prob) {
   CUPID_CALL(require_constraints(prob));
   const cupid_model_t *m = prob->model;
   if (m->analysis.steps > 0 || (m->has_peridynamics && m->pd.fracture.has_fracture)) {
-    /* load steps, crack growth: assembled K and the direct path, re-solved as bonds break */
-    CUPID_CALL(cupid_problem_estimate(prob, 0));
+    /* load steps, crack growth: assembled K and the direct path, re-solved as bonds break, or
+     * (PD only, slabs under mpirun) the kept matrix-free solve */
+    if (!prob->slab) CUPID_CALL(cupid_problem_estimate(prob, 0));
     CUPID_CALL(begin_outputs(prob)); /* the steps' rows are written as the run goes */
     return cupid_problem_run_growth(prob);
   }

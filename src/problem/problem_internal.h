@@ -148,8 +148,9 @@ typedef struct cupid_problem_private {
   unsigned char *protect;           /**< per PD node: its bonds never break (method stage) */
   uint32_t *no_fail;                /**< per PD node: the no-fail boxes holding it */
   double *node_stretch;             /**< per PD node s0 (from G0), or NULL */
-  /* A slab run with the critical-energy criterion (fracture.c): each rank decides the bonds
-   * of its owned nodes and sends their bits to the ranks that hold them as halo. */
+  /* A slab run with the critical-energy criterion, or a static one (fracture.c): each rank
+   * decides the bonds of its owned nodes and sends their bits to the ranks that hold them as
+   * halo. */
   cupid_petsc_halo break_halo;
   double *break_words;              /**< the bits of every slab node (broken_words each) */
   cupid_int broken_bonds;           /**< broken during the run (pre-cracks not counted) */
@@ -207,6 +208,9 @@ cupid_status cupid_problem_balanced_operator(cupid_problem_state *prob, cupid_co
 
 /* growth.c: `type: static` with load steps or fracture (sequentially linear growth). */
 cupid_status cupid_problem_run_growth(cupid_problem_state *prob);
+/** The largest ratio of a bond to its limit at u (cupid_pd_operator_max_ratio), over the
+ *  ranks of a slab run (collective there). */
+cupid_status cupid_problem_max_ratio(const cupid_problem_state *prob, const double *u, double *r);
 
 /* growth_downdate.c: the change Kold - Knew that broken bonds made, as the rank-one columns of
  * C (Kold - Knew = C C^T, columns of 6 entries: w at node i, -w at node j), for
@@ -219,6 +223,37 @@ typedef struct {
 cupid_status cupid_growth_downdate_terms(const cupid_csr_t *Kold, const cupid_csr_t *Knew,
                                          cupid_growth_downdate *u, int *ok);
 void cupid_growth_downdate_free(cupid_growth_downdate *u);
+
+/* growth_slab.c: load steps and crack growth of a PD-only model on slabs under mpirun: one
+ * kept matrix-free PETSc solve (CG + GAMG, the preconditioner built once on the intact grid)
+ * re-run from the last solution after each round of breaks, and the search for nodes that
+ * lost their support over the ranks. */
+typedef struct {
+  cupid_petsc_nodes_solver solver;
+  cupid_node_operator op;
+  cupid_petsc_halo halo;        /* the DOFs' exchange: owned -> the other ranks' halo copies */
+  double *flags;                /* a DOF-sized buffer: node flags in their first DOF */
+  double *u_last;               /* the last solution (CG's first guess) */
+  cupid_int iterations;         /* CG iterations over the run */
+  double setup_s, solve_s;
+} cupid_growth_slab;
+/** Solve at the current load and conditions (u: the last solution, CG's first guess after the
+ *  first solve): u on every node of the slab (owned from the solve, halo by the exchange),
+ *  exactly the prescribed values on fixed DOFs, f_int on the owned rows (collective). */
+cupid_status cupid_growth_slab_solve(cupid_problem_state *prob, cupid_growth_slab *gs);
+/** cupid_pd_operator_unsupported over the whole distributed grid: each rank decides its owned
+ *  nodes, @p release then agrees on every copy; *fresh counts the newly released nodes of all
+ *  ranks (collective). */
+cupid_status cupid_growth_slab_unsupported(cupid_problem_state *prob, cupid_growth_slab *gs,
+                                           const unsigned char *anchored, unsigned char *release,
+                                           cupid_int *fresh);
+/** After a solve that found no equilibrium (a mechanism the support search missed): the node
+ *  whose displacement ran furthest from the last solution in CG's iterate (over the ranks, the
+ *  lowest global index among equals) is held there, release = 1 on every copy, u restored to
+ *  the last solution; x its position, *held = 0 when no free node moved (collective). */
+cupid_status cupid_growth_slab_hold_runaway(cupid_problem_state *prob, cupid_growth_slab *gs,
+                                            unsigned char *release, double x[3], int *held);
+void cupid_growth_slab_free(cupid_growth_slab *gs);
 
 /* fracture.c */
 /** Model errors of pre-cracks and fracture this version cannot run (before anything is
@@ -304,7 +339,8 @@ cupid_status cupid_problem_sample_point(const cupid_problem_state *prob, const d
 
 /* slab.c (issue 6): PD models split into z slabs over the MPI ranks. */
 /** Several ranks, 3D, a method that runs on slabs, and a static solve by a distributed engine
- *  (petsc or auto; no load steps, no crack growth) or explicit dynamics of a PD-only model. */
+ *  (petsc or auto; load steps and crack growth on PD-only models) or explicit dynamics of a
+ *  PD-only model. */
 int cupid_problem_slab_wanted(const cupid_problem_state *prob);
 /** The status of every rank agreed (collective): an error on any rank is an error on all, so
  *  that none waits alone in the next collective call (the failing rank keeps its message). */
@@ -323,6 +359,9 @@ cupid_status cupid_problem_slab_collect(cupid_problem_state *prob);
  *  there; NULL on the others), in global node order (collective). */
 cupid_status cupid_problem_slab_gather(const cupid_problem_state *prob, const double *local,
                                        int n_per_node, double **whole);
+/** The output points' values u (3 each, NaN where this rank's sampling found none) made the
+ *  whole grid's on every rank: each taken from the rank owning its cell's node (collective). */
+cupid_status cupid_problem_slab_points(const cupid_problem_state *prob, double *u);
 /** The partition of an explicit run on this rank's slab: owned DOFs, the halo exchange
  *  (*halo, destroyed by the caller) and sums over the ranks (collective). */
 cupid_status cupid_problem_slab_partition(const cupid_problem_state *prob, cupid_petsc_halo *halo,

@@ -7,6 +7,7 @@
  *
  * Every decision that can fail is agreed over the ranks before the next collective call, so
  * an error on one rank stops all of them (the lowest failing rank prints it, cli.c). */
+#include <math.h>
 #include <stdio.h>
 
 #include "method.h"
@@ -21,11 +22,14 @@ int cupid_problem_slab_wanted(const cupid_problem_state *prob) {
    * --replicate keeps the whole model on every rank */
   int slabs = (prob->method->caps & CUPID_METHOD_SLABS) && !(m->has_beam && prob->opts->assembled);
   const cupid_analysis *a = &m->analysis;
-  /* static: the matrix-free solve of a distributed engine (load steps and crack growth
-   * assemble K on one process); dynamic: central differences on a PD-only model, each rank
-   * stepping its slab with the stencil operator and a halo exchange a step */
-  const int solve = a->type == CUPID_ANALYSIS_STATIC && a->steps == 0 &&
-                    !m->pd.fracture.has_fracture && (!engine || engine->distributed);
+  /* static: the matrix-free solve of a distributed engine; load steps and crack growth too on
+   * a PD-only model (growth_slab.c: a kept CG + GAMG solve re-run as bonds break), while a
+   * coupled model's growth assembles K on the replicated model; dynamic: central differences
+   * on a PD-only model, each rank stepping its slab with the stencil operator and a halo
+   * exchange a step */
+  const int growth = a->steps > 0 || m->pd.fracture.has_fracture;
+  const int solve = a->type == CUPID_ANALYSIS_STATIC && (!growth || !m->has_beam) &&
+                    (!engine || engine->distributed);
   const int explicit_pd = a->type == CUPID_ANALYSIS_DYNAMIC && !m->has_beam &&
                           a->dynamic.integrator == CUPID_INTEGRATOR_CENTRAL;
   return slabs && !prob->opts->replicate && cupid_petsc_size() > 1 && !prob->opts->check_only &&
@@ -79,6 +83,31 @@ cupid_status cupid_problem_slab_gather(const cupid_problem_state *prob, const do
                                        int n_per_node, double **whole) {
   *whole = NULL;
   return gather_nodes(prob, local, n_per_node, whole);
+}
+
+/* Each output point sampled by the rank that owns the node whose cell holds it (its
+ * neighbours' copies are current), and summed over the ranks. */
+cupid_status cupid_problem_slab_points(const cupid_problem_state *prob, double *u) {
+  const cupid_output *out = &prob->model->output;
+  const int np = out->n_points;
+  double *buf = NULL;
+  CUPID_CALL(cupid_calloc((size_t)(4 * np) + 1, sizeof *buf, "output points", &buf));
+  double o[3], h = cupid_pd_grid_spacing(prob->grid);
+  cupid_pd_grid_origin(prob->grid, o);
+  for (int k = 0; k < np; k++) {
+    const double *p = out->points[k].at;
+    cupid_int ijk[3];
+    for (int a = 0; a < 3; a++) ijk[a] = (cupid_int)floor((p[a] - o[a]) / h);
+    const cupid_int node = cupid_pd_grid_node_at(prob->grid, ijk[0], ijk[1], ijk[2]);
+    const int mine = node >= 0 && cupid_problem_pd_owned(prob, node) && u[3 * k] == u[3 * k];
+    for (int c = 0; c < 3 && mine; c++) buf[3 * k + c] = u[3 * k + c];
+    buf[3 * np + k] = mine;
+  }
+  cupid_petsc_sum_doubles(buf, 4 * np);
+  for (int k = 0; k < np; k++)
+    for (int c = 0; c < 3; c++) u[3 * k + c] = buf[3 * np + k] > 0 ? buf[3 * k + c] : NAN;
+  cupid_free(&buf);
+  return CUPID_SUCCESS;
 }
 
 static cupid_status halo_exchange(void *ctx, double *x) { return cupid_petsc_halo_update(ctx, x); }

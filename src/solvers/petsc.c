@@ -287,14 +287,20 @@ cleanup:
   return st;
 }
 
+/* The tolerances a KSP was set up with (cupid's, then the user's options): restored before
+ * each solve of a kept KSP, whose refinement passes below change them. */
+typedef struct {
+  PetscReal rtol, atol, dtol;
+  PetscInt maxit;
+} ksp_tolerances;
+
 /* KSP on A (operator) and P (preconditioner matrix) with cupid's defaults, then the user's
- * -ksp_* / -pc_* options; solve, check the reason and the true residual, fill info. */
-static cupid_status krylov_solve(Mat A, Mat P, Vec b, Vec x, const solver_defaults *def,
-                                 cupid_solve_info *info) {
+ * -ksp_* / -pc_* options, set up (the preconditioner built): *seconds the time it took. */
+static cupid_status krylov_create(Mat A, Mat P, const solver_defaults *def, KSP *out,
+                                  ksp_tolerances *tol, double *seconds) {
   cupid_status st = CUPID_SUCCESS;
   KSP ksp = NULL;
   PC pc;
-  Vec r = NULL;
   double t0 = cupid_wtime();
   PTRY(KSPCreate(PETSC_COMM_WORLD, &ksp));
   PTRY(KSPSetOperators(ksp, A, P));
@@ -315,6 +321,27 @@ static cupid_status krylov_solve(Mat A, Mat P, Vec b, Vec x, const solver_defaul
   PTRY(KSPSetFromOptions(ksp));
   PTRY(KSPSetUp(ksp));
   PTRY(KSPSetUpOnBlocks(ksp));
+  PTRY(KSPGetTolerances(ksp, &tol->rtol, &tol->atol, &tol->dtol, &tol->maxit));
+  *seconds = cupid_wtime() - t0;
+  *out = ksp;
+  ksp = NULL;
+cleanup:
+  KSPDestroy(&ksp);
+  return st;
+}
+
+/* Solve with a set-up KSP (from x when guess, else from 0), check the reason and the true
+ * residual, fill info (info->time_factor is the caller's). */
+static cupid_status krylov_run(KSP ksp, const ksp_tolerances *tol, Vec b, Vec x, int guess,
+                               cupid_solve_info *info) {
+  cupid_status st = CUPID_SUCCESS;
+  Mat A, P;
+  PC pc;
+  Vec r = NULL;
+  PTRY(KSPGetOperators(ksp, &A, &P));
+  PTRY(KSPGetPC(ksp, &pc));
+  PTRY(KSPSetTolerances(ksp, tol->rtol, tol->atol, tol->dtol, tol->maxit));
+  PTRY(KSPSetInitialGuessNonzero(ksp, guess ? PETSC_TRUE : PETSC_FALSE));
   double t1 = cupid_wtime();
   PTRY(KSPSolve(ksp, b, x));
   double t2 = cupid_wtime();
@@ -331,7 +358,6 @@ static cupid_status krylov_solve(Mat A, Mat P, Vec b, Vec x, const solver_defaul
   snprintf(info->pc_type, sizeof info->pc_type, "%s", pt ? pt : "?");
   snprintf(info->converged_reason, sizeof info->converged_reason, "%s", KSPConvergedReasons[reason]);
   info->iterations = (int)its;
-  info->time_factor = t1 - t0;
   info->time_solve = t2 - t1;
   if (reason < 0) {
     st = CUPID_ERROR(CUPID_ERR_NUMERIC,
@@ -378,6 +404,18 @@ static cupid_status krylov_solve(Mat A, Mat P, Vec b, Vec x, const solver_defaul
   }
 cleanup:
   VecDestroy(&r);
+  return st;
+}
+
+/* A one-off solve: krylov_create, krylov_run from 0. */
+static cupid_status krylov_solve(Mat A, Mat P, Vec b, Vec x, const solver_defaults *def,
+                                 cupid_solve_info *info) {
+  KSP ksp = NULL;
+  ksp_tolerances tol;
+  double setup = 0.0;
+  CUPID_CALL(krylov_create(A, P, def, &ksp, &tol, &setup));
+  cupid_status st = krylov_run(ksp, &tol, b, x, 0, info);
+  info->time_factor = setup;
   KSPDestroy(&ksp);
   return st;
 }
@@ -739,90 +777,159 @@ cleanup:
   return st;
 }
 
-cupid_status cupid_petsc_solve_nodes(const cupid_node_operator *op, const double *f,
-                                     const cupid_dirichlet_t *bc, double *u,
-                                     cupid_solve_info *info) {
-  cupid_solve_info local;
-  if (!info) info = &local;
+/* A kept matrix-free solve (solvers.h, cupid_petsc_nodes_solver): the operator (a copy of
+ * the caller's description), the shell, the preconditioner matrix and the set-up KSP. */
+struct cupid_petsc_nodes_solver_private {
+  cupid_node_operator op;
+  shell_ctx c;
+  int slab;
+  cupid_int n;        /* global DOFs */
+  Mat A, P;
+  Vec b, x;
+  KSP ksp;
+  ksp_tolerances tol;
+  double setup_s;     /* given to the first solve's info (time_factor) */
+  double nnz_p;
+  double *uc, *kuc;   /* the prescribed values, their lifted load (owned rows) */
+};
+
+cupid_status cupid_petsc_nodes_solver_create(const cupid_node_operator *op,
+                                             const cupid_dirichlet_t *bc,
+                                             cupid_petsc_nodes_solver *out) {
+  *out = NULL;
   const cupid_pd_grid_partition part = op->part;
   const int slab = part.parts > 1;
-  cupid_int nodes = op->nodes, nl = 3 * nodes, n = 3 * part.global_nodes;
+  const cupid_int nodes = op->nodes, nl = 3 * nodes, n = 3 * part.global_nodes;
   CUPID_CHECK(op->dimension == 3, CUPID_ERR_UNSUPPORTED,
               "the matrix-free PETSc path needs a 3D grid");
   CUPID_CHECK(!slab || part.parts == cupid_petsc_size(), CUPID_ERR_ARGUMENT,
               "a grid of %d slabs on %d MPI ranks", part.parts, cupid_petsc_size());
   CUPID_CALL(check_sizes(n));
-  shell_ctx c = {.op = op, .bc = bc};
-  if (slab) {
-    c.goff = 3 * part.first_global;
-    c.first = 3 * part.owned_first;
-    c.last = 3 * part.owned_last;
-  } else {
-    owned_rows(n, 3, &c.first, &c.last);
-  }
-  double n_free = 0.0;
-  for (cupid_int d = c.first; d < c.last; d++) n_free += !(bc && bc->fixed[d]);
-  MPI_Allreduce(MPI_IN_PLACE, &n_free, 1, MPI_DOUBLE, MPI_SUM, PETSC_COMM_WORLD);
-  info_begin(info, (cupid_int)n_free);
-  info->matrix_free = 1;
+  cupid_petsc_nodes_solver S = NULL;
+  CUPID_CALL(cupid_calloc(1, sizeof *S, "matrix-free solver", &S));
   cupid_status st = CUPID_SUCCESS;
-  Mat A = NULL, P = NULL;
-  Vec b = NULL, x = NULL;
-  double *uc = NULL, *kuc = NULL;
   double t0 = cupid_wtime();
-  CUPID_TRY(op->dependency_range(op, c.first / 3, c.last / 3, &c.lo, &c.hi));
-  CUPID_TRY(cupid_calloc((size_t)nl, sizeof *c.work, "matrix-free work vector", &c.work));
-  CUPID_TRY(operator_scale(op, nodes, &c, &c.s));
+  S->op = *op;
+  S->slab = slab;
+  S->n = n;
+  shell_ctx *c = &S->c;
+  *c = (shell_ctx){.op = &S->op, .bc = bc};
+  if (slab) {
+    c->goff = 3 * part.first_global;
+    c->first = 3 * part.owned_first;
+    c->last = 3 * part.owned_last;
+  } else {
+    owned_rows(n, 3, &c->first, &c->last);
+  }
+  CUPID_TRY(op->dependency_range(op, c->first / 3, c->last / 3, &c->lo, &c->hi));
+  CUPID_TRY(cupid_calloc((size_t)nl, sizeof *c->work, "matrix-free work vector", &c->work));
+  CUPID_TRY(cupid_calloc((size_t)nl, sizeof *S->uc, "prescribed displacements", &S->uc));
+  CUPID_TRY(cupid_calloc((size_t)(c->last - c->first + 1), sizeof *S->kuc, "lifted load", &S->kuc));
+  CUPID_TRY(operator_scale(op, nodes, c, &c->s));
 
-  PTRY(MatCreateShell(PETSC_COMM_WORLD, (PetscInt)(c.last - c.first), (PetscInt)(c.last - c.first),
-                      (PetscInt)n, (PetscInt)n, &c, &A));
-  PTRY(MatShellSetOperation(A, MATOP_MULT, (void (*)(void))shell_mult));
-  PTRY(MatSetBlockSize(A, 3));
-  PTRY(MatSetOption(A, MAT_SYMMETRIC, PETSC_TRUE));
-  PTRY(MatCreateVecs(A, &x, &b));
-  CUPID_TRY(make_halo(x, &c));
-
-  /* Right-hand side: f - K u_c on free DOFs (u_c the prescribed values), s * value on fixed. */
-  CUPID_TRY(cupid_calloc((size_t)nl, sizeof *uc, "prescribed displacements", &uc));
-  CUPID_TRY(cupid_calloc((size_t)(c.last - c.first + 1), sizeof *kuc, "lifted load", &kuc));
-  int lifted = 0;
-  if (bc)
-    for (cupid_int d = 0; d < nl; d++)
-      if (bc->fixed[d] && bc->value[d] != 0.0) uc[d] = bc->value[d], lifted = 1;
-  lifted = cupid_petsc_max_int(lifted);
-  if (lifted) CUPID_TRY(op->apply_range(op, c.first / 3, c.last / 3, uc, kuc));
-  PetscScalar *bl;
-  PTRY(VecGetArray(b, &bl));
-  for (cupid_int d = c.first; d < c.last; d++)
-    bl[d - c.first] = (bc && bc->fixed[d]) ? c.s * bc->value[d] : (f ? f[d] : 0.0) - kuc[d - c.first];
-  PTRY(VecRestoreArray(b, &bl));
-  cupid_free(&uc);
-  cupid_free(&kuc);
+  PTRY(MatCreateShell(PETSC_COMM_WORLD, (PetscInt)(c->last - c->first),
+                      (PetscInt)(c->last - c->first), (PetscInt)n, (PetscInt)n, c, &S->A));
+  PTRY(MatShellSetOperation(S->A, MATOP_MULT, (void (*)(void))shell_mult));
+  PTRY(MatSetBlockSize(S->A, 3));
+  PTRY(MatSetOption(S->A, MAT_SYMMETRIC, PETSC_TRUE));
+  PTRY(MatCreateVecs(S->A, &S->x, &S->b));
+  CUPID_TRY(make_halo(S->x, c));
 
   PetscReal radius = 1.5;
   PetscBool set;
   PTRY(PetscOptionsGetReal(NULL, NULL, "-cupid_pc_radius", &radius, &set));
-  CUPID_TRY(pc_matrix(radius * op->spacing, &c, n, &P));
-  CUPID_TRY(set_rigid_body(P, op->coords, c.first, c.last));
-  double t_setup = cupid_wtime() - t0;
-
-  solver_defaults def = {KSPCG, PCGAMG, 0};
-  CUPID_TRY(krylov_solve(A, P, b, x, &def, info));
-  info->time_factor += t_setup;
+  CUPID_TRY(pc_matrix(radius * op->spacing, c, n, &S->P));
+  CUPID_TRY(set_rigid_body(S->P, op->coords, c->first, c->last));
   MatInfo mi;
-  PTRY(MatGetInfo(P, MAT_GLOBAL_SUM, &mi));
-  info->nnz_matrix = (cupid_int)mi.nz_used; /* of the preconditioner matrix */
-  CUPID_TRY(local_solution(x, &c, slab, n, u));
+  PTRY(MatGetInfo(S->P, MAT_GLOBAL_SUM, &mi));
+  S->nnz_p = mi.nz_used;
+  solver_defaults def = {KSPCG, PCGAMG, 0};
+  double t_pc = 0.0;
+  CUPID_TRY(krylov_create(S->A, S->P, &def, &S->ksp, &S->tol, &t_pc));
+  /* the preconditioner is kept as the operator changes (bonds break, DOFs are held) */
+  PTRY(KSPSetReusePreconditioner(S->ksp, PETSC_TRUE));
+  S->setup_s = cupid_wtime() - t0;
+  *out = S;
+  S = NULL;
 cleanup:
-  MatDestroy(&A);
-  MatDestroy(&P);
-  VecDestroy(&b);
-  VecDestroy(&x);
-  VecScatterDestroy(&c.halo);
-  VecDestroy(&c.xdep);
-  cupid_free(&c.work);
-  cupid_free(&uc);
-  cupid_free(&kuc);
+  cupid_petsc_nodes_solver_destroy(&S);
+  return st;
+}
+
+cupid_status cupid_petsc_nodes_solver_solve(cupid_petsc_nodes_solver S, const double *f, int guess,
+                                            double *u, cupid_solve_info *info) {
+  cupid_solve_info local;
+  if (!info) info = &local;
+  CUPID_CHECK(S && u, CUPID_ERR_ARGUMENT, "cupid_petsc_nodes_solver_solve needs a solver and u");
+  shell_ctx *c = &S->c;
+  const cupid_dirichlet_t *bc = c->bc;
+  const cupid_int nl = 3 * S->op.nodes;
+  double n_free = 0.0;
+  for (cupid_int d = c->first; d < c->last; d++) n_free += !(bc && bc->fixed[d]);
+  MPI_Allreduce(MPI_IN_PLACE, &n_free, 1, MPI_DOUBLE, MPI_SUM, PETSC_COMM_WORLD);
+  info_begin(info, (cupid_int)n_free);
+  info->matrix_free = 1;
+  cupid_status st = CUPID_SUCCESS;
+
+  /* Right-hand side: f - K u_c on free DOFs (u_c the prescribed values), s * value on fixed;
+   * the first guess u's owned values (the prescribed ones on fixed DOFs), or 0. */
+  int lifted = 0;
+  for (cupid_int d = 0; d < nl; d++) {
+    S->uc[d] = bc && bc->fixed[d] ? bc->value[d] : 0.0;
+    lifted |= S->uc[d] != 0.0;
+  }
+  lifted = cupid_petsc_max_int(lifted);
+  if (lifted) CUPID_TRY(S->op.apply_range(&S->op, c->first / 3, c->last / 3, S->uc, S->kuc));
+  PetscScalar *bl, *xl;
+  PTRY(VecGetArray(S->b, &bl));
+  PTRY(VecGetArray(S->x, &xl));
+  for (cupid_int d = c->first; d < c->last; d++) {
+    const int fx = bc && bc->fixed[d];
+    bl[d - c->first] = fx ? c->s * bc->value[d] : (f ? f[d] : 0.0) - (lifted ? S->kuc[d - c->first] : 0.0);
+    xl[d - c->first] = !guess ? 0.0 : fx ? bc->value[d] : u[d];
+  }
+  PTRY(VecRestoreArray(S->x, &xl));
+  PTRY(VecRestoreArray(S->b, &bl));
+
+  st = krylov_run(S->ksp, &S->tol, S->b, S->x, guess, info);
+  info->time_factor = S->setup_s; /* the preconditioner's set-up: charged to the first solve */
+  S->setup_s = 0.0;
+  info->nnz_matrix = (cupid_int)S->nnz_p; /* of the preconditioner matrix */
+  if (st != CUPID_SUCCESS && st != CUPID_ERR_NUMERIC) goto cleanup;
+  /* a solve that failed leaves its last iterate: where it ran away shows what lost support */
+  cupid_status st2 = local_solution(S->x, c, S->slab, S->n, u);
+  if (st == CUPID_SUCCESS) st = st2;
+cleanup:
+  return st;
+}
+
+void cupid_petsc_nodes_solver_limit(cupid_petsc_nodes_solver S, int max_iterations) {
+  if (S && max_iterations > 0 && max_iterations < S->tol.maxit) S->tol.maxit = max_iterations;
+}
+
+void cupid_petsc_nodes_solver_destroy(cupid_petsc_nodes_solver *S) {
+  if (!S || !*S) return;
+  cupid_petsc_nodes_solver s = *S;
+  KSPDestroy(&s->ksp);
+  MatDestroy(&s->A);
+  MatDestroy(&s->P);
+  VecDestroy(&s->b);
+  VecDestroy(&s->x);
+  VecScatterDestroy(&s->c.halo);
+  VecDestroy(&s->c.xdep);
+  cupid_free(&s->c.work);
+  cupid_free(&s->uc);
+  cupid_free(&s->kuc);
+  cupid_free(S);
+}
+
+cupid_status cupid_petsc_solve_nodes(const cupid_node_operator *op, const double *f,
+                                     const cupid_dirichlet_t *bc, double *u,
+                                     cupid_solve_info *info) {
+  cupid_petsc_nodes_solver S = NULL;
+  CUPID_CALL(cupid_petsc_nodes_solver_create(op, bc, &S));
+  cupid_status st = cupid_petsc_nodes_solver_solve(S, f, 0, u, info);
+  cupid_petsc_nodes_solver_destroy(&S);
   return st;
 }
 
@@ -878,5 +985,22 @@ cupid_status cupid_petsc_solve_nodes(const cupid_node_operator *op, const double
                                      cupid_solve_info *info) {
   return NO_PETSC;
 }
+
+cupid_status cupid_petsc_nodes_solver_create(const cupid_node_operator *op,
+                                             const cupid_dirichlet_t *bc,
+                                             cupid_petsc_nodes_solver *out) {
+  (void)op, (void)bc;
+  *out = NULL;
+  return NO_PETSC;
+}
+cupid_status cupid_petsc_nodes_solver_solve(cupid_petsc_nodes_solver S, const double *f, int guess,
+                                            double *u, cupid_solve_info *info) {
+  (void)S, (void)f, (void)guess, (void)u, (void)info;
+  return NO_PETSC;
+}
+void cupid_petsc_nodes_solver_limit(cupid_petsc_nodes_solver S, int max_iterations) {
+  (void)S, (void)max_iterations;
+}
+void cupid_petsc_nodes_solver_destroy(cupid_petsc_nodes_solver *S) { (void)S; }
 
 #endif

@@ -3,7 +3,8 @@
  * padded box and on a sparse union, every instruction set) against the bond-list kernels, the
  * assembled K, the energy and the diagonal; the stretch criterion at and just above s0;
  * irreversibility, protection and no-fail boxes; damage; the energy a break dissipates;
- * the same broken bonds for 1 and 2 threads; a node that loses every bond. */
+ * the same broken bonds for 1 and 2 threads; a node that loses every bond; the nodes that
+ * lose their support, on a whole grid and on slabs. */
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -431,12 +432,150 @@ static void test_copy_broken(void **state) {
   destroy(&a);
 }
 
+/* ---- Nodes that lost their support (cupid_pd_operator_unsupported and its two halves) ----
+ * A bar 6 x 6 x 12 cut through at z = 6 by a pre-crack, with one node of the lower part
+ * isolated by six small pre-cracks around its cell, anchored at its bottom layer: every node
+ * above the cut (a fragment) and the isolated node (no bond left) lose their support, nothing
+ * else does. Then the same search as slabs of a distributed grid run it (growth_slab.c): each
+ * slab decides its owned nodes' weakness, searches from the anchored nodes and the flags its
+ * neighbours sent, and the owned flags go to the other slabs' copies until none changes; the
+ * owners' flags must be the whole grid's, and the middle slab (no anchored node) must need
+ * the exchange. */
+static const cupid_box support_box = {.lo = {0, 0, 0}, .hi = {6, 6, 12}, .has = {1, 1, 1}};
+static const double support_isolated[3] = {2.5, 2.5, 2.5};
+
+static void support_cracks(cupid_pd_operator op) {
+  cupid_int removed = 0;
+  cupid_pd_precrack cut = {.normal = 2, .at = 6.0, .lo = {0, 0, 0}, .hi = {6, 6, 0}};
+  CUPID_ASSERT_OK(cupid_pd_operator_precrack(op, &cut, &removed));
+  for (int a = 0; a < 3; a++) /* the faces of the isolated node's cell */
+    for (int side = 0; side < 2; side++) {
+      cupid_pd_precrack c = {.normal = a, .at = support_isolated[a] + (side ? 0.5 : -0.5)};
+      for (int b = 0; b < 3; b++)
+        if (b != a) c.lo[b] = support_isolated[b] - 0.5, c.hi[b] = support_isolated[b] + 0.5;
+      CUPID_ASSERT_OK(cupid_pd_operator_precrack(op, &c, &removed));
+    }
+}
+
+static body support_body(int parts, int part, int halo) {
+  body b = {0};
+  cupid_pd_grid_options go = {.spacing = 1.0, .dimension = 3, .parts = parts, .part = part,
+                              .halo_layers = halo};
+  int m = 0;
+  CUPID_ASSERT_OK(cupid_pd_grid_create(&go, 1, &support_box, &m, &b.grid));
+  cupid_pd_operator_options oo = {.horizon = 2.0, .model = CUPID_PD_BOND,
+                                  .influence = CUPID_INFLUENCE_CONSTANT,
+                                  .partial_volume = CUPID_PARTIAL_NONE, .materials = mats,
+                                  .n_materials = 1};
+  CUPID_ASSERT_OK(cupid_pd_operator_create(b.grid, &oo, &b.op));
+  b.n = cupid_pd_grid_num_nodes(b.grid);
+  support_cracks(b.op);
+  return b;
+}
+
+/* Owned flags of every slab to the other slabs' copies (by global index): copy = owner's, or
+ * copy |= owner's; returns how many copies that raised. */
+#define SUPPORT_PARTS 3
+static cupid_int support_share(body *s, const cupid_pd_grid_partition *pt, unsigned char **flag,
+                               int or) {
+  cupid_int changed = 0;
+  for (int p = 0; p < SUPPORT_PARTS; p++)
+    for (cupid_int i = 0; i < s[p].n; i++) {
+      if (i >= pt[p].owned_first && i < pt[p].owned_last) continue;
+      const cupid_int g = pt[p].first_global + i;
+      int q = 0;
+      while (!(g >= pt[q].first_global + pt[q].owned_first && g < pt[q].first_global + pt[q].owned_last)) q++;
+      const unsigned char v = flag[q][g - pt[q].first_global];
+      if (!or) flag[p][i] = v;
+      else if (v && !flag[p][i]) flag[p][i] = v, changed++;
+    }
+  return changed;
+}
+
+static void test_support(void **state) {
+  (void)state;
+  body w = support_body(1, 0, 0);
+  const double *x = cupid_pd_grid_coords(w.grid);
+  unsigned char *anchored = calloc((size_t)w.n, 1), *release = calloc((size_t)w.n, 1);
+  for (cupid_int i = 0; i < w.n; i++) anchored[i] = x[3 * i + 2] < 1.0;
+  cupid_int count = 0, expected = 0;
+  CUPID_ASSERT_OK(cupid_pd_operator_unsupported(w.op, anchored, release, &count));
+  for (cupid_int i = 0; i < w.n; i++) {
+    const double *xi = x + 3 * i;
+    const int isolated = xi[0] == support_isolated[0] && xi[1] == support_isolated[1] &&
+                         xi[2] == support_isolated[2];
+    const int lost = xi[2] > 6.0 || isolated;
+    expected += lost;
+    assert_int_equal(release[i], lost ? 2 : 0);
+  }
+  assert_int_equal(count, expected);
+  assert_int_equal(expected, 6 * 6 * 6 + 1);
+  /* again: the released ones stay, nothing new */
+  CUPID_ASSERT_OK(cupid_pd_operator_unsupported(w.op, anchored, release, &count));
+  assert_int_equal(count, expected);
+  for (cupid_int i = 0; i < w.n; i++)
+    if (release[i]) release[i] = 1;
+  CUPID_ASSERT_OK(cupid_pd_operator_unsupported(w.op, anchored, release, &count));
+  assert_int_equal(count, 0);
+
+  /* the slabs */
+  int halo = 0;
+  cupid_pd_operator_options oo = {.horizon = 2.0, .model = CUPID_PD_BOND};
+  CUPID_ASSERT_OK(cupid_pd_operator_halo_layers(&oo, 1.0, &halo));
+  body s[SUPPORT_PARTS];
+  cupid_pd_grid_partition pt[SUPPORT_PARTS];
+  unsigned char *rel[SUPPORT_PARTS], *seen[SUPPORT_PARTS];
+  for (int p = 0; p < SUPPORT_PARTS; p++) {
+    s[p] = support_body(SUPPORT_PARTS, p, halo);
+    cupid_pd_grid_get_partition(s[p].grid, &pt[p]);
+    rel[p] = calloc((size_t)s[p].n, 1);
+    seen[p] = calloc((size_t)s[p].n, 1);
+    cupid_int weak = 0;
+    CUPID_ASSERT_OK(cupid_pd_operator_weakly_held(s[p].op, pt[p].owned_first, pt[p].owned_last,
+                                                  rel[p], &weak));
+  }
+  support_share(s, pt, rel, 0);
+  for (int p = 0; p < SUPPORT_PARTS; p++) {
+    const double *xp = cupid_pd_grid_coords(s[p].grid);
+    for (cupid_int i = 0; i < s[p].n; i++) seen[p][i] = xp[3 * i + 2] < 1.0 && !rel[p][i];
+  }
+  int rounds = 0;
+  cupid_int changed;
+  do {
+    for (int p = 0; p < SUPPORT_PARTS; p++) {
+      cupid_int added = 0;
+      CUPID_ASSERT_OK(cupid_pd_operator_reach(s[p].op, rel[p], seen[p], &added));
+    }
+    changed = support_share(s, pt, seen, 1);
+    rounds++;
+  } while (changed > 0);
+  assert_true(rounds >= 2); /* the upper slabs hold no anchored node */
+  cupid_int total = 0;
+  for (int p = 0; p < SUPPORT_PARTS; p++)
+    for (cupid_int i = pt[p].owned_first; i < pt[p].owned_last; i++) {
+      if (!rel[p][i] && !seen[p][i]) rel[p][i] = 2;
+      const cupid_int g = pt[p].first_global + i;
+      assert_int_equal(rel[p][i] != 0, release[g] != 0);
+      total += rel[p][i] != 0;
+    }
+  assert_int_equal(total, expected);
+  printf("support search: %lld of %lld nodes lost their support, found alike by the whole grid "
+         "and by %d slabs in %d rounds\n", (long long)expected, (long long)w.n, SUPPORT_PARTS, rounds);
+  for (int p = 0; p < SUPPORT_PARTS; p++) {
+    free(rel[p]), free(seen[p]);
+    destroy(&s[p]);
+  }
+  free(anchored), free(release);
+  destroy(&w);
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_precrack_count),     cmocka_unit_test(test_cracked_operator),
       cmocka_unit_test(test_stretch_threshold),  cmocka_unit_test(test_protect_damage_energy),
       cmocka_unit_test(test_threads),            cmocka_unit_test(test_isolated_node),
       cmocka_unit_test(test_copy_broken),        cmocka_unit_test(test_scan_paths),
+      cmocka_unit_test(test_support),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

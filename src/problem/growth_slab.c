@@ -1,0 +1,170 @@
+/* Load steps and crack growth on PD slabs under mpirun (issue 17, item 5; growth.c runs the
+ * steps and calls these where a slab run differs from a whole model).
+ *
+ * The solve: cupid_petsc_nodes_solver, the matrix-free CG of the one-shot slab solve (a
+ * MATSHELL over each rank's owned rows, GAMG on the short-range bond-based matrix of the
+ * intact grid) kept for the whole run. Bonds that break and nodes that are held change the
+ * operator, which the shell reads at every product; the preconditioner stays the intact
+ * grid's (still symmetric positive definite, so CG converges; only its iteration count feels
+ * the crack), and each re-solve starts from the last solution, which after a round of breaks
+ * is already close: no set-up is repeated per broken bond (issue 17, item 3's Krylov re-solve
+ * "preconditioned by the last factor", with GAMG for the factor). The target is absolute,
+ * |b - K u| <= rtol |b|, as from a zero guess, so the guess does not change what "solved"
+ * means.
+ *
+ * Support: a node whose own intact bonds no longer hold it is decided by its owner (its family
+ * is whole there). A fragment cut off from every support is a connectivity question over the
+ * whole grid: each rank searches its slab from the anchored nodes and those its neighbours
+ * found (cupid_pd_operator_reach), the flags of the owned nodes go to the other ranks' halo
+ * copies, and the rounds repeat until no copy changes anywhere. A path that crosses between
+ * slabs k times takes about k + 1 rounds; an intact bond lies in the slabs of both its ends'
+ * owners (the halo is at least a horizon), so each round carries every mark one crossing
+ * further, and the fixed point is what one search of the whole grid finds. */
+#include <string.h>
+
+#include "method.h"
+#include "problem_internal.h"
+
+#define RUNAWAY_FACTOR 10
+#define RUNAWAY_MIN 300
+
+void cupid_growth_slab_free(cupid_growth_slab *gs) {
+  cupid_petsc_nodes_solver_destroy(&gs->solver);
+  cupid_petsc_halo_destroy(&gs->halo);
+  cupid_free(&gs->flags);
+  cupid_free(&gs->u_last);
+}
+
+/* The halo exchange and its buffer, at the first use. */
+static cupid_status exchange_setup(cupid_problem_state *prob, cupid_growth_slab *gs) {
+  if (gs->halo) return CUPID_SUCCESS;
+  cupid_dynamics_partition part;
+  CUPID_CALL(cupid_problem_slab_partition(prob, &gs->halo, &part));
+  cupid_status st = cupid_calloc((size_t)prob->ndof + 1, sizeof *gs->flags, "node flags", &gs->flags);
+  if (st == CUPID_SUCCESS)
+    st = cupid_calloc((size_t)prob->ndof + 1, sizeof *gs->u_last, "last solution", &gs->u_last);
+  return cupid_problem_slab_agree(st);
+}
+
+cupid_status cupid_growth_slab_solve(cupid_problem_state *prob, cupid_growth_slab *gs) {
+  CUPID_CALL(exchange_setup(prob, gs));
+  const double t0 = cupid_wtime();
+  if (!gs->solver) {
+    cupid_pd_node_operator(prob->op, prob->grid, prob->pd_materials, &gs->op);
+    CUPID_CALL(cupid_problem_slab_agree(cupid_petsc_nodes_solver_create(&gs->op, prob->bc, &gs->solver)));
+  }
+  const int guess = prob->growth.solves > 0;
+  memcpy(gs->u_last, prob->u, (size_t)prob->ndof * sizeof *prob->u);
+  cupid_status st = cupid_petsc_nodes_solver_solve(gs->solver, prob->f_ext, guess, prob->u, &prob->solve);
+  cupid_problem_record_solve(prob);
+  CUPID_CALL(cupid_problem_slab_agree(st));
+  gs->iterations += prob->solve.iterations;
+  /* A re-solve starts from the last solution, so it needs fewer iterations than the first;
+   * CG on a mechanism (a part that lost its support in a way the search does not see) never
+   * converges, and is told by needing RUNAWAY_FACTOR times the first solve's count (bounded
+   * below by RUNAWAY_MIN), not the default 10^4 (cupid_growth_slab_hold_runaway then). */
+  if (!guess)
+    cupid_petsc_nodes_solver_limit(gs->solver, RUNAWAY_FACTOR * prob->solve.iterations > RUNAWAY_MIN
+                                                   ? RUNAWAY_FACTOR * prob->solve.iterations
+                                                   : RUNAWAY_MIN);
+  gs->setup_s += prob->solve.time_factor;
+  gs->solve_s += cupid_wtime() - t0 - prob->solve.time_factor;
+  /* the whole slab's u: owned from the solve, the halo from its owners */
+  CUPID_CALL(cupid_problem_slab_agree(cupid_petsc_halo_update(gs->halo, prob->u)));
+  for (cupid_int d = 0; d < prob->ndof; d++)
+    if (prob->bc->fixed[d]) prob->u[d] = prob->bc->value[d];
+  const cupid_int a = prob->part.owned_first, b = prob->part.owned_last;
+  return cupid_problem_slab_agree(
+      cupid_pd_operator_apply_range(prob->op, a, b, prob->u, prob->f_int + 3 * a));
+}
+
+/* Node flags of the owned nodes to every halo copy: copy[i] = owner's (overwrite), or
+ * copy[i] |= owner's (*changed: how many copies that raised). */
+static cupid_status share_flags(cupid_problem_state *prob, cupid_growth_slab *gs,
+                                unsigned char *flag, int or, cupid_int *changed) {
+  const cupid_int first = prob->part.owned_first, last = prob->part.owned_last;
+  cupid_int n = 0;
+  for (cupid_int i = first; i < last; i++) gs->flags[3 * i] = flag[i];
+  CUPID_CALL(cupid_problem_slab_agree(cupid_petsc_halo_update(gs->halo, gs->flags)));
+  for (cupid_int i = 0; i < prob->n_pd; i++) {
+    if (i >= first && i < last) continue;
+    const unsigned char v = (unsigned char)gs->flags[3 * i];
+    if (!or) flag[i] = v;
+    else if (v && !flag[i]) flag[i] = v, n++;
+  }
+  if (changed) *changed = n;
+  return CUPID_SUCCESS;
+}
+
+cupid_status cupid_growth_slab_unsupported(cupid_problem_state *prob, cupid_growth_slab *gs,
+                                           const unsigned char *anchored, unsigned char *release,
+                                           cupid_int *fresh) {
+  const cupid_int first = prob->part.owned_first, last = prob->part.owned_last, nn = prob->n_pd;
+  unsigned char *seen = NULL;
+  cupid_int weak = 0, added = 0, changed = 0;
+  CUPID_CALL(exchange_setup(prob, gs));
+  CUPID_CALL(cupid_problem_slab_agree(cupid_calloc((size_t)nn + 1, 1, "node flags", &seen)));
+  cupid_status st = cupid_pd_operator_weakly_held(prob->op, first, last, release, &weak);
+  CUPID_TRY(cupid_problem_slab_agree(st));
+  CUPID_TRY(share_flags(prob, gs, release, 0, NULL));
+  for (cupid_int i = 0; i < nn; i++) seen[i] = anchored[i] && !release[i];
+  do { /* rounds of a search on each slab and an exchange, to the fixed point */
+    CUPID_TRY(cupid_problem_slab_agree(cupid_pd_operator_reach(prob->op, release, seen, &added)));
+    CUPID_TRY(share_flags(prob, gs, seen, 1, &changed));
+  } while (cupid_petsc_max_int(changed > 0));
+  cupid_int n = 0;
+  for (cupid_int i = first; i < last; i++) {
+    if (!release[i] && !seen[i]) release[i] = 2;
+    n += release[i] == 2;
+  }
+  CUPID_TRY(share_flags(prob, gs, release, 0, NULL));
+  *fresh = cupid_problem_global_count(prob, n);
+cleanup:
+  cupid_free(&seen);
+  return st;
+}
+
+cupid_status cupid_growth_slab_hold_runaway(cupid_problem_state *prob, cupid_growth_slab *gs,
+                                            unsigned char *release, double x[3], int *held) {
+  const cupid_int first = prob->part.owned_first, last = prob->part.owned_last;
+  const cupid_dirichlet_t *bc = prob->bc;
+  *held = 0;
+  CUPID_CALL(cupid_problem_slab_agree(cupid_petsc_halo_update(gs->halo, prob->u)));
+  /* this rank's owned node that moved furthest, then the largest over the ranks */
+  double top = 0.0;
+  cupid_int node = -1;
+  for (cupid_int i = first; i < last; i++) {
+    if (release[i]) continue;
+    double d2 = 0.0;
+    for (int c = 0; c < 3; c++) {
+      const double d = bc->fixed[3 * i + c] ? 0.0 : prob->u[3 * i + c] - gs->u_last[3 * i + c];
+      d2 += d * d;
+    }
+    if (d2 > top || node < 0) top = d2, node = i; /* NaN never wins */
+  }
+  double best = node >= 0 ? top : -1.0;
+  cupid_petsc_max_doubles(&best, 1);
+  const int size = cupid_petsc_size(), rank = cupid_petsc_rank();
+  const int winner = size - cupid_petsc_max_int(node >= 0 && top == best && best > 0.0 ? size - rank : 0);
+  double where[4] = {0, 0, 0, 0}; /* the global index and position, from the winner */
+  if (winner == rank) {
+    const double *xi = cupid_pd_grid_coords(prob->grid) + 3 * node;
+    where[0] = (double)(prob->part.first_global + node);
+    for (int c = 0; c < 3; c++) where[1 + c] = xi[c];
+  }
+  cupid_petsc_sum_doubles(where, 4);
+  memcpy(prob->u, gs->u_last, (size_t)prob->ndof * sizeof *prob->u);
+  if (winner >= size) return CUPID_SUCCESS; /* nothing moved */
+  const cupid_int i = (cupid_int)where[0] - prob->part.first_global;
+  cupid_status st = CUPID_SUCCESS;
+  if (i >= 0 && i < prob->n_pd) { /* this rank holds it, owned or as halo */
+    release[i] = 1;
+    for (int c = 0; c < 3 && st == CUPID_SUCCESS; c++)
+      st = cupid_dirichlet_fix(prob->bc, 3 * i + c, prob->u[3 * i + c]);
+    if (st == CUPID_SUCCESS) st = cupid_dirichlet_finalize(prob->bc);
+  }
+  CUPID_CALL(cupid_problem_slab_agree(st));
+  for (int c = 0; c < 3; c++) x[c] = where[1 + c];
+  *held = 1;
+  return CUPID_SUCCESS;
+}
