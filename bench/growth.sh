@@ -37,3 +37,40 @@ print(f"| {s['resolve']} | {sys.argv[2]} | {s['solves']} | {s['factorisations']}
       f"{s['factorisation_s']:.1f} | {s['downdate_s']:.1f} | {s['cg_s']:.1f} | {f['broken_bonds']} |")
 PY
 done
+
+# On PD slabs under mpirun (issue 17, item 5): the same plate turned along z (the axis the
+# slabs cut), the direct path with its downdates on one process (1 and 2 threads), the kept
+# matrix-free CG + GAMG of growth_slab.c on 2 ranks of one thread, and the PETSc engine on one
+# process (CG + GAMG on the assembled K, set up afresh for every re-solve). Needs
+# build-petsc/cupid (scripts/build.sh --with-petsc); skipped without it.
+pcupid=$root/build-petsc/cupid
+mpiexec=$(command -v mpiexec || true)
+if [ -x "$pcupid" ] && [ -n "$mpiexec" ]; then
+  export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1
+  export OMPI_MCA_rmaps_base_oversubscribe=1
+  sed -e 's/x: \[0, 12\], y: \[0, 2\], z: \[0, 24\]/x: [0, 24], y: [0, 3], z: [0, 48]/' \
+      -e 's/at: 12, x: \[0, 3\], y: \[0, 2\]/at: 24, x: [0, 6], y: [0, 3]/' \
+      -e 's/z: \[21, 24\]/z: [45, 48]/' -e 's/value: \[0, 0, 0.02\]/value: [0, 0, 0.04]/' \
+      -e 's/at: \[6, 1, 22.5\]/at: [12, 1.5, 46.5]/' "$root/tests/models/growth/plate_z.yaml" > plate_z.yaml
+  echo
+  echo "| path (plate along z) | ranks x threads | run s | solves | CG iterations | set-up s | solve s | broken bonds |"
+  echo "|---|---|---|---|---|---|---|---|"
+  for run in "direct 1 1" "direct 1 2" "slabs 2 1" "petsc 1 1"; do
+    set -- $run
+    t0=$(date +%s.%N)
+    case $1 in
+      direct) OMP_NUM_THREADS=$3 "$pcupid" run plate_z.yaml -o "z$1$2$3" --quiet --solver direct ;;
+      slabs) OMP_NUM_THREADS=$3 "$mpiexec" -n "$2" "$pcupid" run plate_z.yaml -o "z$1$2$3" --quiet ;;
+      petsc) OMP_NUM_THREADS=$3 "$pcupid" run plate_z.yaml -o "z$1$2$3" --quiet --solver petsc ;;
+    esac
+    t1=$(date +%s.%N)
+    python3 - "z$1$2$3" "$1" "$2 x $3" "$(awk -v a="$t0" -v b="$t1" 'BEGIN{printf "%.1f", b-a}')" <<'PY'
+import json, sys
+f = json.load(open(sys.argv[1] + "/summary.json"))["fracture"]
+s = f["solves"]
+print(f"| {sys.argv[2]} ({s['resolve']}) | {sys.argv[3]} | {sys.argv[4]} | {s['solves']} | "
+      f"{s['cg_iterations']} | {s['factorisation_s']:.1f} | {s['cg_s'] + s['downdate_s']:.1f} | "
+      f"{f['broken_bonds']} |")
+PY
+  done
+fi
