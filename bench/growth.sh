@@ -11,7 +11,8 @@
 # (which must agree). Reported figures,
 # not a timed test.
 #
-#   bench/growth.sh        needs build/cupid (scripts/build.sh)
+#   bench/growth.sh        needs build/cupid (scripts/build.sh); the second table
+#                          build-petsc/cupid (scripts/build.sh --with-petsc)
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 cupid=$root/build/cupid
@@ -40,9 +41,10 @@ done
 
 # On PD slabs under mpirun (issue 17, item 5): the same plate turned along z (the axis the
 # slabs cut), the direct path with its downdates on one process (1 and 2 threads), the kept
-# matrix-free CG + GAMG of growth_slab.c on 2 ranks of one thread, and the PETSc engine on one
-# process (CG + GAMG on the assembled K, set up afresh for every re-solve). Needs
-# build-petsc/cupid (scripts/build.sh --with-petsc); skipped without it.
+# matrix-free CG + GAMG of growth_matrix_free.c on 2 ranks of one thread (slabs) and on one
+# process (--solver petsc), and the PETSc engine's CG + GAMG on the assembled K, set up afresh
+# for every re-solve (--solver petsc --assembled). Needs build-petsc/cupid
+# (scripts/build.sh --with-petsc); skipped without it.
 pcupid=$root/build-petsc/cupid
 mpiexec=$(command -v mpiexec || true)
 if [ -x "$pcupid" ] && [ -n "$mpiexec" ]; then
@@ -55,13 +57,14 @@ if [ -x "$pcupid" ] && [ -n "$mpiexec" ]; then
   echo
   echo "| path (plate along z) | ranks x threads | run s | solves | CG iterations | set-up s | solve s | broken bonds |"
   echo "|---|---|---|---|---|---|---|---|"
-  for run in "direct 1 1" "direct 1 2" "slabs 2 1" "petsc 1 1"; do
+  for run in "direct 1 1" "direct 1 2" "slabs 2 1" "petsc 1 1" "assembled 1 1"; do
     set -- $run
     t0=$(date +%s.%N)
     case $1 in
       direct) OMP_NUM_THREADS=$3 "$pcupid" run plate_z.yaml -o "z$1$2$3" --quiet --solver direct ;;
       slabs) OMP_NUM_THREADS=$3 "$mpiexec" -n "$2" "$pcupid" run plate_z.yaml -o "z$1$2$3" --quiet ;;
       petsc) OMP_NUM_THREADS=$3 "$pcupid" run plate_z.yaml -o "z$1$2$3" --quiet --solver petsc ;;
+      assembled) OMP_NUM_THREADS=$3 "$pcupid" run plate_z.yaml -o "z$1$2$3" --quiet --solver petsc --assembled ;;
     esac
     t1=$(date +%s.%N)
     python3 - "z$1$2$3" "$1" "$2 x $3" "$(awk -v a="$t0" -v b="$t1" 'BEGIN{printf "%.1f", b-a}')" <<'PY'

@@ -51,7 +51,8 @@ typedef struct {
   double t_factor, t_cg;
   double *react;                /* 3 per constraint: the reactions of the last solution */
   double *points;               /* 3 per output point */
-  cupid_growth_slab slab;       /* a slab run (growth_slab.c) */
+  int matrix_free;              /* solves by the kept matrix-free PETSc solve ... */
+  cupid_growth_mf mf;           /* ... (growth_matrix_free.c) */
 } growth_run;
 
 static void growth_free(growth_run *g) {
@@ -69,7 +70,7 @@ static void growth_free(growth_run *g) {
   for (int k = 0; k < 4; k++) cupid_free(&g->w[k]);
   cupid_free(&g->react);
   cupid_free(&g->points);
-  cupid_growth_slab_free(&g->slab);
+  cupid_growth_mf_free(&g->mf);
 }
 
 /* The DOFs each constraint fixes (one byte a DOF and constraint), and the unit translations:
@@ -263,7 +264,7 @@ static cupid_status release_unsupported(growth_run *g, int step) {
   cupid_problem_state *prob = g->prob;
   cupid_int fresh = 0;
   if (prob->slab)
-    CUPID_CALL(cupid_growth_slab_unsupported(prob, &g->slab, g->anchored, g->release, &fresh));
+    CUPID_CALL(cupid_growth_mf_unsupported(prob, &g->mf, g->anchored, g->release, &fresh));
   else
     CUPID_CALL(cupid_pd_operator_unsupported(prob->op, g->anchored, g->release, &fresh));
   if (fresh == 0) return CUPID_SUCCESS;
@@ -286,15 +287,15 @@ static cupid_status release_unsupported(growth_run *g, int step) {
 /* A factorisation that broke down at a PD node after bonds broke: that node lost its support
  * in a way the checks of cupid_pd_operator_unsupported() miss (a mechanism of several nodes):
  * it is held too. A slab run has no factorisation: CG on a mechanism diverges, and the node
- * its iterate moved furthest is held (growth_slab.c). *held = 0 when the failure names no such
+ * its iterate moved furthest is held (growth_matrix_free.c). *held = 0 when the failure names no such
  * node (the solve's error then stands). */
 static cupid_status hold_singular_node(growth_run *g, int step, int *held) {
   cupid_problem_state *prob = g->prob;
   const cupid_int dof = prob->solve.failed_dof;
   *held = 0;
-  if (prob->slab) { /* no factorisation to name it: where CG's iterate ran away */
+  if (g->matrix_free) { /* no factorisation to name it: where CG's iterate ran away */
     double x[3];
-    CUPID_CALL(cupid_growth_slab_hold_runaway(prob, &g->slab, g->release, x, held));
+    CUPID_CALL(cupid_growth_mf_hold_runaway(prob, &g->mf, g->release, x, held));
     if (!*held) return CUPID_SUCCESS;
     cupid_error_clear();
     g->released++;
@@ -496,7 +497,15 @@ static cupid_status downdate_factor(growth_run *g, const cupid_csr_t *Kold) {
 /* The growth solves with its own CHOLMOD factor (downdates, CG): an SPD method on a direct
  * engine; otherwise every solve is the engine's. */
 static int own_factor(const cupid_problem_state *prob) {
-  return prob->method->matrix == CUPID_MATRIX_SPD && !prob->engine->iterative && !prob->slab;
+  return prob->method->matrix == CUPID_MATRIX_SPD && !prob->engine->iterative;
+}
+
+/* The kept matrix-free PETSc solve (growth_matrix_free.c): PD slabs, or a PD-only 3D model
+ * whose method solves it matrix-free on this engine (--solver petsc), unless --assembled asks
+ * for the engine's solves of the assembled K. */
+static int matrix_free(const cupid_problem_state *prob) {
+  return prob->slab || (prob->grid && !prob->beam && !prob->opts->assembled &&
+                        prob->method->matrix_free(prob, prob->engine));
 }
 
 /* Solve at the current load (K assembled again when bonds broke): CG preconditioned by the
@@ -505,8 +514,8 @@ static int own_factor(const cupid_problem_state *prob) {
  * iterative engine takes the engine's solve every time. */
 static cupid_status solve(growth_run *g, int reassemble) {
   cupid_problem_state *prob = g->prob;
-  if (prob->slab) { /* no K: the kept matrix-free solve (growth_slab.c) */
-    CUPID_CALL(cupid_growth_slab_solve(prob, &g->slab));
+  if (g->matrix_free) { /* no K: the kept matrix-free solve (growth_matrix_free.c) */
+    CUPID_CALL(cupid_growth_mf_solve(prob, &g->mf));
     prob->growth.solves++;
     return CUPID_SUCCESS;
   }
@@ -637,6 +646,7 @@ static cupid_status setup_run(growth_run *g) {
   const char *how = getenv("CUPID_GROWTH_RESOLVE");
   g->krylov = !(how && strcmp(how, "factor") == 0);
   g->downdate = g->krylov && !(how && strcmp(how, "krylov") == 0);
+  g->matrix_free = matrix_free(prob);
   return open_csv(g);
 }
 
@@ -689,7 +699,7 @@ cupid_status cupid_problem_run_growth(cupid_problem_state *prob) {
   }
   prob->solved = 1;
   prob->phases[CUPID_PHASE_SOLVE] = (cupid_phase_record){cupid_wtime() - t0, cupid_peak_memory(), 1};
-  prob->growth.resolve = prob->slab          ? "matrix-free"
+  prob->growth.resolve = g.matrix_free       ? "matrix-free"
                          : !own_factor(prob) ? "engine"
                          : g.downdates       ? "downdate"
                          : g.krylov          ? "krylov"
@@ -704,11 +714,13 @@ cupid_status cupid_problem_run_growth(cupid_problem_state *prob) {
   prob->phases[CUPID_PHASE_FACTORISATION] =
       (cupid_phase_record){g.t_factor, cupid_peak_memory(), g.factorisations > 0};
   prob->growth.cg_s = g.t_cg;
-  if (prob->slab) { /* the CG + GAMG solves; then rank 0 gathers the whole model */
+  if (g.matrix_free) { /* the CG + GAMG solves */
     prob->growth.cg_solves = prob->growth.solves;
-    prob->growth.cg_iterations = g.slab.iterations;
-    prob->growth.cg_s = g.slab.solve_s;
-    prob->growth.factor_s = g.slab.setup_s;
+    prob->growth.cg_iterations = g.mf.iterations;
+    prob->growth.cg_s = g.mf.solve_s;
+    prob->growth.factor_s = g.mf.setup_s;
+  }
+  if (prob->slab) { /* rank 0 gathers the whole model */
     CUPID_TRY(cupid_problem_slab_collect(prob));
     if (prob->slab) goto cleanup; /* a rank other than 0 */
   }

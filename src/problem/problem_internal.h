@@ -224,7 +224,7 @@ cupid_status cupid_growth_downdate_terms(const cupid_csr_t *Kold, const cupid_cs
                                          cupid_growth_downdate *u, int *ok);
 void cupid_growth_downdate_free(cupid_growth_downdate *u);
 
-/* growth_slab.c: load steps and crack growth of a PD-only model on slabs under mpirun: one
+/* growth_matrix_free.c: load steps and crack growth of a PD-only model on slabs under mpirun: one
  * kept matrix-free PETSc solve (CG + GAMG, the preconditioner built once on the intact grid)
  * re-run from the last solution after each round of breaks, and the search for nodes that
  * lost their support over the ranks. */
@@ -236,24 +236,24 @@ typedef struct {
   double *u_last;               /* the last solution (CG's first guess) */
   cupid_int iterations;         /* CG iterations over the run */
   double setup_s, solve_s;
-} cupid_growth_slab;
+} cupid_growth_mf;
 /** Solve at the current load and conditions (u: the last solution, CG's first guess after the
  *  first solve): u on every node of the slab (owned from the solve, halo by the exchange),
  *  exactly the prescribed values on fixed DOFs, f_int on the owned rows (collective). */
-cupid_status cupid_growth_slab_solve(cupid_problem_state *prob, cupid_growth_slab *gs);
+cupid_status cupid_growth_mf_solve(cupid_problem_state *prob, cupid_growth_mf *gs);
 /** cupid_pd_operator_unsupported over the whole distributed grid: each rank decides its owned
  *  nodes, @p release then agrees on every copy; *fresh counts the newly released nodes of all
  *  ranks (collective). */
-cupid_status cupid_growth_slab_unsupported(cupid_problem_state *prob, cupid_growth_slab *gs,
+cupid_status cupid_growth_mf_unsupported(cupid_problem_state *prob, cupid_growth_mf *gs,
                                            const unsigned char *anchored, unsigned char *release,
                                            cupid_int *fresh);
 /** After a solve that found no equilibrium (a mechanism the support search missed): the node
  *  whose displacement ran furthest from the last solution in CG's iterate (over the ranks, the
  *  lowest global index among equals) is held there, release = 1 on every copy, u restored to
  *  the last solution; x its position, *held = 0 when no free node moved (collective). */
-cupid_status cupid_growth_slab_hold_runaway(cupid_problem_state *prob, cupid_growth_slab *gs,
+cupid_status cupid_growth_mf_hold_runaway(cupid_problem_state *prob, cupid_growth_mf *gs,
                                             unsigned char *release, double x[3], int *held);
-void cupid_growth_slab_free(cupid_growth_slab *gs);
+void cupid_growth_mf_free(cupid_growth_mf *gs);
 
 /* fracture.c */
 /** Model errors of pre-cracks and fracture this version cannot run (before anything is

@@ -23,7 +23,7 @@ int cupid_problem_slab_wanted(const cupid_problem_state *prob) {
   int slabs = (prob->method->caps & CUPID_METHOD_SLABS) && !(m->has_beam && prob->opts->assembled);
   const cupid_analysis *a = &m->analysis;
   /* static: the matrix-free solve of a distributed engine; load steps and crack growth too on
-   * a PD-only model (growth_slab.c: a kept CG + GAMG solve re-run as bonds break), while a
+   * a PD-only model (growth_matrix_free.c: a kept CG + GAMG solve re-run as bonds break), while a
    * coupled model's growth assembles K on the replicated model; dynamic: central differences
    * on a PD-only model, each rank stepping its slab with the stencil operator and a halo
    * exchange a step */

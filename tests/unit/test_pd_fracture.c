@@ -436,7 +436,7 @@ static void test_copy_broken(void **state) {
  * A bar 6 x 6 x 12 cut through at z = 6 by a pre-crack, with one node of the lower part
  * isolated by six small pre-cracks around its cell, anchored at its bottom layer: every node
  * above the cut (a fragment) and the isolated node (no bond left) lose their support, nothing
- * else does. Then the same search as slabs of a distributed grid run it (growth_slab.c): each
+ * else does. Then the same search as slabs of a distributed grid run it (growth_matrix_free.c): each
  * slab decides its owned nodes' weakness, searches from the anchored nodes and the flags its
  * neighbours sent, and the owned flags go to the other slabs' copies until none changes; the
  * owners' flags must be the whole grid's, and the middle slab (no anchored node) must need

@@ -5,9 +5,10 @@
 # of every node equal to the bit, and the reactions within 1e-8 of the largest (each solve
 # stops at a relative residual of 1e-12 on the direct path, PETSc's rtol on the others; a crack
 # that followed another path would differ by O(1)).
-#  - tests/models/growth/plate.yaml: PETSc's CG + GAMG on the assembled K on one rank
-#    (--solver petsc), on 2 ranks with the model replicated (--replicate), and on 2 ranks in
-#    PD slabs (the default under mpirun: the kept matrix-free solve of growth_slab.c);
+#  - tests/models/growth/plate.yaml on the PETSc engine: the engine's CG + GAMG on the
+#    assembled K on one rank (--assembled: set up afresh for every re-solve), the kept
+#    matrix-free CG + GAMG of growth_matrix_free.c on one rank, on 2 ranks with the model
+#    replicated (--replicate) and on 2 ranks in PD slabs (the default under mpirun);
 #  - plate_z.yaml, the same plate along z, so that the slabs cut across the crack's path: 2 and
 #    3 ranks, and 2 ranks of 2 threads each (the bonds must not depend on the thread count);
 #    with `per_iteration: one` (one bond of the whole grid per re-solve, chosen over the
@@ -35,7 +36,8 @@ sed -e 's/model: bond/model: lps/' \
 grep -q "per_iteration: one" one.yaml && grep -q "criterion: energy" lps.yaml && ok || bad "model variants"
 
 "$CUPID" run "$M" -o direct --quiet --solver direct && ok || bad "direct run"
-"$CUPID" run "$M" -o petsc1 --quiet --solver petsc && ok || bad "PETSc run, one rank"
+"$CUPID" run "$M" -o petsc1 --quiet --solver petsc --assembled && ok || bad "PETSc run, one rank, assembled"
+"$CUPID" run "$M" -o petsc1mf --quiet --solver petsc && ok || bad "PETSc run, one rank, matrix-free"
 "$MPIEXEC" -n 2 "$CUPID" run "$M" -o petsc2 --quiet --solver petsc --replicate && ok || bad "PETSc run, 2 ranks, replicated"
 "$MPIEXEC" -n 2 "$CUPID" run "$M" -o slab2 --quiet && ok || bad "PETSc run, 2 slabs"
 "$CUPID" run "$Z" -o zdirect --quiet --solver direct && ok || bad "direct run along z"
@@ -68,17 +70,20 @@ def same(ref, other, axis, until_cut=False):
     if not until_cut:
         assert damage(other) == damage(ref), other
     return compared
-for d in ("petsc1", "petsc2", "slab2"):
+for d in ("petsc1", "petsc1mf", "petsc2", "slab2"):
     same("direct", d, "y")
 for d in ("zslab2", "zslab3", "zslab2t2"):
     same("zdirect", d, "z")
 same("onedirect", "oneslab2", "z")
 assert same("lpsdirect", "lpsslab3", "z", until_cut=True) >= 4
 s = {d: json.load(open(d + "/summary.json"))
-     for d in ("direct", "petsc1", "petsc2", "slab2", "zslab3", "oneslab2", "lpsslab3")}
+     for d in ("direct", "petsc1", "petsc1mf", "petsc2", "slab2", "zslab3", "oneslab2", "lpsslab3")}
 assert s["direct"]["fracture"]["solves"]["resolve"] == "downdate", s["direct"]["fracture"]["solves"]
 assert [s[d]["solver"]["method"] for d in ("direct", "petsc1", "petsc2")] == ["cholmod", "petsc", "petsc"]
 assert s["petsc2"]["solver"]["ranks"] == 2 and "pd_slabs" not in s["petsc2"]["solver"]
+assert s["petsc1"]["fracture"]["solves"]["resolve"] == "engine", s["petsc1"]["fracture"]["solves"]
+for d in ("petsc1mf", "petsc2"):
+    assert s[d]["fracture"]["solves"]["resolve"] == "matrix-free", (d, s[d]["fracture"]["solves"])
 for d, n in (("slab2", 2), ("zslab3", 3), ("oneslab2", 2), ("lpsslab3", 3)):
     assert s[d]["solver"]["pd_slabs"]["ranks"] == n, (d, s[d]["solver"])
     assert s[d]["fracture"]["solves"]["resolve"] == "matrix-free", (d, s[d]["fracture"]["solves"])

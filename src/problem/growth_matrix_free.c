@@ -1,5 +1,7 @@
-/* Load steps and crack growth on PD slabs under mpirun (issue 17, item 5; growth.c runs the
- * steps and calls these where a slab run differs from a whole model).
+/* Load steps and crack growth of a PD-only 3D model on the PETSc engine, matrix-free: on PD
+ * slabs under mpirun, or on the whole grid (one process, or --replicate) with --solver petsc
+ * (issue 17, item 5; growth.c runs the steps and calls these where such a run differs from
+ * the assembled one).
  *
  * The solve: cupid_petsc_nodes_solver, the matrix-free CG of the one-shot slab solve (a
  * MATSHELL over each rank's owned rows, GAMG on the short-range bond-based matrix of the
@@ -28,59 +30,65 @@
 #define RUNAWAY_FACTOR 10
 #define RUNAWAY_MIN 300
 
-void cupid_growth_slab_free(cupid_growth_slab *gs) {
+/* A status agreed over the ranks: a slab's, or a replicated model's (PETSc is collective). */
+static cupid_status agree(cupid_status st) {
+  return cupid_petsc_size() > 1 ? cupid_problem_slab_agree(st) : st;
+}
+
+void cupid_growth_mf_free(cupid_growth_mf *gs) {
   cupid_petsc_nodes_solver_destroy(&gs->solver);
   cupid_petsc_halo_destroy(&gs->halo);
   cupid_free(&gs->flags);
   cupid_free(&gs->u_last);
 }
 
-/* The halo exchange and its buffer, at the first use. */
-static cupid_status exchange_setup(cupid_problem_state *prob, cupid_growth_slab *gs) {
-  if (gs->halo) return CUPID_SUCCESS;
-  cupid_dynamics_partition part;
-  CUPID_CALL(cupid_problem_slab_partition(prob, &gs->halo, &part));
+/* The buffers and, on a slab, the halo exchange, at the first use. */
+static cupid_status setup(cupid_problem_state *prob, cupid_growth_mf *gs) {
+  if (gs->u_last) return CUPID_SUCCESS;
   cupid_status st = cupid_calloc((size_t)prob->ndof + 1, sizeof *gs->flags, "node flags", &gs->flags);
   if (st == CUPID_SUCCESS)
     st = cupid_calloc((size_t)prob->ndof + 1, sizeof *gs->u_last, "last solution", &gs->u_last);
-  return cupid_problem_slab_agree(st);
+  CUPID_CALL(agree(st));
+  if (!prob->slab) return CUPID_SUCCESS;
+  cupid_dynamics_partition part;
+  return cupid_problem_slab_partition(prob, &gs->halo, &part);
 }
 
-cupid_status cupid_growth_slab_solve(cupid_problem_state *prob, cupid_growth_slab *gs) {
-  CUPID_CALL(exchange_setup(prob, gs));
+cupid_status cupid_growth_mf_solve(cupid_problem_state *prob, cupid_growth_mf *gs) {
+  CUPID_CALL(setup(prob, gs));
   const double t0 = cupid_wtime();
   if (!gs->solver) {
     cupid_pd_node_operator(prob->op, prob->grid, prob->pd_materials, &gs->op);
-    CUPID_CALL(cupid_problem_slab_agree(cupid_petsc_nodes_solver_create(&gs->op, prob->bc, &gs->solver)));
+    CUPID_CALL(agree(cupid_petsc_nodes_solver_create(&gs->op, prob->bc, &gs->solver)));
   }
   const int guess = prob->growth.solves > 0;
   memcpy(gs->u_last, prob->u, (size_t)prob->ndof * sizeof *prob->u);
   cupid_status st = cupid_petsc_nodes_solver_solve(gs->solver, prob->f_ext, guess, prob->u, &prob->solve);
   cupid_problem_record_solve(prob);
-  CUPID_CALL(cupid_problem_slab_agree(st));
+  CUPID_CALL(agree(st));
   gs->iterations += prob->solve.iterations;
   /* A re-solve starts from the last solution, so it needs fewer iterations than the first;
    * CG on a mechanism (a part that lost its support in a way the search does not see) never
    * converges, and is told by needing RUNAWAY_FACTOR times the first solve's count (bounded
-   * below by RUNAWAY_MIN), not the default 10^4 (cupid_growth_slab_hold_runaway then). */
+   * below by RUNAWAY_MIN), not the default 10^4 (cupid_growth_mf_hold_runaway then). */
   if (!guess)
     cupid_petsc_nodes_solver_limit(gs->solver, RUNAWAY_FACTOR * prob->solve.iterations > RUNAWAY_MIN
                                                    ? RUNAWAY_FACTOR * prob->solve.iterations
                                                    : RUNAWAY_MIN);
   gs->setup_s += prob->solve.time_factor;
   gs->solve_s += cupid_wtime() - t0 - prob->solve.time_factor;
-  /* the whole slab's u: owned from the solve, the halo from its owners */
-  CUPID_CALL(cupid_problem_slab_agree(cupid_petsc_halo_update(gs->halo, prob->u)));
+  /* the whole slab's u: owned from the solve, the halo from its owners (a whole grid: every
+   * node from the solve) */
+  if (prob->slab) CUPID_CALL(cupid_problem_slab_agree(cupid_petsc_halo_update(gs->halo, prob->u)));
   for (cupid_int d = 0; d < prob->ndof; d++)
     if (prob->bc->fixed[d]) prob->u[d] = prob->bc->value[d];
   const cupid_int a = prob->part.owned_first, b = prob->part.owned_last;
-  return cupid_problem_slab_agree(
-      cupid_pd_operator_apply_range(prob->op, a, b, prob->u, prob->f_int + 3 * a));
+  return agree(cupid_pd_operator_apply_range(prob->op, a, b, prob->u, prob->f_int + 3 * a));
 }
 
 /* Node flags of the owned nodes to every halo copy: copy[i] = owner's (overwrite), or
  * copy[i] |= owner's (*changed: how many copies that raised). */
-static cupid_status share_flags(cupid_problem_state *prob, cupid_growth_slab *gs,
+static cupid_status share_flags(cupid_problem_state *prob, cupid_growth_mf *gs,
                                 unsigned char *flag, int or, cupid_int *changed) {
   const cupid_int first = prob->part.owned_first, last = prob->part.owned_last;
   cupid_int n = 0;
@@ -96,13 +104,13 @@ static cupid_status share_flags(cupid_problem_state *prob, cupid_growth_slab *gs
   return CUPID_SUCCESS;
 }
 
-cupid_status cupid_growth_slab_unsupported(cupid_problem_state *prob, cupid_growth_slab *gs,
+cupid_status cupid_growth_mf_unsupported(cupid_problem_state *prob, cupid_growth_mf *gs,
                                            const unsigned char *anchored, unsigned char *release,
                                            cupid_int *fresh) {
   const cupid_int first = prob->part.owned_first, last = prob->part.owned_last, nn = prob->n_pd;
   unsigned char *seen = NULL;
   cupid_int weak = 0, added = 0, changed = 0;
-  CUPID_CALL(exchange_setup(prob, gs));
+  CUPID_CALL(setup(prob, gs));
   CUPID_CALL(cupid_problem_slab_agree(cupid_calloc((size_t)nn + 1, 1, "node flags", &seen)));
   cupid_status st = cupid_pd_operator_weakly_held(prob->op, first, last, release, &weak);
   CUPID_TRY(cupid_problem_slab_agree(st));
@@ -124,12 +132,12 @@ cleanup:
   return st;
 }
 
-cupid_status cupid_growth_slab_hold_runaway(cupid_problem_state *prob, cupid_growth_slab *gs,
+cupid_status cupid_growth_mf_hold_runaway(cupid_problem_state *prob, cupid_growth_mf *gs,
                                             unsigned char *release, double x[3], int *held) {
   const cupid_int first = prob->part.owned_first, last = prob->part.owned_last;
   const cupid_dirichlet_t *bc = prob->bc;
   *held = 0;
-  CUPID_CALL(cupid_problem_slab_agree(cupid_petsc_halo_update(gs->halo, prob->u)));
+  if (prob->slab) CUPID_CALL(cupid_problem_slab_agree(cupid_petsc_halo_update(gs->halo, prob->u)));
   /* this rank's owned node that moved furthest, then the largest over the ranks */
   double top = 0.0;
   cupid_int node = -1;
@@ -163,7 +171,7 @@ cupid_status cupid_growth_slab_hold_runaway(cupid_problem_state *prob, cupid_gro
       st = cupid_dirichlet_fix(prob->bc, 3 * i + c, prob->u[3 * i + c]);
     if (st == CUPID_SUCCESS) st = cupid_dirichlet_finalize(prob->bc);
   }
-  CUPID_CALL(cupid_problem_slab_agree(st));
+  CUPID_CALL(agree(st));
   for (int c = 0; c < 3; c++) x[c] = where[1 + c];
   *held = 1;
   return CUPID_SUCCESS;
