@@ -286,9 +286,9 @@ static cupid_status release_unsupported(growth_run *g, int step) {
 
 /* A factorisation that broke down at a PD node after bonds broke: that node lost its support
  * in a way the checks of cupid_pd_operator_unsupported() miss (a mechanism of several nodes):
- * it is held too. A slab run has no factorisation: CG on a mechanism diverges, and the node
- * its iterate moved furthest is held (growth_matrix_free.c). *held = 0 when the failure names no such
- * node (the solve's error then stands). */
+ * it is held too. The matrix-free path has no factorisation: CG on a mechanism diverges or
+ * stalls, and the node its iterate moved furthest is held (growth_matrix_free.c). *held = 0
+ * when the failure names no such node (the solve's error then stands). */
 static cupid_status hold_singular_node(growth_run *g, int step, int *held) {
   cupid_problem_state *prob = g->prob;
   const cupid_int dof = prob->solve.failed_dof;

@@ -33,7 +33,9 @@ sed -e 's/critical_stretch: 1.0e-3}/critical_stretch: 1.0e-3, per_iteration: one
 sed -e 's/model: bond/model: lps/' \
     -e 's/{criterion: stretch, critical_stretch: 1.0e-3}/{criterion: energy, energy_release_rate: 0.01}/' \
     "$Z" > lps.yaml
-grep -q "per_iteration: one" one.yaml && grep -q "criterion: energy" lps.yaml && ok || bad "model variants"
+grep -v "fracture:" "$Z" > linear.yaml
+grep -q "per_iteration: one" one.yaml && grep -q "criterion: energy" lps.yaml &&
+  ! grep -q "fracture:" linear.yaml && ok || bad "model variants"
 
 "$CUPID" run "$M" -o direct --quiet --solver direct && ok || bad "direct run"
 "$CUPID" run "$M" -o petsc1 --quiet --solver petsc --assembled && ok || bad "PETSc run, one rank, assembled"
@@ -46,6 +48,8 @@ grep -q "per_iteration: one" one.yaml && grep -q "criterion: energy" lps.yaml &&
 OMP_NUM_THREADS=2 "$MPIEXEC" -n 2 "$CUPID" run "$Z" -o zslab2t2 --quiet && ok || bad "2 slabs of 2 threads"
 "$CUPID" run one.yaml -o onedirect --quiet --solver direct && ok || bad "direct run, one bond a re-solve"
 "$MPIEXEC" -n 2 "$CUPID" run one.yaml -o oneslab2 --quiet && ok || bad "2 slabs, one bond a re-solve"
+"$CUPID" run linear.yaml -o lindirect --quiet --solver direct && ok || bad "direct run, load steps alone"
+"$MPIEXEC" -n 3 "$CUPID" run linear.yaml -o linslab3 --quiet && ok || bad "3 slabs, load steps alone"
 "$CUPID" run lps.yaml -o lpsdirect --quiet --solver direct && ok || bad "direct run, LPS energy"
 "$MPIEXEC" -n 3 "$CUPID" run lps.yaml -o lpsslab3 --quiet && ok || bad "3 slabs, LPS energy"
 
@@ -75,6 +79,7 @@ for d in ("petsc1", "petsc1mf", "petsc2", "slab2"):
 for d in ("zslab2", "zslab3", "zslab2t2"):
     same("zdirect", d, "z")
 same("onedirect", "oneslab2", "z")
+same("lindirect", "linslab3", "z")  # load steps alone: one solve, its multiples
 assert same("lpsdirect", "lpsslab3", "z", until_cut=True) >= 4
 s = {d: json.load(open(d + "/summary.json"))
      for d in ("direct", "petsc1", "petsc1mf", "petsc2", "slab2", "zslab3", "oneslab2", "lpsslab3")}
