@@ -148,7 +148,8 @@ cupid_status cupid_growth_mf_hold_runaway(cupid_problem_state *prob, cupid_growt
       const double d = bc->fixed[3 * i + c] ? 0.0 : prob->u[3 * i + c] - gs->u_last[3 * i + c];
       d2 += d * d;
     }
-    if (d2 > top || node < 0) top = d2, node = i; /* NaN never wins */
+    if (!(d2 >= 0.0)) continue; /* a NaN never wins */
+    if (node < 0 || d2 > top) top = d2, node = i;
   }
   double best = node >= 0 ? top : -1.0;
   cupid_petsc_max_doubles(&best, 1);
