@@ -683,6 +683,9 @@ cupid_status cupid_problem_run_growth(cupid_problem_state *prob) {
     for (size_t d = 0; d < n; d++) {
       prob->f_ext[d] = lambda * g.f_full[d];
       if (g.fixed0[d]) prob->bc->value[d] = lambda * g.g_full[d];
+      /* CG's first guess on the matrix-free path: the last step's solution scaled to this
+       * load, exact when no bond breaks (each solve is linear); held nodes stay */
+      else if (g.matrix_free && k > 1 && !prob->bc->fixed[d]) prob->u[d] *= (double)k / (k - 1);
     }
     const cupid_int before = prob->broken_bonds;
     int it = 0, stop = 0;
