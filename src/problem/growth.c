@@ -722,6 +722,8 @@ cupid_status cupid_problem_run_growth(cupid_problem_state *prob) {
     prob->growth.cg_iterations = g.mf.iterations;
     prob->growth.cg_s = g.mf.solve_s;
     prob->growth.factor_s = g.mf.setup_s;
+    /* the preconditioner's one set-up stands for the factorisations */
+    prob->phases[CUPID_PHASE_FACTORISATION] = (cupid_phase_record){g.mf.setup_s, cupid_peak_memory(), 1};
   }
   if (prob->slab) { /* rank 0 gathers the whole model */
     CUPID_TRY(cupid_problem_slab_collect(prob));
