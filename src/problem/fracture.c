@@ -199,10 +199,8 @@ static cupid_status breaks_most_here(const cupid_problem_state *prob, const doub
   CUPID_CALL(cupid_pd_operator_max_ratio(prob->op, u, &prob->fracture, &r));
   *top = r;
   cupid_petsc_max_doubles(top, 1);
-  const int size = cupid_petsc_size(), rank = cupid_petsc_rank();
   const int near = *top > 1.0 && r >= *top * (1.0 - CUPID_PD_TIE);
-  const int first = size - cupid_petsc_max_int(near ? size - rank : 0);
-  *here = first == rank;
+  *here = cupid_problem_lowest_rank(near) == cupid_petsc_rank();
   return CUPID_SUCCESS;
 }
 

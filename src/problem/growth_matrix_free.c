@@ -45,9 +45,9 @@ void cupid_growth_mf_free(cupid_growth_mf *gs) {
 /* The buffers and, on a slab, the halo exchange, at the first use. */
 static cupid_status setup(cupid_problem_state *prob, cupid_growth_mf *gs) {
   if (gs->u_last) return CUPID_SUCCESS;
-  cupid_status st = cupid_calloc((size_t)prob->ndof + 1, sizeof *gs->flags, "node flags", &gs->flags);
-  if (st == CUPID_SUCCESS)
-    st = cupid_calloc((size_t)prob->ndof + 1, sizeof *gs->u_last, "last solution", &gs->u_last);
+  cupid_status st = cupid_calloc((size_t)prob->ndof + 1, sizeof *gs->u_last, "last solution", &gs->u_last);
+  if (st == CUPID_SUCCESS && prob->slab) /* the support search's exchange */
+    st = cupid_calloc((size_t)prob->ndof + 1, sizeof *gs->flags, "node flags", &gs->flags);
   CUPID_CALL(agree(st));
   if (!prob->slab) return CUPID_SUCCESS;
   cupid_dynamics_partition part;
@@ -154,7 +154,7 @@ cupid_status cupid_growth_mf_hold_runaway(cupid_problem_state *prob, cupid_growt
   double best = node >= 0 ? top : -1.0;
   cupid_petsc_max_doubles(&best, 1);
   const int size = cupid_petsc_size(), rank = cupid_petsc_rank();
-  const int winner = size - cupid_petsc_max_int(node >= 0 && top == best && best > 0.0 ? size - rank : 0);
+  const int winner = cupid_problem_lowest_rank(node >= 0 && top == best && best > 0.0);
   double where[4] = {0, 0, 0, 0}; /* the global index and position, from the winner */
   if (winner == rank) {
     const double *xi = cupid_pd_grid_coords(prob->grid) + 3 * node;

@@ -224,10 +224,10 @@ cupid_status cupid_growth_downdate_terms(const cupid_csr_t *Kold, const cupid_cs
                                          cupid_growth_downdate *u, int *ok);
 void cupid_growth_downdate_free(cupid_growth_downdate *u);
 
-/* growth_matrix_free.c: load steps and crack growth of a PD-only model on slabs under mpirun: one
- * kept matrix-free PETSc solve (CG + GAMG, the preconditioner built once on the intact grid)
- * re-run from the last solution after each round of breaks, and the search for nodes that
- * lost their support over the ranks. */
+/* growth_matrix_free.c: load steps and crack growth of a PD-only 3D model on the petsc engine
+ * (the whole grid, or slabs under mpirun): one kept matrix-free PETSc solve (CG + GAMG, the
+ * preconditioner built once on the intact grid) re-run from the last solution after each
+ * round of breaks, and on slabs the search for nodes that lost their support over the ranks. */
 typedef struct {
   cupid_petsc_nodes_solver solver;
   cupid_node_operator op;
@@ -347,6 +347,9 @@ int cupid_problem_slab_wanted(const cupid_problem_state *prob);
 cupid_status cupid_problem_slab_agree(cupid_status st);
 /** Node i counts on this rank (always, unless a slab does not own it). */
 int cupid_problem_pd_owned(const cupid_problem_state *prob, cupid_int node);
+/** The lowest rank whose @p mine is nonzero, or the number of ranks when none (collective):
+ *  which rank acts on a choice that ties over the ranks (the lowest holds the lower nodes). */
+int cupid_problem_lowest_rank(int mine);
 /** A count of owned nodes summed over the ranks of a slab run (collective there). */
 cupid_int cupid_problem_global_count(const cupid_problem_state *prob, cupid_int count);
 /** cupid_problem_check_points against the whole grid, built on rank 0 for the check

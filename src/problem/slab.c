@@ -40,6 +40,11 @@ int cupid_problem_pd_owned(const cupid_problem_state *prob, cupid_int node) {
   return !prob->slab || (node >= prob->part.owned_first && node < prob->part.owned_last);
 }
 
+int cupid_problem_lowest_rank(int mine) {
+  const int size = cupid_petsc_size();
+  return size - cupid_petsc_max_int(mine ? size - cupid_petsc_rank() : 0);
+}
+
 cupid_int cupid_problem_global_count(const cupid_problem_state *prob, cupid_int count) {
   if (!prob->slab) return count;
   double c = (double)count;
