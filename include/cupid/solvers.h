@@ -370,6 +370,29 @@ cupid_status cupid_krylov_solve(const cupid_linear_operator *A, const cupid_csr_
                                 const cupid_krylov_options *opts,
                                 cupid_solve_info *info);
 
+/**
+ * The solve of cupid_krylov_solve() on the slab layout (fixed DOFs kept as scaled identity
+ * rows, read from @p bc at every product) kept for a sequence of systems whose operator
+ * changes a little between them (crack growth: bonds break, nodes are held): the shell, the
+ * preconditioner matrix and its factor are built once by _create and reused by every _solve
+ * (the factor stays the intact system's, still symmetric positive definite). A slab (A->part,
+ * parts = the MPI ranks) or a whole model on one process; @p A is copied, @p bc must outlive
+ * the solver. _solve starts from u (guess != 0: its free values) or from 0, to the same
+ * absolute target |b - A u| <= rtol |b| either way; u gets every local DOF. info->time_factor
+ * of the first solve is the set-up. A solve that does not converge (CUPID_ERR_NUMERIC) leaves
+ * the Krylov method's last iterate in u. Collective. Builds without PETSc: UNSUPPORTED.
+ */
+typedef struct cupid_krylov_solver_private *cupid_krylov_solver;
+cupid_status cupid_krylov_solver_create(const cupid_linear_operator *A, const cupid_csr_t *P,
+                                        const cupid_dirichlet_t *bc,
+                                        const cupid_krylov_options *opts,
+                                        cupid_krylov_solver *out);
+cupid_status cupid_krylov_solver_solve(cupid_krylov_solver S, const double *f, int guess,
+                                       double *u, cupid_solve_info *info);
+/** Lower the solves' iteration limit to @p max_iterations (as cupid_petsc_nodes_solver_limit). */
+void cupid_krylov_solver_limit(cupid_krylov_solver S, int max_iterations);
+void cupid_krylov_solver_destroy(cupid_krylov_solver *S);
+
 
 /* ---- end of the PETSc block ---- */
 

@@ -134,20 +134,31 @@ static cupid_status open_csv(growth_run *g) {
 }
 
 /* The reaction of each constraint k into g->react[3 k ..]: the work of (f_int - f_ext) on its
- * DOFs against the unit translations (a slab: on its owned DOFs, summed over the ranks). */
+ * DOFs against the unit translations (a slab: on its owned DOFs and, on rank 0, the beam's,
+ * which every rank holds whole, summed over the ranks). */
+static void add_reaction(const growth_run *g, const unsigned char *fixed, size_t d0, size_t d1,
+                         double r[3]) {
+  const cupid_problem_state *prob = g->prob;
+  const size_t n = (size_t)prob->ndof;
+  for (size_t d = d0; d < d1; d++)
+    if (fixed[d])
+      for (int c = 0; c < 3; c++) r[c] += (prob->f_int[d] - prob->f_ext[d]) * g->T[(size_t)c * n + d];
+}
+
 static void reactions(growth_run *g) {
   const cupid_problem_state *prob = g->prob;
   const size_t n = (size_t)prob->ndof;
   const int nk = prob->model->n_constraints;
-  const size_t d0 = prob->slab ? 3 * (size_t)prob->part.owned_first : 0;
-  const size_t d1 = prob->slab ? 3 * (size_t)prob->part.owned_last : n;
   for (int k = 0; k < nk; k++) {
     const unsigned char *fixed = g->masks + (size_t)k * n;
     double *r = g->react + 3 * k;
     r[0] = r[1] = r[2] = 0.0;
-    for (size_t d = d0; d < d1; d++)
-      if (fixed[d])
-        for (int c = 0; c < 3; c++) r[c] += (prob->f_int[d] - prob->f_ext[d]) * g->T[(size_t)c * n + d];
+    if (!prob->slab) {
+      add_reaction(g, fixed, 0, n, r);
+      continue;
+    }
+    add_reaction(g, fixed, 3 * (size_t)prob->part.owned_first, 3 * (size_t)prob->part.owned_last, r);
+    if (cupid_petsc_rank() == 0) add_reaction(g, fixed, (size_t)prob->fe_offset, n, r);
   }
   if (prob->slab) cupid_petsc_sum_doubles(g->react, 3 * nk);
 }
@@ -504,8 +515,12 @@ static int own_factor(const cupid_problem_state *prob) {
  * whose method solves it matrix-free on this engine (--solver petsc), unless --assembled asks
  * for the engine's solves of the assembled K. */
 static int matrix_free(const cupid_problem_state *prob) {
-  return prob->slab || (prob->grid && !prob->beam && !prob->opts->assembled &&
-                        prob->method->matrix_free(prob, prob->engine));
+  if (prob->slab) return 1;
+  if (!prob->grid || prob->opts->assembled || !prob->method->matrix_free(prob, prob->engine)) return 0;
+  /* a coupled model: the method's kept operator on PETSc's kept solve, one process (a model
+   * replicated on several ranks assembles K) */
+  return !prob->beam || (prob->method->growth_operator && prob->engine->distributed &&
+                         cupid_petsc_size() == 1);
 }
 
 /* Solve at the current load (K assembled again when bonds broke): CG preconditioned by the
@@ -544,21 +559,41 @@ static cupid_status solve(growth_run *g, int reassemble) {
   return CUPID_SUCCESS;
 }
 
+/* On slabs: the blocked bonds counted over the ranks, the largest ratio and the place of its
+ * node from the lowest rank that has it (collective). */
+static cupid_status blocked_over_ranks(const cupid_problem_state *prob, cupid_int *count,
+                                       double *ratio, double x[3]) {
+  const cupid_int mine = *count;
+  double top = mine > 0 ? *ratio : -1.0;
+  cupid_petsc_max_doubles(&top, 1);
+  *count = cupid_problem_global_count(prob, mine);
+  const int winner = cupid_problem_lowest_rank(mine > 0 && *ratio == top);
+  double where[3] = {0.0, 0.0, 0.0};
+  if (winner == cupid_petsc_rank()) memcpy(where, x, sizeof where);
+  cupid_petsc_sum_doubles(where, 3);
+  memcpy(x, where, sizeof where);
+  *ratio = top;
+  return CUPID_SUCCESS;
+}
+
 /* A crack that reached the coupling zone (whose bonds never break: the PD nodes there share
  * the load with the beam): bonds over their limit there stop the growth, named and placed;
  * *stop = 1. The steps before it stand (written), this one is not. */
 static cupid_status check_blocked(growth_run *g, int k, double lambda, int *stop) {
   cupid_problem_state *prob = g->prob;
   cupid_int count = 0, node = -1;
-  double ratio = 0.0;
+  double ratio = 0.0, x[3] = {0.0, 0.0, 0.0};
   *stop = 0;
   if (!prob->protect) return CUPID_SUCCESS;
   CUPID_CALL(cupid_pd_operator_blocked(prob->op, prob->u, &prob->fracture, &count, &node, &ratio));
+  if (count > 0)
+    memcpy(x, cupid_pd_grid_coords(prob->grid) + 3 * node, sizeof x);
+  if (prob->slab) /* the owned bonds of every rank: the count summed, the worst one's place */
+    CUPID_CALL(blocked_over_ranks(prob, &count, &ratio, x));
   if (count == 0) return CUPID_SUCCESS;
   char zone[256];
   snprintf(zone, sizeof zone, "the coupling zone of method %s", prob->method->name);
-  if (prob->method->protected_zone) prob->method->protected_zone(prob, node, zone, sizeof zone);
-  const double *x = cupid_pd_grid_coords(prob->grid) + 3 * node;
+  if (prob->method->protected_zone) prob->method->protected_zone(prob, x, zone, sizeof zone);
   snprintf(prob->growth.stopped, sizeof prob->growth.stopped,
            "crack growth stopped at load step %d (load factor %.6g): %lld bond%s of %s reached "
            "the breaking limit (up to %.3g times) near (%g, %g, %g), where a crack cannot go: "
@@ -691,7 +726,7 @@ cupid_status cupid_problem_run_growth(cupid_problem_state *prob) {
     int it = 0, stop = 0;
     CUPID_TRY(load_step(&g, k, lambda, &it, &stop));
     if (stop) {
-      fprintf(stderr, "cupid: %s\n", prob->growth.stopped);
+      if (!prob->slab || cupid_petsc_rank() == 0) fprintf(stderr, "cupid: %s\n", prob->growth.stopped);
       break;
     }
     CUPID_TRY(write_row(&g, k, lambda, it));

@@ -37,6 +37,9 @@ static cupid_status agree(cupid_status st) {
 
 void cupid_growth_mf_free(cupid_growth_mf *gs) {
   cupid_petsc_nodes_solver_destroy(&gs->solver);
+  cupid_krylov_solver_destroy(&gs->coupled);
+  if (gs->owner_destroy) gs->owner_destroy(&gs->owner);
+  gs->owner_destroy = NULL;
   cupid_petsc_halo_destroy(&gs->halo);
   cupid_free(&gs->flags);
   cupid_free(&gs->u_last);
@@ -54,16 +57,39 @@ static cupid_status setup(cupid_problem_state *prob, cupid_growth_mf *gs) {
   return cupid_problem_slab_partition(prob, &gs->halo, &part);
 }
 
+static cupid_status linear_apply(void *ctx, const double *x, double *y) {
+  return cupid_krylov_apply(ctx, x, y);
+}
+
+/* The kept solver at the first solve: CG + GAMG on the PD grid's node operator, or a coupled
+ * model's operator (the method's growth_operator, patch-tested as the one-shot solve is) with
+ * the Cholesky factor of its twin by MUMPS (method_coupled.c's choice). */
+static cupid_status create_solver(cupid_problem_state *prob, cupid_growth_mf *gs) {
+  if (!prob->beam) {
+    cupid_pd_node_operator(prob->op, prob->grid, prob->pd_materials, &gs->op);
+    return agree(cupid_petsc_nodes_solver_create(&gs->op, prob->bc, &gs->solver));
+  }
+  CUPID_CHECK(prob->method->growth_operator, CUPID_ERR_UNSUPPORTED,
+              "coupling method %s has no kept matrix-free solve for load steps", prob->method->name);
+  cupid_csr P = NULL;
+  cupid_method_operator owner = {0};
+  CUPID_CALL(prob->method->growth_operator(prob, &gs->L, &P, &owner)); /* agreed */
+  gs->owner = owner.ctx, gs->owner_destroy = owner.destroy;
+  cupid_status st = cupid_problem_patch_test(prob, linear_apply, &gs->L); /* collective */
+  const cupid_krylov_options ko = {.factor_package = "mumps"};
+  if (st == CUPID_SUCCESS) st = agree(cupid_krylov_solver_create(&gs->L, P, prob->bc, &ko, &gs->coupled));
+  cupid_csr_destroy(&P); /* in PETSc's factor now */
+  return st;
+}
+
 cupid_status cupid_growth_mf_solve(cupid_problem_state *prob, cupid_growth_mf *gs) {
   CUPID_CALL(setup(prob, gs));
   const double t0 = cupid_wtime();
-  if (!gs->solver) {
-    cupid_pd_node_operator(prob->op, prob->grid, prob->pd_materials, &gs->op);
-    CUPID_CALL(agree(cupid_petsc_nodes_solver_create(&gs->op, prob->bc, &gs->solver)));
-  }
+  if (!gs->solver && !gs->coupled) CUPID_CALL(create_solver(prob, gs));
   const int guess = prob->growth.solves > 0;
   memcpy(gs->u_last, prob->u, (size_t)prob->ndof * sizeof *prob->u);
-  cupid_status st = cupid_petsc_nodes_solver_solve(gs->solver, prob->f_ext, guess, prob->u, &prob->solve);
+  cupid_status st = gs->solver ? cupid_petsc_nodes_solver_solve(gs->solver, prob->f_ext, guess, prob->u, &prob->solve)
+                               : cupid_krylov_solver_solve(gs->coupled, prob->f_ext, guess, prob->u, &prob->solve);
   cupid_problem_record_solve(prob);
   CUPID_CALL(agree(st));
   gs->iterations += prob->solve.iterations;
@@ -71,12 +97,15 @@ cupid_status cupid_growth_mf_solve(cupid_problem_state *prob, cupid_growth_mf *g
    * CG on a mechanism (a part that lost its support in a way the search does not see) never
    * converges, and is told by needing RUNAWAY_FACTOR times the first solve's count (bounded
    * below by RUNAWAY_MIN), not the default 10^4 (cupid_growth_mf_hold_runaway then). */
-  if (!guess)
-    cupid_petsc_nodes_solver_limit(gs->solver, RUNAWAY_FACTOR * prob->solve.iterations > RUNAWAY_MIN
-                                                   ? RUNAWAY_FACTOR * prob->solve.iterations
-                                                   : RUNAWAY_MIN);
+  const int limit = RUNAWAY_FACTOR * prob->solve.iterations > RUNAWAY_MIN
+                        ? RUNAWAY_FACTOR * prob->solve.iterations
+                        : RUNAWAY_MIN;
+  if (!guess && gs->solver) cupid_petsc_nodes_solver_limit(gs->solver, limit);
+  if (!guess && gs->coupled) cupid_krylov_solver_limit(gs->coupled, limit);
   gs->setup_s += prob->solve.time_factor;
   gs->solve_s += cupid_wtime() - t0 - prob->solve.time_factor;
+  if (gs->coupled) /* u on every local DOF from the solve; the owned and the beam's rows */
+    return agree(cupid_krylov_apply(&gs->L, prob->u, prob->f_int));
   /* the whole slab's u: owned from the solve, the halo from its owners (a whole grid: every
    * node from the solve) */
   if (prob->slab) CUPID_CALL(cupid_problem_slab_agree(cupid_petsc_halo_update(gs->halo, prob->u)));

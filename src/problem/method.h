@@ -82,9 +82,17 @@ struct cupid_method_ops {
   /** Fracture: flag the PD nodes whose bonds must never break (the coupling zone: overlaps,
    *  tied or fictitious-node layers), @p protect zeroed, one per PD node. NULL: none. */
   cupid_status (*fracture_protect)(const cupid_problem_state *prob, unsigned char *protect);
-  /** Fracture: name the protected zone holding PD node @p i for a message (e.g. "the Arlequin
-   *  overlap {y: [29, 34]} (coupling.arlequin.overlap[0], line 40)"). NULL: the method's name. */
-  void (*protected_zone)(const cupid_problem_state *prob, cupid_int i, char *buf, size_t len);
+  /** Fracture: name the protected zone holding the PD node at @p x for a message (e.g. "the
+   *  Arlequin overlap {y: [29, 34]} (coupling.arlequin.overlap[0], line 40)"); by position, so
+   *  that any rank of a slab run can name another's node. NULL: the method's name. */
+  void (*protected_zone)(const cupid_problem_state *prob, const double x[3], char *buf, size_t len);
+  /** Load steps and crack growth on the matrix-free path (growth_matrix_free.c): the static
+   *  operator in *L (on a slab: its rows), the preconditioner matrix in *P and the operator's
+   *  owner, kept for the whole run; with pre-cracks or fracture prob->crack_copy is set to
+   *  the operator's own PD bonds, so that they break with prob->op's. On failure nothing is
+   *  left to free. NULL: the method's growth assembles K. */
+  cupid_status (*growth_operator)(cupid_problem_state *prob, cupid_linear_operator *L, cupid_csr *P,
+                                  cupid_method_operator *owner);
 };
 
 /** dynamic.c: the method's mass, integrate (central differences on @p op when not NULL, else

@@ -648,6 +648,23 @@ cleanup:
   return st;
 }
 
+/* Growth on the matrix-free path: the operator of the one-shot solve, kept (its own PD bonds
+ * break with prob->op's). */
+static cupid_status growth_operator(cupid_problem_state *prob, cupid_linear_operator *L, cupid_csr *P,
+                                    cupid_method_operator *owner) {
+  cupid_arlequin_operator A = NULL;
+  cupid_status st = create_operator(prob, &A, P);
+  if (st != CUPID_SUCCESS) {
+    cupid_arlequin_operator_destroy(&A);
+    cupid_csr_destroy(P);
+    return st;
+  }
+  cupid_arlequin_operator_linear(A, L);
+  *owner = (cupid_method_operator){.ctx = A, .destroy = destroy_operator};
+  if (prob->damage) prob->crack_copy = cupid_arlequin_operator_pd(A);
+  return CUPID_SUCCESS;
+}
+
 /* Central differences (lumped mass, checked) need K only through products: the matrix-free
  * operator, no assembled K, no preconditioner. */
 static cupid_status explicit_operator(cupid_problem_state *prob, cupid_method_operator *op) {
@@ -675,10 +692,10 @@ static cupid_status fracture_protect(const cupid_problem_state *prob, unsigned c
   return CUPID_SUCCESS;
 }
 
-/* The overlap holding PD node i, for the message of a crack that reached it. */
-static void protected_zone(const cupid_problem_state *prob, cupid_int i, char *buf, size_t len) {
+/* The overlap holding the PD node at x, for the message of a crack that reached it. */
+static void protected_zone(const cupid_problem_state *prob, const double x[3], char *buf, size_t len) {
   const cupid_coupling *c = &prob->model->coupling;
-  const double *x = cupid_pd_grid_coords(prob->grid) + 3 * i, h = cupid_pd_grid_spacing(prob->grid);
+  const double h = cupid_pd_grid_spacing(prob->grid);
   snprintf(buf, len, "an Arlequin overlap");
   for (int s = 0; s < c->n_overlaps; s++) {
     if (!cupid_box_contains(&c->overlaps[s], x, 1e-9 * h)) continue;
@@ -745,5 +762,6 @@ const cupid_method_ops cupid_method_arlequin = {
     .estimate_matrix_free = estimate_matrix_free,
     .fracture_protect = fracture_protect,
     .protected_zone = protected_zone,
+    .growth_operator = growth_operator,
     .patch_tie = patch_tie,
 };

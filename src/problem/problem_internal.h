@@ -224,13 +224,19 @@ cupid_status cupid_growth_downdate_terms(const cupid_csr_t *Kold, const cupid_cs
                                          cupid_growth_downdate *u, int *ok);
 void cupid_growth_downdate_free(cupid_growth_downdate *u);
 
-/* growth_matrix_free.c: load steps and crack growth of a PD-only 3D model on the petsc engine
- * (the whole grid, or slabs under mpirun): one kept matrix-free PETSc solve (CG + GAMG, the
- * preconditioner built once on the intact grid) re-run from the last solution after each
- * round of breaks, and on slabs the search for nodes that lost their support over the ranks. */
+/* growth_matrix_free.c: load steps and crack growth on the petsc engine, matrix-free (the
+ * whole model on one process, or slabs under mpirun): one kept PETSc solve re-run from the last
+ * solution after each round of breaks (a PD-only 3D model: CG + GAMG, the preconditioner built
+ * once on the intact grid; a coupled one: the method's operator, CG + the Cholesky factor of
+ * its bond-based twin, factored once), and on slabs the search for nodes that lost their
+ * support over the ranks. */
 typedef struct {
-  cupid_petsc_nodes_solver solver;
+  cupid_petsc_nodes_solver solver; /* PD only */
   cupid_node_operator op;
+  cupid_krylov_solver coupled;     /* a coupled model: the method's operator (growth_operator) */
+  cupid_linear_operator L;
+  void *owner;                     /* ... its owner, freed by owner_destroy */
+  void (*owner_destroy)(void **ctx);
   cupid_petsc_halo halo;        /* the DOFs' exchange: owned -> the other ranks' halo copies */
   double *flags;                /* a DOF-sized buffer: node flags in their first DOF */
   double *u_last;               /* the last solution (CG's first guess) */
@@ -238,8 +244,9 @@ typedef struct {
   double setup_s, solve_s;
 } cupid_growth_mf;
 /** Solve at the current load and conditions (u: the last solution, CG's first guess after the
- *  first solve): u on every node of the slab (owned from the solve, halo by the exchange),
- *  exactly the prescribed values on fixed DOFs, f_int on the owned rows (collective). */
+ *  first solve): u on every DOF of the slab (owned from the solve, halo by the exchange, the
+ *  beam's the same on every rank), exactly the prescribed values on fixed DOFs, f_int on the
+ *  owned rows and a beam's rows (collective). */
 cupid_status cupid_growth_mf_solve(cupid_problem_state *prob, cupid_growth_mf *gs);
 /** cupid_pd_operator_unsupported over the whole distributed grid: each rank decides its owned
  *  nodes, @p release then agrees on every copy; *fresh counts the newly released nodes of all

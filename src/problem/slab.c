@@ -22,13 +22,14 @@ int cupid_problem_slab_wanted(const cupid_problem_state *prob) {
    * --replicate keeps the whole model on every rank */
   int slabs = (prob->method->caps & CUPID_METHOD_SLABS) && !(m->has_beam && prob->opts->assembled);
   const cupid_analysis *a = &m->analysis;
-  /* static: the matrix-free solve of a distributed engine; load steps and crack growth too on
-   * a PD-only model (growth_matrix_free.c: a kept CG + GAMG solve re-run as bonds break), while a
-   * coupled model's growth assembles K on the replicated model; dynamic: central differences
-   * on a PD-only model, each rank stepping its slab with the stencil operator and a halo
-   * exchange a step */
+  /* static: the matrix-free solve of a distributed engine; load steps and crack growth too
+   * (growth_matrix_free.c: a kept solve re-run as bonds break) on a PD-only model and with a
+   * method that keeps its operator (growth_operator: Arlequin), while the others' growth
+   * assembles K on the replicated model; dynamic: central differences on a PD-only model, each
+   * rank stepping its slab with the stencil operator and a halo exchange a step */
   const int growth = a->steps > 0 || m->pd.fracture.has_fracture;
-  const int solve = a->type == CUPID_ANALYSIS_STATIC && (!growth || !m->has_beam) &&
+  const int solve = a->type == CUPID_ANALYSIS_STATIC &&
+                    (!growth || !m->has_beam || prob->method->growth_operator) &&
                     (!engine || engine->distributed);
   const int explicit_pd = a->type == CUPID_ANALYSIS_DYNAMIC && !m->has_beam &&
                           a->dynamic.integrator == CUPID_INTEGRATOR_CENTRAL;
@@ -91,7 +92,8 @@ cupid_status cupid_problem_slab_gather(const cupid_problem_state *prob, const do
 }
 
 /* Each output point sampled by the rank that owns the node whose cell holds it (its
- * neighbours' copies are current), and summed over the ranks. */
+ * neighbours' copies are current), or by rank 0 in a beam (whose DOFs every rank holds
+ * whole), and summed over the ranks. */
 cupid_status cupid_problem_slab_points(const cupid_problem_state *prob, double *u) {
   const cupid_output *out = &prob->model->output;
   const int np = out->n_points;
@@ -104,7 +106,9 @@ cupid_status cupid_problem_slab_points(const cupid_problem_state *prob, double *
     cupid_int ijk[3];
     for (int a = 0; a < 3; a++) ijk[a] = (cupid_int)floor((p[a] - o[a]) / h);
     const cupid_int node = cupid_pd_grid_node_at(prob->grid, ijk[0], ijk[1], ijk[2]);
-    const int mine = node >= 0 && cupid_problem_pd_owned(prob, node) && u[3 * k] == u[3 * k];
+    const int in_beam = prob->beam && cupid_cuf_contains(prob->beam, p[0], p[1], p[2]);
+    const int mine = (in_beam ? cupid_petsc_rank() == 0 : node >= 0 && cupid_problem_pd_owned(prob, node)) &&
+                     u[3 * k] == u[3 * k];
     for (int c = 0; c < 3 && mine; c++) buf[3 * k + c] = u[3 * k + c];
     buf[3 * np + k] = mine;
   }
@@ -130,8 +134,9 @@ static void max_over_ranks(void *ctx, double *values, int count) {
 cupid_status cupid_problem_slab_partition(const cupid_problem_state *prob, cupid_petsc_halo *halo,
                                           cupid_dynamics_partition *part) {
   const cupid_pd_grid_partition *p = &prob->part;
+  /* the PD DOFs (a beam's DOFs, after them, are whole on every rank) */
   CUPID_CALL(cupid_problem_slab_agree(cupid_petsc_halo_create(
-      prob->ndof, 3 * p->owned_first, 3 * p->owned_last, 3 * p->first_global, halo)));
+      3 * prob->n_pd, 3 * p->owned_first, 3 * p->owned_last, 3 * p->first_global, halo)));
   *part = (cupid_dynamics_partition){.owned_first = 3 * p->owned_first,
                                      .owned_last = 3 * p->owned_last,
                                      .global_first = 3 * p->first_global,

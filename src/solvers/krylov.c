@@ -768,80 +768,166 @@ cleanup:
   return st;
 }
 
-/* The PD grid in slabs, one a rank (slab_ctx above). */
+/* A kept solve on the slab layout (solvers.h, cupid_krylov_solver): the operator (a copy, its
+ * partition the caller's or, on one process, the whole grid as one part), the shell and the
+ * set-up KSP with its preconditioner. */
+struct cupid_krylov_solver_private {
+  cupid_linear_operator A;
+  cupid_pd_grid_partition whole; /* the one part of a whole grid on one process */
+  slab_ctx c;
+  ksp_objects obj;
+  PetscInt max_it;
+  double setup_s; /* given to the first solve's info (time_factor) */
+};
+
+cupid_status cupid_krylov_solver_create(const cupid_linear_operator *A, const cupid_csr_t *P,
+                                        const cupid_dirichlet_t *bc,
+                                        const cupid_krylov_options *opts,
+                                        cupid_krylov_solver *out) {
+  *out = NULL;
+  CUPID_CHECK(A && A->apply_rows && P && bc, CUPID_ERR_ARGUMENT,
+              "a kept Krylov solve needs an operator with apply_rows, a preconditioner and conditions");
+  CUPID_CHECK(bc->n == A->n && P->nrows * P->bs == A->n, CUPID_ERR_ARGUMENT,
+              "operator (%lld DOFs), preconditioner (%lld) and conditions (%lld) differ",
+              (long long)A->n, (long long)(P->nrows * P->bs), (long long)bc->n);
+  PetscMPIInt size = 1;
+  MPI_Comm_size(PETSC_COMM_WORLD, &size);
+  const int slab = A->part && A->part->parts > 1;
+  CUPID_CHECK(slab ? A->part->parts == size : size == 1, CUPID_ERR_ARGUMENT,
+              "a kept Krylov solve of %d slab(s) on %d MPI ranks (a whole model: one rank)",
+              slab ? A->part->parts : 1, (int)size);
+  cupid_krylov_solver S = NULL;
+  CUPID_CALL(cupid_calloc(1, sizeof *S, "Krylov solver", &S));
+  cupid_status st = CUPID_SUCCESS;
+  const double t0 = cupid_wtime();
+  S->A = *A;
+  if (!slab) {
+    const cupid_int nodes = A->n_pd_dofs / 3;
+    S->whole = (cupid_pd_grid_partition){.global_nodes = nodes, .owned_last = nodes, .parts = 1};
+    S->A.part = &S->whole;
+  }
+  const cupid_pd_grid_partition *p = S->A.part;
+  slab_ctx *c = &S->c;
+  *c = (slab_ctx){.A = &S->A, .bc = bc, .n = A->n, .n_pd = A->n_pd_dofs,
+                  .pd0 = 3 * p->owned_first, .pd1 = 3 * p->owned_last,
+                  .fe_owner = p->part == p->parts - 1};
+  const PetscInt N = (PetscInt)(3 * p->global_nodes + (A->n - A->n_pd_dofs));
+  c->g0 = (PetscInt)(3 * (p->first_global + p->owned_first));
+  c->nloc = (PetscInt)(c->pd1 - c->pd0) + (c->fe_owner ? (PetscInt)(A->n - A->n_pd_dofs) : 0);
+  c->fe_global = (PetscInt)(3 * p->global_nodes);
+  CUPID_TRY(cupid_calloc((size_t)c->n + 1, sizeof *c->xw, "work vector", &c->xw));
+  CUPID_TRY(cupid_calloc((size_t)c->n + 1, sizeof *c->yw, "work vector", &c->yw));
+  c->s = slab_fixed_scale(c, P);
+  PTRY(VecCreateMPI(PETSC_COMM_WORLD, c->nloc, N, &S->obj.b));
+  PTRY(VecDuplicate(S->obj.b, &S->obj.x));
+  CUPID_TRY(slab_halo(c, S->obj.x));
+  PTRY(MatCreateShell(PETSC_COMM_WORLD, c->nloc, c->nloc, N, N, c, &S->obj.S));
+  PTRY(MatShellSetOperation(S->obj.S, MATOP_MULT, (void (*)(void))slab_mult));
+  CUPID_TRY(slab_matrix(c, P, N, &S->obj.Pm));
+  const PetscInt pd_owned = (PetscInt)(c->pd1 - c->pd0);
+  const ksp_fields fields = {c->g0, c->g0 + pd_owned, c->g0 + pd_owned, c->g0 + c->nloc, 1};
+  CUPID_TRY(configure_ksp(&S->A, opts, &fields, &S->obj));
+  /* the factor is kept as the operator changes (bonds break, DOFs are held) */
+  PTRY(KSPSetReusePreconditioner(S->obj.ksp, PETSC_TRUE));
+  PetscReal rtol, atol, dtol;
+  PTRY(KSPGetTolerances(S->obj.ksp, &rtol, &atol, &dtol, &S->max_it));
+  S->setup_s = cupid_wtime() - t0;
+  *out = S;
+  S = NULL;
+cleanup:
+  cupid_krylov_solver_destroy(&S);
+  return st;
+}
+
+cupid_status cupid_krylov_solver_solve(cupid_krylov_solver S, const double *f, int guess,
+                                       double *u, cupid_solve_info *info) {
+  cupid_status st = CUPID_SUCCESS;
+  cupid_solve_info inf;
+  memset(&inf, 0, sizeof inf);
+  CUPID_CHECK(S && f && u, CUPID_ERR_ARGUMENT, "cupid_krylov_solver_solve: NULL argument");
+  slab_ctx *c = &S->c;
+  const cupid_dirichlet_t *bc = c->bc;
+  ksp_objects *obj = &S->obj;
+  PetscReal rtol, atol, dtol;
+  PetscInt maxit;
+  PTRY(KSPGetTolerances(obj->ksp, &rtol, &atol, &dtol, &maxit));
+  PTRY(KSPSetTolerances(obj->ksp, rtol, atol, dtol, S->max_it));
+
+  /* b = f - A u_c on the free owned DOFs, 0 on the fixed ones; x = u's free values or 0 (the
+   * fixed rows solve for the correction to the prescribed values: 0) */
+  for (cupid_int d = 0; d < c->n; d++) c->xw[d] = bc->fixed[d] ? bc->value[d] : 0.0;
+  CUPID_TRY(slab_product(&S->A, c->xw, c->yw));
+  for (cupid_int d = 0; d < c->n; d++) {
+    c->yw[d] = bc->fixed[d] ? 0.0 : f[d] - c->yw[d];
+    c->xw[d] = guess && !bc->fixed[d] ? u[d] : 0.0;
+  }
+  PetscScalar *ba, *xa0;
+  PTRY(VecGetArray(obj->b, &ba));
+  slab_owned(c, c->yw, ba);
+  PTRY(VecRestoreArray(obj->b, &ba));
+  PTRY(VecGetArray(obj->x, &xa0));
+  slab_owned(c, c->xw, xa0);
+  PTRY(VecRestoreArray(obj->x, &xa0));
+  PetscReal bnorm;
+  PTRY(VecNorm(obj->b, NORM_2, &bnorm));
+  /* from a guess, PETSc's rtol is still relative to |b|: the same target as from zero */
+  PTRY(KSPSetInitialGuessNonzero(obj->ksp, guess ? PETSC_TRUE : PETSC_FALSE));
+  CUPID_TRY(run_ksp(obj->ksp, &S->A, obj->b, obj->x, &inf));
+  inf.time_factor = S->setup_s; /* the factorisation: charged to the first solve */
+  S->setup_s = 0.0;
+  CUPID_TRY(refine_true_residual(obj->ksp, obj->S, obj->b, obj->x, &inf));
+
+  /* u = u_c + x on every local DOF (a solve that failed: its last iterate, where a part that
+   * lost its support ran away); the true residual over the free owned DOFs, recomputed */
+  const PetscScalar *xa;
+  PTRY(slab_gather(c, obj->x));
+  PTRY(VecGetArrayRead(c->xl, &xa));
+  for (cupid_int d = 0; d < c->n; d++) u[d] = bc->fixed[d] ? bc->value[d] : xa[d];
+  PTRY(VecRestoreArrayRead(c->xl, &xa));
+  CUPID_TRY(slab_product(&S->A, u, c->yw));
+  double sums[3] = {0.0, 0.0, 0.0}; /* |r|^2, |f|^2, free DOFs */
+  for (cupid_int d = 0; d < c->n; d++) {
+    int owned = (d >= c->pd0 && d < c->pd1) || (d >= c->n_pd && c->fe_owner);
+    if (!owned || bc->fixed[d]) continue;
+    sums[0] += (f[d] - c->yw[d]) * (f[d] - c->yw[d]);
+    sums[1] += f[d] * f[d];
+    sums[2] += 1.0;
+  }
+  MPI_Allreduce(MPI_IN_PLACE, sums, 3, MPI_DOUBLE, MPI_SUM, PETSC_COMM_WORLD);
+  double scale = bnorm > 0 ? (double)bnorm : sqrt(sums[1]);
+  inf.residual = scale > 0 ? sqrt(sums[0]) / scale : sqrt(sums[0]);
+  inf.n = (cupid_int)sums[2];
+  st = not_converged(&inf);
+cleanup:
+  if (info) *info = inf;
+  return st;
+}
+
+void cupid_krylov_solver_limit(cupid_krylov_solver S, int max_iterations) {
+  if (S && max_iterations > 0 && max_iterations < S->max_it) S->max_it = max_iterations;
+}
+
+void cupid_krylov_solver_destroy(cupid_krylov_solver *S) {
+  if (!S || !*S) return;
+  cupid_krylov_solver s = *S;
+  ksp_objects_destroy(&s->obj);
+  if (s->c.halo) VecScatterDestroy(&s->c.halo);
+  if (s->c.xl) VecDestroy(&s->c.xl);
+  cupid_free(&s->c.xw);
+  cupid_free(&s->c.yw);
+  cupid_free(S);
+}
+
+/* The PD grid in slabs, one a rank (slab_ctx above): the kept solve, once. */
 static cupid_status solve_slabs(const cupid_linear_operator *A, const cupid_csr_t *P,
                                 const cupid_dirichlet_t *bc, const double *f, double *u,
                                 const cupid_krylov_options *opts,
                                 cupid_solve_info *info) {
-  cupid_status st = CUPID_SUCCESS;
-  cupid_solve_info inf;
-  memset(&inf, 0, sizeof inf);
-  const cupid_pd_grid_partition *p = A->part;
-  PetscMPIInt size = 1;
-  MPI_Comm_size(PETSC_COMM_WORLD, &size);
-  CUPID_CHECK(p->parts == size, CUPID_ERR_ARGUMENT, "a grid of %d slabs on %d MPI ranks",
-              p->parts, (int)size);
-  slab_ctx c = {.A = A, .bc = bc, .n = A->n, .n_pd = A->n_pd_dofs, .pd0 = 3 * p->owned_first,
-                .pd1 = 3 * p->owned_last, .fe_owner = p->part == p->parts - 1};
-  const PetscInt N = (PetscInt)(3 * p->global_nodes + (A->n - A->n_pd_dofs));
-  c.g0 = (PetscInt)(3 * (p->first_global + p->owned_first));
-  c.nloc = (PetscInt)(c.pd1 - c.pd0) + (c.fe_owner ? (PetscInt)(A->n - A->n_pd_dofs) : 0);
-  c.fe_global = (PetscInt)(3 * p->global_nodes);
-  ksp_objects obj = {0};
-  CUPID_TRY(cupid_calloc((size_t)c.n + 1, sizeof *c.xw, "work vector", &c.xw));
-  CUPID_TRY(cupid_calloc((size_t)c.n + 1, sizeof *c.yw, "work vector", &c.yw));
-  c.s = slab_fixed_scale(&c, P);
-
-  /* b = f - A u_c on the free owned DOFs, 0 on the fixed ones */
-  for (cupid_int d = 0; d < c.n; d++) c.xw[d] = bc->fixed[d] ? bc->value[d] : 0.0;
-  CUPID_TRY(slab_product(A, c.xw, c.yw));
-  for (cupid_int d = 0; d < c.n; d++) c.yw[d] = bc->fixed[d] ? 0.0 : f[d] - c.yw[d];
-  PTRY(VecCreateMPI(PETSC_COMM_WORLD, c.nloc, N, &obj.b));
-  PTRY(VecDuplicate(obj.b, &obj.x));
-  PetscScalar *ba;
-  PTRY(VecGetArray(obj.b, &ba));
-  slab_owned(&c, c.yw, ba);
-  PTRY(VecRestoreArray(obj.b, &ba));
-  PetscReal bnorm;
-  PTRY(VecNorm(obj.b, NORM_2, &bnorm));
-  CUPID_TRY(slab_halo(&c, obj.x));
-
-  double t0 = cupid_wtime();
-  PTRY(MatCreateShell(PETSC_COMM_WORLD, c.nloc, c.nloc, N, N, &c, &obj.S));
-  PTRY(MatShellSetOperation(obj.S, MATOP_MULT, (void (*)(void))slab_mult));
-  CUPID_TRY(slab_matrix(&c, P, N, &obj.Pm));
-  const PetscInt pd_owned = (PetscInt)(c.pd1 - c.pd0);
-  const ksp_fields fields = {c.g0, c.g0 + pd_owned, c.g0 + pd_owned, c.g0 + c.nloc, 1};
-  CUPID_TRY(configure_ksp(A, opts, &fields, &obj));
-  CUPID_TRY(run_ksp(obj.ksp, A, obj.b, obj.x, &inf));
-  inf.time_factor = cupid_wtime() - t0 - inf.time_solve;
-  CUPID_TRY(refine_true_residual(obj.ksp, obj.S, obj.b, obj.x, &inf));
-
-  /* u = u_c + x on every local DOF; the true residual over the free owned DOFs, recomputed */
-  const PetscScalar *xa;
-  PTRY(slab_gather(&c, obj.x));
-  PTRY(VecGetArrayRead(c.xl, &xa));
-  for (cupid_int d = 0; d < c.n; d++) u[d] = bc->fixed[d] ? bc->value[d] : xa[d];
-  PTRY(VecRestoreArrayRead(c.xl, &xa));
-  CUPID_TRY(slab_product(A, u, c.yw));
-  double sums[2] = {0.0, 0.0}; /* |r|^2, |f|^2 */
-  for (cupid_int d = 0; d < c.n; d++) {
-    int owned = (d >= c.pd0 && d < c.pd1) || (d >= c.n_pd && c.fe_owner);
-    if (!owned || bc->fixed[d]) continue;
-    sums[0] += (f[d] - c.yw[d]) * (f[d] - c.yw[d]);
-    sums[1] += f[d] * f[d];
-  }
-  MPI_Allreduce(MPI_IN_PLACE, sums, 2, MPI_DOUBLE, MPI_SUM, PETSC_COMM_WORLD);
-  double scale = bnorm > 0 ? (double)bnorm : sqrt(sums[1]);
-  inf.residual = scale > 0 ? sqrt(sums[0]) / scale : sqrt(sums[0]);
-  st = not_converged(&inf);
-cleanup:
-  if (info) *info = inf;
-  ksp_objects_destroy(&obj);
-  if (c.halo) VecScatterDestroy(&c.halo);
-  if (c.xl) VecDestroy(&c.xl);
-  cupid_free(&c.xw);
-  cupid_free(&c.yw);
+  cupid_krylov_solver S = NULL;
+  if (info) memset(info, 0, sizeof *info);
+  CUPID_CALL(cupid_krylov_solver_create(A, P, bc, opts, &S));
+  cupid_status st = cupid_krylov_solver_solve(S, f, 0, u, info);
+  cupid_krylov_solver_destroy(&S);
   return st;
 }
 
@@ -889,6 +975,30 @@ cupid_status cupid_krylov_apply(const cupid_linear_operator *A, const double *x,
   CUPID_CHECK(!A->part || A->part->parts <= 1, CUPID_ERR_UNSUPPORTED,
               "an operator on a slab needs the PETSc engine (MPI)");
   return A->apply(A->ctx, x, y);
+}
+
+cupid_status cupid_krylov_solver_create(const cupid_linear_operator *A, const cupid_csr_t *P,
+                                        const cupid_dirichlet_t *bc,
+                                        const cupid_krylov_options *opts,
+                                        cupid_krylov_solver *out) {
+  (void)A, (void)P, (void)bc, (void)opts;
+  *out = NULL;
+  return CUPID_ERROR(CUPID_ERR_UNSUPPORTED,
+                     "a kept matrix-free coupled solve needs the PETSc engine: configure with "
+                     "-DCUPID_WITH_PETSC=ON");
+}
+
+cupid_status cupid_krylov_solver_solve(cupid_krylov_solver S, const double *f, int guess,
+                                       double *u, cupid_solve_info *info) {
+  (void)S, (void)f, (void)guess, (void)u;
+  if (info) memset(info, 0, sizeof *info);
+  return CUPID_ERROR(CUPID_ERR_UNSUPPORTED, "a kept matrix-free coupled solve needs the PETSc engine");
+}
+
+void cupid_krylov_solver_limit(cupid_krylov_solver S, int max_iterations) { (void)S, (void)max_iterations; }
+
+void cupid_krylov_solver_destroy(cupid_krylov_solver *S) {
+  if (S) *S = NULL;
 }
 
 #endif
