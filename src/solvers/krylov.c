@@ -790,6 +790,10 @@ cupid_status cupid_krylov_solver_create(const cupid_linear_operator *A, const cu
   CUPID_CHECK(bc->n == A->n && P->nrows * P->bs == A->n, CUPID_ERR_ARGUMENT,
               "operator (%lld DOFs), preconditioner (%lld) and conditions (%lld) differ",
               (long long)A->n, (long long)(P->nrows * P->bs), (long long)bc->n);
+  PetscBool init = PETSC_FALSE;
+  if (PetscInitialized(&init) || !init)
+    CUPID_CHECK(PetscInitializeNoArguments() == 0, CUPID_ERR_UNSUPPORTED,
+                "PETSc could not be initialised");
   PetscMPIInt size = 1;
   MPI_Comm_size(PETSC_COMM_WORLD, &size);
   const int slab = A->part && A->part->parts > 1;
