@@ -511,14 +511,14 @@ static int own_factor(const cupid_problem_state *prob) {
   return prob->method->matrix == CUPID_MATRIX_SPD && !prob->engine->iterative;
 }
 
-/* The kept matrix-free PETSc solve (growth_matrix_free.c): PD slabs, or a PD-only 3D model
- * whose method solves it matrix-free on this engine (--solver petsc), unless --assembled asks
- * for the engine's solves of the assembled K. */
+/* The kept matrix-free PETSc solve (growth_matrix_free.c): PD slabs, or a PD-only 3D or
+ * Arlequin model whose method solves it matrix-free on this engine (--solver petsc), unless
+ * --assembled asks for the engine's solves of the assembled K. A coupled model needs the
+ * method's kept operator and PETSc's kept solve, on one process (a model replicated on
+ * several ranks assembles K). */
 static int matrix_free(const cupid_problem_state *prob) {
   if (prob->slab) return 1;
   if (!prob->grid || prob->opts->assembled || !prob->method->matrix_free(prob, prob->engine)) return 0;
-  /* a coupled model: the method's kept operator on PETSc's kept solve, one process (a model
-   * replicated on several ranks assembles K) */
   return !prob->beam || (prob->method->growth_operator && prob->engine->distributed &&
                          cupid_petsc_size() == 1);
 }

@@ -1,7 +1,13 @@
-/* Load steps and crack growth of a PD-only 3D model on the PETSc engine, matrix-free: on PD
- * slabs under mpirun, or on the whole grid (one process, or --replicate) with --solver petsc
- * (issue 17, item 5; growth.c runs the steps and calls these where such a run differs from
- * the assembled one).
+/* Load steps and crack growth of a PD-only 3D or an Arlequin-coupled model on the PETSc
+ * engine, matrix-free: on PD slabs under mpirun, or on the whole model with --solver petsc
+ * (one process; a PD-only grid also with --replicate) (issue 17, item 5; growth.c runs the
+ * steps and calls these where such a run differs from the assembled one).
+ *
+ * A coupled model keeps the method's static operator instead (growth_operator: Arlequin's
+ * weighted PD operator, the beam and the tie, whose own PD copy loses every bond prob->op
+ * loses) on cupid_krylov_solver: CG with the MUMPS Cholesky factor of its bond-based twin,
+ * factored once; on slabs every rank holds the whole beam, whose rows are summed over the
+ * ranks at every product.
  *
  * The solve: cupid_petsc_nodes_solver, the matrix-free CG of the one-shot slab solve (a
  * MATSHELL over each rank's owned rows, GAMG on the short-range bond-based matrix of the
