@@ -30,6 +30,8 @@ typedef struct {
   double *u1;                   /* without fracture: u and K u at load factor 1 */
   double u0[3];                 /* the first output point's displacement, last step */
   double next_ratio;            /* fracture: the settled step's largest ratio (next_break) */
+  double ratio_per_load;        /* the first scanned solve's largest ratio per load factor */
+  int cut_through;              /* the crack has cut the load path (carries_load) */
   cupid_atomic_file csv;
   cupid_int released;
   /* Re-solves after breaks (below): the factor of the last factorised K, reused as the
@@ -171,6 +173,19 @@ static void reactions(growth_run *g) {
  * 0 when no breakable bond is stretched. */
 static double next_break(const growth_run *g, double lambda) {
   return g->next_ratio > 0.0 ? lambda / g->next_ratio : 0.0;
+}
+
+/* A settled largest ratio per unit load factor below CUT_THROUGH times the first solve's:
+ * the crack has cut the load path. What is left of the stretches is the solve's round-off
+ * (1e-11 of the first one's on a SENB cut through by a grip's displacement), which the
+ * scaling by 1 / ratio of next_break would blow up into a "next break" at 10^10 times the
+ * load and a peak reaction of round-off times 10^11 (measured: 60 N against the true 16 N).
+ * A crack that still leaves a load path lowers the stretches at a given grip displacement by
+ * far less (the SENB before its cut: to 0.13 of the first). */
+#define CUT_THROUGH 1e-6
+
+static int carries_load(const growth_run *g, double lambda, double ratio) {
+  return !(g->ratio_per_load > 0.0 && lambda > 0.0 && ratio / lambda < CUT_THROUGH * g->ratio_per_load);
 }
 
 /* Keep each constraint's largest reaction of the envelope (by magnitude). */
@@ -639,14 +654,21 @@ static cupid_status load_step(growth_run *g, int k, double lambda, int *iteratio
     if (prob->first_break_step < 0) { /* the exact load of the first break, by scaling */
       CUPID_CALL(cupid_problem_max_ratio(prob, prob->u, &r));
       if (r > 1.0) prob->first_break_load = lambda / r;
+      if (g->ratio_per_load == 0.0 && r > 0.0 && lambda > 0.0) g->ratio_per_load = r / lambda;
     }
     cupid_int broken = 0;
     double diss = 0.0;
     CUPID_CALL(cupid_problem_fracture_step(prob, k, lambda, prob->u, only_most, &broken, &diss));
     if (broken == 0) { /* settled: the next break's load factor from this solution (nothing
                           broke, so a ratio scanned above still holds) */
-      if (r >= 0.0) g->next_ratio = r;
-      else CUPID_CALL(cupid_problem_max_ratio(prob, prob->u, &g->next_ratio));
+      if (r < 0.0) CUPID_CALL(cupid_problem_max_ratio(prob, prob->u, &r));
+      g->next_ratio = carries_load(g, lambda, r) ? r : 0.0; /* none after a cut */
+      if (g->next_ratio == 0.0 && r > 0.0 && !g->cut_through) {
+        g->cut_through = 1;
+        cupid_problem_progress(prob, "growth: step %d: the crack has cut the load path (the bonds' "
+                               "largest stretch per unit load is %.1e of the first solve's): no "
+                               "next break, no peak from here", k, r / lambda / g->ratio_per_load);
+      }
       return CUPID_SUCCESS;
     }
     CUPID_CALL(release_unsupported(g, k));

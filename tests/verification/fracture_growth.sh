@@ -7,8 +7,10 @@
 #  2. the first break at the load factor the linear solution predicts (s0 / s_max): loaded
 #     1e-9 below it (one step) nothing breaks, 1e-9 above it a bond does;
 #  3. growth: bonds break, the crack crosses, a node left loose is held instead of a singular
-#     matrix, the reaction falls to zero once the plate is cut; 1 and 2 threads give the same
-#     damage.csv byte for byte; the Krylov re-solves break the bonds that refactorising does;
+#     matrix, the reaction falls to zero once the plate is cut (and no next break or peak is
+#     read off the round-off left); 1 and 2 threads give the same damage.csv byte for byte;
+#     the Krylov re-solves break the bonds that refactorising does; a SENB cut through keeps
+#     the peak it had before the cut;
 #  4. errors: steps outside type static, fracture in type evaluate.
 . "$(dirname "$0")/../tools/checks.sh"  # CUPID, SRC, $work (cwd), ok, bad, finish
 PY=${CUPID_SYSTEM_PYTHON:-/usr/bin/python3}
@@ -72,6 +74,39 @@ print("growth: %d bonds broken, first at load factor %.6f, %s nodes held, peak r
          float(rows[-1]["reaction_0_y"])))
 assert fr["broken_bonds"] > 100
 assert abs(float(rows[-1]["reaction_0_y"])) < 1e-6 * peak, "the plate still carries load"
+# once cut, no next break (the stretches left are round-off, which 1 / ratio would blow up)
+cut = [r for r in rows if abs(float(r["reaction_0_y"])) < 1e-6 * peak]
+assert cut and all(float(r["next_break_load_factor"]) == 0.0 for r in cut), cut
+assert fr["peak_reactions"][0]["step"] < int(cut[0]["step"]), fr["peak_reactions"][0]
+PY
+
+# 3a. a crack that cuts the load path of a grip-loaded beam: the coupled SENB of
+# examples/fracture at h = 5/3 without its no-fail box, its load line pushed to -0.2 mm, so
+# that the crack runs through the height. After the cut the stretches are the solve's
+# round-off (1e-12 of the first solve's per unit load), and scaling them to a "next break"
+# made a peak of round-off times 10^11: 60 N at load factor 8e10 against the true 16.3 N. The
+# peak must be the largest reaction times next_break / load factor over the steps before the
+# cut, and next_break 0 after it.
+sed -e '/    no_fail:/,/^coupling:/{/^coupling:/!d}' "$SRC/examples/fracture/senb_coupled.yaml" > cut.yaml
+"$CUPID" run cut.yaml -o cut --quiet --set analysis.steps=20 \
+  --set "constraints[0].displacement.value=[-0.2, null, null]" \
+  --set peridynamics.spacing=1.6666666666666667 --set peridynamics.horizon=5.025 \
+  --set output.vtu=false --set output.plots=false && ! grep -q no_fail cut.yaml && ok || bad "the SENB cut through"
+"$PY" - cut <<'PY' && ok || bad "the peak of a beam cut through"
+import csv, json, sys
+rows = list(csv.DictReader(open(sys.argv[1] + "/damage.csv")))
+fr = json.load(open(sys.argv[1] + "/summary.json"))["fracture"]
+top = max(abs(float(r["reaction_0_x"])) for r in rows)
+cut = [r for r in rows if abs(float(r["reaction_0_x"])) < 1e-6 * top]
+assert len(cut) >= 5, "the beam was not cut through"
+before = [r for r in rows if int(r["step"]) < int(cut[0]["step"])]
+env = max(abs(float(r["reaction_0_x"])) * float(r["next_break_load_factor"]) / float(r["load_factor"])
+          for r in before)
+p = fr["peak_reactions"][0]
+print("cut at step %s; peak %.6g N at step %d (envelope %.6g)" % (cut[0]["step"], -p["reaction"][0], p["step"], env))
+# 1e-9: damage.csv holds 11 significant digits of each of the three factors
+assert abs(abs(p["reaction"][0]) - env) <= 1e-9 * env and p["step"] < int(cut[0]["step"]), p
+assert all(float(r["next_break_load_factor"]) == 0.0 for r in cut)
 PY
 
 # 3b. the re-solves after breaks: the last factor downdated by the broken bonds' rank-one
