@@ -20,7 +20,7 @@
 #    on 2 ranks with `--replicate`, which keeps the replicated model on PETSc's assembled
 #    solves (set up afresh for every re-solve: 35 s for the whole SENB above, so the short
 #    run here).
-# Skipped (77) without PETSc. ~80 s on 2 cores.
+# Skipped (77) without PETSc. 80-120 s on 2 cores (the 3-rank runs oversubscribe them).
 if [ "${CUPID_HAVE_PETSC:-0}" != 1 ]; then
   echo "SKIP: cupid was built without PETSc (scripts/build.sh --with-petsc builds build-petsc/)"
   exit 77
