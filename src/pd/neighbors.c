@@ -320,10 +320,13 @@ cupid_status pd_families_build(struct cupid_pd_operator_private *op) {
   }
   op->padded = pcells <= PD_PAD_RATIO * (double)nn + 4096.0;
   CUPID_CALL(cupid_malloc((size_t)S->n, sizeof *op->pclin, "PD stencil cell offsets", &op->pclin));
+  CUPID_CALL(cupid_malloc((size_t)S->n, sizeof *op->pclin_opp, "PD stencil cell offsets",
+                          &op->pclin_opp));
   for (int s = 0; s < S->n; s++) {
     const int32_t *o = S->off + 3 * s;
     op->pclin[s] = o[0] + op->pn[0] * (o[1] + op->pn[1] * (cupid_int)o[2]);
   }
+  for (int s = 0; s < S->n; s++) op->pclin_opp[s] = op->pclin[S->n - 1 - s];
   /* Runs: consecutive nodes at consecutive cells of one row, at most PD_RUN_MAX long (a new
    * run wherever the padded cell index jumps); full = every node of the run is full. */
   cupid_int nruns = 0;

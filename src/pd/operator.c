@@ -16,6 +16,7 @@ void cupid_pd_operator_destroy(cupid_pd_operator *op) {
   cupid_free(&o->fidx);
   cupid_free(&o->runs);
   cupid_free(&o->pclin);
+  cupid_free(&o->pclin_opp);
   cupid_free(&o->crank);
   cupid_free(&o->ncorr);
   pd_stencil_work_free(o);

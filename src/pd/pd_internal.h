@@ -116,6 +116,7 @@ struct cupid_pd_operator_private {
   cupid_int pn[3];        /* padded cells per axis */
   int32_t pr[3];          /* reach per axis */
   cupid_int *pclin;
+  cupid_int *pclin_opp;   /* pclin[n-1-s]: the offset of entry s's opposite (the kernels' pairs) */
   /* Work arrays of the stencil path, kept between applies (a fresh allocation per apply
    * costs page faults comparable to the apply); one apply at a time takes them, a
    * concurrent one allocates its own. */

@@ -22,7 +22,8 @@
  *
  * LPS (paper 000 Eqs. 17-21), two passes: a_j = kappa_j theta_j / m_j on the nodes the rows
  * need, then (K u)_i = -V^2 sum_s omega beta [ (a_i + a_j) x_s + 15 (b_i + b_j) e_ij ] n_s,
- * b = mu / m. Bond-based (paper 004 section 2.2), one pass:
+ * b = mu / m. The first pass also sums the terms in b (they need no a), so each pass loads
+ * a neighbour's u once; the second adds the terms in a. Bond-based (paper 004 section 2.2), one pass:
  * (K u)_i = -V^2 sum_s omega beta / x_s (c_i + c_j)/2 e_ij n_s. */
 #define _POSIX_C_SOURCE 200809L /* posix_memalign */
 #include <stdlib.h>
@@ -58,18 +59,19 @@ typedef struct {
   double *x, *y, *z; /* displacement components */
   double *a;         /* LPS: kappa theta / m; bond-based: micromodulus c */
   double *b;         /* LPS: mu / m; NULL for bond-based */
-  double *raw[5];    /* the blocks of x, y, z, a and b (b is NULL for bond-based) */
+  double *gx, *gy, *gz; /* LPS: the force's sums without the a terms, between the passes */
+  double *raw[8];    /* the blocks of x, y, z, a, b, gx, gy, gz (LPS only from b on) */
   cupid_int *absent;      /* the stretch scan: the window's cells without a node, */
   cupid_int n_absent;     /* for the window absent_key (base, n, lead) */
   cupid_int absent_key[3];
 } pd_work;
 
 static void work_free(pd_work *w) {
-  for (int k = 0; k < 5; k++) cupid_free(&w->raw[k]);
+  for (int k = 0; k < 8; k++) cupid_free(&w->raw[k]);
   cupid_free(&w->absent);
   w->n_absent = 0;
   w->absent_key[1] = -1;
-  w->x = w->y = w->z = w->a = w->b = NULL;
+  w->x = w->y = w->z = w->a = w->b = w->gx = w->gy = w->gz = NULL;
   w->cap = 0;
 }
 
@@ -80,19 +82,21 @@ void pd_stencil_work_free(struct cupid_pd_operator_private *op) {
 }
 
 /* Arrays for n entries from `lead` on, plus PD_LANES_MAX of zeroed slack (grown as needed;
- * separate arrays, 8 bytes an entry each). */
+ * separate arrays, 8 bytes an entry each: 5, and 8 for LPS). */
 static cupid_status work_reserve(pd_work *w, int padded, cupid_int base, cupid_int n, int lead,
                                  int lps) {
-  if (w->cap < n) {
+  const int arrays_n = lps ? 8 : 5;
+  if (w->cap < n || !w->raw[arrays_n - 1]) {
     work_free(w);
     w->filled[1] = -1;
     const size_t bytes = ((size_t)n + PD_ROW_ALIGN + PD_LANES_MAX) * sizeof(double);
-    for (int k = 0; k < 5; k++) {
+    for (int k = 0; k < arrays_n; k++) {
       void *p = NULL;
       if (posix_memalign(&p, 64, bytes) != 0) {
         work_free(w);
         return CUPID_ERROR(CUPID_ERR_MEMORY,
-                           "out of memory for the PD stencil work arrays (%zu bytes)", 5 * bytes);
+                           "out of memory for the PD stencil work arrays (%zu bytes)",
+                           arrays_n * bytes);
       }
       w->raw[k] = p;
     }
@@ -103,12 +107,12 @@ static cupid_status work_reserve(pd_work *w, int padded, cupid_int base, cupid_i
   w->lead = lead;
   w->base = base;
   w->n = n;
-  double **arrays[5] = {&w->x, &w->y, &w->z, &w->a, &w->b};
-  for (int k = 0; k < 5; k++) {
-    *arrays[k] = w->raw[k] + lead;
-    memset(*arrays[k] + n, 0, PD_LANES_MAX * sizeof(double));
+  double **arrays[8] = {&w->x, &w->y, &w->z, &w->a, &w->b, &w->gx, &w->gy, &w->gz};
+  for (int k = 0; k < 8; k++) {
+    *arrays[k] = w->raw[k] ? w->raw[k] + lead : NULL;
+    if (*arrays[k]) memset(*arrays[k] + n, 0, PD_LANES_MAX * sizeof(double));
   }
-  if (!lps) w->b = NULL;
+  if (!lps) w->b = w->gx = w->gy = w->gz = NULL;
   return CUPID_SUCCESS;
 }
 
@@ -131,6 +135,7 @@ static inline cupid_int work_neighbour(const struct cupid_pd_operator_private *o
  * j- the one at -o_s: with n = n_s, d+ = n.(u+ - u_i), d- = n.(u- - u_i),
  *   dilatation:  g_s.(u+ - u_i) + g_s'.(u- - u_i) = g_s.(u+ - u-)            (g = omega beta xi)
  *   LPS force:   (q_s - q_s') n = [wx (a+ - a-) + w15 ((b_i + b+) d+ + (b_i + b-) d-)] n
+ *                (its b terms summed in the dilatation's pass, with wx (d+ - d-) for theta)
  *   bond force:  (q_s - q_s') n = wc ((c_i + c+) d+ + (c_i + c-) d-) n
  * (wx = omega beta |xi|, w15 = 15 omega beta, wc = omega beta / (2|xi|)): about 40% fewer
  * operations than bond by bond, which is what bounds these loops. A block of PD_KLANES nodes
@@ -146,16 +151,24 @@ static inline cupid_int work_neighbour(const struct cupid_pd_operator_private *o
  * the variation of u over the range rather than to the strain. */
 
 
-/* The pairs [s0, s1) of the run starting at node i: offsets of the neighbours at +o_s (rp)
- * and -o_s (rm) relative to node i in the work arrays. */
+/* The pairs [s0, s1) of the run starting at node i: offsets of the neighbours at +o_s (*rp)
+ * and -o_s (*rm) relative to node i in the work arrays, from s0 on. Padded, they are the
+ * stencil's cell offsets (no table per run); else tabled into bp and bm. */
 static inline void pair_offsets(const struct cupid_pd_operator_private *op, const pd_work *w,
-                                const pd_run *R, cupid_int i, int s0, int s1, cupid_int *rp,
-                                cupid_int *rm) {
+                                const pd_run *R, cupid_int i, int s0, int s1, cupid_int *bp,
+                                cupid_int *bm, const cupid_int **rp, const cupid_int **rm) {
+  if (w->padded) {
+    *rp = op->pclin + s0;
+    *rm = op->pclin_opp + s0;
+    return;
+  }
   const cupid_int li = work_index(w, R, i);
   for (int s = s0; s < s1; s++) {
-    rp[s - s0] = work_neighbour(op, w, R, i, s) - li;
-    rm[s - s0] = work_neighbour(op, w, R, i, op->st.n - 1 - s) - li;
+    bp[s - s0] = work_neighbour(op, w, R, i, s) - li;
+    bm[s - s0] = work_neighbour(op, w, R, i, op->st.n - 1 - s) - li;
   }
+  *rp = bp;
+  *rm = bm;
 }
 
 /* u_j - u_i along n from the work arrays. */
@@ -215,32 +228,70 @@ static inline int scan_keeps(const struct cupid_pd_operator_private *op, cupid_i
   return pd_grid_lookup(op->grid, q[0] + o[0], q[1] + o[1], q[2] + o[2]) >= 0;
 }
 
+/* The end of a run's dilatation: acc holds sum_s g_s.(u_j - u_i) over the padded stencil;
+ * less the ghost and broken bonds, theta = 3V/m acc and a = kappa theta / m (into w->a and,
+ * if asked, theta). Always inlined, as run_store. */
+__attribute__((always_inline)) static inline void
+run_theta(const struct cupid_pd_operator_private *op, const pd_work *w, const pd_run *R,
+          cupid_int i, int len, double *restrict acc, double *theta) {
+  const cupid_int li = work_index(w, R, i);
+  const double *restrict X = w->x + li, *restrict Y = w->y + li, *restrict Z = w->z + li;
+  if (!R->full) {
+    const unsigned char *restrict full = op->full + i;
+    const double *restrict G = op->gself + 3 * i;
+    for (int t = 0; t < len; t++) /* ghost bonds: -(sum over them of g).(0 - u_i) */
+      if (!full[t]) acc[t] -= G[3 * t] * X[t] + G[3 * t + 1] * Y[t] + G[3 * t + 2] * Z[t];
+  }
+  if (op->bslot)
+    for (int t = 0; t < len; t++)
+      if (op->bslot[i + t] >= 0) acc[t] -= broken_dilatation(op, w, R, i + t);
+  double *restrict a = w->a + li;
+  const double *restrict mi = op->m + i, *restrict ki = op->kappa + i;
+  const double V3 = 3.0 * op->V;
+  for (int t = 0; t < len; t++) {
+    const double th = V3 * acc[t] / mi[t];
+    a[t] = ki[t] * th / mi[t];
+    acc[t] = th;
+  }
+  if (theta) memcpy(theta + i, acc, (size_t)len * sizeof(double));
+}
+
 /* f = -V^2 sum, with the ghost correction k_i G_i + b_i C_i u_i (k_i = a_i for LPS, 0 for
  * bond-based with b_i = c_i) for nodes without a full family. Always inlined: compiled with
  * each kernel instance's instruction set (the store loop vectorises with it). */
 __attribute__((always_inline)) static inline void
 run_store(const struct cupid_pd_operator_private *op, const pd_work *w, const pd_run *R,
-          cupid_int i, int len, double *fx, double *fy, double *fz, double *restrict f) {
+          cupid_int i, int len, double *restrict fx, double *restrict fy, double *restrict fz,
+          double *restrict f) {
   const double V2 = op->V * op->V;
   const cupid_int li = work_index(w, R, i);
   const int lps = op->model == CUPID_PD_LPS;
-  if (!R->full)
+  if (!R->full) {
+    /* Restrict-qualified locals: through op and w the compiler reloaded every pointer for
+     * every node (this loop took half of the LPS second pass at 40^3). */
+    const unsigned char *restrict full = op->full + i;
+    const int32_t *restrict rank = op->crank + i;
+    const double *restrict NC = op->ncorr, *restrict G = lps ? op->gself + 3 * i : NULL;
+    const double *restrict ux = w->x + li, *restrict uy = w->y + li, *restrict uz = w->z + li;
+    const double *restrict bb = lps ? w->b + li : w->a + li, *restrict aa = w->a + li;
     for (int t = 0; t < len; t++) {
-      const cupid_int n = i + t;
-      if (op->full[n]) continue;
-      const double *C = op->ncorr + 6 * (size_t)op->crank[n];
-      const double u0 = w->x[li + t], u1 = w->y[li + t], u2 = w->z[li + t];
-      const double bi = lps ? w->b[li + t] : w->a[li + t];
-      fx[t] += bi * (C[0] * u0 + C[5] * u1 + C[4] * u2);
-      fy[t] += bi * (C[5] * u0 + C[1] * u1 + C[3] * u2);
-      fz[t] += bi * (C[4] * u0 + C[3] * u1 + C[2] * u2);
+      if (full[t]) continue;
+      const double *restrict C = NC + 6 * (size_t)rank[t];
+      const double u0 = ux[t], u1 = uy[t], u2 = uz[t], bi = bb[t];
+      double gx = bi * (C[0] * u0 + C[5] * u1 + C[4] * u2);
+      double gy = bi * (C[5] * u0 + C[1] * u1 + C[3] * u2);
+      double gz = bi * (C[4] * u0 + C[3] * u1 + C[2] * u2);
       if (lps) {
-        const double *G = op->gself + 3 * n, ai = w->a[li + t];
-        fx[t] += ai * G[0];
-        fy[t] += ai * G[1];
-        fz[t] += ai * G[2];
+        const double ai = aa[t];
+        gx += ai * G[3 * t];
+        gy += ai * G[3 * t + 1];
+        gz += ai * G[3 * t + 2];
       }
+      fx[t] += gx;
+      fy[t] += gy;
+      fz[t] += gz;
     }
+  }
   if (op->bslot)
     for (int t = 0; t < len; t++) {
       if (op->bslot[i + t] < 0) continue;
@@ -266,7 +317,7 @@ typedef int (*pd_scan_kernel)(const struct cupid_pd_operator_private *op, const 
                               const pd_run *R, cupid_int i, int len, double lim, pd_hit *hits,
                               int cap);
 typedef struct {
-  pd_run_kernel dilatation, lps_force, bond_force;
+  pd_run_kernel dilatation, bond_force, lps_first, lps_second;
   pd_scan_kernel stretch;
   int lanes;
 } pd_kernel_set;
@@ -406,9 +457,9 @@ static void work_fill(const struct cupid_pd_operator_private *op, pd_work *w, cu
   const cupid_int key[5] = {w->base, w->n, lo, hi, op->gen};
   const int fresh = memcmp(key, w->filled, sizeof key) != 0;
   if (fresh && w->padded) {
-    double *arrays[5] = {w->x, w->y, w->z, w->a, w->b};
+    double *arrays[8] = {w->x, w->y, w->z, w->a, w->b, w->gx, w->gy, w->gz};
 #pragma omp parallel for schedule(static) if (w->n > 8 * PD_OMP_MIN_NODES)
-    for (int k = 0; k < 5; k++)
+    for (int k = 0; k < 8; k++)
       if (arrays[k]) memset(arrays[k], 0, (size_t)w->n * sizeof(double));
   }
   /* K annihilates translations (every row depends on differences only), so the copy is
@@ -441,7 +492,9 @@ static void work_fill(const struct cupid_pd_operator_private *op, pd_work *w, cu
   memcpy(w->filled, key, sizeof key);
 }
 
-typedef enum { PASS_DILATATION, PASS_LPS_FORCE, PASS_BOND_FORCE } pd_pass;
+/* LPS: PASS_LPS_FIRST (theta and the force without a) then PASS_LPS_SECOND (the a terms),
+ * with PASS_DILATATION on nodes whose a is read but whose force is not asked. */
+typedef enum { PASS_DILATATION, PASS_LPS_FIRST, PASS_LPS_SECOND, PASS_BOND_FORCE } pd_pass;
 
 /* One pass over the nodes [p, q) (out: f indexed by i - fbase, or theta by node). Inside a
  * parallel region: work-shared; the implicit barrier at the end separates the passes.
@@ -449,6 +502,7 @@ typedef enum { PASS_DILATATION, PASS_LPS_FORCE, PASS_BOND_FORCE } pd_pass;
 static void sweep(const struct cupid_pd_operator_private *op, const pd_work *w,
                   const pd_kernel_set *K, pd_pass pass, cupid_int p, cupid_int q, double *out,
                   cupid_int fbase) {
+  if (p >= q) return; /* the same on every thread: none meets the loop's barrier */
   const cupid_int r0 = first_run(op, p), r1 = first_run(op, q);
 #pragma omp for schedule(dynamic, 16)
   for (cupid_int r = r0; r < r1 + (r1 < op->nruns && op->runs[r1].i0 < q); r++) {
@@ -457,12 +511,13 @@ static void sweep(const struct cupid_pd_operator_private *op, const pd_work *w,
     const int len = (int)(b - a);
     if (R->full || w->padded) {
       if (pass == PASS_DILATATION) K->dilatation(op, w, R, a, len, out);
-      else if (pass == PASS_LPS_FORCE) K->lps_force(op, w, R, a, len, out + 3 * (a - fbase));
+      else if (pass == PASS_LPS_FIRST) K->lps_first(op, w, R, a, len, out);
+      else if (pass == PASS_LPS_SECOND) K->lps_second(op, w, R, a, len, out + 3 * (a - fbase));
       else K->bond_force(op, w, R, a, len, out + 3 * (a - fbase));
       continue;
     }
     for (cupid_int i = a; i < b; i++) {
-      if (pass == PASS_DILATATION) edge_dilatation(op, w, i, out);
+      if (pass == PASS_DILATATION || pass == PASS_LPS_FIRST) edge_dilatation(op, w, i, out);
       else edge_force(op, w, i, out + 3 * (i - fbase));
     }
   }
@@ -514,8 +569,10 @@ cupid_status pd_stencil_apply(const struct cupid_pd_operator_private *op, cupid_
 #pragma omp parallel if (hi - lo > PD_OMP_MIN_NODES)
   {
     if (lps) {
-      sweep(op, w, K, PASS_DILATATION, lo1, hi1, theta, 0);
-      sweep(op, w, K, PASS_LPS_FORCE, first, last, f, first);
+      sweep(op, w, K, PASS_DILATATION, lo1, first, theta, 0);
+      sweep(op, w, K, PASS_LPS_FIRST, first, last, theta, 0);
+      sweep(op, w, K, PASS_DILATATION, last, hi1, theta, 0);
+      sweep(op, w, K, PASS_LPS_SECOND, first, last, f, first);
     } else {
       sweep(op, w, K, PASS_BOND_FORCE, first, last, f, first);
     }

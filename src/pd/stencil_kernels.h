@@ -25,11 +25,12 @@ static void PD_KNAME(run_dilatation)(const struct cupid_pd_operator_private *op,
   const cupid_int li = work_index(w, R, i);
   const double *restrict X = w->x + li, *restrict Y = w->y + li, *restrict Z = w->z + li;
   double acc[PD_RUN_MAX + PD_LANES_MAX];
-  cupid_int rp[PD_PAIR_CHUNK], rm[PD_PAIR_CHUNK];
+  cupid_int bp[PD_PAIR_CHUNK], bm[PD_PAIR_CHUNK];
+  const cupid_int *rp, *rm;
   const int half = S->n / 2;
   for (int s0 = 0; s0 < half; s0 += PD_PAIR_CHUNK) {
     const int s1 = s0 + PD_PAIR_CHUNK < half ? s0 + PD_PAIR_CHUNK : half;
-    pair_offsets(op, w, R, i, s0, s1, rp, rm);
+    pair_offsets(op, w, R, i, s0, s1, bp, bm, &rp, &rm);
     for (int t = 0; t < len; t += PD_KLANES) {
       /* Two accumulators (even and odd pairs): adds into one would chain every pair. */
       PD_KVEC g = {0}, h = {0};
@@ -46,26 +47,129 @@ static void PD_KNAME(run_dilatation)(const struct cupid_pd_operator_private *op,
       PD_KSTORE(acc + t, g + h);
     }
   }
-  if (!R->full)
-    for (int t = 0; t < len; t++) {
-      const cupid_int n = i + t;
-      if (op->full[n]) continue;
-      const double *G = op->gself + 3 * n; /* ghost bonds: -(sum over them of g).(0 - u_i) */
-      acc[t] -= G[0] * X[t] + G[1] * Y[t] + G[2] * Z[t];
-    }
-  if (op->bslot)
-    for (int t = 0; t < len; t++)
-      if (op->bslot[i + t] >= 0) acc[t] -= broken_dilatation(op, w, R, i + t);
-  double *restrict a = w->a + li;
-  const double *restrict mi = op->m + i, *restrict ki = op->kappa + i;
-  const double V3 = 3.0 * op->V;
-  for (int t = 0; t < len; t++) {
-    const double th = V3 * acc[t] / mi[t];
-    a[t] = ki[t] * th / mi[t];
-    acc[t] = th;
-  }
-  if (theta) memcpy(theta + i, acc, (size_t)len * sizeof(double));
+  run_theta(op, w, R, i, len, acc, theta);
 }
+
+/* LPS, the first of the apply's two passes (pd_stencil_apply): the dilatation and the
+ * force's terms without a, from one load of each neighbour's u and b. With d+ = n.(u+ - u_i)
+ * and d- = n.(u- - u_i), the pair's dilatation term g_s.(u+ - u-) is wx (d+ - d-), and its
+ * force term w15 ((b_i + b+) d+ + (b_i + b-) d-) n; the latter goes to w->gx..gz, and
+ * run_lps_second adds wx (a+ - a-) n once every a is known. A dilatation pass and then a
+ * whole force pass (the kernels before issue 20) loaded 16 neighbour vectors a pair, this
+ * loads 8 here and 2 in the second pass: the loops are bound by those loads. */
+static void PD_KNAME(run_lps_first)(const struct cupid_pd_operator_private *op,
+                                    const pd_work *w, const pd_run *R, cupid_int i, int len,
+                                    double *restrict theta) {
+  const pd_stencil *S = &op->st;
+  const cupid_int li = work_index(w, R, i);
+  const double *restrict X = w->x + li, *restrict Y = w->y + li, *restrict Z = w->z + li;
+  const double *restrict B = w->b + li;
+  double acc[PD_RUN_MAX + PD_LANES_MAX], fx[PD_RUN_MAX + PD_LANES_MAX],
+      fy[PD_RUN_MAX + PD_LANES_MAX], fz[PD_RUN_MAX + PD_LANES_MAX];
+  cupid_int bp[PD_PAIR_CHUNK], bm[PD_PAIR_CHUNK];
+  const cupid_int *rp, *rm;
+  double c1[PD_PAIR_CHUNK], c2[PD_PAIR_CHUNK];
+  const int half = S->n / 2;
+  for (int s0 = 0; s0 < half; s0 += PD_PAIR_CHUNK) {
+    const int s1 = s0 + PD_PAIR_CHUNK < half ? s0 + PD_PAIR_CHUNK : half;
+    pair_offsets(op, w, R, i, s0, s1, bp, bm, &rp, &rm);
+    for (int s = s0; s < s1; s++) c1[s - s0] = S->wb[s] * S->x[s], c2[s - s0] = 15.0 * S->wb[s];
+    for (int t = 0; t < len; t += PD_KLANES) {
+      PD_KVEC gx = {0}, gy = {0}, gz = {0}, th = {0};
+      if (s0)
+        gx = PD_KLOAD(fx + t), gy = PD_KLOAD(fy + t), gz = PD_KLOAD(fz + t),
+        th = PD_KLOAD(acc + t);
+      const PD_KVEC xt = PD_KLOAD(X + t), yt = PD_KLOAD(Y + t), zt = PD_KLOAD(Z + t);
+      const PD_KVEC bt = PD_KLOAD(B + t);
+      for (int s = s0; s < s1; s++) {
+        const cupid_int p = rp[s - s0] + t, m = rm[s - s0] + t;
+        const double n0 = S->nrm[3 * s], n1 = S->nrm[3 * s + 1], n2 = S->nrm[3 * s + 2];
+        const PD_KVEC dp = n0 * (PD_KLOAD(X + p) - xt) + n1 * (PD_KLOAD(Y + p) - yt) +
+                           n2 * (PD_KLOAD(Z + p) - zt);
+        const PD_KVEC dm = n0 * (PD_KLOAD(X + m) - xt) + n1 * (PD_KLOAD(Y + m) - yt) +
+                           n2 * (PD_KLOAD(Z + m) - zt);
+        th += c1[s - s0] * (dp - dm);
+        const PD_KVEC q =
+            c2[s - s0] * ((bt + PD_KLOAD(B + p)) * dp + (bt + PD_KLOAD(B + m)) * dm);
+        gx += q * n0;
+        gy += q * n1;
+        gz += q * n2;
+      }
+      PD_KSTORE(acc + t, th);
+      /* Between chunks on the stack; then into w->gx..gz, of this run's nodes only (the
+       * cells past it may be another thread's). Not through memcpy: a call per run and
+       * array cost 5% of an apply. */
+      if (s1 < half) {
+        PD_KSTORE(fx + t, gx);
+        PD_KSTORE(fy + t, gy);
+        PD_KSTORE(fz + t, gz);
+      } else if (t + PD_KLANES <= len) {
+        PD_KSTORE(w->gx + li + t, gx);
+        PD_KSTORE(w->gy + li + t, gy);
+        PD_KSTORE(w->gz + li + t, gz);
+      } else
+        for (int l = 0; l < len - t; l++)
+          w->gx[li + t + l] = gx[l], w->gy[li + t + l] = gy[l], w->gz[li + t + l] = gz[l];
+    }
+  }
+  run_theta(op, w, R, i, len, acc, theta);
+}
+
+/* LPS, the second pass: f = -V^2 (g + sum_s wx (a+ - a-) n_s) with g from run_lps_first:
+ * -V^2 sum_s omega beta [ (a_i + a_j) x_s + 15 (b_i + b_j) e ] n_s (Eq. 21), the a_i terms
+ * cancelling pair by pair. Its loop is light (two loads and four operations a pair and lane
+ * block), so a pair's three weights and two offsets would cost as much as that work:
+ * PD_KAB blocks share them, as many as the registers hold at three accumulators a block. */
+#define PD_KAB (PD_KLANES == 8 ? 4 : 2)
+#define PD_KATERM_GROUP(NB)                                                                    \
+  do {                                                                                         \
+    PD_KVEC gx[NB], gy[NB], gz[NB];                                                            \
+    const double *restrict Gx = s0 ? fx : w->gx + li, *restrict Gy = s0 ? fy : w->gy + li,     \
+                           *restrict Gz = s0 ? fz : w->gz + li;                                \
+    for (int b = 0; b < NB; b++) {                                                             \
+      gx[b] = PD_KLOAD(Gx + t + b * PD_KLANES);                                                \
+      gy[b] = PD_KLOAD(Gy + t + b * PD_KLANES);                                                \
+      gz[b] = PD_KLOAD(Gz + t + b * PD_KLANES);                                                \
+    }                                                                                          \
+    for (int s = s0; s < s1; s++) {                                                            \
+      const double *restrict A0 = A + t + rp[s - s0], *restrict A1 = A + t + rm[s - s0];       \
+      const double g0 = S->wxn[3 * s], g1 = S->wxn[3 * s + 1], g2 = S->wxn[3 * s + 2];         \
+      _Pragma("GCC unroll 8") for (int b = 0; b < NB; b++) {                                   \
+        const PD_KVEC da = PD_KLOAD(A0 + b * PD_KLANES) - PD_KLOAD(A1 + b * PD_KLANES);        \
+        gx[b] += g0 * da;                                                                      \
+        gy[b] += g1 * da;                                                                      \
+        gz[b] += g2 * da;                                                                      \
+      }                                                                                        \
+    }                                                                                          \
+    for (int b = 0; b < NB; b++) {                                                             \
+      PD_KSTORE(fx + t + b * PD_KLANES, gx[b]);                                                \
+      PD_KSTORE(fy + t + b * PD_KLANES, gy[b]);                                                \
+      PD_KSTORE(fz + t + b * PD_KLANES, gz[b]);                                                \
+    }                                                                                          \
+  } while (0)
+
+static void PD_KNAME(run_lps_second)(const struct cupid_pd_operator_private *op,
+                                     const pd_work *w, const pd_run *R, cupid_int i, int len,
+                                     double *restrict f) {
+  const pd_stencil *S = &op->st;
+  const cupid_int li = work_index(w, R, i);
+  const double *restrict A = w->a + li;
+  double fx[PD_RUN_MAX + PD_LANES_MAX], fy[PD_RUN_MAX + PD_LANES_MAX],
+      fz[PD_RUN_MAX + PD_LANES_MAX];
+  cupid_int bp[PD_PAIR_CHUNK], bm[PD_PAIR_CHUNK];
+  const cupid_int *rp, *rm;
+  const int half = S->n / 2;
+  for (int s0 = 0; s0 < half; s0 += PD_PAIR_CHUNK) {
+    const int s1 = s0 + PD_PAIR_CHUNK < half ? s0 + PD_PAIR_CHUNK : half;
+    pair_offsets(op, w, R, i, s0, s1, bp, bm, &rp, &rm);
+    int t = 0;
+    for (; t + PD_KAB * PD_KLANES <= len; t += PD_KAB * PD_KLANES) PD_KATERM_GROUP(PD_KAB);
+    for (; t < len; t += PD_KLANES) PD_KATERM_GROUP(1);
+  }
+  run_store(op, w, R, i, len, fx, fy, fz, f);
+}
+#undef PD_KATERM_GROUP
+#undef PD_KAB
 
 /* The pair loop of the force kernels: per lane block, (gx, gy, gz) += q n over the pairs
  * of the chunk, q = PAIR (with d+ = n.(u+ - u_i) = dp, d- = n.(u- - u_i) = dm, and the
@@ -74,12 +178,13 @@ static void PD_KNAME(run_dilatation)(const struct cupid_pd_operator_private *op,
 #define PD_KFORCE_PAIRS(NODE_LOAD, CONSTS, PAIR)                                               \
   double fx[PD_RUN_MAX + PD_LANES_MAX], fy[PD_RUN_MAX + PD_LANES_MAX],                       \
       fz[PD_RUN_MAX + PD_LANES_MAX];                                                         \
-  cupid_int rp[PD_PAIR_CHUNK], rm[PD_PAIR_CHUNK];                                            \
+  cupid_int bp[PD_PAIR_CHUNK], bm[PD_PAIR_CHUNK];                                            \
+  const cupid_int *rp, *rm;                                                                  \
   double c1[PD_PAIR_CHUNK], c2[PD_PAIR_CHUNK];                                               \
   const int half = S->n / 2;                                                                 \
   for (int s0 = 0; s0 < half; s0 += PD_PAIR_CHUNK) {                                         \
     const int s1 = s0 + PD_PAIR_CHUNK < half ? s0 + PD_PAIR_CHUNK : half;                    \
-    pair_offsets(op, w, R, i, s0, s1, rp, rm);                                               \
+    pair_offsets(op, w, R, i, s0, s1, bp, bm, &rp, &rm);                                               \
     for (int s = s0; s < s1; s++) CONSTS                                                     \
     for (int t = 0; t < len; t += PD_KLANES) {                                               \
       PD_KVEC gx = {0}, gy = {0}, gz = {0};                                                  \
@@ -105,21 +210,6 @@ static void PD_KNAME(run_dilatation)(const struct cupid_pd_operator_private *op,
       PD_KSTORE(fz + t, gz);                                                                 \
     }                                                                                        \
   }
-
-/* f = -V^2 sum_s omega beta [ (a_i + a_j) x_s + 15 (b_i + b_j) e ] n_s (LPS, Eq. 21). */
-static void PD_KNAME(run_lps_force)(const struct cupid_pd_operator_private *op,
-                                    const pd_work *w, const pd_run *R, cupid_int i, int len,
-                                    double *restrict f) {
-  const pd_stencil *S = &op->st;
-  const cupid_int li = work_index(w, R, i);
-  const double *restrict X = w->x + li, *restrict Y = w->y + li, *restrict Z = w->z + li;
-  const double *restrict A = w->a + li, *restrict B = w->b + li;
-  PD_KFORCE_PAIRS(const PD_KVEC bt = PD_KLOAD(B + t);,
-                  (c1[s - s0] = S->wb[s] * S->x[s], c2[s - s0] = 15.0 * S->wb[s]);,
-                  w1 * (PD_KLOAD(A + p) - PD_KLOAD(A + m)) +
-                      w2 * ((bt + PD_KLOAD(B + p)) * dp + (bt + PD_KLOAD(B + m)) * dm))
-  run_store(op, w, R, i, len, fx, fy, fz, f);
-}
 
 /* f = -V^2 sum_s omega beta / x_s (c_i + c_j)/2 e n_s (bond-based). */
 static void PD_KNAME(run_bond_force)(const struct cupid_pd_operator_private *op,
@@ -149,13 +239,14 @@ static int PD_KNAME(run_stretch)(const struct cupid_pd_operator_private *op, con
   const pd_stencil *S = &op->st;
   const cupid_int li = work_index(w, R, i);
   const double *restrict X = w->x + li, *restrict Y = w->y + li, *restrict Z = w->z + li;
-  cupid_int rp[PD_PAIR_CHUNK], rm[PD_PAIR_CHUNK];
+  cupid_int bp[PD_PAIR_CHUNK], bm[PD_PAIR_CHUNK];
+  const cupid_int *rp, *rm;
   double thr[PD_PAIR_CHUNK];
   const int half = S->n / 2;
   int nh = 0;
   for (int s0 = 0; s0 < half; s0 += PD_PAIR_CHUNK) {
     const int s1 = s0 + PD_PAIR_CHUNK < half ? s0 + PD_PAIR_CHUNK : half;
-    pair_offsets(op, w, R, i, s0, s1, rp, rm);
+    pair_offsets(op, w, R, i, s0, s1, bp, bm, &rp, &rm);
     for (int s = s0; s < s1; s++) thr[s - s0] = lim * S->x[s];
     for (int t = 0; t < len; t += PD_KLANES) {
       const PD_KVEC xt = PD_KLOAD(X + t), yt = PD_KLOAD(Y + t), zt = PD_KLOAD(Z + t);
@@ -192,8 +283,8 @@ static int PD_KNAME(run_stretch)(const struct cupid_pd_operator_private *op, con
 }
 
 static const pd_kernel_set PD_KNAME(kernels) = {
-    PD_KNAME(run_dilatation), PD_KNAME(run_lps_force), PD_KNAME(run_bond_force),
-    PD_KNAME(run_stretch), PD_KLANES};
+    PD_KNAME(run_dilatation), PD_KNAME(run_bond_force), PD_KNAME(run_lps_first),
+    PD_KNAME(run_lps_second), PD_KNAME(run_stretch), PD_KLANES};
 
 #undef PD_KFORCE_PAIRS
 #undef PD_KSTORE
