@@ -13,6 +13,11 @@ static inline int dyn_fixed(const cupid_dirichlet_t *bc, cupid_int d) {
   return bc && bc->fixed[d];
 }
 
+/* Whether any DOF is fixed (n_free is set by cupid_dirichlet_finalize; else assume so). */
+static inline int dyn_any_fixed(const cupid_dirichlet_t *bc) {
+  return bc && !(bc->n_free == bc->n && bc->n > 0);
+}
+
 /* y = M x (consistent or lumped), n entries. */
 void dyn_mass_apply(const cupid_dynamics_system *sys, cupid_int n, const double *x, double *y);
 

@@ -409,6 +409,15 @@ static void central_drift(dyn_state *s, double *u, const double *v, const double
   double w = 0.0;
   const cupid_int n = s->n, lo = s->lo, hi = s->hi;
   double *du = s->du;
+  if (!f && !du && !dyn_any_fixed(bc)) { /* the common explicit step: two streams, vectorised */
+#pragma omp parallel for schedule(static) if (n > DYN_OMP_MIN)
+    for (cupid_int d = 0; d < n; d++) {
+      const double h = v[d] + 0.5 * dt * s->a[d];
+      vh[d] = h;
+      u[d] += dt * h;
+    }
+    return;
+  }
 #pragma omp parallel for reduction(+ : w) schedule(static) if (n > DYN_OMP_MIN)
   for (cupid_int d = 0; d < n; d++) {
     vh[d] = v[d] + 0.5 * dt * s->a[d];
@@ -443,6 +452,16 @@ static void central_kick(dyn_state *s, const double *u, const double *vh, double
   }
   /* undamped: residual, reactions, acceleration and velocity in one pass */
   const double *f = s->f;
+  if (!dyn_any_fixed(bc)) { /* no fixed DOF: no reactions, and branch-free (vectorised) */
+    double *restrict a = s->a;
+    const double *restrict g = s->g, *restrict minv = s->minv;
+#pragma omp parallel for schedule(static) if (s->n > DYN_OMP_MIN)
+    for (cupid_int d = 0; d < s->n; d++) {
+      a[d] = ((f ? f[d] : 0.0) - g[d]) * minv[d];
+      v[d] = vh[d] + hdt * a[d];
+    }
+    return;
+  }
 #pragma omp parallel for schedule(static) if (s->n > DYN_OMP_MIN)
   for (cupid_int d = 0; d < s->n; d++) {
     const int fixed = dyn_fixed(bc, d);

@@ -57,6 +57,65 @@ static void PD_KNAME(run_dilatation)(const struct cupid_pd_operator_private *op,
  * run_lps_second adds wx (a+ - a-) n once every a is known. A dilatation pass and then a
  * whole force pass (the kernels before issue 20) loaded 16 neighbour vectors a pair, this
  * loads 8 here and 2 in the second pass: the loops are bound by those loads. */
+/* PD_KFB lane blocks share each pair's weights and offsets (as in run_lps_second): two with
+ * AVX-512, whose 32 registers hold their 16 accumulators and node values; one where there
+ * are 16 registers. */
+#define PD_KFB (PD_KLANES == 8 ? 2 : 1)
+#define PD_KFIRST_GROUP(NB)                                                                    \
+  do {                                                                                         \
+    PD_KVEC gx[NB], gy[NB], gz[NB], th[NB], xt[NB], yt[NB], zt[NB], bt[NB];                    \
+    for (int b = 0; b < NB; b++) {                                                             \
+      const int u = t + b * PD_KLANES;                                                         \
+      if (s0) {                                                                                \
+        gx[b] = PD_KLOAD(fx + u), gy[b] = PD_KLOAD(fy + u), gz[b] = PD_KLOAD(fz + u);          \
+        th[b] = PD_KLOAD(acc + u);                                                             \
+      } else                                                                                   \
+        gx[b] = gy[b] = gz[b] = th[b] = (PD_KVEC){0};                                          \
+      xt[b] = PD_KLOAD(X + u), yt[b] = PD_KLOAD(Y + u), zt[b] = PD_KLOAD(Z + u);               \
+      bt[b] = PD_KLOAD(B + u);                                                                 \
+    }                                                                                          \
+    for (int s = s0; s < s1; s++) {                                                            \
+      const double *restrict Xp = X + t + rp[s - s0], *restrict Xm = X + t + rm[s - s0];       \
+      const double *restrict Yp = Y + t + rp[s - s0], *restrict Ym = Y + t + rm[s - s0];       \
+      const double *restrict Zp = Z + t + rp[s - s0], *restrict Zm = Z + t + rm[s - s0];       \
+      const double *restrict Bp = B + t + rp[s - s0], *restrict Bm = B + t + rm[s - s0];       \
+      const double n0 = S->nrm[3 * s], n1 = S->nrm[3 * s + 1], n2 = S->nrm[3 * s + 2];         \
+      const double w1 = c1[s - s0], w2 = c2[s - s0];                                           \
+      _Pragma("GCC unroll 4") for (int b = 0; b < NB; b++) {                                   \
+        const int o = b * PD_KLANES;                                                           \
+        const PD_KVEC dp = n0 * (PD_KLOAD(Xp + o) - xt[b]) + n1 * (PD_KLOAD(Yp + o) - yt[b]) + \
+                           n2 * (PD_KLOAD(Zp + o) - zt[b]);                                    \
+        const PD_KVEC dm = n0 * (PD_KLOAD(Xm + o) - xt[b]) + n1 * (PD_KLOAD(Ym + o) - yt[b]) + \
+                           n2 * (PD_KLOAD(Zm + o) - zt[b]);                                    \
+        th[b] += w1 * (dp - dm);                                                               \
+        const PD_KVEC q =                                                                      \
+            w2 * ((bt[b] + PD_KLOAD(Bp + o)) * dp + (bt[b] + PD_KLOAD(Bm + o)) * dm);          \
+        gx[b] += q * n0;                                                                       \
+        gy[b] += q * n1;                                                                       \
+        gz[b] += q * n2;                                                                       \
+      }                                                                                        \
+    }                                                                                          \
+    for (int b = 0; b < NB; b++) {                                                             \
+      const int u = t + b * PD_KLANES;                                                         \
+      PD_KSTORE(acc + u, th[b]);                                                               \
+      /* Between chunks on the stack; then into w->gx..gz, of this run's nodes only (the       \
+       * cells past it may be another thread's). Not through memcpy: a call per run and        \
+       * array cost 5% of an apply. */                                                         \
+      if (s1 < half) {                                                                         \
+        PD_KSTORE(fx + u, gx[b]);                                                              \
+        PD_KSTORE(fy + u, gy[b]);                                                              \
+        PD_KSTORE(fz + u, gz[b]);                                                              \
+      } else if (u + PD_KLANES <= len) {                                                       \
+        PD_KSTORE(w->gx + li + u, gx[b]);                                                      \
+        PD_KSTORE(w->gy + li + u, gy[b]);                                                      \
+        PD_KSTORE(w->gz + li + u, gz[b]);                                                      \
+      } else                                                                                   \
+        for (int l = 0; l < len - u; l++)                                                      \
+          w->gx[li + u + l] = gx[b][l], w->gy[li + u + l] = gy[b][l],                          \
+          w->gz[li + u + l] = gz[b][l];                                                        \
+    }                                                                                          \
+  } while (0)
+
 static void PD_KNAME(run_lps_first)(const struct cupid_pd_operator_private *op,
                                     const pd_work *w, const pd_run *R, cupid_int i, int len,
                                     double *restrict theta) {
@@ -74,46 +133,14 @@ static void PD_KNAME(run_lps_first)(const struct cupid_pd_operator_private *op,
     const int s1 = s0 + PD_PAIR_CHUNK < half ? s0 + PD_PAIR_CHUNK : half;
     pair_offsets(op, w, R, i, s0, s1, bp, bm, &rp, &rm);
     for (int s = s0; s < s1; s++) c1[s - s0] = S->wb[s] * S->x[s], c2[s - s0] = 15.0 * S->wb[s];
-    for (int t = 0; t < len; t += PD_KLANES) {
-      PD_KVEC gx = {0}, gy = {0}, gz = {0}, th = {0};
-      if (s0)
-        gx = PD_KLOAD(fx + t), gy = PD_KLOAD(fy + t), gz = PD_KLOAD(fz + t),
-        th = PD_KLOAD(acc + t);
-      const PD_KVEC xt = PD_KLOAD(X + t), yt = PD_KLOAD(Y + t), zt = PD_KLOAD(Z + t);
-      const PD_KVEC bt = PD_KLOAD(B + t);
-      for (int s = s0; s < s1; s++) {
-        const cupid_int p = rp[s - s0] + t, m = rm[s - s0] + t;
-        const double n0 = S->nrm[3 * s], n1 = S->nrm[3 * s + 1], n2 = S->nrm[3 * s + 2];
-        const PD_KVEC dp = n0 * (PD_KLOAD(X + p) - xt) + n1 * (PD_KLOAD(Y + p) - yt) +
-                           n2 * (PD_KLOAD(Z + p) - zt);
-        const PD_KVEC dm = n0 * (PD_KLOAD(X + m) - xt) + n1 * (PD_KLOAD(Y + m) - yt) +
-                           n2 * (PD_KLOAD(Z + m) - zt);
-        th += c1[s - s0] * (dp - dm);
-        const PD_KVEC q =
-            c2[s - s0] * ((bt + PD_KLOAD(B + p)) * dp + (bt + PD_KLOAD(B + m)) * dm);
-        gx += q * n0;
-        gy += q * n1;
-        gz += q * n2;
-      }
-      PD_KSTORE(acc + t, th);
-      /* Between chunks on the stack; then into w->gx..gz, of this run's nodes only (the
-       * cells past it may be another thread's). Not through memcpy: a call per run and
-       * array cost 5% of an apply. */
-      if (s1 < half) {
-        PD_KSTORE(fx + t, gx);
-        PD_KSTORE(fy + t, gy);
-        PD_KSTORE(fz + t, gz);
-      } else if (t + PD_KLANES <= len) {
-        PD_KSTORE(w->gx + li + t, gx);
-        PD_KSTORE(w->gy + li + t, gy);
-        PD_KSTORE(w->gz + li + t, gz);
-      } else
-        for (int l = 0; l < len - t; l++)
-          w->gx[li + t + l] = gx[l], w->gy[li + t + l] = gy[l], w->gz[li + t + l] = gz[l];
-    }
+    int t = 0;
+    for (; t + PD_KFB * PD_KLANES <= len; t += PD_KFB * PD_KLANES) PD_KFIRST_GROUP(PD_KFB);
+    for (; t < len; t += PD_KLANES) PD_KFIRST_GROUP(1);
   }
   run_theta(op, w, R, i, len, acc, theta);
 }
+#undef PD_KFIRST_GROUP
+#undef PD_KFB
 
 /* LPS, the second pass: f = -V^2 (g + sum_s wx (a+ - a-) n_s) with g from run_lps_first:
  * -V^2 sum_s omega beta [ (a_i + a_j) x_s + 15 (b_i + b_j) e ] n_s (Eq. 21), the a_i terms
