@@ -79,15 +79,24 @@ static cupid_status node_data(struct cupid_pd_operator_private *op,
   /* Bond-based calibration on the full stencil: S = sum omega x beta V. */
   double Sfull = 0.0;
   for (int s = 0; s < S->n; s++) Sfull += S->wb[s] * S->x[s] * op->V;
+  /* A full family's sums, the same for every full node: summed once, in the same order. */
+  double m_full = 0.0, gs_full[3] = {0, 0, 0};
+  for (int s = 0; s < S->n; s++) {
+    m_full += S->wb[s] * S->x[s] * S->x[s] * op->V;
+    for (int c = 0; c < 3; c++) gs_full[c] += S->wxn[3 * s + c];
+  }
   cupid_int empty = -1;
 #pragma omp parallel for schedule(static) if (nn > PD_OMP_MIN_NODES)
   for (cupid_int i = 0; i < nn; i++) {
-    double m = 0.0, gs[3] = {0, 0, 0};
-    const pd_family F = pd_family_of(op, i);
-    for (int q = 0; q < F.n; q++) {
-      const int s = pd_family_entry(&F, q);
-      m += S->wb[s] * S->x[s] * S->x[s] * op->V;
-      for (int c = 0; c < 3; c++) gs[c] += S->wxn[3 * s + c];
+    double m = m_full, gs[3] = {gs_full[0], gs_full[1], gs_full[2]};
+    if (!op->full[i]) {
+      const pd_family F = pd_family_of(op, i);
+      m = gs[0] = gs[1] = gs[2] = 0.0;
+      for (int q = 0; q < F.n; q++) {
+        const int s = pd_family_entry(&F, q);
+        m += S->wb[s] * S->x[s] * S->x[s] * op->V;
+        for (int c = 0; c < 3; c++) gs[c] += S->wxn[3 * s + c];
+      }
     }
     op->m[i] = m;
     if (!(m > 0)) {
