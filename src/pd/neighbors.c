@@ -239,12 +239,13 @@ static cupid_status ghost_corrections(struct cupid_pd_operator_private *op) {
   CUPID_CALL(cupid_malloc((size_t)nn, sizeof *op->crank, "PD ghost corrections", &op->crank));
   int32_t ne = 0;
   for (cupid_int i = 0; i < nn; i++) op->crank[i] = op->full[i] ? -1 : ne++;
-  CUPID_CALL(cupid_calloc(6 * (size_t)ne + 1, sizeof *op->ncorr, "PD ghost corrections", &op->ncorr));
+  CUPID_CALL(cupid_calloc(PD_GHOST_STRIDE * (size_t)ne + 1, sizeof *op->ncorr,
+                          "PD ghost corrections", &op->ncorr));
 #pragma omp parallel for schedule(dynamic, 64) if (nn > PD_OMP_MIN_NODES)
   for (cupid_int i = 0; i < nn; i++) {
     if (op->full[i]) continue;
     const pd_family F = pd_family_of(op, i);
-    double *C = op->ncorr + 6 * (size_t)op->crank[i];
+    double *C = op->ncorr + PD_GHOST_STRIDE * (size_t)op->crank[i];
     int q = 0; /* present entries come in stencil order: walk them alongside */
     for (int s = 0; s < S->n; s++) {
       if (q < F.n && F.s[q] == s) {

@@ -109,8 +109,11 @@ struct cupid_pd_operator_private {
    * would hold more than PD_PAD_RATIO cells a node) near-surface nodes walk their families. */
   int padded;
   /* Ghost-bond corrections of the padded kernels (stencil.c) for non-full nodes: rank among
-   * them (-1 for full nodes) and sum over the absent entries of w n n^T (6 per node: xx yy
-   * zz yz xz xy; w = 15 omega beta for LPS, omega beta / (2|xi|) bond-based). */
+   * them (-1 for full nodes) and PD_GHOST_STRIDE doubles per node: the sum over the absent
+   * entries of w n n^T (xx yy zz yz xz xy; w = 15 omega beta for LPS, omega beta / (2|xi|)
+   * bond-based), then (LPS) a copy of the node's gself. One record per node, in node order:
+   * the kernels read them as one forward stream (gself by node and the six apart cost a
+   * cache miss each at every near-surface stretch of a row). */
   int32_t *crank;
   double *ncorr;
   cupid_int pn[3];        /* padded cells per axis */
@@ -242,6 +245,7 @@ static inline cupid_int pd_family_node(const struct cupid_pd_operator_private *o
   return op->grid->dense[F->cell + op->clin[s]];
 }
 
+#define PD_GHOST_STRIDE 9
 #define PD_PAD_RATIO 8
 /* Padded rows hold a multiple of PD_ROW_ALIGN cells (64 bytes of doubles), so that cells of
  * the same x are equally aligned in every row (stencil.c). */

@@ -238,9 +238,12 @@ run_theta(const struct cupid_pd_operator_private *op, const pd_work *w, const pd
   const double *restrict X = w->x + li, *restrict Y = w->y + li, *restrict Z = w->z + li;
   if (!R->full) {
     const unsigned char *restrict full = op->full + i;
-    const double *restrict G = op->gself + 3 * i;
+    const int32_t *restrict rank = op->crank + i;
     for (int t = 0; t < len; t++) /* ghost bonds: -(sum over them of g).(0 - u_i) */
-      if (!full[t]) acc[t] -= G[3 * t] * X[t] + G[3 * t + 1] * Y[t] + G[3 * t + 2] * Z[t];
+      if (!full[t]) {
+        const double *restrict G = op->ncorr + PD_GHOST_STRIDE * (size_t)rank[t] + 6;
+        acc[t] -= G[0] * X[t] + G[1] * Y[t] + G[2] * Z[t];
+      }
   }
   if (op->bslot)
     for (int t = 0; t < len; t++)
@@ -271,21 +274,21 @@ run_store(const struct cupid_pd_operator_private *op, const pd_work *w, const pd
      * every node (this loop took half of the LPS second pass at 40^3). */
     const unsigned char *restrict full = op->full + i;
     const int32_t *restrict rank = op->crank + i;
-    const double *restrict NC = op->ncorr, *restrict G = lps ? op->gself + 3 * i : NULL;
+    const double *restrict NC = op->ncorr;
     const double *restrict ux = w->x + li, *restrict uy = w->y + li, *restrict uz = w->z + li;
     const double *restrict bb = lps ? w->b + li : w->a + li, *restrict aa = w->a + li;
     for (int t = 0; t < len; t++) {
       if (full[t]) continue;
-      const double *restrict C = NC + 6 * (size_t)rank[t];
+      const double *restrict C = NC + PD_GHOST_STRIDE * (size_t)rank[t]; /* then G_i */
       const double u0 = ux[t], u1 = uy[t], u2 = uz[t], bi = bb[t];
       double gx = bi * (C[0] * u0 + C[5] * u1 + C[4] * u2);
       double gy = bi * (C[5] * u0 + C[1] * u1 + C[3] * u2);
       double gz = bi * (C[4] * u0 + C[3] * u1 + C[2] * u2);
       if (lps) {
         const double ai = aa[t];
-        gx += ai * G[3 * t];
-        gy += ai * G[3 * t + 1];
-        gz += ai * G[3 * t + 2];
+        gx += ai * C[6];
+        gy += ai * C[7];
+        gz += ai * C[8];
       }
       fx[t] += gx;
       fy[t] += gy;
