@@ -412,7 +412,7 @@ cupid_status cupid_pd_operator_row_bound(const cupid_pd_operator op, double *r) 
   const cupid_int nn = op->nnodes;
   const int lps = op->model != CUPID_PD_BOND;
   const double V2 = op->V * op->V;
-  double *G = NULL, *pq = NULL, *kq = NULL, wx_full = 0.0;
+  double *G = NULL, *pq = NULL, *kq = NULL, *ppq = NULL, *pkq = NULL, wx_full = 0.0;
   for (int s = 0; s < S->n; s++) wx_full += S->wb[s] * S->x[s];
   cupid_status st = CUPID_SUCCESS;
   if (lps) CUPID_TRY(cupid_malloc((size_t)nn + 1, sizeof *G, "dilatation gradient norms", &G));
@@ -424,6 +424,18 @@ cupid_status cupid_pd_operator_row_bound(const cupid_pd_operator op, double *r) 
     pq[p] = lps ? 15.0 * op->mu[p] / op->m[p] * V2 : 0.5 * op->c[p] * V2;
     kq[p] = lps ? fabs(op->kappa[p]) * V2 / op->m[p] * G[p] : 0.0;
   }
+  /* On the padded lattice, the neighbours' terms of full, intact families are read at the
+   * stencil's cell offsets (no node lookup a bond): the same terms in the same order. */
+  if (op->padded && !op->sf) {
+    const size_t pcells = (size_t)op->pn[0] * (size_t)op->pn[1] * (size_t)op->pn[2];
+    CUPID_TRY(cupid_calloc(pcells + 1, sizeof *ppq, "row bound terms", &ppq));
+    CUPID_TRY(cupid_calloc(pcells + 1, sizeof *pkq, "row bound terms", &pkq));
+#pragma omp parallel for schedule(static) if (nn > PD_OMP_MIN_NODES)
+    for (cupid_int p = 0; p < nn; p++) {
+      ppq[pd_node_pcell(op, p)] = pq[p];
+      pkq[pd_node_pcell(op, p)] = kq[p];
+    }
+  }
 #pragma omp parallel for schedule(static) if (nn > PD_OMP_MIN_NODES)
   for (cupid_int i = 0; i < nn; i++) {
     double sum = 0.0;
@@ -433,7 +445,16 @@ cupid_status cupid_pd_operator_row_bound(const cupid_pd_operator op, double *r) 
       sum += kq[i] * sqrt(self[0] * self[0] + self[1] * self[1] + self[2] * self[2]);
     }
     if (op->sf) sum += row_bound_corrected(op, i, G);
-    else {
+    else if (ppq && op->full[i] && (!op->bslot || op->bslot[i] < 0)) {
+      const cupid_int c = pd_node_pcell(op, i);
+      double pair = 0.0, dil = 0.0;
+      for (int s = 0; s < S->n; s++) {
+        const double wp = lps ? S->wb[s] : S->wb[s] / S->x[s];
+        pair += wp * (pq[i] + ppq[c + op->pclin[s]]);
+        dil += S->wb[s] * S->x[s] * pkq[c + op->pclin[s]];
+      }
+      sum += 2.0 * pair + dil;
+    } else {
       const pd_family F = pd_family_of(op, i);
       double pair = 0.0, dil = 0.0;
       for (int q = 0; q < F.n; q++) {
@@ -452,5 +473,7 @@ cleanup:
   cupid_free(&G);
   cupid_free(&pq);
   cupid_free(&kq);
+  cupid_free(&ppq);
+  cupid_free(&pkq);
   return st;
 }
