@@ -228,6 +228,23 @@ static inline int scan_keeps(const struct cupid_pd_operator_private *op, cupid_i
   return pd_grid_lookup(op->grid, q[0] + o[0], q[1] + o[1], q[2] + o[2]) >= 0;
 }
 
+/* The near-surface nodes' ghost records of a run, fetched before its pair loop for
+ * run_theta and run_store after it: they come in bursts at a row's ends that the hardware
+ * prefetcher does not follow, and each cost a cache miss (a third of the LPS second pass
+ * at 40^3 before). A record spans at most two cache lines. */
+static inline void prefetch_ghosts(const struct cupid_pd_operator_private *op, const pd_run *R,
+                                   cupid_int i, int len) {
+  if (R->full) return;
+  const unsigned char *restrict full = op->full + i;
+  const int32_t *restrict rank = op->crank + i;
+  for (int t = 0; t < len; t++)
+    if (!full[t]) {
+      const char *rec = (const char *)(op->ncorr + PD_GHOST_STRIDE * (size_t)rank[t]);
+      __builtin_prefetch(rec);
+      __builtin_prefetch(rec + 64);
+    }
+}
+
 /* The end of a run's dilatation: acc holds sum_s g_s.(u_j - u_i) over the padded stencil;
  * less the ghost and broken bonds, theta = 3V/m acc and a = kappa theta / m (into w->a and,
  * if asked, theta). Always inlined, as run_store. */

@@ -129,6 +129,7 @@ static void PD_KNAME(run_lps_first)(const struct cupid_pd_operator_private *op,
   const cupid_int *rp, *rm;
   double c1[PD_PAIR_CHUNK], c2[PD_PAIR_CHUNK];
   const int half = S->n / 2;
+  prefetch_ghosts(op, R, i, len);
   for (int s0 = 0; s0 < half; s0 += PD_PAIR_CHUNK) {
     const int s1 = s0 + PD_PAIR_CHUNK < half ? s0 + PD_PAIR_CHUNK : half;
     pair_offsets(op, w, R, i, s0, s1, bp, bm, &rp, &rm);
@@ -186,6 +187,7 @@ static void PD_KNAME(run_lps_second)(const struct cupid_pd_operator_private *op,
   cupid_int bp[PD_PAIR_CHUNK], bm[PD_PAIR_CHUNK];
   const cupid_int *rp, *rm;
   const int half = S->n / 2;
+  prefetch_ghosts(op, R, i, len);
   for (int s0 = 0; s0 < half; s0 += PD_PAIR_CHUNK) {
     const int s1 = s0 + PD_PAIR_CHUNK < half ? s0 + PD_PAIR_CHUNK : half;
     pair_offsets(op, w, R, i, s0, s1, bp, bm, &rp, &rm);
