@@ -25,13 +25,19 @@ static void check(cupid_status st) {
   }
 }
 
-/* Bytes held by the operator's stencil storage (families, runs, per-node data). */
+/* Bytes held by the operator's stencil storage (families, runs, per-node data, the ghost
+ * records of near-surface nodes). */
 static double stencil_bytes(const struct cupid_pd_operator_private *op) {
   const double nn = (double)op->nnodes;
   double b = nn * (1 + 8) + 8; /* full flags, family offsets */
   b += (double)op->fptr[op->nnodes] * 4 + (double)op->nruns * sizeof(pd_run);
-  b += (double)op->st.n * (3 * 4 + 8 + 24 + 8 + 24 + 8 + 8);
+  b += (double)op->st.n * (3 * 4 + 8 + 24 + 8 + 24 + 8 + 8 + 8 + 8);
   b += nn * 8 * (op->model == CUPID_PD_LPS ? 6 : 4); /* m kappa mu + gself(3) | c */
+  if (op->crank) {
+    double partial = 0;
+    for (cupid_int i = 0; i < op->nnodes; i++) partial += !op->full[i];
+    b += nn * 4 + partial * 8 * PD_GHOST_STRIDE; /* crank, ncorr */
+  }
   return b;
 }
 
@@ -147,8 +153,9 @@ int main(int argc, char **argv) {
     double cs_st = 0, cs_bl = 0;
     const double t_st_steps = explicit_steps(op, nn, steps, u, v, f, &cs_st, &c_st_steps);
     const double peak_stencil = (double)cupid_peak_memory() / 1e6;
-    /* The kept work arrays: 5 doubles a cell of the padded window. */
-    const double wb = 40.0 * (op->padded ? (double)(op->pn[0] * op->pn[1] * op->pn[2]) : (double)nn);
+    /* The kept work arrays: 5 doubles a cell of the padded window (8 for LPS). */
+    const double wb = (op->model == CUPID_PD_LPS ? 64.0 : 40.0) *
+                      (op->padded ? (double)(op->pn[0] * op->pn[1] * op->pn[2]) : (double)nn);
     double t_bl = NAN, t_bl_steps = NAN, bb = NAN, diff = NAN;
     if (bond_lists) {
       for (cupid_int i = 0; i < 3 * nn; i++) {
