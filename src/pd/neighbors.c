@@ -333,7 +333,8 @@ cupid_status pd_families_build(struct cupid_pd_operator_private *op) {
   }
   op->nbonds = total;
   for (cupid_int i = 0; i < nn; i++) p[i + 1] += p[i];
-  CUPID_TRY(cupid_malloc((size_t)p[nn] + 1, sizeof *op->fidx, "PD near-surface families", &op->fidx));
+  CUPID_TRY(cupid_malloc((size_t)p[nn] + 1, sizeof *op->fidx, "PD near-surface families",
+                         &op->fidx));
 #pragma omp parallel for schedule(static) if (nn > PD_OMP_MIN_NODES)
   for (cupid_int i = 0; i < nn; i++) {
     if (op->full[i]) continue;

@@ -23,8 +23,8 @@
  * LPS (paper 000 Eqs. 17-21), two passes: a_j = kappa_j theta_j / m_j on the nodes the rows
  * need, then (K u)_i = -V^2 sum_s omega beta [ (a_i + a_j) x_s + 15 (b_i + b_j) e_ij ] n_s,
  * b = mu / m. The first pass also sums the terms in b (they need no a), so each pass loads
- * a neighbour's u once; the second adds the terms in a. Bond-based (paper 004 section 2.2), one pass:
- * (K u)_i = -V^2 sum_s omega beta / x_s (c_i + c_j)/2 e_ij n_s. */
+ * a neighbour's u once; the second adds the terms in a. Bond-based (paper 004 section 2.2),
+ * one pass: (K u)_i = -V^2 sum_s omega beta / x_s (c_i + c_j)/2 e_ij n_s. */
 #define _POSIX_C_SOURCE 200809L /* posix_memalign */
 #include <stdlib.h>
 #include <math.h>

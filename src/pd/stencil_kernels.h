@@ -200,7 +200,7 @@ static void PD_KNAME(run_lps_second)(const struct cupid_pd_operator_private *op,
 #undef PD_KATERM_GROUP
 #undef PD_KAB
 
-/* The pair loop of the force kernels: per lane block, (gx, gy, gz) += q n over the pairs
+/* The pair loop of the bond-based force kernel: per lane block, (gx, gy, gz) += q n over the pairs
  * of the chunk, q = PAIR (with d+ = n.(u+ - u_i) = dp, d- = n.(u- - u_i) = dm, and the
  * pair's weights w1, w2 that CONSTS tables per chunk in c1, c2); the accumulators go
  * through fx, fy, fz only between chunks. */
@@ -213,7 +213,7 @@ static void PD_KNAME(run_lps_second)(const struct cupid_pd_operator_private *op,
   const int half = S->n / 2;                                                                 \
   for (int s0 = 0; s0 < half; s0 += PD_PAIR_CHUNK) {                                         \
     const int s1 = s0 + PD_PAIR_CHUNK < half ? s0 + PD_PAIR_CHUNK : half;                    \
-    pair_offsets(op, w, R, i, s0, s1, bp, bm, &rp, &rm);                                               \
+    pair_offsets(op, w, R, i, s0, s1, bp, bm, &rp, &rm);                                     \
     for (int s = s0; s < s1; s++) CONSTS                                                     \
     for (int t = 0; t < len; t += PD_KLANES) {                                               \
       PD_KVEC gx = {0}, gy = {0}, gz = {0};                                                  \
