@@ -200,10 +200,10 @@ static void PD_KNAME(run_lps_second)(const struct cupid_pd_operator_private *op,
 #undef PD_KATERM_GROUP
 #undef PD_KAB
 
-/* The pair loop of the bond-based force kernel: per lane block, (gx, gy, gz) += q n over the pairs
- * of the chunk, q = PAIR (with d+ = n.(u+ - u_i) = dp, d- = n.(u- - u_i) = dm, and the
- * pair's weights w1, w2 that CONSTS tables per chunk in c1, c2); the accumulators go
- * through fx, fy, fz only between chunks. */
+/* The pair loop of the bond-based force kernel: per lane block, (gx, gy, gz) += q n over
+ * the pairs of the chunk, q = PAIR (with d+ = n.(u+ - u_i) = dp, d- = n.(u- - u_i) = dm,
+ * and the pair's weights w1, w2 that CONSTS tables per chunk in c1, c2); the accumulators
+ * go through fx, fy, fz only between chunks. */
 #define PD_KFORCE_PAIRS(NODE_LOAD, CONSTS, PAIR)                                               \
   double fx[PD_RUN_MAX + PD_LANES_MAX], fy[PD_RUN_MAX + PD_LANES_MAX],                       \
       fz[PD_RUN_MAX + PD_LANES_MAX];                                                         \
