@@ -56,8 +56,8 @@ static void PD_KNAME(run_dilatation)(const struct cupid_pd_operator_private *op,
  * force term w15 ((b_i + b+) d+ + (b_i + b-) d-) n; the latter goes to w->gx..gz, and
  * run_lps_second adds wx (a+ - a-) n once every a is known. A dilatation pass and then a
  * whole force pass (the kernels before issue 20) loaded 16 neighbour vectors a pair, this
- * loads 8 here and 2 in the second pass: the loops are bound by those loads. */
-/* PD_KFB lane blocks share each pair's weights and offsets (as in run_lps_second): two with
+ * loads 8 here and 2 in the second pass: the loops are bound by those loads.
+ * PD_KFB lane blocks share each pair's weights and offsets (as in run_lps_second): two with
  * AVX-512, whose 32 registers hold their 16 accumulators and node values; one where there
  * are 16 registers. */
 #define PD_KFB (PD_KLANES == 8 ? 2 : 1)
@@ -200,47 +200,9 @@ static void PD_KNAME(run_lps_second)(const struct cupid_pd_operator_private *op,
 #undef PD_KATERM_GROUP
 #undef PD_KAB
 
-/* The pair loop of the bond-based force kernel: per lane block, (gx, gy, gz) += q n over
- * the pairs of the chunk, q = PAIR (with d+ = n.(u+ - u_i) = dp, d- = n.(u- - u_i) = dm,
- * and the pair's weights w1, w2 that CONSTS tables per chunk in c1, c2); the accumulators
- * go through fx, fy, fz only between chunks. */
-#define PD_KFORCE_PAIRS(NODE_LOAD, CONSTS, PAIR)                                               \
-  double fx[PD_RUN_MAX + PD_LANES_MAX], fy[PD_RUN_MAX + PD_LANES_MAX],                       \
-      fz[PD_RUN_MAX + PD_LANES_MAX];                                                         \
-  cupid_int bp[PD_PAIR_CHUNK], bm[PD_PAIR_CHUNK];                                            \
-  const cupid_int *rp, *rm;                                                                  \
-  double c1[PD_PAIR_CHUNK], c2[PD_PAIR_CHUNK];                                               \
-  const int half = S->n / 2;                                                                 \
-  for (int s0 = 0; s0 < half; s0 += PD_PAIR_CHUNK) {                                         \
-    const int s1 = s0 + PD_PAIR_CHUNK < half ? s0 + PD_PAIR_CHUNK : half;                    \
-    pair_offsets(op, w, R, i, s0, s1, bp, bm, &rp, &rm);                                     \
-    for (int s = s0; s < s1; s++) CONSTS                                                     \
-    for (int t = 0; t < len; t += PD_KLANES) {                                               \
-      PD_KVEC gx = {0}, gy = {0}, gz = {0};                                                  \
-      if (s0) gx = PD_KLOAD(fx + t), gy = PD_KLOAD(fy + t), gz = PD_KLOAD(fz + t);          \
-      const PD_KVEC xt = PD_KLOAD(X + t), yt = PD_KLOAD(Y + t), zt = PD_KLOAD(Z + t);        \
-      NODE_LOAD                                                                              \
-      for (int s = s0; s < s1; s++) {                                                        \
-        const cupid_int p = rp[s - s0] + t, m = rm[s - s0] + t;                              \
-        const double n0 = S->nrm[3 * s], n1 = S->nrm[3 * s + 1], n2 = S->nrm[3 * s + 2];     \
-        const double w1 = c1[s - s0], w2 = c2[s - s0];                                       \
-        (void)w2;                                                                            \
-        const PD_KVEC dp = n0 * (PD_KLOAD(X + p) - xt) + n1 * (PD_KLOAD(Y + p) - yt) +       \
-                           n2 * (PD_KLOAD(Z + p) - zt);                                      \
-        const PD_KVEC dm = n0 * (PD_KLOAD(X + m) - xt) + n1 * (PD_KLOAD(Y + m) - yt) +       \
-                           n2 * (PD_KLOAD(Z + m) - zt);                                      \
-        const PD_KVEC q = PAIR;                                                              \
-        gx += q * n0;                                                                        \
-        gy += q * n1;                                                                        \
-        gz += q * n2;                                                                        \
-      }                                                                                      \
-      PD_KSTORE(fx + t, gx);                                                                 \
-      PD_KSTORE(fy + t, gy);                                                                 \
-      PD_KSTORE(fz + t, gz);                                                                 \
-    }                                                                                        \
-  }
-
-/* f = -V^2 sum_s omega beta / x_s (c_i + c_j)/2 e n_s (bond-based). */
+/* f = -V^2 sum_s omega beta / x_s (c_i + c_j)/2 e n_s (bond-based). Per lane block,
+ * (gx, gy, gz) += q n over the pairs of the chunk, q = wc ((c_i + c+) d+ + (c_i + c-) d-)
+ * with wc tabled per chunk; the accumulators go through fx, fy, fz only between chunks. */
 static void PD_KNAME(run_bond_force)(const struct cupid_pd_operator_private *op,
                                      const pd_work *w, const pd_run *R, cupid_int i, int len,
                                      double *restrict f) {
@@ -248,9 +210,39 @@ static void PD_KNAME(run_bond_force)(const struct cupid_pd_operator_private *op,
   const cupid_int li = work_index(w, R, i);
   const double *restrict X = w->x + li, *restrict Y = w->y + li, *restrict Z = w->z + li;
   const double *restrict A = w->a + li;
-  PD_KFORCE_PAIRS(const PD_KVEC ct = PD_KLOAD(A + t);,
-                  (c1[s - s0] = 0.5 * S->wb[s] / S->x[s], c2[s - s0] = 0.0);,
-                  w1 * ((ct + PD_KLOAD(A + p)) * dp + (ct + PD_KLOAD(A + m)) * dm))
+  double fx[PD_RUN_MAX + PD_LANES_MAX], fy[PD_RUN_MAX + PD_LANES_MAX],
+      fz[PD_RUN_MAX + PD_LANES_MAX];
+  cupid_int bp[PD_PAIR_CHUNK], bm[PD_PAIR_CHUNK];
+  const cupid_int *rp, *rm;
+  double wc[PD_PAIR_CHUNK];
+  const int half = S->n / 2;
+  for (int s0 = 0; s0 < half; s0 += PD_PAIR_CHUNK) {
+    const int s1 = s0 + PD_PAIR_CHUNK < half ? s0 + PD_PAIR_CHUNK : half;
+    pair_offsets(op, w, R, i, s0, s1, bp, bm, &rp, &rm);
+    for (int s = s0; s < s1; s++) wc[s - s0] = 0.5 * S->wb[s] / S->x[s];
+    for (int t = 0; t < len; t += PD_KLANES) {
+      PD_KVEC gx = {0}, gy = {0}, gz = {0};
+      if (s0) gx = PD_KLOAD(fx + t), gy = PD_KLOAD(fy + t), gz = PD_KLOAD(fz + t);
+      const PD_KVEC xt = PD_KLOAD(X + t), yt = PD_KLOAD(Y + t), zt = PD_KLOAD(Z + t);
+      const PD_KVEC ct = PD_KLOAD(A + t);
+      for (int s = s0; s < s1; s++) {
+        const cupid_int p = rp[s - s0] + t, m = rm[s - s0] + t;
+        const double n0 = S->nrm[3 * s], n1 = S->nrm[3 * s + 1], n2 = S->nrm[3 * s + 2];
+        const PD_KVEC dp = n0 * (PD_KLOAD(X + p) - xt) + n1 * (PD_KLOAD(Y + p) - yt) +
+                           n2 * (PD_KLOAD(Z + p) - zt);
+        const PD_KVEC dm = n0 * (PD_KLOAD(X + m) - xt) + n1 * (PD_KLOAD(Y + m) - yt) +
+                           n2 * (PD_KLOAD(Z + m) - zt);
+        const PD_KVEC q =
+            wc[s - s0] * ((ct + PD_KLOAD(A + p)) * dp + (ct + PD_KLOAD(A + m)) * dm);
+        gx += q * n0;
+        gy += q * n1;
+        gz += q * n2;
+      }
+      PD_KSTORE(fx + t, gx);
+      PD_KSTORE(fy + t, gy);
+      PD_KSTORE(fz + t, gz);
+    }
+  }
   run_store(op, w, R, i, len, fx, fy, fz, f);
 }
 
@@ -315,7 +307,6 @@ static const pd_kernel_set PD_KNAME(kernels) = {
     PD_KNAME(run_dilatation), PD_KNAME(run_bond_force), PD_KNAME(run_lps_first),
     PD_KNAME(run_lps_second), PD_KNAME(run_stretch), PD_KLANES};
 
-#undef PD_KFORCE_PAIRS
 #undef PD_KSTORE
 #undef PD_KLOAD
 #undef PD_KVEC_U
