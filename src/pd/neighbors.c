@@ -306,6 +306,7 @@ cupid_status pd_families_build(struct cupid_pd_operator_private *op) {
     op->pclin[s] = o[0] + op->pn[0] * (o[1] + op->pn[1] * (cupid_int)o[2]);
   }
   for (int s = 0; s < S->n; s++) op->pclin_opp[s] = op->pclin[S->n - 1 - s];
+  CUPID_CALL(pd_pair_plan_build(op));
   /* Which stencil neighbours exist: on the padded lattice from a byte per cell (a load a
    * neighbour, no bounds tests: a tenth of the grid lookups' time), else by lookups. */
   unsigned char *present = NULL;

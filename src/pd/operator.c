@@ -17,6 +17,7 @@ void cupid_pd_operator_destroy(cupid_pd_operator *op) {
   cupid_free(&o->runs);
   cupid_free(&o->pclin);
   cupid_free(&o->pclin_opp);
+  pd_pair_plan_free(&o->plan);
   cupid_free(&o->crank);
   cupid_free(&o->ncorr);
   pd_stencil_work_free(o);

@@ -82,6 +82,23 @@ typedef struct {
 /* Longest run: the kernels keep a run's accumulators on the stack. */
 #define PD_RUN_MAX 256
 
+/* The LPS kernels' walk over the stencil's pairs (stencil.c, pd_pair_plan_build): the pairs
+ * (s, n-1-s), s < n/2, by chunks of PD_PAIR_CHUNK in stencil order, each chunk's pairs
+ * grouped by which components of n_s are nonzero (PD_PAIR_CLASSES: xyz, yz, xz, xy, x, y,
+ * z). A class skips the loads and products of its zero components: in a ball of 3 spacings
+ * 33 of the 61 pairs lie in a lattice plane or on an axis, and the first pass is bound by
+ * those loads and products. On an axis n_s = +-1 (exactly), folded into w1. */
+#define PD_PAIR_CHUNK 64 /* pairs whose neighbour offsets are tabled at a time */
+#define PD_PAIR_CLASSES 7
+typedef struct {
+  int n;              /* pairs: st.n / 2 */
+  int *s;             /* stencil entry (the + side) of each pair, in walk order */
+  int *seg;           /* chunk c's pairs of class q: [seg[c (Q+1) + q], seg[c (Q+1) + q + 1]) */
+  double *nrm, *wxn;  /* entry s's n and omega beta |xi| n, 3 per pair */
+  double *w1, *w2;    /* omega beta |xi| (times n's sign on an axis), 15 omega beta */
+  cupid_int *pp, *pm; /* padded cell offsets of the + and - neighbours */
+} pd_pair_plan;
+
 struct cupid_pd_operator_private {
   const struct cupid_pd_grid_private *grid; /* borrowed: must outlive the operator */
   cupid_pd_model_kind model;
@@ -120,6 +137,7 @@ struct cupid_pd_operator_private {
   int32_t pr[3];          /* reach per axis */
   cupid_int *pclin;
   cupid_int *pclin_opp;   /* pclin[n-1-s]: the offset of entry s's opposite (the kernels' pairs) */
+  pd_pair_plan plan;      /* the LPS passes' order of the pairs */
   /* Work arrays of the stencil path, kept between applies (a fresh allocation per apply
    * costs page faults comparable to the apply); one apply at a time takes them, a
    * concurrent one allocates its own. */
@@ -285,6 +303,9 @@ cupid_status pd_stencil_stretch_scan(const struct cupid_pd_operator_private *op,
 
 /* Free the kept work arrays (operator destroy). */
 void pd_stencil_work_free(struct cupid_pd_operator_private *op);
+/* The pair plan of the stencil and its padded offsets (pd_families_build, after pclin). */
+cupid_status pd_pair_plan_build(struct cupid_pd_operator_private *op);
+void pd_pair_plan_free(pd_pair_plan *P);
 /* The stencil kernels come in one instance per x86-64 instruction set (AVX-512, AVX2,
  * baseline), the CPU's best picked at run time. pd_stencil_force_isa(level) caps the choice
  * for the whole process (0: the CPU's best; 1 baseline, 3 AVX2, 4 AVX-512), so that tests

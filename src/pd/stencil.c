@@ -16,8 +16,9 @@
  * above with neighbours through the dense cell map, near-surface nodes walk their stored
  * stencil entries.
  *
- * Each node's bonds are summed in stencil order (pairs of opposites, one pair at a time),
- * as the bond-list kernels of lps.c and bond.c do bond by bond, so the two paths agree to
+ * Each node's bonds are summed by pairs of opposites, one pair at a time (in stencil order,
+ * or for the LPS passes in the order of the pair plan, pd_pair_plan), the same terms as the
+ * bond-list kernels of lps.c and bond.c sum bond by bond, so the two paths agree to
  * round-off (tests/unit/test_pd_stencil.c).
  *
  * LPS (paper 000 Eqs. 17-21), two passes: a_j = kappa_j theta_j / m_j on the nodes the rows
@@ -44,7 +45,6 @@
 #if PD_ROW_ALIGN % PD_LANES_MAX != 0
 #error "padded rows must be whole lane blocks"
 #endif
-#define PD_PAIR_CHUNK 64 /* pairs whose neighbour offsets are tabled at a time */
 
 /* Structure-of-arrays copies of the data the rows depend on. Padded: indexed by padded
  * cell - base, absent cells zero; else by node - base. The arrays start `lead` entries into
@@ -166,6 +166,94 @@ static inline void pair_offsets(const struct cupid_pd_operator_private *op, cons
   for (int s = s0; s < s1; s++) {
     bp[s - s0] = work_neighbour(op, w, R, i, s) - li;
     bm[s - s0] = work_neighbour(op, w, R, i, op->st.n - 1 - s) - li;
+  }
+  *rp = bp;
+  *rm = bm;
+}
+
+/* The class of a pair by its nonzero offset components (pd_pair_plan). */
+static int pair_class(const int32_t *o) {
+  static const int cls[8] = {-1, 4, 5, 3, 6, 2, 1, 0}; /* by x + 2y + 4z nonzero */
+  return cls[(o[0] != 0) + 2 * (o[1] != 0) + 4 * (o[2] != 0)];
+}
+
+void pd_pair_plan_free(pd_pair_plan *P) {
+  cupid_free(&P->s);
+  cupid_free(&P->seg);
+  cupid_free(&P->nrm);
+  cupid_free(&P->wxn);
+  cupid_free(&P->w1);
+  cupid_free(&P->w2);
+  cupid_free(&P->pp);
+  cupid_free(&P->pm);
+  P->n = 0;
+}
+
+cupid_status pd_pair_plan_build(struct cupid_pd_operator_private *op) {
+  const pd_stencil *S = &op->st;
+  pd_pair_plan *P = &op->plan;
+  const int half = S->n / 2, chunks = (half + PD_PAIR_CHUNK - 1) / PD_PAIR_CHUNK;
+  pd_pair_plan_free(P);
+  cupid_status st = CUPID_SUCCESS;
+  const size_t np = (size_t)half + 1;
+  CUPID_TRY(cupid_malloc(np, sizeof *P->s, "PD pair plan", &P->s));
+  CUPID_TRY(cupid_malloc((size_t)chunks * (PD_PAIR_CLASSES + 1) + 1, sizeof *P->seg, "PD pair plan",
+                         &P->seg));
+  CUPID_TRY(cupid_malloc(3 * np, sizeof *P->nrm, "PD pair plan", &P->nrm));
+  CUPID_TRY(cupid_malloc(3 * np, sizeof *P->wxn, "PD pair plan", &P->wxn));
+  CUPID_TRY(cupid_malloc(np, sizeof *P->w1, "PD pair plan", &P->w1));
+  CUPID_TRY(cupid_malloc(np, sizeof *P->w2, "PD pair plan", &P->w2));
+  CUPID_TRY(cupid_malloc(np, sizeof *P->pp, "PD pair plan", &P->pp));
+  CUPID_TRY(cupid_malloc(np, sizeof *P->pm, "PD pair plan", &P->pm));
+  P->n = half;
+  int k = 0;
+  for (int c = 0; c < chunks; c++) {
+    const int s0 = c * PD_PAIR_CHUNK, s1 = s0 + PD_PAIR_CHUNK < half ? s0 + PD_PAIR_CHUNK : half;
+    int *seg = P->seg + c * (PD_PAIR_CLASSES + 1);
+    for (int q = 0; q < PD_PAIR_CLASSES; q++) { /* stencil order within a class */
+      seg[q] = k;
+      for (int s = s0; s < s1; s++)
+        if (pair_class(S->off + 3 * s) == q) P->s[k++] = s;
+    }
+    seg[PD_PAIR_CLASSES] = k;
+  }
+  CUPID_TRY_CHECK(k == half, CUPID_ERR_INTERNAL, "PD pair plan: %d of %d pairs classed", k, half);
+  for (k = 0; k < half; k++) {
+    const int s = P->s[k];
+    const int32_t *o = S->off + 3 * s;
+    const int axis = pair_class(o) >= 4;
+    double sign = 1.0;
+    for (int a = 0; a < 3; a++) {
+      P->nrm[3 * k + a] = S->nrm[3 * s + a];
+      P->wxn[3 * k + a] = S->wxn[3 * s + a];
+      if (axis && o[a] < 0) sign = -1.0;
+    }
+    P->w1[k] = S->wb[s] * S->x[s] * sign;
+    P->w2[k] = 15.0 * S->wb[s];
+    P->pp[k] = op->pclin[s];
+    P->pm[k] = op->pclin[S->n - 1 - s];
+  }
+  return CUPID_SUCCESS;
+cleanup:
+  pd_pair_plan_free(P);
+  return st;
+}
+
+/* The pairs [k0, k1) of the plan (walk order) for the run starting at node i, as
+ * pair_offsets does for stencil order. */
+static inline void plan_offsets(const struct cupid_pd_operator_private *op, const pd_work *w,
+                                const pd_run *R, cupid_int i, int k0, int k1, cupid_int *bp,
+                                cupid_int *bm, const cupid_int **rp, const cupid_int **rm) {
+  const pd_pair_plan *P = &op->plan;
+  if (w->padded) {
+    *rp = P->pp + k0;
+    *rm = P->pm + k0;
+    return;
+  }
+  const cupid_int li = work_index(w, R, i);
+  for (int k = k0; k < k1; k++) {
+    bp[k - k0] = work_neighbour(op, w, R, i, P->s[k]) - li;
+    bm[k - k0] = work_neighbour(op, w, R, i, op->st.n - 1 - P->s[k]) - li;
   }
   *rp = bp;
   *rm = bm;

@@ -50,17 +50,65 @@ static void PD_KNAME(run_dilatation)(const struct cupid_pd_operator_private *op,
   run_theta(op, w, R, i, len, acc, theta);
 }
 
+/* n.d over the components that a pair class (pd_pair_plan) uses, HX, HY, HZ constants 0 or
+ * 1: the unused components are neither loaded nor multiplied. On an axis n = +-1 is folded
+ * into the plan's weights (w1 carries the sign, and q n = q' with q' from the plain
+ * differences), so the plain difference. */
+#define PD_KNDOT(HX, HY, HZ, n0, n1, n2, dx, dy, dz)                                           \
+  ((HX) + (HY) + (HZ) == 1 ? ((HX) ? (dx) : (HY) ? (dy) : (dz))                                \
+   : (HX) && (HY) && (HZ) ? (n0) * (dx) + (n1) * (dy) + (n2) * (dz)                            \
+   : (HX) && (HY)         ? (n0) * (dx) + (n1) * (dy)                                          \
+   : (HX)                 ? (n0) * (dx) + (n2) * (dz)                                          \
+                          : (n1) * (dy) + (n2) * (dz))
+/* The seven classes of a chunk, in the plan's order: PAIRS(NB, HX, HY, HZ, k0, k1). */
+#define PD_KCLASSES(PAIRS, NB, sg)                                                             \
+  do {                                                                                         \
+    PAIRS(NB, 1, 1, 1, (sg)[0], (sg)[1]);                                                      \
+    PAIRS(NB, 0, 1, 1, (sg)[1], (sg)[2]);                                                      \
+    PAIRS(NB, 1, 0, 1, (sg)[2], (sg)[3]);                                                      \
+    PAIRS(NB, 1, 1, 0, (sg)[3], (sg)[4]);                                                      \
+    PAIRS(NB, 1, 0, 0, (sg)[4], (sg)[5]);                                                      \
+    PAIRS(NB, 0, 1, 0, (sg)[5], (sg)[6]);                                                      \
+    PAIRS(NB, 0, 0, 1, (sg)[6], (sg)[7]);                                                      \
+  } while (0)
+
 /* LPS, the first of the apply's two passes (pd_stencil_apply): the dilatation and the
  * force's terms without a, from one load of each neighbour's u and b. With d+ = n.(u+ - u_i)
  * and d- = n.(u- - u_i), the pair's dilatation term g_s.(u+ - u-) is wx (d+ - d-), and its
  * force term w15 ((b_i + b+) d+ + (b_i + b-) d-) n; the latter goes to w->gx..gz, and
  * run_lps_second adds wx (a+ - a-) n once every a is known. A dilatation pass and then a
  * whole force pass (the kernels before issue 20) loaded 16 neighbour vectors a pair, this
- * loads 8 here and 2 in the second pass: the loops are bound by those loads.
+ * loads 8 here and 2 in the second pass (fewer for the pairs in a lattice plane or on an
+ * axis: pd_pair_plan): the loops are bound by those loads and the products.
  * PD_KFB lane blocks share each pair's weights and offsets (as in run_lps_second): two with
  * AVX-512, whose 32 registers hold their 16 accumulators and node values; one where there
  * are 16 registers. */
 #define PD_KFB (PD_KLANES == 8 ? 2 : 1)
+#define PD_KFIRST_PAIRS(NB, HX, HY, HZ, K0, K1)                                                \
+  for (int k = (K0); k < (K1); k++) {                                                          \
+    const cupid_int op_ = t + rp[k - s0], om_ = t + rm[k - s0];                                \
+    const double n0 = P->nrm[3 * k], n1 = P->nrm[3 * k + 1], n2 = P->nrm[3 * k + 2];           \
+    const double w1 = P->w1[k], w2 = P->w2[k];                                                 \
+    _Pragma("GCC unroll 4") for (int b = 0; b < NB; b++) {                                     \
+      const int o = b * PD_KLANES;                                                             \
+      const PD_KVEC dp = PD_KNDOT(HX, HY, HZ, n0, n1, n2, PD_KLOAD(X + op_ + o) - xt[b],       \
+                                  PD_KLOAD(Y + op_ + o) - yt[b], PD_KLOAD(Z + op_ + o) - zt[b]); \
+      const PD_KVEC dm = PD_KNDOT(HX, HY, HZ, n0, n1, n2, PD_KLOAD(X + om_ + o) - xt[b],       \
+                                  PD_KLOAD(Y + om_ + o) - yt[b], PD_KLOAD(Z + om_ + o) - zt[b]); \
+      th[b] += w1 * (dp - dm);                                                                 \
+      const PD_KVEC q =                                                                        \
+          w2 * ((bt[b] + PD_KLOAD(B + op_ + o)) * dp + (bt[b] + PD_KLOAD(B + om_ + o)) * dm);  \
+      if ((HX) + (HY) + (HZ) == 1) {                                                           \
+        if (HX) gx[b] += q;                                                                    \
+        if (HY) gy[b] += q;                                                                    \
+        if (HZ) gz[b] += q;                                                                    \
+      } else {                                                                                 \
+        if (HX) gx[b] += q * n0;                                                               \
+        if (HY) gy[b] += q * n1;                                                               \
+        if (HZ) gz[b] += q * n2;                                                               \
+      }                                                                                        \
+    }                                                                                          \
+  }
 #define PD_KFIRST_GROUP(NB)                                                                    \
   do {                                                                                         \
     PD_KVEC gx[NB], gy[NB], gz[NB], th[NB], xt[NB], yt[NB], zt[NB], bt[NB];                    \
@@ -74,27 +122,7 @@ static void PD_KNAME(run_dilatation)(const struct cupid_pd_operator_private *op,
       xt[b] = PD_KLOAD(X + u), yt[b] = PD_KLOAD(Y + u), zt[b] = PD_KLOAD(Z + u);               \
       bt[b] = PD_KLOAD(B + u);                                                                 \
     }                                                                                          \
-    for (int s = s0; s < s1; s++) {                                                            \
-      const double *restrict Xp = X + t + rp[s - s0], *restrict Xm = X + t + rm[s - s0];       \
-      const double *restrict Yp = Y + t + rp[s - s0], *restrict Ym = Y + t + rm[s - s0];       \
-      const double *restrict Zp = Z + t + rp[s - s0], *restrict Zm = Z + t + rm[s - s0];       \
-      const double *restrict Bp = B + t + rp[s - s0], *restrict Bm = B + t + rm[s - s0];       \
-      const double n0 = S->nrm[3 * s], n1 = S->nrm[3 * s + 1], n2 = S->nrm[3 * s + 2];         \
-      const double w1 = c1[s - s0], w2 = c2[s - s0];                                           \
-      _Pragma("GCC unroll 4") for (int b = 0; b < NB; b++) {                                   \
-        const int o = b * PD_KLANES;                                                           \
-        const PD_KVEC dp = n0 * (PD_KLOAD(Xp + o) - xt[b]) + n1 * (PD_KLOAD(Yp + o) - yt[b]) + \
-                           n2 * (PD_KLOAD(Zp + o) - zt[b]);                                    \
-        const PD_KVEC dm = n0 * (PD_KLOAD(Xm + o) - xt[b]) + n1 * (PD_KLOAD(Ym + o) - yt[b]) + \
-                           n2 * (PD_KLOAD(Zm + o) - zt[b]);                                    \
-        th[b] += w1 * (dp - dm);                                                               \
-        const PD_KVEC q =                                                                      \
-            w2 * ((bt[b] + PD_KLOAD(Bp + o)) * dp + (bt[b] + PD_KLOAD(Bm + o)) * dm);          \
-        gx[b] += q * n0;                                                                       \
-        gy[b] += q * n1;                                                                       \
-        gz[b] += q * n2;                                                                       \
-      }                                                                                        \
-    }                                                                                          \
+    PD_KCLASSES(PD_KFIRST_PAIRS, NB, sg);                                                      \
     for (int b = 0; b < NB; b++) {                                                             \
       const int u = t + b * PD_KLANES;                                                         \
       PD_KSTORE(acc + u, th[b]);                                                               \
@@ -119,7 +147,7 @@ static void PD_KNAME(run_dilatation)(const struct cupid_pd_operator_private *op,
 static void PD_KNAME(run_lps_first)(const struct cupid_pd_operator_private *op,
                                     const pd_work *w, const pd_run *R, cupid_int i, int len,
                                     double *restrict theta) {
-  const pd_stencil *S = &op->st;
+  const pd_pair_plan *P = &op->plan;
   const cupid_int li = work_index(w, R, i);
   const double *restrict X = w->x + li, *restrict Y = w->y + li, *restrict Z = w->z + li;
   const double *restrict B = w->b + li;
@@ -127,13 +155,12 @@ static void PD_KNAME(run_lps_first)(const struct cupid_pd_operator_private *op,
       fy[PD_RUN_MAX + PD_LANES_MAX], fz[PD_RUN_MAX + PD_LANES_MAX];
   cupid_int bp[PD_PAIR_CHUNK], bm[PD_PAIR_CHUNK];
   const cupid_int *rp, *rm;
-  double c1[PD_PAIR_CHUNK], c2[PD_PAIR_CHUNK];
-  const int half = S->n / 2;
+  const int half = P->n;
   prefetch_ghosts(op, R, i, len);
   for (int s0 = 0; s0 < half; s0 += PD_PAIR_CHUNK) {
     const int s1 = s0 + PD_PAIR_CHUNK < half ? s0 + PD_PAIR_CHUNK : half;
-    pair_offsets(op, w, R, i, s0, s1, bp, bm, &rp, &rm);
-    for (int s = s0; s < s1; s++) c1[s - s0] = S->wb[s] * S->x[s], c2[s - s0] = 15.0 * S->wb[s];
+    const int *sg = P->seg + s0 / PD_PAIR_CHUNK * (PD_PAIR_CLASSES + 1);
+    plan_offsets(op, w, R, i, s0, s1, bp, bm, &rp, &rm);
     int t = 0;
     for (; t + PD_KFB * PD_KLANES <= len; t += PD_KFB * PD_KLANES) PD_KFIRST_GROUP(PD_KFB);
     for (; t < len; t += PD_KLANES) PD_KFIRST_GROUP(1);
@@ -141,14 +168,27 @@ static void PD_KNAME(run_lps_first)(const struct cupid_pd_operator_private *op,
   run_theta(op, w, R, i, len, acc, theta);
 }
 #undef PD_KFIRST_GROUP
+#undef PD_KFIRST_PAIRS
 #undef PD_KFB
 
 /* LPS, the second pass: f = -V^2 (g + sum_s wx (a+ - a-) n_s) with g from run_lps_first:
  * -V^2 sum_s omega beta [ (a_i + a_j) x_s + 15 (b_i + b_j) e ] n_s (Eq. 21), the a_i terms
  * cancelling pair by pair. Its loop is light (two loads and four operations a pair and lane
- * block), so a pair's three weights and two offsets would cost as much as that work:
- * PD_KAB blocks share them, as many as the registers hold at three accumulators a block. */
+ * block, fewer products in a lattice plane or on an axis), so a pair's weights and two
+ * offsets would cost as much as that work: PD_KAB blocks share them, as many as the
+ * registers hold at three accumulators a block. */
 #define PD_KAB (PD_KLANES == 8 ? 4 : 2)
+#define PD_KATERM_PAIRS(NB, HX, HY, HZ, K0, K1)                                                \
+  for (int k = (K0); k < (K1); k++) {                                                          \
+    const double *restrict A0 = A + t + rp[k - s0], *restrict A1 = A + t + rm[k - s0];         \
+    const double g0 = P->wxn[3 * k], g1 = P->wxn[3 * k + 1], g2 = P->wxn[3 * k + 2];           \
+    _Pragma("GCC unroll 8") for (int b = 0; b < NB; b++) {                                     \
+      const PD_KVEC da = PD_KLOAD(A0 + b * PD_KLANES) - PD_KLOAD(A1 + b * PD_KLANES);          \
+      if (HX) gx[b] += g0 * da;                                                                \
+      if (HY) gy[b] += g1 * da;                                                                \
+      if (HZ) gz[b] += g2 * da;                                                                \
+    }                                                                                          \
+  }
 #define PD_KATERM_GROUP(NB)                                                                    \
   do {                                                                                         \
     PD_KVEC gx[NB], gy[NB], gz[NB];                                                            \
@@ -159,16 +199,7 @@ static void PD_KNAME(run_lps_first)(const struct cupid_pd_operator_private *op,
       gy[b] = PD_KLOAD(Gy + t + b * PD_KLANES);                                                \
       gz[b] = PD_KLOAD(Gz + t + b * PD_KLANES);                                                \
     }                                                                                          \
-    for (int s = s0; s < s1; s++) {                                                            \
-      const double *restrict A0 = A + t + rp[s - s0], *restrict A1 = A + t + rm[s - s0];       \
-      const double g0 = S->wxn[3 * s], g1 = S->wxn[3 * s + 1], g2 = S->wxn[3 * s + 2];         \
-      _Pragma("GCC unroll 8") for (int b = 0; b < NB; b++) {                                   \
-        const PD_KVEC da = PD_KLOAD(A0 + b * PD_KLANES) - PD_KLOAD(A1 + b * PD_KLANES);        \
-        gx[b] += g0 * da;                                                                      \
-        gy[b] += g1 * da;                                                                      \
-        gz[b] += g2 * da;                                                                      \
-      }                                                                                        \
-    }                                                                                          \
+    PD_KCLASSES(PD_KATERM_PAIRS, NB, sg);                                                      \
     for (int b = 0; b < NB; b++) {                                                             \
       PD_KSTORE(fx + t + b * PD_KLANES, gx[b]);                                                \
       PD_KSTORE(fy + t + b * PD_KLANES, gy[b]);                                                \
@@ -179,18 +210,19 @@ static void PD_KNAME(run_lps_first)(const struct cupid_pd_operator_private *op,
 static void PD_KNAME(run_lps_second)(const struct cupid_pd_operator_private *op,
                                      const pd_work *w, const pd_run *R, cupid_int i, int len,
                                      double *restrict f) {
-  const pd_stencil *S = &op->st;
+  const pd_pair_plan *P = &op->plan;
   const cupid_int li = work_index(w, R, i);
   const double *restrict A = w->a + li;
   double fx[PD_RUN_MAX + PD_LANES_MAX], fy[PD_RUN_MAX + PD_LANES_MAX],
       fz[PD_RUN_MAX + PD_LANES_MAX];
   cupid_int bp[PD_PAIR_CHUNK], bm[PD_PAIR_CHUNK];
   const cupid_int *rp, *rm;
-  const int half = S->n / 2;
+  const int half = P->n;
   prefetch_ghosts(op, R, i, len);
   for (int s0 = 0; s0 < half; s0 += PD_PAIR_CHUNK) {
     const int s1 = s0 + PD_PAIR_CHUNK < half ? s0 + PD_PAIR_CHUNK : half;
-    pair_offsets(op, w, R, i, s0, s1, bp, bm, &rp, &rm);
+    const int *sg = P->seg + s0 / PD_PAIR_CHUNK * (PD_PAIR_CLASSES + 1);
+    plan_offsets(op, w, R, i, s0, s1, bp, bm, &rp, &rm);
     int t = 0;
     for (; t + PD_KAB * PD_KLANES <= len; t += PD_KAB * PD_KLANES) PD_KATERM_GROUP(PD_KAB);
     for (; t < len; t += PD_KLANES) PD_KATERM_GROUP(1);
@@ -198,6 +230,7 @@ static void PD_KNAME(run_lps_second)(const struct cupid_pd_operator_private *op,
   run_store(op, w, R, i, len, fx, fy, fz, f);
 }
 #undef PD_KATERM_GROUP
+#undef PD_KATERM_PAIRS
 #undef PD_KAB
 
 /* f = -V^2 sum_s omega beta / x_s (c_i + c_j)/2 e n_s (bond-based). Per lane block,
@@ -307,6 +340,8 @@ static const pd_kernel_set PD_KNAME(kernels) = {
     PD_KNAME(run_dilatation), PD_KNAME(run_bond_force), PD_KNAME(run_lps_first),
     PD_KNAME(run_lps_second), PD_KNAME(run_stretch), PD_KLANES};
 
+#undef PD_KCLASSES
+#undef PD_KNDOT
 #undef PD_KSTORE
 #undef PD_KLOAD
 #undef PD_KVEC_U

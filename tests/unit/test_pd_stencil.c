@@ -1,7 +1,8 @@
 /* The stencil kernels of the matrix-free PD operator (src/pd/stencil.c, the default path)
  * against the bond-list kernels (lps.c, bond.c on explicit bond lists, the former path) on
  * random fields: boxes, a union of boxes with a re-entrant corner and a hole, two
- * materials, a row longer than one run, a grid too thin for any full family, a 1D bar;
+ * materials, a row longer than one run, a grid too thin for any full family, a horizon of
+ * two pair chunks, a 1D bar;
  * LPS and bond-based, three influence / partial-volume combinations; whole products and
  * row ranges; every instruction-set instance of the kernels. Also the storage: no bond
  * stored for full families. */
@@ -115,6 +116,8 @@ static const grid_case cases[] = {
     {"thin", 1, {BOX(0, 0, 0, 5, 5, 1.5)}, {0}, 3, 3.015},
     /* Sparse union (two blocks far apart): no padded lattice, families walked instead. */
     {"sparse", 2, {BOX(0, 0, 0, 5, 4, 4), BOX(40, 30, 20, 44, 34, 24)}, {0, 1}, 3, 3.015},
+    /* m = 4: 128 pairs, two chunks of the pair plan. */
+    {"wide", 1, {BOX(0, 0, 0, 6, 5.5, 5)}, {0}, 3, 4.015},
 };
 
 static void test_lps(void **state) {
@@ -162,6 +165,63 @@ static void test_instances(void **state) {
   pd_stencil_force_isa(0);
 }
 
+/* The pair plan (pd_pair_plan): every pair s < n/2 once, in its own chunk, grouped by class
+ * (the components the class skips are zero, the others not), the padded offsets and
+ * weights of its stencil entry, the sign of n folded into w1 on an axis. */
+static void check_plan(const struct cupid_pd_operator_private *op) {
+  const pd_stencil *S = &op->st;
+  const pd_pair_plan *P = &op->plan;
+  static const int uses[PD_PAIR_CLASSES][3] = {{1, 1, 1}, {0, 1, 1}, {1, 0, 1}, {1, 1, 0},
+                                               {1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+  assert_int_equal(P->n, S->n / 2);
+  int seen[1024] = {0};
+  assert_true(P->n <= 1024);
+  for (int c = 0; c * PD_PAIR_CHUNK < P->n; c++) {
+    const int *sg = P->seg + c * (PD_PAIR_CLASSES + 1);
+    assert_int_equal(sg[0], c * PD_PAIR_CHUNK);
+    assert_int_equal(sg[PD_PAIR_CLASSES], c * PD_PAIR_CHUNK + PD_PAIR_CHUNK < P->n
+                                              ? c * PD_PAIR_CHUNK + PD_PAIR_CHUNK : P->n);
+    for (int q = 0; q < PD_PAIR_CLASSES; q++)
+      for (int k = sg[q]; k < sg[q + 1]; k++) {
+        const int s = P->s[k];
+        assert_true(s >= c * PD_PAIR_CHUNK && s < c * PD_PAIR_CHUNK + PD_PAIR_CHUNK && s < P->n);
+        seen[s]++;
+        int axis_sign = 0;
+        for (int a = 0; a < 3; a++) {
+          assert_int_equal(S->off[3 * s + a] != 0, uses[q][a]);
+          assert_true(P->nrm[3 * k + a] == S->nrm[3 * s + a]);
+          assert_true(P->wxn[3 * k + a] == S->wxn[3 * s + a]);
+          if (uses[q][a]) axis_sign = S->off[3 * s + a] > 0 ? 1 : -1;
+        }
+        const double w1 = S->wb[s] * S->x[s];
+        assert_true(P->w1[k] == (q >= 4 ? axis_sign * w1 : w1));
+        assert_true(P->w2[k] == 15.0 * S->wb[s]);
+        assert_int_equal(P->pp[k], op->pclin[s]);
+        assert_int_equal(P->pm[k], op->pclin[S->n - 1 - s]);
+      }
+  }
+  for (int s = 0; s < P->n; s++) assert_int_equal(seen[s], 1);
+}
+
+static void test_pair_plan(void **state) {
+  (void)state;
+  for (size_t c = 0; c < sizeof cases / sizeof *cases; c++) {
+    cupid_pd_grid_options go = {.spacing = 0.5, .dimension = cases[c].dim, .area = 0.3};
+    cupid_pd_grid grid = NULL;
+    CUPID_ASSERT_OK(cupid_pd_grid_create(&go, cases[c].n_boxes, cases[c].boxes, cases[c].mats, &grid));
+    const cupid_pd_material pm[2] = {{.E = 1.0, .nu = 0.25}, {.E = 2.0, .nu = 0.25}};
+    cupid_pd_operator_options oo = {.horizon = cases[c].horizon * go.spacing, .model = CUPID_PD_LPS,
+                                    .influence = CUPID_INFLUENCE_INVERSE,
+                                    .partial_volume = CUPID_PARTIAL_PDLAMMPS, .materials = pm,
+                                    .n_materials = 2};
+    cupid_pd_operator op = NULL;
+    CUPID_ASSERT_OK(cupid_pd_operator_create(grid, &oo, &op));
+    check_plan(op);
+    cupid_pd_operator_destroy(&op);
+    cupid_pd_grid_destroy(&grid);
+  }
+}
+
 /* The runs cover every node once, in order, at consecutive (padded) cells with one full
  * flag each; the union is dense enough for the padded lattice, a sparse one is not. */
 static void test_partition(void **state) {
@@ -205,6 +265,7 @@ static void test_partition(void **state) {
 int main(void) {
   const struct CMUnitTest tests[] = {cmocka_unit_test(test_lps), cmocka_unit_test(test_bond),
                                      cmocka_unit_test(test_bar), cmocka_unit_test(test_instances),
-                                     cmocka_unit_test(test_partition)};
+                                     cmocka_unit_test(test_partition),
+                                     cmocka_unit_test(test_pair_plan)};
   return cmocka_run_group_tests(tests, NULL, NULL);
 }
