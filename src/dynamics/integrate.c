@@ -55,6 +55,7 @@ typedef struct {
   cupid_dynamics_energy e;  /* this process's damping, external and fracture shares */
   cupid_dynamics_energy eg; /* the whole system's energies (monitor, balance) */
   double e0, scale, max_balance;
+  int ku_ok;                /* g holds K u for the u the monitor sees (central differences) */
 } dyn_state;
 
 static void state_free(dyn_state *s) {
@@ -68,7 +69,14 @@ static cupid_status state_alloc(dyn_state *s) {
   for (size_t k = 0; k < sizeof arrays / sizeof *arrays; k++)
     CUPID_CALL(cupid_calloc((size_t)s->n, sizeof(double), "dynamics work vector", arrays[k]));
   s->f = s->sys->f;
-  if (!(s->hooks && s->hooks->conditions)) return CUPID_SUCCESS;
+  if (!(s->hooks && s->hooks->conditions)) {
+    /* A constant load of zeros (a free vibration) is no load: the explicit step then takes
+     * its two-stream paths (central_drift, central_kick) and the external work stays 0. */
+    int zero = s->f != NULL;
+    for (cupid_int d = 0; zero && d < s->n; d++) zero = s->f[d] == 0.0;
+    if (zero) s->f = NULL;
+    return CUPID_SUCCESS;
+  }
   double **more[] = {&s->fcur, &s->fprev, &s->ufix, &s->react, &s->du};
   for (size_t k = 0; k < sizeof more / sizeof *more; k++)
     CUPID_CALL(cupid_calloc((size_t)s->n, sizeof(double), "dynamics work vector", more[k]));
@@ -172,8 +180,12 @@ static void energies(dyn_state *s, const double *u, const double *v) {
   dyn_mass_apply(s->sys, s->n, v, s->t1);
   double sums[5] = {0.5 * dyn_dot(len, v + lo, s->t1 + lo), 0.0, s->e.damping, s->e.external,
                     s->e.fracture};
-  dyn_stiffness(s, u, s->t1);
-  sums[1] = 0.5 * dyn_dot(len, u + lo, s->t1 + lo);
+  const double *ku = s->g; /* the step's own product when it holds (an apply saved) */
+  if (!s->ku_ok) {
+    dyn_stiffness(s, u, s->t1);
+    ku = s->t1;
+  }
+  sums[1] = 0.5 * dyn_dot(len, u + lo, ku + lo);
   reduce(s, sums, 5);
   cupid_dynamics_energy *g = &s->eg;
   g->kinetic = sums[0], g->strain = sums[1], g->damping = sums[2], g->external = sums[3];
@@ -232,9 +244,10 @@ static void initial_reactions(dyn_state *s) {
     s->react[d] = dyn_fixed(s->sys->bc, d) ? s->w2[d] + s->t1[d] : 0.0;
 }
 
-/* Initial acceleration M a = f - K u - C v on the free DOFs. */
+/* Initial acceleration M a = f - K u - C v on the free DOFs (K u left in g). */
 static cupid_status initial_acceleration(dyn_state *s, const double *u, const double *v) {
-  residual_force(s, u, v, s->t1);
+  dyn_stiffness(s, u, s->g);
+  residual_of(s, s->g, v, s->t1);
   const cupid_dirichlet_t *bc = s->sys->bc;
   if (!s->sys->M) {
     for (cupid_int d = 0; d < s->n; d++)
@@ -399,6 +412,29 @@ static cupid_status check_stable(dyn_state *s, cupid_dynamics_info *info) {
   return CUPID_SUCCESS;
 }
 
+/* The drift and the kick where no DOF is fixed and there is no load: the streams as
+ * restrict-qualified arguments (through s the compiler must assume they alias, and leaves the
+ * loops scalar), so they vectorise. */
+static void drift_free(cupid_int n, double dt, const double *restrict v,
+                       const double *restrict a, double *restrict vh, double *restrict u) {
+#pragma omp parallel for schedule(static) if (n > DYN_OMP_MIN)
+  for (cupid_int d = 0; d < n; d++) {
+    const double h = v[d] + 0.5 * dt * a[d];
+    vh[d] = h;
+    u[d] += dt * h;
+  }
+}
+
+static void kick_free(cupid_int n, double hdt, const double *restrict g,
+                      const double *restrict minv, const double *restrict vh, double *restrict a,
+                      double *restrict v) {
+#pragma omp parallel for schedule(static) if (n > DYN_OMP_MIN)
+  for (cupid_int d = 0; d < n; d++) {
+    a[d] = (0.0 - g[d]) * minv[d];
+    v[d] = vh[d] + hdt * a[d];
+  }
+}
+
 /* The drift of a step: v_{n+1/2} = v_n + dt/2 a_n into vh, u_{n+1} = u_n + dt v_{n+1/2} (the
  * fixed DOFs at their values at the step's end, moved), in place, with the external work of
  * the step (the load's mean over the step when it changes) and the fixed DOFs' increments. */
@@ -409,13 +445,8 @@ static void central_drift(dyn_state *s, double *u, const double *v, const double
   double w = 0.0;
   const cupid_int n = s->n, lo = s->lo, hi = s->hi;
   double *du = s->du;
-  if (!f && !du && !dyn_any_fixed(bc)) { /* the common explicit step: two streams, vectorised */
-#pragma omp parallel for schedule(static) if (n > DYN_OMP_MIN)
-    for (cupid_int d = 0; d < n; d++) {
-      const double h = v[d] + 0.5 * dt * s->a[d];
-      vh[d] = h;
-      u[d] += dt * h;
-    }
+  if (!f && !du && !dyn_any_fixed(bc)) { /* the common explicit step */
+    drift_free(n, dt, v, s->a, vh, u);
     return;
   }
 #pragma omp parallel for reduction(+ : w) schedule(static) if (n > DYN_OMP_MIN)
@@ -452,7 +483,11 @@ static void central_kick(dyn_state *s, const double *u, const double *vh, double
   }
   /* undamped: residual, reactions, acceleration and velocity in one pass */
   const double *f = s->f;
-  if (!dyn_any_fixed(bc)) { /* no fixed DOF: no reactions, and branch-free (vectorised) */
+  if (!f && !dyn_any_fixed(bc)) { /* no load, no fixed DOF: no reactions */
+    kick_free(s->n, hdt, s->g, s->minv, vh, s->a, v);
+    return;
+  }
+  if (!dyn_any_fixed(bc)) { /* no fixed DOF: no reactions, and branch-free */
     double *restrict a = s->a;
     const double *restrict g = s->g, *restrict minv = s->minv;
 #pragma omp parallel for schedule(static) if (s->n > DYN_OMP_MIN)
@@ -478,9 +513,9 @@ static void central_kick(dyn_state *s, const double *u, const double *vh, double
 static cupid_status after_break(dyn_state *s, cupid_int step, const double *u, const double *v) {
   int changed = 0;
   if (!s->hooks || !s->hooks->after_forces) return CUPID_SUCCESS;
-  if (step == 0) dyn_stiffness(s, u, s->g); /* initial_acceleration kept no K u */
   CUPID_CALL(after_forces(s, step, u, s->g, &changed));
   if (!changed) return CUPID_SUCCESS;
+  if (changed != 1) s->ku_ok = 0; /* g is the old K's product */
   if (changed == 1 && s->opt->rayleigh_stiffness == 0.0) residual_of(s, s->g, v, s->t1);
   else residual_force(s, u, v, s->t1);
   accelerations(s, s->t1);
@@ -507,6 +542,7 @@ static cupid_status run_central(dyn_state *s, double *u, double *v, cupid_dynami
   for (cupid_int d = 0; d < s->n; d++) s->minv[d] = dyn_fixed(bc, d) ? 0.0 : 1.0 / s->sys->m_lumped[d];
   CUPID_CALL(check_stable(s, info));
   CUPID_CALL(initial_acceleration(s, u, v));
+  s->ku_ok = 1;
   if (s->react) initial_reactions(s);
   CUPID_CALL(s->kst);
   CUPID_CALL(after_break(s, 0, u, v));
@@ -517,6 +553,7 @@ static cupid_status run_central(dyn_state *s, double *u, double *v, cupid_dynami
     if (s->react) CUPID_CALL(conditions_at(s, (double)step * dt));
     double *vh = s->vn; /* v_{n+1/2} */
     central_drift(s, u, v, s->react ? s->ufix : u, vh);
+    s->ku_ok = 0;
     CUPID_CALL(refresh(s, u));
     if (stiff_damping) CUPID_CALL(refresh(s, vh)); /* b K v_{n+1/2} reads its copies */
     if (o->rayleigh_mass != 0.0 || stiff_damping) { /* the damping's work over the step */
@@ -524,6 +561,7 @@ static cupid_status run_central(dyn_state *s, double *u, double *v, cupid_dynami
       s->e.damping += dt * dyn_dot(s->hi - s->lo, vh + s->lo, s->t1 + s->lo);
     }
     central_kick(s, u, vh, v);
+    s->ku_ok = 1;
     if (s->react) support_work(s, s->w2);
     CUPID_CALL(s->kst);
     CUPID_CALL(after_break(s, step, u, v));
