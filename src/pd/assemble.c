@@ -399,6 +399,60 @@ static double row_bound_corrected(const struct cupid_pd_operator_private *op, cu
   return sum;
 }
 
+/* The row bound's per-node tables (cupid_pd_operator_row_bound): pair and dilatation
+ * terms by node (pq, kq) and, on the padded lattice, by cell (ppq, pkq; else NULL). */
+typedef struct {
+  int lps;
+  const double *G, *pq, *kq, *ppq, *pkq;
+} row_bound_terms;
+
+/* p = i: |c_i| |g_i[i]| G_i (LPS; 0 bond-based). */
+static double row_bound_self(const struct cupid_pd_operator_private *op, const row_bound_terms *T,
+                             cupid_int i) {
+  if (!T->lps) return 0.0;
+  double gi[3];
+  const double *self = pd_gself_intact(op, i, gi);
+  return 0.0 + T->kq[i] * sqrt(self[0] * self[0] + self[1] * self[1] + self[2] * self[2]);
+}
+
+/* The bonds' terms of row i, walked over its family (or with surface factors). */
+static double row_bound_family(const struct cupid_pd_operator_private *op,
+                               const row_bound_terms *T, cupid_int i) {
+  if (op->sf) return row_bound_corrected(op, i, T->G);
+  const pd_stencil *S = &op->st;
+  const pd_family F = pd_family_of(op, i);
+  double pair = 0.0, dil = 0.0;
+  for (int q = 0; q < F.n; q++) {
+    const int s = pd_family_entry(&F, q);
+    if (pd_bond_broken(op, i, s)) continue;
+    const cupid_int j = pd_family_node(op, &F, s);
+    const double wp = T->lps ? S->wb[s] : S->wb[s] / S->x[s];
+    pair += wp * (T->pq[i] + T->pq[j]);
+    dil += S->wb[s] * S->x[s] * T->kq[j];
+  }
+  return 2.0 * pair + dil;
+}
+
+/* The bonds' sums of the len consecutive full, intact families from node i0 on (consecutive
+ * padded cells), read at the stencil's cell offsets with the nodes innermost (vectorised; a
+ * node at a time the two sums chained every bond): each node's terms in stencil order, as
+ * row_bound_family sums them. */
+static void row_bound_full(const struct cupid_pd_operator_private *op, const row_bound_terms *T,
+                           cupid_int i0, int len, double *restrict pair, double *restrict dil) {
+  const pd_stencil *S = &op->st;
+  const cupid_int c0 = pd_node_pcell(op, i0);
+  const double *restrict pi = T->pq + i0;
+  for (int t = 0; t < len; t++) pair[t] = dil[t] = 0.0;
+  for (int s = 0; s < S->n; s++) {
+    const double wp = T->lps ? S->wb[s] : S->wb[s] / S->x[s], wx = S->wb[s] * S->x[s];
+    const double *restrict pj = T->ppq + c0 + op->pclin[s], *restrict kj = T->pkq + c0 + op->pclin[s];
+    for (int t = 0; t < len; t++) {
+      pair[t] += wp * (pi[t] + pj[t]);
+      dil[t] += wx * kj[t];
+    }
+  }
+}
+
 /* Block Gershgorin (the header's K = K_pair + sum_p c_p g_p g_p^T, each block's 2-norm
  * bounded by the triangle inequality): row i of K_pair has |K_ii| + sum_j |K_ij| <= 2 sum_j
  * |w_ij| (|n n^T| = 1); row i of c_p g_p g_p^T has sum_k |c_p| |g_p[i]| |g_p[k]| = |c_p|
@@ -436,38 +490,26 @@ cupid_status cupid_pd_operator_row_bound(const cupid_pd_operator op, double *r) 
       pkq[pd_node_pcell(op, p)] = kq[p];
     }
   }
-#pragma omp parallel for schedule(static) if (nn > PD_OMP_MIN_NODES)
-  for (cupid_int i = 0; i < nn; i++) {
-    double sum = 0.0;
-    if (lps) { /* p = i: |c_i| |g_i[i]| G_i */
-      double gi[3];
-      const double *self = pd_gself_intact(op, i, gi);
-      sum += kq[i] * sqrt(self[0] * self[0] + self[1] * self[1] + self[2] * self[2]);
-    }
-    if (op->sf) sum += row_bound_corrected(op, i, G);
-    else if (ppq && op->full[i] && (!op->bslot || op->bslot[i] < 0)) {
-      const cupid_int c = pd_node_pcell(op, i);
-      double pair = 0.0, dil = 0.0;
-      for (int s = 0; s < S->n; s++) {
-        const double wp = lps ? S->wb[s] : S->wb[s] / S->x[s];
-        pair += wp * (pq[i] + ppq[c + op->pclin[s]]);
-        dil += S->wb[s] * S->x[s] * pkq[c + op->pclin[s]];
+  const row_bound_terms T = {lps, G, pq, kq, ppq, pkq};
+#pragma omp parallel for schedule(dynamic, 16) if (nn > PD_OMP_MIN_NODES)
+  for (cupid_int k = 0; k < op->nruns; k++) {
+    const pd_run *R = &op->runs[k];
+    const cupid_int end = R->i0 + R->len;
+    double pair[PD_RUN_MAX], dil[PD_RUN_MAX];
+    for (cupid_int i = R->i0; i < end;) {
+      cupid_int e = i; /* [i, e): consecutive full, intact families (consecutive cells) */
+      while (e < end && ppq && op->full[e] && (!op->bslot || op->bslot[e] < 0)) e++;
+      if (e == i) {
+        r[3 * i] = r[3 * i + 1] = r[3 * i + 2] = row_bound_self(op, &T, i) + row_bound_family(op, &T, i);
+        i++;
+        continue;
       }
-      sum += 2.0 * pair + dil;
-    } else {
-      const pd_family F = pd_family_of(op, i);
-      double pair = 0.0, dil = 0.0;
-      for (int q = 0; q < F.n; q++) {
-        const int s = pd_family_entry(&F, q);
-        if (pd_bond_broken(op, i, s)) continue;
-        const cupid_int j = pd_family_node(op, &F, s);
-        const double wp = lps ? S->wb[s] : S->wb[s] / S->x[s];
-        pair += wp * (pq[i] + pq[j]);
-        dil += S->wb[s] * S->x[s] * kq[j];
-      }
-      sum += 2.0 * pair + dil;
+      row_bound_full(op, &T, i, (int)(e - i), pair, dil);
+      for (cupid_int q = i; q < e; q++)
+        r[3 * q] = r[3 * q + 1] = r[3 * q + 2] =
+            row_bound_self(op, &T, q) + (2.0 * pair[q - i] + dil[q - i]);
+      i = e;
     }
-    r[3 * i] = r[3 * i + 1] = r[3 * i + 2] = sum;
   }
 cleanup:
   cupid_free(&G);
