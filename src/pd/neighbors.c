@@ -271,6 +271,39 @@ static inline int neighbour_exists(const struct cupid_pd_grid_private *g, cupid_
   return pd_grid_lookup(g, q[0] + o[0], q[1] + o[1], q[2] + o[2]) >= 0;
 }
 
+/* Neighbour counts on the padded lattice, from a byte per cell: full flags, fptr[i + 1] =
+ * the count of a non-full node (0 for full ones), the total returned. Nodes at consecutive
+ * cells are counted together, the stencil outermost and the nodes innermost (vectorised:
+ * node by node, the count was a chain of byte loads at scattered offsets). */
+static cupid_int count_families(struct cupid_pd_operator_private *op, const unsigned char *present) {
+  const pd_stencil *S = &op->st;
+  const cupid_int nn = op->grid->nnodes;
+  cupid_int total = 0;
+#pragma omp parallel for schedule(dynamic, 64) reduction(+ : total) if (nn > PD_OMP_MIN_NODES)
+  for (cupid_int i0 = 0; i0 < nn; i0 += PD_RUN_MAX) {
+    const cupid_int i1 = i0 + PD_RUN_MAX < nn ? i0 + PD_RUN_MAX : nn;
+    int32_t cnt[PD_RUN_MAX];
+    for (cupid_int i = i0; i < i1;) {
+      const cupid_int c0 = pd_node_pcell(op, i);
+      cupid_int e = i + 1; /* [i, e): consecutive cells */
+      while (e < i1 && pd_node_pcell(op, e) == c0 + (e - i)) e++;
+      const int len = (int)(e - i);
+      for (int t = 0; t < len; t++) cnt[t] = 0;
+      for (int s = 0; s < S->n; s++) {
+        const unsigned char *restrict pc = present + c0 + op->pclin[s];
+        for (int t = 0; t < len; t++) cnt[t] += pc[t];
+      }
+      for (int t = 0; t < len; t++) {
+        op->full[i + t] = cnt[t] == S->n;
+        op->fptr[i + t + 1] = op->full[i + t] ? 0 : cnt[t];
+        total += cnt[t];
+      }
+      i = e;
+    }
+  }
+  return total;
+}
+
 /* Families without per-bond storage for the bulk (pd_internal.h): cell offsets of the
  * stencil, full flags, the stencil entries of near-surface nodes, the padded lattice and
  * the runs. Two passes over nodes x stencil, O(nodes). */
@@ -320,17 +353,16 @@ cupid_status pd_families_build(struct cupid_pd_operator_private *op) {
   CUPID_TRY(cupid_malloc((size_t)nn + 1, sizeof *op->fptr, "PD family offsets", &op->fptr));
   cupid_int *p = op->fptr, total = 0;
   p[0] = 0;
+  if (present) total = count_families(op, present);
+  else {
 #pragma omp parallel for schedule(static) reduction(+ : total) if (nn > PD_OMP_MIN_NODES)
-  for (cupid_int i = 0; i < nn; i++) {
-    cupid_int c = 0;
-    if (present) {
-      const unsigned char *pc = present + pd_node_pcell(op, i);
-      for (int s = 0; s < S->n; s++) c += pc[op->pclin[s]];
-    } else
+    for (cupid_int i = 0; i < nn; i++) {
+      cupid_int c = 0;
       for (int s = 0; s < S->n; s++) c += neighbour_exists(g, i, S->off + 3 * s);
-    op->full[i] = c == S->n;
-    p[i + 1] = op->full[i] ? 0 : c;
-    total += c;
+      op->full[i] = c == S->n;
+      p[i + 1] = op->full[i] ? 0 : c;
+      total += c;
+    }
   }
   op->nbonds = total;
   for (cupid_int i = 0; i < nn; i++) p[i + 1] += p[i];
@@ -340,10 +372,19 @@ cupid_status pd_families_build(struct cupid_pd_operator_private *op) {
   for (cupid_int i = 0; i < nn; i++) {
     if (op->full[i]) continue;
     cupid_int b = p[i];
+    if (present) { /* branch-free: every entry written at b, which only a present one
+                      advances; past the node's last slot, into a scratch */
+      const unsigned char *pc = present + pd_node_pcell(op, i);
+      const cupid_int end = p[i + 1];
+      int32_t scratch;
+      for (int s = 0; s < S->n; s++) {
+        *(b < end ? op->fidx + b : &scratch) = s;
+        b += pc[op->pclin[s]];
+      }
+      continue;
+    }
     for (int s = 0; s < S->n; s++)
-      if (present ? present[pd_node_pcell(op, i) + op->pclin[s]]
-                  : neighbour_exists(g, i, S->off + 3 * s))
-        op->fidx[b++] = s;
+      if (neighbour_exists(g, i, S->off + 3 * s)) op->fidx[b++] = s;
   }
 cleanup:
   cupid_free(&present);

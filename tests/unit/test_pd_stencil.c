@@ -257,6 +257,24 @@ static void test_partition(void **state) {
     }
     assert_int_equal(next, n);
     assert_true(nfull < n);
+    /* The families: a full node has every stencil neighbour, a listed one exactly the
+     * entries whose cell holds a node, ascending. */
+    for (cupid_int i = 0; i < n; i++) {
+      const int32_t *q = op->grid->ijk + 3 * i;
+      cupid_int k = op->fptr[i];
+      for (int s = 0; s < op->st.n; s++) {
+        const int32_t *o = op->st.off + 3 * s;
+        const int exists = pd_grid_lookup(op->grid, q[0] + o[0], q[1] + o[1], q[2] + o[2]) >= 0;
+        if (op->full[i]) {
+          assert_true(exists);
+          continue;
+        }
+        if (!exists) continue;
+        assert_true(k < op->fptr[i + 1]);
+        assert_int_equal(op->fidx[k++], s);
+      }
+      assert_int_equal(k, op->fptr[i + 1]);
+    }
     cupid_pd_operator_destroy(&op);
     cupid_pd_grid_destroy(&grid);
   }
