@@ -198,6 +198,7 @@ void pd_pair_plan_free(pd_pair_plan *P) {
   cupid_free(&P->wxn);
   cupid_free(&P->w1);
   cupid_free(&P->w2);
+  cupid_free(&P->nw);
   cupid_free(&P->pp);
   cupid_free(&P->pm);
   P->n = 0;
@@ -217,6 +218,7 @@ cupid_status pd_pair_plan_build(struct cupid_pd_operator_private *op) {
   CUPID_TRY(cupid_malloc(3 * np, sizeof *P->wxn, "PD pair plan", &P->wxn));
   CUPID_TRY(cupid_malloc(np, sizeof *P->w1, "PD pair plan", &P->w1));
   CUPID_TRY(cupid_malloc(np, sizeof *P->w2, "PD pair plan", &P->w2));
+  CUPID_TRY(cupid_malloc(3 * np, sizeof *P->nw, "PD pair plan", &P->nw));
   CUPID_TRY(cupid_malloc(np, sizeof *P->pp, "PD pair plan", &P->pp));
   CUPID_TRY(cupid_malloc(np, sizeof *P->pm, "PD pair plan", &P->pm));
   P->n = half;
@@ -244,6 +246,7 @@ cupid_status pd_pair_plan_build(struct cupid_pd_operator_private *op) {
     }
     P->w1[k] = S->wb[s] * S->x[s] * sign;
     P->w2[k] = 15.0 * S->wb[s];
+    for (int a = 0; a < 3; a++) P->nw[3 * k + a] = P->w2[k] * S->nrm[3 * s + a] * sign;
     P->pp[k] = op->pclin[s];
     P->pm[k] = op->pclin[S->n - 1 - s];
   }

@@ -52,8 +52,8 @@ static void PD_KNAME(run_dilatation)(const struct cupid_pd_operator_private *op,
 
 /* n.d over the components that a pair class (pd_pair_plan) uses, HX, HY, HZ constants 0 or
  * 1: the unused components are neither loaded nor multiplied. On an axis n = +-1 is folded
- * into the plan's weights (w1 carries the sign, and q n = q' with q' from the plain
- * differences), so the plain difference. */
+ * into the plan's weights (w1 and nw = w15 n carry the sign: (s q) (w15 s) = w15 q), so the
+ * plain difference. */
 #define PD_KNDOT(HX, HY, HZ, n0, n1, n2, dx, dy, dz)                                           \
   ((HX) + (HY) + (HZ) == 1 ? ((HX) ? (dx) : (HY) ? (dy) : (dz))                                \
    : (HX) && (HY) && (HZ) ? (n0) * (dx) + (n1) * (dy) + (n2) * (dz)                            \
@@ -88,7 +88,8 @@ static void PD_KNAME(run_dilatation)(const struct cupid_pd_operator_private *op,
   for (int k = (K0); k < (K1); k++) {                                                          \
     const cupid_int op_ = t + rp[k - s0], om_ = t + rm[k - s0];                                \
     const double n0 = P->nrm[3 * k], n1 = P->nrm[3 * k + 1], n2 = P->nrm[3 * k + 2];           \
-    const double w1 = P->w1[k], w2 = P->w2[k];                                                 \
+    const double v0 = P->nw[3 * k], v1 = P->nw[3 * k + 1], v2 = P->nw[3 * k + 2];              \
+    const double w1 = P->w1[k];                                                                \
     _Pragma("GCC unroll 4") for (int b = 0; b < NB; b++) {                                     \
       const int o = b * PD_KLANES;                                                             \
       const PD_KVEC dp = PD_KNDOT(HX, HY, HZ, n0, n1, n2, PD_KLOAD(X + op_ + o) - xt[b],       \
@@ -96,17 +97,10 @@ static void PD_KNAME(run_dilatation)(const struct cupid_pd_operator_private *op,
       const PD_KVEC dm = PD_KNDOT(HX, HY, HZ, n0, n1, n2, PD_KLOAD(X + om_ + o) - xt[b],       \
                                   PD_KLOAD(Y + om_ + o) - yt[b], PD_KLOAD(Z + om_ + o) - zt[b]); \
       th[b] += w1 * (dp - dm);                                                                 \
-      const PD_KVEC q =                                                                        \
-          w2 * ((bt[b] + PD_KLOAD(B + op_ + o)) * dp + (bt[b] + PD_KLOAD(B + om_ + o)) * dm);  \
-      if ((HX) + (HY) + (HZ) == 1) {                                                           \
-        if (HX) gx[b] += q;                                                                    \
-        if (HY) gy[b] += q;                                                                    \
-        if (HZ) gz[b] += q;                                                                    \
-      } else {                                                                                 \
-        if (HX) gx[b] += q * n0;                                                               \
-        if (HY) gy[b] += q * n1;                                                               \
-        if (HZ) gz[b] += q * n2;                                                               \
-      }                                                                                        \
+      const PD_KVEC q = (bt[b] + PD_KLOAD(B + op_ + o)) * dp + (bt[b] + PD_KLOAD(B + om_ + o)) * dm; \
+      if (HX) gx[b] += v0 * q;                                                                 \
+      if (HY) gy[b] += v1 * q;                                                                 \
+      if (HZ) gz[b] += v2 * q;                                                                 \
     }                                                                                          \
   }
 #define PD_KFIRST_GROUP(NB)                                                                    \
