@@ -422,6 +422,17 @@ static double row_bound_family(const struct cupid_pd_operator_private *op,
   const pd_stencil *S = &op->st;
   const pd_family F = pd_family_of(op, i);
   double pair = 0.0, dil = 0.0;
+  if (T->ppq) { /* padded: the neighbours' terms at their cells (no node lookup) */
+    const cupid_int c = pd_node_pcell(op, i);
+    for (int q = 0; q < F.n; q++) {
+      const int s = pd_family_entry(&F, q);
+      if (pd_bond_broken(op, i, s)) continue;
+      const double wp = T->lps ? S->wb[s] : S->wb[s] / S->x[s];
+      pair += wp * (T->pq[i] + T->ppq[c + op->pclin[s]]);
+      dil += S->wb[s] * S->x[s] * T->pkq[c + op->pclin[s]];
+    }
+    return 2.0 * pair + dil;
+  }
   for (int q = 0; q < F.n; q++) {
     const int s = pd_family_entry(&F, q);
     if (pd_bond_broken(op, i, s)) continue;
