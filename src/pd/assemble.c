@@ -412,6 +412,7 @@ static double row_bound_self(const struct cupid_pd_operator_private *op, const r
   if (!T->lps) return 0.0;
   double gi[3];
   const double *self = pd_gself_intact(op, i, gi);
+  /* 0.0 + as the running sum it replaces began: a -0.0 term comes out +0.0, bit for bit */
   return 0.0 + T->kq[i] * sqrt(self[0] * self[0] + self[1] * self[1] + self[2] * self[2]);
 }
 

@@ -95,8 +95,8 @@ typedef struct {
   int *s;             /* stencil entry (the + side) of each pair, in walk order */
   int *seg;           /* chunk c's pairs of class q: [seg[c (Q+1) + q], seg[c (Q+1) + q + 1]) */
   double *nrm, *wxn;  /* entry s's n and omega beta |xi| n, 3 per pair */
-  double *w1, *w2;    /* omega beta |xi| (times n's sign on an axis), 15 omega beta */
-  double *nw;         /* w2 n (times n's sign on an axis: there w2), 3 per pair */
+  double *w1;         /* omega beta |xi| (times n's sign on an axis) */
+  double *nw;         /* 15 omega beta n (times n's sign on an axis), 3 per pair */
   cupid_int *pp, *pm; /* padded cell offsets of the + and - neighbours */
 } pd_pair_plan;
 

@@ -165,21 +165,24 @@ static inline cupid_int work_neighbour(const struct cupid_pd_operator_private *o
  * the variation of u over the range rather than to the strain. */
 
 
-/* The pairs [s0, s1) of the run starting at node i: offsets of the neighbours at +o_s (*rp)
- * and -o_s (*rm) relative to node i in the work arrays, from s0 on. Padded, they are the
- * stencil's cell offsets (no table per run); else tabled into bp and bm. */
+/* The pairs [s0, s1) of the run starting at node i, in stencil order or (planned) in the
+ * order of the pair plan: offsets of the neighbours at +o_s (*rp) and -o_s (*rm) relative to
+ * node i in the work arrays, from s0 on. Padded, they are the stencil's (or the plan's) cell
+ * offsets (no table per run); else tabled into bp and bm. */
 static inline void pair_offsets(const struct cupid_pd_operator_private *op, const pd_work *w,
-                                const pd_run *R, cupid_int i, int s0, int s1, cupid_int *bp,
-                                cupid_int *bm, const cupid_int **rp, const cupid_int **rm) {
+                                const pd_run *R, cupid_int i, int s0, int s1, int planned,
+                                cupid_int *bp, cupid_int *bm, const cupid_int **rp,
+                                const cupid_int **rm) {
   if (w->padded) {
-    *rp = op->pclin + s0;
-    *rm = op->pclin_opp + s0;
+    *rp = (planned ? op->plan.pp : op->pclin) + s0;
+    *rm = (planned ? op->plan.pm : op->pclin_opp) + s0;
     return;
   }
   const cupid_int li = work_index(w, R, i);
-  for (int s = s0; s < s1; s++) {
-    bp[s - s0] = work_neighbour(op, w, R, i, s) - li;
-    bm[s - s0] = work_neighbour(op, w, R, i, op->st.n - 1 - s) - li;
+  for (int k = s0; k < s1; k++) {
+    const int s = planned ? op->plan.s[k] : k;
+    bp[k - s0] = work_neighbour(op, w, R, i, s) - li;
+    bm[k - s0] = work_neighbour(op, w, R, i, op->st.n - 1 - s) - li;
   }
   *rp = bp;
   *rm = bm;
@@ -197,7 +200,6 @@ void pd_pair_plan_free(pd_pair_plan *P) {
   cupid_free(&P->nrm);
   cupid_free(&P->wxn);
   cupid_free(&P->w1);
-  cupid_free(&P->w2);
   cupid_free(&P->nw);
   cupid_free(&P->pp);
   cupid_free(&P->pm);
@@ -217,7 +219,6 @@ cupid_status pd_pair_plan_build(struct cupid_pd_operator_private *op) {
   CUPID_TRY(cupid_malloc(3 * np, sizeof *P->nrm, "PD pair plan", &P->nrm));
   CUPID_TRY(cupid_malloc(3 * np, sizeof *P->wxn, "PD pair plan", &P->wxn));
   CUPID_TRY(cupid_malloc(np, sizeof *P->w1, "PD pair plan", &P->w1));
-  CUPID_TRY(cupid_malloc(np, sizeof *P->w2, "PD pair plan", &P->w2));
   CUPID_TRY(cupid_malloc(3 * np, sizeof *P->nw, "PD pair plan", &P->nw));
   CUPID_TRY(cupid_malloc(np, sizeof *P->pp, "PD pair plan", &P->pp));
   CUPID_TRY(cupid_malloc(np, sizeof *P->pm, "PD pair plan", &P->pm));
@@ -245,8 +246,7 @@ cupid_status pd_pair_plan_build(struct cupid_pd_operator_private *op) {
       if (axis && o[a] < 0) sign = -1.0;
     }
     P->w1[k] = S->wb[s] * S->x[s] * sign;
-    P->w2[k] = 15.0 * S->wb[s];
-    for (int a = 0; a < 3; a++) P->nw[3 * k + a] = P->w2[k] * S->nrm[3 * s + a] * sign;
+    for (int a = 0; a < 3; a++) P->nw[3 * k + a] = 15.0 * S->wb[s] * S->nrm[3 * s + a] * sign;
     P->pp[k] = op->pclin[s];
     P->pm[k] = op->pclin[S->n - 1 - s];
   }
@@ -254,26 +254,6 @@ cupid_status pd_pair_plan_build(struct cupid_pd_operator_private *op) {
 cleanup:
   pd_pair_plan_free(P);
   return st;
-}
-
-/* The pairs [k0, k1) of the plan (walk order) for the run starting at node i, as
- * pair_offsets does for stencil order. */
-static inline void plan_offsets(const struct cupid_pd_operator_private *op, const pd_work *w,
-                                const pd_run *R, cupid_int i, int k0, int k1, cupid_int *bp,
-                                cupid_int *bm, const cupid_int **rp, const cupid_int **rm) {
-  const pd_pair_plan *P = &op->plan;
-  if (w->padded) {
-    *rp = P->pp + k0;
-    *rm = P->pm + k0;
-    return;
-  }
-  const cupid_int li = work_index(w, R, i);
-  for (int k = k0; k < k1; k++) {
-    bp[k - k0] = work_neighbour(op, w, R, i, P->s[k]) - li;
-    bm[k - k0] = work_neighbour(op, w, R, i, op->st.n - 1 - P->s[k]) - li;
-  }
-  *rp = bp;
-  *rm = bm;
 }
 
 /* u_j - u_i along n from the work arrays. */

@@ -30,7 +30,7 @@ static void PD_KNAME(run_dilatation)(const struct cupid_pd_operator_private *op,
   const int half = S->n / 2;
   for (int s0 = 0; s0 < half; s0 += PD_PAIR_CHUNK) {
     const int s1 = s0 + PD_PAIR_CHUNK < half ? s0 + PD_PAIR_CHUNK : half;
-    pair_offsets(op, w, R, i, s0, s1, bp, bm, &rp, &rm);
+    pair_offsets(op, w, R, i, s0, s1, 0, bp, bm, &rp, &rm);
     for (int t = 0; t < len; t += PD_KLANES) {
       /* Two accumulators (even and odd pairs): adds into one would chain every pair. */
       PD_KVEC g = {0}, h = {0};
@@ -154,7 +154,7 @@ static void PD_KNAME(run_lps_first)(const struct cupid_pd_operator_private *op,
   for (int s0 = 0; s0 < half; s0 += PD_PAIR_CHUNK) {
     const int s1 = s0 + PD_PAIR_CHUNK < half ? s0 + PD_PAIR_CHUNK : half;
     const int *sg = P->seg + s0 / PD_PAIR_CHUNK * (PD_PAIR_CLASSES + 1);
-    plan_offsets(op, w, R, i, s0, s1, bp, bm, &rp, &rm);
+    pair_offsets(op, w, R, i, s0, s1, 1, bp, bm, &rp, &rm);
     int t = 0;
     for (; t + PD_KFB * PD_KLANES <= len; t += PD_KFB * PD_KLANES) PD_KFIRST_GROUP(PD_KFB);
     for (; t < len; t += PD_KLANES) PD_KFIRST_GROUP(1);
@@ -216,7 +216,7 @@ static void PD_KNAME(run_lps_second)(const struct cupid_pd_operator_private *op,
   for (int s0 = 0; s0 < half; s0 += PD_PAIR_CHUNK) {
     const int s1 = s0 + PD_PAIR_CHUNK < half ? s0 + PD_PAIR_CHUNK : half;
     const int *sg = P->seg + s0 / PD_PAIR_CHUNK * (PD_PAIR_CLASSES + 1);
-    plan_offsets(op, w, R, i, s0, s1, bp, bm, &rp, &rm);
+    pair_offsets(op, w, R, i, s0, s1, 1, bp, bm, &rp, &rm);
     int t = 0;
     for (; t + PD_KAB * PD_KLANES <= len; t += PD_KAB * PD_KLANES) PD_KATERM_GROUP(PD_KAB);
     for (; t < len; t += PD_KLANES) PD_KATERM_GROUP(1);
@@ -245,7 +245,7 @@ static void PD_KNAME(run_bond_force)(const struct cupid_pd_operator_private *op,
   const int half = S->n / 2;
   for (int s0 = 0; s0 < half; s0 += PD_PAIR_CHUNK) {
     const int s1 = s0 + PD_PAIR_CHUNK < half ? s0 + PD_PAIR_CHUNK : half;
-    pair_offsets(op, w, R, i, s0, s1, bp, bm, &rp, &rm);
+    pair_offsets(op, w, R, i, s0, s1, 0, bp, bm, &rp, &rm);
     for (int s = s0; s < s1; s++) wc[s - s0] = 0.5 * S->wb[s] / S->x[s];
     for (int t = 0; t < len; t += PD_KLANES) {
       PD_KVEC gx = {0}, gy = {0}, gz = {0};
@@ -294,7 +294,7 @@ static int PD_KNAME(run_stretch)(const struct cupid_pd_operator_private *op, con
   int nh = 0;
   for (int s0 = 0; s0 < half; s0 += PD_PAIR_CHUNK) {
     const int s1 = s0 + PD_PAIR_CHUNK < half ? s0 + PD_PAIR_CHUNK : half;
-    pair_offsets(op, w, R, i, s0, s1, bp, bm, &rp, &rm);
+    pair_offsets(op, w, R, i, s0, s1, 0, bp, bm, &rp, &rm);
     for (int s = s0; s < s1; s++) thr[s - s0] = lim * S->x[s];
     for (int t = 0; t < len; t += PD_KLANES) {
       const PD_KVEC xt = PD_KLOAD(X + t), yt = PD_KLOAD(Y + t), zt = PD_KLOAD(Z + t);
