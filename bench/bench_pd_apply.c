@@ -26,18 +26,16 @@ static void check(cupid_status st) {
 }
 
 /* Bytes held by the operator's stencil storage (families, runs, per-node data, the ghost
- * records of near-surface nodes). */
+ * records of near-surface nodes' segments). */
 static double stencil_bytes(const struct cupid_pd_operator_private *op) {
   const double nn = (double)op->nnodes;
   double b = nn * (1 + 8) + 8; /* full flags, family offsets */
   b += (double)op->fptr[op->nnodes] * 4 + (double)op->nruns * sizeof(pd_run);
   b += (double)op->st.n * (3 * 4 + 8 + 24 + 8 + 24 + 8 + 8 + 8 + 8);
   b += nn * 8 * (op->model == CUPID_PD_LPS ? 6 : 4); /* m kappa mu + gself(3) | c */
-  if (op->crank) {
-    double partial = 0;
-    for (cupid_int i = 0; i < op->nnodes; i++) partial += !op->full[i];
-    b += nn * 4 + partial * 8 * PD_GHOST_STRIDE; /* crank, ncorr */
-  }
+  if (op->gseg) /* segments, their shared records */
+    b += (double)op->nruns * 8 + (double)op->nseg * sizeof(pd_ghost_seg) +
+         ((double)op->gstride * PD_GHOST_STRIDE + PD_GHOST_SLACK) * 8;
   return b;
 }
 

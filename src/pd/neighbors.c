@@ -226,45 +226,6 @@ cleanup:
   return st;
 }
 
-/* The stencil kernels pair entry s with entry n-1-s, its opposite (the offset set is
- * symmetric and sorted), and remove the bonds to absent cells of non-full nodes with
- * crank / ncorr (pd_internal.h). */
-static cupid_status ghost_corrections(struct cupid_pd_operator_private *op) {
-  const pd_stencil *S = &op->st;
-  const cupid_int nn = op->nnodes;
-  for (int s = 0; s < S->n; s++)
-    for (int k = 0; k < 3; k++)
-      CUPID_CHECK(S->off[3 * (S->n - 1 - s) + k] == -S->off[3 * s + k], CUPID_ERR_INTERNAL,
-                  "the PD stencil is not symmetric at entry %d", s);
-  CUPID_CALL(cupid_malloc((size_t)nn, sizeof *op->crank, "PD ghost corrections", &op->crank));
-  int32_t ne = 0;
-  for (cupid_int i = 0; i < nn; i++) op->crank[i] = op->full[i] ? -1 : ne++;
-  CUPID_CALL(cupid_calloc(PD_GHOST_STRIDE * (size_t)ne + 1, sizeof *op->ncorr,
-                          "PD ghost corrections", &op->ncorr));
-#pragma omp parallel for schedule(dynamic, 64) if (nn > PD_OMP_MIN_NODES)
-  for (cupid_int i = 0; i < nn; i++) {
-    if (op->full[i]) continue;
-    const pd_family F = pd_family_of(op, i);
-    double *C = op->ncorr + PD_GHOST_STRIDE * (size_t)op->crank[i];
-    int q = 0; /* present entries come in stencil order: walk them alongside */
-    for (int s = 0; s < S->n; s++) {
-      if (q < F.n && F.s[q] == s) {
-        q++;
-        continue;
-      }
-      const double *n = S->nrm + 3 * s;
-      const double w = op->model == CUPID_PD_LPS ? 15.0 * S->wb[s] : 0.5 * S->wb[s] / S->x[s];
-      C[0] += w * n[0] * n[0];
-      C[1] += w * n[1] * n[1];
-      C[2] += w * n[2] * n[2];
-      C[3] += w * n[1] * n[2];
-      C[4] += w * n[0] * n[2];
-      C[5] += w * n[0] * n[1];
-    }
-  }
-  return CUPID_SUCCESS;
-}
-
 static inline int neighbour_exists(const struct cupid_pd_grid_private *g, cupid_int i,
                                    const int32_t *o) {
   const int32_t *q = g->ijk + 3 * i;
@@ -419,7 +380,7 @@ cleanup:
       CUPID_CALL(cupid_malloc((size_t)(nruns + nn / PD_RUN_MAX + 1), sizeof *op->runs, "PD runs", &op->runs));
   }
   op->nruns = nruns;
-  return ghost_corrections(op);
+  return pd_ghosts_build(op);
 }
 
 /* Full nodes: every neighbour exists and node order follows cell order, so the extremes

@@ -18,8 +18,9 @@ void cupid_pd_operator_destroy(cupid_pd_operator *op) {
   cupid_free(&o->pclin);
   cupid_free(&o->pclin_opp);
   pd_pair_plan_free(&o->plan);
-  cupid_free(&o->crank);
   cupid_free(&o->ncorr);
+  cupid_free(&o->gptr);
+  cupid_free(&o->gseg);
   pd_stencil_work_free(o);
   cupid_free(&o->bptr);
   cupid_free(&o->bnbr);
@@ -111,8 +112,6 @@ static cupid_status node_data(struct cupid_pd_operator_private *op,
     if (op->c) op->c[i] = (op->dim == 3 ? 18.0 * K : 2.0 * mat->E) / Sfull;
     if (op->gself)
       for (int c = 0; c < 3; c++) op->gself[3 * i + c] = gs[c];
-    if (op->gself && op->crank && op->crank[i] >= 0) /* the kernels' copy (pd_internal.h) */
-      for (int c = 0; c < 3; c++) op->ncorr[PD_GHOST_STRIDE * (size_t)op->crank[i] + 6 + c] = gs[c];
   }
   if (empty >= 0) {
     const double *x = g->coords + 3 * empty;

@@ -79,6 +79,13 @@ typedef struct {
   int len, full;
 } pd_run;
 
+/* A segment of a run's non-full nodes: nodes i0 .. i0+n-1, ranks rank .. rank+n-1 (see
+ * cupid_pd_operator_private's gseg). */
+typedef struct {
+  cupid_int i0;
+  int32_t rank, n;
+} pd_ghost_seg;
+
 /* Longest run: the kernels keep a run's accumulators on the stack. */
 #define PD_RUN_MAX 256
 
@@ -126,14 +133,20 @@ struct cupid_pd_operator_private {
    * cells read 0 (their bonds corrected per node); else (a sparse union, whose padded box
    * would hold more than PD_PAD_RATIO cells a node) near-surface nodes walk their families. */
   int padded;
-  /* Ghost-bond corrections of the padded kernels (stencil.c) for non-full nodes: rank among
-   * them (-1 for full nodes) and PD_GHOST_STRIDE doubles per node: the sum over the absent
-   * entries of w n n^T (xx yy zz yz xz xy; w = 15 omega beta for LPS, omega beta / (2|xi|)
-   * bond-based), then (LPS) a copy of the node's gself. One record per node, in node order:
-   * the kernels read them as one forward stream (gself by node and the six apart cost a
-   * cache miss each at every near-surface stretch of a row). */
-  int32_t *crank;
+  /* Ghost-bond corrections of the padded kernels for non-full nodes (ghosts.c): records of
+   * PD_GHOST_STRIDE values stored by component, ncorr[PD_GHOST_SLACK + c gstride + k]: the
+   * sum over the node's absent entries of w n n^T (c = 0..5: xx yy zz yz xz xy; w = 15 omega
+   * beta for LPS, omega beta / (2|xi|) bond-based), then the present entries' sum of g
+   * (gself, c = 6..8). The non-full nodes of run r come in segments of consecutive nodes,
+   * gseg[gptr[r] .. gptr[r + 1]); a segment's records are consecutive from its rank, shared
+   * by every segment with the same content. The kernels correct a segment a lane block at a
+   * time (node by node behind a branch on each node's flag, mispredicted at every segment's
+   * end, and from 72 bytes a node, the corrections cost an eighth of an explicit LPS step). */
   double *ncorr;
+  cupid_int gstride; /* the records + PD_GHOST_SLACK: a lane block around a segment's
+                        records stays inside the arrays */
+  cupid_int *gptr, nseg;
+  pd_ghost_seg *gseg;
   cupid_int pn[3];        /* padded cells per axis */
   int32_t pr[3];          /* reach per axis */
   cupid_int *pclin;
@@ -265,6 +278,7 @@ static inline cupid_int pd_family_node(const struct cupid_pd_operator_private *o
 }
 
 #define PD_GHOST_STRIDE 9
+#define PD_GHOST_SLACK 8 /* the widest lane block (stencil.c, PD_LANES_MAX) */
 #define PD_PAD_RATIO 8
 /* Padded rows hold a multiple of PD_ROW_ALIGN cells (64 bytes of doubles), so that cells of
  * the same x are equally aligned in every row (stencil.c). */
@@ -278,6 +292,9 @@ static inline cupid_int pd_node_pcell(const struct cupid_pd_operator_private *op
 
 /* Build the families (full flags, near-surface lists, runs, padding) of the operator. */
 cupid_status pd_families_build(struct cupid_pd_operator_private *op);
+
+/* The ghost-bond corrections: segments and records (ghosts.c), after the runs. */
+cupid_status pd_ghosts_build(struct cupid_pd_operator_private *op);
 
 /* Build the explicit bond lists (if not there yet) and switch apply to the bond-list
  * kernels (stencil_off = 1). Not thread-safe: call before sharing the operator. */

@@ -313,40 +313,13 @@ static inline int scan_keeps(const struct cupid_pd_operator_private *op, cupid_i
   return pd_grid_lookup(op->grid, q[0] + o[0], q[1] + o[1], q[2] + o[2]) >= 0;
 }
 
-/* The near-surface nodes' ghost records of a run, fetched before its pair loop for
- * run_theta and run_store after it: they come in bursts at a row's ends that the hardware
- * prefetcher does not follow, and each cost a cache miss (a third of the LPS second pass
- * at 40^3 before). A record spans at most two cache lines. */
-static inline void prefetch_ghosts(const struct cupid_pd_operator_private *op, const pd_run *R,
-                                   cupid_int i, int len) {
-  if (R->full) return;
-  const unsigned char *restrict full = op->full + i;
-  const int32_t *restrict rank = op->crank + i;
-  for (int t = 0; t < len; t++)
-    if (!full[t]) {
-      const char *rec = (const char *)(op->ncorr + PD_GHOST_STRIDE * (size_t)rank[t]);
-      __builtin_prefetch(rec);
-      __builtin_prefetch(rec + 64);
-    }
-}
-
-/* The end of a run's dilatation: acc holds sum_s g_s.(u_j - u_i) over the padded stencil;
- * less the ghost and broken bonds, theta = 3V/m acc and a = kappa theta / m (into w->a and,
- * if asked, theta). Always inlined, as run_store. */
+/* The end of a run's dilatation: acc holds sum_s g_s.(u_j - u_i) over the padded stencil,
+ * less the ghost bonds (the kernel's ghost_theta); less the broken bonds, theta = 3V/m acc
+ * and a = kappa theta / m (into w->a and, if asked, theta). Always inlined, as run_store. */
 __attribute__((always_inline)) static inline void
 run_theta(const struct cupid_pd_operator_private *op, const pd_work *w, const pd_run *R,
           cupid_int i, int len, double *restrict acc, double *theta) {
   const cupid_int li = work_index(w, R, i);
-  const double *restrict X = w->x + li, *restrict Y = w->y + li, *restrict Z = w->z + li;
-  if (!R->full) {
-    const unsigned char *restrict full = op->full + i;
-    const int32_t *restrict rank = op->crank + i;
-    for (int t = 0; t < len; t++) /* ghost bonds: -(sum over them of g).(0 - u_i) */
-      if (!full[t]) {
-        const double *restrict G = op->ncorr + PD_GHOST_STRIDE * (size_t)rank[t] + 6;
-        acc[t] -= G[0] * X[t] + G[1] * Y[t] + G[2] * Z[t];
-      }
-  }
   if (op->bslot)
     for (int t = 0; t < len; t++)
       if (op->bslot[i + t] >= 0) acc[t] -= broken_dilatation(op, w, R, i + t);
@@ -361,42 +334,14 @@ run_theta(const struct cupid_pd_operator_private *op, const pd_work *w, const pd
   if (theta) memcpy(theta + i, acc, (size_t)len * sizeof(double));
 }
 
-/* f = -V^2 sum, with the ghost correction k_i G_i + b_i C_i u_i (k_i = a_i for LPS, 0 for
- * bond-based with b_i = c_i) for nodes without a full family. Always inlined: compiled with
- * each kernel instance's instruction set (the store loop vectorises with it). */
+/* f = -V^2 sum, the sum with the ghost corrections (the kernel's ghost_force) and less the
+ * broken bonds. Always inlined: compiled with each kernel instance's instruction set (the
+ * store loop vectorises with it). */
 __attribute__((always_inline)) static inline void
 run_store(const struct cupid_pd_operator_private *op, const pd_work *w, const pd_run *R,
           cupid_int i, int len, double *restrict fx, double *restrict fy, double *restrict fz,
           double *restrict f) {
   const double V2 = op->V * op->V;
-  const cupid_int li = work_index(w, R, i);
-  const int lps = op->model == CUPID_PD_LPS;
-  if (!R->full) {
-    /* Restrict-qualified locals: through op and w the compiler reloaded every pointer for
-     * every node (this loop took half of the LPS second pass at 40^3). */
-    const unsigned char *restrict full = op->full + i;
-    const int32_t *restrict rank = op->crank + i;
-    const double *restrict NC = op->ncorr;
-    const double *restrict ux = w->x + li, *restrict uy = w->y + li, *restrict uz = w->z + li;
-    const double *restrict bb = lps ? w->b + li : w->a + li, *restrict aa = w->a + li;
-    for (int t = 0; t < len; t++) {
-      if (full[t]) continue;
-      const double *restrict C = NC + PD_GHOST_STRIDE * (size_t)rank[t]; /* then G_i */
-      const double u0 = ux[t], u1 = uy[t], u2 = uz[t], bi = bb[t];
-      double gx = bi * (C[0] * u0 + C[5] * u1 + C[4] * u2);
-      double gy = bi * (C[5] * u0 + C[1] * u1 + C[3] * u2);
-      double gz = bi * (C[4] * u0 + C[3] * u1 + C[2] * u2);
-      if (lps) {
-        const double ai = aa[t];
-        gx += ai * C[6];
-        gy += ai * C[7];
-        gz += ai * C[8];
-      }
-      fx[t] += gx;
-      fy[t] += gy;
-      fz[t] += gz;
-    }
-  }
   if (op->bslot)
     for (int t = 0; t < len; t++) {
       if (op->bslot[i + t] < 0) continue;

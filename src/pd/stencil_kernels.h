@@ -17,6 +17,116 @@ typedef double PD_KVEC_U __attribute__((vector_size(8 * PD_KLANES), aligned(8), 
 #define PD_KLOAD(p) (*(const PD_KVEC_U *)(p))
 #define PD_KSTORE(p, v) (*(PD_KVEC_U *)(p) = (v))
 
+/* The ghost corrections of the nodes [i, i + len) of run R (pd_internal.h, gseg): each
+ * segment of non-full nodes, clipped to them, over the kernels' own lane blocks (aligned
+ * with their stores of the accumulators, so that these loads take the stored values
+ * straight from the store queue: a block astride two stores waits for both to reach the
+ * cache, which cost more than the corrections' arithmetic), from the components' streams.
+ * The lanes outside the segment are masked to +0 (a bitwise and: whatever the neighbouring
+ * records or cells hold, those lanes add exactly nothing). The accumulators (the kernels'
+ * stack arrays) have a lane block of slack past the run, as the work arrays and records. */
+#define PD_KGHOST_SEGMENTS(...)                                                                \
+  do {                                                                                         \
+    const cupid_int gr_ = R - op->runs;                                                        \
+    PD_KIVEC iota_;                                                                            \
+    for (int l = 0; l < PD_KLANES; l++) iota_[l] = l;                                          \
+    for (cupid_int k_ = op->gptr[gr_]; k_ < op->gptr[gr_ + 1]; k_++) {                        \
+      const pd_ghost_seg *g_ = op->gseg + k_;                                                  \
+      const cupid_int a_ = g_->i0 > i ? g_->i0 - i : 0; /* in the call's nodes */              \
+      const cupid_int b_ = g_->i0 + g_->n < i + len ? g_->i0 + g_->n - i : len;               \
+      for (int t = (int)(a_ - a_ % PD_KLANES); t < b_; t += PD_KLANES) {                      \
+        const cupid_int q = g_->rank + (i + t - g_->i0); /* the rank at lane 0 */             \
+        const PD_KIVEC lane_ = iota_ + t;                                                      \
+        const PD_KIVEC keep = (lane_ >= a_) & (lane_ < b_);                                    \
+        __VA_ARGS__;                                                                           \
+      }                                                                                        \
+    }                                                                                          \
+  } while (0)
+#define PD_KMASKED(v, keep) ((PD_KVEC)((PD_KIVEC)(v) & (keep)))
+
+/* b_i C_i u_i of a lane block at t, rank q (C_i: the sum over the node's absent entries of
+ * w n n^T, pd_internal.h), into gx, gy, gz. */
+#define PD_KGHOST_BCU(Bv)                                                                      \
+  const PD_KVEC u0 = PD_KLOAD(X + t), u1 = PD_KLOAD(Y + t), u2 = PD_KLOAD(Z + t);              \
+  const PD_KVEC bi = PD_KLOAD((Bv) + t);                                                       \
+  const PD_KVEC cxx = PD_KLOAD(C + q), cyy = PD_KLOAD(C + gs + q),                             \
+                czz = PD_KLOAD(C + 2 * gs + q), cyz = PD_KLOAD(C + 3 * gs + q),                \
+                cxz = PD_KLOAD(C + 4 * gs + q), cxy = PD_KLOAD(C + 5 * gs + q);                \
+  const PD_KVEC gx = bi * (cxx * u0 + cxy * u1 + cxz * u2);                                    \
+  const PD_KVEC gy = bi * (cxy * u0 + cyy * u1 + cyz * u2);                                    \
+  const PD_KVEC gz = bi * (cxz * u0 + cyz * u1 + czz * u2)
+
+/* The first LPS pass's ghost bonds, while the nodes' u and b are in the cache (in the second
+ * pass they came from memory: that cost twice the arithmetic):
+ * - the dilatation: the pairs' g_s.(u+ - u-) hold sum_s g_s.u_j (absent cells read 0) but
+ *   not the node's own term, -G_i.u_i with G_i the present entries' sum of g (gself), so
+ *   acc -= G_i.u_i;
+ * - with force, the b terms of the force, + b_i C_i u_i, into the kernel's w->gx..gz of the
+ *   run's nodes (a block past the run's end lane by lane: those cells may be another
+ *   thread's). */
+static inline void PD_KNAME(ghost_first)(const struct cupid_pd_operator_private *op,
+                                         const pd_work *w, const pd_run *R, cupid_int i, int len,
+                                         double *restrict acc, int force) {
+  if (R->full) return;
+  const cupid_int li = work_index(w, R, i), gs = op->gstride;
+  const double *restrict X = w->x + li, *restrict Y = w->y + li, *restrict Z = w->z + li;
+  const double *restrict C = op->ncorr + PD_GHOST_SLACK;
+  const double *restrict G0 = C + 6 * gs, *restrict G1 = G0 + gs, *restrict G2 = G1 + gs;
+  double *restrict Fx = w->gx + li, *restrict Fy = w->gy + li, *restrict Fz = w->gz + li;
+  PD_KGHOST_SEGMENTS({
+    const PD_KVEC v = PD_KLOAD(G0 + q) * PD_KLOAD(X + t) + PD_KLOAD(G1 + q) * PD_KLOAD(Y + t) +
+                      PD_KLOAD(G2 + q) * PD_KLOAD(Z + t);
+    PD_KSTORE(acc + t, PD_KLOAD(acc + t) - PD_KMASKED(v, keep));
+    if (force) {
+      PD_KGHOST_BCU(w->b + li);
+      const PD_KVEC hx = PD_KMASKED(gx, keep), hy = PD_KMASKED(gy, keep),
+                    hz = PD_KMASKED(gz, keep);
+      if (t + PD_KLANES <= len) {
+        PD_KSTORE(Fx + t, PD_KLOAD(Fx + t) + hx);
+        PD_KSTORE(Fy + t, PD_KLOAD(Fy + t) + hy);
+        PD_KSTORE(Fz + t, PD_KLOAD(Fz + t) + hz);
+      } else
+        for (int l = 0; l < len - t; l++) Fx[t + l] += hx[l], Fy[t + l] += hy[l], Fz[t + l] += hz[l];
+    }
+  });
+}
+
+/* The second LPS pass's ghost bonds: + a_i G_i (pd_internal.h); the nodes' a are in the
+ * cache (the pass reads them). */
+static inline void PD_KNAME(ghost_second)(const struct cupid_pd_operator_private *op,
+                                          const pd_work *w, const pd_run *R, cupid_int i,
+                                          int len, double *restrict fx, double *restrict fy,
+                                          double *restrict fz) {
+  if (R->full) return;
+  const cupid_int li = work_index(w, R, i), gs = op->gstride;
+  const double *restrict A = w->a + li;
+  const double *restrict G0 = op->ncorr + PD_GHOST_SLACK + 6 * gs, *restrict G1 = G0 + gs,
+                         *restrict G2 = G1 + gs;
+  PD_KGHOST_SEGMENTS({
+    const PD_KVEC ai = PD_KMASKED(PD_KLOAD(A + t), keep);
+    PD_KSTORE(fx + t, PD_KLOAD(fx + t) + ai * PD_KLOAD(G0 + q));
+    PD_KSTORE(fy + t, PD_KLOAD(fy + t) + ai * PD_KLOAD(G1 + q));
+    PD_KSTORE(fz + t, PD_KLOAD(fz + t) + ai * PD_KLOAD(G2 + q));
+  });
+}
+
+/* The bond-based force's ghost bonds: + c_i C_i u_i (c_i in w->a). */
+static inline void PD_KNAME(ghost_bond)(const struct cupid_pd_operator_private *op,
+                                        const pd_work *w, const pd_run *R, cupid_int i, int len,
+                                        double *restrict fx, double *restrict fy,
+                                        double *restrict fz) {
+  if (R->full) return;
+  const cupid_int li = work_index(w, R, i), gs = op->gstride;
+  const double *restrict X = w->x + li, *restrict Y = w->y + li, *restrict Z = w->z + li;
+  const double *restrict C = op->ncorr + PD_GHOST_SLACK;
+  PD_KGHOST_SEGMENTS({
+    PD_KGHOST_BCU(w->a + li);
+    PD_KSTORE(fx + t, PD_KLOAD(fx + t) + PD_KMASKED(gx, keep));
+    PD_KSTORE(fy + t, PD_KLOAD(fy + t) + PD_KMASKED(gy, keep));
+    PD_KSTORE(fz + t, PD_KLOAD(fz + t) + PD_KMASKED(gz, keep));
+  });
+}
+
 /* a = kappa theta / m with theta = 3V/m sum_s omega beta xi_s . (u_j - u_i) (Eq. 19). */
 static void PD_KNAME(run_dilatation)(const struct cupid_pd_operator_private *op,
                                      const pd_work *w, const pd_run *R, cupid_int i, int len,
@@ -47,6 +157,7 @@ static void PD_KNAME(run_dilatation)(const struct cupid_pd_operator_private *op,
       PD_KSTORE(acc + t, g + h);
     }
   }
+  PD_KNAME(ghost_first)(op, w, R, i, len, acc, 0);
   run_theta(op, w, R, i, len, acc, theta);
 }
 
@@ -150,7 +261,6 @@ static void PD_KNAME(run_lps_first)(const struct cupid_pd_operator_private *op,
   cupid_int bp[PD_PAIR_CHUNK], bm[PD_PAIR_CHUNK];
   const cupid_int *rp, *rm;
   const int half = P->n;
-  prefetch_ghosts(op, R, i, len);
   for (int s0 = 0; s0 < half; s0 += PD_PAIR_CHUNK) {
     const int s1 = s0 + PD_PAIR_CHUNK < half ? s0 + PD_PAIR_CHUNK : half;
     const int *sg = P->seg + s0 / PD_PAIR_CHUNK * (PD_PAIR_CLASSES + 1);
@@ -159,6 +269,7 @@ static void PD_KNAME(run_lps_first)(const struct cupid_pd_operator_private *op,
     for (; t + PD_KFB * PD_KLANES <= len; t += PD_KFB * PD_KLANES) PD_KFIRST_GROUP(PD_KFB);
     for (; t < len; t += PD_KLANES) PD_KFIRST_GROUP(1);
   }
+  PD_KNAME(ghost_first)(op, w, R, i, len, acc, 1);
   run_theta(op, w, R, i, len, acc, theta);
 }
 #undef PD_KFIRST_GROUP
@@ -212,7 +323,6 @@ static void PD_KNAME(run_lps_second)(const struct cupid_pd_operator_private *op,
   cupid_int bp[PD_PAIR_CHUNK], bm[PD_PAIR_CHUNK];
   const cupid_int *rp, *rm;
   const int half = P->n;
-  prefetch_ghosts(op, R, i, len);
   for (int s0 = 0; s0 < half; s0 += PD_PAIR_CHUNK) {
     const int s1 = s0 + PD_PAIR_CHUNK < half ? s0 + PD_PAIR_CHUNK : half;
     const int *sg = P->seg + s0 / PD_PAIR_CHUNK * (PD_PAIR_CLASSES + 1);
@@ -221,6 +331,7 @@ static void PD_KNAME(run_lps_second)(const struct cupid_pd_operator_private *op,
     for (; t + PD_KAB * PD_KLANES <= len; t += PD_KAB * PD_KLANES) PD_KATERM_GROUP(PD_KAB);
     for (; t < len; t += PD_KLANES) PD_KATERM_GROUP(1);
   }
+  PD_KNAME(ghost_second)(op, w, R, i, len, fx, fy, fz);
   run_store(op, w, R, i, len, fx, fy, fz, f);
 }
 #undef PD_KATERM_GROUP
@@ -270,6 +381,7 @@ static void PD_KNAME(run_bond_force)(const struct cupid_pd_operator_private *op,
       PD_KSTORE(fz + t, gz);
     }
   }
+  PD_KNAME(ghost_bond)(op, w, R, i, len, fx, fy, fz);
   run_store(op, w, R, i, len, fx, fy, fz, f);
 }
 
@@ -334,6 +446,9 @@ static const pd_kernel_set PD_KNAME(kernels) = {
     PD_KNAME(run_dilatation), PD_KNAME(run_bond_force), PD_KNAME(run_lps_first),
     PD_KNAME(run_lps_second), PD_KNAME(run_stretch), PD_KLANES};
 
+#undef PD_KGHOST_BCU
+#undef PD_KMASKED
+#undef PD_KGHOST_SEGMENTS
 #undef PD_KCLASSES
 #undef PD_KNDOT
 #undef PD_KSTORE

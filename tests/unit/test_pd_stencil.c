@@ -5,7 +5,7 @@
  * two pair chunks, a 1D bar;
  * LPS and bond-based, three influence / partial-volume combinations; whole products and
  * row ranges; every instruction-set instance of the kernels. Also the storage: no bond
- * stored for full families. */
+ * stored for full families; the pair plan; the ghost-bond records and their sharing. */
 #include <math.h>
 #include <string.h>
 
@@ -223,6 +223,79 @@ static void test_pair_plan(void **state) {
   }
 }
 
+/* The ghost-bond records (ghosts.c): each run's segments are exactly its runs of non-full
+ * nodes, in order; every node's record, read where the kernels read it (the segment's
+ * shared records), is the sum over its own family (C_i over the absent entries, G_i =
+ * gself over the present ones); and on the box, whose rows of a kind share their
+ * segments, the shared records are a small fraction of the near-surface nodes. */
+static void check_ghosts(const struct cupid_pd_operator_private *op, int box) {
+  const pd_stencil *S = &op->st;
+  const double *C = op->ncorr + PD_GHOST_SLACK;
+  cupid_int nonfull = 0;
+  for (cupid_int r = 0; r < op->nruns; r++) {
+    const pd_run *R = &op->runs[r];
+    cupid_int k = op->gptr[r];
+    for (cupid_int i = R->i0; i < R->i0 + R->len; i++) {
+      if (op->full[i]) continue;
+      nonfull++;
+      while (k < op->gptr[r + 1] && op->gseg[k].i0 + op->gseg[k].n <= i) k++;
+      assert_true(k < op->gptr[r + 1]);
+      const pd_ghost_seg *g = &op->gseg[k];
+      assert_true(g->i0 <= i && (i == g->i0 || !op->full[i - 1]));
+      const cupid_int q = g->rank + (i - g->i0);
+      assert_true(q >= 0 && q + PD_GHOST_SLACK <= op->gstride);
+      const pd_family F = pd_family_of(op, i);
+      double want[PD_GHOST_STRIDE] = {0}, scale = 0.0;
+      for (int s = 0, p = 0; s < S->n; s++) {
+        const double *n = S->nrm + 3 * s, w = 15.0 * S->wb[s];
+        if (p < F.n && F.s[p] == s) {
+          p++;
+          for (int c = 0; c < 3; c++) want[6 + c] += S->wxn[3 * s + c];
+          continue;
+        }
+        const int ab[6][2] = {{0, 0}, {1, 1}, {2, 2}, {1, 2}, {0, 2}, {0, 1}};
+        for (int c = 0; c < 6; c++) want[c] += w * n[ab[c][0]] * n[ab[c][1]];
+      }
+      for (int c = 0; c < PD_GHOST_STRIDE; c++) scale = fmax(scale, fabs(want[c]));
+      for (int c = 0; c < 3; c++) ASSERT_NEAR(want[6 + c], op->gself[3 * i + c], 1e-14 * scale);
+      for (int c = 0; c < PD_GHOST_STRIDE; c++)
+        ASSERT_NEAR(C[c * op->gstride + q], want[c], 1e-14 * scale);
+    }
+    for (cupid_int j = op->gptr[r]; j < op->gptr[r + 1]; j++) { /* maximal, inside the run */
+      const pd_ghost_seg *g = &op->gseg[j];
+      assert_true(g->n >= 1 && g->i0 >= R->i0 && g->i0 + g->n <= R->i0 + R->len);
+      assert_true(g->i0 == R->i0 || op->full[g->i0 - 1]);
+      assert_true(g->i0 + g->n == R->i0 + R->len || op->full[g->i0 + g->n]);
+      for (cupid_int i = g->i0; i < g->i0 + g->n; i++) assert_false(op->full[i]);
+    }
+  }
+  assert_int_equal(op->gptr[op->nruns], op->nseg);
+  const cupid_int shared = op->gstride - PD_GHOST_SLACK;
+  print_message("ghost records: %lld near-surface nodes, %lld segments, %lld records\n",
+                (long long)nonfull, (long long)op->nseg, (long long)shared);
+  assert_true(shared <= nonfull);
+  if (box) assert_true(3 * shared < nonfull); /* 678 of 2208 */
+}
+
+static void test_ghosts(void **state) {
+  (void)state;
+  for (size_t c = 0; c < sizeof cases / sizeof *cases; c++) {
+    cupid_pd_grid_options go = {.spacing = 0.5, .dimension = cases[c].dim, .area = 0.3};
+    cupid_pd_grid grid = NULL;
+    CUPID_ASSERT_OK(cupid_pd_grid_create(&go, cases[c].n_boxes, cases[c].boxes, cases[c].mats, &grid));
+    const cupid_pd_material pm[2] = {{.E = 1.0, .nu = 0.25}, {.E = 2.0, .nu = 0.25}};
+    cupid_pd_operator_options oo = {.horizon = cases[c].horizon * go.spacing, .model = CUPID_PD_LPS,
+                                    .influence = CUPID_INFLUENCE_INVERSE,
+                                    .partial_volume = CUPID_PARTIAL_PDLAMMPS, .materials = pm,
+                                    .n_materials = 2};
+    cupid_pd_operator op = NULL;
+    CUPID_ASSERT_OK(cupid_pd_operator_create(grid, &oo, &op));
+    check_ghosts(op, c == 0);
+    cupid_pd_operator_destroy(&op);
+    cupid_pd_grid_destroy(&grid);
+  }
+}
+
 /* The runs cover every node once, in order, at consecutive (padded) cells with one full
  * flag each; the union is dense enough for the padded lattice, a sparse one is not. */
 static void test_partition(void **state) {
@@ -285,6 +358,7 @@ int main(void) {
   const struct CMUnitTest tests[] = {cmocka_unit_test(test_lps), cmocka_unit_test(test_bond),
                                      cmocka_unit_test(test_bar), cmocka_unit_test(test_instances),
                                      cmocka_unit_test(test_partition),
-                                     cmocka_unit_test(test_pair_plan)};
+                                     cmocka_unit_test(test_pair_plan),
+                                     cmocka_unit_test(test_ghosts)};
   return cmocka_run_group_tests(tests, NULL, NULL);
 }
