@@ -11,8 +11,8 @@
  *
  * Padded lattice (the usual case): the copies live on the bounding box grown by the
  * stencil reach, absent cells read 0, and every run, near the surface or not, takes the
- * same loop; the ghost bonds of non-full nodes are removed per node afterwards (see the
- * run kernels). Sparse unions (pd_internal.h, PD_PAD_RATIO): copies by node, full runs as
+ * same loop; the ghost bonds of non-full nodes are removed afterwards, by segments of
+ * those nodes (ghosts.c, the kernels' ghost_*). Sparse unions (pd_internal.h, PD_PAD_RATIO): copies by node, full runs as
  * above with neighbours through the dense cell map, near-surface nodes walk their stored
  * stencil entries.
  *
@@ -157,8 +157,9 @@ static inline cupid_int work_neighbour(const struct cupid_pd_operator_private *o
  *
  * Padded lattice, every run in one branch-free form: absent cells hold u = a = b = c = 0,
  * and a node whose family is not full gets the exact excess of those ghost bonds removed
- * per node afterwards (pd_correction_*): with G_i = sum over present entries of g
- * (op->gself) and C_i = sum over absent entries of w N (N = n n^T, w = w15 or wc),
+ * afterwards (the kernels' ghost_first, ghost_second, ghost_bond from the records of
+ * ghosts.c): with G_i = sum over present entries of g (op->gself) and C_i = sum over
+ * absent entries of w N (N = n n^T, w = w15 or wc),
  *   theta: sum - G_i.u_i;  LPS: sum + a_i G_i + b_i C_i u_i;  bond: sum + c_i C_i u_i.
  * These cancel terms of size |u_i| (not |u_j - u_i|), so the copy of u is shifted by a
  * reference displacement (work_fill): near the surface the round-off is then relative to
