@@ -67,6 +67,13 @@ typedef struct {
   double rayleigh_mass;          /**< a in C = a M + b K */
   double rayleigh_stiffness;     /**< b */
   const cupid_dynamics_hooks *hooks; /**< NULL: constant conditions, nothing after the forces */
+  /** 1: the monitor reads v and a at step 0 and at output steps only (it gets NULL for both
+   *  at the other steps). Central differences may then merge a step's closing half-kick
+   *  with the next step's opening one between outputs (v_{n+3/2} = v_{n+1/2} + dt a_{n+1}:
+   *  one pass over the vectors a step instead of two; the same scheme, other rounding), where
+   *  nothing else needs v_{n+1}: no load, fixed DOF, damping or hook. 0 (default): v and a
+   *  at every step. */
+  int velocity_at_outputs;
 } cupid_dynamics_options;
 
 /** Energies at one instant. With E0 the initial kinetic + strain energy, the balance is
@@ -97,7 +104,9 @@ typedef struct {
 
 /**
  * Called at step 0 (t = 0, before any step) and after every step; @p output is 1 at steps
- * that are multiples of `every` and at the last step. u, v, a are full vectors (n entries).
+ * that are multiples of `every` and at the last step. u, v, a are full vectors (n entries);
+ * v and a are NULL at the steps that are not output steps if the run was asked
+ * velocity_at_outputs.
  * The kinetic and strain energies (and the balance) are evaluated at output steps only (the
  * other steps see the last output's values; damping and external work are accumulated at
  * every step). A non-success return stops the run with that status.

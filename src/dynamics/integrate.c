@@ -265,12 +265,19 @@ static cupid_status initial_acceleration(dyn_state *s, const double *u, const do
 
 /* Kinetic and strain energy cost two products per call, so they are evaluated at output
  * steps only (the balance check samples those); the monitor sees them there. */
+static int output_step(const dyn_state *s, cupid_int step) {
+  return step % s->opt->every == 0 || step == s->opt->steps;
+}
+
 static cupid_status notify(dyn_state *s, cupid_dynamics_monitor fn, void *ctx, cupid_int step,
                            const double *u, const double *v) {
-  int out = step % s->opt->every == 0 || step == s->opt->steps;
+  int out = output_step(s, step);
   if (out) energies(s, u, v);
+  if (!out && s->opt->velocity_at_outputs && !fn) return CUPID_SUCCESS;
   if (!fn) return CUPID_SUCCESS;
-  return fn(ctx, step, (double)step * s->opt->dt, out, u, v, s->a, &s->eg);
+  const int hide = !out && s->opt->velocity_at_outputs;
+  return fn(ctx, step, (double)step * s->opt->dt, out, u, hide ? NULL : v, hide ? NULL : s->a,
+            &s->eg);
 }
 
 /* K_eff = (1 + a1 b) K + (a0 + a1 a) M. */
@@ -435,6 +442,48 @@ static void kick_free(cupid_int n, double hdt, const double *restrict g,
   }
 }
 
+/* A step's closing half-kick merged with the next step's drift, between outputs where no
+ * one reads v_{n+1} (merge_kicks): a_{n+1} = -M^-1 K u_{n+1}, v_{n+3/2} = v_{n+1/2} + dt
+ * a_{n+1}, u_{n+2} = u_{n+1} + dt v_{n+3/2}, in place (vh holds v_{n+1/2}); one pass over
+ * g, minv, vh and u instead of the kick's and the drift's five streams each. A uniform mass
+ * (every node of one material) is one number: a stream fewer, the same values. */
+static void kick_drift_free(cupid_int n, double dt, const double *restrict g,
+                            const double *restrict minv, double *restrict vh,
+                            double *restrict u) {
+#pragma omp parallel for schedule(static) if (n > DYN_OMP_MIN)
+  for (cupid_int d = 0; d < n; d++) {
+    const double h = vh[d] + dt * ((0.0 - g[d]) * minv[d]);
+    vh[d] = h;
+    u[d] += dt * h;
+  }
+}
+
+static void kick_drift_uniform(cupid_int n, double dt, const double *restrict g, double minv,
+                               double *restrict vh, double *restrict u) {
+#pragma omp parallel for schedule(static) if (n > DYN_OMP_MIN)
+  for (cupid_int d = 0; d < n; d++) {
+    const double h = vh[d] + dt * ((0.0 - g[d]) * minv);
+    vh[d] = h;
+    u[d] += dt * h;
+  }
+}
+
+/* minv's value if every entry has it, else NaN. */
+static double uniform_value(cupid_int n, const double *x) {
+  for (cupid_int d = 1; d < n; d++)
+    if (x[d] != x[0]) return NAN;
+  return n > 0 ? x[0] : NAN;
+}
+
+/* Whether the closing half-kick of a step may merge with the next step's drift: no one
+ * reads v_{n+1} between outputs (the monitor asked velocity_at_outputs; no hook, load,
+ * fixed DOF or damping needs it or changes the update). */
+static int merge_kicks(const dyn_state *s) {
+  const cupid_dynamics_options *o = s->opt;
+  return o->velocity_at_outputs && !s->hooks && !s->f && !s->du && !s->react &&
+         !dyn_any_fixed(s->sys->bc) && o->rayleigh_mass == 0.0 && o->rayleigh_stiffness == 0.0;
+}
+
 /* The drift of a step: v_{n+1/2} = v_n + dt/2 a_n into vh, u_{n+1} = u_n + dt v_{n+1/2} (the
  * fixed DOFs at their values at the step's end, moved), in place, with the external work of
  * the step (the load's mean over the step when it changes) and the fixed DOFs' increments. */
@@ -549,16 +598,30 @@ static cupid_status run_central(dyn_state *s, double *u, double *v, cupid_dynami
   CUPID_CALL(notify(s, fn, ctx, 0, u, v));
   double t0 = cupid_wtime();
   const int stiff_damping = o->rayleigh_stiffness != 0.0;
+  const int merge = merge_kicks(s);
+  const double mu = merge ? uniform_value(s->n, s->minv) : NAN;
+  int drifted = 0; /* u holds u_{n+1} and vn v_{n+1/2} already (a merged kick and drift) */
   for (cupid_int step = 1; step <= o->steps; step++) {
     if (s->react) CUPID_CALL(conditions_at(s, (double)step * dt));
     double *vh = s->vn; /* v_{n+1/2} */
-    central_drift(s, u, v, s->react ? s->ufix : u, vh);
+    if (!drifted) central_drift(s, u, v, s->react ? s->ufix : u, vh);
+    drifted = 0;
     s->ku_ok = 0;
     CUPID_CALL(refresh(s, u));
     if (stiff_damping) CUPID_CALL(refresh(s, vh)); /* b K v_{n+1/2} reads its copies */
     if (o->rayleigh_mass != 0.0 || stiff_damping) { /* the damping's work over the step */
       damping_apply(s, vh, s->t1, s->t2);
       s->e.damping += dt * dyn_dot(s->hi - s->lo, vh + s->lo, s->t1 + s->lo);
+    }
+    if (merge && !output_step(s, step)) { /* v_{n+1} unread: the kick joins the next drift */
+      dyn_stiffness(s, u, s->g);
+      s->ku_ok = 1;
+      CUPID_CALL(s->kst);
+      CUPID_CALL(notify(s, fn, ctx, step, u, NULL));
+      if (mu == mu) kick_drift_uniform(s->n, dt, s->g, mu, vh, u);
+      else kick_drift_free(s->n, dt, s->g, s->minv, vh, u);
+      drifted = 1;
+      continue;
     }
     central_kick(s, u, vh, v);
     s->ku_ok = 1;

@@ -536,6 +536,7 @@ cupid_status cupid_problem_run_dynamic(cupid_problem_state *prob, const cupid_me
   opt.gamma = d->newmark_gamma;
   opt.rayleigh_mass = d->rayleigh_mass;
   opt.rayleigh_stiffness = d->rayleigh_stiffness;
+  opt.velocity_at_outputs = 1; /* monitor(): v only for the output steps' files */
   cupid_dynamics_hooks hooks = {.ctx = &o};
   for (int k = 0; k < m->n_constraints; k++) o.timed_constraints |= constraint_depends_on_time(&m->constraints[k]);
   for (int k = 0; k < m->n_loads; k++) o.timed_loads |= load_depends_on_time(&m->loads[k]);

@@ -1,7 +1,8 @@
 /* Matrix-free central differences (cupid_dynamics_run_explicit with the PD operator's
  * product) against central differences on the assembled PD stiffness (cupid_dynamics_run):
  * a small LPS and a bond-based block, one face held, a body force, an initial velocity field
- * and Rayleigh damping (both terms). Same steps, so the same states to round-off. */
+ * and Rayleigh damping (both terms). Same steps, so the same states to round-off. Also the
+ * merged half-kicks of velocity_at_outputs, and a failing product. */
 #include <math.h>
 #include <string.h>
 
@@ -20,6 +21,22 @@ static cupid_status observe(void *ctx, cupid_int step, double t, int output, con
   r->calls++;
   if (output) r->last = *e;
   return CUPID_SUCCESS;
+}
+
+/* Checks what a velocity_at_outputs run promises: v and a at step 0 and the output steps,
+ * NULL at the others; u always. */
+typedef struct {
+  record r;
+  int every, steps, bad;
+} lazy_record;
+
+static cupid_status observe_lazy(void *ctx, cupid_int step, double t, int output,
+                                 const double *u, const double *v, const double *a,
+                                 const cupid_dynamics_energy *e) {
+  lazy_record *l = ctx;
+  const int out = step % l->every == 0 || step == l->steps;
+  if (output != out || !u || (v == NULL) == out || (a == NULL) == out) l->bad++;
+  return observe(&l->r, step, t, output, u, v, a, e);
 }
 
 static cupid_status pd_apply(void *ctx, const double *x, double *y) {
@@ -185,11 +202,92 @@ static void test_bond(void **state) {
   compare(CUPID_PD_BOND);
 }
 
+/* velocity_at_outputs (the half-kicks between outputs merged into one pass): on a free LPS
+ * block (no load, fixed DOF or damping) the same states and energies as the plain run to
+ * round-off, over output intervals of 20 (a uniform mass) and of 7 (a varying one; the last
+ * step then an output of its own),
+ * with v and a NULL only at the steps between outputs. With a fixed DOF nothing merges: the
+ * same numbers to the bit as without the option. */
+static void test_merged_kicks(void **state) {
+  (void)state;
+  cupid_box box = {{0, 0, 0}, {3.0, 2.5, 3.5}, {1, 1, 1}};
+  int mat = 0;
+  cupid_pd_grid_options go = {.spacing = 0.5, .dimension = 3};
+  cupid_pd_grid grid = NULL;
+  CUPID_ASSERT_OK(cupid_pd_grid_create(&go, 1, &box, &mat, &grid));
+  cupid_pd_material pm = {.E = 2000.0, .nu = 0.3};
+  cupid_pd_operator_options oo = {.horizon = 1.0, .model = CUPID_PD_LPS,
+                                  .influence = CUPID_INFLUENCE_INVERSE,
+                                  .partial_volume = CUPID_PARTIAL_PDLAMMPS, .materials = &pm,
+                                  .n_materials = 1};
+  cupid_pd_operator op = NULL;
+  CUPID_ASSERT_OK(cupid_pd_operator_create(grid, &oo, &op));
+  const cupid_int nn = cupid_pd_grid_num_nodes(grid), n = 3 * nn;
+  const double *x = cupid_pd_grid_coords(grid);
+  double *m = NULL, *u0 = NULL, *v0 = NULL, *u1 = NULL, *v1 = NULL;
+  double **arrays[] = {&m, &u0, &v0, &u1, &v1};
+  for (int k = 0; k < 5; k++) CUPID_ASSERT_OK(cupid_calloc((size_t)n, sizeof(double), "t", arrays[k]));
+  for (int fixed = 0; fixed < 2; fixed++)
+    for (int every = 20; every > 0; every -= 13) {
+      cupid_dirichlet bc = NULL;
+      CUPID_ASSERT_OK(cupid_dirichlet_create(n, &bc));
+      if (fixed) CUPID_ASSERT_OK(cupid_dirichlet_fix(bc, 0, 0.0));
+      CUPID_ASSERT_OK(cupid_dirichlet_finalize(bc));
+      for (cupid_int i = 0; i < nn; i++)
+        for (int c = 0; c < 3; c++) {
+          const double *p = x + 3 * i;
+          /* every 20: a uniform mass (its own merged loop), every 7: not */
+          m[3 * i + c] = 7.0 * cupid_pd_grid_cell_volume(grid) * (every == 20 ? 1.0 : 1.0 + 0.2 * (i % 3));
+          u0[3 * i + c] = u1[3 * i + c] = 1e-3 * sin(1.3 * p[0] + c) * p[2];
+          v0[3 * i + c] = v1[3 * i + c] = 0.02 * cos(0.7 * p[1] - c) * p[2];
+        }
+      cupid_dynamics_explicit_system es = {.n = n, .apply = pd_apply, .ctx = op, .m_lumped = m,
+                                           .bc = bc};
+      cupid_dynamics_options o = cupid_dynamics_defaults();
+      o.integrator = CUPID_INTEGRATOR_CENTRAL;
+      o.steps = 60;
+      o.every = every;
+      o.dt = 1e3;
+      cupid_dynamics_info ia, ib;
+      assert_int_equal(cupid_dynamics_run_explicit(&es, &o, u0, v0, NULL, NULL, &ia), CUPID_ERR_ARGUMENT);
+      o.dt = 0.5 * ia.dt_critical;
+      record ra = {0};
+      lazy_record rb = {.every = every, .steps = 60};
+      CUPID_ASSERT_OK(cupid_dynamics_run_explicit(&es, &o, u0, v0, observe, &ra, &ia));
+      o.velocity_at_outputs = 1;
+      CUPID_ASSERT_OK(cupid_dynamics_run_explicit(&es, &o, u1, v1, observe_lazy, &rb, &ib));
+      assert_int_equal(rb.bad, 0);
+      assert_int_equal(ra.calls, rb.r.calls);
+      if (fixed) { /* nothing merged */
+        assert_memory_equal(u0, u1, (size_t)n * sizeof *u0);
+        assert_memory_equal(v0, v1, (size_t)n * sizeof *v0);
+      }
+      /* The merged kick adds dt a once where the plain run adds dt/2 a twice: round-off,
+       * 1e-13 of the largest values after 60 steps (observed ~1e-16). */
+      const double umax = max_abs(n, u0), vmax = max_abs(n, v0);
+      assert_true(umax > 1e-3 && vmax > 1e-3);
+      for (cupid_int d = 0; d < n; d++) {
+        ASSERT_NEAR(u1[d], u0[d], 1e-13 * umax);
+        ASSERT_NEAR(v1[d], v0[d], 1e-13 * vmax);
+      }
+      const double escale = ra.last.kinetic + ra.last.strain;
+      ASSERT_NEAR(rb.r.last.kinetic, ra.last.kinetic, 1e-13 * escale);
+      ASSERT_NEAR(rb.r.last.strain, ra.last.strain, 1e-13 * escale);
+      ASSERT_NEAR(rb.r.last.balance, ra.last.balance, 1e-13 * escale);
+      cupid_dirichlet_destroy(&bc);
+    }
+  for (int k = 0; k < 5; k++) cupid_free(arrays[k]);
+  cupid_pd_operator_destroy(&op);
+  cupid_pd_grid_destroy(&grid);
+}
+
 /* A failing product stops the run with its status, and at once: in the stable-step check
  * (call 2: E0, then the first Lanczos product), in the time loop (call L + 4: E0, the L
  * Lanczos products of a run that succeeds, the initial acceleration, the energies of step 0,
- * the forces of step 1), or never (the run succeeds). */
-static cupid_status run_failing(int fail_at, int *calls_made, cupid_dynamics_info *info) {
+ * the forces of step 1; or of step 3, two products on), or never (the run succeeds); the
+ * same with the half-kicks between outputs merged. */
+static cupid_status run_failing(int fail_at, int merge, int *calls_made,
+                                cupid_dynamics_info *info) {
   double m[3] = {1, 1, 1}, u[3] = {0}, v[3] = {0};
   int calls[2] = {0, fail_at};
   cupid_dynamics_explicit_system es = {.n = 3, .apply = failing_apply, .ctx = calls, .m_lumped = m};
@@ -197,6 +295,8 @@ static cupid_status run_failing(int fail_at, int *calls_made, cupid_dynamics_inf
   o.integrator = CUPID_INTEGRATOR_CENTRAL;
   o.dt = 0.1;
   o.steps = 5;
+  o.every = 5;
+  o.velocity_at_outputs = merge; /* a failure inside the merged steps stops the run too */
   cupid_status st = cupid_dynamics_run_explicit(&es, &o, u, v, NULL, NULL, info);
   *calls_made = calls[0];
   return st;
@@ -206,17 +306,22 @@ static void test_apply_failure(void **state) {
   (void)state;
   cupid_dynamics_info info;
   int calls = 0;
-  CUPID_ASSERT_OK(run_failing(1000, &calls, &info)); /* K = I: Lanczos ends after 1 product */
-  assert_int_equal(info.lanczos_steps, 1);
-  assert_int_equal(run_failing(2, &calls, NULL), CUPID_ERR_NUMERIC);
-  assert_int_equal(calls, 2);
-  const int in_loop = info.lanczos_steps + 4;
-  assert_int_equal(run_failing(in_loop, &calls, NULL), CUPID_ERR_NUMERIC);
-  assert_int_equal(calls, in_loop);
+  for (int merge = 0; merge < 2; merge++) {
+    CUPID_ASSERT_OK(run_failing(1000, merge, &calls, &info)); /* K = I: Lanczos ends after 1 */
+    assert_int_equal(info.lanczos_steps, 1);
+    assert_int_equal(run_failing(2, merge, &calls, NULL), CUPID_ERR_NUMERIC);
+    assert_int_equal(calls, 2);
+    for (int at = 0; at < 2; at++) { /* at the forces of step 1, then of step 3 */
+      const int in_loop = info.lanczos_steps + 4 + 2 * at;
+      assert_int_equal(run_failing(in_loop, merge, &calls, NULL), CUPID_ERR_NUMERIC);
+      assert_int_equal(calls, in_loop);
+    }
+  }
 }
 
 int main(void) {
   const struct CMUnitTest tests[] = {cmocka_unit_test(test_lps), cmocka_unit_test(test_bond),
+                                     cmocka_unit_test(test_merged_kicks),
                                      cmocka_unit_test(test_apply_failure)};
   return cmocka_run_group_tests(tests, NULL, NULL);
 }
