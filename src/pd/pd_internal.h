@@ -77,6 +77,8 @@ cupid_status pd_neighbors_build(const struct cupid_pd_grid_private *g, const pd_
 typedef struct {
   cupid_int i0, c0, cp0;
   int len, full;
+  int ub0, ub1; /* nodes i0 + [ub0, ub1): each with b equal over its whole family (LPS,
+                   padded; pd_uniform_build), the run's longest such stretch; else 0, 0 */
 } pd_run;
 
 /* A segment of a run's non-full nodes: nodes i0 .. i0+n-1, ranks rank .. rank+n-1 (see
@@ -295,6 +297,9 @@ cupid_status pd_families_build(struct cupid_pd_operator_private *op);
 
 /* The ghost-bond corrections: segments and records (ghosts.c), after the runs. */
 cupid_status pd_ghosts_build(struct cupid_pd_operator_private *op);
+
+/* The runs' stretches of uniform b (pd_run ub0, ub1; uniform.c), after the node data. */
+cupid_status pd_uniform_build(struct cupid_pd_operator_private *op);
 
 /* Build the explicit bond lists (if not there yet) and switch apply to the bond-list
  * kernels (stencil_off = 1). Not thread-safe: call before sharing the operator. */

@@ -27,6 +27,29 @@ static double max_abs(cupid_int n, const double *x) {
   return m;
 }
 
+/* The runs' stretches of uniform b (pd_run ub0, ub1; uniform.c): every node in one has its
+ * whole family, each neighbour with the node's own b to the bit (as the work arrays hold it:
+ * mu / m); with `some`, the grid has such nodes. */
+static void check_uniform(const struct cupid_pd_operator_private *op, int some) {
+  cupid_int total = 0;
+  for (cupid_int r = 0; r < op->nruns; r++) {
+    const pd_run *R = &op->runs[r];
+    assert_true(R->ub0 >= 0 && R->ub0 <= R->ub1 && R->ub1 <= R->len);
+    for (cupid_int i = R->i0 + R->ub0; i < R->i0 + R->ub1; i++) {
+      assert_true(op->full[i]);
+      const double bi = op->mu[i] / op->m[i];
+      const pd_family F = pd_family_of(op, i);
+      for (int s = 0; s < op->st.n; s++) {
+        const cupid_int j = pd_family_node(op, &F, s);
+        assert_true(j >= 0);
+        assert_true(op->mu[j] / op->m[j] == bi);
+      }
+    }
+    total += R->ub1 - R->ub0;
+  }
+  if (some) assert_true(total > 0);
+}
+
 /* Stencil f against bond-list f of the same operator, whole and by ranges. */
 static void compare(const grid_case *gc, cupid_pd_model_kind model, cupid_influence infl,
                     cupid_partial_volume pv) {
@@ -50,6 +73,7 @@ static void compare(const grid_case *gc, cupid_pd_model_kind model, cupid_influe
   CUPID_ASSERT_OK(cupid_malloc(3 * (size_t)n, sizeof *g, "g", &g));
   uint64_t seed = 11 + (uint64_t)model;
   for (cupid_int i = 0; i < 3 * n; i++) u[i] = cupid_test_random(&seed) - 0.5;
+  check_uniform(op, strncmp(gc->name, "deep", 4) == 0 && model == CUPID_PD_LPS);
   CUPID_ASSERT_OK(cupid_pd_operator_apply(op, u, f)); /* stencil (default) */
   assert_int_equal(op->stencil_off, 0);
   CUPID_ASSERT_OK(pd_operator_use_bond_lists(op));
@@ -118,6 +142,10 @@ static const grid_case cases[] = {
     {"sparse", 2, {BOX(0, 0, 0, 5, 4, 4), BOX(40, 30, 20, 44, 34, 24)}, {0, 1}, 3, 3.015},
     /* m = 4: 128 pairs, two chunks of the pair plan. */
     {"wide", 1, {BOX(0, 0, 0, 6, 5.5, 5)}, {0}, 3, 4.015},
+    /* 30 x 13 x 13 nodes: lane blocks of uniform b (pd_run ub0, ub1) in the middle rows. */
+    {"deep", 1, {BOX(0, 0, 0, 15, 6.5, 6.5)}, {0}, 3, 3.015},
+    /* 34 x 17 x 17 nodes at m = 4: uniform blocks over two pair chunks. */
+    {"deep wide", 1, {BOX(0, 0, 0, 17, 8.5, 8.5)}, {0}, 3, 4.015},
 };
 
 static void test_lps(void **state) {
