@@ -367,9 +367,13 @@ typedef void (*pd_run_kernel)(const struct cupid_pd_operator_private *op, const 
 typedef int (*pd_scan_kernel)(const struct cupid_pd_operator_private *op, const pd_work *w,
                               const pd_run *R, cupid_int i, int len, double lim, pd_hit *hits,
                               int cap);
+typedef void (*pd_copy_kernel)(cupid_int len, const double *restrict u, double r0, double r1,
+                               double r2, double *restrict x, double *restrict y,
+                               double *restrict z);
 typedef struct {
   pd_run_kernel dilatation, bond_force, lps_first, lps_second;
   pd_scan_kernel stretch;
+  pd_copy_kernel copy;
   int lanes;
 } pd_kernel_set;
 
@@ -502,8 +506,8 @@ static cupid_int first_run(const struct cupid_pd_operator_private *op, cupid_int
  * (bond-based); padded, absent cells read 0. The node constants and the zeros are written
  * only when the window or the nodes differ from the last fill: the kernels write a (LPS)
  * at node cells only, so both still hold on every apply of a time loop or a Krylov solve. */
-static void work_fill(const struct cupid_pd_operator_private *op, pd_work *w, cupid_int lo,
-                      cupid_int hi, const double *u) {
+static void work_fill(const struct cupid_pd_operator_private *op, const pd_kernel_set *K,
+                      pd_work *w, cupid_int lo, cupid_int hi, const double *u) {
   const int lps = w->b != NULL;
   const cupid_int key[5] = {w->base, w->n, lo, hi, op->gen};
   const int fresh = memcmp(key, w->filled, sizeof key) != 0;
@@ -527,13 +531,7 @@ static void work_fill(const struct cupid_pd_operator_private *op, pd_work *w, cu
     const pd_run *R = &op->runs[r];
     const cupid_int a = R->i0 > lo ? R->i0 : lo, b = R->i0 + R->len < hi ? R->i0 + R->len : hi;
     const cupid_int q = work_index(w, R, a);
-    double *restrict x = w->x + q, *restrict y = w->y + q, *restrict z = w->z + q;
-    const double *restrict ua = u + 3 * a;
-    for (cupid_int t = 0; t < b - a; t++) {
-      x[t] = ua[3 * t] - r0;
-      y[t] = ua[3 * t + 1] - r1;
-      z[t] = ua[3 * t + 2] - r2;
-    }
+    K->copy(b - a, u + 3 * a, r0, r1, r2, w->x + q, w->y + q, w->z + q);
     if (!fresh) continue;
     for (cupid_int t = 0; t < b - a; t++) {
       if (lps) w->b[q + t] = op->mu[a + t] / op->m[a + t];
@@ -616,7 +614,7 @@ cupid_status pd_stencil_apply(const struct cupid_pd_operator_private *op, cupid_
   }
   const pd_kernel_set *K = kernels_pick();
   CUPID_TRY(work_reserve(w, op->padded, base, len, lead, lps));
-  work_fill(op, w, lo, hi, u);
+  work_fill(op, K, w, lo, hi, u);
 #pragma omp parallel if (hi - lo > PD_OMP_MIN_NODES)
   {
     if (lps) {
@@ -750,7 +748,7 @@ cupid_status pd_stencil_stretch_scan(const struct cupid_pd_operator_private *op,
   }
   const pd_kernel_set *K = kernels_pick();
   CUPID_TRY(work_reserve(w, op->padded, base, len, lead, lps));
-  work_fill(op, w, 0, nn, u);
+  work_fill(op, K, w, 0, nn, u);
   if (w->padded) {
     CUPID_TRY(scan_absent_nan(op, w));
     nan_cells = 1;

@@ -2,10 +2,10 @@
  *
  * The first pass sums w15 ((b_i + b+) d+ + (b_i + b-) d-) n over the pairs, loading b+ and
  * b- for every pair (stencil_kernels.h). Where node i and every node of its family have the
- * same b = mu / m (bit for bit: one material, full families all round, so one m), the sum is
+ * same b = mu / m (to the bit: one material, full families all round, so one m), the sum is
  * 2 b_i sum w15 (d+ + d-) n, and the kernel skips those loads. That holds at least a horizon
  * inside the surface: a third of the nodes of a 40^3 cube, two thirds of a 100^3 one. */
-#include <math.h>
+#include <stdint.h>
 
 #include "pd/pd_internal.h"
 
@@ -27,26 +27,29 @@ static void longest(const unsigned char *ok, int len, int *a, int *b) {
 cupid_status pd_uniform_build(struct cupid_pd_operator_private *op) {
   if (!op->padded || op->model != CUPID_PD_LPS) return CUPID_SUCCESS;
   const cupid_int cells = op->pn[0] * op->pn[1] * op->pn[2];
-  double *bc = NULL;
-  /* b by padded cell, NaN where no node is: a comparison with an absent neighbour fails. */
-  CUPID_CALL(cupid_malloc((size_t)cells, sizeof *bc, "PD uniform stretches", &bc));
-#pragma omp parallel for schedule(static) if (cells > PD_OMP_MIN_NODES)
-  for (cupid_int c = 0; c < cells; c++) bc[c] = NAN;
+  uint16_t *key = NULL;
+  /* By padded cell: the material + 1 of a node with a full family, else 0. Full nodes of one
+   * material have one b = mu / m to the bit (m of a full family is summed once, node_data),
+   * so a node whose family all has its own key has uniform b. */
+  for (cupid_int i = 0; i < op->nnodes; i++)
+    if (op->grid->material[i] >= UINT16_MAX - 1) return CUPID_SUCCESS; /* no key: no stretch */
+  CUPID_CALL(cupid_calloc((size_t)cells, sizeof *key, "PD uniform stretches", &key));
 #pragma omp parallel for schedule(static) if (op->nnodes > PD_OMP_MIN_NODES)
-  for (cupid_int i = 0; i < op->nnodes; i++) bc[pd_node_pcell(op, i)] = op->mu[i] / op->m[i];
+  for (cupid_int i = 0; i < op->nnodes; i++)
+    if (op->full[i]) key[pd_node_pcell(op, i)] = (uint16_t)(op->grid->material[i] + 1);
   const pd_stencil *S = &op->st;
 #pragma omp parallel for schedule(dynamic, 16) if (op->nnodes > PD_OMP_MIN_NODES)
   for (cupid_int r = 0; r < op->nruns; r++) {
     pd_run *R = &op->runs[r];
-    const double *restrict b = bc + R->cp0;
+    const uint16_t *restrict k = key + R->cp0;
     unsigned char ok[PD_RUN_MAX];
-    for (int t = 0; t < R->len; t++) ok[t] = op->full[R->i0 + t];
+    for (int t = 0; t < R->len; t++) ok[t] = k[t] != 0;
     for (int s = 0; s < S->n; s++) {
-      const double *restrict bj = b + op->pclin[s];
-      for (int t = 0; t < R->len; t++) ok[t] &= bj[t] == b[t];
+      const uint16_t *restrict kj = k + op->pclin[s];
+      for (int t = 0; t < R->len; t++) ok[t] &= kj[t] == k[t];
     }
     longest(ok, R->len, &R->ub0, &R->ub1);
   }
-  cupid_free(&bc);
+  cupid_free(&key);
   return CUPID_SUCCESS;
 }
