@@ -514,14 +514,20 @@ cleanup:
 cupid_status cupid_problem_force_sums(cupid_problem_state *prob, double load[3],
                                       double reaction[3]) {
   double *t = NULL;
-  CUPID_CALL(cupid_calloc((size_t)(3 * prob->ndof), sizeof *t, "translation vectors", &t));
-  cupid_status st = cupid_problem_translations(prob, t);
+  /* The unit translation along k: 1 at every PD DOF of component k, the beam's own
+   * interpolation elsewhere (cupid_problem_translations); without a beam the PD DOFs are all
+   * there is, and their sums need no vector (three of the DOF count were written and read). */
+  if (prob->beam)
+    CUPID_CALL(cupid_calloc((size_t)(3 * prob->ndof), sizeof *t, "translation vectors", &t));
+  cupid_status st = t ? cupid_problem_translations(prob, t) : CUPID_SUCCESS;
   for (int k = 0; k < 3 && st == CUPID_SUCCESS; k++) {
-    const double *tk = t + (size_t)k * (size_t)prob->ndof;
+    const double *tk = t ? t + (size_t)k * (size_t)prob->ndof : NULL;
+    const cupid_int first = tk ? 0 : k, end = tk ? prob->ndof : 3 * prob->n_pd, step = tk ? 1 : 3;
     load[k] = reaction[k] = 0.0;
-    for (cupid_int d = 0; d < prob->ndof; d++) {
-      load[k] += prob->f_ext[d] * tk[d];
-      if (prob->bc->fixed[d]) reaction[k] += (prob->f_int[d] - prob->f_ext[d]) * tk[d];
+    for (cupid_int d = first; d < end; d += step) {
+      const double w = tk ? tk[d] : 1.0;
+      load[k] += prob->f_ext[d] * w;
+      if (prob->bc->fixed[d]) reaction[k] += (prob->f_int[d] - prob->f_ext[d]) * w;
     }
   }
   cupid_free(&t);
