@@ -233,14 +233,19 @@ static void PD_KNAME(run_dilatation)(const struct cupid_pd_operator_private *op,
       } else                                                                                   \
         gx[b] = gy[b] = gz[b] = th[b] = (PD_KVEC){0};                                          \
       xt[b] = PD_KLOAD(X + u), yt[b] = PD_KLOAD(Y + u), zt[b] = PD_KLOAD(Z + u);               \
-      bt[b] = PD_KLOAD(B + u);                                                                 \
+      /* uniform: b_i only after the pairs (live across them, it cost AVX2 a register:        \
+       * GCC kept an accumulator in memory) */                                                 \
+      if (UNIFORM)                                                                             \
+        bt[b] = (PD_KVEC){0};                                                                  \
+      else                                                                                     \
+        bt[b] = PD_KLOAD(B + u);                                                               \
     }                                                                                          \
     PD_KCLASSES(PAIRS, NB, sg);                                                      \
     for (int b = 0; b < NB; b++) {                                                             \
       const int u = t + b * PD_KLANES;                                                         \
       PD_KSTORE(acc + u, th[b]);                                                               \
       if ((UNIFORM) && s1 >= half) { /* the sums without b times b_i + b_j = 2 b_i */          \
-        const PD_KVEC b2 = bt[b] + bt[b];                                                      \
+        const PD_KVEC b2 = PD_KLOAD(B + u) + PD_KLOAD(B + u);                                  \
         gx[b] *= b2, gy[b] *= b2, gz[b] *= b2;                                                 \
       }                                                                                        \
       /* Between chunks on the stack; then into w->gx..gz, of this run's nodes only (the       \
