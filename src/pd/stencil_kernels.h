@@ -86,7 +86,8 @@ static inline void PD_KNAME(ghost_first)(const struct cupid_pd_operator_private 
         PD_KSTORE(Fy + t, PD_KLOAD(Fy + t) + hy);
         PD_KSTORE(Fz + t, PD_KLOAD(Fz + t) + hz);
       } else
-        for (int l = 0; l < len - t; l++) Fx[t + l] += hx[l], Fy[t + l] += hy[l], Fz[t + l] += hz[l];
+        for (int l = 0; l < len - t; l++)
+          Fx[t + l] += hx[l], Fy[t + l] += hy[l], Fz[t + l] += hz[l];
     }
   });
 }
@@ -195,7 +196,7 @@ static void PD_KNAME(run_dilatation)(const struct cupid_pd_operator_private *op,
  * AVX-512, whose 32 registers hold their 16 accumulators and node values; one where there
  * are 16 registers. */
 #define PD_KFB (PD_KLANES == 8 ? 2 : 1)
-#define PD_KFIRST_PAIRS_(NB, HX, HY, HZ, K0, K1, UNIFORM)                                                \
+#define PD_KFIRST_PAIRS_(NB, HX, HY, HZ, K0, K1, UNIFORM)                                       \
   for (int k = (K0); k < (K1); k++) {                                                          \
     const cupid_int op_ = t + rp[k - s0], om_ = t + rm[k - s0];                                \
     const double n0 = P->nrm[3 * k], n1 = P->nrm[3 * k + 1], n2 = P->nrm[3 * k + 2];           \
@@ -222,7 +223,7 @@ static void PD_KNAME(run_dilatation)(const struct cupid_pd_operator_private *op,
  * once per node after the pairs: neither b+ nor b- is loaded (6 neighbour loads a pair, not 8)
  * and 3 operations fewer a pair. */
 #define PD_KFIRST_PAIRS_U(NB, HX, HY, HZ, K0, K1) PD_KFIRST_PAIRS_(NB, HX, HY, HZ, K0, K1, 1)
-#define PD_KFIRST_GROUP(NB, PAIRS, UNIFORM)                                                                    \
+#define PD_KFIRST_GROUP(NB, PAIRS, UNIFORM)                                                     \
   do {                                                                                         \
     PD_KVEC gx[NB], gy[NB], gz[NB], th[NB], xt[NB], yt[NB], zt[NB], bt[NB];                    \
     for (int b = 0; b < NB; b++) {                                                             \
