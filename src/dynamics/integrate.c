@@ -263,17 +263,17 @@ static cupid_status initial_acceleration(dyn_state *s, const double *u, const do
   return st;
 }
 
-/* Kinetic and strain energy cost two products per call, so they are evaluated at output
- * steps only (the balance check samples those); the monitor sees them there. */
 static int output_step(const dyn_state *s, cupid_int step) {
   return step % s->opt->every == 0 || step == s->opt->steps;
 }
 
+/* Kinetic and strain energy cost two products per call, so they are evaluated at output
+ * steps only (the balance check samples those); the monitor sees them there, and v and a
+ * only there if the run was asked velocity_at_outputs. */
 static cupid_status notify(dyn_state *s, cupid_dynamics_monitor fn, void *ctx, cupid_int step,
                            const double *u, const double *v) {
   int out = output_step(s, step);
   if (out) energies(s, u, v);
-  if (!out && s->opt->velocity_at_outputs && !fn) return CUPID_SUCCESS;
   if (!fn) return CUPID_SUCCESS;
   const int hide = !out && s->opt->velocity_at_outputs;
   return fn(ctx, step, (double)step * s->opt->dt, out, u, hide ? NULL : v, hide ? NULL : s->a,

@@ -522,7 +522,8 @@ cupid_status cupid_problem_force_sums(cupid_problem_state *prob, double load[3],
   cupid_status st = t ? cupid_problem_translations(prob, t) : CUPID_SUCCESS;
   for (int k = 0; k < 3 && st == CUPID_SUCCESS; k++) {
     const double *tk = t ? t + (size_t)k * (size_t)prob->ndof : NULL;
-    const cupid_int first = tk ? 0 : k, end = tk ? prob->ndof : 3 * prob->n_pd, step = tk ? 1 : 3;
+    const cupid_int first = tk ? 0 : k, step = tk ? 1 : 3;
+    const cupid_int end = tk ? prob->ndof : 3 * prob->n_pd;
     load[k] = reaction[k] = 0.0;
     for (cupid_int d = first; d < end; d += step) {
       const double w = tk ? tk[d] : 1.0;
