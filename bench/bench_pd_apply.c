@@ -7,8 +7,12 @@
  * best-of-reps apply time of each path, force evaluations per second, and the time of
  * `--steps` explicit central-difference steps (velocity Verlet, lumped mass rho V,
  * cupid_pd_operator_apply per step), peak resident memory. Prints a markdown table.
- * Usage: bench_pd_apply [n ...] [--bond] [--steps S] [--reps R] [--no-bond-lists];
- * threads from OMP_NUM_THREADS. */
+ * `--uniform-ab R`: R rounds in one process, alternating the LPS stencil apply with and
+ * without the runs' stretches of uniform b (pd_run ub0, ub1; src/pd/uniform.c), best of 5
+ * applies each: the medians and the median of the rounds' ratios (to stderr). One process
+ * sees one memory layout, so a few percent are resolved that separate processes blur.
+ * Usage: bench_pd_apply [n ...] [--bond] [--steps S] [--reps R] [--no-bond-lists]
+ * [--uniform-ab R]; threads from OMP_NUM_THREADS. */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -64,6 +68,46 @@ static double best_apply(cupid_pd_operator op, const double *u, double *f, int r
   return best;
 }
 
+static int by_value(const void *a, const void *b) {
+  const double x = *(const double *)a, y = *(const double *)b;
+  return x < y ? -1 : x > y;
+}
+
+static double median(double *x, int n) {
+  qsort(x, (size_t)n, sizeof *x, by_value);
+  return n % 2 ? x[n / 2] : 0.5 * (x[n / 2 - 1] + x[n / 2]);
+}
+
+/* The apply with the uniform-b stretches and without (see the header), rounds alternated. */
+static void uniform_ab(struct cupid_pd_operator_private *op, int n, int rounds, const double *u,
+                       double *f) {
+  int *keep = malloc(2 * (size_t)op->nruns * sizeof *keep);
+  double *on = malloc(3 * (size_t)rounds * sizeof *on), *off = on + rounds, *ratio = off + rounds;
+  if (!keep || !on) exit(1);
+  cupid_int nodes = 0;
+  for (cupid_int r = 0; r < op->nruns; r++) {
+    keep[2 * r] = op->runs[r].ub0, keep[2 * r + 1] = op->runs[r].ub1;
+    nodes += op->runs[r].ub1 - op->runs[r].ub0;
+  }
+  for (int k = 0; k < rounds; k++) {
+    for (int with = 1; with >= 0; with--) {
+      for (cupid_int r = 0; r < op->nruns; r++) {
+        op->runs[r].ub0 = with ? keep[2 * r] : 0;
+        op->runs[r].ub1 = with ? keep[2 * r + 1] : 0;
+      }
+      double cpu;
+      (with ? on : off)[k] = best_apply(op, u, f, 5, &cpu);
+    }
+    ratio[k] = on[k] / off[k];
+  }
+  fprintf(stderr, "n = %d: uniform-b stretches (%lld nodes of %lld), %d alternated rounds of "
+          "best-of-5 applies: on %.3f ms, off %.3f ms (medians), on/off median %.3f\n",
+          n, (long long)nodes, (long long)op->nnodes, rounds, 1e3 * median(on, rounds),
+          1e3 * median(off, rounds), median(ratio, rounds));
+  free(keep);
+  free(on);
+}
+
 /* steps of velocity Verlet, m a = -K u, from a smooth initial velocity; returns wall
  * seconds, *cpu the CPU seconds. */
 static double explicit_steps(cupid_pd_operator op, cupid_int nn, int steps, double *u, double *v,
@@ -94,13 +138,14 @@ static double explicit_steps(cupid_pd_operator op, cupid_int nn, int steps, doub
 }
 
 int main(int argc, char **argv) {
-  int sizes[64], ns = 0, steps = 110, reps = 10, bond_lists = 1;
+  int sizes[64], ns = 0, steps = 110, reps = 10, bond_lists = 1, ab = 0;
   cupid_pd_model_kind model = CUPID_PD_LPS;
   for (int a = 1; a < argc && ns < 64; a++) {
     if (!strcmp(argv[a], "--bond")) model = CUPID_PD_BOND;
     else if (!strcmp(argv[a], "--steps") && a + 1 < argc) steps = atoi(argv[++a]);
     else if (!strcmp(argv[a], "--reps") && a + 1 < argc) reps = atoi(argv[++a]);
     else if (!strcmp(argv[a], "--no-bond-lists")) bond_lists = 0;
+    else if (!strcmp(argv[a], "--uniform-ab") && a + 1 < argc) ab = atoi(argv[++a]);
     else sizes[ns++] = atoi(argv[a]);
   }
   if (ns == 0) {
@@ -150,6 +195,7 @@ int main(int argc, char **argv) {
     const double t_st = best_apply(op, u, f, reps, &c_st);
     double cs_st = 0, cs_bl = 0;
     const double t_st_steps = explicit_steps(op, nn, steps, u, v, f, &cs_st, &c_st_steps);
+    if (ab > 0) uniform_ab(op, n, ab, u, f);
     const double peak_stencil = (double)cupid_peak_memory() / 1e6;
     /* The kept work arrays: 5 doubles a cell of the padded window (8 for LPS). */
     const double wb = (op->model == CUPID_PD_LPS ? 64.0 : 40.0) *
