@@ -64,19 +64,26 @@ static double max_abs(cupid_int n, const double *x) {
   return m;
 }
 
-static void compare(cupid_pd_model_kind model) {
+/* The tests' block: 6 x 5 x 7 nodes, h = 0.5, delta = 1, E = 2000 (nu 0.3 LPS, 0.25
+ * bond-based: its only one). */
+static cupid_pd_operator block_operator(cupid_pd_model_kind model, cupid_pd_grid *grid) {
   cupid_box box = {{0, 0, 0}, {3.0, 2.5, 3.5}, {1, 1, 1}};
   int mat = 0;
   cupid_pd_grid_options go = {.spacing = 0.5, .dimension = 3};
-  cupid_pd_grid grid = NULL;
-  CUPID_ASSERT_OK(cupid_pd_grid_create(&go, 1, &box, &mat, &grid));
+  CUPID_ASSERT_OK(cupid_pd_grid_create(&go, 1, &box, &mat, grid));
   cupid_pd_material pm = {.E = 2000.0, .nu = model == CUPID_PD_BOND ? 0.25 : 0.3};
   cupid_pd_operator_options oo = {.horizon = 1.0, .model = model,
                                   .influence = CUPID_INFLUENCE_INVERSE,
                                   .partial_volume = CUPID_PARTIAL_PDLAMMPS, .materials = &pm,
                                   .n_materials = 1};
   cupid_pd_operator op = NULL;
-  CUPID_ASSERT_OK(cupid_pd_operator_create(grid, &oo, &op));
+  CUPID_ASSERT_OK(cupid_pd_operator_create(*grid, &oo, &op));
+  return op;
+}
+
+static void compare(cupid_pd_model_kind model) {
+  cupid_pd_grid grid = NULL;
+  cupid_pd_operator op = block_operator(model, &grid);
   const cupid_int nn = cupid_pd_grid_num_nodes(grid), n = 3 * nn;
   const double *x = cupid_pd_grid_coords(grid);
   cupid_csr K = NULL;
@@ -210,18 +217,8 @@ static void test_bond(void **state) {
  * same numbers to the bit as without the option. */
 static void test_merged_kicks(void **state) {
   (void)state;
-  cupid_box box = {{0, 0, 0}, {3.0, 2.5, 3.5}, {1, 1, 1}};
-  int mat = 0;
-  cupid_pd_grid_options go = {.spacing = 0.5, .dimension = 3};
   cupid_pd_grid grid = NULL;
-  CUPID_ASSERT_OK(cupid_pd_grid_create(&go, 1, &box, &mat, &grid));
-  cupid_pd_material pm = {.E = 2000.0, .nu = 0.3};
-  cupid_pd_operator_options oo = {.horizon = 1.0, .model = CUPID_PD_LPS,
-                                  .influence = CUPID_INFLUENCE_INVERSE,
-                                  .partial_volume = CUPID_PARTIAL_PDLAMMPS, .materials = &pm,
-                                  .n_materials = 1};
-  cupid_pd_operator op = NULL;
-  CUPID_ASSERT_OK(cupid_pd_operator_create(grid, &oo, &op));
+  cupid_pd_operator op = block_operator(CUPID_PD_LPS, &grid);
   const cupid_int nn = cupid_pd_grid_num_nodes(grid), n = 3 * nn;
   const double *x = cupid_pd_grid_coords(grid);
   double *m = NULL, *u0 = NULL, *v0 = NULL, *u1 = NULL, *v1 = NULL;

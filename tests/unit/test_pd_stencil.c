@@ -232,8 +232,8 @@ static void check_plan(const struct cupid_pd_operator_private *op) {
   for (int s = 0; s < P->n; s++) assert_int_equal(seen[s], 1);
 }
 
-static void test_pair_plan(void **state) {
-  (void)state;
+/* fn on the LPS operator (influence 1/|xi|, PDLAMMPS volumes) of every case. */
+static void each_case(void (*fn)(const struct cupid_pd_operator_private *op, size_t c)) {
   for (size_t c = 0; c < sizeof cases / sizeof *cases; c++) {
     cupid_pd_grid_options go = {.spacing = 0.5, .dimension = cases[c].dim, .area = 0.3};
     cupid_pd_grid grid = NULL;
@@ -245,10 +245,20 @@ static void test_pair_plan(void **state) {
                                     .n_materials = 2};
     cupid_pd_operator op = NULL;
     CUPID_ASSERT_OK(cupid_pd_operator_create(grid, &oo, &op));
-    check_plan(op);
+    fn(op, c);
     cupid_pd_operator_destroy(&op);
     cupid_pd_grid_destroy(&grid);
   }
+}
+
+static void plan_case(const struct cupid_pd_operator_private *op, size_t c) {
+  (void)c;
+  check_plan(op);
+}
+
+static void test_pair_plan(void **state) {
+  (void)state;
+  each_case(plan_case);
 }
 
 /* The ghost-bond records (ghosts.c): each run's segments are exactly its runs of non-full
@@ -305,23 +315,13 @@ static void check_ghosts(const struct cupid_pd_operator_private *op, int box) {
   if (box) assert_true(3 * shared < nonfull); /* 678 of 2208 */
 }
 
+static void ghosts_case(const struct cupid_pd_operator_private *op, size_t c) {
+  check_ghosts(op, c == 0);
+}
+
 static void test_ghosts(void **state) {
   (void)state;
-  for (size_t c = 0; c < sizeof cases / sizeof *cases; c++) {
-    cupid_pd_grid_options go = {.spacing = 0.5, .dimension = cases[c].dim, .area = 0.3};
-    cupid_pd_grid grid = NULL;
-    CUPID_ASSERT_OK(cupid_pd_grid_create(&go, cases[c].n_boxes, cases[c].boxes, cases[c].mats, &grid));
-    const cupid_pd_material pm[2] = {{.E = 1.0, .nu = 0.25}, {.E = 2.0, .nu = 0.25}};
-    cupid_pd_operator_options oo = {.horizon = cases[c].horizon * go.spacing, .model = CUPID_PD_LPS,
-                                    .influence = CUPID_INFLUENCE_INVERSE,
-                                    .partial_volume = CUPID_PARTIAL_PDLAMMPS, .materials = pm,
-                                    .n_materials = 2};
-    cupid_pd_operator op = NULL;
-    CUPID_ASSERT_OK(cupid_pd_operator_create(grid, &oo, &op));
-    check_ghosts(op, c == 0);
-    cupid_pd_operator_destroy(&op);
-    cupid_pd_grid_destroy(&grid);
-  }
+  each_case(ghosts_case);
 }
 
 /* The runs cover every node once, in order, at consecutive (padded) cells with one full
