@@ -5,7 +5,8 @@
  * A removed bond is a bit in a per-node mask of stencil entries (pd_internal.h), set for both
  * of its ends; the families stay the geometric ones, so the storage and the stencil sweeps
  * of the intact body are untouched. Removing bonds recomputes the weighted volume m of the
- * two nodes over their intact bonds (broken bonds leave the family sums, fracture.md) and
+ * two nodes over their intact bonds (broken bonds leave the family sums, fracture.md), takes
+ * them and their families out of the stencil path's uniform-b stretches (uniform.c) and
  * bumps op->gen so that the stencil path refreshes its copies of mu/m. A node left without
  * any bond gets m = +inf: its dilatation, its a = kappa theta/m and b = mu/m are then 0, and
  * it carries no force (it flies free, as in every PD code). */
@@ -124,6 +125,8 @@ static cupid_status remove_bond(struct cupid_pd_operator_private *op, cupid_int 
   op->nbroken++;
   weighted_volume(op, i);
   weighted_volume(op, j);
+  pd_uniform_exclude(op, i); /* b = mu/m of i and j changed: no longer uniform around them */
+  pd_uniform_exclude(op, j);
   op->gen++;
   return CUPID_SUCCESS;
 }

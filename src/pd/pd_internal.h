@@ -298,8 +298,10 @@ cupid_status pd_families_build(struct cupid_pd_operator_private *op);
 /* The ghost-bond corrections: segments and records (ghosts.c), after the runs. */
 cupid_status pd_ghosts_build(struct cupid_pd_operator_private *op);
 
-/* The runs' stretches of uniform b (pd_run ub0, ub1; uniform.c), after the node data. */
+/* The runs' stretches of uniform b (pd_run ub0, ub1; uniform.c), after the node data; and
+ * node i with its family out of them (i's m changed: a bond of it was removed). */
 cupid_status pd_uniform_build(struct cupid_pd_operator_private *op);
+void pd_uniform_exclude(struct cupid_pd_operator_private *op, cupid_int i);
 
 /* Build the explicit bond lists (if not there yet) and switch apply to the bond-list
  * kernels (stencil_off = 1). Not thread-safe: call before sharing the operator. */

@@ -3,8 +3,10 @@
  * The first pass sums w15 ((b_i + b+) d+ + (b_i + b-) d-) n over the pairs, loading b+ and
  * b- for every pair (stencil_kernels.h). Where node i and every node of its family have the
  * same b = mu / m (to the bit: one material, full families all round, so one m), the sum is
- * 2 b_i sum w15 (d+ + d-) n, and the kernel skips those loads. That holds at least a horizon
- * inside the surface: a third of the nodes of a 40^3 cube, two thirds of a 100^3 one. */
+ * 2 b_i sum w15 (d+ + d-) n, and the kernel skips those loads. That holds two horizons
+ * inside the surface: a third of the nodes of a 40^3 cube, two thirds of a 100^3 one. A
+ * removed bond changes the m, so the b, of its two nodes (fracture.c): pd_uniform_exclude
+ * then cuts them and their families out of the stretches. */
 #include <stdint.h>
 
 #include "pd/pd_internal.h"
@@ -52,4 +54,31 @@ cupid_status pd_uniform_build(struct cupid_pd_operator_private *op) {
   }
   cupid_free(&key);
   return CUPID_SUCCESS;
+}
+
+/* The run holding node i (runs ascend and cover every node). */
+static pd_run *run_of(struct cupid_pd_operator_private *op, cupid_int i) {
+  cupid_int a = 0, b = op->nruns;
+  while (a < b) {
+    const cupid_int m = a + (b - a) / 2;
+    if (op->runs[m].i0 + op->runs[m].len <= i) a = m + 1;
+    else b = m;
+  }
+  return &op->runs[a];
+}
+
+/* Node k out of its run's stretch: the longer side of it stays. */
+static void cut(struct cupid_pd_operator_private *op, cupid_int k) {
+  pd_run *R = run_of(op, k);
+  const int t = (int)(k - R->i0);
+  if (t < R->ub0 || t >= R->ub1) return;
+  if (t - R->ub0 >= R->ub1 - t - 1) R->ub1 = t;
+  else R->ub0 = t + 1;
+}
+
+void pd_uniform_exclude(struct cupid_pd_operator_private *op, cupid_int i) {
+  if (!op->padded || op->model != CUPID_PD_LPS) return;
+  const pd_family F = pd_family_of(op, i);
+  cut(op, i);
+  for (int q = 0; q < F.n; q++) cut(op, pd_family_node(op, &F, pd_family_entry(&F, q)));
 }

@@ -185,6 +185,52 @@ static void test_cracked_operator(void **state) {
     }
 }
 
+/* A body deep enough for the LPS first pass's uniform-b stretches (pd_run ub0, ub1: a node
+ * and its whole family with one b = mu/m), cracked through them: a removed bond changes the
+ * m, so the b, of its two nodes, and the stretches must give way around them (else the
+ * kernel would take 2 b_j for b_j + b_i). Stencil path against the bond lists, every
+ * instruction set, for the pre-crack and then for bonds broken one at a time. */
+static void test_cracked_uniform(void **state) {
+  (void)state;
+  const cupid_box box = box3(0, 30, 0, 15, 0, 15);
+  for (int isa = 1; isa <= 4; isa += (isa == 1 ? 2 : 1)) {
+    body b = make(1, &box, CUPID_PD_LPS, CUPID_PARTIAL_PDLAMMPS, 3.0);
+    cupid_int uniform = 0, removed, broken;
+    for (cupid_int r = 0; r < b.op->nruns; r++) uniform += b.op->runs[r].ub1 - b.op->runs[r].ub0;
+    assert_true(uniform > 0);
+    const cupid_int n = b.n;
+    double *u = malloc(3 * (size_t)n * sizeof *u), *f = malloc(3 * (size_t)n * sizeof *f);
+    double *g = malloc(3 * (size_t)n * sizeof *g), diss;
+    uint64_t seed = 29;
+    for (cupid_int i = 0; i < 3 * n; i++) u[i] = cupid_test_random(&seed) - 0.5;
+    for (int stage = 0; stage < 2; stage++) {
+      if (stage == 0) { /* a pre-crack across the middle of the bulk */
+        cupid_pd_precrack c = {.normal = 1, .at = 7.0, .lo = {10, 0, -1}, .hi = {20, 0, 16}};
+        CUPID_ASSERT_OK(cupid_pd_operator_precrack(b.op, &c, &removed));
+        assert_true(removed > 0);
+      } else { /* then the most strained bond alone, a few times */
+        cupid_pd_fracture_options fo = {.criterion = CUPID_PD_BREAK_STRETCH,
+                                        .critical_stretch = 0.05};
+        for (int k = 0; k < 5; k++) {
+          CUPID_ASSERT_OK(cupid_pd_operator_break_bonds(b.op, u, &fo, 1, &broken, &diss));
+          assert_int_equal(broken, 1);
+        }
+      }
+      b.op->stencil_off = 0;
+      pd_stencil_force_isa(isa);
+      CUPID_ASSERT_OK(cupid_pd_operator_apply(b.op, u, f));
+      pd_stencil_force_isa(0);
+      CUPID_ASSERT_OK(pd_operator_use_bond_lists(b.op));
+      CUPID_ASSERT_OK(cupid_pd_operator_apply(b.op, u, g));
+      const double fm = max_abs(3 * n, g);
+      /* as check_cracked: round-off, 1e-12 of max |f| */
+      for (cupid_int i = 0; i < 3 * n; i++) ASSERT_NEAR(f[i], g[i], 1e-12 * fm);
+    }
+    free(u), free(f), free(g);
+    destroy(&b);
+  }
+}
+
 /* u_y = s y (s = 1/2, coordinates half-integers: every stretch exact): bonds along y have
  * stretch exactly s, all others less. At s0 = s none breaks; at u (1 + 2^-10) exactly the
  * y bonds do; then nothing heals or breaks at u = 0. */
@@ -572,6 +618,7 @@ static void test_support(void **state) {
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_precrack_count),     cmocka_unit_test(test_cracked_operator),
+      cmocka_unit_test(test_cracked_uniform),
       cmocka_unit_test(test_stretch_threshold),  cmocka_unit_test(test_protect_damage_energy),
       cmocka_unit_test(test_threads),            cmocka_unit_test(test_isolated_node),
       cmocka_unit_test(test_copy_broken),        cmocka_unit_test(test_scan_paths),
