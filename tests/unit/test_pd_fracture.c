@@ -1,7 +1,7 @@
 /* Fracture in the PD operator (src/pd/fracture.c): pre-crack geometry against a brute-force
  * count; the operator of a cracked body (stencil kernels with their broken-bond masks, on a
  * padded box and on a sparse union, every instruction set) against the bond-list kernels, the
- * assembled K, the energy and the diagonal; the stretch criterion at and just above s0;
+ * assembled K, the energy and the diagonal; a body cracked through its uniform-b stretches; the stretch criterion at and just above s0;
  * irreversibility, protection and no-fail boxes; damage; the energy a break dissipates;
  * the same broken bonds for 1 and 2 threads; a node that loses every bond; the nodes that
  * lose their support, on a whole grid and on slabs. */
