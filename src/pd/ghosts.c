@@ -42,8 +42,8 @@ static cupid_status ghost_segments(struct cupid_pd_operator_private *op, const i
 }
 
 /* The records of every non-full node by rank, stored by component (c gs + rank): C_i, the
- * sum over the absent entries of w n n^T, and G_i, the present entries' sum of
- * g = omega beta xi (summed in the order of node_data's gself, so the same to the bit). */
+ * sum over the absent entries of w n n^T, and G_i = gself (node_data's sum over the present
+ * entries of g = omega beta xi; LPS only, 0 bond-based, whose kernels do not read it). */
 static void ghost_records(const struct cupid_pd_operator_private *op, const int32_t *rank,
                           cupid_int gs, double *restrict rec) {
   const pd_stencil *S = &op->st;
@@ -57,7 +57,6 @@ static void ghost_records(const struct cupid_pd_operator_private *op, const int3
     for (int s = 0; s < S->n; s++) {
       if (q < F.n && F.s[q] == s) {
         q++;
-        for (int k = 0; k < 3; k++) c[6 + k] += S->wxn[3 * s + k];
         continue;
       }
       const double *n = S->nrm + 3 * s;
@@ -69,6 +68,8 @@ static void ghost_records(const struct cupid_pd_operator_private *op, const int3
       c[4] += w * n[0] * n[2];
       c[5] += w * n[0] * n[1];
     }
+    if (op->gself)
+      for (int k = 0; k < 3; k++) c[6 + k] = op->gself[3 * i + k];
     for (int k = 0; k < PD_GHOST_STRIDE; k++) rec[k * gs + rank[i]] = c[k];
   }
 }

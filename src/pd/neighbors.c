@@ -380,7 +380,7 @@ cleanup:
       CUPID_CALL(cupid_malloc((size_t)(nruns + nn / PD_RUN_MAX + 1), sizeof *op->runs, "PD runs", &op->runs));
   }
   op->nruns = nruns;
-  return pd_ghosts_build(op);
+  return CUPID_SUCCESS;
 }
 
 /* Full nodes: every neighbour exists and node order follows cell order, so the extremes

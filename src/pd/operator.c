@@ -154,6 +154,7 @@ cupid_status cupid_pd_operator_create(const cupid_pd_grid grid,
   CUPID_TRY(pd_stencil_build(o->dim, o->h, o->delta, o->rule, o->influence, &o->st));
   CUPID_TRY(pd_families_build(o));
   CUPID_TRY(node_data(o, opts));
+  CUPID_TRY(pd_ghosts_build(o));
   CUPID_TRY(pd_uniform_build(o));
   o->surface = opts->surface_correction;
   /* The corrected kernels carry per-bond factors: they run on explicit bond lists (the

@@ -292,10 +292,22 @@ static inline cupid_int pd_node_pcell(const struct cupid_pd_operator_private *op
   return (q[0] + op->pr[0]) + op->pn[0] * ((q[1] + op->pr[1]) + op->pn[1] * (cupid_int)(q[2] + op->pr[2]));
 }
 
+/* The first run whose last node is >= p (binary search: runs ascend and cover every node,
+ * so run r ends where run r + 1 starts); nruns if none. */
+static inline cupid_int pd_first_run(const struct cupid_pd_operator_private *op, cupid_int p) {
+  cupid_int a = 0, b = op->nruns;
+  while (a < b) {
+    const cupid_int m = a + (b - a) / 2;
+    if (op->runs[m].i0 + op->runs[m].len <= p) a = m + 1;
+    else b = m;
+  }
+  return a;
+}
+
 /* Build the families (full flags, near-surface lists, runs, padding) of the operator. */
 cupid_status pd_families_build(struct cupid_pd_operator_private *op);
 
-/* The ghost-bond corrections: segments and records (ghosts.c), after the runs. */
+/* The ghost-bond corrections: segments and records (ghosts.c), after the node data. */
 cupid_status pd_ghosts_build(struct cupid_pd_operator_private *op);
 
 /* The runs' stretches of uniform b (pd_run ub0, ub1; uniform.c), after the node data; and

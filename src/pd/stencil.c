@@ -488,19 +488,7 @@ static void edge_force(const struct cupid_pd_operator_private *op, const pd_work
   for (int k = 0; k < 3; k++) f[k] = -V2 * fi[k];
 }
 
-/* ---- Sweeps over a node range: the runs, clipped to it. ---- */
-
-/* First run whose last node is >= p (binary search; runs are ascending and cover every
- * node, so run r ends where run r + 1 starts). */
-static cupid_int first_run(const struct cupid_pd_operator_private *op, cupid_int p) {
-  cupid_int a = 0, b = op->nruns;
-  while (a < b) {
-    const cupid_int m = a + (b - a) / 2;
-    if (op->runs[m].i0 + op->runs[m].len <= p) a = m + 1;
-    else b = m;
-  }
-  return a;
-}
+/* ---- Sweeps over a node range: the runs, clipped to it (pd_first_run). ---- */
 
 /* Copy u on the nodes [lo, hi) into the work arrays, with b = mu/m (LPS) or a = c
  * (bond-based); padded, absent cells read 0. The node constants and the zeros are written
@@ -525,7 +513,7 @@ static void work_fill(const struct cupid_pd_operator_private *op, const pd_kerne
   const double r0 = w->padded ? u[3 * mid] : 0.0, r1 = w->padded ? u[3 * mid + 1] : 0.0,
                r2 = w->padded ? u[3 * mid + 2] : 0.0;
   /* By runs: consecutive nodes at consecutive positions, a contiguous copy each. */
-  const cupid_int rlo = first_run(op, lo), rhi = first_run(op, hi - 1) + 1;
+  const cupid_int rlo = pd_first_run(op, lo), rhi = pd_first_run(op, hi - 1) + 1;
 #pragma omp parallel for schedule(static) if (hi - lo > PD_OMP_MIN_NODES)
   for (cupid_int r = rlo; r < rhi; r++) {
     const pd_run *R = &op->runs[r];
@@ -552,7 +540,7 @@ static void sweep(const struct cupid_pd_operator_private *op, const pd_work *w,
                   const pd_kernel_set *K, pd_pass pass, cupid_int p, cupid_int q, double *out,
                   cupid_int fbase) {
   if (p >= q) return; /* the same on every thread: none meets the loop's barrier */
-  const cupid_int r0 = first_run(op, p), r1 = first_run(op, q);
+  const cupid_int r0 = pd_first_run(op, p), r1 = pd_first_run(op, q);
 #pragma omp for schedule(dynamic, 16)
   for (cupid_int r = r0; r < r1 + (r1 < op->nruns && op->runs[r1].i0 < q); r++) {
     const pd_run *R = &op->runs[r];

@@ -56,20 +56,9 @@ cupid_status pd_uniform_build(struct cupid_pd_operator_private *op) {
   return CUPID_SUCCESS;
 }
 
-/* The run holding node i (runs ascend and cover every node). */
-static pd_run *run_of(struct cupid_pd_operator_private *op, cupid_int i) {
-  cupid_int a = 0, b = op->nruns;
-  while (a < b) {
-    const cupid_int m = a + (b - a) / 2;
-    if (op->runs[m].i0 + op->runs[m].len <= i) a = m + 1;
-    else b = m;
-  }
-  return &op->runs[a];
-}
-
 /* Node k out of its run's stretch: the longer side of it stays. */
 static void cut(struct cupid_pd_operator_private *op, cupid_int k) {
-  pd_run *R = run_of(op, k);
+  pd_run *R = &op->runs[pd_first_run(op, k)];
   const int t = (int)(k - R->i0);
   if (t < R->ub0 || t >= R->ub1) return;
   if (t - R->ub0 >= R->ub1 - t - 1) R->ub1 = t;
