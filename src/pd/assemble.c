@@ -289,18 +289,28 @@ static cupid_status check_weights(const struct cupid_pd_operator_private *op, co
 
 /* The moduli enter every node's energy linearly (E_p = V [kappa_p/6 theta_p^2 + 15 mu_p /
  * (2 m_p) sum omega e^2 beta V], bond-based c_p), and theta_p, m_p and the surface factors do
- * not depend on them: scaling node p's moduli by w_p is weighting node p's energy by w_p. */
-cupid_status cupid_pd_operator_scale_energy(cupid_pd_operator op, const double *w) {
-  CUPID_CHECK(op && w, CUPID_ERR_ARGUMENT, "energy scaling needs an operator and weights");
-  CUPID_CALL(check_weights(op, w));
+ * not depend on them: scaling node p's moduli by w_p is weighting node p's energy by w_p.
+ * b = mu / m changes with them: the stencil path's copies of it are refreshed (gen) and its
+ * stretches of uniform b found again (uniform.c; issue 32: kept from before the scaling, they
+ * spanned an Arlequin overlap's ramp of weights). */
+static void scale_moduli(struct cupid_pd_operator_private *op, const double *w) {
   double *moduli[3] = {op->kappa, op->mu, op->c};
   for (int k = 0; k < 3; k++)
     if (moduli[k])
       for (cupid_int i = 0; i < op->nnodes; i++) moduli[k][i] *= w[i];
-  return CUPID_SUCCESS;
 }
 
-/* The moduli are scaled in place for the assembly and restored from copies (bit-exact). */
+cupid_status cupid_pd_operator_scale_energy(cupid_pd_operator op, const double *w) {
+  CUPID_CHECK(op && w, CUPID_ERR_ARGUMENT, "energy scaling needs an operator and weights");
+  CUPID_CALL(check_weights(op, w));
+  scale_moduli(op, w);
+  op->gen++;
+  return pd_uniform_build(op);
+}
+
+/* The moduli are scaled in place for the assembly and restored from copies (bit-exact: the
+ * stencil path's copies of b and its uniform stretches hold again, and the assembly reads
+ * neither). */
 cupid_status cupid_pd_operator_assemble_weighted(cupid_pd_operator op, const double *w,
                                                  cupid_csr *K) {
   CUPID_CHECK(op && w && K, CUPID_ERR_ARGUMENT, "weighted assembly needs operator, weights, output");
@@ -313,7 +323,7 @@ cupid_status cupid_pd_operator_assemble_weighted(cupid_pd_operator op, const dou
     CUPID_TRY(cupid_malloc((size_t)n, sizeof *saved[k], "saved PD moduli", &saved[k]));
     memcpy(saved[k], moduli[k], (size_t)n * sizeof *saved[k]);
   }
-  CUPID_TRY(cupid_pd_operator_scale_energy(op, w));
+  scale_moduli(op, w);
   st = cupid_pd_operator_assemble(op, K);
 cleanup:
   for (int k = 0; k < 3; k++)

@@ -2,12 +2,20 @@
  *
  * The first pass sums w15 ((b_i + b+) d+ + (b_i + b-) d-) n over the pairs, loading b+ and
  * b- for every pair (stencil_kernels.h). Where node i and every node of its family have the
- * same b = mu / m (to the bit: one material, full families all round, so one m), the sum is
- * 2 b_i sum w15 (d+ + d-) n, and the kernel skips those loads. That holds two horizons
- * inside the surface: a third of the nodes of a 40^3 cube, two thirds of a 100^3 one. A
- * removed bond changes the m, so the b, of its two nodes (fracture.c): pd_uniform_exclude
- * then cuts them and their families out of the stretches. */
+ * same b = mu / m to the bit, the sum is 2 b_i sum w15 (d+ + d-) n, and the kernel skips
+ * those loads. That holds two horizons inside the surface of a body of one material: a
+ * third of the nodes of a 40^3 cube, two thirds of a 100^3 one.
+ *
+ * The decision compares b itself, as the work arrays hold it (mu / m, stencil.c work_fill),
+ * never a proxy of it: every factor of b changes it. The material (mu); m, which differs near
+ * the surface (ghost corrections: non-full nodes are never in a stretch) and where a bond is
+ * removed; and the energy weights of an Arlequin overlap (cupid_pd_operator_scale_energy()
+ * scales mu node by node after the operator is built, and rebuilds the stretches). Keying by
+ * the material alone, as first done, took 2 b_i for b_i + b_j across an overlap's ramp: the
+ * matrix-free Arlequin solves were 4-7% off (issue 32). A removed bond changes m, so b, of
+ * its two nodes (fracture.c): pd_uniform_exclude then cuts them and their families out. */
 #include <stdint.h>
+#include <string.h>
 
 #include "pd/pd_internal.h"
 
@@ -26,19 +34,49 @@ static void longest(const unsigned char *ok, int len, int *a, int *b) {
   }
 }
 
+/* Keys of b: equal keys are equal b = mu / m to the bit, 0 no key (a node whose family is
+ * not full, or one of more distinct b values than 16 bits number: left out, never wrong).
+ * 16-bit keys, not the doubles, in the stretch compares below: a quarter of the bytes
+ * streamed (st.n compares a node). The distinct values are few (one a material in the bulk,
+ * one a weight of an overlap's ramp): an open-addressed table of their bits. */
+#define KEY_TABLE (1u << 17) /* twice the keys it can give: probes stay short */
+typedef struct {
+  uint64_t bits[KEY_TABLE];
+  uint16_t key[KEY_TABLE]; /* 0: empty slot */
+  uint16_t next;           /* the next key to give */
+} b_keys;
+
+static uint16_t b_key(b_keys *T, uint64_t bits) {
+  uint32_t h = (uint32_t)((bits * 0x9E3779B97F4A7C15ull) >> 47) & (KEY_TABLE - 1);
+  while (T->key[h] && T->bits[h] != bits) h = (h + 1) & (KEY_TABLE - 1);
+  if (T->key[h]) return T->key[h];
+  if (T->next == UINT16_MAX) return 0; /* out of keys */
+  T->bits[h] = bits;
+  return T->key[h] = T->next++;
+}
+
 cupid_status pd_uniform_build(struct cupid_pd_operator_private *op) {
+  for (cupid_int r = 0; r < op->nruns; r++) op->runs[r].ub0 = op->runs[r].ub1 = 0;
   if (!op->padded || op->model != CUPID_PD_LPS) return CUPID_SUCCESS;
   const cupid_int cells = op->pn[0] * op->pn[1] * op->pn[2];
   uint16_t *key = NULL;
-  /* By padded cell: the material + 1 of a node with a full family, else 0. Full nodes of one
-   * material have one b = mu / m to the bit (m of a full family is summed once, node_data),
-   * so a node whose family all has its own key has uniform b. */
-  for (cupid_int i = 0; i < op->nnodes; i++)
-    if (op->grid->material[i] >= UINT16_MAX - 1) return CUPID_SUCCESS; /* no key: no stretch */
-  CUPID_CALL(cupid_calloc((size_t)cells, sizeof *key, "PD uniform stretches", &key));
-#pragma omp parallel for schedule(static) if (op->nnodes > PD_OMP_MIN_NODES)
-  for (cupid_int i = 0; i < op->nnodes; i++)
-    if (op->full[i]) key[pd_node_pcell(op, i)] = (uint16_t)(op->grid->material[i] + 1);
+  b_keys *T = NULL;
+  cupid_status st = CUPID_SUCCESS;
+  CUPID_TRY(cupid_calloc((size_t)cells, sizeof *key, "PD uniform stretches", &key));
+  CUPID_TRY(cupid_calloc(1, sizeof *T, "PD uniform stretches' keys", &T));
+  T->next = 1;
+  /* By padded cell: the key of b of a node with a full family, else 0. Serial (the table is
+   * shared); runs of equal b skip the table. */
+  uint64_t last = 0;
+  uint16_t last_key = 0;
+  for (cupid_int i = 0; i < op->nnodes; i++) {
+    if (!op->full[i]) continue;
+    const double b = op->mu[i] / op->m[i]; /* as work_fill computes it */
+    uint64_t bits;
+    memcpy(&bits, &b, sizeof bits);
+    if (!last_key || bits != last) last = bits, last_key = b_key(T, bits);
+    key[pd_node_pcell(op, i)] = last_key;
+  }
   const pd_stencil *S = &op->st;
 #pragma omp parallel for schedule(dynamic, 16) if (op->nnodes > PD_OMP_MIN_NODES)
   for (cupid_int r = 0; r < op->nruns; r++) {
@@ -52,8 +90,10 @@ cupid_status pd_uniform_build(struct cupid_pd_operator_private *op) {
     }
     longest(ok, R->len, &R->ub0, &R->ub1);
   }
+cleanup:
+  cupid_free(&T);
   cupid_free(&key);
-  return CUPID_SUCCESS;
+  return st;
 }
 
 /* Node k out of its run's stretch: the longer side of it stays. */
