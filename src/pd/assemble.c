@@ -223,44 +223,50 @@ static int thread_id(void) {
 #endif
 }
 
-cupid_status cupid_pd_operator_assemble(const cupid_pd_operator op, cupid_csr *Kout) {
+cupid_status pd_assemble_rows(const struct cupid_pd_operator_private *op, cupid_int first,
+                              cupid_int last, cupid_csr *Kout) {
   cupid_status st = CUPID_SUCCESS;
   cupid_csr_t *K = NULL;
   offset_table t = {0};
   double *acc = NULL;
   unsigned char *hit = NULL;
   CUPID_CHECK(op && Kout, CUPID_ERR_ARGUMENT, "assemble needs an operator and an output");
+  CUPID_CHECK(first >= 0 && first <= last && last <= op->nnodes, CUPID_ERR_ARGUMENT,
+              "assemble: rows [%lld, %lld) outside the %lld nodes", (long long)first,
+              (long long)last, (long long)op->nnodes);
   *Kout = NULL;
-  const cupid_int nn = op->nnodes;
-  const int nt = nn > PD_OMP_MIN_NODES ? num_threads() : 1;
+  const cupid_int nr = last - first;
+  const int nt = nr > PD_OMP_MIN_NODES ? num_threads() : 1;
   CUPID_TRY(offset_table_build(op, &t));
   CUPID_TRY(cupid_calloc((size_t)nt * 9 * (size_t)t.nd, sizeof *acc, "assembly buffers", &acc));
   CUPID_TRY(cupid_calloc((size_t)nt * (size_t)t.nd, 1, "assembly buffers", &hit));
   CUPID_TRY(cupid_calloc(1, sizeof *K, "the PD stiffness matrix", &K));
-  K->nrows = K->ncols = nn;
+  K->nrows = nr;
+  K->ncols = op->nnodes;
   K->bs = 3;
-  CUPID_TRY(cupid_malloc((size_t)nn + 1, sizeof *K->rowptr, "PD matrix row pointers", &K->rowptr));
+  CUPID_TRY(cupid_malloc((size_t)nr + 1, sizeof *K->rowptr, "PD matrix row pointers", &K->rowptr));
   K->rowptr[0] = 0;
 #pragma omp parallel num_threads(nt)
   {
     row_buffer buf = {acc + 9 * (size_t)thread_id() * (size_t)t.nd, hit + (size_t)thread_id() * (size_t)t.nd};
 #pragma omp for schedule(dynamic, 64)
-    for (cupid_int r = 0; r < nn; r++) {
+    for (cupid_int r = first; r < last; r++) {
       gather_row(op, &t, r, &buf, 0);
-      K->rowptr[r + 1] = flush_row(op, &t, r, &buf, NULL, NULL);
+      K->rowptr[r - first + 1] = flush_row(op, &t, r, &buf, NULL, NULL);
     }
   }
-  for (cupid_int r = 0; r < nn; r++) K->rowptr[r + 1] += K->rowptr[r];
-  const cupid_int nblk = K->rowptr[nn];
-  CUPID_TRY(cupid_malloc((size_t)nblk, sizeof *K->col, "PD matrix columns", &K->col));
-  CUPID_TRY(cupid_malloc(9 * (size_t)nblk, sizeof *K->val, "PD matrix values", &K->val));
+  for (cupid_int r = 0; r < nr; r++) K->rowptr[r + 1] += K->rowptr[r];
+  const cupid_int nblk = K->rowptr[nr];
+  CUPID_TRY(cupid_malloc((size_t)nblk + 1, sizeof *K->col, "PD matrix columns", &K->col));
+  CUPID_TRY(cupid_malloc(9 * (size_t)nblk + 1, sizeof *K->val, "PD matrix values", &K->val));
 #pragma omp parallel num_threads(nt)
   {
     row_buffer buf = {acc + 9 * (size_t)thread_id() * (size_t)t.nd, hit + (size_t)thread_id() * (size_t)t.nd};
 #pragma omp for schedule(dynamic, 64)
-    for (cupid_int r = 0; r < nn; r++) {
+    for (cupid_int r = first; r < last; r++) {
+      const cupid_int k = K->rowptr[r - first];
       gather_row(op, &t, r, &buf, 1);
-      flush_row(op, &t, r, &buf, K->col + K->rowptr[r], K->val + 9 * (size_t)K->rowptr[r]);
+      flush_row(op, &t, r, &buf, K->col + k, K->val + 9 * (size_t)k);
     }
   }
   *Kout = K;
@@ -276,6 +282,11 @@ cleanup:
   cupid_free(&acc);
   cupid_free(&hit);
   return st;
+}
+
+cupid_status cupid_pd_operator_assemble(const cupid_pd_operator op, cupid_csr *K) {
+  CUPID_CHECK(op && K, CUPID_ERR_ARGUMENT, "assemble needs an operator and an output");
+  return pd_assemble_rows(op, 0, op->nnodes, K);
 }
 
 /* Weights must be finite and >= 0. */

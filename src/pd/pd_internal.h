@@ -315,6 +315,12 @@ cupid_status pd_ghosts_build(struct cupid_pd_operator_private *op);
 cupid_status pd_uniform_build(struct cupid_pd_operator_private *op);
 void pd_uniform_exclude(struct cupid_pd_operator_private *op, cupid_int i);
 
+/* The rows [first, last) of the assembled K (cupid_pd_operator_assemble() is all of them):
+ * nrows = last - first, ncols = nodes, each row as the whole assembly has it. Tests compare
+ * the matrix-free products with it on grids whose whole K would not fit. */
+cupid_status pd_assemble_rows(const struct cupid_pd_operator_private *op, cupid_int first,
+                              cupid_int last, cupid_csr *K);
+
 /* Build the explicit bond lists (if not there yet) and switch apply to the bond-list
  * kernels (stencil_off = 1). Not thread-safe: call before sharing the operator. */
 cupid_status pd_operator_use_bond_lists(struct cupid_pd_operator_private *op);

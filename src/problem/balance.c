@@ -83,15 +83,20 @@ static cupid_status balanced_csr_apply(void *ctx, const double *x, double *y) {
   return CUPID_SUCCESS;
 }
 
+cupid_status cupid_problem_balance_assembled(const cupid_problem_state *prob, const cupid_csr_t *K,
+                                             cupid_coupling_balance *B) {
+  /* K's FE rows: block rows n_pd.. (rowptr holds absolute offsets into col and val) */
+  cupid_csr_t fe = {.nrows = K->nrows - prob->n_pd, .ncols = K->ncols, .bs = K->bs,
+                    .rowptr = K->rowptr + prob->n_pd, .col = K->col, .val = K->val};
+  return balance_create(prob, csr_transpose, (void *)K, &fe, B);
+}
+
 cupid_status cupid_problem_balanced_direct_solve(cupid_problem_state *prob) {
   cupid_coupling_balance B = NULL;
   cupid_direct_factor F = NULL;
   cupid_status st = CUPID_SUCCESS;
   const cupid_csr_t *K = prob->K;
-  /* K's FE rows: block rows n_pd.. (rowptr holds absolute offsets into col and val) */
-  cupid_csr_t fe = {.nrows = K->nrows - prob->n_pd, .ncols = K->ncols, .bs = K->bs,
-                    .rowptr = K->rowptr + prob->n_pd, .col = K->col, .val = K->val};
-  CUPID_TRY(balance_create(prob, csr_transpose, (void *)K, &fe, &B));
+  CUPID_TRY(cupid_problem_balance_assembled(prob, K, &B));
   balanced_csr bk = {K, B};
   CUPID_TRY(cupid_problem_patch_test(prob, balanced_csr_apply, &bk));
   cupid_solve_info si = {0};

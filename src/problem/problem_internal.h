@@ -199,6 +199,10 @@ void cupid_problem_quality_json(cupid_json js, const cupid_problem_state *prob);
 /* balance.c: `coupling.balance: momentum` (the balanced fictitious-node operator). */
 /** The model asks for the balanced operator (and is coupled). */
 int cupid_problem_balanced(const cupid_problem_state *prob);
+/** The correction of the assembled @p K (C = K^T R from K itself): K' x = K x, then
+ *  cupid_coupling_balance_correct(*B, x, .); *B is the caller's. */
+cupid_status cupid_problem_balance_assembled(const cupid_problem_state *prob, const cupid_csr_t *K,
+                                             cupid_coupling_balance *B);
 /** The assembled path: patch test, factor of K_ff, the balanced solve, f_int = K' u. */
 cupid_status cupid_problem_balanced_direct_solve(cupid_problem_state *prob);
 /** The matrix-free path: *out = K' around L (the operator of A); *B is the caller's. */
