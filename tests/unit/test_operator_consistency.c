@@ -171,6 +171,19 @@ static cupid_int uniform_nodes(const struct cupid_pd_operator_private *op) {
   return t;
 }
 
+/* An nx x ny x nz box of spacing 1 and its PD operator. */
+static void box_operator(int nx, int ny, int nz, const pd_case *c, cupid_pd_grid *grid,
+                         cupid_pd_operator *op) {
+  const cupid_box box = {.lo = {0, 0, 0}, .hi = {nx, ny, nz}, .has = {1, 1, 1}};
+  const int mat = 0;
+  cupid_pd_grid_options go = {.spacing = 1.0, .dimension = 3};
+  CUPID_ASSERT_OK(cupid_pd_grid_create(&go, 1, &box, &mat, grid));
+  const cupid_pd_material pm = {.E = 1000.0, .nu = 0.27};
+  cupid_pd_operator_options oo = {.horizon = c->m, .model = c->model, .influence = c->infl,
+                                  .partial_volume = c->pv, .materials = &pm, .n_materials = 1};
+  CUPID_ASSERT_OK(cupid_pd_operator_create(*grid, &oo, op));
+}
+
 static void run_pd_case(const pd_case *c) {
   /* reach r: the largest lattice offset along an axis with a partial volume > 0 */
   const int r = (int)ceil(c->m + 0.5 - 1e-9) - 1;
@@ -178,16 +191,9 @@ static void run_pd_case(const pd_case *c) {
    * of 8 past them; thin: two layers along y, families near the surface only */
   const int nx = c->deep ? 4 * r + 16 : 2 * r + 8, ny = c->deep ? 4 * r + 2 : 2,
             nz = c->deep ? 4 * r + 1 : 2 * r + 2;
-  const cupid_box box = {.lo = {0, 0, 0}, .hi = {nx, ny, nz}, .has = {1, 1, 1}};
-  const int mat = 0;
-  cupid_pd_grid_options go = {.spacing = 1.0, .dimension = 3};
   cupid_pd_grid grid = NULL;
-  CUPID_ASSERT_OK(cupid_pd_grid_create(&go, 1, &box, &mat, &grid));
-  const cupid_pd_material pm = {.E = 1000.0, .nu = 0.27};
-  cupid_pd_operator_options oo = {.horizon = c->m, .model = c->model, .influence = c->infl,
-                                  .partial_volume = c->pv, .materials = &pm, .n_materials = 1};
   cupid_pd_operator op = NULL;
-  CUPID_ASSERT_OK(cupid_pd_operator_create(grid, &oo, &op));
+  box_operator(nx, ny, nz, c, &grid, &op);
   const cupid_int n = op->nnodes;
   const row_windows W = windows(n, (cupid_int)nx * ny, nz);
   if (c->deep && c->model == CUPID_PD_LPS) assert_true(uniform_nodes(op) >= 8);
@@ -542,18 +548,10 @@ static void test_coupled_matrix(void **state) {
  * never spans nodes of different b (the root of issue 32, checked node by node). */
 static void test_uniform_after_weights(void **state) {
   (void)state;
-  const cupid_box box = {.lo = {0, 0, 0}, .hi = {24, 6, 5}, .has = {1, 1, 1}};
-  const int mat = 0;
-  cupid_pd_grid_options go = {.spacing = 1.0, .dimension = 3};
+  const pd_case c = {CUPID_PD_LPS, 1.5, CUPID_INFLUENCE_GAUSSIAN, CUPID_PARTIAL_PDLAMMPS, 1};
   cupid_pd_grid grid = NULL;
-  CUPID_ASSERT_OK(cupid_pd_grid_create(&go, 1, &box, &mat, &grid));
-  const cupid_pd_material pm = {.E = 1000.0, .nu = 0.27};
-  cupid_pd_operator_options oo = {.horizon = 1.5, .model = CUPID_PD_LPS,
-                                  .influence = CUPID_INFLUENCE_GAUSSIAN,
-                                  .partial_volume = CUPID_PARTIAL_PDLAMMPS, .materials = &pm,
-                                  .n_materials = 1};
   cupid_pd_operator op = NULL;
-  CUPID_ASSERT_OK(cupid_pd_operator_create(grid, &oo, &op));
+  box_operator(24, 6, 5, &c, &grid, &op);
   const cupid_int before = uniform_nodes(op);
   assert_true(before >= 16);
   double *w = vec(op->nnodes);
