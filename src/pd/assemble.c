@@ -300,10 +300,7 @@ static cupid_status check_weights(const struct cupid_pd_operator_private *op, co
 
 /* The moduli enter every node's energy linearly (E_p = V [kappa_p/6 theta_p^2 + 15 mu_p /
  * (2 m_p) sum omega e^2 beta V], bond-based c_p), and theta_p, m_p and the surface factors do
- * not depend on them: scaling node p's moduli by w_p is weighting node p's energy by w_p.
- * b = mu / m changes with them: the stencil path's copies of it are refreshed (gen) and its
- * stretches of uniform b found again (uniform.c; issue 32: kept from before the scaling, they
- * spanned an Arlequin overlap's ramp of weights). */
+ * not depend on them: scaling node p's moduli by w_p is weighting node p's energy by w_p. */
 static void scale_moduli(struct cupid_pd_operator_private *op, const double *w) {
   double *moduli[3] = {op->kappa, op->mu, op->c};
   for (int k = 0; k < 3; k++)
@@ -311,6 +308,9 @@ static void scale_moduli(struct cupid_pd_operator_private *op, const double *w) 
       for (cupid_int i = 0; i < op->nnodes; i++) moduli[k][i] *= w[i];
 }
 
+/* b = mu / m changes with the moduli: the stencil path's copies of it are refreshed (gen) and
+ * its stretches of uniform b found again (uniform.c; issue 32: kept from before the scaling,
+ * they spanned an Arlequin overlap's ramp of weights). */
 cupid_status cupid_pd_operator_scale_energy(cupid_pd_operator op, const double *w) {
   CUPID_CHECK(op && w, CUPID_ERR_ARGUMENT, "energy scaling needs an operator and weights");
   CUPID_CALL(check_weights(op, w));

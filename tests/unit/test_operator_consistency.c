@@ -317,12 +317,14 @@ static void coupled_name(const coupled_case *c, const char *what, int isa, char 
 
 typedef cupid_status (*apply_fn)(void *ctx, const double *x, double *y);
 
-/* y = apply(x) against K x on every instance. */
-static void compare_system(const coupled_case *c, const char *what, apply_fn apply, void *ctx,
-                           const cupid_csr_t *K, cupid_int n) {
+/* y = apply(x) against K x (with @p B: K x corrected by B, the balanced twin) on every
+ * instance. */
+static void compare_twin(const coupled_case *c, const char *what, apply_fn apply, void *ctx,
+                         const cupid_csr_t *K, cupid_coupling_balance B, cupid_int n) {
   double *x = vec(n), *y = vec(n), *k = vec(n);
   random_fill(x, n, 99 + (uint64_t)n);
   cupid_csr_matvec(K, x, k);
+  if (B) cupid_coupling_balance_correct(B, x, k);
   for (int l = 0; l < n_isa; l++) {
     pd_stencil_force_isa(isa_levels[l]);
     CUPID_ASSERT_OK(apply(ctx, x, y));
@@ -334,6 +336,11 @@ static void compare_system(const coupled_case *c, const char *what, apply_fn app
   cupid_free(&x);
   cupid_free(&y);
   cupid_free(&k);
+}
+
+static void compare_system(const coupled_case *c, const char *what, apply_fn apply, void *ctx,
+                           const cupid_csr_t *K, cupid_int n) {
+  compare_twin(c, what, apply, ctx, K, NULL, n);
 }
 
 static cupid_status method_apply(void *ctx, const double *x, double *y) {
@@ -451,22 +458,8 @@ static void check_fictitious(const coupled_case *c, int balanced) {
     cupid_linear_operator Lb;
     CUPID_ASSERT_OK(cupid_problem_balanced_operator(prob, A, &L, &Bf, &Lb));
     CUPID_ASSERT_OK(cupid_problem_balance_assembled(prob, K, &Ba));
-    double *x = vec(n), *y = vec(n), *k = vec(n);
-    random_fill(x, n, 11);
-    cupid_csr_matvec(K, x, k);
-    cupid_coupling_balance_correct(Ba, x, k);
-    for (int l = 0; l < n_isa; l++) {
-      pd_stencil_force_isa(isa_levels[l]);
-      CUPID_ASSERT_OK(Lb.apply(Lb.ctx, x, y));
-      char name[320];
-      coupled_name(c, "fictitious nodes, balance: momentum (K - W C^T), matrix-free",
-                   isa_levels[l], name, sizeof name);
-      check(name, y, k, n);
-    }
-    pd_stencil_force_isa(0);
-    cupid_free(&x);
-    cupid_free(&y);
-    cupid_free(&k);
+    compare_twin(c, "fictitious nodes, balance: momentum (K - W C^T), matrix-free", linear_apply,
+                 &Lb, K, Ba, n);
     cupid_coupling_balance_destroy(&Bf);
     cupid_coupling_balance_destroy(&Ba);
   }
