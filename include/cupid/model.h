@@ -139,6 +139,7 @@ typedef struct {
                                           `energy` needs G0 */
   int per_iteration_all;             /**< static growth: 1 all bonds over their limit per
                                           re-solve (default), 0 only the most critical one */
+  cupid_mark per_iteration_mark;     /**< line > 0 when the key is given (static only) */
   cupid_box no_fail[CUPID_MAX_NO_FAIL];
   cupid_mark no_fail_marks[CUPID_MAX_NO_FAIL];
   int n_no_fail;

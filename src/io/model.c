@@ -135,6 +135,19 @@ void cupid_model_destroy(cupid_model *model) {
   cupid_free(model);
 }
 
+/* The last --set whose path lies within the item at key ("peridynamics.precracks[0].at=50"
+ * within "peridynamics.precracks[0]"), or NULL: an error about an item whose mark is in the
+ * file may be about the value an override gave it. */
+const char *mr_override_within(const char *const *sets, int n_sets, const char *key) {
+  const size_t n = key ? strlen(key) : 0;
+  const char *found = NULL;
+  for (int k = 0; n > 0 && k < n_sets; k++) {
+    const char *s = sets[k];
+    if (strncmp(s, key, n) == 0 && (s[n] == '.' || s[n] == '[' || s[n] == '=')) found = s;
+  }
+  return found;
+}
+
 cupid_status cupid_model_error(const cupid_model_t *model, const cupid_mark *mark, const char *fmt,
                                ...) {
   char message[1536];
@@ -152,6 +165,10 @@ cupid_status cupid_model_error(const cupid_model_t *model, const cupid_mark *mar
       return CUPID_ERROR(CUPID_ERR_MODEL, "%s: %s: %s", file, mark->key, message);
     return CUPID_ERROR(CUPID_ERR_MODEL, "%s: %s", file, message);
   }
+  const char *set = mr_override_within((const char *const *)model->sets, model->n_sets, mark->key);
+  if (set) /* the item is the file's, a value in it the override's: cite the override */
+    return CUPID_ERROR(CUPID_ERR_MODEL, "%s: --set %s: %s (%s:%d:%d): %s", file, set, mark->key,
+                       file, mark->line, mark->column, message);
   if (mark->key[0])
     return CUPID_ERROR(CUPID_ERR_MODEL, "%s:%d:%d: %s: %s", file, mark->line, mark->column,
                        mark->key, message);

@@ -34,6 +34,8 @@ typedef struct {
 
 /* Nodes made by an override k (--set) carry the line MR_SET_LINE + k (model_override.c). */
 #define MR_SET_LINE 1000000000
+/* The last of sets ("key.path=value") whose path lies within the item at key, or NULL. */
+const char *mr_override_within(const char *const *sets, int n_sets, const char *key);
 #define MR_MAX_SETS 256
 /* Apply the overrides "key.path=value" to the loaded document (model_override.c). */
 cupid_status mr_apply_overrides(yaml_document_t *doc, const char *name, const char *const *sets,

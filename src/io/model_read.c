@@ -24,6 +24,10 @@ static cupid_status error_va(const model_reader *rd, int line0, int column0, con
     return CUPID_ERROR(CUPID_ERR_MODEL, "%s: --set %s: %s%s%s", name,
                        rd->sets[line0 - MR_SET_LINE], path && path[0] ? path : "",
                        path && path[0] ? ": " : "", message);
+  const char *set = path ? mr_override_within(rd->sets, rd->n_sets, path) : NULL;
+  if (set) /* the item is the file's, a value in it the override's: cite the override */
+    return CUPID_ERROR(CUPID_ERR_MODEL, "%s: --set %s: %s (%s:%d:%d): %s", name, set, path, name,
+                       line0 + 1, column0 + 1, message);
   if (path && path[0])
     return CUPID_ERROR(CUPID_ERR_MODEL, "%s:%d:%d: %s: %s", name, line0 + 1, column0 + 1, path,
                        message);

@@ -693,6 +693,11 @@ static cupid_status read_no_fail(model_reader *rd, yaml_node_t *node, cupid_frac
     mr_path_index(p, path, i);
     mr_mark(item, p, &f->no_fail_marks[i]);
     CUPID_CALL(mr_box(rd, item, p, &f->no_fail[i]));
+    for (int a = 0; a < 3; a++) /* a box of no volume holds no node's centre but by chance */
+      if (f->no_fail[i].has[a] && !(f->no_fail[i].lo[a] < f->no_fail[i].hi[a]))
+        return mr_error(rd, item, p, "the box has no volume along %c ([%g, %g]): a no_fail box "
+                        "needs min < max on every axis it gives", "xyz"[a], f->no_fail[i].lo[a],
+                        f->no_fail[i].hi[a]);
     int inside = 0;
     for (int r = 0; r < pd->n_regions && !inside; r++)
       inside = box_overlaps(&f->no_fail[i], &pd->regions[r].box);
@@ -767,6 +772,7 @@ static cupid_status read_fracture(model_reader *rd, yaml_node_t *node, cupid_per
     CUPID_CALL(mr_enum(rd, v, "peridynamics.fracture.per_iteration", per_iteration,
                        COUNT(per_iteration), &k));
     f->per_iteration_all = k == 0;
+    mr_mark(v, "peridynamics.fracture.per_iteration", &f->per_iteration_mark);
   }
   if ((v = mr_get(&map, "no_fail"))) CUPID_CALL(read_no_fail(rd, v, f));
   return CUPID_SUCCESS;

@@ -27,6 +27,27 @@ static cupid_status check_dynamic_densities(const model_reader *rd) {
   return CUPID_SUCCESS;
 }
 
+/* t is the time of a dynamic analysis. A static one (load steps or not) and an evaluation have
+ * no time: they ramp every load and prescribed value by the load factor themselves, and a
+ * value in t was silently evaluated at t = 0 (issue 33): refused, with the value and the way. */
+static cupid_status check_no_time(const cupid_model_t *m, const cupid_mark *mark,
+                                  const cupid_value v[3]) {
+  static const char *const type[] = {"static", "dynamic", "evaluate"};
+  for (int c = 0; c < 3; c++) {
+    if (v[c].kind != CUPID_VALUE_EXPR || !cupid_expr_uses(v[c].expr, 3)) continue;
+    const int a = m->analysis.type;
+    return cupid_model_error(
+        m, mark,
+        "value[%d] \"%s\" uses t, the time of a dynamic analysis; analysis type: %s has no time "
+        "(%s): give the value at load factor 1 without t, or use type: dynamic",
+        c, cupid_expr_text(v[c].expr), a >= 0 && a < 3 ? type[a] : "?",
+        a == CUPID_ANALYSIS_EVALUATE ? "it evaluates one field"
+                                     : "its load steps scale every load and prescribed value "
+                                       "by the load factor, k / steps at step k");
+  }
+  return CUPID_SUCCESS;
+}
+
 cupid_status mr_validate(model_reader *rd, const mr_map *top) {
   const cupid_model_t *m = rd->model;
   if (!m->has_beam && !m->has_peridynamics)
@@ -39,6 +60,17 @@ cupid_status mr_validate(model_reader *rd, const mr_map *top) {
   if (m->has_coupling && !(m->has_beam && m->has_peridynamics))
     return mr_error(rd, mr_get(top, "coupling"), "coupling",
                     "only meaningful when the model has both beam and peridynamics");
-  if (m->analysis.type == CUPID_ANALYSIS_DYNAMIC) CUPID_CALL(check_dynamic_densities(rd));
+  const cupid_fracture *f = &m->pd.fracture;
+  if (m->analysis.type != CUPID_ANALYSIS_STATIC && f->per_iteration_mark.line > 0)
+    return cupid_model_error(m, &f->per_iteration_mark,
+                             "is only used with type: static (the re-solves of a load step); "
+                             "explicit dynamics breaks every bond over its limit at each time "
+                             "step");
+  if (m->analysis.type == CUPID_ANALYSIS_DYNAMIC) return check_dynamic_densities(rd);
+  for (int k = 0; k < m->n_loads; k++)
+    CUPID_CALL(check_no_time(m, &m->loads[k].mark, m->loads[k].value));
+  for (int k = 0; k < m->n_constraints; k++)
+    if (m->constraints[k].kind == CUPID_CONSTRAINT_DISPLACEMENT)
+      CUPID_CALL(check_no_time(m, &m->constraints[k].mark, m->constraints[k].value));
   return CUPID_SUCCESS;
 }

@@ -444,6 +444,21 @@ static cupid_status finish_outputs(dyn_output *o) {
   return CUPID_SUCCESS;
 }
 
+/* A prescribed value that turned non-finite at t (an expression undefined there): a model
+ * error at the constraint's line, the node and t, as the load's (cupid_problem_pd_loads). Only
+ * this constraint's nodes are scanned each step; the message's scan runs once. */
+static cupid_status check_prescribed(const cupid_problem_state *prob, const cupid_constraint *c,
+                                     const cupid_int *nodes, cupid_int n, double t) {
+  const double *v = prob->bc->value;
+  int bad = 0;
+  for (cupid_int k = 0; k < n && !bad; k++)
+    for (int a = 0; a < 3; a++) bad |= !isfinite(v[3 * nodes[k] + a]);
+  if (!bad) return CUPID_SUCCESS;
+  char what[96];
+  snprintf(what, sizeof what, "at t = %g the prescribed displacement", t);
+  return cupid_problem_check_finite(prob, v, &c->mark, what);
+}
+
 /* hooks->conditions: the values of the model's expressions at t on the PD nodes (a model
  * with a beam has none that change: check_time_independent). Every constraint is applied
  * again in the file's order, so that where two overlap the later one wins as at t = 0. */
@@ -462,8 +477,10 @@ static cupid_status conditions_now(void *ctx, double t, double *u_fixed, double 
                                                    &o->n_cnodes[k]));
   }
   if (o->timed_constraints)
-    for (int k = 0; k < m->n_constraints; k++)
+    for (int k = 0; k < m->n_constraints; k++) {
       cupid_problem_pd_prescribe_nodes(prob, &m->constraints[k], o->cnodes[k], o->n_cnodes[k]);
+      CUPID_CALL(check_prescribed(prob, &m->constraints[k], o->cnodes[k], o->n_cnodes[k], t));
+    }
   if (o->timed_loads) {
     memset(prob->f_ext, 0, sizeof *prob->f_ext * (size_t)prob->ndof);
     CUPID_CALL(cupid_problem_pd_loads(prob, m->loads, m->n_loads, prob->f_ext));

@@ -350,6 +350,18 @@ void cupid_problem_fracture_json(cupid_json js, const cupid_problem_state *prob)
       }
       cupid_json_end_array(js);
     }
+    if (prob->growth.held) { /* growth.c, held_forces */
+      cupid_json_integer(js, "held_nodes", prob->growth.held_count);
+      cupid_json_number(js, "held_share", prob->growth.held_share);
+    }
+    if (prob->growth.collapse_step) { /* growth.c, check_collapse */
+      cupid_json_begin_object(js, "collapse");
+      cupid_json_integer(js, "step", prob->growth.collapse_step);
+      cupid_json_number(js, "load_factor", prob->growth.collapse_load);
+      cupid_json_number(js, "held_share", prob->growth.collapse_share);
+      cupid_json_integer(js, "held_nodes", prob->growth.collapse_held);
+      cupid_json_end_object(js);
+    }
     if (prob->growth.stopped_step) {
       cupid_json_integer(js, "stopped_step", prob->growth.stopped_step);
       cupid_json_string(js, "stopped", prob->growth.stopped);

@@ -25,6 +25,9 @@ typedef struct {
   double *f_full, *g_full;      /* the load and the prescribed values at load factor 1 */
   unsigned char *fixed0;        /* the model's constrained DOFs */
   unsigned char *anchored, *release;
+  unsigned char *weak_scan;     /* a copy of release, scratch */
+  unsigned char *weak;          /* per node: released as weakly held (at most 2 bonds, or all
+                                   in one plane; held_forces) */
   unsigned char *masks;         /* per constraint k: ndof flags, the DOFs it fixes */
   double *T;                    /* the unit translations, 3 ndof (cupid_problem_translations) */
   double *u1;                   /* without fracture: u and K u at load factor 1 */
@@ -32,6 +35,7 @@ typedef struct {
   double next_ratio;            /* fracture: the settled step's largest ratio (next_break) */
   double ratio_per_load;        /* the first scanned solve's largest ratio per load factor */
   int cut_through;              /* the crack has cut the load path (carries_load) */
+  int substep;                  /* sub-steps to each break's load (load_step) */
   cupid_atomic_file csv;
   cupid_int released;
   /* Re-solves after breaks (below): the factor of the last factorised K, reused as the
@@ -52,6 +56,9 @@ typedef struct {
   cupid_int cg_since_factor;    /* CG iterations since the last factorisation */
   double t_factor, t_cg;
   double *react;                /* 3 per constraint: the reactions of the last solution */
+  double held_share;            /* the held nodes' share of the forces on the body (collapse) */
+  double weak_share;            /* the weakly held nodes' share (held_forces) */
+  double force_scale;           /* the largest |P| + sum |R_k| of the run (held_forces) */
   double *points;               /* 3 per output point */
   int matrix_free;              /* solves by the kept matrix-free PETSc solve ... */
   cupid_growth_mf mf;           /* ... (growth_matrix_free.c) */
@@ -63,6 +70,8 @@ static void growth_free(growth_run *g) {
   cupid_free(&g->fixed0);
   cupid_free(&g->anchored);
   cupid_free(&g->release);
+  cupid_free(&g->weak);
+  cupid_free(&g->weak_scan);
   cupid_free(&g->masks);
   cupid_free(&g->T);
   cupid_free(&g->u1);
@@ -147,6 +156,57 @@ static void add_reaction(const growth_run *g, const unsigned char *fixed, size_t
       for (int c = 0; c < 3; c++) r[c] += (prob->f_int[d] - prob->f_ext[d]) * g->T[(size_t)c * n + d];
 }
 
+/* The share of the forces on the body that the held nodes carry: H / (H + S), H the sum over
+ * held nodes of |f_int - f_ext| at the node, S the applied load's magnitude |P| plus the
+ * magnitudes of the constraints' reactions |R_k| (g->react, just computed), the largest of the
+ * run (so that a body cut through under a grip compares round-off with the load it had). A
+ * node of a fragment cut off from every support, or one a factorisation found singular, is
+ * held to remove a rigid mode of what breaking left loose: it carries nothing but round-off
+ * and the load applied to the loose part, so a share above COLLAPSE_SHARE is load carried by
+ * supports the model never had: the body has collapsed (check_collapse). The magnitudes are
+ * summed node by node so that a fragment held under a moment, whose forces cancel, still
+ * counts. A weakly held node (at most 2 intact bonds, or all in one plane) is apart: held
+ * where it is, its few bonds to the body pull on it as the body moves on (24 N of the 800 N
+ * of a plate pulled apart, mid-step), a force of the holding, not of a lost load path; its
+ * share is g->weak_share, reported at the end. Every held node's force is in the vector sum
+ * for summary.json (held_reaction_sum), apart from the constraints' reactions. */
+static void held_forces(growth_run *g) {
+  cupid_problem_state *prob = g->prob;
+  const size_t n = (size_t)prob->ndof;
+  double sums[5] = {0.0, 0.0, 0.0, 0.0, 0.0}; /* the held vector sum, H, and |P|'s parts */
+  double load[3] = {0.0, 0.0, 0.0};
+  cupid_int a = 0, b = prob->n_pd;
+  if (prob->slab) a = prob->part.owned_first, b = prob->part.owned_last;
+  for (cupid_int i = a; g->release && i < b; i++) {
+    if (!g->release[i]) continue;
+    double r[3];
+    for (int c = 0; c < 3; c++) r[c] = prob->f_int[3 * i + c] - prob->f_ext[3 * i + c];
+    for (int c = 0; c < 3; c++) sums[c] += r[c];
+    sums[g->weak[i] ? 4 : 3] += sqrt(r[0] * r[0] + r[1] * r[1] + r[2] * r[2]);
+  }
+  for (size_t d = prob->slab ? 3 * (size_t)a : 0; d < (prob->slab ? 3 * (size_t)b : n); d++)
+    for (int c = 0; c < 3; c++) load[c] += prob->f_ext[d] * g->T[(size_t)c * n + d];
+  if (prob->slab && cupid_petsc_rank() == 0) /* the beam, which every rank holds whole */
+    for (size_t d = (size_t)prob->fe_offset; d < n; d++)
+      for (int c = 0; c < 3; c++) load[c] += prob->f_ext[d] * g->T[(size_t)c * n + d];
+  if (prob->slab) {
+    double all[8] = {sums[0], sums[1], sums[2], sums[3], sums[4], load[0], load[1], load[2]};
+    cupid_petsc_sum_doubles(all, 8);
+    memcpy(sums, all, 5 * sizeof *all);
+    memcpy(load, all + 5, 3 * sizeof *all);
+  }
+  double S = sqrt(load[0] * load[0] + load[1] * load[1] + load[2] * load[2]);
+  for (int k = 0; k < prob->model->n_constraints; k++) {
+    const double *r = g->react + 3 * k;
+    S += sqrt(r[0] * r[0] + r[1] * r[1] + r[2] * r[2]);
+  }
+  if (S > g->force_scale) g->force_scale = S;
+  S = g->force_scale; /* a body cut through under a grip: round-off against round-off */
+  memcpy(prob->growth.held_reaction, sums, 3 * sizeof *sums);
+  g->held_share = sums[3] > 0.0 ? sums[3] / (sums[3] + S) : 0.0;
+  g->weak_share = sums[4] > 0.0 ? sums[4] / (sums[4] + S) : 0.0;
+}
+
 static void reactions(growth_run *g) {
   const cupid_problem_state *prob = g->prob;
   const size_t n = (size_t)prob->ndof;
@@ -163,6 +223,7 @@ static void reactions(growth_run *g) {
     if (cupid_petsc_rank() == 0) add_reaction(g, fixed, (size_t)prob->fe_offset, n, r);
   }
   if (prob->slab) cupid_petsc_sum_doubles(g->react, 3 * nk);
+  held_forces(g);
 }
 
 /* The load factor at which the next bond breaks, the crack as it is: each solve is linear, so
@@ -172,7 +233,8 @@ static void reactions(growth_run *g) {
  * Exact while no node is held (a held node keeps its displacement as the load scales).
  * 0 when no breakable bond is stretched. */
 static double next_break(const growth_run *g, double lambda) {
-  return g->next_ratio > 0.0 ? lambda / g->next_ratio : 0.0;
+  const double lc = g->next_ratio > 0.0 ? lambda / g->next_ratio : 0.0;
+  return isfinite(lc) ? lc : 0.0; /* a limit no stretch comes near (s0 = 1e307) */
 }
 
 /* A settled largest ratio per unit load factor below CUT_THROUGH times the first solve's:
@@ -188,18 +250,27 @@ static int carries_load(const growth_run *g, double lambda, double ratio) {
   return !(g->ratio_per_load > 0.0 && lambda > 0.0 && ratio / lambda < CUT_THROUGH * g->ratio_per_load);
 }
 
-/* Keep each constraint's largest reaction of the envelope (by magnitude). */
-static void track_peaks(growth_run *g, int step, double lambda) {
+/* Each solve's point of the envelope, kept where it is a constraint's largest reaction (by
+ * magnitude). Each solve is linear in the load at its crack, so the crack as this solve has it
+ * takes the load factor mu = lambda min(1, 1 / ratio) with the reactions R mu / lambda: with
+ * ratio > 1 (bonds over their limit: the first solve of the step where the first bond breaks,
+ * or a re-solve after breaks) the load at which its most critical bond reaches its limit,
+ * the top of a tooth of the sawtooth of sequentially linear analysis (Rots et al.); with
+ * ratio <= 1 (settled) the load applied. So every break is on the envelope, whichever step it
+ * falls in, and nothing is extrapolated past the loading applied (a model whose bonds never
+ * come near their limit peaks at load factor 1). Exact while no node is held (a held node
+ * keeps its displacement as the load scales). */
+static void track_peaks(growth_run *g, int step, double lambda, double ratio) {
   cupid_problem_state *prob = g->prob;
-  const double lc = next_break(g, lambda);
-  if (!prob->growth.peak || lc <= 0.0 || lambda <= 0.0) return;
+  if (!prob->growth.peak || lambda <= 0.0) return;
+  const double mu = ratio > 1.0 ? lambda / ratio : lambda;
   for (int k = 0; k < prob->model->n_constraints; k++) {
     double r[3];
-    for (int c = 0; c < 3; c++) r[c] = g->react[3 * k + c] * lc / lambda;
+    for (int c = 0; c < 3; c++) r[c] = g->react[3 * k + c] * (mu / lambda);
     double *p = prob->growth.peak + 6 * k;
     const double mag = sqrt(r[0] * r[0] + r[1] * r[1] + r[2] * r[2]);
-    if (mag <= p[0]) continue;
-    p[0] = mag, p[1] = lc, p[2] = step;
+    if (!(mag > p[0])) continue;
+    p[0] = mag, p[1] = mu, p[2] = step;
     for (int c = 0; c < 3; c++) p[3 + c] = r[c];
   }
 }
@@ -209,7 +280,6 @@ static cupid_status write_row(growth_run *g, int step, double lambda, int iterat
   cupid_problem_state *prob = g->prob;
   const cupid_model_t *m = prob->model;
   reactions(g);
-  track_peaks(g, step, lambda);
   if (!g->csv && !prob->slab) return CUPID_SUCCESS;
   CUPID_CALL(cupid_problem_fracture_damage(prob));
   const int damage = cupid_problem_has_damage(prob);
@@ -288,7 +358,15 @@ static void anchor(growth_run *g) {
 /* Release the nodes that lost their support: held at their displacement now. */
 static cupid_status release_unsupported(growth_run *g, int step) {
   cupid_problem_state *prob = g->prob;
-  cupid_int fresh = 0;
+  cupid_int fresh = 0, weak = 0;
+  /* which of the nodes released now are weakly held (held_forces tells them apart): the owned
+   * ones, on a copy of the flags, the first check of the searches below */
+  const cupid_int a = prob->slab ? prob->part.owned_first : 0;
+  const cupid_int b = prob->slab ? prob->part.owned_last : prob->n_pd;
+  memcpy(g->weak_scan, g->release, (size_t)prob->n_pd);
+  CUPID_CALL(cupid_pd_operator_weakly_held(prob->op, a, b, g->weak_scan, &weak));
+  for (cupid_int i = a; i < b && weak > 0; i++)
+    if (g->weak_scan[i] == 2) g->weak[i] = 1;
   if (prob->slab)
     CUPID_CALL(cupid_growth_mf_unsupported(prob, &g->mf, g->anchored, g->release, &fresh));
   else
@@ -621,21 +699,99 @@ static cupid_status check_blocked(growth_run *g, int k, double lambda, int *stop
   return CUPID_SUCCESS;
 }
 
-/* One load step: solve, break, solve again until nothing is over its limit; *stop = 1 when a
- * coupling zone stopped it (check_blocked). */
+/* The held nodes carry more than COLLAPSE_SHARE of the forces on the body (held_forces): the
+ * crack has cut the load path of a load the supports can no longer take (a traction on a part
+ * cut loose, an Arlequin beam end whose PD piece broke through), and what the held nodes hold
+ * is a support the model never had. 1e-6: a fragment without load, or a body cut through under
+ * a grip, leaves its held nodes round-off (1e-20 of the run's forces on the growth test's
+ * plate); a collapse puts nearly all of the load on them (0.997 on a plate pulled apart). */
+#define COLLAPSE_SHARE 1e-6
+
+/* A collapse stops the run at this step (*stop = 1), reported as such: the message, the
+ * fracture block's `collapse`, exit status 2; the step's row is not written (no equilibrium),
+ * the fields written are this solve's, for the crack that cut the body. Checked on a settled
+ * solve, by the nodes held for a fragment or a singular factorisation (a weakly held node's
+ * bonds pull on it at every step: held_forces); with_weak: by every held node, where a
+ * coupling zone stopped the step (check_blocked) in the middle of its re-solves. */
+static cupid_status check_collapse(growth_run *g, int k, double lambda, int with_weak, int *stop) {
+  cupid_problem_state *prob = g->prob;
+  const double share = with_weak && g->weak_share > g->held_share ? g->weak_share : g->held_share;
+  *stop = 0;
+  if (share <= COLLAPSE_SHARE) return CUPID_SUCCESS;
+  prob->growth.collapse_step = k;
+  prob->growth.collapse_load = lambda;
+  prob->growth.collapse_share = share;
+  prob->growth.collapse_held = g->released;
+  const double *h = prob->growth.held_reaction;
+  snprintf(prob->growth.stopped, sizeof prob->growth.stopped,
+           "the body collapsed at load step %d (load factor %.6g): the crack cut the load path, "
+           "and the %lld node%s held where breaking left %s loose carr%s %.3g of the forces on "
+           "the body (a sum of (%.4g, %.4g, %.4g); more than %.0e is a support the model does "
+           "not have). The load is more than what is left of the body can carry: results past "
+           "the last step written are no equilibrium; the fields written are this solve's",
+           k, lambda, (long long)g->released, g->released == 1 ? "" : "s",
+           g->released == 1 ? "it" : "them", g->released == 1 ? "ies" : "y", share, h[0], h[1],
+           h[2], COLLAPSE_SHARE);
+  prob->growth.stopped_step = k;
+  *stop = 1;
+  return CUPID_SUCCESS;
+}
+
+/* The load and the prescribed values of the model at load factor mu (held nodes keep theirs). */
+static void set_load(growth_run *g, double mu) {
+  cupid_problem_state *prob = g->prob;
+  for (cupid_int d = 0; d < prob->ndof; d++) {
+    prob->f_ext[d] = mu * g->f_full[d];
+    if (g->fixed0[d]) prob->bc->value[d] = mu * g->g_full[d];
+  }
+}
+
+/* The solve at load factor mu scaled to mu2: exact, each solve being linear, while no node is
+ * held (a held node keeps its displacement). */
+static void scale_solution(growth_run *g, double mu, double mu2) {
+  cupid_problem_state *prob = g->prob;
+  const double s = mu2 / mu;
+  for (cupid_int d = 0; d < prob->ndof; d++) prob->u[d] *= s, prob->f_int[d] *= s;
+  for (int c = 0; c < 3 * prob->model->n_constraints; c++) g->react[c] *= s;
+  set_load(g, mu2);
+}
+
+/* How far past its limit a sub-step puts the most critical bond, so that it breaks: far above
+ * the round-off of the ratio (1e-15), far below any physical difference (the growth test finds
+ * the first break between 1e-9 below and above the predicted load). */
+#define SUBSTEP_OVER 1e-9
+
+/* One load step to load factor lambda: solve, break, solve again until nothing is over its
+ * limit; *stop = 1 when a coupling zone stopped it (check_blocked) or the body collapsed
+ * (check_collapse).
+ * Sub-steps make the crack's path independent of the step count: a solve of a crack that
+ * broke nothing at its load yet, with bonds over their limit (ratio r > 1), is scaled back to
+ * the load factor mu / r (1 + SUBSTEP_OVER) at which its most critical bond reaches its limit
+ * (exact: each solve is linear), the bonds break there, and the re-solves run at that load
+ * until nothing more breaks (a crack that runs at constant load); then the load goes on to
+ * lambda, by scaling the settled solve again (no solve: the next sub-step, if any, is found
+ * on it). So every crack is broken at the load it first fails at, as in sequentially linear
+ * analysis (Rots et al. 2008), and the steps only choose where the rows are written: a
+ * coarse step no longer breaks at once the bonds a finer one would have broken one event at
+ * a time, at lower loads (the plate of issue 33: peaks of 1134 to 1284 N over 1 to 50 steps
+ * before). Once a node is held the scaling is no longer exact, and the bonds over their limit
+ * break at the step's load as they did (CUPID_GROWTH_SUBSTEP=0: always so, bench/growth.sh). */
 static cupid_status load_step(growth_run *g, int k, double lambda, int *iterations, int *stop) {
   cupid_problem_state *prob = g->prob;
   const cupid_model_t *m = prob->model;
   const int fracture = m->has_peridynamics && m->pd.fracture.has_fracture;
   const int only_most = fracture && !m->pd.fracture.per_iteration_all;
   int reassemble = 0; /* K holds the intact bonds of the last solve */
+  double mu = lambda; /* the load factor of the solve */
+  int broke_here = 0; /* bonds broke at load factor mu */
+  int scaled = 0;     /* the solution is the last solve's scaled to mu: no solve needed */
   *iterations = 0;
   if (g->F && g->bonds_at_factor != prob->broken_bonds) cupid_direct_factor_destroy(&g->F);
   for (;;) {
     const int quiet = prob->quiet; /* the first solve reports its assembly; the others would
                                       repeat it per broken bond */
     if (k > 1 || *iterations > 0) prob->quiet = 1;
-    cupid_status st = solve(g, reassemble);
+    cupid_status st = scaled ? CUPID_SUCCESS : solve(g, reassemble);
     prob->quiet = quiet;
     if (st == CUPID_ERR_NUMERIC && prob->broken_bonds > 0) { /* what breaking left loose */
       int held = 0;
@@ -646,22 +802,43 @@ static cupid_status load_step(growth_run *g, int k, double lambda, int *iteratio
       }
     }
     CUPID_CALL(st);
-    (*iterations)++;
+    if (!scaled) (*iterations)++;
+    scaled = 0;
     if (!fracture) return CUPID_SUCCESS;
-    CUPID_CALL(check_blocked(g, k, lambda, stop));
-    if (*stop) return CUPID_SUCCESS;
-    double r = -1.0; /* the largest ratio of this solution, when scanned */
-    if (prob->first_break_step < 0) { /* the exact load of the first break, by scaling */
-      CUPID_CALL(cupid_problem_max_ratio(prob, prob->u, &r));
-      if (r > 1.0) prob->first_break_load = lambda / r;
-      if (g->ratio_per_load == 0.0 && r > 0.0 && lambda > 0.0) g->ratio_per_load = r / lambda;
+    reactions(g);
+    CUPID_CALL(check_blocked(g, k, mu, stop));
+    if (*stop) { /* a loose part swung round into a coupling zone: a collapse, if held nodes
+                    carry it (an Arlequin bar cut through under an end traction: weakly held
+                    nodes among them, the pivots it swung round) */
+      int collapsed = 0;
+      return check_collapse(g, k, mu, 1, &collapsed);
     }
+    double r = 0.0; /* the largest ratio of this solution */
+    CUPID_CALL(cupid_problem_max_ratio(prob, prob->u, &r));
+    if (prob->first_break_step < 0) { /* the exact load of the first break, by scaling */
+      if (r > 1.0) prob->first_break_load = mu / r;
+      if (g->ratio_per_load == 0.0 && r > 0.0 && mu > 0.0) g->ratio_per_load = r / mu;
+    }
+    if (r > 1.0 && !broke_here && g->substep && g->released == 0) { /* the sub-step */
+      const double mc = mu / r * (1.0 + SUBSTEP_OVER);
+      scale_solution(g, mu, mc);
+      r *= mc / mu, mu = mc;
+    }
+    track_peaks(g, k, mu, carries_load(g, mu, r) ? r : 0.0);
     cupid_int broken = 0;
     double diss = 0.0;
-    CUPID_CALL(cupid_problem_fracture_step(prob, k, lambda, prob->u, only_most, &broken, &diss));
+    CUPID_CALL(cupid_problem_fracture_step(prob, k, mu, prob->u, only_most, &broken, &diss));
+    if (broken == 0 && mu < lambda) { /* settled below the step's load: on to it, by scaling
+                                         (no node held) or a solve */
+      if (g->released == 0) scale_solution(g, mu, lambda), scaled = 1;
+      else set_load(g, lambda), reassemble = 0;
+      mu = lambda, broke_here = 0;
+      continue;
+    }
     if (broken == 0) { /* settled: the next break's load factor from this solution (nothing
-                          broke, so a ratio scanned above still holds) */
-      if (r < 0.0) CUPID_CALL(cupid_problem_max_ratio(prob, prob->u, &r));
+                          broke, so the ratio scanned above still holds) */
+      CUPID_CALL(check_collapse(g, k, lambda, 0, stop));
+      if (*stop) return CUPID_SUCCESS;
       g->next_ratio = carries_load(g, lambda, r) ? r : 0.0; /* none after a cut */
       if (g->next_ratio == 0.0 && r > 0.0 && !g->cut_through) {
         g->cut_through = 1;
@@ -671,6 +848,7 @@ static cupid_status load_step(growth_run *g, int k, double lambda, int *iteratio
       }
       return CUPID_SUCCESS;
     }
+    broke_here = 1;
     CUPID_CALL(release_unsupported(g, k));
     reassemble = 1;
     CUPID_CHECK(*iterations < 1000000, CUPID_ERR_NUMERIC,
@@ -690,6 +868,8 @@ static cupid_status setup_run(growth_run *g) {
   if (prob->grid) {
     CUPID_CALL(cupid_calloc((size_t)prob->n_pd + 1, 1, "anchored nodes", &g->anchored));
     CUPID_CALL(cupid_calloc((size_t)prob->n_pd + 1, 1, "released nodes", &g->release));
+    CUPID_CALL(cupid_calloc((size_t)prob->n_pd + 1, 1, "weakly held nodes", &g->weak));
+    CUPID_CALL(cupid_calloc((size_t)prob->n_pd + 1, 1, "weakly held scan", &g->weak_scan));
     anchor(g);
   }
   CUPID_CALL(constraint_masks(g));
@@ -704,6 +884,8 @@ static cupid_status setup_run(growth_run *g) {
   g->krylov = !(how && strcmp(how, "factor") == 0);
   g->downdate = g->krylov && !(how && strcmp(how, "krylov") == 0);
   g->matrix_free = matrix_free(prob);
+  const char *sub = getenv("CUPID_GROWTH_SUBSTEP");
+  g->substep = !(sub && strcmp(sub, "0") == 0);
   return open_csv(g);
 }
 
@@ -781,6 +963,18 @@ cupid_status cupid_problem_run_growth(cupid_problem_state *prob) {
     prob->growth.factor_s = g.mf.setup_s;
     /* the preconditioner's one set-up stands for the factorisations */
     prob->phases[CUPID_PHASE_FACTORISATION] = (cupid_phase_record){g.mf.setup_s, cupid_peak_memory(), 1};
+  }
+  if (g.released > 0) { /* the held nodes, whose forces the summary shows apart (force_sums;
+                          a slab's gathered with the fields) */
+    prob->growth.held = g.release, g.release = NULL;
+    prob->growth.held_count = g.released;
+    prob->growth.held_share = g.held_share > g.weak_share ? g.held_share : g.weak_share;
+    if (!prob->growth.collapse_step && g.weak_share > COLLAPSE_SHARE && !prob->quiet &&
+        (!prob->slab || cupid_petsc_rank() == 0))
+      fprintf(stderr, "cupid: warning: the %lld nodes held where breaking left them weakly held "
+              "(at most 2 bonds, or all in one plane) carry %.3g of the forces on the body: a "
+              "support of that size that the model does not have (summary.json's "
+              "held_reaction_sum)\n", (long long)g.released, g.weak_share);
   }
   if (prob->slab) { /* rank 0 gathers the whole model */
     CUPID_TRY(cupid_problem_slab_collect(prob));

@@ -528,7 +528,10 @@ cupid_status cupid_problem_force_sums(cupid_problem_state *prob, double load[3],
     for (cupid_int d = first; d < end; d += step) {
       const double w = tk ? tk[d] : 1.0;
       load[k] += prob->f_ext[d] * w;
-      if (prob->bc->fixed[d]) reaction[k] += (prob->f_int[d] - prob->f_ext[d]) * w;
+      /* a node that growth held is no support of the model's: its force is apart
+       * (growth.held_reaction, summary.json's held_reaction_sum) */
+      const int held = prob->growth.held && d < 3 * prob->n_pd && prob->growth.held[d / 3];
+      if (prob->bc->fixed[d] && !held) reaction[k] += (prob->f_int[d] - prob->f_ext[d]) * w;
     }
   }
   cupid_free(&t);
@@ -585,6 +588,7 @@ void cupid_problem_state_free(cupid_problem_state *prob) {
   cupid_free(&prob->break_words);
   cupid_free(&prob->damage);
   cupid_free(&prob->growth.peak);
+  cupid_free(&prob->growth.held);
 }
 
 cupid_status cupid_problem_create(const cupid_model_t *model, const cupid_run_options *opts,

@@ -174,6 +174,13 @@ typedef struct cupid_problem_private {
     /* per constraint k, peak[6 k ..]: the largest reaction (by magnitude) of the sawtooth
      * envelope, its load factor, step, and x, y, z (growth.c, next_break) */
     double *peak;
+    double held_reaction[3];        /**< the held nodes' forces summed (growth.c, held_forces) */
+    unsigned char *held;            /**< per PD node, nonzero: held (NULL: none was) */
+    cupid_int held_count;
+    double held_share;              /**< the held nodes' share of the forces, last solve */
+    int collapse_step;              /**< the step the body collapsed (0: it did not) */
+    double collapse_load, collapse_share;
+    cupid_int collapse_held;
     int stopped_step;               /**< the step a crack reaching a coupling zone stopped
                                          (0: ran to the end) */
     char stopped[1024];              /**< then: why, for the message and summary.json */

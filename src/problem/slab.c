@@ -194,6 +194,25 @@ static cupid_status become_whole(cupid_problem_state *prob, double *g[7]) {
   return CUPID_SUCCESS;
 }
 
+/* The nodes that growth held (growth.held, one flag per slab node) to rank 0, over the whole
+ * grid, where force_sums keeps their forces apart from the constraints' reactions. */
+static cupid_status gather_held(cupid_problem_state *prob) {
+  double *mine = NULL, *all = NULL;
+  cupid_status st = cupid_malloc((size_t)prob->n_pd + 1, sizeof *mine, "held flags", &mine);
+  CUPID_CALL(cupid_problem_slab_agree(st));
+  for (cupid_int i = 0; i < prob->n_pd; i++) mine[i] = prob->growth.held[i];
+  st = gather_nodes(prob, mine, 1, &all);
+  cupid_free(&mine);
+  cupid_free(&prob->growth.held);
+  if (st == CUPID_SUCCESS && cupid_petsc_rank() == 0) {
+    const cupid_int n = prob->part.global_nodes;
+    st = cupid_calloc((size_t)n + 1, 1, "held nodes", &prob->growth.held);
+    for (cupid_int i = 0; i < n && st == CUPID_SUCCESS; i++) prob->growth.held[i] = all[i] != 0.0;
+  }
+  cupid_free(&all);
+  return st;
+}
+
 cupid_status cupid_problem_slab_collect(cupid_problem_state *prob) {
   cupid_status st = CUPID_SUCCESS;
   double *g[7] = {NULL, NULL, NULL, NULL, NULL, NULL, NULL}, *flags = NULL, *values = NULL;
@@ -220,6 +239,7 @@ cupid_status cupid_problem_slab_collect(cupid_problem_state *prob) {
     CUPID_TRY(cupid_problem_slab_agree(cupid_problem_fracture_damage(prob)));
     CUPID_TRY(gather_nodes(prob, prob->damage, 1, &g[6]));
   }
+  if (prob->growth.held) CUPID_TRY(gather_held(prob));
   if (cupid_petsc_rank() == 0) {
     CUPID_TRY(become_whole(prob, g));
     prob->slab = 0; /* rank 0 now holds the whole model; the others stop here */

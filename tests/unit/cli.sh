@@ -66,6 +66,9 @@ expect 1 'point_load_outside.yaml:[0-9]+:[0-9]+: loads\[0\].*outside every PD re
 expect 1 'load_nan.yaml:13:5: loads\[0\]: the load is not finite \(-?nan\) at PD node \(0.5, 5.5, 0.5\)' -- "$CUPID" run "$M/load_nan.yaml" -o o9
 expect 1 'load_inf.yaml:13:5: loads\[0\]: the load is not finite \(inf\)' -- "$CUPID" run "$M/load_inf.yaml" -o o9
 expect 1 'displacement_nan.yaml:11:5: constraints\[0\]: the prescribed displacement is not finite' -- "$CUPID" run "$M/displacement_nan.yaml" -o o9
+# ... and one that turns non-finite mid-run (issue 33: was "DOF 3598 is not finite at t = ...",
+# exit 2, without the constraint or the node)
+expect 1 'displacement_blowup.yaml:12:5: constraints\[1\]: at t = 0.005 the prescribed displacement is not finite \(inf\) at PD node \(0.5, 6.5, 0.5\), component y' -- "$CUPID" run "$M/displacement_blowup.yaml" -o o9
 expect 1 'initial_nan.yaml:[0-9]+:[0-9]+: analysis.dynamic: the initial velocity is not finite' -- "$CUPID" run "$M/initial_nan.yaml" -o o9
 expect 2 'not finite' -- "$CUPID" run "$M/newmark_unstable.yaml" -o o9
 expect 2 'numerical error' -- "$CUPID" run "$M/rayleigh_huge.yaml" -o o9
@@ -81,6 +84,9 @@ expect 1 'good_small.yaml: --set peridynamics.spacing=-1: peridynamics.spacing: 
 expect 1 "--set analysis.solvr=direct: analysis.solvr: unknown key; did you mean 'solver'" -- "$CUPID" run "$M/good_small.yaml" -o o9 --set analysis.solvr=direct
 expect 1 '--set loads\[3\].traction.value=1: loads\[3\] does not exist \(1 items\)' -- "$CUPID" run "$M/good_small.yaml" -o o9 --set 'loads[3].traction.value=1'
 expect 1 '--set nokey: expected key.path=value' -- "$CUPID" run "$M/good_small.yaml" -o o9 --set nokey
+# an error about an item of the file whose value an override gave cites the override, and the
+# item's line (issue 33: it cited the file's line alone)
+expect 1 'good_small.yaml: --set loads\[0\].traction.y=9: loads\[0\] \(.*good_small.yaml:[0-9]+:[0-9]+\): ' -- "$CUPID" check "$M/good_small.yaml" --set 'loads[0].traction.y=9'
 expect 0 'cupid run MODEL.yaml' -- "$CUPID" run --help
 expect 1 'option -o needs a directory' -- "$CUPID" run "$M/good_small.yaml" -o ""
 for d in out_petsc o1 o2 o3 o4 o5 o6 o7 o8 o9; do
