@@ -607,6 +607,12 @@ cupid_status cupid_problem_run_dynamic(cupid_problem_state *prob, const cupid_me
   prob->dyn.done = 1;
   cupid_problem_progress(prob, "dynamics: done, %lld output steps, energy balance %.2e (relative)",
                      (long long)o.out_count, prob->dyn.info.max_balance);
+  if (prob->dyn.info.max_balance > CUPID_ENERGY_BALANCE_BOUND && !prob->quiet &&
+      (!prob->slab || cupid_petsc_rank() == 0))
+    fprintf(stderr, "cupid: warning: the energy balance misses by %.2e of the run's largest "
+            "energy (bound %.0e): the energies' bookkeeping or the time step is off; compare "
+            "energies.csv's columns (docs/dynamics.md, \"Energies\")\n",
+            prob->dyn.info.max_balance, CUPID_ENERGY_BALANCE_BOUND);
 cleanup:
   cupid_atomic_abort(&o.history);
   cupid_atomic_abort(&o.damage);
@@ -658,6 +664,7 @@ void cupid_problem_dynamic_json(cupid_json js, const cupid_problem_state *prob) 
   cupid_json_number(js, "external_work", prob->dyn.energy.external);
   cupid_json_end_object(js);
   cupid_json_number(js, "max_energy_balance_relative", in->max_balance);
+  cupid_json_number(js, "energy_balance_bound", CUPID_ENERGY_BALANCE_BOUND);
   if (prob->slab_ranks > 1) { /* the PD grid was stepped in z slabs, one per rank */
     cupid_json_begin_object(js, "pd_slabs");
     cupid_json_integer(js, "ranks", prob->slab_ranks);
