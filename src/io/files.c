@@ -7,7 +7,7 @@
  * Temporary files still open are listed in a lock-free registry so a signal handler can
  * unlink them (cupid_atomic_cleanup_all) and an interrupted run leaves no debris behind.
  */
-#define _POSIX_C_SOURCE 200809L
+#define _GNU_SOURCE /* syscall(), SYS_getdents64: a folder listing safe in a signal handler */
 #include "cupid/io.h"
 
 #include <errno.h>
@@ -20,6 +20,9 @@
 #include <sys/types.h>
 #include <sys/wait.h>
 #include <unistd.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <sys/syscall.h>
 
 #include "io/io_internal.h"
 
@@ -115,6 +118,62 @@ void cupid_io_helper_end(int slot) {
   registry_remove(slot);
 }
 
+/* Output sets being written (output_set.c): the staging folder and the lock file of each, so
+ * that an interrupted run removes both (issue 33: SIGINT left the lock and an empty staging
+ * folder). A few sets at once at most (the Python API may hold several problems). */
+#define SET_SLOTS 8
+static struct {
+  atomic_int state;
+  char staging[REGISTRY_PATH], lock[REGISTRY_PATH];
+} set_registry[SET_SLOTS];
+
+int cupid_io_set_register(const char *staging, const char *lock) {
+  const size_t ls = strlen(staging), ll = strlen(lock);
+  if (ls >= REGISTRY_PATH || ll >= REGISTRY_PATH) return -1;
+  for (int i = 0; i < SET_SLOTS; i++) {
+    int expected = SLOT_FREE;
+    if (atomic_compare_exchange_strong(&set_registry[i].state, &expected, SLOT_CLAIMED)) {
+      memcpy(set_registry[i].staging, staging, ls + 1);
+      memcpy(set_registry[i].lock, lock, ll + 1);
+      atomic_store(&set_registry[i].state, SLOT_ACTIVE);
+      return i;
+    }
+  }
+  return -1;
+}
+
+void cupid_io_set_unregister(int slot) {
+  if (slot >= 0 && slot < SET_SLOTS) atomic_store(&set_registry[slot].state, SLOT_FREE);
+}
+
+/* The files of a flat folder and the folder, from a signal handler: open, getdents64 (the
+ * system call: readdir allocates), unlinkat and rmdir are async-signal-safe. Two passes, as
+ * unlinking while reading may skip an entry. */
+static void remove_folder_signal_safe(const char *dir) {
+  for (int pass = 0; pass < 2; pass++) {
+    int fd = open(dir, O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+    if (fd < 0) return;
+    _Alignas(8) char buf[4096];
+    long n;
+    while ((n = syscall(SYS_getdents64, fd, buf, sizeof buf)) > 0)
+      for (long off = 0; off < n;) {
+        const struct {
+          uint64_t ino;
+          int64_t off;
+          unsigned short reclen;
+          unsigned char type;
+          char name[];
+        } *e = (const void *)(buf + off);
+        const char *name = e->name;
+        if (!(name[0] == '.' && (name[1] == '\0' || (name[1] == '.' && name[2] == '\0'))))
+          unlinkat(fd, name, 0);
+        off += e->reclen;
+      }
+    close(fd);
+    if (rmdir(dir) == 0) return;
+  }
+}
+
 void cupid_atomic_cleanup_all(void) {
   int saved = errno; /* a signal handler must not change errno under the interrupted code */
   for (int i = 0; i < REGISTRY_SLOTS; i++) {
@@ -124,6 +183,11 @@ void cupid_atomic_cleanup_all(void) {
   }
   for (int i = 0; i < REGISTRY_SLOTS; i++)
     if (atomic_load(&registry[i].state) == SLOT_ACTIVE) unlink(registry[i].path);
+  for (int i = 0; i < SET_SLOTS; i++) /* the staged files, their folder, then the lock */
+    if (atomic_load(&set_registry[i].state) == SLOT_ACTIVE) {
+      remove_folder_signal_safe(set_registry[i].staging);
+      unlink(set_registry[i].lock);
+    }
   errno = saved;
 }
 

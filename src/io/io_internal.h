@@ -24,4 +24,13 @@ void cupid_io_helper_set_child(int slot, pid_t child);
 /** The helper has exited: forget it (the file is complete or already removed). */
 void cupid_io_helper_end(int slot);
 
+/**
+ * An output set being written (output_set.c): cupid_atomic_cleanup_all() removes its staging
+ * folder with the files in it and its lock file, so that an interrupted run leaves neither.
+ * Returns a slot for cupid_io_set_unregister() (-1 if none is free: then the next run into the
+ * folder removes what is left, as for a run that was killed).
+ */
+int cupid_io_set_register(const char *staging, const char *lock);
+void cupid_io_set_unregister(int slot);
+
 #endif

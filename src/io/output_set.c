@@ -32,6 +32,7 @@ struct cupid_output_set_private {
   char *staging; /* parent/.base.cupid-run-PID */
   char *lock;    /* parent/.base.cupid-lock */
   int lock_fd;
+  int slot;      /* cupid_io_set_register's, or -1 */
 };
 
 /* The files a run writes, by pattern: the folder's other files are the user's and stay. */
@@ -90,6 +91,7 @@ static void remove_dead_staging(const struct cupid_output_set_private *s) {
 }
 
 static void set_free(struct cupid_output_set_private *s) {
+  cupid_io_set_unregister(s->slot);
   if (s->lock_fd >= 0) {
     unlink(s->lock);
     close(s->lock_fd); /* releases the flock */
@@ -124,6 +126,7 @@ cupid_status cupid_output_set_begin(const char *dir, cupid_output_set *set) {
   cupid_status st = CUPID_SUCCESS;
   CUPID_CALL(cupid_calloc(1, sizeof *s, "output set", &s));
   s->lock_fd = -1;
+  s->slot = -1;
   CUPID_TRY(split_path(s, dir));
   CUPID_TRY_CHECK(strcmp(s->base, ".") && strcmp(s->base, ".."), CUPID_ERR_IO,
                   "output folder '%s': name it by its own name (not '.' or '..')", dir);
@@ -158,6 +161,7 @@ cupid_status cupid_output_set_begin(const char *dir, cupid_output_set *set) {
   remove_flat(s->staging); /* a leftover of this pid's earlier set */
   CUPID_TRY_CHECK(mkdir(s->staging, 0777) == 0, CUPID_ERR_IO,
                   "cannot create the staging folder '%s': %s", s->staging, strerror(errno));
+  s->slot = cupid_io_set_register(s->staging, s->lock); /* a signal removes both */
   *set = s;
   s = NULL;
 cleanup:

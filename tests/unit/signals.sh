@@ -152,6 +152,13 @@ for trial in $(seq 1 "$TRIALS"); do
       echo "FAIL: trial $trial (SIG$sig to the $group after $delay_ms ms, exit $rc): partial outputs"
       fail=$((fail+1))
     fi
+    # nor the run's lock or staging folder (issue 33: both stayed, the folder empty)
+    left=$(ls -A | grep -E "^\.$dir\.cupid-(lock|run-)" || true)
+    if [ -n "$left" ]; then
+      echo "FAIL: trial $trial (SIG$sig to the $group, exit $rc): left behind: $left"; fail=$((fail+1))
+    else
+      pass=$((pass+1))
+    fi
     echo "trial $trial: SIG$sig to $group at $delay_ms ms: exit $rc, $(ls "$dir" 2>/dev/null | wc -l) files"
     [ "$rc" -ne 0 ] && break
     delay_ms=$((delay_ms / 2))
@@ -193,6 +200,8 @@ for target in group pid; do
       echo "FAIL: stalled gnuplot, SIG$sig to the $target: half-made line_a.png left behind"; fail=$((fail+1))
     elif [ -n "$(find fake_out -name '*.tmp*')" ]; then
       echo "FAIL: stalled gnuplot, SIG$sig to the $target: temporary files left"; fail=$((fail+1))
+    elif [ -n "$(ls -A | grep -E '^\.fake_out\.cupid-(lock|run-)')" ]; then
+      echo "FAIL: stalled gnuplot, SIG$sig to the $target: the lock or the staging folder left"; fail=$((fail+1))
     else
       pass=$((pass+1))
     fi
