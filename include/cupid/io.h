@@ -69,6 +69,10 @@ cupid_status cupid_output_set_begin(const char *dir, cupid_output_set *set);
 const char *cupid_output_set_dir(const cupid_output_set set);
 cupid_status cupid_output_set_publish(cupid_output_set *set);
 void cupid_output_set_abort(cupid_output_set *set);
+/** publish leaves every file of @p dir that the set does not write alone (no stale files
+ *  removed): a second publish of the same run's outputs, whose first one holds files (time
+ *  series written as the run went) that this one does not. */
+void cupid_output_set_keep_others(cupid_output_set set);
 
 /**
  * Streaming JSON writer: pretty printed (2-space indent), keys and strings escaped per

@@ -35,6 +35,12 @@ class Error(RuntimeError):
         self.exit_code = exit_code
 
 
+class GrowthStopped(Error):
+    """Crack growth stopped before its last load step (a crack reached a coupling zone, or the
+    body collapsed): the message says which. The problem stays solved up to there: its fields,
+    info and write_outputs() hold the steps that ran (the command line exits with status 2)."""
+
+
 class _RunOptions(ctypes.Structure):  # cupid_run_options (problem.h)
     _fields_ = [("output_dir", ctypes.c_char_p), ("solver", ctypes.c_int),
                 ("threads", ctypes.c_int), ("max_memory_gb", ctypes.c_double),
@@ -200,11 +206,16 @@ class Problem:
         return self
 
     def solve(self):
-        """The analysis (static, dynamic or evaluate); sets the problem up first if needed."""
+        """The analysis (static, dynamic or evaluate); sets the problem up first if needed.
+        Raises GrowthStopped when crack growth stopped before its last step (the problem is
+        solved up to there: write_outputs() still writes it)."""
         self.setup()
         if self._stage < 2:
             _check(_lib.cupid_problem_solve(self._p))
             self._stage = 2
+            stopped = self.info["stopped"]
+            if stopped:
+                raise GrowthStopped(stopped, "growth stopped", 2)
         return self
 
     @property

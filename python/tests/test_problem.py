@@ -176,7 +176,8 @@ def test_crack_growth_peak_and_stop(tmp_path):
     """Quasi-static growth through the package: the plate of tests/models/growth/plate.yaml runs
     to its end (stopped is None) with the envelope's peak equal to summary.json's; the SENB whose
     crack reaches an Arlequin overlap stops (info names the overlap, solve still succeeds and
-    the files are written: the command line turns this into exit status 2)."""
+    the files are written: the command line turns this into exit status 2; solve() raises
+    GrowthStopped, issue 33)."""
     plate = os.path.join(SRC, "tests", "models", "growth", "plate.yaml")
     p = cupid.Problem(plate, output_dir=str(tmp_path / "plate"))
     p.solve()
@@ -188,5 +189,42 @@ def test_crack_growth_peak_and_stop(tmp_path):
     assert info["peak_reaction"] == peak["reaction"]
     stop = os.path.join(SRC, "tests", "models", "growth", "senb_interface.yaml")
     q = cupid.Problem(stop, output_dir=str(tmp_path / "stop"))
-    q.solve()
+    with pytest.raises(cupid.GrowthStopped) as stopped:
+        q.solve()
+    assert stopped.value.exit_code == 2 and "Arlequin overlap {x: [8, 12]}" in str(stopped.value)
     assert "Arlequin overlap {x: [8, 12]}" in q.info["stopped"]
+
+
+def test_growth_outputs_twice_quiet_and_dict_folder(tmp_path, capfd, monkeypatch):
+    """Issue 33: a second write_outputs() keeps what the first wrote (it removed damage.csv,
+    model.pvd and the frames as stale); a collapsed growth raises GrowthStopped and prints
+    nothing with quiet=True; a dict model without output.directory writes to out/model (it made
+    a folder named "out/<dict>")."""
+    plate = os.path.join(SRC, "tests", "models", "growth", "plate.yaml")
+    p = cupid.Problem(plate, output_dir=str(tmp_path / "twice"))
+    p.solve()
+    p.write_outputs()
+    first = sorted(os.listdir(tmp_path / "twice"))
+    assert "damage.csv" in first and "summary.json" in first
+    p.write_outputs()
+    assert sorted(os.listdir(tmp_path / "twice")) == first
+    capfd.readouterr()
+    apart = os.path.join(SRC, "tests", "models", "growth", "pulled_apart.yaml")
+    q = cupid.Problem(apart, output_dir=str(tmp_path / "apart"), quiet=True)
+    with pytest.raises(cupid.GrowthStopped) as stopped:
+        q.solve()
+    assert "the body collapsed at load step 2" in str(stopped.value)
+    q.write_outputs()
+    assert capfd.readouterr().err == ""
+    fr = json.load(open(tmp_path / "apart" / "summary.json"))["fracture"]
+    assert fr["collapse"]["step"] == 2
+    monkeypatch.chdir(tmp_path)
+    model = {"materials": {"m": {"E": 1000, "nu": 0.25}},
+             "peridynamics": {"spacing": 1, "horizon": 2, "material": "m",
+                              "regions": [{"x": [0, 2], "y": [0, 4], "z": [0, 2]}]},
+             "constraints": [{"fix": {"box": {"y": [0, 1]}}}],
+             "loads": [{"traction": {"y": 4, "value": [0, 1, 0]}}]}
+    r = cupid.Problem(model)
+    assert r.output_dir == "out/model"
+    r.solve().write_outputs()
+    assert os.path.exists(tmp_path / "out" / "model" / "summary.json")

@@ -293,21 +293,22 @@ int cupid_cli_main(int argc, char **argv) {
   if (st == CUPID_SUCCESS) st = cupid_problem_setup(problem);
   if (st == CUPID_SUCCESS && is_check) st = cupid_problem_print_estimate(problem);
   if (st == CUPID_SUCCESS && is_run) st = cupid_problem_solve(problem);
-  if (st == CUPID_SUCCESS && is_run) st = cupid_problem_write_outputs(problem);
-  if (st == CUPID_SUCCESS && is_run && !opts.quiet && cupid_petsc_rank() == 0)
-    print_results(problem);
-  /* a crack growth that stopped before its last step (its message printed, its results
-   * written): a run that did not finish, status 2 */
+  /* a crack growth that stopped before its last step (a coupling zone, a collapse): its
+   * message, as an error's, even with --quiet; its results written; a run that did not
+   * finish, status 2 */
   int stopped = 0;
   cupid_problem_info info;
   if (st == CUPID_SUCCESS && is_run && cupid_problem_get_info(problem, &info) == CUPID_SUCCESS)
     stopped = info.stopped != NULL;
+  if (stopped && cupid_petsc_rank() == 0) fprintf(stderr, "cupid: %s\n", info.stopped);
+  if (st == CUPID_SUCCESS && is_run) st = cupid_problem_write_outputs(problem);
+  if (st == CUPID_SUCCESS && is_run && !opts.quiet && cupid_petsc_rank() == 0)
+    print_results(problem);
   cupid_problem_destroy(&problem);
   if (cupid_petsc_initialized()) {
     const int code = finish_parallel(st);
     return code ? code : stopped ? 2 : 0;
   }
-  if (stopped) return 2;
-  if (st != CUPID_SUCCESS) return report_error(st);
-  return 0;
+  if (st != CUPID_SUCCESS) return report_error(st); /* writing the outputs failed */
+  return stopped ? 2 : 0;
 }

@@ -1351,8 +1351,11 @@ cleanup:
   return st;
 }
 
-/* "out/<stem>": the model file's name without directories and extension. */
+/* "out/<stem>": the model file's name without directories and extension; "out/model" for a
+ * model that is no file ("<dict>", "<text>": the Python API's names, issue 33: a folder named
+ * "<dict>" was made). */
 static cupid_status default_directory(const char *file, char **out) {
+  if (file[0] == '<') return cupid_strdup("out/model", out);
   const char *base = strrchr(file, '/');
   base = base ? base + 1 : file;
   size_t n = strlen(base);

@@ -33,6 +33,7 @@ struct cupid_output_set_private {
   char *lock;    /* parent/.base.cupid-lock */
   int lock_fd;
   int slot;      /* cupid_io_set_register's, or -1 */
+  int keep;      /* publish leaves the folder's other files alone (keep_others) */
 };
 
 /* The files a run writes, by pattern: the folder's other files are the user's and stay. */
@@ -225,7 +226,7 @@ cupid_status cupid_output_set_publish(cupid_output_set *set) {
   cupid_status st = CUPID_SUCCESS;
   CUPID_TRY(cupid_mkdir_p(s->dir));
   CUPID_TRY(check_targets(s));
-  remove_stale(s);
+  if (!s->keep) remove_stale(s);
   DIR *d = opendir(s->staging);
   CUPID_TRY_CHECK(d, CUPID_ERR_IO, "cannot read the staging folder '%s': %s", s->staging,
                   strerror(errno));
@@ -244,6 +245,10 @@ cupid_status cupid_output_set_publish(cupid_output_set *set) {
 cleanup:
   cupid_output_set_abort(set); /* the staging folder (now empty on success) and the lock */
   return st;
+}
+
+void cupid_output_set_keep_others(cupid_output_set set) {
+  if (set) set->keep = 1;
 }
 
 void cupid_output_set_abort(cupid_output_set *set) {

@@ -929,10 +929,7 @@ cupid_status cupid_problem_run_growth(cupid_problem_state *prob) {
     const cupid_int before = prob->broken_bonds;
     int it = 0, stop = 0;
     CUPID_TRY(load_step(&g, k, lambda, &it, &stop));
-    if (stop) {
-      if (!prob->slab || cupid_petsc_rank() == 0) fprintf(stderr, "cupid: %s\n", prob->growth.stopped);
-      break;
-    }
+    if (stop) break; /* the message: cupid_problem_get_info's stopped (the CLI prints it) */
     CUPID_TRY(write_row(&g, k, lambda, it));
     cupid_problem_progress(prob, "growth: step %d / %d, load factor %.4g: %d solve%s, %lld bonds "
                            "broken (+%lld), %lld nodes held",

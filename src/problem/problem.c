@@ -660,8 +660,13 @@ cupid_status cupid_problem_write_outputs(cupid_problem_state *prob) {
               "cupid_problem_write_outputs: solve the problem first");
   if (prob->slab || cupid_petsc_rank() != 0) return CUPID_SUCCESS; /* rank 0 writes */
   CUPID_CALL(begin_outputs(prob));
+  /* a second call writes the report again beside what the first published: the files the
+   * solve wrote as it ran (steps, time series, frames) are there only (issue 33: they were
+   * removed as stale) */
+  if (prob->outputs_written) cupid_output_set_keep_others(prob->outputs);
   CUPID_CALL(cupid_problem_report(prob));
   CUPID_CALL(cupid_output_set_publish(&prob->outputs));
+  prob->outputs_written = 1;
   prob->writedir = NULL;
   cupid_problem_progress(prob, "done: results in %s", prob->outdir);
   return CUPID_SUCCESS;

@@ -75,6 +75,7 @@ typedef struct cupid_problem_private {
   int stage;
   const char *outdir;       /**< where the results go (-o, else output.directory) */
   cupid_output_set outputs; /**< the run's files, staged until write_outputs publishes them */
+  int outputs_written;              /**< write_outputs published once (keep_others then) */
   const char *writedir;     /**< the staging folder the files are written to (NULL: none on this
                                  MPI rank) */
   int quiet;
