@@ -554,6 +554,7 @@ cupid_status cupid_problem_run_dynamic(cupid_problem_state *prob, const cupid_me
   opt.rayleigh_mass = d->rayleigh_mass;
   opt.rayleigh_stiffness = d->rayleigh_stiffness;
   opt.velocity_at_outputs = 1; /* monitor(): v only for the output steps' files */
+  if (prob->opts->check_only) opt.steps = 0; /* `cupid check`: the checks before step 1 only */
   cupid_dynamics_hooks hooks = {.ctx = &o};
   for (int k = 0; k < m->n_constraints; k++) o.timed_constraints |= constraint_depends_on_time(&m->constraints[k]);
   for (int k = 0; k < m->n_loads; k++) o.timed_loads |= load_depends_on_time(&m->loads[k]);
@@ -569,9 +570,13 @@ cupid_status cupid_problem_run_dynamic(cupid_problem_state *prob, const cupid_me
     CUPID_TRY(cupid_malloc((size_t)prob->ndof, sizeof *o.u_view, "recovered displacements",
                            &o.u_view));
   CUPID_TRY(open_outputs(&o));
-  cupid_problem_progress(prob, "dynamics: %s, %lld steps of %g, %s mass",
-                     d->integrator == CUPID_INTEGRATOR_NEWMARK ? "newmark" : "central",
-                     (long long)opt.steps, opt.dt, m_lumped ? "lumped" : "consistent");
+  if (prob->opts->check_only)
+    cupid_problem_progress(prob, "dynamics: the step %g of central differences checked as a "
+                           "run checks it", opt.dt);
+  else
+    cupid_problem_progress(prob, "dynamics: %s, %lld steps of %g, %s mass",
+                           d->integrator == CUPID_INTEGRATOR_NEWMARK ? "newmark" : "central",
+                           (long long)opt.steps, opt.dt, m_lumped ? "lumped" : "consistent");
   t0 = cupid_wtime();
   cupid_dynamics_explicit_system esys = {.n = prob->ndof,
                                          .apply = mf ? op->apply : NULL,
@@ -591,6 +596,7 @@ cupid_status cupid_problem_run_dynamic(cupid_problem_state *prob, const cupid_me
       prob->dyn.info.dt_critical > 0 && d->dt > prob->dyn.info.dt_critical)
     st = cupid_model_error(m, &d->mark, "%s", cupid_error_message());
   CUPID_TRY(st);
+  if (prob->opts->check_only) goto cleanup; /* no step was taken, nothing to write */
   prob->phases[CUPID_PHASE_FACTORISATION] =
       (cupid_phase_record){prob->dyn.info.factor.time_factor, cupid_peak_memory(), 1};
   prob->phases[CUPID_PHASE_SOLVE] = (cupid_phase_record){cupid_wtime() - t0, cupid_peak_memory(), 1};

@@ -325,6 +325,21 @@ static cupid_status apply_conditions(cupid_problem_state *prob) {
   return agreed(prob, prob->method->loads(prob));
 }
 
+static cupid_status require_constraints(const cupid_problem_state *prob);
+static cupid_status run_dynamic(cupid_problem_state *prob);
+
+/* `cupid check`: what a run checks before its first solve or step, by the run's own code
+ * (issue 33: check said "valid" to a dt that run refused as unstable): the constraints of a
+ * static analysis, and central differences' stable step, found as a run finds it (the method's
+ * operator, the mass, the integrator's check before step 1: a dynamic run of no step). */
+static cupid_status check_before_solving(cupid_problem_state *prob) {
+  const cupid_analysis *a = &prob->model->analysis;
+  if (a->type == CUPID_ANALYSIS_STATIC) return require_constraints(prob);
+  if (a->type == CUPID_ANALYSIS_DYNAMIC && a->dynamic.integrator == CUPID_INTEGRATOR_CENTRAL)
+    return run_dynamic(prob);
+  return CUPID_SUCCESS;
+}
+
 cupid_status cupid_problem_setup(cupid_problem_state *prob) {
   const cupid_model_t *model = prob->model;
   CUPID_CHECK(prob->stage == CUPID_STAGE_CREATED, CUPID_ERR_ARGUMENT,
@@ -347,8 +362,10 @@ cupid_status cupid_problem_setup(cupid_problem_state *prob) {
     prob->engine = cupid_solver_type_at(0);
     CUPID_CALL(allocate_fields(prob));
     if (model->analysis.type != CUPID_ANALYSIS_EVALUATE &&
-        !(prob->method->caps & CUPID_METHOD_CONDITIONS_ASSEMBLE))
+        !(prob->method->caps & CUPID_METHOD_CONDITIONS_ASSEMBLE)) {
       CUPID_CALL(apply_conditions(prob));
+      CUPID_CALL(check_before_solving(prob));
+    }
     prob->stage = CUPID_STAGE_SET_UP;
     return CUPID_SUCCESS;
   }
@@ -498,8 +515,9 @@ static cupid_status run_dynamic(cupid_problem_state *prob) {
                      prob->method->name);
     goto cleanup;
   }
-  CUPID_TRY(begin_outputs(prob)); /* the time series are written as the run goes */
+  if (!prob->opts->check_only) CUPID_TRY(begin_outputs(prob)); /* the series, as it goes */
   CUPID_TRY(cupid_problem_run_dynamic(prob, op.apply ? &op : NULL));
+  if (prob->opts->check_only) goto cleanup; /* cupid check: no step, nothing to report */
   if (prob->method->recover) { /* the eliminated unknowns, and K u with them */
     prob->method->recover(prob, prob->u);
     cupid_csr_matvec(prob->K, prob->u, prob->f_int);

@@ -46,6 +46,11 @@ fi
 # Semantic errors found after reading: the file, line and key of the culprit.
 expect 2 'unconstrained' -- "$CUPID" run "$M/unconstrained.yaml" -o o1
 expect 2 'unconstrained: no constraint fixes the y z displacement' -- "$CUPID" run "$M/fixed_only_x.yaml" -o o2
+# check runs every check that run runs before solving (issue 33, item 7: check said "valid"):
+# the constraints of a static model, and the stable step of central differences
+expect 2 'unconstrained: no constraint fixes the y z displacement' -- "$CUPID" check "$M/fixed_only_x.yaml"
+expect 1 'notched_plate.yaml: --set analysis.dynamic.dt=1e-5: analysis.dynamic \(.*\): central differences are unstable with dt = 1e-05' -- "$CUPID" check "$SRC/examples/notched_plate/notched_plate.yaml" --set analysis.dynamic.dt=1e-5
+expect 0 'the model is valid' -- "$CUPID" check "$SRC/examples/notched_plate/notched_plate.yaml"
 expect 2 'singular|not positive definite' -- "$CUPID" run "$M/two_blocks_apart.yaml" -o o3
 expect 1 'constraint_empty.yaml:[0-9]+:[0-9]+: constraints\[0\].*no PD node' -- "$CUPID" run "$M/constraint_empty.yaml" -o o4
 expect 1 'point_outside.yaml:[0-9]+:[0-9]+: output.points\[0\].*outside' -- "$CUPID" run "$M/point_outside.yaml" -o o5
