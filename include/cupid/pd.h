@@ -319,6 +319,11 @@ typedef struct {
  */
 cupid_status cupid_pd_operator_precrack(cupid_pd_operator op, const cupid_pd_precrack *crack,
                                         cupid_int *removed);
+/** The bonds of the stencil (unordered pairs, removed or not) that cross the rectangle as
+ *  cupid_pd_operator_precrack() counts crossing: > 0 where a pre-crack that removed nothing
+ *  lies over bonds an earlier one removed. */
+cupid_status cupid_pd_operator_precrack_crossing(const cupid_pd_operator op,
+                                                 const cupid_pd_precrack *crack, cupid_int *count);
 
 typedef enum {
   CUPID_PD_BREAK_STRETCH = 0, /**< e / |xi| > critical_stretch (linearised stretch) */

@@ -177,6 +177,26 @@ cupid_status cupid_pd_operator_precrack(cupid_pd_operator op, const cupid_pd_pre
   return CUPID_SUCCESS;
 }
 
+cupid_status cupid_pd_operator_precrack_crossing(const cupid_pd_operator op,
+                                                 const cupid_pd_precrack *crack, cupid_int *count) {
+  CUPID_CHECK(op && crack && count, CUPID_ERR_ARGUMENT, "precrack_crossing needs its arguments");
+  CUPID_CHECK(crack->normal >= 0 && crack->normal < 3 && isfinite(crack->at), CUPID_ERR_ARGUMENT,
+              "a pre-crack needs a normal axis 0, 1 or 2 and a finite position");
+  const double *x = op->grid->coords;
+  const pd_stencil *S = &op->st;
+  const int half = S->n / 2;
+  cupid_int n = 0;
+  for (cupid_int i = 0; i < op->nnodes; i++) {
+    const pd_family F = pd_family_of(op, i);
+    for (int q = 0; q < F.n; q++) {
+      const int s = pd_family_entry(&F, q);
+      if (s >= half && segment_crosses(crack, x + 3 * i, x + 3 * pd_family_node(op, &F, s))) n++;
+    }
+  }
+  *count = n;
+  return CUPID_SUCCESS;
+}
+
 /* ---- Breaking ---- */
 
 /* 1 if node i's share is counted (cupid_pd_fracture_options.count_first/last). */

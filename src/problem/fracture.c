@@ -51,14 +51,22 @@ static cupid_status apply_precracks(cupid_problem_state *prob) {
     const cupid_precrack *pc = &m->pd.precracks[k];
     cupid_pd_precrack c = {.normal = pc->normal, .at = pc->at};
     for (int b = 0; b < 3; b++) c.lo[b] = pc->rect.lo[b], c.hi[b] = pc->rect.hi[b];
-    cupid_int removed = 0;
+    cupid_int removed = 0, crossing = 0;
     CUPID_CALL(cupid_pd_operator_precrack(prob->op, &c, &removed));
-    if (cupid_problem_global_count(prob, removed) == 0)
-      return cupid_model_error(m, &pc->mark,
-                               "the pre-crack cuts no bond: no two PD nodes within the horizon "
-                               "lie on opposite sides of its rectangle (nodes sit at cell "
-                               "centres, half a spacing inside the region faces)");
     prob->precrack_bonds += removed;
+    if (cupid_problem_global_count(prob, removed) > 0) continue;
+    /* nothing left to cut: pre-cracks that overlap are one crack (issue 33: "cuts no bond"
+     * was said of a rectangle inside an earlier one) */
+    CUPID_CALL(cupid_pd_operator_precrack_crossing(prob->op, &c, &crossing));
+    if (cupid_problem_global_count(prob, crossing) > 0) {
+      cupid_problem_progress(prob, "precracks[%d]: its bonds were cut by the pre-cracks before "
+                             "it (it lies over them)", k);
+      continue;
+    }
+    return cupid_model_error(m, &pc->mark,
+                             "the pre-crack cuts no bond: no two PD nodes within the horizon "
+                             "lie on opposite sides of its rectangle (nodes sit at cell "
+                             "centres, half a spacing inside the region faces)");
   }
   return CUPID_SUCCESS;
 }

@@ -218,6 +218,17 @@ for d, f in zip(sys.argv[5:], fr[4:]):
     assert all(math.isfinite(float(v)) for v in last.values()), last
 PY
 
+# 3e. overlapping pre-cracks are one crack (issue 33, item 8: "precracks[1]: the pre-crack
+# cuts no bond" for a rectangle inside the first): accepted, the same bonds removed
+"$CUPID" run "$M" -o overlap --quiet --set analysis.steps=1 --set peridynamics.fracture.critical_stretch=1 \
+  --set 'peridynamics.precracks=[{normal: y, at: 12, x: [0, 3], z: [0, 2]}, {normal: y, at: 12, x: [1, 2], z: [0, 2]}]' \
+  && ok || bad "overlapping pre-cracks"
+"$PY" - overlap grow2 <<'PY' && ok || bad "overlapping pre-cracks remove the first one's bonds"
+import json, sys
+a, b = (json.load(open(d + "/summary.json"))["fracture"] for d in sys.argv[1:])
+assert a["precracks"] == 2 and a["precrack_bonds_removed"] == b["precrack_bonds_removed"] > 0, (a, b)
+PY
+
 # 4. errors
 out=$("$CUPID" check "$M" --set analysis.type=dynamic 2>&1); rc=$?
 [ $rc -eq 1 ] && grep -q "analysis.steps: is only used with type: static" <<<"$out" && ok || bad "steps with type dynamic: $out"
