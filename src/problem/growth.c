@@ -36,6 +36,7 @@ typedef struct {
   double ratio_per_load;        /* the first scanned solve's largest ratio per load factor */
   int cut_through;              /* the crack has cut the load path (carries_load) */
   int substep;                  /* sub-steps to each break's load (load_step) */
+  double t_line;                /* when the last step's progress line was printed */
   cupid_atomic_file csv;
   cupid_int released;
   /* Re-solves after breaks (below): the factor of the last factorised K, reused as the
@@ -856,6 +857,21 @@ static cupid_status load_step(growth_run *g, int k, double lambda, int *iteratio
   }
 }
 
+/* The progress line of step k of N: the first, the last, every tenth, and the others at most
+ * one a second, so that a run of 10^5 steps does not fill a batch log (issue 33: 11 MB) while
+ * a slow run still shows it moves (docs/model-format.md, "Progress"). */
+#define STEP_LINE_INTERVAL_S 1.0
+
+static int step_line_due(growth_run *g, int k, int N) {
+  const int tenth = N / 10 > 0 ? N / 10 : 1;
+  const double now = cupid_wtime();
+  if (k == 1 || k == N || k % tenth == 0 || now - g->t_line >= STEP_LINE_INTERVAL_S) {
+    g->t_line = now;
+    return 1;
+  }
+  return 0;
+}
+
 static cupid_status setup_run(growth_run *g) {
   cupid_problem_state *prob = g->prob;
   const size_t n = (size_t)prob->ndof;
@@ -931,7 +947,8 @@ cupid_status cupid_problem_run_growth(cupid_problem_state *prob) {
     CUPID_TRY(load_step(&g, k, lambda, &it, &stop));
     if (stop) break; /* the message: cupid_problem_get_info's stopped (the CLI prints it) */
     CUPID_TRY(write_row(&g, k, lambda, it));
-    cupid_problem_progress(prob, "growth: step %d / %d, load factor %.4g: %d solve%s, %lld bonds "
+    if (step_line_due(&g, k, N))
+      cupid_problem_progress(prob, "growth: step %d / %d, load factor %.4g: %d solve%s, %lld bonds "
                            "broken (+%lld), %lld nodes held",
                            k, N, lambda, it, it == 1 ? "" : "s", (long long)prob->broken_bonds,
                            (long long)(prob->broken_bonds - before), (long long)g.released);

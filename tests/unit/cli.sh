@@ -46,6 +46,15 @@ fi
 # Semantic errors found after reading: the file, line and key of the culprit.
 expect 2 'unconstrained' -- "$CUPID" run "$M/unconstrained.yaml" -o o1
 expect 2 'unconstrained: no constraint fixes the y z displacement' -- "$CUPID" run "$M/fixed_only_x.yaml" -o o2
+# progress in a batch log (stderr not a terminal): of 2000 load steps the first, the last,
+# every tenth and at most one a second (issue 33, item 9: a line a step, 11 MB at 10^5 steps)
+out=$("$CUPID" run "$SRC/tests/models/growth/plate.yaml" -o o_steps --set analysis.steps=2000 \
+      --set peridynamics.fracture.critical_stretch=1 2>&1 >/dev/null)
+n=$(grep -c "growth: step" <<<"$out")
+t=$(python3 -c "import json; print(int(json.load(open('o_steps/summary.json'))['total_time_s']) + 1)")
+if [ "$n" -ge 11 ] && [ "$n" -le $((11 + t)) ] && grep -q "growth: step 1 / 2000" <<<"$out" \
+   && grep -q "growth: step 2000 / 2000" <<<"$out"; then pass=$((pass+1))
+else echo "FAIL: $n progress lines of 2000 load steps in $t s"; fail=$((fail+1)); fi
 # check runs every check that run runs before solving (issue 33, item 7: check said "valid"):
 # the constraints of a static model, and the stable step of central differences
 expect 2 'unconstrained: no constraint fixes the y z displacement' -- "$CUPID" check "$M/fixed_only_x.yaml"
