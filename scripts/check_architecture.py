@@ -10,6 +10,11 @@
    engine names (CUPID_SOLVER_DIRECT, _PETSC) only in the reader and the engine table
    (src/solvers/engine.c).
 3. src/app/ is the command line only: main.c and cli.c.
+4. The files of src/problem/ call one another without a circle (issue 33): problem.c drives the
+   stages (set-up, the analyses, the outputs), and what the stages share (progress, phases,
+   checks, the agreements over the ranks: support.c; the solver engine: solver.c) lies below
+   them. A call is a file naming a function that another file of the folder defines (the
+   methods' stages, called through their table, are no calls).
 
 Usage: scripts/check_architecture.py [-v] [SOURCE_DIR]   (-v: print the folder graph)
 """
@@ -70,6 +75,24 @@ def find_cycle(graph):
     return None
 
 
+DEFINITION = re.compile(r"^(?!static\b)[A-Za-z_][\w \*]*?\b(cupid_\w+)\s*\([^;{]*\)\s*\{", re.M)
+
+
+def call_graph(texts):
+    """{file: files whose (non-static) functions it names} over the .c files of one folder."""
+    defined = {}
+    code = {n: strip_comments(t) for n, t in texts.items() if n.endswith(".c")}
+    for n, c in code.items():
+        for name in DEFINITION.findall(c):
+            defined[name] = n
+    graph = {}
+    for n, c in code.items():
+        for name in set(re.findall(r"\b(cupid_\w+)\s*\(", c)):
+            if name in defined and defined[name] != n:
+                graph.setdefault(n, set()).add(defined[name])
+    return graph
+
+
 def main():
     problems = []
     folders, files = {}, {}
@@ -125,6 +148,11 @@ def main():
     if app != ["cli.c", "main.c"]:
         problems.append("src/app/ holds %s: it is the command line only (cli.c, main.c)" % ", ".join(app))
 
+    cycle = find_cycle(call_graph({n: t for (f, n), t in texts.items() if f == "problem"}))
+    if cycle:
+        problems.append("call circle in src/problem: %s: move what the stages share to a file "
+                        "below them (support.c)" % " -> ".join(cycle))
+
     edges = sum(len(v) for v in folders.values())
     if "-v" in sys.argv:
         for f in sorted(folders):
@@ -133,7 +161,7 @@ def main():
           (len({f for f, _ in texts}), edges, len(texts)))
     for p in problems:
         print("FAIL:", p)
-    print("3 passed, 0 failed" if not problems else "0 passed, %d failed" % len(problems))
+    print("4 passed, 0 failed" if not problems else "%d passed, %d failed" % (max(0, 4 - len(problems)), len(problems)))
     return 1 if problems else 0
 
 

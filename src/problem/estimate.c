@@ -444,3 +444,71 @@ cupid_status cupid_problem_guard_run(const cupid_problem_state *prob) {
                              seconds / 3600.0, bytes / 1e9, files);
   return CUPID_SUCCESS;
 }
+
+/* ------------------------------------------------------------- the engine auto picks
+ * (solver.c uses it; `cupid check` prints it) */
+
+/* The estimate of @p e's path for this problem: the factorisation, the method's matrix-free
+ * path where the engine takes it, or (an engine that solves assembled systems by Krylov)
+ * the assembled Krylov solve. */
+const cupid_solver_cost *cupid_problem_path_cost(const cupid_problem_state *prob,
+                                          const cupid_solver_type *e,
+                                          const cupid_solver_cost *factor,
+                                          const cupid_solver_cost *krylov) {
+  if (!e->iterative) return factor;
+  if (prob->method->matrix_free(prob, e)) return krylov;
+  return e->distributed ? krylov : factor; /* krylov: assembled systems are factored */
+}
+
+/* auto: the engine whose estimated time is the smallest among those whose estimated memory
+ * stays below a quarter of the limit (a margin: fill-in and iteration counts are estimated,
+ * not known; ties: the table's order, the factorisation first); when none does, the one of
+ * least memory (the size guard then says what it needs). Analyses other than static take the
+ * first engine (the integrators factor or need no solve). */
+#define AUTO_MEMORY_SHARE 0.25
+cupid_status cupid_problem_auto_engine(const cupid_problem_state *prob,
+                                       const cupid_solver_type **engine, char *why, size_t len) {
+  const cupid_solver_type *first = cupid_solver_type_at(0), *pick = NULL, *lean = NULL;
+  if (prob->model->analysis.type != CUPID_ANALYSIS_STATIC) {
+    snprintf(why, len, "auto: the only engine for this analysis");
+    *engine = first;
+    return CUPID_SUCCESS;
+  }
+  cupid_solver_cost factor, krylov;
+  CUPID_CALL(cupid_problem_costs(prob, &factor, &krylov));
+  const double limit = cupid_problem_memory_limit(prob);
+  const cupid_model_t *m = prob->model;
+  if (!first->iterative && (m->analysis.steps > 0 || (m->has_peridynamics && m->pd.fracture.has_fracture))) {
+    /* load steps and crack growth solve many times with one K, changed by few bonds: one
+     * factorisation serves them all (downdated as bonds break, growth.c), where an iterative
+     * engine would start every solve from nothing */
+    const cupid_solver_cost *c = cupid_problem_path_cost(prob, first, &factor, &krylov);
+    if (c->bytes <= AUTO_MEMORY_SHARE * limit) {
+      snprintf(why, len, "auto: %s (%s; load steps reuse one factorisation), estimate %.3g s and "
+               "%.3g GB", first->name, c->what, c->seconds, c->bytes / 1e9);
+      *engine = first;
+      return CUPID_SUCCESS;
+    }
+  }
+  const cupid_solver_cost *best = NULL, *least = NULL;
+  for (int k = 0; cupid_solver_type_at(k); k++) {
+    const cupid_solver_type *e = cupid_solver_type_at(k);
+    if (!e->available()) continue;
+    const cupid_solver_cost *c = cupid_problem_path_cost(prob, e, &factor, &krylov);
+    if (!least || c->bytes < least->bytes) least = c, lean = e;
+    if (c->bytes <= AUTO_MEMORY_SHARE * limit && (!best || c->seconds < best->seconds))
+      best = c, pick = e;
+  }
+  if (!pick) pick = lean, best = least;
+  int n = snprintf(why, len, "auto: %s (%s), estimate %.3g s and %.3g GB", pick->name, best->what,
+                   best->seconds, best->bytes / 1e9);
+  for (int k = 0; cupid_solver_type_at(k) && n > 0 && (size_t)n < len; k++) { /* the others */
+    const cupid_solver_type *e = cupid_solver_type_at(k);
+    const cupid_solver_cost *c = e->available() ? cupid_problem_path_cost(prob, e, &factor, &krylov) : NULL;
+    if (c && c != best)
+      n += snprintf(why + n, len - (size_t)n, "; %s (%s): %.3g s, %.3g GB", e->name, c->what,
+                    c->seconds, c->bytes / 1e9);
+  }
+  *engine = pick;
+  return CUPID_SUCCESS;
+}

@@ -11,238 +11,10 @@
 #include "cupid/io.h"
 #include "method.h"
 
-void cupid_problem_progress(const cupid_problem_state *prob, const char *fmt, ...) {
-  if (prob->quiet) return;
-  va_list ap;
-  va_start(ap, fmt);
-  fprintf(stderr, "cupid [%7.2f s] ", cupid_wtime() - prob->t_start);
-  vfprintf(stderr, fmt, ap);
-  fputc('\n', stderr);
-  va_end(ap);
-}
-
-void cupid_problem_phase_end(cupid_problem_state *prob, cupid_phase phase, double t0) {
-  prob->phases[phase].seconds += cupid_wtime() - t0;
-  prob->phases[phase].peak_memory = cupid_peak_memory();
-  prob->phases[phase].used = 1;
-}
-
-void cupid_problem_record_solve(cupid_problem_state *prob) {
-  prob->phases[CUPID_PHASE_FACTORISATION] =
-      (cupid_phase_record){prob->solve.time_factor, cupid_peak_memory(), 1};
-  prob->phases[CUPID_PHASE_SOLVE] = (cupid_phase_record){prob->solve.time_solve, cupid_peak_memory(), 1};
-}
 
 cupid_run_options cupid_run_options_default(void) { return (cupid_run_options){.solver = -1}; }
 
-/* ------------------------------------------------------------- the solver engine (issue 6)
- * The command line wins over the model file. auto: the direct engine while its estimated peak
- * memory stays below a quarter of the memory limit and its factorisation below two minutes,
- * PETSc above (when cupid was built with it): Krylov + AMG costs O(n) memory where the factor
- * grows like n^(4/3) (docs/scale.md). */
 
-static cupid_solver_kind requested_solver(const cupid_problem_state *prob) {
-  return prob->opts->solver >= 0 ? (cupid_solver_kind)prob->opts->solver
-                                 : prob->model->analysis.solver;
-}
-
-/* Only static solves go through PETSc: refuse an explicit request elsewhere. */
-static cupid_status check_engine_request(const cupid_problem_state *prob) {
-  const cupid_model_t *m = prob->model;
-  const cupid_solver_type *e = cupid_solver_type_get(requested_solver(prob));
-  if (!e || !e->iterative) return CUPID_SUCCESS;
-  if (!e->available())
-    return CUPID_ERROR(CUPID_ERR_UNSUPPORTED,
-                       "solver %s: this build of cupid has no PETSc engine: rebuild with "
-                       "scripts/build.sh --with-petsc, or use 'direct' or 'auto'", e->name);
-  if (m->analysis.type == CUPID_ANALYSIS_DYNAMIC)
-    return cupid_model_error(m, &m->analysis.mark,
-                             "solver %s serves static analyses; type dynamic uses its own "
-                             "integrators (use solver auto or direct)", e->name);
-  return CUPID_SUCCESS;
-}
-
-static cupid_status use_engine(cupid_problem_state *prob, const cupid_solver_type *e) {
-  prob->engine = e;
-  prob->solver = (cupid_solver_kind)e->kind;
-  return e->start();
-}
-
-/* The first engine this build has that solves over MPI ranks (NULL: none). */
-static const cupid_solver_type *distributed_engine(void) {
-  for (int k = 0; cupid_solver_type_at(k); k++)
-    if (cupid_solver_type_at(k)->distributed && cupid_solver_type_at(k)->available())
-      return cupid_solver_type_at(k);
-  return NULL;
-}
-
-/* The estimate of @p e's path for this problem: the factorisation, the method's matrix-free
- * path where the engine takes it, or (an engine that solves assembled systems by Krylov)
- * the assembled Krylov solve. */
-static const cupid_solver_cost *path_cost(const cupid_problem_state *prob,
-                                          const cupid_solver_type *e,
-                                          const cupid_solver_cost *factor,
-                                          const cupid_solver_cost *krylov) {
-  if (!e->iterative) return factor;
-  if (prob->method->matrix_free(prob, e)) return krylov;
-  return e->distributed ? krylov : factor; /* krylov: assembled systems are factored */
-}
-
-/* auto: the engine whose estimated time is the smallest among those whose estimated memory
- * stays below a quarter of the limit (a margin: fill-in and iteration counts are estimated,
- * not known; ties: the table's order, the factorisation first); when none does, the one of
- * least memory (the size guard then says what it needs). Analyses other than static take the
- * first engine (the integrators factor or need no solve). */
-#define AUTO_MEMORY_SHARE 0.25
-cupid_status cupid_problem_auto_engine(const cupid_problem_state *prob,
-                                       const cupid_solver_type **engine, char *why, size_t len) {
-  const cupid_solver_type *first = cupid_solver_type_at(0), *pick = NULL, *lean = NULL;
-  if (prob->model->analysis.type != CUPID_ANALYSIS_STATIC) {
-    snprintf(why, len, "auto: the only engine for this analysis");
-    *engine = first;
-    return CUPID_SUCCESS;
-  }
-  cupid_solver_cost factor, krylov;
-  CUPID_CALL(cupid_problem_costs(prob, &factor, &krylov));
-  const double limit = cupid_problem_memory_limit(prob);
-  const cupid_model_t *m = prob->model;
-  if (!first->iterative && (m->analysis.steps > 0 || (m->has_peridynamics && m->pd.fracture.has_fracture))) {
-    /* load steps and crack growth solve many times with one K, changed by few bonds: one
-     * factorisation serves them all (downdated as bonds break, growth.c), where an iterative
-     * engine would start every solve from nothing */
-    const cupid_solver_cost *c = path_cost(prob, first, &factor, &krylov);
-    if (c->bytes <= AUTO_MEMORY_SHARE * limit) {
-      snprintf(why, len, "auto: %s (%s; load steps reuse one factorisation), estimate %.3g s and "
-               "%.3g GB", first->name, c->what, c->seconds, c->bytes / 1e9);
-      *engine = first;
-      return CUPID_SUCCESS;
-    }
-  }
-  const cupid_solver_cost *best = NULL, *least = NULL;
-  for (int k = 0; cupid_solver_type_at(k); k++) {
-    const cupid_solver_type *e = cupid_solver_type_at(k);
-    if (!e->available()) continue;
-    const cupid_solver_cost *c = path_cost(prob, e, &factor, &krylov);
-    if (!least || c->bytes < least->bytes) least = c, lean = e;
-    if (c->bytes <= AUTO_MEMORY_SHARE * limit && (!best || c->seconds < best->seconds))
-      best = c, pick = e;
-  }
-  if (!pick) pick = lean, best = least;
-  int n = snprintf(why, len, "auto: %s (%s), estimate %.3g s and %.3g GB", pick->name, best->what,
-                   best->seconds, best->bytes / 1e9);
-  for (int k = 0; cupid_solver_type_at(k) && n > 0 && (size_t)n < len; k++) { /* the others */
-    const cupid_solver_type *e = cupid_solver_type_at(k);
-    const cupid_solver_cost *c = e->available() ? path_cost(prob, e, &factor, &krylov) : NULL;
-    if (c && c != best)
-      n += snprintf(why + n, len - (size_t)n, "; %s (%s): %.3g s, %.3g GB", e->name, c->what,
-                    c->seconds, c->bytes / 1e9);
-  }
-  *engine = pick;
-  return CUPID_SUCCESS;
-}
-
-static cupid_status choose_automatically(cupid_problem_state *prob) {
-  const cupid_solver_type *e = NULL;
-  CUPID_CALL(cupid_problem_auto_engine(prob, &e, prob->solver_reason, sizeof prob->solver_reason));
-  return use_engine(prob, e);
-}
-
-/* The chosen engine's estimate, for summary.json and bench/estimates.sh (static only). */
-static cupid_status record_estimate(cupid_problem_state *prob) {
-  if (prob->model->analysis.type != CUPID_ANALYSIS_STATIC || prob->slab) return CUPID_SUCCESS;
-  cupid_solver_cost factor, krylov;
-  CUPID_CALL(cupid_problem_costs(prob, &factor, &krylov));
-  prob->estimate = *path_cost(prob, prob->engine, &factor, &krylov);
-  return CUPID_SUCCESS;
-}
-
-static cupid_status choose_engine(cupid_problem_state *prob) {
-  cupid_solver_kind req = requested_solver(prob);
-  if (prob->slab) { /* only a distributed engine runs on slabs (slab.c) */
-    snprintf(prob->solver_reason, sizeof prob->solver_reason,
-             "%s: %d MPI ranks, each holding one z slab of the PD grid",
-             req == CUPID_SOLVER_AUTO ? "auto" : "requested", prob->part.parts);
-    return use_engine(prob, distributed_engine());
-  }
-  if (req != CUPID_SOLVER_AUTO) {
-    snprintf(prob->solver_reason, sizeof prob->solver_reason, "requested");
-    return use_engine(prob, cupid_solver_type_get(req));
-  }
-  return choose_automatically(prob);
-}
-
-static cupid_status choose_solver(cupid_problem_state *prob) {
-  CUPID_CALL(choose_engine(prob));
-  return record_estimate(prob);
-}
-
-/* Name the node (PD) or beam node and expansion term (FE) where a factorisation broke
- * down (exit status 2). */
-static cupid_status explain_singular(const cupid_problem_state *prob, cupid_status st) {
-  cupid_int dof = prob->solve.failed_dof;
-  if (dof < 0 || dof >= prob->ndof) return st;
-  char msg[1024];
-  snprintf(msg, sizeof msg, "%s", cupid_error_message());
-  char comp = "xyz"[dof % 3];
-  if (!prob->beam || dof < prob->fe_offset) {
-    const double *x = cupid_pd_grid_coords(prob->grid);
-    cupid_int node = dof / 3;
-    return CUPID_ERROR(st,
-                       "%s; PD node %lld at (%g, %g, %g), component %c: check that every PD "
-                       "region is constrained against rigid motion (fix, clamp or displacement)",
-                       msg, (long long)node, x[3 * node], x[3 * node + 1], x[3 * node + 2], comp);
-  }
-  cupid_int fe_node = (dof - prob->fe_offset) / 3, M = prob->fe_info.M;
-  cupid_int beam_node = fe_node / M;
-  return CUPID_ERROR(st,
-                     "%s; beam node %lld at y = %g, expansion term %lld, component %c: check "
-                     "that the beam is clamped or fixed against rigid motion",
-                     msg, (long long)beam_node, cupid_cuf_beam_node_y(prob->beam, beam_node),
-                     (long long)(fe_node % M), comp);
-}
-
-cupid_status cupid_problem_linear_solve(cupid_problem_state *prob, cupid_matrix_kind kind) {
-  /* Coordinates give GAMG the rigid-body modes when every DOF is a PD node's. */
-  cupid_petsc_options hints = {0};
-  if (prob->grid && !prob->beam) {
-    hints.coords = cupid_pd_grid_coords(prob->grid);
-    hints.n_coord_nodes = prob->n_pd;
-  }
-  cupid_status st = prob->engine->solve_matrix(prob->K, kind, prob->f_ext, prob->bc, prob->u,
-                                               &hints, &prob->solve);
-  cupid_problem_record_solve(prob);
-  if (st == CUPID_ERR_NUMERIC) return explain_singular(prob, st);
-  CUPID_CALL(st);
-  if (prob->engine->iterative)
-    cupid_problem_progress(prob, "PETSc: %s + %s, %d iterations on %d rank%s, %s",
-                           prob->solve.ksp_type, prob->solve.pc_type, prob->solve.iterations,
-                           prob->solve.ranks, prob->solve.ranks == 1 ? "" : "s",
-                           prob->solve.converged_reason);
-  return CUPID_SUCCESS;
-}
-
-cupid_status cupid_problem_check_finite(const cupid_problem_state *prob, const double *v,
-                                        const cupid_mark *mark, const char *what) {
-  cupid_int d = 0;
-  while (d < prob->ndof && isfinite(v[d])) d++;
-  if (d == prob->ndof) return CUPID_SUCCESS;
-  char where[160];
-  const char comp = "xyz"[d % 3];
-  if (d < prob->fe_offset) {
-    const double *x = cupid_pd_grid_coords(prob->grid) + 3 * (d / 3);
-    snprintf(where, sizeof where, "PD node (%g, %g, %g), component %c", x[0], x[1], x[2], comp);
-  } else {
-    cupid_int node = (d - prob->fe_offset) / 3 / prob->fe_info.M;
-    snprintf(where, sizeof where, "beam node %lld (y = %g), component %c", (long long)node,
-             cupid_cuf_beam_node_y(prob->beam, node), comp);
-  }
-  if (!mark)
-    return CUPID_ERROR(CUPID_ERR_NUMERIC, "%s is not finite (%g) at %s", what, v[d], where);
-  return cupid_model_error(prob->model, mark,
-                           "%s is not finite (%g) at %s: an expression is undefined or overflows "
-                           "there",
-                           what, v[d], where);
-}
 
 /* ----------------------------------------------------------------------- the set-up */
 
@@ -346,7 +118,7 @@ cupid_status cupid_problem_setup(cupid_problem_state *prob) {
               "cupid_problem_setup: the problem is already set up");
   CUPID_CALL(prob->method->check(prob));
   CUPID_CALL(cupid_problem_fracture_check(prob));
-  CUPID_CALL(check_engine_request(prob));
+  CUPID_CALL(cupid_problem_check_engine_request(prob));
   CUPID_CALL(cupid_problem_guard_size(prob)); /* before anything that scales with the model */
   prob->slab = cupid_problem_slab_wanted(prob);
   if (model->has_peridynamics) CUPID_CALL(agreed(prob, build_pd(prob)));
@@ -369,7 +141,7 @@ cupid_status cupid_problem_setup(cupid_problem_state *prob) {
     prob->stage = CUPID_STAGE_SET_UP;
     return CUPID_SUCCESS;
   }
-  CUPID_CALL(choose_solver(prob));
+  CUPID_CALL(cupid_problem_choose_solver(prob));
   cupid_problem_progress(prob, "solver: %s (%s)", prob->engine->name, prob->solver_reason);
   CUPID_CALL(cupid_problem_guard_run(prob));
   CUPID_CALL(allocate_fields(prob));
@@ -472,16 +244,6 @@ static cupid_status run_static(cupid_problem_state *prob) {
   return prob->method->report ? prob->method->report(prob) : CUPID_SUCCESS;
 }
 
-cupid_status cupid_problem_assembled_solve(cupid_problem_state *prob) {
-  CUPID_CALL(cupid_problem_patch_test_assembled(prob));
-  CUPID_CALL(cupid_problem_linear_solve(prob, prob->method->matrix));
-  prob->solved = 1;
-  if (prob->method->recover) prob->method->recover(prob, prob->u);
-  cupid_csr_matvec(prob->K, prob->u, prob->f_int);
-  cupid_problem_progress(prob, "solve: %s, %lld equations, residual %.2e", prob->solve.method,
-                         (long long)prob->solve.n, prob->solve.residual);
-  return CUPID_SUCCESS;
-}
 
 /* The run's files go to a staging folder beside the output folder until write_outputs
  * publishes them (io.h, cupid_output_set): a failed or interrupted run leaves the previous
@@ -529,32 +291,6 @@ cleanup:
   return st;
 }
 
-cupid_status cupid_problem_force_sums(cupid_problem_state *prob, double load[3],
-                                      double reaction[3]) {
-  double *t = NULL;
-  /* The unit translation along k: 1 at every PD DOF of component k, the beam's own
-   * interpolation elsewhere (cupid_problem_translations); without a beam the PD DOFs are all
-   * there is, and their sums need no vector (three of the DOF count were written and read). */
-  if (prob->beam)
-    CUPID_CALL(cupid_calloc((size_t)(3 * prob->ndof), sizeof *t, "translation vectors", &t));
-  cupid_status st = t ? cupid_problem_translations(prob, t) : CUPID_SUCCESS;
-  for (int k = 0; k < 3 && st == CUPID_SUCCESS; k++) {
-    const double *tk = t ? t + (size_t)k * (size_t)prob->ndof : NULL;
-    const cupid_int first = tk ? 0 : k, step = tk ? 1 : 3;
-    const cupid_int end = tk ? prob->ndof : 3 * prob->n_pd;
-    load[k] = reaction[k] = 0.0;
-    for (cupid_int d = first; d < end; d += step) {
-      const double w = tk ? tk[d] : 1.0;
-      load[k] += prob->f_ext[d] * w;
-      /* a node that growth held is no support of the model's: its force is apart
-       * (growth.held_reaction, summary.json's held_reaction_sum) */
-      const int held = prob->growth.held && d < 3 * prob->n_pd && prob->growth.held[d / 3];
-      if (prob->bc->fixed[d] && !held) reaction[k] += (prob->f_int[d] - prob->f_ext[d]) * w;
-    }
-  }
-  cupid_free(&t);
-  return st;
-}
 
 cupid_status cupid_problem_solve(cupid_problem_state *prob) {
   CUPID_CHECK(prob->stage == CUPID_STAGE_SET_UP && !prob->opts->check_only, CUPID_ERR_ARGUMENT,

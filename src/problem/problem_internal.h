@@ -303,28 +303,53 @@ void cupid_problem_fracture_print(const cupid_problem_state *prob);
 /** The "fracture" block of summary.json. */
 void cupid_problem_fracture_json(cupid_json js, const cupid_problem_state *prob);
 
-/* problem.c: the stages. */
+/* support.c: below the stages. */
 void cupid_problem_progress(const cupid_problem_state *prob, const char *fmt, ...)
     __attribute__((format(printf, 2, 3)));
 void cupid_problem_phase_end(cupid_problem_state *prob, cupid_phase phase, double t0);
 /** The factorisation and solve phases from prob->solve (a linear solve just done). */
 void cupid_problem_record_solve(cupid_problem_state *prob);
-/** The static solve of the assembled prob->K (a method's default): the patch test, the engine's
- *  solve, the eliminated unknowns, f_int = K u. */
-cupid_status cupid_problem_assembled_solve(cupid_problem_state *prob);
-/** Solve prob->K u = f_ext with prob->bc by the chosen engine into prob->u and prob->solve;
- *  a breakdown names the node (PD) or beam node and expansion term (FE). */
-cupid_status cupid_problem_linear_solve(cupid_problem_state *prob, cupid_matrix_kind kind);
-/** The initial or imposed field of the model's expressions @p v on the PD nodes (into u). */
-void cupid_problem_pd_field(const cupid_problem_state *prob, const cupid_value v[3], double t,
-                            double *u);
-
 /** The first non-finite entry of @p v (a vector of the system's layout, ndof entries) as a
  *  model error at @p mark: "<what> is not finite (nan) at PD node (x, y, z)" or "... at beam
  *  node N (y = ...)" (an expression undefined where it was evaluated). CUPID_SUCCESS if all are
  *  finite. With mark NULL: a numerical failure (exit 2) instead. */
 cupid_status cupid_problem_check_finite(const cupid_problem_state *prob, const double *v,
                                         const cupid_mark *mark, const char *what);
+/** The status of every rank agreed (collective): an error on any rank is an error on all, so
+ *  that none waits alone in the next collective call (the failing rank keeps its message). */
+cupid_status cupid_problem_slab_agree(cupid_status st);
+/** Node i counts on this rank (always, unless a slab does not own it). */
+int cupid_problem_pd_owned(const cupid_problem_state *prob, cupid_int node);
+/** The lowest rank whose @p mine is nonzero, or the number of ranks when none (collective):
+ *  which rank acts on a choice that ties over the ranks (the lowest holds the lower nodes). */
+int cupid_problem_lowest_rank(int mine);
+/** A count of owned nodes summed over the ranks of a slab run (collective there). */
+cupid_int cupid_problem_global_count(const cupid_problem_state *prob, cupid_int count);
+/** The outputs need nodal PD stresses (VTU, or a point with stress). */
+int cupid_problem_needs_stress(const cupid_problem_state *prob);
+/** "u_x, u_y" for the components whose largest |value| is not zero to 1e-12 of the largest
+ *  (the ones cupid_plot keeps): a plot's y label. */
+void cupid_plot_component_label(const double umax[3], char *label, size_t len);
+
+/* solver.c: the solver engine of a problem. */
+/** The engine a static solve may ask for (solver petsc in a build without PETSc, or in a
+ *  dynamic analysis: refused). */
+cupid_status cupid_problem_check_engine_request(const cupid_problem_state *prob);
+/** The engine (requested, or auto) into prob->engine, why into prob->solver_reason, its
+ *  estimate into prob->estimate. */
+cupid_status cupid_problem_choose_solver(cupid_problem_state *prob);
+/** The static solve of the assembled prob->K (a method's default): the patch test, the engine's
+ *  solve, the eliminated unknowns, f_int = K u. */
+cupid_status cupid_problem_assembled_solve(cupid_problem_state *prob);
+/** Solve prob->K u = f_ext with prob->bc by the chosen engine into prob->u and prob->solve;
+ *  a breakdown names the node (PD) or beam node and expansion term (FE). */
+cupid_status cupid_problem_linear_solve(cupid_problem_state *prob, cupid_matrix_kind kind);
+
+/* problem.c: the stages. */
+/** The initial or imposed field of the model's expressions @p v on the PD nodes (into u). */
+void cupid_problem_pd_field(const cupid_problem_state *prob, const cupid_value v[3], double t,
+                            double *u);
+
 
 /** The PD materials and operator options of the model (prob->pd_materials,
  *  prob->pd_options); a PD region with an orthotropic material is a model error. */
@@ -355,6 +380,9 @@ int cupid_problem_fe_node_in_box(const cupid_problem_state *prob, const cupid_bo
 int cupid_problem_pd_node_in_box(const cupid_problem_state *prob, const cupid_box *b);
 
 /* sample.c: displacement (and stress) at a point, by trilinear interpolation of the grid. */
+/** Every output point must lie inside the model (checked before solving). */
+cupid_status cupid_problem_check_points(const cupid_problem_state *prob);
+
 /** @p sol: the solution vector sampled (NULL: only say where the point lies). */
 cupid_status cupid_problem_sample_point(const cupid_problem_state *prob, const double *sol,
                                         const double p[3],
@@ -365,16 +393,6 @@ cupid_status cupid_problem_sample_point(const cupid_problem_state *prob, const d
  *  (petsc or auto; load steps and crack growth on PD-only models) or explicit dynamics of a
  *  PD-only model. */
 int cupid_problem_slab_wanted(const cupid_problem_state *prob);
-/** The status of every rank agreed (collective): an error on any rank is an error on all, so
- *  that none waits alone in the next collective call (the failing rank keeps its message). */
-cupid_status cupid_problem_slab_agree(cupid_status st);
-/** Node i counts on this rank (always, unless a slab does not own it). */
-int cupid_problem_pd_owned(const cupid_problem_state *prob, cupid_int node);
-/** The lowest rank whose @p mine is nonzero, or the number of ranks when none (collective):
- *  which rank acts on a choice that ties over the ranks (the lowest holds the lower nodes). */
-int cupid_problem_lowest_rank(int mine);
-/** A count of owned nodes summed over the ranks of a slab run (collective there). */
-cupid_int cupid_problem_global_count(const cupid_problem_state *prob, cupid_int count);
 /** cupid_problem_check_points against the whole grid, built on rank 0 for the check
  *  (collective). */
 cupid_status cupid_problem_slab_check_points(cupid_problem_state *prob);
@@ -394,16 +412,9 @@ cupid_status cupid_problem_slab_partition(const cupid_problem_state *prob, cupid
                                           cupid_dynamics_partition *part);
 
 /* report.c: every file of output (summary.json, lines, pd_nodes.csv, VTU, plots). */
-/** The outputs need nodal PD stresses (VTU, or a point with stress). */
-int cupid_problem_needs_stress(const cupid_problem_state *prob);
 /** prob->pd_stress from prob->u (once). */
 cupid_status cupid_problem_pd_stress(cupid_problem_state *prob);
 cupid_status cupid_problem_report(cupid_problem_state *prob);
-/** "u_x, u_y" for the components whose largest |value| is not zero to 1e-12 of the largest
- *  (the ones cupid_plot keeps): a plot's y label. */
-void cupid_plot_component_label(const double umax[3], char *label, size_t len);
-/** Every output point must lie inside the model (checked before solving). */
-cupid_status cupid_problem_check_points(const cupid_problem_state *prob);
 
 /* fe.c: the CUF beam of a model: creation, constraints, loads, sampling, VTU. */
 cupid_status cupid_problem_fe_build(cupid_problem_state *prob);
@@ -442,7 +453,13 @@ double cupid_problem_memory_limit(const cupid_problem_state *prob);
 cupid_status cupid_problem_costs(const cupid_problem_state *prob, cupid_solver_cost *direct,
                                  cupid_solver_cost *iterative);
 
-/** `solver: auto` (problem.c): the available engine of the smallest estimated time whose
+/** The estimate of engine @p e's path for this problem: the factorisation, the method's
+ *  matrix-free path where the engine takes it, or the assembled Krylov solve. */
+const cupid_solver_cost *cupid_problem_path_cost(const cupid_problem_state *prob,
+                                                 const cupid_solver_type *e,
+                                                 const cupid_solver_cost *factor,
+                                                 const cupid_solver_cost *krylov);
+/** `solver: auto` (estimate.c): the available engine of the smallest estimated time whose
  *  estimated memory fits the limit, and why (for the log and summary.json). */
 cupid_status cupid_problem_auto_engine(const cupid_problem_state *prob,
                                        const cupid_solver_type **engine, char *why, size_t len);

@@ -312,3 +312,32 @@ void cupid_problem_quality_json(cupid_json js, const cupid_problem_state *prob) 
   cupid_json_end_array(js);
   cupid_json_end_object(js);
 }
+
+/* The applied load and the constraints' reactions summed along x, y, z (summary.json,
+ * the imbalance above). */
+cupid_status cupid_problem_force_sums(cupid_problem_state *prob, double load[3],
+                                      double reaction[3]) {
+  double *t = NULL;
+  /* The unit translation along k: 1 at every PD DOF of component k, the beam's own
+   * interpolation elsewhere (cupid_problem_translations); without a beam the PD DOFs are all
+   * there is, and their sums need no vector (three of the DOF count were written and read). */
+  if (prob->beam)
+    CUPID_CALL(cupid_calloc((size_t)(3 * prob->ndof), sizeof *t, "translation vectors", &t));
+  cupid_status st = t ? cupid_problem_translations(prob, t) : CUPID_SUCCESS;
+  for (int k = 0; k < 3 && st == CUPID_SUCCESS; k++) {
+    const double *tk = t ? t + (size_t)k * (size_t)prob->ndof : NULL;
+    const cupid_int first = tk ? 0 : k, step = tk ? 1 : 3;
+    const cupid_int end = tk ? prob->ndof : 3 * prob->n_pd;
+    load[k] = reaction[k] = 0.0;
+    for (cupid_int d = first; d < end; d += step) {
+      const double w = tk ? tk[d] : 1.0;
+      load[k] += prob->f_ext[d] * w;
+      /* a node that growth held is no support of the model's: its force is apart
+       * (growth.held_reaction, summary.json's held_reaction_sum) */
+      const int held = prob->growth.held && d < 3 * prob->n_pd && prob->growth.held[d / 3];
+      if (prob->bc->fixed[d] && !held) reaction[k] += (prob->f_int[d] - prob->f_ext[d]) * w;
+    }
+  }
+  cupid_free(&t);
+  return st;
+}

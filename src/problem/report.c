@@ -2,6 +2,7 @@
  * model.pvd, plots and summary.json. Each file is written atomically (temp + rename). */
 #include <math.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 
 #include "problem_internal.h"
@@ -20,13 +21,6 @@ static cupid_status join_path(const char *dir, const char *name, char *out, size
   return CUPID_SUCCESS;
 }
 
-void cupid_plot_component_label(const double umax[3], char *label, size_t len) {
-  double top = fmax(umax[0], fmax(umax[1], umax[2]));
-  label[0] = '\0';
-  for (int c = 0, n = 0; c < 3; c++)
-    if (umax[c] > 1e-12 * top || top == 0.0)
-      n += snprintf(label + n, len - (size_t)n, "%su_%c", n ? ", " : "", "xyz"[c]);
-}
 
 /* Write `line_<name>.csv`: s,x,y,z,ux,uy,uz,region, and its plot. */
 static cupid_status write_line(cupid_problem_state *prob, const cupid_output_line *line) {
@@ -311,6 +305,9 @@ static cupid_status write_summary(cupid_problem_state *prob) {
   cupid_json_string(js, "model_file", m->file);
   cupid_json_string(js, "analysis", types[m->analysis.type]);
   cupid_json_integer(js, "threads", cupid_num_threads());
+  /* how the threads waited (the CLI and the Python package set PASSIVE unless told: main.c) */
+  const char *wait = getenv("OMP_WAIT_POLICY");
+  cupid_json_string(js, "omp_wait_policy", wait ? wait : "");
   json_counts(js, prob);
   if (prob->beam) json_beam(js, prob);
   json_phases(js, prob);
@@ -351,13 +348,6 @@ cleanup:
   return st;
 }
 
-int cupid_problem_needs_stress(const cupid_problem_state *prob) {
-  const cupid_output *o = &prob->model->output;
-  if (o->vtu) return 1;
-  for (int k = 0; k < o->n_points; k++)
-    if (o->points[k].stress) return 1;
-  return 0;
-}
 
 cupid_status cupid_problem_pd_stress(cupid_problem_state *prob) {
   if (!prob->grid || prob->pd_stress || !prob->u) return CUPID_SUCCESS;
@@ -379,33 +369,3 @@ cupid_status cupid_problem_report(cupid_problem_state *prob) {
   return write_summary(prob);
 }
 
-cupid_status cupid_problem_check_points(const cupid_problem_state *prob) {
-  const cupid_output *o = &prob->model->output;
-  for (int k = 0; k < o->n_points; k++) {
-    double u[3];
-    cupid_region_kind region;
-    CUPID_CALL(cupid_problem_sample_point(prob, NULL, o->points[k].at, u, NULL, &region));
-    if (region == CUPID_REGION_NONE)
-      return cupid_model_error(prob->model, &o->points[k].mark,
-                               "the point (%g, %g, %g) lies outside the model",
-                               o->points[k].at[0], o->points[k].at[1], o->points[k].at[2]);
-  }
-  /* A line with no point inside the model would only hold NaN (and gnuplot fails on it after
-   * the whole solve): refuse it now. Stops at the first point inside. */
-  for (int k = 0; k < o->n_lines; k++) {
-    const cupid_output_line *line = &o->lines[k];
-    cupid_region_kind region = CUPID_REGION_NONE;
-    for (int i = 0; i < line->points && region == CUPID_REGION_NONE; i++) {
-      double t = line->points > 1 ? (double)i / (line->points - 1) : 0.0, p[3], u[3];
-      for (int a = 0; a < 3; a++) p[a] = line->from[a] + t * (line->to[a] - line->from[a]);
-      CUPID_CALL(cupid_problem_sample_point(prob, NULL, p, u, NULL, &region));
-    }
-    if (region == CUPID_REGION_NONE)
-      return cupid_model_error(prob->model, &line->mark,
-                               "the line from (%g, %g, %g) to (%g, %g, %g) lies outside the model "
-                               "(none of its %d points is inside)",
-                               line->from[0], line->from[1], line->from[2], line->to[0],
-                               line->to[1], line->to[2], line->points);
-  }
-  return CUPID_SUCCESS;
-}

@@ -80,3 +80,35 @@ cupid_status cupid_problem_sample_point(const cupid_problem_state *prob, const d
   *region = CUPID_REGION_PD;
   return CUPID_SUCCESS;
 }
+
+/* Before the solve: output points and lines against the model's regions and the beam. */
+cupid_status cupid_problem_check_points(const cupid_problem_state *prob) {
+  const cupid_output *o = &prob->model->output;
+  for (int k = 0; k < o->n_points; k++) {
+    double u[3];
+    cupid_region_kind region;
+    CUPID_CALL(cupid_problem_sample_point(prob, NULL, o->points[k].at, u, NULL, &region));
+    if (region == CUPID_REGION_NONE)
+      return cupid_model_error(prob->model, &o->points[k].mark,
+                               "the point (%g, %g, %g) lies outside the model",
+                               o->points[k].at[0], o->points[k].at[1], o->points[k].at[2]);
+  }
+  /* A line with no point inside the model would only hold NaN (and gnuplot fails on it after
+   * the whole solve): refuse it now. Stops at the first point inside. */
+  for (int k = 0; k < o->n_lines; k++) {
+    const cupid_output_line *line = &o->lines[k];
+    cupid_region_kind region = CUPID_REGION_NONE;
+    for (int i = 0; i < line->points && region == CUPID_REGION_NONE; i++) {
+      double t = line->points > 1 ? (double)i / (line->points - 1) : 0.0, p[3], u[3];
+      for (int a = 0; a < 3; a++) p[a] = line->from[a] + t * (line->to[a] - line->from[a]);
+      CUPID_CALL(cupid_problem_sample_point(prob, NULL, p, u, NULL, &region));
+    }
+    if (region == CUPID_REGION_NONE)
+      return cupid_model_error(prob->model, &line->mark,
+                               "the line from (%g, %g, %g) to (%g, %g, %g) lies outside the model "
+                               "(none of its %d points is inside)",
+                               line->from[0], line->from[1], line->from[2], line->to[0],
+                               line->to[1], line->to[2], line->points);
+  }
+  return CUPID_SUCCESS;
+}

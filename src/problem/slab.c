@@ -37,27 +37,6 @@ int cupid_problem_slab_wanted(const cupid_problem_state *prob) {
          m->has_peridynamics && m->pd.dimension == 3 && (solve || explicit_pd);
 }
 
-int cupid_problem_pd_owned(const cupid_problem_state *prob, cupid_int node) {
-  return !prob->slab || (node >= prob->part.owned_first && node < prob->part.owned_last);
-}
-
-int cupid_problem_lowest_rank(int mine) {
-  const int size = cupid_petsc_size();
-  return size - cupid_petsc_max_int(mine ? size - cupid_petsc_rank() : 0);
-}
-
-cupid_int cupid_problem_global_count(const cupid_problem_state *prob, cupid_int count) {
-  if (!prob->slab) return count;
-  double c = (double)count;
-  cupid_petsc_sum_doubles(&c, 1);
-  return (cupid_int)c;
-}
-
-cupid_status cupid_problem_slab_agree(cupid_status st) {
-  if (!cupid_petsc_max_int(st != CUPID_SUCCESS)) return CUPID_SUCCESS;
-  if (st != CUPID_SUCCESS) return st;
-  return CUPID_ERROR(CUPID_ERR_MODEL, "another MPI rank reported an error");
-}
 
 /* Output points and lines are checked on rank 0: before the solve the check only locates
  * them against the model's regions and the beam (cupid_problem_sample_point without a
