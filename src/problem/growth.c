@@ -673,6 +673,18 @@ static cupid_status blocked_over_ranks(const cupid_problem_state *prob, cupid_in
 /* A crack that reached the coupling zone (whose bonds never break: the PD nodes there share
  * the load with the beam): bonds over their limit there stop the growth, named and placed;
  * *stop = 1. The steps before it stand (written), this one is not. */
+/* The largest ratio of a coupling zone's bonds (over their limit or not; 0 without a zone),
+ * over the ranks of a slab run: the sub-step stops at the load where it reaches 1. */
+static cupid_status blocked_ratio(growth_run *g, double *ratio) {
+  cupid_problem_state *prob = g->prob;
+  cupid_int count = 0, node = -1;
+  *ratio = 0.0;
+  if (!prob->protect) return CUPID_SUCCESS;
+  CUPID_CALL(cupid_pd_operator_blocked(prob->op, prob->u, &prob->fracture, &count, &node, ratio));
+  if (prob->slab) cupid_petsc_max_doubles(ratio, 1);
+  return CUPID_SUCCESS;
+}
+
 static cupid_status check_blocked(growth_run *g, int k, double lambda, int *stop) {
   cupid_problem_state *prob = g->prob;
   cupid_int count = 0, node = -1;
@@ -771,7 +783,9 @@ static void scale_solution(growth_run *g, double mu, double mu2) {
  * (exact: each solve is linear), the bonds break there, and the re-solves run at that load
  * until nothing more breaks (a crack that runs at constant load); then the load goes on to
  * lambda, by scaling the settled solve again (no solve: the next sub-step, if any, is found
- * on it). So every crack is broken at the load it first fails at, as in sequentially linear
+ * on it). A coupling zone's bond that would reach its limit first stops the sub-step there:
+ * the run stops at the load where the crack first asks to enter the zone, whatever the
+ * steps (check_blocked). So every crack is broken at the load it first fails at, as in sequentially linear
  * analysis (Rots et al. 2008), and the steps only choose where the rows are written: a
  * coarse step no longer breaks at once the bonds a finer one would have broken one event at
  * a time, at lower loads (the plate of issue 33: peaks of 1134 to 1284 N over 1 to 50 steps
@@ -807,23 +821,30 @@ static cupid_status load_step(growth_run *g, int k, double lambda, int *iteratio
     scaled = 0;
     if (!fracture) return CUPID_SUCCESS;
     reactions(g);
+    double r = 0.0; /* the largest ratio of this solution's breakable bonds */
+    CUPID_CALL(cupid_problem_max_ratio(prob, prob->u, &r));
+    if (prob->first_break_step < 0) { /* the exact load of the first break, by scaling */
+      if (r > 1.0) prob->first_break_load = mu / r;
+      if (g->ratio_per_load == 0.0 && r > 0.0 && mu > 0.0) g->ratio_per_load = r / mu;
+    }
+    if (!broke_here && g->substep && g->released == 0) { /* the sub-step, to the first limit
+                                                            reached: a bond's, or a coupling
+                                                            zone's (check_blocked stops there) */
+      double rb = 0.0;
+      CUPID_CALL(blocked_ratio(g, &rb));
+      const double top = r > rb ? r : rb;
+      if (top > 1.0) {
+        const double mc = mu / top * (1.0 + SUBSTEP_OVER);
+        scale_solution(g, mu, mc);
+        r *= mc / mu, mu = mc;
+      }
+    }
     CUPID_CALL(check_blocked(g, k, mu, stop));
     if (*stop) { /* a loose part swung round into a coupling zone: a collapse, if held nodes
                     carry it (an Arlequin bar cut through under an end traction: weakly held
                     nodes among them, the pivots it swung round) */
       int collapsed = 0;
       return check_collapse(g, k, mu, 1, &collapsed);
-    }
-    double r = 0.0; /* the largest ratio of this solution */
-    CUPID_CALL(cupid_problem_max_ratio(prob, prob->u, &r));
-    if (prob->first_break_step < 0) { /* the exact load of the first break, by scaling */
-      if (r > 1.0) prob->first_break_load = mu / r;
-      if (g->ratio_per_load == 0.0 && r > 0.0 && mu > 0.0) g->ratio_per_load = r / mu;
-    }
-    if (r > 1.0 && !broke_here && g->substep && g->released == 0) { /* the sub-step */
-      const double mc = mu / r * (1.0 + SUBSTEP_OVER);
-      scale_solution(g, mu, mc);
-      r *= mc / mu, mu = mc;
     }
     track_peaks(g, k, mu, carries_load(g, mu, r) ? r : 0.0);
     cupid_int broken = 0;

@@ -376,7 +376,8 @@ static void test_read_string_and_defaults(void **state) {
   assert_int_equal(m->pd.n_regions, 2);
   assert_int_equal(m->pd.regions[1].material, 1);
   assert_true(m->materials[1].E == 1);
-  assert_string_equal(m->output.directory, "out/<model>");
+  /* a model that is no file ("<model>", "<dict>"): out/model, not a folder named "<model>" */
+  assert_string_equal(m->output.directory, "out/model");
   cupid_model_destroy(&m);
   cupid_model_destroy(&m); /* NULL-safe */
   cupid_model_destroy(NULL);

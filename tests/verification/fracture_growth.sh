@@ -185,6 +185,27 @@ out=$("$CUPID" run bar_static.yaml -o bar --quiet 2>&1); rc=$?
 [ $rc -eq 2 ] && grep -q "the body collapsed at load step 7" <<<"$out" && ! grep -q "Arlequin overlap" <<<"$out" \
   && ok || bad "an Arlequin bar pulled apart: exit $rc: $out"
 
+# ... and the load at which a growth stops at a coupling zone does not hang on the step count
+# either: the same bar intact at 100 MPa, whose overlap's bonds reach their limit before any
+# other (the sub-step goes to that load; issue 33: a stop on a step's first solve stopped at
+# the step's load, 0.667 or 0.471 of it at 3 or 17 steps)
+sed -e '/  precracks:/,+1d' bar_static.yaml > bar_intact.yaml
+for N in 3 17; do
+  "$CUPID" run bar_intact.yaml -o intact$N --quiet --set analysis.steps=$N \
+    --set 'loads[0].traction.value=[0, 100, 0]' 2> intact$N.err; echo $? > intact$N.rc
+done
+"$PY" - <<'PY' && ok || bad "the stop at a coupling zone against the step count"
+import re
+loads = []
+for N in (3, 17):
+    err, rc = open("intact%d.err" % N).read(), int(open("intact%d.rc" % N).read())
+    m = re.search(r"crack growth stopped at load step \d+ \(load factor ([0-9.e-]+)\): \d+ bonds? of the Arlequin overlap", err)
+    assert rc == 2 and m, (N, rc, err)
+    loads.append(m.group(1))
+print("stop at the overlap: load factor %s (3 steps), %s (17 steps)" % tuple(loads))
+assert loads[0] == loads[1], loads
+PY
+
 # 3d. the peak load does not hang on the step count (issue 33, item 2): the sub-steps break
 # every crack at its own load (growth.c, load_step), so 1, 3, 10 and 37 steps break the same
 # bonds and find the same peak (1e-9: the round-off of the scalings, 1e-15 seen). Before: a
