@@ -368,6 +368,7 @@ void cupid_problem_fracture_json(cupid_json js, const cupid_problem_state *prob)
       cupid_json_number(js, "load_factor", prob->growth.collapse_load);
       cupid_json_number(js, "held_share", prob->growth.collapse_share);
       cupid_json_integer(js, "held_nodes", prob->growth.collapse_held);
+      cupid_json_string(js, "cause", prob->growth.collapse_cause);
       cupid_json_end_object(js);
     }
     if (prob->growth.stopped_step) {

@@ -734,6 +734,7 @@ static cupid_status check_collapse(growth_run *g, int k, double lambda, int with
   prob->growth.collapse_step = k;
   prob->growth.collapse_load = lambda;
   prob->growth.collapse_share = share;
+  prob->growth.collapse_cause = "held nodes carry load";
   prob->growth.collapse_held = g->released;
   const double *h = prob->growth.held_reaction;
   snprintf(prob->growth.stopped, sizeof prob->growth.stopped,
@@ -774,6 +775,36 @@ static void scale_solution(growth_run *g, double mu, double mu2) {
  * the first break between 1e-9 below and above the predicted load). */
 #define SUBSTEP_OVER 1e-9
 
+/* A matrix-free solve that runs away again and again in one load step, each time after the
+ * node its iterate moved furthest was held (growth_matrix_free.c): a mechanism that holding
+ * nodes one by one does not steady, under load (CG converges on a mechanism the load does not
+ * push). The Arlequin bar cut through under its end traction on the petsc engine held 17
+ * crack-face nodes at 3 s each, and went on for 13 minutes, where the direct path's factor
+ * names the loose part at once and the held share calls it a collapse (check_collapse). A
+ * step whose solve ran away more than RUNAWAY_HOLDS_MAX times stops as a collapse. 8: the
+ * runaways of a growth that goes on are the odd node at a time (the force-loaded plate of
+ * verification.mpi_fracture_growth: one). */
+#define RUNAWAY_HOLDS_MAX 8
+
+static cupid_status runaway_collapse(growth_run *g, int k, double mu, int runaways, int *stop) {
+  cupid_problem_state *prob = g->prob;
+  prob->growth.collapse_step = k;
+  prob->growth.collapse_load = mu;
+  prob->growth.collapse_share = g->held_share;
+  prob->growth.collapse_held = g->released;
+  prob->growth.collapse_cause = "runaway";
+  snprintf(prob->growth.stopped, sizeof prob->growth.stopped,
+           "the body collapsed at load step %d (load factor %.6g): the crack cut the load path: "
+           "the PETSc solve ran away %d times in this step, each time after the node it moved "
+           "furthest was held (a mechanism under load, that holding nodes does not steady: a "
+           "part that came loose carries load). Results past the last step written are no "
+           "equilibrium; the fields written are the last steady solve's",
+           k, mu, runaways);
+  prob->growth.stopped_step = k;
+  *stop = 1;
+  return CUPID_SUCCESS;
+}
+
 /* One load step to load factor lambda: solve, break, solve again until nothing is over its
  * limit; *stop = 1 when a coupling zone stopped it (check_blocked) or the body collapsed
  * (check_collapse).
@@ -800,6 +831,7 @@ static cupid_status load_step(growth_run *g, int k, double lambda, int *iteratio
   double mu = lambda; /* the load factor of the solve */
   int broke_here = 0; /* bonds broke at load factor mu */
   int scaled = 0;     /* the solution is the last solve's scaled to mu: no solve needed */
+  int runaways = 0;   /* nodes held where the matrix-free solve ran away, this step */
   *iterations = 0;
   if (g->F && g->bonds_at_factor != prob->broken_bonds) cupid_direct_factor_destroy(&g->F);
   for (;;) {
@@ -811,6 +843,8 @@ static cupid_status load_step(growth_run *g, int k, double lambda, int *iteratio
     if (st == CUPID_ERR_NUMERIC && prob->broken_bonds > 0) { /* what breaking left loose */
       int held = 0;
       CUPID_CALL(hold_singular_node(g, k, &held));
+      if (held && g->matrix_free && ++runaways > RUNAWAY_HOLDS_MAX)
+        return runaway_collapse(g, k, mu, runaways, stop);
       if (held) {
         reassemble = 1;
         continue;

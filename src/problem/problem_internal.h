@@ -185,6 +185,7 @@ typedef struct cupid_problem_private {
     double held_share;              /**< the held nodes' share of the forces, last solve */
     int collapse_step;              /**< the step the body collapsed (0: it did not) */
     double collapse_load, collapse_share;
+    const char *collapse_cause;     /**< "held nodes carry load" or "runaway" */
     cupid_int collapse_held;
     int stopped_step;               /**< the step a crack reaching a coupling zone stopped
                                          (0: ran to the end) */
