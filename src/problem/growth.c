@@ -3,12 +3,14 @@
  *
  * Every load and prescribed value ramps as k/N over N steps. Without fracture each step is one
  * linear solve. With fracture the scheme is sequentially linear (Ni, Zaccariotto, Zhu,
- * Galvanetto 2019): at each step solve, break the bonds over their limit (all of them, or the
- * most critical one: `fracture.per_iteration`), solve again at the same load, until none is
- * over; the stiffness is secant (intact bonds only). Nodes that lose their support (at most 2
- * intact bonds, or a fragment cut off from every support) are released: held where they are,
- * counted and reported, so that a run does not end in a singular matrix because of fracture.
- * The load factor of the first break is found exactly by scaling (each solve is linear).
+ * Galvanetto 2019): solve, break the bonds over their limit (all of them, or the most critical
+ * one: `fracture.per_iteration`), solve again at the same load, until none is over; the
+ * stiffness is secant (intact bonds only). Each solve is linear, so a crack is broken at the
+ * load it first fails at (the sub-steps of load_step: the crack's path and the peak do not
+ * hang on N), and the load factor of the first break is exact. Nodes that lose their support
+ * (at most 2 intact bonds, or a fragment cut off from every support) are released: held where
+ * they are, counted and reported, so that a run does not end in a singular matrix because of
+ * fracture; held nodes that carry load are a collapse, which stops the run (check_collapse).
  * Outputs: damage.csv one row per step (load factor, iterations, counts, the reaction of every
  * constraint), its plot, and the fracture block of summary.json. */
 #include <math.h>
