@@ -118,6 +118,10 @@ typedef struct {
    *  part of the section (partial.c) always use the removed pairs. */
   cupid_fictitious_fe fictitious_fe;
   double fictitious_length;            /**< CUPID_FICTITIOUS_FE_LENGTH only */
+  /** The real grid's PD operator to assemble from, its removed bonds (pre-cracks, breaks)
+   *  included (borrowed; NULL: the coupling builds its own from @p pd). Read by the Lagrange
+   *  coupling; the fictitious-node one builds its operator on the extended grid. */
+  cupid_pd_operator pd_operator;
 } cupid_coupling_options;
 
 /** Counts, for summaries. */

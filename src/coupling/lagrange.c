@@ -159,9 +159,13 @@ cupid_status cupid_coupling_lagrange_create(cupid_cuf_beam beam, cupid_pd_grid g
   for (cupid_int a = nfe; a > 0; a--) fptr[a] = fptr[a - 1];
   fptr[0] = 0;
 
-  CUPID_TRY(cupid_pd_operator_create(grid, &o->pd, &op));
-  CUPID_TRY(cupid_pd_operator_assemble(op, &Kp));
-  cupid_pd_operator_destroy(&op);
+  if (o->pd_operator) { /* the caller's, with its removed bonds (fracture) */
+    CUPID_TRY(cupid_pd_operator_assemble(o->pd_operator, &Kp));
+  } else {
+    CUPID_TRY(cupid_pd_operator_create(grid, &o->pd, &op));
+    CUPID_TRY(cupid_pd_operator_assemble(op, &Kp));
+    cupid_pd_operator_destroy(&op);
+  }
   CUPID_TRY(cupid_cuf_assemble(beam, &Kb));
 
   /* K = T^T diag(K_PD, K_FE) T, row by row. */

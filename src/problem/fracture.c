@@ -28,8 +28,9 @@ cupid_status cupid_problem_fracture_check(const cupid_problem_state *prob) {
   if (!(prob->method->caps & CUPID_METHOD_FRACTURE))
     return cupid_model_error(m, mk,
                              "pre-cracks and fracture are not supported with coupling method %s "
-                             "in cupid %s (its coupling builds its own PD operator); use "
-                             "`coupling: {method: arlequin}`",
+                             "in cupid %s (its coupling builds its own PD operator, on the grid "
+                             "with its fictitious nodes); use `coupling: {method: lagrange}` or "
+                             "`{method: arlequin}`",
                              prob->method->name, cupid_version());
   if (!fr->has_fracture) return CUPID_SUCCESS;
   const cupid_analysis *a = &m->analysis;
@@ -41,6 +42,13 @@ cupid_status cupid_problem_fracture_check(const cupid_problem_state *prob) {
     return cupid_model_error(m, &fr->mark,
                              "bond breaking needs analysis.dynamic.integrator: central (Newmark "
                              "factors K once, and every broken bond changes K)");
+  if (a->type == CUPID_ANALYSIS_DYNAMIC && !prob->method->explicit_operator)
+    return cupid_model_error(m, &fr->mark,
+                             "bond breaking in dynamics needs the method's matrix-free explicit "
+                             "operator, which coupling method %s has not (its K is assembled "
+                             "once); quasi-static growth (type: static with steps) breaks bonds "
+                             "with it, or use `coupling: {method: arlequin}` for dynamics",
+                             prob->method->name);
   return CUPID_SUCCESS;
 }
 

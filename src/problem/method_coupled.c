@@ -130,7 +130,8 @@ cupid_status cupid_method_coupling_options(const cupid_problem_state *prob,
                                  .spacing = m->pd.spacing,
                                  .pd = prob->pd_options,
                                  .fictitious_fe = (cupid_fictitious_fe)m->coupling.fictitious_fe,
-                                 .fictitious_length = m->coupling.fictitious_length};
+                                 .fictitious_length = m->coupling.fictitious_length,
+                                 .pd_operator = prob->op}; /* its pre-cracks and breaks */
   return CUPID_SUCCESS;
 }
 

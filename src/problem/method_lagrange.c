@@ -4,6 +4,9 @@
  * from the beam after the solve), so the system T^T K T is symmetric positive definite
  * (CHOLMOD). Any grid dimension (a 1D grid is a bar along the axis), statics and dynamics
  * (the tied nodes' mass moves onto the beam through the tie). */
+#include <math.h>
+#include <stdio.h>
+
 #include "method.h"
 
 static cupid_status check(const cupid_problem_state *prob) {
@@ -12,11 +15,16 @@ static cupid_status check(const cupid_problem_state *prob) {
 }
 
 /* The tie and the eliminated K are built first: the constraints hold the tied nodes and the
- * loads on them act through the tie. */
+ * loads on them act through the tie. K_PD is assembled from prob->op itself, so that its
+ * pre-cracks and broken bonds are K's; crack growth assembles again after breaks (the tie,
+ * geometry alone, comes out the same). */
 static cupid_status assemble(cupid_problem_state *prob) {
   if (prob->K) return CUPID_SUCCESS;
+  const int again = prob->coupling != NULL;
+  cupid_coupling_destroy(&prob->coupling);
   cupid_coupling_info ci;
   CUPID_CALL(cupid_method_build_coupling(prob, cupid_coupling_lagrange_create, &ci));
+  if (again) return CUPID_SUCCESS;
   const cupid_int *tied;
   cupid_int nt;
   cupid_coupling_tied(prob->coupling, &tied, &nt);
@@ -58,9 +66,53 @@ static void recover(const cupid_problem_state *prob, double *u) {
   cupid_coupling_recover(prob->coupling, u);
 }
 
+/* The coupling zone, whose bonds never break: the tied nodes (they follow the beam) and every
+ * node within a horizon of one (its family reaches the tie, where the PD families are cut
+ * short by the interface). A crack that comes there stops the run (growth.c, check_blocked).
+ * The tie is built for its nodes (a coupling of the intact grid, freed; the solve builds its
+ * own). */
+static cupid_status fracture_protect(const cupid_problem_state *prob, unsigned char *protect) {
+  cupid_problem_state *p = (cupid_problem_state *)prob; /* the build borrows K and coupling */
+  cupid_csr K = p->K;
+  cupid_coupling_h c = p->coupling;
+  p->K = NULL, p->coupling = NULL;
+  cupid_coupling_info ci;
+  cupid_status st = cupid_method_build_coupling(p, cupid_coupling_lagrange_create, &ci);
+  const cupid_int *tied = NULL;
+  cupid_int nt = 0;
+  if (st == CUPID_SUCCESS) cupid_coupling_tied(p->coupling, &tied, &nt);
+  /* the lattice points within the horizon of each tied node (the grid is a lattice) */
+  const cupid_pd_grid g = prob->grid;
+  const double h = cupid_pd_grid_spacing(g), m = prob->model->pd.horizon / h;
+  const cupid_int reach = (cupid_int)floor(m + 1e-9), d1 = cupid_pd_grid_dimension(g) == 1;
+  for (cupid_int t = 0; t < nt; t++) {
+    cupid_int q[3];
+    cupid_pd_grid_node_lattice(g, tied[t], q);
+    for (cupid_int a = d1 ? 0 : -reach; a <= (d1 ? 0 : reach); a++)
+      for (cupid_int b = -reach; b <= reach; b++)
+        for (cupid_int e = d1 ? 0 : -reach; e <= (d1 ? 0 : reach); e++) {
+          if ((double)(a * a + b * b + e * e) > m * m * (1.0 + 1e-9)) continue;
+          const cupid_int i = cupid_pd_grid_node_at(g, q[0] + a, q[1] + b, q[2] + e);
+          if (i >= 0) protect[i] = 1;
+        }
+  }
+  cupid_csr_destroy(&p->K);
+  cupid_coupling_destroy(&p->coupling);
+  p->K = K, p->coupling = c;
+  return st;
+}
+
+/* The stop message's name of the zone at x. */
+static void protected_zone(const cupid_problem_state *prob, const double x[3], char *buf, size_t len) {
+  (void)prob;
+  snprintf(buf, len, "the Lagrange tie (the tied PD nodes and those within a horizon of them, "
+           "near (%g, %g, %g))", x[0], x[1], x[2]);
+}
+
 const cupid_method_ops cupid_method_lagrange = {
     .name = "lagrange",
-    .caps = CUPID_METHOD_DYNAMIC | CUPID_METHOD_GRID_1D | CUPID_METHOD_CONDITIONS_ASSEMBLE,
+    .caps = CUPID_METHOD_DYNAMIC | CUPID_METHOD_GRID_1D | CUPID_METHOD_CONDITIONS_ASSEMBLE |
+            CUPID_METHOD_FRACTURE,
     .matrix = CUPID_MATRIX_SPD,
     .check = check,
     .prepare = cupid_method_deactivate_regions,
@@ -71,4 +123,6 @@ const cupid_method_ops cupid_method_lagrange = {
     .mass = mass,
     .recover = recover,
     .report = cupid_method_print_equilibrium,
+    .fracture_protect = fracture_protect,
+    .protected_zone = protected_zone,
 };

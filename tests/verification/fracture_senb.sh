@@ -8,7 +8,8 @@
 #     both faces, whose truncated families hold a fraction of G0 and of the stiffness (the
 #     discrete fraction of G0 is 0.63, 0.72, 0.78 at these horizons: examples/fracture/README.md),
 #     so a peak at or above P_c, or below half of it (a wrong s0 of G0, say), is a fault.
-#  2. Coupled (CUF beam + PD around the notch, Arlequin) against PD-only at h = 1.25 and 1: the
+#  2. Coupled (CUF beam + PD around the notch, Arlequin; and Lagrange multipliers, within 3%)
+#     against PD-only at h = 1.25 and 1: the
 #     peak loads within the PD-only model's own discretisation change between its two finest
 #     horizons (|P(1) - P(1.25)| / P(1)); the crack path the same: the highest damaged node
 #     above the notch and the widest damaged node off the notch plane within one spacing.
@@ -33,6 +34,8 @@ for h in 5/3 1.25 1; do
   if [ "$h" != 5/3 ]; then
     "$CUPID" run "$EX/senb_coupled.yaml" -o "cp_$tag" --quiet "${short[@]}" \
       --set peridynamics.spacing="$hv" --set peridynamics.horizon="$dv" && ok || bad "coupled run, h = $h"
+    "$CUPID" run "$EX/senb_coupled.yaml" -o "lg_$tag" --quiet "${short[@]}" --set 'coupling={method: lagrange}' \
+      --set peridynamics.spacing="$hv" --set peridynamics.horizon="$dv" && ok || bad "Lagrange run, h = $h"
   fi
 done
 
@@ -65,6 +68,7 @@ for tag, h in (("5_3", 5 / 3), ("1.25", 1.25), ("1", 1.0)):
     runs["pd", tag] = load("pd_" + tag) + (h,)
     if tag != "5_3":
         runs["cp", tag] = load("cp_" + tag) + (h,)
+        runs["lg", tag] = load("lg_" + tag) + (h,)
 
 # 3. the envelope
 for key, (s, rows, nodes, h) in runs.items():
@@ -97,6 +101,20 @@ for tag in ("1.25", "1"):
           "width %.2f / %.2f" % (tag, peak(sc), peak(sp), 100 * d, xc, xp, yc, yp))
     assert abs(d) <= tol, (tag, d, tol)
     assert abs(xc - xp) <= h + 1e-9 and abs(yc - yp) <= h + 1e-9, (tag, xc, xp, yc, yp)
+
+# 2a. Lagrange multipliers (issue 34: the method refused cracks) against PD-only: within 3%
+# (the issue's bound: the tie's truncated families and the h/2 offset of the tied layer, paper
+# 000 section 5.1), the same crack
+for tag in ("1.25", "1"):
+    sp, _, np_, h = runs["pd", tag]
+    sl, _, nl, _ = runs["lg", tag]
+    d = peak(sl) / peak(sp) - 1
+    xl, yl = path(nl, h)
+    xp, yp = path(np_, h)
+    print("h = %s: Lagrange peak %.2f N against PD-only %.2f N (%+.2f%%); crack top %.2f / %.2f, "
+          "width %.2f / %.2f" % (tag, peak(sl), peak(sp), 100 * d, xl, xp, yl, yp))
+    assert abs(d) <= 0.03, (tag, d)
+    assert abs(xl - xp) <= h + 1e-9 and abs(yl - yp) <= h + 1e-9, (tag, xl, xp, yl, yp)
 PY
 
 # 4. a crack into an Arlequin overlap
