@@ -91,6 +91,18 @@ cupid_status cupid_problem_balance_assembled(const cupid_problem_state *prob, co
   return balance_create(prob, csr_transpose, (void *)K, &fe, B);
 }
 
+cupid_status cupid_problem_balanced_evaluate(cupid_problem_state *prob) {
+  cupid_coupling_balance B = NULL;
+  cupid_status st = CUPID_SUCCESS;
+  CUPID_TRY(cupid_problem_balance_assembled(prob, prob->K, &B));
+  balanced_csr bk = {prob->K, B};
+  CUPID_TRY(cupid_problem_patch_test(prob, balanced_csr_apply, &bk));
+  CUPID_TRY(balanced_csr_apply(&bk, prob->u, prob->f_int));
+cleanup:
+  cupid_coupling_balance_destroy(&B);
+  return st;
+}
+
 cupid_status cupid_problem_balanced_direct_solve(cupid_problem_state *prob) {
   cupid_coupling_balance B = NULL;
   cupid_direct_factor F = NULL;

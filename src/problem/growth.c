@@ -637,6 +637,12 @@ static cupid_status solve(growth_run *g, int reassemble) {
   if (st0 == CUPID_SUCCESS && Kold) st0 = downdate_factor(g, Kold);
   cupid_csr_destroy(&Kold);
   CUPID_CALL(st0);
+  if (cupid_problem_balanced(prob)) { /* K' = K - W C^T: the balanced solve and f_int = K' u
+                                         (balance.c; load steps without fracture: one solve) */
+    CUPID_CALL(prob->method->solve_assembled(prob));
+    prob->growth.solves++;
+    return CUPID_SUCCESS;
+  }
   CUPID_CALL(cupid_problem_patch_test_assembled(prob)); /* the first K: once */
   const int own = own_factor(prob);
   int done = 0;

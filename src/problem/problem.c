@@ -187,8 +187,12 @@ static cupid_status run_evaluate(cupid_problem_state *prob) {
       if (!cupid_cuf_node_used(prob->beam, (int)(n % prob->fe_info.M), n / prob->fe_info.M))
         for (int c = 0; c < 3; c++) prob->u[prob->fe_offset + 3 * n + c] = 0.0;
     CUPID_CALL(prob->method->assemble(prob));
-    CUPID_CALL(cupid_problem_patch_test_assembled(prob));
-    cupid_csr_matvec(prob->K, prob->u, prob->f_int);
+    if (cupid_problem_balanced(prob)) { /* K' = K - W C^T (balance.c) */
+      CUPID_CALL(cupid_problem_balanced_evaluate(prob));
+    } else {
+      CUPID_CALL(cupid_problem_patch_test_assembled(prob));
+      cupid_csr_matvec(prob->K, prob->u, prob->f_int);
+    }
   }
   cupid_problem_phase_end(prob, CUPID_PHASE_SOLVE, t0);
   cupid_problem_progress(prob, "evaluate: internal forces of the imposed field computed");

@@ -216,6 +216,12 @@ int cupid_problem_balanced(const cupid_problem_state *prob);
  *  cupid_coupling_balance_correct(*B, x, .); *B is the caller's. */
 cupid_status cupid_problem_balance_assembled(const cupid_problem_state *prob, const cupid_csr_t *K,
                                              cupid_coupling_balance *B);
+/** The resultant of f_int along x, y, z (sum of f_int T_k) and the sum of the terms'
+ *  magnitudes (quality.c). */
+cupid_status cupid_problem_internal_force_sum(const cupid_problem_state *prob, double sum[3],
+                                              double *scale);
+/** `type: evaluate` on the assembled K: the patch test and f_int = K' u of the imposed u. */
+cupid_status cupid_problem_balanced_evaluate(cupid_problem_state *prob);
 /** The assembled path: patch test, factor of K_ff, the balanced solve, f_int = K' u. */
 cupid_status cupid_problem_balanced_direct_solve(cupid_problem_state *prob);
 /** The matrix-free path: *out = K' around L (the operator of A); *B is the caller's. */

@@ -341,3 +341,25 @@ cupid_status cupid_problem_force_sums(cupid_problem_state *prob, double load[3],
   cupid_free(&t);
   return st;
 }
+
+/* The resultant of the internal forces, sum over DOFs of f_int T_k (the unit translations), and
+ * the sum of |f_int| for its scale: 0 for an operator that conserves momentum (every PD model,
+ * the balanced coupling: R^T K' = 0), the coupling's imbalance otherwise (summary.json of an
+ * evaluation, `internal_force_sum`). */
+cupid_status cupid_problem_internal_force_sum(const cupid_problem_state *prob, double sum[3],
+                                              double *scale) {
+  double *t = NULL;
+  CUPID_CALL(cupid_calloc((size_t)(3 * prob->ndof) + 1, sizeof *t, "translation vectors", &t));
+  cupid_status st = cupid_problem_translations(prob, t);
+  *scale = 0.0;
+  for (int k = 0; k < 3; k++) {
+    sum[k] = 0.0;
+    for (cupid_int d = 0; d < prob->ndof && st == CUPID_SUCCESS; d++) {
+      const double f = prob->f_int[d] * t[(size_t)k * (size_t)prob->ndof + d];
+      sum[k] += f;
+      *scale += fabs(f);
+    }
+  }
+  cupid_free(&t);
+  return st;
+}

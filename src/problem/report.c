@@ -325,6 +325,12 @@ static cupid_status write_summary(cupid_problem_state *prob) {
   json_vec3(js, "applied_load_sum", prob->load_sum);
   json_vec3(js, "reaction_sum", prob->reaction_sum); /* the model's constraints */
   if (prob->growth.held) json_vec3(js, "held_reaction_sum", prob->growth.held_reaction);
+  if (m->analysis.type == CUPID_ANALYSIS_EVALUATE) { /* the internal forces' resultant */
+    double sum[3], scale;
+    CUPID_TRY(cupid_problem_internal_force_sum(prob, sum, &scale));
+    json_vec3(js, "internal_force_sum", sum);
+    cupid_json_number(js, "internal_force_magnitude", scale);
+  }
   if (m->analysis.type != CUPID_ANALYSIS_DYNAMIC) { /* a static balance; dynamics: the energy's */
     double imbalance[3];
     for (int c = 0; c < 3; c++) imbalance[c] = prob->load_sum[c] + prob->reaction_sum[c];
