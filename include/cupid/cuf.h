@@ -117,6 +117,9 @@ cupid_int cupid_cuf_num_dofs(const cupid_cuf_beam beam);
 
 /** Place the beam DOFs at @p offset (a multiple of 3) of a larger system. Default 0. */
 cupid_status cupid_cuf_set_dof_offset(cupid_cuf_beam beam, cupid_int offset);
+/** The time t at which cupid_cuf_load_add() and cupid_cuf_constraint_apply() evaluate the
+ *  model's expressions (0 until set: a dynamic run sets it at every step). */
+void cupid_cuf_set_time(cupid_cuf_beam beam, double t);
 
 /** Global scalar DOF (offset included) of expansion function tau, beam node i, component k. */
 cupid_int cupid_cuf_dof(const cupid_cuf_beam beam, int tau, cupid_int node, int k);

@@ -9,12 +9,16 @@
 
 typedef struct cupid_cuf_beam_private beam_t;
 
-double cuf_value(const cupid_value *v, const double p[3], double density) {
+double cuf_value(const cupid_value *v, const double p[3], double density, double t) {
   switch (v->kind) {
     case CUPID_VALUE_NONE: return 0.0;
     case CUPID_VALUE_CONSTANT: return v->constant;
-    default: return cupid_value_eval(v, p[0], p[1], p[2], 0.0, density);
+    default: return cupid_value_eval(v, p[0], p[1], p[2], t, density);
   }
+}
+
+void cupid_cuf_set_time(cupid_cuf_beam beam, double t) {
+  if (beam) beam->time = t;
 }
 
 /* ---------------------------------------------------------------- create / destroy */

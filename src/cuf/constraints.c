@@ -149,8 +149,8 @@ cleanup:
 }
 
 static void value_field(void *ctx, const double p[3], double density, double out[3]) {
-  const cupid_value *v = ctx;
-  for (int k = 0; k < 3; k++) out[k] = cuf_value(&v[k], p, density);
+  const cuf_values_at *at = ctx;
+  for (int k = 0; k < 3; k++) out[k] = cuf_value(&at->v[k], p, density, at->t);
 }
 
 cupid_status cupid_cuf_constraint_apply(const cupid_cuf_beam b, const cupid_model_t *model,
@@ -173,7 +173,8 @@ cupid_status cupid_cuf_constraint_apply(const cupid_cuf_beam b, const cupid_mode
     case CUPID_CONSTRAINT_DISPLACEMENT: {
       int mask[3];
       for (int k = 0; k < 3; k++) mask[k] = c->value[k].kind != CUPID_VALUE_NONE;
-      st = cupid_cuf_prescribe(b, &c->box, mask, value_field, (void *)(uintptr_t)c->value, bc, &count);
+      cuf_values_at at = {c->value, b->time};
+      st = cupid_cuf_prescribe(b, &c->box, mask, value_field, &at, bc, &count);
       break;
     }
     default: return CUPID_ERROR(CUPID_ERR_ARGUMENT, "unknown constraint kind %d", (int)c->kind);

@@ -70,6 +70,7 @@ struct cupid_cuf_beam_private {
   cupid_int n_bnodes, n_belem;
   double *by;         /* y of each beam node */
   double ymin, ymax;
+  double time; /* t of the model's expressions (cupid_cuf_set_time; 0 by default) */
   int integration;
   int poisson_corrected; /* 1: every C is the corrected law (cuf_poisson_correct) */
   int poisson_split;     /* TE1: R acts on the constant-term axial strain (docs/theory.md) */
@@ -168,6 +169,12 @@ cupid_status cuf_te_project(const struct cupid_cuf_beam_private *b, double y, cu
 
 /* ---- misc ---- */
 /* Evaluate a model value; NONE -> 0. */
-double cuf_value(const cupid_value *v, const double p[3], double density);
+/** A model value at p and time t (cupid_cuf_set_time: a dynamic run's conditions). */
+double cuf_value(const cupid_value *v, const double p[3], double density, double t);
+/** What value_field callbacks read: the values and the time to evaluate them at. */
+typedef struct {
+  const cupid_value *v;
+  double t;
+} cuf_values_at;
 
 #endif

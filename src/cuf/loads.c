@@ -199,14 +199,15 @@ cleanup:
 /* ---------------------------------------------------------------- model loads */
 
 static void value_field(void *ctx, const double p[3], double density, double out[3]) {
-  const cupid_value *v = ctx;
-  for (int k = 0; k < 3; k++) out[k] = cuf_value(&v[k], p, density);
+  const cuf_values_at *at = ctx;
+  for (int k = 0; k < 3; k++) out[k] = cuf_value(&at->v[k], p, density, at->t);
 }
 
 cupid_status cupid_cuf_load_add(const cupid_cuf_beam b, const cupid_model_t *model,
                                 const cupid_load *load, double *f) {
   cupid_status st;
-  void *ctx = (void *)(uintptr_t)load->value; /* read only */
+  cuf_values_at at = {load->value, b->time};
+  void *ctx = &at;
   switch (load->kind) {
     case CUPID_LOAD_TRACTION:
       st = cupid_cuf_traction_add(b, load->plane_y, &load->patch, value_field, ctx, f, NULL);

@@ -36,6 +36,21 @@ assert max(abs(y - 50) for y in ys) <= 5.0, "damage away from the notch plane: y
 assert s["dynamic"]["max_energy_balance_relative"] < 1e-3
 PY
 
+# a traction that changes with t on the beam end (issue 34: refused before, a beam's loads
+# held at t = 0): ramped to the 30 MPa over 2e-5 s, the run keeps its energy balance (1e-3, as
+# above) and the tip moves less than under the sudden load (no overshoot), but moves
+"$CUPID" run "$E" -o ramp --quiet --set 'loads[0].traction.value=[0, "30*t/2e-5", 0]' \
+  --set analysis.dynamic.duration=2e-5 --set output.vtu=false --set output.plots=false && ok || bad "the ramped traction"
+"$CUPID" run "$E" -o sudden --quiet --set analysis.dynamic.duration=2e-5 --set output.vtu=false \
+  --set output.plots=false && ok || bad "the sudden traction, 2e-5 s"
+"$PY" - <<'PY' && ok || bad "a ramped traction on the coupled bar"
+import json
+r, s = (json.load(open(d + "/summary.json")) for d in ("ramp", "sudden"))
+ur, us = r["points"][0]["uy"], s["points"][0]["uy"]
+print("tip at 2e-5 s: ramped %.4g, sudden %.4g; energy balance %.1e" % (ur, us, r["energy_balance"]))
+assert r["energy_balance"] < 1e-3 and 0.2 * us < ur < 0.8 * us, (ur, us)
+PY
+
 # refusals: what a fracture model cannot run with, each a model error naming its key (exit 1)
 M=$SRC/tests/models/fracture
 expect 1 'evaluate.yaml:[0-9]+:[0-9]+: peridynamics.fracture: bond breaking needs type: static' -- "$CUPID" run "$M/evaluate.yaml" -o ev
