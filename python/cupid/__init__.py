@@ -162,7 +162,9 @@ class Problem:
 
     model: a path to a model file, or a dict with the model file's keys (model-format.md).
     output_dir, solver ("auto", "direct", "krylov", "petsc"), threads, max_memory_gb, quiet: as the
-    command line's -o, --solver, --threads, --max-memory, --quiet.
+    command line's -o, --solver, --threads, --max-memory, --quiet. Without output_dir the files
+    go to the model's output.directory, by default out/<file name> (out/model for a dict).
+    write_outputs() may be called again: it rewrites the report beside what the run wrote.
     """
 
     @classmethod
