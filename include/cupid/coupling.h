@@ -178,6 +178,12 @@ cupid_status cupid_coupling_lagrange_create(cupid_cuf_beam beam, cupid_pd_grid g
                                             const cupid_coupling_options *opts,
                                             cupid_coupling_h *c, cupid_csr *K);
 
+/** The eliminated K of the Lagrange coupling @p c again, with K_PD from @p op (the operator
+ *  of the real grid, its removed bonds included: crack growth); the tie and the beam's K are
+ *  c's. Equal to what cupid_coupling_lagrange_create() builds with that operator. */
+cupid_status cupid_coupling_lagrange_update(const cupid_coupling_h c, const cupid_pd_operator op,
+                                            cupid_csr *K);
+
 /** Tied PD nodes of the Lagrange coupling (NULL, 0 for the fictitious-node method). */
 void cupid_coupling_tied(const cupid_coupling_h c, const cupid_int **nodes, cupid_int *n);
 

@@ -58,6 +58,13 @@ struct cupid_coupling_private {
   double *tw;
   cupid_int fe_block; /* first FE block (= real PD nodes) */
   int tie_M, tie_te;  /* expansion functions per beam node; 1 for a TE expansion (lumping) */
+  /* kept for cupid_coupling_lagrange_update (a cracked PD operator, the rest unchanged): the
+   * tie by FE node (fptr over FE nodes, flist the tied PD nodes, fw their weights), each PD
+   * node's tied index or -1, and the beam's K */
+  cupid_int *tied_of, *fptr, *flist;
+  double *fw;
+  cupid_csr Kb;
+  cupid_int n_fe;
 };
 
 /** The interfaces: region y bounds whose beam node is still used by an active pair

@@ -895,6 +895,11 @@ void cupid_coupling_destroy(cupid_coupling_h *c) {
   cupid_free(&(*c)->tptr);
   cupid_free(&(*c)->tnode);
   cupid_free(&(*c)->tw);
+  cupid_free(&(*c)->tied_of);
+  cupid_free(&(*c)->fptr);
+  cupid_free(&(*c)->flist);
+  cupid_free(&(*c)->fw);
+  cupid_csr_destroy(&(*c)->Kb);
   cupid_free(c);
 }
 

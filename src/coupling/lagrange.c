@@ -96,7 +96,8 @@ cleanup:
 
 /* Row i of K_PD through T: master columns stay, tied columns go to FE columns. */
 static cupid_status pd_row_through_t(cpl_rowbuild *rb, const cupid_csr_t *Kp, cupid_int i,
-                                     double s, const cupid_int *tied_of, const cupid_coupling_h c) {
+                                     double s, const cupid_int *tied_of,
+                                     const struct cupid_coupling_private *c) {
   for (cupid_int k = Kp->rowptr[i]; k < Kp->rowptr[i + 1]; k++) {
     cupid_int j = Kp->col[k];
     const double *blk = Kp->val + 9 * k;
@@ -111,16 +112,38 @@ static cupid_status pd_row_through_t(cpl_rowbuild *rb, const cupid_csr_t *Kp, cu
   return CUPID_SUCCESS;
 }
 
+/* K = T^T diag(K_PD, K_FE) T, row by row, from the PD matrix @p Kp and what @p c keeps. */
+static cupid_status eliminated_matrix(const struct cupid_coupling_private *c, const cupid_csr_t *Kp,
+                                      cupid_csr *K) {
+  const cupid_int n_pd = c->fe_block, nfe = c->n_fe;
+  const cupid_csr_t *Kb = c->Kb;
+  cpl_rowbuild rb = {0};
+  cupid_status st = CUPID_SUCCESS;
+  CUPID_TRY(cpl_rowbuild_init(&rb, n_pd + nfe, n_pd + nfe));
+  for (cupid_int i = 0; i < n_pd; i++) {
+    if (c->tied_of[i] < 0) CUPID_TRY(pd_row_through_t(&rb, Kp, i, 1.0, c->tied_of, c));
+    CUPID_TRY(cpl_rowbuild_end_row(&rb, i));
+  }
+  for (cupid_int a = 0; a < nfe; a++) {
+    for (cupid_int k = Kb->rowptr[a]; k < Kb->rowptr[a + 1]; k++)
+      CUPID_TRY(cpl_rowbuild_add(&rb, n_pd + Kb->col[k], 1.0, Kb->val + 9 * k));
+    for (cupid_int k = c->fptr[a]; k < c->fptr[a + 1]; k++)
+      CUPID_TRY(pd_row_through_t(&rb, Kp, c->flist[k], c->fw[k], c->tied_of, c));
+    CUPID_TRY(cpl_rowbuild_end_row(&rb, n_pd + a));
+  }
+  CUPID_TRY(cpl_rowbuild_finish(&rb, K));
+cleanup:
+  cpl_rowbuild_free(&rb);
+  return st;
+}
+
 cupid_status cupid_coupling_lagrange_create(cupid_cuf_beam beam, cupid_pd_grid grid,
                                             const cupid_coupling_options *o, cupid_coupling_h *out,
                                             cupid_csr *K) {
   cupid_status st = CUPID_SUCCESS;
   cupid_coupling_h c = NULL;
   cupid_pd_operator op = NULL;
-  cupid_csr Kp = NULL, Kb = NULL;
-  cupid_int *tied_of = NULL, *fptr = NULL, *flist = NULL;
-  double *fw = NULL;
-  cpl_rowbuild rb = {0};
+  cupid_csr Kp = NULL;
   cupid_cuf_info info;
   cupid_cuf_get_info(beam, &info);
   int M = info.M, p = info.element_nodes;
@@ -136,25 +159,27 @@ cupid_status cupid_coupling_lagrange_create(cupid_cuf_beam beam, cupid_pd_grid g
               (long long)info.dof_offset, (long long)(3 * n_pd));
   CUPID_CALL(cupid_calloc(1, sizeof *c, "coupling", &c));
   c->fe_block = n_pd;
+  c->n_fe = nfe;
   c->tie_M = M;
   c->tie_te = info.expansion == CUPID_EXPANSION_TE;
   CUPID_TRY(tie_nodes(c, beam, grid, o, M, p));
 
   /* Transpose of the tie map: for each FE node, the tied nodes and weights. */
-  CUPID_TRY(cupid_malloc((size_t)n_pd, sizeof *tied_of, "tied index", &tied_of));
-  for (cupid_int i = 0; i < n_pd; i++) tied_of[i] = -1;
-  for (cupid_int t = 0; t < c->n_tied; t++) tied_of[c->tied[t]] = t;
+  CUPID_TRY(cupid_malloc((size_t)n_pd + 1, sizeof *c->tied_of, "tied index", &c->tied_of));
+  for (cupid_int i = 0; i < n_pd; i++) c->tied_of[i] = -1;
+  for (cupid_int t = 0; t < c->n_tied; t++) c->tied_of[c->tied[t]] = t;
   cupid_int nw = c->n_tied ? c->tptr[c->n_tied] : 0;
-  CUPID_TRY(cupid_calloc((size_t)nfe + 1, sizeof *fptr, "FE tie pointers", &fptr));
-  CUPID_TRY(cupid_malloc((size_t)nw + 1, sizeof *flist, "FE tie list", &flist));
-  CUPID_TRY(cupid_malloc((size_t)nw + 1, sizeof *fw, "FE tie weights", &fw));
+  CUPID_TRY(cupid_calloc((size_t)nfe + 1, sizeof *c->fptr, "FE tie pointers", &c->fptr));
+  CUPID_TRY(cupid_malloc((size_t)nw + 1, sizeof *c->flist, "FE tie list", &c->flist));
+  CUPID_TRY(cupid_malloc((size_t)nw + 1, sizeof *c->fw, "FE tie weights", &c->fw));
+  cupid_int *fptr = c->fptr;
   for (cupid_int k = 0; k < nw; k++) fptr[c->tnode[k] + 1]++;
   for (cupid_int a = 0; a < nfe; a++) fptr[a + 1] += fptr[a];
   for (cupid_int t = 0; t < c->n_tied; t++)
     for (cupid_int k = c->tptr[t]; k < c->tptr[t + 1]; k++) {
       cupid_int a = c->tnode[k], pos = fptr[a]++;
-      flist[pos] = c->tied[t];
-      fw[pos] = c->tw[k];
+      c->flist[pos] = c->tied[t];
+      c->fw[pos] = c->tw[k];
     }
   for (cupid_int a = nfe; a > 0; a--) fptr[a] = fptr[a - 1];
   fptr[0] = 0;
@@ -166,35 +191,26 @@ cupid_status cupid_coupling_lagrange_create(cupid_cuf_beam beam, cupid_pd_grid g
     CUPID_TRY(cupid_pd_operator_assemble(op, &Kp));
     cupid_pd_operator_destroy(&op);
   }
-  CUPID_TRY(cupid_cuf_assemble(beam, &Kb));
-
-  /* K = T^T diag(K_PD, K_FE) T, row by row. */
-  CUPID_TRY(cpl_rowbuild_init(&rb, n_pd + nfe, n_pd + nfe));
-  for (cupid_int i = 0; i < n_pd; i++) {
-    if (tied_of[i] < 0) CUPID_TRY(pd_row_through_t(&rb, Kp, i, 1.0, tied_of, c));
-    CUPID_TRY(cpl_rowbuild_end_row(&rb, i));
-  }
-  for (cupid_int a = 0; a < nfe; a++) {
-    for (cupid_int k = Kb->rowptr[a]; k < Kb->rowptr[a + 1]; k++)
-      CUPID_TRY(cpl_rowbuild_add(&rb, n_pd + Kb->col[k], 1.0, Kb->val + 9 * k));
-    for (cupid_int k = fptr[a]; k < fptr[a + 1]; k++)
-      CUPID_TRY(pd_row_through_t(&rb, Kp, flist[k], fw[k], tied_of, c));
-    CUPID_TRY(cpl_rowbuild_end_row(&rb, n_pd + a));
-  }
-  CUPID_TRY(cpl_rowbuild_finish(&rb, K));
+  CUPID_TRY(cupid_cuf_assemble(beam, &c->Kb));
+  CUPID_TRY(eliminated_matrix(c, Kp, K));
   c->info.n_real_pd = n_pd;
   *out = c;
   c = NULL;
 cleanup:
   cupid_csr_destroy(&Kp);
-  cupid_csr_destroy(&Kb);
   cupid_pd_operator_destroy(&op);
-  cupid_free(&tied_of);
-  cupid_free(&fptr);
-  cupid_free(&flist);
-  cupid_free(&fw);
-  cpl_rowbuild_free(&rb);
   cupid_coupling_destroy(&c);
+  return st;
+}
+
+cupid_status cupid_coupling_lagrange_update(const cupid_coupling_h c, const cupid_pd_operator op,
+                                            cupid_csr *K) {
+  CUPID_CHECK(c && c->Kb && op && K, CUPID_ERR_ARGUMENT,
+              "cupid_coupling_lagrange_update needs a Lagrange coupling and a PD operator");
+  cupid_csr Kp = NULL;
+  CUPID_CALL(cupid_pd_operator_assemble(op, &Kp));
+  cupid_status st = eliminated_matrix(c, Kp, K);
+  cupid_csr_destroy(&Kp);
   return st;
 }
 

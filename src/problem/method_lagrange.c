@@ -20,11 +20,14 @@ static cupid_status check(const cupid_problem_state *prob) {
  * geometry alone, comes out the same). */
 static cupid_status assemble(cupid_problem_state *prob) {
   if (prob->K) return CUPID_SUCCESS;
-  const int again = prob->coupling != NULL;
-  cupid_coupling_destroy(&prob->coupling);
+  if (prob->coupling) { /* again after breaks: the tie and the beam's K kept */
+    double t0 = cupid_wtime();
+    CUPID_CALL(cupid_coupling_lagrange_update(prob->coupling, prob->op, &prob->K));
+    cupid_problem_phase_end(prob, CUPID_PHASE_COUPLING, t0);
+    return CUPID_SUCCESS;
+  }
   cupid_coupling_info ci;
   CUPID_CALL(cupid_method_build_coupling(prob, cupid_coupling_lagrange_create, &ci));
-  if (again) return CUPID_SUCCESS;
   const cupid_int *tied;
   cupid_int nt;
   cupid_coupling_tied(prob->coupling, &tied, &nt);
