@@ -80,6 +80,37 @@ static void check_mass(cupid_cuf_beam beam, cupid_pd_grid grid, cupid_coupling_h
   cupid_free(&Mt);
 }
 
+/* Crack growth's re-assembly (issue 34): cupid_coupling_lagrange_update with a pre-cracked
+ * operator gives, bit for bit, the K that a coupling created on that operator gives, and one
+ * that differs from the intact K. */
+static void check_update(cupid_cuf_beam beam, cupid_pd_grid grid, cupid_coupling_options co,
+                         cupid_coupling_h c, const cupid_csr_t *K0) {
+  cupid_pd_operator op = NULL;
+  CUPID_ASSERT_OK(cupid_pd_operator_create(grid, &co.pd, &op));
+  cupid_pd_precrack pc = {.normal = 1, .at = 9.0, .lo = {0, 0, 0}, .hi = {4, 0, 8}};
+  cupid_int removed = 0;
+  CUPID_ASSERT_OK(cupid_pd_operator_precrack(op, &pc, &removed));
+  assert_true(removed > 0);
+  cupid_csr K1 = NULL, K2 = NULL;
+  CUPID_ASSERT_OK(cupid_coupling_lagrange_update(c, op, &K1));
+  co.pd_operator = op;
+  cupid_coupling_h c2 = NULL;
+  CUPID_ASSERT_OK(cupid_coupling_lagrange_create(beam, grid, &co, &c2, &K2));
+  const cupid_int nnz = K1->rowptr[K1->nrows];
+  assert_int_equal(K1->nrows, K2->nrows);
+  assert_int_equal(nnz, K2->rowptr[K2->nrows]);
+  assert_memory_equal(K1->rowptr, K2->rowptr, (size_t)(K1->nrows + 1) * sizeof *K1->rowptr);
+  assert_memory_equal(K1->col, K2->col, (size_t)nnz * sizeof *K1->col);
+  assert_memory_equal(K1->val, K2->val, (size_t)nnz * 9 * sizeof *K1->val);
+  int differs = K0->rowptr[K0->nrows] != nnz;
+  for (cupid_int k = 0; !differs && k < 9 * nnz; k++) differs = K0->val[k] != K1->val[k];
+  assert_true(differs); /* the crack's bonds left K */
+  cupid_coupling_destroy(&c2);
+  cupid_csr_destroy(&K1);
+  cupid_csr_destroy(&K2);
+  cupid_pd_operator_destroy(&op);
+}
+
 static void run_case(int le) {
   tb_beam tb;
   tb_init(&tb, 1000.0, 0.2);
@@ -116,6 +147,7 @@ static void run_case(int le) {
   cupid_coupling_h c = NULL;
   cupid_csr K = NULL;
   CUPID_ASSERT_OK(cupid_coupling_lagrange_create(beam, grid, &co, &c, &K));
+  check_update(beam, grid, co, c, K);
   double asym = cupid_csr_asymmetry(K);
   const cupid_int *tied;
   cupid_int nt;
