@@ -39,11 +39,12 @@ static cupid_status check_no_time(const cupid_model_t *m, const cupid_mark *mark
     return cupid_model_error(
         m, mark,
         "value[%d] \"%s\" uses t, the time of a dynamic analysis; analysis type: %s has no time "
-        "(%s): give the value at load factor 1 without t, or use type: dynamic",
+        "(%s), or use type: dynamic",
         c, cupid_expr_text(v[c].expr), a >= 0 && a < 3 ? type[a] : "?",
-        a == CUPID_ANALYSIS_EVALUATE ? "it evaluates one field"
+        a == CUPID_ANALYSIS_EVALUATE ? "it evaluates one field: give it without t"
                                      : "its load steps scale every load and prescribed value "
-                                       "by the load factor, k / steps at step k");
+                                       "by the load factor, k / steps at step k: give the value "
+                                       "at load factor 1 without t");
   }
   return CUPID_SUCCESS;
 }
@@ -69,6 +70,8 @@ cupid_status mr_validate(model_reader *rd, const mr_map *top) {
   if (m->analysis.type == CUPID_ANALYSIS_DYNAMIC) return check_dynamic_densities(rd);
   for (int k = 0; k < m->n_loads; k++)
     CUPID_CALL(check_no_time(m, &m->loads[k].mark, m->loads[k].value));
+  if (m->analysis.type == CUPID_ANALYSIS_EVALUATE) /* the imposed field too */
+    CUPID_CALL(check_no_time(m, &m->analysis.mark, m->analysis.field));
   for (int k = 0; k < m->n_constraints; k++)
     if (m->constraints[k].kind == CUPID_CONSTRAINT_DISPLACEMENT)
       CUPID_CALL(check_no_time(m, &m->constraints[k].mark, m->constraints[k].value));

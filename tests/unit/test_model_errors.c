@@ -248,6 +248,10 @@ static const bad_case cases[] = {
     {"fracture_g0_overflow.yaml",
      "8:35: peridynamics.fracture.energy_release_rate: must be a finite number, got '1e400'",
      NULL},
+    {"evaluate_time.yaml",
+     "9:11: analysis: value[1] \"1e-3*y*t\" uses t, the time of a dynamic analysis; analysis "
+     "type: evaluate has no time (it evaluates one field: give it without t)",
+     NULL},
     {"static_time_prescribed.yaml",
      "11:5: constraints[1]: value[1] \"0.01*t\" uses t, the time of a dynamic analysis; "
      "analysis type: static has no time",
