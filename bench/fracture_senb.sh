@@ -7,7 +7,9 @@
 #   factor    a new factorisation after every round of breaks,
 #   petsc     the PETSc engine on one process, matrix-free: the kept CG with the Cholesky
 #             factor of the bond-based twin (growth_matrix_free.c), needs build-petsc/cupid,
-#   slabs     the same on 2 PD slabs under mpirun (2 ranks of one thread).
+#   slabs     the same on 2 PD slabs under mpirun (2 ranks of one thread),
+#   lagrange  the same beam coupled by Lagrange multipliers instead (issue 34), the default
+#             re-solves.
 # Prints per run: seconds, PD nodes, load steps, solves, broken bonds, the time per broken bond
 # and per load step, the factorisations, downdates, CG solves, peak memory, and the peak load
 # (which must agree between the ways: the same bonds break). Reported figures, not a timed
@@ -37,7 +39,8 @@ row() { # model, way, dir, seconds
   python3 - "$@" <<'PY'
 import csv, json, sys
 model, way, d, t = sys.argv[1], sys.argv[2], sys.argv[3], float(sys.argv[4])
-label = {"petsc": "matrix-free, 1 process", "slabs": "matrix-free, 2 slabs"}
+label = {"petsc": "matrix-free, 1 process", "slabs": "matrix-free, 2 slabs",
+         "lagrange": "Lagrange multipliers, downdate"}
 s = json.load(open(d + "/summary.json"))
 f = s["fracture"]; v = f["solves"]
 steps = len(list(csv.DictReader(open(d + "/damage.csv"))))
@@ -55,6 +58,7 @@ run() { # model file, way
   case $2 in
     petsc) OMP_NUM_THREADS=1 "$pcupid" run "$m" -o "$d" "${set[@]}" --solver petsc ;;
     slabs) OMP_NUM_THREADS=1 "$mpiexec" -n 2 "$pcupid" run "$m" -o "$d" "${set[@]}" ;;
+    lagrange) "$cupid" run "$m" -o "$d" "${set[@]}" --set 'coupling={method: lagrange}' ;;
     *) CUPID_GROWTH_RESOLVE=$2 "$cupid" run "$m" -o "$d" "${set[@]}" ;;
   esac
   t1=$(date +%s.%N)
