@@ -19,8 +19,10 @@
 #    ratio and the place found over the ranks), exit status 2, the steps before written; and
 #    on 2 ranks with `--replicate`, which keeps the replicated model on PETSc's assembled
 #    solves (set up afresh for every re-solve: 35 s for the whole SENB above, so the short
-#    run here).
-# Skipped (77) without PETSc. 80-120 s on 2 cores (the 3-rank runs oversubscribe them).
+#    run here);
+#  - the SENB tied by Lagrange multipliers (issue 34) on 2 and 3 ranks of the PETSc engine's
+#    assembled solves (about 30 s each) against its direct path.
+# Skipped (77) without PETSc. 140-200 s on 2 cores (the 3-rank runs oversubscribe them).
 if [ "${CUPID_HAVE_PETSC:-0}" != 1 ]; then
   echo "SKIP: cupid was built without PETSc (scripts/build.sh --with-petsc builds build-petsc/)"
   exit 77
@@ -48,6 +50,14 @@ OMP_NUM_THREADS=2 "$MPIEXEC" -n 2 "$CUPID" run "$E" -o lpsslab2 "${coarse[@]}" "
 [ $? -eq 2 ] && ok || bad "direct run into an overlap: exit status 2"
 "$MPIEXEC" -n 3 "$CUPID" run "$I" -o stopslab3 --quiet 2> stopslab3.err
 [ $? -eq 2 ] && ok || bad "3 slabs into an overlap: exit status 2"
+# Lagrange multipliers (issue 34): the same beam tied instead, on the direct path and on 2 and
+# 3 ranks of the PETSc engine (the replicated model on PETSc's assembled solves: Lagrange has
+# no slab path), the same bonds in the same steps
+lag=(--set 'coupling={method: lagrange}')
+"$CUPID" run "$E" -o lgdirect "${coarse[@]}" "${lag[@]}" --solver direct && ok || bad "Lagrange, direct"
+for n in 2 3; do
+  "$MPIEXEC" -n $n "$CUPID" run "$E" -o lg$n "${coarse[@]}" "${lag[@]}" --solver petsc && ok || bad "Lagrange, $n ranks"
+done
 "$MPIEXEC" -n 2 "$CUPID" run "$I" -o stoprepl2 --quiet --solver petsc --replicate 2> stoprepl2.err
 [ $? -eq 2 ] && ok || bad "2 ranks replicated into an overlap: exit status 2"
 msg() { grep -o "cupid: crack growth stopped.*" "$1"; }
@@ -76,6 +86,9 @@ for d in ("petsc1", "slab2", "slab3"):
 same("lpsdirect", "lpsslab2")
 same("stopdirect", "stopslab3", nodes=False)
 same("stopdirect", "stoprepl2", nodes=False)
+for d in ("lg2", "lg3"):
+    same("lgdirect", d)
+assert int(rows("lgdirect")[-1]["broken_bonds"]) > 400, rows("lgdirect")[-1]
 assert int(rows("direct")[-1]["broken_bonds"]) > 400, rows("direct")[-1]
 assert int(rows("lpsdirect")[-1]["broken_bonds"]) > 400, rows("lpsdirect")[-1]
 s = {d: json.load(open(d + "/summary.json"))
