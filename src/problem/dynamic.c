@@ -483,8 +483,12 @@ static cupid_status conditions_now(void *ctx, double t, double *u_fixed, double 
       CUPID_CALL(check_prescribed(prob, c, o->cnodes[k], o->n_cnodes[k], t));
       if (prob->beam && constraint_depends_on_time(c) && cupid_problem_fe_node_in_box(prob, &c->box)) {
         CUPID_CALL(cupid_cuf_constraint_apply(prob->beam, m, c, prob->bc)); /* the same DOFs */
-        CUPID_CALL(cupid_problem_check_finite(prob, prob->bc->value, &c->mark,
-                                              "the prescribed displacement"));
+        int bad = 0; /* the beam's DOFs only each step; the message's scan once */
+        for (cupid_int d = prob->fe_offset; d < prob->ndof && !bad; d++)
+          bad = !isfinite(prob->bc->value[d]);
+        if (bad)
+          CUPID_CALL(cupid_problem_check_finite(prob, prob->bc->value, &c->mark,
+                                                "the prescribed displacement"));
       }
     }
   if (o->timed_loads && prob->beam) { /* every load again, through the method (its split

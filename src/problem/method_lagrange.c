@@ -20,17 +20,20 @@ static cupid_status check(const cupid_problem_state *prob) {
  * geometry alone, comes out the same). */
 static cupid_status assemble(cupid_problem_state *prob) {
   if (prob->K) return CUPID_SUCCESS;
-  if (prob->coupling) { /* again after breaks: the tie and the beam's K kept */
+  cupid_coupling_info ci = {0};
+  if (prob->coupling) { /* the tie and the beam's K kept (fracture_protect's build, or the last
+                           assembly before breaks): K_PD from prob->op again */
     double t0 = cupid_wtime();
     CUPID_CALL(cupid_coupling_lagrange_update(prob->coupling, prob->op, &prob->K));
     cupid_problem_phase_end(prob, CUPID_PHASE_COUPLING, t0);
-    return CUPID_SUCCESS;
+    cupid_coupling_get_info(prob->coupling, &ci);
+  } else {
+    CUPID_CALL(cupid_method_build_coupling(prob, cupid_coupling_lagrange_create, &ci));
   }
-  cupid_coupling_info ci;
-  CUPID_CALL(cupid_method_build_coupling(prob, cupid_coupling_lagrange_create, &ci));
   const cupid_int *tied;
   cupid_int nt;
   cupid_coupling_tied(prob->coupling, &tied, &nt);
+  /* growth runs its re-solves quiet: this reports the first assembly only */
   cupid_problem_progress(prob, "coupling (Lagrange multipliers, eliminated): %d interfaces, %lld "
                          "tied PD nodes; %lld non-zeros (%.1f MB)", ci.n_interfaces, (long long)nt,
                          (long long)cupid_csr_nnz(prob->K), (double)cupid_csr_bytes(prob->K) / 1e6);
@@ -72,18 +75,16 @@ static void recover(const cupid_problem_state *prob, double *u) {
 /* The coupling zone, whose bonds never break: the tied nodes (they follow the beam) and every
  * node within a horizon of one (its family reaches the tie, where the PD families are cut
  * short by the interface). A crack that comes there stops the run (growth.c, check_blocked).
- * The tie is built for its nodes (a coupling of the intact grid, freed; the solve builds its
- * own). */
+ * The tie is built here for its nodes and kept; its K, assembled before the pre-cracks are
+ * cut, is dropped, and assemble() makes K from the cut operator on the kept tie. */
 static cupid_status fracture_protect(const cupid_problem_state *prob, unsigned char *protect) {
-  cupid_problem_state *p = (cupid_problem_state *)prob; /* the build borrows K and coupling */
-  cupid_csr K = p->K;
-  cupid_coupling_h c = p->coupling;
-  p->K = NULL, p->coupling = NULL;
+  cupid_problem_state *p = (cupid_problem_state *)prob; /* the tie is the problem's */
   cupid_coupling_info ci;
-  cupid_status st = cupid_method_build_coupling(p, cupid_coupling_lagrange_create, &ci);
+  if (!p->coupling) CUPID_CALL(cupid_method_build_coupling(p, cupid_coupling_lagrange_create, &ci));
+  cupid_csr_destroy(&p->K);
   const cupid_int *tied = NULL;
   cupid_int nt = 0;
-  if (st == CUPID_SUCCESS) cupid_coupling_tied(p->coupling, &tied, &nt);
+  cupid_coupling_tied(p->coupling, &tied, &nt);
   /* the lattice points within the horizon of each tied node (the grid is a lattice) */
   const cupid_pd_grid g = prob->grid;
   const double h = cupid_pd_grid_spacing(g), m = prob->model->pd.horizon / h;
@@ -99,10 +100,7 @@ static cupid_status fracture_protect(const cupid_problem_state *prob, unsigned c
           if (i >= 0) protect[i] = 1;
         }
   }
-  cupid_csr_destroy(&p->K);
-  cupid_coupling_destroy(&p->coupling);
-  p->K = K, p->coupling = c;
-  return st;
+  return CUPID_SUCCESS;
 }
 
 /* The stop message's name of the zone at x. */
