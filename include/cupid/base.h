@@ -43,6 +43,10 @@ cupid_status cupid_strdup(const char *s, char **out);
 
 /** Monotonic wall-clock time in seconds. */
 double cupid_wtime(void);
+/** sum_k a[k] b[k], the same to the bit for any thread count: partial sums over fixed chunks
+ *  of 4096 entries (in parallel), added in order. Solvers whose iterates decide which bonds
+ *  break use it, so that a crack does not depend on OMP_NUM_THREADS. */
+double cupid_dot(cupid_int n, const double *a, const double *b);
 
 /** Peak resident memory of this process so far, in bytes (0 if unknown). */
 int64_t cupid_peak_memory(void);

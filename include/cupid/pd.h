@@ -390,6 +390,13 @@ cupid_status cupid_pd_operator_unpack_broken(cupid_pd_operator op, cupid_int fir
 /** Remove from @p dst every bond removed from @p src that it still has (both operators on one
  *  grid with the same stencil: e.g. a weighted copy of the operator). */
 cupid_status cupid_pd_operator_copy_broken(cupid_pd_operator dst, const cupid_pd_operator src);
+/** As cupid_pd_operator_copy_broken() onto an operator on another grid of the same lattice
+ *  spacing and stencil: the bond of @p src's node i at stencil entry s is the bond of node
+ *  map[i] of @p dst at the same entry (e.g. a fictitious-node coupling's extended grid, whose
+ *  real nodes are the model grid's: cupid_coupling_operator_pd). A bond whose other end does
+ *  not map onto dst's neighbour is an ARGUMENT error. @p map NULL: one grid, as copy_broken. */
+cupid_status cupid_pd_operator_copy_broken_mapped(cupid_pd_operator dst, const cupid_pd_operator src,
+                                                  const cupid_int *map);
 
 /** The largest ratio of an intact, breakable bond's criterion to its limit at u (stretch:
  *  e / (s0 |xi|); energy: sqrt(w / w_c), both linear in u): a linear solution scaled by
@@ -427,6 +434,12 @@ cupid_status cupid_pd_operator_weakly_held(const cupid_pd_operator op, cupid_int
  *  rounds of this and an exchange of the flags between ranks find what the whole grid would. */
 cupid_status cupid_pd_operator_reach(const cupid_pd_operator op, const unsigned char *release,
                                      unsigned char *seen, cupid_int *added);
+
+/** out[j] = 1 for every node j in the family (the stencil's neighbours present, bonds intact
+ *  or not) of a node i with mark[i] != 0; other entries of @p out are left as they are. The
+ *  family is symmetric, so j is flagged exactly when a marked node is in j's family. */
+void cupid_pd_operator_mark_families(const cupid_pd_operator op, const unsigned char *mark,
+                                     unsigned char *out);
 
 /** Bonds (unordered pairs) removed so far: pre-cracks and breaks. */
 cupid_int cupid_pd_operator_num_broken(const cupid_pd_operator op);

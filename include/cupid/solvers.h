@@ -509,6 +509,23 @@ cupid_status cupid_iterative_solve(const cupid_linear_operator *A, const cupid_c
                                    const cupid_dirichlet_t *bc, const double *f, double *u,
                                    const cupid_krylov_options *opts, cupid_solve_info *info);
 
+/**
+ * A re-solve of a system that changed a little since its preconditioner was made (crack growth
+ * with a non-symmetric coupling: the LU of the last factorised K, src/problem/growth_lu.c):
+ * right-preconditioned restarted GMRES on the free DOFs of @p bc (A_ff u_f = f_f - A_fc u_c)
+ * from u's free values, to |b - A u| <= rtol |b| by the true residual (as
+ * cupid_iterative_solve()). @p pc applies M^-1 to full-length vectors (r zero on the fixed
+ * DOFs; z read on the free ones). At most @p max_it iterations, restarted every
+ * min(max_it, 200). Returns CUPID_SUCCESS whether or not it converged: the caller reads
+ * info->converged_reason ("CONVERGED_*" or not) and keeps u only then; u holds the last
+ * iterate (fixed DOFs: their values). The scalar products are the same for any thread count
+ * (cupid_dot). A non-finite iterate: CUPID_ERR_NUMERIC.
+ */
+cupid_status cupid_gmres_resolve(const cupid_linear_operator *A, const cupid_dirichlet_t *bc,
+                                 cupid_status (*pc)(void *ctx, const double *r, double *z),
+                                 void *pc_ctx, const double *f, double *u, double rtol,
+                                 int max_it, cupid_solve_info *info);
+
 /** The engine of a cupid_solver_kind (DIRECT or PETSC; NULL otherwise). */
 const cupid_solver_type *cupid_solver_type_get(int kind);
 /** The k-th engine of the table (0, 1, ...; NULL past the end): the factorisation first, then

@@ -70,6 +70,31 @@ cupid_status cupid_strdup(const char *s, char **out) {
   return CUPID_SUCCESS;
 }
 
+#define DOT_CHUNK 4096
+#define DOT_STACK 512
+
+static double dot_chunk(cupid_int n, const double *a, const double *b) {
+  double s = 0.0;
+  for (cupid_int k = 0; k < n; k++) s += a[k] * b[k];
+  return s;
+}
+
+double cupid_dot(cupid_int n, const double *a, const double *b) {
+  const cupid_int nc = (n + DOT_CHUNK - 1) / DOT_CHUNK;
+  if (nc <= 4) return dot_chunk(n, a, b);
+  double stack[DOT_STACK], *part = nc <= DOT_STACK ? stack : malloc((size_t)nc * sizeof *part);
+  if (!part) return dot_chunk(n, a, b); /* the same sum, in one thread */
+#pragma omp parallel for schedule(static)
+  for (cupid_int c = 0; c < nc; c++) {
+    const cupid_int k0 = c * DOT_CHUNK, len = k0 + DOT_CHUNK <= n ? DOT_CHUNK : n - k0;
+    part[c] = dot_chunk(len, a + k0, b + k0);
+  }
+  double s = 0.0;
+  for (cupid_int c = 0; c < nc; c++) s += part[c];
+  if (part != stack) free(part);
+  return s;
+}
+
 double cupid_wtime(void) {
   struct timespec ts;
   clock_gettime(CLOCK_MONOTONIC, &ts);

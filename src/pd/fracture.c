@@ -548,19 +548,58 @@ cupid_status cupid_pd_operator_unpack_broken(cupid_pd_operator op, cupid_int fir
 cupid_status cupid_pd_operator_copy_broken(cupid_pd_operator dst, const cupid_pd_operator src) {
   CUPID_CHECK(dst && src && dst->grid == src->grid && dst->st.n == src->st.n, CUPID_ERR_ARGUMENT,
               "copy_broken needs two operators on one grid with one stencil");
-  if (!src->bslot || dst->nbroken == src->nbroken) return CUPID_SUCCESS;
+  return cupid_pd_operator_copy_broken_mapped(dst, src, NULL);
+}
+
+/* 1 if entry s of the stencil is in the family (a full family has them all). */
+static int family_has(const pd_family *F, int s) {
+  if (!F->s) return 1;
+  for (int q = 0; q < F->n; q++)
+    if (F->s[q] == s) return 1;
+  return 0;
+}
+
+/* The stencils of two operators are one when their entries are the same lattice offsets in the
+ * same order (the same horizon, spacing, dimension and partial-volume rule build them so). */
+static int same_stencil(const struct cupid_pd_operator_private *a,
+                        const struct cupid_pd_operator_private *b) {
+  if (a->st.n != b->st.n || a->dim != b->dim || fabs(a->h - b->h) > 1e-12 * a->h) return 0;
+  for (int s = 0; s < a->st.n; s++)
+    for (int c = 0; c < 3; c++)
+      if (a->st.off[3 * s + c] != b->st.off[3 * s + c]) return 0;
+  return 1;
+}
+
+cupid_status cupid_pd_operator_copy_broken_mapped(cupid_pd_operator dst, const cupid_pd_operator src,
+                                                  const cupid_int *map) {
+  CUPID_CHECK(dst && src && same_stencil(dst, src), CUPID_ERR_ARGUMENT,
+              "copy_broken: the two operators need one stencil (the same horizon, spacing and "
+              "partial-volume rule)");
+  CUPID_CHECK(map || dst->grid == src->grid, CUPID_ERR_ARGUMENT,
+              "copy_broken: operators on two grids need the map of the nodes");
+  if (!src->bslot || (!map && dst->nbroken == src->nbroken)) return CUPID_SUCCESS;
   CUPID_CALL(fracture_init(dst));
   const int half = src->st.n / 2;
   for (cupid_int i = 0; i < src->nnodes; i++) {
     const int32_t k = src->bslot[i];
     if (k < 0) continue;
+    const cupid_int I = map ? map[i] : i;
     const uint64_t *mask = src->bmask + (size_t)k * (size_t)src->bwords;
     for (int w = 0; w < src->bwords; w++)
       for (uint64_t bits = mask[w]; bits; bits &= bits - 1) {
         const int s = 64 * w + __builtin_ctzll(bits);
-        if (s < half || pd_bond_broken(dst, i, s)) continue; /* each bond from its lower node */
+        /* each bond from its lower node; through a map, from either (dst's order may differ) */
+        if ((!map && s < half) || pd_bond_broken(dst, I, s)) continue;
+        if (map) { /* the bond must join the images of its ends */
+          const pd_family Fs = pd_family_of(src, i), Fd = pd_family_of(dst, I);
+          const cupid_int j = pd_family_node(src, &Fs, s);
+          const cupid_int J = family_has(&Fd, s) ? pd_family_node(dst, &Fd, s) : -1;
+          CUPID_CHECK(j >= 0 && J >= 0 && map[j] == J, CUPID_ERR_ARGUMENT,
+                      "copy_broken: the map does not carry bond (%lld, %lld) onto the other grid",
+                      (long long)i, (long long)j);
+        }
         int fresh; /* dst counts them as broken: the copy keeps no pre-crack tally */
-        CUPID_CALL(remove_bond(dst, i, s, 0, &fresh));
+        CUPID_CALL(remove_bond(dst, I, s, 0, &fresh));
       }
   }
   return CUPID_SUCCESS;
@@ -733,6 +772,15 @@ cupid_status cupid_pd_operator_reach(const cupid_pd_operator op, const unsigned 
   *added = n;
   cupid_free(&queue);
   return CUPID_SUCCESS;
+}
+
+void cupid_pd_operator_mark_families(const cupid_pd_operator op, const unsigned char *mark,
+                                     unsigned char *out) {
+  for (cupid_int i = 0; i < op->nnodes; i++) {
+    if (!mark[i]) continue;
+    const pd_family F = pd_family_of(op, i);
+    for (int q = 0; q < F.n; q++) out[pd_family_node(op, &F, pd_family_entry(&F, q))] = 1;
+  }
 }
 
 cupid_status cupid_pd_operator_unsupported(const cupid_pd_operator op, const unsigned char *anchored,

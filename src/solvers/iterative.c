@@ -26,14 +26,25 @@ typedef struct {
   cupid_int *global; /* free index -> DOF */
   double *xw, *yw;   /* full length */
   cupid_direct_factor F;
+  /* or a preconditioner on full-length vectors (cupid_gmres_resolve): r with zero fixed
+   * entries in, z out */
+  cupid_status (*pc)(void *ctx, const double *r, double *z);
+  void *pc_ctx;
+  double *pr, *pz;   /* full length, for pc */
 } system_free;
 
-static double dot(cupid_int n, const double *a, const double *b) {
-  double s = 0.0;
-#pragma omp parallel for schedule(static) reduction(+ : s) if (n > 32768)
-  for (cupid_int k = 0; k < n; k++) s += a[k] * b[k];
-  return s;
+/* z = M^-1 r on the free DOFs: the factor's solve, or the caller's preconditioner. */
+static cupid_status precondition(system_free *S, const double *r, double *z) {
+  if (S->F) return cupid_direct_factor_solve_free(S->F, r, z);
+  memset(S->pr, 0, (size_t)S->n * sizeof *S->pr);
+  for (cupid_int k = 0; k < S->nf; k++) S->pr[S->global[k]] = r[k];
+  CUPID_CALL(S->pc(S->pc_ctx, S->pr, S->pz));
+  for (cupid_int k = 0; k < S->nf; k++) z[k] = S->pz[S->global[k]];
+  return CUPID_SUCCESS;
 }
+
+/* the same to the bit for any thread count (crack growth's re-solves decide bonds with it) */
+static double dot(cupid_int n, const double *a, const double *b) { return cupid_dot(n, a, b); }
 
 static void axpy(cupid_int n, double a, const double *x, double *y) {
 #pragma omp parallel for schedule(static) if (n > 32768)
@@ -60,7 +71,7 @@ static cupid_status solve_cg(system_free *S, const double *b, double *x, double 
   memcpy(r, b, (size_t)n * sizeof *r);
   const double bnorm = sqrt(dot(n, b, b));
   double rnorm = bnorm;
-  CUPID_TRY(cupid_direct_factor_solve_free(S->F, r, z));
+  CUPID_TRY(precondition(S, r, z));
   memcpy(p, z, (size_t)n * sizeof *p);
   double rz = dot(n, r, z);
   int it = 0;
@@ -74,7 +85,7 @@ static cupid_status solve_cg(system_free *S, const double *b, double *x, double 
     axpy(n, -alpha, q, r);
     rnorm = sqrt(dot(n, r, r));
     it++;
-    CUPID_TRY(cupid_direct_factor_solve_free(S->F, r, z));
+    CUPID_TRY(precondition(S, r, z));
     const double rz_new = dot(n, r, z), beta = rz_new / rz;
     rz = rz_new;
 #pragma omp parallel for schedule(static) if (n > 32768)
@@ -190,7 +201,7 @@ static cupid_status solve_gmres(system_free *S, const double *b, double *x, doub
     int j = 0;
     for (; j < m && it < max_it; j++, it++) {
       double *vj = V + (size_t)j * (size_t)n, *vn = V + (size_t)(j + 1) * (size_t)n;
-      CUPID_TRY(cupid_direct_factor_solve_free(S->F, vj, z));
+      CUPID_TRY(precondition(S, vj, z));
       CUPID_TRY(apply_free(S, z, vn));
       for (int i = 0; i <= j; i++) { /* modified Gram-Schmidt */
         const double *vi = V + (size_t)i * (size_t)n;
@@ -229,7 +240,7 @@ static cupid_status solve_gmres(system_free *S, const double *b, double *x, doub
     }
     memset(w, 0, (size_t)n * sizeof *w);
     for (int i = 0; i < j; i++) axpy(n, y[i], V + (size_t)i * (size_t)n, w);
-    CUPID_TRY(cupid_direct_factor_solve_free(S->F, w, z));
+    CUPID_TRY(precondition(S, w, z));
     axpy(n, 1.0, z, x);
   }
   info->iterations = it;
@@ -318,6 +329,69 @@ cleanup:
   cupid_free(&S.global);
   cupid_free(&S.xw);
   cupid_free(&S.yw);
+  cupid_free(&b);
+  cupid_free(&x);
+  cupid_free(&ax);
+  return st;
+}
+
+cupid_status cupid_gmres_resolve(const cupid_linear_operator *A, const cupid_dirichlet_t *bc,
+                                 cupid_status (*pc)(void *ctx, const double *r, double *z),
+                                 void *pc_ctx, const double *f, double *u, double rtol,
+                                 int max_it, cupid_solve_info *info) {
+  CUPID_CHECK(A && A->apply && bc && pc && f && u && info && bc->n == A->n && rtol > 0 && max_it > 0,
+              CUPID_ERR_ARGUMENT, "cupid_gmres_resolve: bad arguments");
+  memset(info, 0, sizeof *info);
+  info->method = "gmres";
+  info->failed_dof = -1;
+  info->ranks = 1;
+  snprintf(info->ksp_type, sizeof info->ksp_type, "gmres");
+  snprintf(info->pc_type, sizeof info->pc_type, "given");
+  system_free S = {.A = A, .n = A->n, .nf = bc->n_free, .pc = pc, .pc_ctx = pc_ctx};
+  cupid_status st = CUPID_SUCCESS;
+  double *b = NULL, *x = NULL, *ax = NULL, t0 = cupid_wtime();
+  info->n = S.nf;
+  CUPID_TRY(cupid_malloc((size_t)S.nf + 1, sizeof *S.global, "free DOFs", &S.global));
+  CUPID_TRY(cupid_calloc((size_t)S.n + 1, sizeof *S.xw, "work vector", &S.xw));
+  CUPID_TRY(cupid_calloc((size_t)S.n + 1, sizeof *S.yw, "work vector", &S.yw));
+  CUPID_TRY(cupid_calloc((size_t)S.n + 1, sizeof *S.pr, "work vector", &S.pr));
+  CUPID_TRY(cupid_calloc((size_t)S.n + 1, sizeof *S.pz, "work vector", &S.pz));
+  CUPID_TRY(cupid_calloc((size_t)S.nf + 1, sizeof *b, "right-hand side", &b));
+  CUPID_TRY(cupid_calloc((size_t)S.nf + 1, sizeof *x, "solution", &x));
+  CUPID_TRY(cupid_calloc((size_t)S.nf + 1, sizeof *ax, "residual", &ax));
+  for (cupid_int d = 0, k = 0; d < S.n; d++)
+    if (!bc->fixed[d]) S.global[k++] = d;
+  /* b_f = f_f - A_fc u_c; the guess: u's free values */
+  for (cupid_int d = 0; d < S.n; d++) S.xw[d] = bc->fixed[d] ? bc->value[d] : 0.0;
+  CUPID_TRY(A->apply(A->ctx, S.xw, S.yw));
+  for (cupid_int k = 0; k < S.nf; k++) {
+    b[k] = f[S.global[k]] - S.yw[S.global[k]];
+    x[k] = u[S.global[k]];
+  }
+  memset(S.xw, 0, (size_t)S.n * sizeof *S.xw); /* fixed DOFs stay 0 in products */
+  const int restart = max_it < DEFAULT_RESTART ? max_it : DEFAULT_RESTART;
+  CUPID_TRY(solve_gmres(&S, b, x, rtol, max_it, restart, info));
+  CUPID_TRY(apply_free(&S, x, ax));
+  double r2 = 0.0, b2 = 0.0;
+  for (cupid_int k = 0; k < S.nf; k++) {
+    const double r = b[k] - ax[k];
+    r2 += r * r;
+    b2 += b[k] * b[k];
+  }
+  info->residual = b2 > 0 ? sqrt(r2 / b2) : sqrt(r2);
+  info->time_solve = cupid_wtime() - t0;
+  for (cupid_int k = 0; k < S.nf; k++)
+    CUPID_TRY_CHECK(isfinite(x[k]), CUPID_ERR_NUMERIC, "GMRES: non-finite iterate at DOF %lld",
+                    (long long)S.global[k]);
+  for (cupid_int d = 0; d < S.n; d++)
+    if (bc->fixed[d]) u[d] = bc->value[d];
+  for (cupid_int k = 0; k < S.nf; k++) u[S.global[k]] = x[k];
+cleanup:
+  cupid_free(&S.global);
+  cupid_free(&S.xw);
+  cupid_free(&S.yw);
+  cupid_free(&S.pr);
+  cupid_free(&S.pz);
   cupid_free(&b);
   cupid_free(&x);
   cupid_free(&ax);
