@@ -423,10 +423,42 @@ cupid_status cupid_coupling_operator_apply_rows(const cupid_coupling_operator A,
                                                 cupid_int d0, cupid_int d1, double *y);
 /**
  * The assembled coupled matrix of Eq. 38 with the PD operator @p pd on the same extended grid
- * (NULL: the operator's own, giving the matrix of cupid_coupling_create()).
+ * (NULL: the operator's own, with its broken bonds; intact, the matrix of
+ * cupid_coupling_create()).
  */
 cupid_status cupid_coupling_operator_assemble(const cupid_coupling_operator A,
                                               const cupid_pd_operator_options *pd, cupid_csr *K);
+/**
+ * The operator's own PD operator on the extended grid (real + fictitious nodes), which fracture
+ * keeps in step with the model grid's: cupid_pd_operator_copy_broken_mapped() with the map of
+ * cupid_coupling_operator_extended_nodes(). Borrowed: it lives as long as A.
+ */
+cupid_pd_operator cupid_coupling_operator_pd(const cupid_coupling_operator A);
+/** Each real PD node's node on the extended grid (the grid's nodes: a slab's local ones). */
+const cupid_int *cupid_coupling_operator_extended_nodes(const cupid_coupling_operator A);
+/**
+ * For every FE node a whose row of Eq. 38 reads PD columns (through the fits of a fictitious FE
+ * element, Eqs. 31-36): boxes[6 a ..] = the bounding box (lo x y z, hi x y z) of those PD nodes
+ * and of the FE node's own point (LE: its section node at its beam node's y; TE: the beam
+ * node's y), which is the part of the region its fictitious elements span; other rows: an empty
+ * box (lo = +inf, hi = -inf). On a slab, the PD columns of this slab's owned nodes only: the
+ * boxes of the ranks are joined by min / max. @p beam: the beam the operator was built on.
+ */
+cupid_status cupid_coupling_operator_fit_boxes(const cupid_coupling_operator A,
+                                               const cupid_cuf_beam beam, double *boxes);
+/**
+ * The coupling zone of fracture: zone[r] = 1 for every real PD node r (one entry per real node
+ * of the grid: a slab's local nodes) that is fictitious-adjacent, i.e. whose family on the
+ * extended grid holds a fictitious node or a node of @p core (NULL: none; one flag per real
+ * node, e.g. those inside cupid_coupling_operator_fit_boxes), or that is in @p core; else 0.
+ * Any bond (i, j) with neither end in the zone changes the PD rows of Eq. 38 in real columns
+ * only, by the same symmetric, rigid-mode-free terms as on the model grid: the fits of
+ * Eqs. 33-36 and the balance's C = K^T R stay as they were (docs/theory.md, "Fracture with
+ * fictitious nodes"); the fit boxes keep a crack from passing between an interface and the
+ * planes its fictitious FE element reads, which would bridge the crack with beam stiffness.
+ */
+cupid_status cupid_coupling_operator_zone(const cupid_coupling_operator A,
+                                          const unsigned char *core, unsigned char *zone);
 /**
  * The cheap PD operator of the preconditioner: @p fine (materials kept) turned bond-based with
  * horizon horizon_factor * spacing (<= 0: 1.5, the 18 face and edge neighbours), constant
@@ -458,11 +490,27 @@ typedef struct cupid_coupling_balance_private *cupid_coupling_balance;
  *  when those DOFs do not span the rigid modes. */
 cupid_status cupid_coupling_balance_create(cupid_int n, const double *R, const double *C,
                                            const double *d, cupid_coupling_balance *B);
+/** 1 when PD region @p region spans the beam's whole cross-section (x/z bounds missing or
+ *  covering it): its interfaces are planes normal to the axis at its y bounds. */
+int cupid_coupling_region_spans_section(const cupid_cuf_beam beam, const cupid_box *region);
+/** Interfaces balanced apart at most (cupid_coupling_balance_create_grouped). */
+#define CUPID_BALANCE_GROUPS_MAX 64
+/** The balance of each interface on its own: the DOFs in @p n_groups groups (group[j], one per
+ *  DOF; every DOF whose column of C is nonzero must lie in the group of its interface), and
+ *  K' = K - sum_g W_g C_g^T with C_g the group's entries of C and W_g = D_g R (R^T D_g R)^-1
+ *  from its weights. Then R^T K' = 0 as before, and the forces across each interface balance
+ *  (every free body cut between interfaces is in equilibrium: docs/coupling.md). A group with
+ *  no entry of C and no weight is left out; one with entries of C but weights that do not span
+ *  the rigid modes: CUPID_ERR_MODEL. n_groups = 1 (group NULL): cupid_coupling_balance_create.
+ *  At most CUPID_BALANCE_GROUPS_MAX groups. */
+cupid_status cupid_coupling_balance_create_grouped(cupid_int n, const double *R, const double *C,
+                                                   const double *d, int n_groups, const int *group,
+                                                   cupid_coupling_balance *B);
 void cupid_coupling_balance_destroy(cupid_coupling_balance *B);
 /** y -= W (C^T x): turns y = K x into K' x. */
 void cupid_coupling_balance_correct(const cupid_coupling_balance B, const double *x, double *y);
 /** u with K'_ff u_f = f_f - K'_fc u_c (u_c = bc's values) from the factor F of K_ff
- *  (Sherman-Morrison-Woodbury: CUPID_BALANCE_MODES more solves). */
+ *  (Sherman-Morrison-Woodbury: CUPID_BALANCE_MODES more solves per group). */
 cupid_status cupid_coupling_balance_solve(const cupid_coupling_balance B, const cupid_csr_t *K,
                                           cupid_direct_factor F, const cupid_dirichlet_t *bc,
                                           const double *f, double *u);

@@ -190,7 +190,9 @@ typedef struct {
   int fictitious_fe;
   double fictitious_length;
   /** fictitious: `balance:` 0 none (paper 000's Eq. 38), 1 momentum (the balanced operator
-   *  K - W C^T that conserves linear and angular momentum; coupling.h, docs/coupling.md) */
+   *  K - sum W_g C_g^T: momentum conserved across each interface plane, or over the whole model
+   *  when a region covers part of the section), 2 global (one K - W C^T for the whole model,
+   *  issue 18's form); coupling.h, docs/coupling.md */
   int balance;
   cupid_mark mark;
 } cupid_coupling;

@@ -24,80 +24,114 @@
 
 struct cupid_coupling_balance_private {
   cupid_int n;
-  double *C, *W; /* NR columns of n each */
+  int k;         /* columns: NR per group that takes a correction */
+  double *C, *W; /* k columns of n each: group g's C_g = its DOFs' entries of K^T R, W_g */
   cupid_linear_operator inner; /* the wrapped operator (cupid_coupling_balance_linear) */
 };
 
-/* A z = b in place (n <= NR) by Gaussian elimination with partial pivoting; 0 if singular to
+/* A z = b in place (A: n x n row-major) by Gaussian elimination with partial pivoting; 0 if singular to
  * working precision (a pivot below 1e-12 of the largest entry: the rank a dense 6 x 6 system
  * can be trusted with). */
-static int dense_solve(double A[NR][NR], double *b, int n) {
+static int dense_solve(double *A, double *b, int n) {
   double amax = 0.0;
   for (int r = 0; r < n; r++)
-    for (int c = 0; c < n; c++) amax = fmax(amax, fabs(A[r][c]));
+    for (int c = 0; c < n; c++) amax = fmax(amax, fabs(A[r * n + c]));
   for (int c = 0; c < n; c++) {
     int p = c;
     for (int r = c + 1; r < n; r++)
-      if (fabs(A[r][c]) > fabs(A[p][c])) p = r;
-    if (!(fabs(A[p][c]) > 1e-12 * amax)) return 0;
+      if (fabs(A[r * n + c]) > fabs(A[p * n + c])) p = r;
+    if (!(fabs(A[p * n + c]) > 1e-12 * amax)) return 0;
     for (int k = 0; k < n && p != c; k++) {
-      double t = A[c][k];
-      A[c][k] = A[p][k];
-      A[p][k] = t;
+      double t = A[c * n + k];
+      A[c * n + k] = A[p * n + k];
+      A[p * n + k] = t;
     }
     double t = b[c];
     b[c] = b[p];
     b[p] = t;
     for (int r = c + 1; r < n; r++) {
-      double f = A[r][c] / A[c][c];
-      for (int k = c; k < n; k++) A[r][k] -= f * A[c][k];
+      double f = A[r * n + c] / A[c * n + c];
+      for (int k = c; k < n; k++) A[r * n + k] -= f * A[c * n + k];
       b[r] -= f * b[c];
     }
   }
   for (int c = n - 1; c >= 0; c--) {
-    for (int k = c + 1; k < n; k++) b[c] -= A[c][k] * b[k];
-    b[c] /= A[c][c];
+    for (int k = c + 1; k < n; k++) b[c] -= A[c * n + k] * b[k];
+    b[c] /= A[c * n + c];
   }
   return 1;
 }
 
-static double dot(cupid_int n, const double *a, const double *b) {
-  double s = 0.0;
-#pragma omp parallel for reduction(+ : s) schedule(static) if (n > 100000)
-  for (cupid_int j = 0; j < n; j++) s += a[j] * b[j];
-  return s;
-}
+/* the same to the bit for any thread count (a growth's iterates decide which bonds break) */
+static double dot(cupid_int n, const double *a, const double *b) { return cupid_dot(n, a, b); }
 
 cupid_status cupid_coupling_balance_create(cupid_int n, const double *R, const double *C,
                                            const double *d, cupid_coupling_balance *out) {
+  return cupid_coupling_balance_create_grouped(n, R, C, d, 1, NULL, out);
+}
+
+/* Group g's W_g = D_g R (R^T D_g R)^-1 into W (NR columns), dr scratch (NR n). 0: D_g does not
+ * span the rigid modes. */
+static int group_weights(cupid_int n, const double *R, const double *d, const int *group, int g,
+                         double *dr, double *W) {
+  for (int a = 0; a < NR; a++)
+    for (cupid_int j = 0; j < n; j++)
+      dr[(size_t)a * n + j] = (!group || group[j] == g) ? d[j] * R[(size_t)a * n + j] : 0.0;
+  double G[NR * NR];
+  for (int a = 0; a < NR; a++)
+    for (int b = 0; b < NR; b++) G[a * NR + b] = dot(n, R + (size_t)a * n, dr + (size_t)b * n);
+  for (int b = 0; b < NR; b++) { /* column b of W = D R G^-1 e_b */
+    double A[NR * NR], x[NR] = {0};
+    memcpy(A, G, sizeof A);
+    x[b] = 1.0;
+    if (!dense_solve(A, x, NR)) return 0;
+    double *w = W + (size_t)b * n;
+    for (cupid_int j = 0; j < n; j++) {
+      double v = 0.0;
+      for (int a = 0; a < NR; a++) v += dr[(size_t)a * n + j] * x[a];
+      w[j] = v;
+    }
+  }
+  return 1;
+}
+
+cupid_status cupid_coupling_balance_create_grouped(cupid_int n, const double *R, const double *C,
+                                                   const double *d, int n_groups, const int *group,
+                                                   cupid_coupling_balance *out) {
   cupid_status st = CUPID_SUCCESS;
   cupid_coupling_balance B = NULL;
   double *dr = NULL;
   *out = NULL;
+  CUPID_CHECK(n_groups >= 1 && n_groups <= CUPID_BALANCE_GROUPS_MAX && (n_groups == 1 || group),
+              CUPID_ERR_ARGUMENT, "balance: 1 to %d groups, with the group of every DOF (got %d)",
+              CUPID_BALANCE_GROUPS_MAX, n_groups);
   CUPID_CALL(cupid_calloc(1, sizeof *B, "balanced coupling", &B));
   B->n = n;
-  CUPID_TRY(cupid_malloc((size_t)NR * (size_t)n, sizeof *B->C, "K^T R", &B->C));
-  CUPID_TRY(cupid_malloc((size_t)NR * (size_t)n, sizeof *B->W, "balance distribution", &B->W));
+  const size_t cap = (size_t)NR * (size_t)n_groups * (size_t)n;
+  CUPID_TRY(cupid_calloc(cap + 1, sizeof *B->C, "K^T R", &B->C));
+  CUPID_TRY(cupid_calloc(cap + 1, sizeof *B->W, "balance distribution", &B->W));
   CUPID_TRY(cupid_malloc((size_t)NR * (size_t)n, sizeof *dr, "D R", &dr));
-  memcpy(B->C, C, (size_t)NR * (size_t)n * sizeof *C);
-  for (int a = 0; a < NR; a++)
-    for (cupid_int j = 0; j < n; j++) dr[(size_t)a * n + j] = d[j] * R[(size_t)a * n + j];
-  double G[NR][NR];
-  for (int a = 0; a < NR; a++)
-    for (int b = 0; b < NR; b++) G[a][b] = dot(n, R + (size_t)a * n, dr + (size_t)b * n);
-  for (int b = 0; b < NR; b++) { /* column b of W = D R G^-1 e_b */
-    double A[NR][NR], g[NR] = {0};
-    memcpy(A, G, sizeof A);
-    g[b] = 1.0;
-    CUPID_TRY_CHECK(dense_solve(A, g, NR), CUPID_ERR_MODEL,
-                    "coupling.balance: the interface FE nodes do not span the six rigid-body "
-                    "modes (a region whose interfaces hold too few FE nodes)");
-    double *w = B->W + (size_t)b * n;
+  for (int g = 0; g < n_groups; g++) {
+    /* C_g: the group's entries of K^T R; a group whose DOFs neither take a correction nor
+     * make an imbalance is left out */
+    double *Cg = B->C + (size_t)B->k * (size_t)n, *Wg = B->W + (size_t)B->k * (size_t)n;
+    int any_c = 0, any_d = 0;
     for (cupid_int j = 0; j < n; j++) {
-      double v = 0.0;
-      for (int a = 0; a < NR; a++) v += dr[(size_t)a * n + j] * g[a];
-      w[j] = v;
+      const int in = n_groups == 1 || group[j] == g;
+      any_d |= in && d[j] != 0.0;
+      for (int a = 0; a < NR; a++) {
+        const double c = in ? C[(size_t)a * n + j] : 0.0;
+        Cg[(size_t)a * n + j] = c;
+        any_c |= c != 0.0;
+      }
     }
+    if (!any_c && !any_d) continue;
+    CUPID_TRY_CHECK(any_d && group_weights(n, R, d, n_groups == 1 ? NULL : group, g, dr, Wg),
+                    CUPID_ERR_MODEL,
+                    "coupling.balance: the interface FE nodes%s do not span the six rigid-body "
+                    "modes (a region whose interfaces hold too few FE nodes)",
+                    n_groups > 1 ? " of an interface" : "");
+    B->k += NR;
   }
   *out = B;
   B = NULL;
@@ -116,12 +150,12 @@ void cupid_coupling_balance_destroy(cupid_coupling_balance *B) {
 
 void cupid_coupling_balance_correct(const cupid_coupling_balance B, const double *x, double *y) {
   const cupid_int n = B->n;
-  double c[NR];
-  for (int k = 0; k < NR; k++) c[k] = dot(n, B->C + (size_t)k * n, x);
+  double c[NR * CUPID_BALANCE_GROUPS_MAX];
+  for (int k = 0; k < B->k; k++) c[k] = dot(n, B->C + (size_t)k * n, x);
 #pragma omp parallel for schedule(static) if (n > 100000)
   for (cupid_int j = 0; j < n; j++) {
     double v = 0.0;
-    for (int k = 0; k < NR; k++) v += B->W[(size_t)k * n + j] * c[k];
+    for (int k = 0; k < B->k; k++) v += B->W[(size_t)k * n + j] * c[k];
     y[j] -= v;
   }
 }
@@ -130,12 +164,15 @@ cupid_status cupid_coupling_balance_solve(const cupid_coupling_balance B, const 
                                           cupid_direct_factor F, const cupid_dirichlet_t *bc,
                                           const double *f, double *u) {
   const cupid_int n = B->n;
-  const size_t sz = (size_t)NR * (size_t)n;
-  double *Z = NULL, *b = NULL, *y = NULL;
+  const int k = B->k;
+  const size_t sz = (size_t)k * (size_t)n;
+  double *Z = NULL, *b = NULL, *y = NULL, *S = NULL, *g = NULL;
   cupid_status st = CUPID_SUCCESS;
-  CUPID_TRY(cupid_calloc(sz, sizeof *Z, "K_ff^-1 W", &Z));
+  CUPID_TRY(cupid_calloc(sz + 1, sizeof *Z, "K_ff^-1 W", &Z));
   CUPID_TRY(cupid_calloc((size_t)n, sizeof *b, "balanced right-hand side", &b));
   CUPID_TRY(cupid_calloc((size_t)n, sizeof *y, "balanced solve", &y));
+  CUPID_TRY(cupid_calloc((size_t)(k * k) + 1, sizeof *S, "capacitance", &S));
+  CUPID_TRY(cupid_calloc((size_t)k + 1, sizeof *g, "capacitance", &g));
   /* b = f - K' u_c (u_c: the prescribed values, 0 on the free DOFs) */
   for (cupid_int j = 0; j < n; j++) y[j] = bc->fixed[j] ? bc->value[j] : 0.0;
   cupid_csr_matvec(K, y, b);
@@ -143,23 +180,22 @@ cupid_status cupid_coupling_balance_solve(const cupid_coupling_balance B, const 
   for (cupid_int j = 0; j < n; j++) b[j] = f[j] - b[j];
   memset(y, 0, (size_t)n * sizeof *y);
   CUPID_TRY(cupid_direct_factor_solve(F, b, y));
-  for (int k = 0; k < NR; k++) CUPID_TRY(cupid_direct_factor_solve(F, B->W + (size_t)k * n, Z + (size_t)k * n));
+  for (int c = 0; c < k; c++) CUPID_TRY(cupid_direct_factor_solve(F, B->W + (size_t)c * n, Z + (size_t)c * n));
   /* K'_ff = K_ff - W_f C_f^T: u_f = y + Z (I - C_f^T Z)^-1 C_f^T y */
-  double S[NR][NR], g[NR];
-  for (int a = 0; a < NR; a++) {
+  for (int a = 0; a < k; a++) {
     const double *ca = B->C + (size_t)a * n;
     g[a] = 0.0;
     for (cupid_int j = 0; j < n; j++)
       if (!bc->fixed[j]) g[a] += ca[j] * y[j];
-    for (int c = 0; c < NR; c++) {
+    for (int c = 0; c < k; c++) {
       const double *zc = Z + (size_t)c * n;
       double v = 0.0;
       for (cupid_int j = 0; j < n; j++)
         if (!bc->fixed[j]) v += ca[j] * zc[j];
-      S[a][c] = (a == c) - v;
+      S[a * k + c] = (a == c) - v;
     }
   }
-  CUPID_TRY_CHECK(dense_solve(S, g, NR), CUPID_ERR_NUMERIC,
+  CUPID_TRY_CHECK(dense_solve(S, g, k), CUPID_ERR_NUMERIC,
                   "coupling.balance: the balanced operator is singular on the free DOFs");
   for (cupid_int j = 0; j < n; j++) {
     if (bc->fixed[j]) {
@@ -167,13 +203,15 @@ cupid_status cupid_coupling_balance_solve(const cupid_coupling_balance B, const 
       continue;
     }
     double v = y[j];
-    for (int c = 0; c < NR; c++) v += Z[(size_t)c * n + j] * g[c];
+    for (int c = 0; c < k; c++) v += Z[(size_t)c * n + j] * g[c];
     u[j] = v;
   }
 cleanup:
   cupid_free(&Z);
   cupid_free(&b);
   cupid_free(&y);
+  cupid_free(&S);
+  cupid_free(&g);
   return st;
 }
 

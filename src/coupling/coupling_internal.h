@@ -113,6 +113,9 @@ cupid_status cpl_parts_build(cupid_cuf_beam beam, cupid_pd_grid grid,
 /** The coupled matrix of Eq. 38 with the PD operator of @p pd on the extended grid. */
 cupid_status cpl_parts_assemble(const cpl_parts *p, const cupid_pd_operator_options *pd,
                                 cupid_csr *K);
+/** The coupled matrix of Eq. 38 with the PD operator @p op on the extended grid (its broken
+ *  bonds included). */
+cupid_status cpl_parts_assemble_op(const cpl_parts *p, const cupid_pd_operator op, cupid_csr *K);
 void cpl_parts_free(cpl_parts *p);
 /** The options of an extended grid: the whole one (@p cut NULL or a whole grid's partition),
  *  or the slab cut like the real grid's slab @p cut (same z window and halo). */

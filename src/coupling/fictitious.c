@@ -63,6 +63,10 @@ int cpl_region_full(const cupid_cuf_beam beam, const cupid_box *b) {
          (!b->has[2] || (b->lo[2] <= bb[2] + stol && b->hi[2] >= bb[3] - stol));
 }
 
+int cupid_coupling_region_spans_section(const cupid_cuf_beam beam, const cupid_box *region) {
+  return cpl_region_full(beam, region);
+}
+
 /* A region over part of the section (paper 000 section 4.4): the section elements inside its
  * x/z box give way over its y range, the others stay. Its x/z bounds must be section-element
  * edges and no element may straddle them (LE only: a TE expansion spans the whole section
@@ -837,14 +841,19 @@ void cpl_parts_free(cpl_parts *p) {
 
 cupid_status cpl_parts_assemble(const cpl_parts *p, const cupid_pd_operator_options *pd,
                                 cupid_csr *K) {
-  cupid_status st = CUPID_SUCCESS;
   cupid_pd_operator op = NULL;
+  CUPID_CALL(cupid_pd_operator_create(p->ext, pd, &op));
+  cupid_status st = cpl_parts_assemble_op(p, op, K);
+  cupid_pd_operator_destroy(&op);
+  return st;
+}
+
+cupid_status cpl_parts_assemble_op(const cpl_parts *p, const cupid_pd_operator op, cupid_csr *K) {
+  cupid_status st = CUPID_SUCCESS;
   cupid_csr Ke = NULL;
   cpl_rowbuild rb = {0};
   cupid_int n_pd = p->n_pd, N = n_pd + p->Kfe->nrows;
-  CUPID_TRY(cupid_pd_operator_create(p->ext, pd, &op));
   CUPID_TRY(cupid_pd_operator_assemble(op, &Ke));
-  cupid_pd_operator_destroy(&op);
   CUPID_TRY(cpl_rowbuild_init(&rb, N, N));
   CUPID_TRY(cpl_pd_rows(&rb, Ke, &p->map, p->n_ext, n_pd));
   cupid_csr_destroy(&Ke);
@@ -857,7 +866,6 @@ cupid_status cpl_parts_assemble(const cpl_parts *p, const cupid_pd_operator_opti
   CUPID_TRY(cpl_rowbuild_finish(&rb, K));
 cleanup:
   cupid_csr_destroy(&Ke);
-  cupid_pd_operator_destroy(&op);
   cpl_rowbuild_free(&rb);
   return st;
 }

@@ -196,7 +196,73 @@ cupid_status cupid_coupling_operator_apply_rows(const cupid_coupling_operator A,
 
 cupid_status cupid_coupling_operator_assemble(const cupid_coupling_operator A,
                                               const cupid_pd_operator_options *pd, cupid_csr *K) {
-  return cpl_parts_assemble(&A->parts, pd ? pd : &A->pd, K);
+  return pd ? cpl_parts_assemble(&A->parts, pd, K) : cpl_parts_assemble_op(&A->parts, A->op, K);
+}
+
+cupid_pd_operator cupid_coupling_operator_pd(const cupid_coupling_operator A) { return A->op; }
+
+const cupid_int *cupid_coupling_operator_extended_nodes(const cupid_coupling_operator A) {
+  return A->ext_of;
+}
+
+cupid_status cupid_coupling_operator_fit_boxes(const cupid_coupling_operator A,
+                                               const cupid_cuf_beam beam, double *boxes) {
+  const cupid_csr_t *F = A->parts.Kfe;
+  const double *xe = cupid_pd_grid_coords(A->parts.ext);
+  cupid_cuf_info info;
+  cupid_cuf_get_info(beam, &info);
+  CUPID_CHECK(F->nrows == info.n_fe_nodes, CUPID_ERR_ARGUMENT,
+              "fit boxes: the operator has %lld FE nodes, the beam %lld", (long long)F->nrows,
+              (long long)info.n_fe_nodes);
+  const cupid_int n_pd = A->parts.n_pd;
+  for (cupid_int a = 0; a < F->nrows; a++) {
+    double *b = boxes + 6 * a;
+    for (int c = 0; c < 3; c++) b[c] = INFINITY, b[3 + c] = -INFINITY;
+    int reads_pd = 0;
+    for (cupid_int k = F->rowptr[a]; k < F->rowptr[a + 1]; k++) {
+      const cupid_int col = F->col[k];
+      if (col >= n_pd) continue;
+      const double *v = F->val + 9 * k;
+      int nonzero = 0;
+      for (int e = 0; e < 9; e++) nonzero |= v[e] != 0.0;
+      if (!nonzero) continue;
+      reads_pd = 1;
+      const double *x = xe + 3 * A->ext_of[col];
+      for (int c = 0; c < 3; c++) b[c] = fmin(b[c], x[c]), b[3 + c] = fmax(b[3 + c], x[c]);
+    }
+    if (!reads_pd) continue;
+    /* the FE node itself: its beam node's y, and its section point (LE; a TE term spans the
+     * section, which the fits over whole planes already do) */
+    double xz[2], hs;
+    const double y = cupid_cuf_beam_node_y(beam, a / info.M);
+    b[1] = fmin(b[1], y), b[4] = fmax(b[4], y);
+    if (info.expansion == CUPID_EXPANSION_LE) {
+      cupid_cuf_section_node(beam, (int)(a % info.M), xz, &hs);
+      b[0] = fmin(b[0], xz[0]), b[3] = fmax(b[3], xz[0]);
+      b[2] = fmin(b[2], xz[1]), b[5] = fmax(b[5], xz[1]);
+    }
+  }
+  return CUPID_SUCCESS;
+}
+
+cupid_status cupid_coupling_operator_zone(const cupid_coupling_operator A,
+                                          const unsigned char *core, unsigned char *zone) {
+  const cupid_int n_ext = A->parts.n_ext, n_pd = A->parts.n_pd;
+  unsigned char *mark = NULL, *near = NULL;
+  cupid_status st = CUPID_SUCCESS;
+  CUPID_TRY(cupid_calloc((size_t)n_ext + 1, 1, "fictitious nodes", &mark));
+  CUPID_TRY(cupid_calloc((size_t)n_ext + 1, 1, "coupling zone", &near));
+  for (cupid_int i = 0; i < n_ext; i++) {
+    const cupid_int r = A->parts.map.real[i];
+    mark[i] = r < 0 || (core && core[r]);
+    near[i] = mark[i];
+  }
+  cupid_pd_operator_mark_families(A->op, mark, near);
+  for (cupid_int r = 0; r < n_pd; r++) zone[r] = near[A->ext_of[r]];
+cleanup:
+  cupid_free(&mark);
+  cupid_free(&near);
+  return st;
 }
 
 void cupid_coupling_cheap_options(const cupid_pd_operator_options *fine, double spacing,

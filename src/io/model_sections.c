@@ -891,7 +891,7 @@ static cupid_status read_fictitious_fe(model_reader *rd, yaml_node_t *node, cupi
 
 static cupid_status read_coupling(model_reader *rd, yaml_node_t *node) {
   static const char *const keys[] = {"method", "arlequin", "fictitious_fe", "balance"};
-  static const char *const balances[] = {"none", "momentum"};
+  static const char *const balances[] = {"none", "momentum", "global"};
   static const char *const methods[] = {"fictitious", "lagrange", "arlequin"};
   cupid_coupling *c = &rd->model->coupling;
   mr_map map;

@@ -4,6 +4,9 @@
  *  - R^T K' = 0 (momentum conserved) and K' R = 0 (rigid modes free of force);
  *  - K' x = K x when R^T K x = 0 (the patch test's fields are kept);
  *  - the Sherman-Morrison-Woodbury solve with the factor of K_ff solves K'_ff u_f = f_f - K'_fc u_c;
+ *  - two groups (each interface balanced apart, `balance: momentum`): every column of K'
+ *    self-equilibrated, each column's correction on its own group's weighted DOFs only, the
+ *    solve with 12 modes, a group whose weights cannot span the modes refused;
  *  - weights that do not span the modes, and a slab, are refused.
  * Tolerances: 1e-11 relative to |K| |x| (dense sums of 30 terms of O(1), condition of the
  * 21 x 21 free block ~1e3 on these seeds). */
@@ -206,6 +209,69 @@ static void smw_solve(void **state) {
   cupid_csr_destroy(&fx.K);
 }
 
+/* Two groups (the interfaces of balance: momentum): DOFs [0, 15) and [15, 30), weights on
+ * 6..14 and 18..29. Every column of K' is self-equilibrated (R^T K' = 0, as with one group),
+ * the correction of a column stays on its own group's weighted DOFs (K' e_j - K e_j is zero
+ * elsewhere: no force at one interface from a displacement at the other), and the SMW solve
+ * (12 modes) solves K'. A group with entries of C but too few weights is refused. */
+static void grouped(void **state) {
+  (void)state;
+  fixture fx;
+  build(&fx, 1);
+  int group[N];
+  for (int j = 0; j < N; j++) {
+    group[j] = j < N / 2 ? 0 : 1;
+    fx.d[j] = (j >= 6 && j < 15) || j >= 18 ? 1.0 + 0.5 * (j % 3) : 0.0;
+  }
+  CUPID_ASSERT_OK(cupid_coupling_balance_create_grouped(N, fx.R, fx.C, fx.d, 2, group, &fx.B));
+  const double ks = kscale(&fx);
+  double y[N], k0[N], worst_left = 0.0, worst_far = 0.0;
+  for (int j = 0; j < N; j++) {
+    double e[N] = {0};
+    e[j] = 1.0;
+    kprime(&fx, e, y);
+    cupid_csr_matvec(fx.K, e, k0);
+    for (int k = 0; k < NR; k++) {
+      double s = 0.0;
+      for (int i = 0; i < N; i++) s += fx.R[k * N + i] * y[i];
+      worst_left = fmax(worst_left, fabs(s));
+    }
+    for (int i = 0; i < N; i++)
+      if (group[i] != group[j] || fx.d[i] == 0.0) worst_far = fmax(worst_far, fabs(y[i] - k0[i]));
+  }
+  printf("  two groups: |R^T K'| = %.2e, correction away from the column's group %.2e\n",
+         worst_left, worst_far);
+  assert_true(worst_left <= 1e-11 * ks * N);
+  assert_true(worst_far == 0.0);
+  /* the solve with 12 modes */
+  cupid_dirichlet bc = NULL;
+  CUPID_ASSERT_OK(cupid_dirichlet_create(N, &bc));
+  uint64_t seed = 5; /* 9 fixed DOFs hold the 6 modes (R^T K' = 0 makes K' singular else) */
+  for (int j = 0; j < 9; j++) CUPID_ASSERT_OK(cupid_dirichlet_fix(bc, j, cupid_test_random(&seed)));
+  CUPID_ASSERT_OK(cupid_dirichlet_finalize(bc));
+  double f[N], u[N], res = 0.0;
+  for (int j = 0; j < N; j++) f[j] = cupid_test_random(&seed);
+  cupid_direct_factor F = NULL;
+  CUPID_ASSERT_OK(cupid_direct_factor_create_kind(fx.K, CUPID_MATRIX_GENERAL, bc, &F, NULL));
+  CUPID_ASSERT_OK(cupid_coupling_balance_solve(fx.B, fx.K, F, bc, f, u));
+  kprime(&fx, u, y);
+  for (int j = 0; j < N; j++)
+    if (!bc->fixed[j]) res = fmax(res, fabs(y[j] - f[j]));
+  printf("  two groups, SMW solve: max |K' u - f| = %.2e\n", res);
+  assert_true(res <= 1e-11 * ks * N);
+  cupid_direct_factor_destroy(&F);
+  cupid_dirichlet_destroy(&bc);
+  cupid_coupling_balance_destroy(&fx.B);
+  /* group 0 with weights on 3 DOFs only */
+  for (int j = 0; j < N / 2; j++) fx.d[j] = j < 3 ? 1.0 : 0.0;
+  assert_int_equal(cupid_coupling_balance_create_grouped(N, fx.R, fx.C, fx.d, 2, group, &fx.B),
+                   CUPID_ERR_MODEL);
+  assert_null(fx.B);
+  assert_non_null(strstr(cupid_error_message(), "of an interface"));
+  cupid_error_clear();
+  cupid_csr_destroy(&fx.K);
+}
+
 static cupid_status nothing(void *ctx, const double *x, double *y) {
   (void)ctx, (void)x, (void)y;
   return CUPID_SUCCESS;
@@ -236,6 +302,7 @@ int main(void) {
       cmocka_unit_test(balanced_and_rigid),
       cmocka_unit_test(patch_fields_kept),
       cmocka_unit_test(smw_solve),
+      cmocka_unit_test(grouped),
       cmocka_unit_test(refusals),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
