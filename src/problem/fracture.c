@@ -28,9 +28,7 @@ cupid_status cupid_problem_fracture_check(const cupid_problem_state *prob) {
   if (!(prob->method->caps & CUPID_METHOD_FRACTURE))
     return cupid_model_error(m, mk,
                              "pre-cracks and fracture are not supported with coupling method %s "
-                             "in cupid %s (its coupling builds its own PD operator, on the grid "
-                             "with its fictitious nodes); use `coupling: {method: lagrange}` or "
-                             "`{method: arlequin}`",
+                             "in cupid %s",
                              prob->method->name, cupid_version());
   if (!fr->has_fracture) return CUPID_SUCCESS;
   const cupid_analysis *a = &m->analysis;
@@ -85,13 +83,20 @@ static cupid_status check_protected(cupid_problem_state *prob) {
   if (!prob->protect || m->pd.n_precracks == 0) return CUPID_SUCCESS;
   CUPID_CALL(cupid_problem_fracture_damage(prob));
   const double *x = cupid_pd_grid_coords(prob->grid);
-  for (cupid_int i = 0; i < prob->n_pd; i++)
-    if (prob->protect[i] && prob->damage[i] > 0)
-      return cupid_model_error(m, &m->pd.precracks[0].mark,
-                               "a pre-crack reaches the coupling zone at the PD node (%g, %g, %g) "
-                               "(coupling method %s: its bonds never break); keep pre-cracks "
-                               "more than a horizon away from it",
-                               x[3 * i], x[3 * i + 1], x[3 * i + 2], prob->method->name);
+  for (cupid_int i = 0; i < prob->n_pd; i++) {
+    if (!prob->protect[i] || prob->damage[i] <= 0) continue;
+    char zone[512] = "";
+    if (prob->method->protected_zone) {
+      char z[480];
+      prob->method->protected_zone(prob, x + 3 * i, z, sizeof z);
+      snprintf(zone, sizeof zone, ": %s", z);
+    }
+    return cupid_model_error(m, &m->pd.precracks[0].mark,
+                             "a pre-crack reaches the coupling zone at the PD node (%g, %g, %g) "
+                             "(coupling method %s%s; its bonds never break); keep pre-cracks "
+                             "more than a horizon away from it",
+                             x[3 * i], x[3 * i + 1], x[3 * i + 2], prob->method->name, zone);
+  }
   return CUPID_SUCCESS;
 }
 
@@ -283,7 +288,8 @@ cupid_status cupid_problem_fracture_step(cupid_problem_state *prob, cupid_int st
   }
   prob->broken_bonds += broken;
   prob->fracture_energy += total[1];
-  if (prob->crack_copy) CUPID_CALL(cupid_pd_operator_copy_broken(prob->crack_copy, prob->op));
+  if (prob->crack_copy)
+    CUPID_CALL(cupid_pd_operator_copy_broken_mapped(prob->crack_copy, prob->op, prob->crack_map));
   return CUPID_SUCCESS;
 }
 

@@ -63,6 +63,7 @@ typedef struct {
   double weak_share;            /* the weakly held nodes' share (held_forces) */
   double force_scale;           /* the largest |P| + sum |R_k| of the run (held_forces) */
   double *points;               /* 3 per output point */
+  cupid_growth_lu lu;           /* a non-symmetric method on the direct engine (growth_lu.c) */
   int matrix_free;              /* solves by the kept matrix-free PETSc solve ... */
   cupid_growth_mf mf;           /* ... (growth_matrix_free.c) */
 } growth_run;
@@ -85,6 +86,7 @@ static void growth_free(growth_run *g) {
   cupid_free(&g->react);
   cupid_free(&g->points);
   cupid_growth_mf_free(&g->mf);
+  cupid_growth_lu_free(&g->lu);
 }
 
 /* The DOFs each constraint fixes (one byte a DOF and constraint), and the unit translations:
@@ -637,6 +639,12 @@ static cupid_status solve(growth_run *g, int reassemble) {
   if (st0 == CUPID_SUCCESS && Kold) st0 = downdate_factor(g, Kold);
   cupid_csr_destroy(&Kold);
   CUPID_CALL(st0);
+  if (cupid_growth_lu_applies(prob)) { /* non-symmetric (fictitious nodes, either balance): GMRES
+                                          on the last LU (growth_lu.c) */
+    CUPID_CALL(cupid_growth_lu_solve(prob, &g->lu));
+    prob->growth.solves++;
+    return CUPID_SUCCESS;
+  }
   if (cupid_problem_balanced(prob)) { /* K' = K - W C^T: the balanced solve and f_int = K' u
                                          (balance.c; load steps without fracture: one solve) */
     CUPID_CALL(prob->method->solve_assembled(prob));
@@ -842,6 +850,7 @@ static cupid_status load_step(growth_run *g, int k, double lambda, int *iteratio
   int runaways = 0;   /* nodes held where the matrix-free solve ran away, this step */
   *iterations = 0;
   if (g->F && g->bonds_at_factor != prob->broken_bonds) cupid_direct_factor_destroy(&g->F);
+  if (g->lu.F && g->lu.bonds_at_factor != prob->broken_bonds) cupid_growth_lu_renew(&g->lu);
   for (;;) {
     const int quiet = prob->quiet; /* the first solve reports its assembly; the others would
                                       repeat it per broken bond */
@@ -1018,7 +1027,9 @@ cupid_status cupid_problem_run_growth(cupid_problem_state *prob) {
   }
   prob->solved = 1;
   prob->phases[CUPID_PHASE_SOLVE] = (cupid_phase_record){cupid_wtime() - t0, cupid_peak_memory(), 1};
+  const int lu = g.lu.factorisations > 0;
   prob->growth.resolve = g.matrix_free       ? "matrix-free"
+                         : lu                ? "gmres"
                          : !own_factor(prob) ? "engine"
                          : g.downdates       ? "downdate"
                          : g.krylov          ? "krylov"
@@ -1033,6 +1044,14 @@ cupid_status cupid_problem_run_growth(cupid_problem_state *prob) {
   prob->phases[CUPID_PHASE_FACTORISATION] =
       (cupid_phase_record){g.t_factor, cupid_peak_memory(), g.factorisations > 0};
   prob->growth.cg_s = g.t_cg;
+  if (lu) { /* GMRES on the last LU: its re-solves in the CG fields */
+    prob->growth.factorisations = g.lu.factorisations;
+    prob->growth.cg_solves = g.lu.resolves;
+    prob->growth.cg_iterations = g.lu.iterations;
+    prob->growth.factor_s = g.lu.t_factor;
+    prob->growth.cg_s = g.lu.t_resolve;
+    prob->phases[CUPID_PHASE_FACTORISATION] = (cupid_phase_record){g.lu.t_factor, cupid_peak_memory(), 1};
+  }
   if (g.matrix_free) { /* the CG + GAMG solves */
     prob->growth.cg_solves = prob->growth.solves;
     prob->growth.cg_iterations = g.mf.iterations;

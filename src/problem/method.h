@@ -93,6 +93,8 @@ struct cupid_method_ops {
    *  left to free. NULL: the method's growth assembles K. */
   cupid_status (*growth_operator)(cupid_problem_state *prob, cupid_linear_operator *L, cupid_csr *P,
                                   cupid_method_operator *owner);
+  /** Free prob->method_state (what the method kept between its stages). NULL: it keeps none. */
+  void (*free_state)(cupid_problem_state *prob);
 };
 
 /** dynamic.c: the method's mass, integrate (central differences on @p op when not NULL, else

@@ -2,8 +2,75 @@
  * way inside the PD regions, constraints and loads go to the part they touch, and the coupled
  * matrix of Eq. 38 is solved by UMFPACK (it is not symmetric), or without the PD matrix by the
  * PETSc engine: GMRES preconditioned by the LU of a cheap bond-based twin (src/coupling/
- * operator.c, solvers/krylov.c; issue 6), on one rank or several (the PD grid in z slabs). */
+ * operator.c, solvers/krylov.c; issue 6), on one rank or several (the PD grid in z slabs).
+ *
+ * Fracture (issue 34): with pre-cracks or bond breaking the method keeps one matrix-free
+ * operator for the run (its state), whose PD operator on the extended grid (real + fictitious
+ * nodes) loses every bond prob->op loses (cupid_pd_operator_copy_broken_mapped, through
+ * prob->crack_copy and crack_map). The coupling zone, whose bonds never break, is the span of
+ * the fictitious FE elements (the PD nodes their fits read, and what lies between them and the
+ * interface) and every real node whose family reaches it or a fictitious node
+ * (cupid_coupling_operator_zone): a bond broken outside it changes Eq. 38 in real rows and
+ * columns only, by the same symmetric, rigid-mode-free terms as on the model grid, so the fits
+ * of Eqs. 33-36 and the balance's C = K^T R stay valid without rebuilding (docs/theory.md,
+ * "Fracture with fictitious nodes"). The assembled K
+ * is the kept operator's, assembled again after breaks; growth re-solves it by GMRES on the
+ * last LU (growth_lu.c), or on the PETSc engine by the kept matrix-free solve. */
+#include <stdio.h>
+#include <string.h>
+
 #include "method.h"
+
+/* The method's state (prob->method_state) when the model has pre-cracks or fracture. */
+typedef struct {
+  cupid_coupling_operator A; /* the fictitious-node operator, kept for the run */
+} fict_state;
+
+static void free_state(cupid_problem_state *prob) {
+  fict_state *s = prob->method_state;
+  if (!s) return;
+  cupid_coupling_operator_destroy(&s->A);
+  cupid_free(&s);
+  prob->method_state = NULL;
+  prob->crack_copy = NULL;
+  prob->crack_map = NULL;
+}
+
+/* The kept operator (built at the first call), its PD bonds brought to prob->op's: the
+ * pre-cracks, and on a path that did not see them, the breaks (crack_copy carries those of
+ * each fracture step as they happen). */
+static cupid_status kept_operator(cupid_problem_state *prob, cupid_coupling_operator *out) {
+  fict_state *s = prob->method_state;
+  if (!s) {
+    cupid_status st = CUPID_SUCCESS;
+    cupid_box *boxes = NULL;
+    int *mats = NULL;
+    cupid_coupling_options co;
+    const double t0 = cupid_wtime();
+    CUPID_TRY(cupid_calloc(1, sizeof *s, "fictitious-node state", &s));
+    CUPID_TRY(cupid_method_coupling_options(prob, &co, &boxes, &mats));
+    st = cupid_coupling_operator_create(prob->beam, prob->grid, &co, &s->A);
+    CUPID_TRY(prob->slab ? cupid_problem_slab_agree(st) : st);
+    prob->method_state = s;
+    s = NULL;
+    cupid_problem_phase_end(prob, CUPID_PHASE_COUPLING, t0);
+  cleanup:
+    if (s) cupid_coupling_operator_destroy(&s->A);
+    cupid_free(&s);
+    cupid_free(&boxes);
+    cupid_free(&mats);
+    CUPID_CALL(st);
+    s = prob->method_state;
+    cupid_coupling_info ci;
+    cupid_coupling_operator_get_info(s->A, &ci);
+    prob->n_fictitious = ci.n_fictitious_pd;
+    prob->crack_copy = cupid_coupling_operator_pd(s->A);
+    prob->crack_map = cupid_coupling_operator_extended_nodes(s->A);
+  }
+  CUPID_CALL(cupid_pd_operator_copy_broken_mapped(prob->crack_copy, prob->op, prob->crack_map));
+  *out = s->A;
+  return CUPID_SUCCESS;
+}
 
 static cupid_status check(const cupid_problem_state *prob) {
   const cupid_model_t *m = prob->model;
@@ -30,10 +97,22 @@ static cupid_status constraints(cupid_problem_state *prob) {
   return cupid_method_split_constraints(prob, NULL);
 }
 
+/* With pre-cracks or fracture: the kept operator's K (its PD bonds those of prob->op). */
+static cupid_status assemble_kept(cupid_problem_state *prob, cupid_coupling_info *ci) {
+  cupid_coupling_operator A = NULL;
+  CUPID_CALL(kept_operator(prob, &A));
+  const double t0 = cupid_wtime();
+  CUPID_CALL(cupid_coupling_operator_assemble(A, NULL, &prob->K));
+  cupid_problem_phase_end(prob, CUPID_PHASE_COUPLING, t0);
+  cupid_coupling_operator_get_info(A, ci);
+  return CUPID_SUCCESS;
+}
+
 static cupid_status assemble(cupid_problem_state *prob) {
   if (prob->K) return CUPID_SUCCESS;
   cupid_coupling_info ci;
-  CUPID_CALL(cupid_method_build_coupling(prob, cupid_coupling_create, &ci));
+  if (prob->damage) CUPID_CALL(assemble_kept(prob, &ci));
+  else CUPID_CALL(cupid_method_build_coupling(prob, cupid_coupling_create, &ci));
   prob->n_fictitious = ci.n_fictitious_pd;
   cupid_problem_progress(prob,
                          "coupling (fictitious nodes): %d interfaces, %lld fictitious PD nodes, "
@@ -74,17 +153,19 @@ static cupid_status solve_matrix_free(cupid_problem_state *prob) {
   cupid_box *boxes = NULL;
   int *mats = NULL;
   cupid_coupling_options co;
-  cupid_coupling_operator A = NULL;
+  cupid_coupling_operator A = NULL, kept = NULL; /* pre-cracks: the kept operator has them */
   cupid_coupling_balance B = NULL;
   cupid_csr P = NULL;
   double t0 = cupid_wtime();
+  if (prob->damage) CUPID_TRY(kept_operator(prob, &kept));
   CUPID_TRY(cupid_method_coupling_options(prob, &co, &boxes, &mats));
   /* a slab: every rank's failure stops all of them before the next collective call */
-  st = cupid_coupling_operator_create(prob->beam, prob->grid, &co, &A);
-  if (st == CUPID_SUCCESS) st = cupid_coupling_preconditioner(A, 1.5, &P);
+  st = kept ? CUPID_SUCCESS : cupid_coupling_operator_create(prob->beam, prob->grid, &co, &A);
+  if (st == CUPID_SUCCESS) st = cupid_coupling_preconditioner(kept ? kept : A, 1.5, &P);
   CUPID_TRY(prob->slab ? cupid_problem_slab_agree(st) : st);
+  const cupid_coupling_operator use = kept ? kept : A;
   cupid_coupling_info ci; /* the whole model's, on a slab too */
-  cupid_coupling_operator_get_info(A, &ci);
+  cupid_coupling_operator_get_info(use, &ci);
   prob->n_fictitious = ci.n_fictitious_pd;
   cupid_problem_phase_end(prob, CUPID_PHASE_COUPLING, t0);
   cupid_problem_progress(prob,
@@ -92,13 +173,14 @@ static cupid_status solve_matrix_free(cupid_problem_state *prob) {
                          "PD nodes, %lld fictitious FE nodes; operator %.1f MB, preconditioner "
                          "matrix %.1f MB%s",
                          ci.n_interfaces, (long long)ci.n_fictitious_pd, (long long)ci.n_fictitious_fe,
-                         (double)cupid_coupling_operator_bytes(A) / 1e6,
+                         (double)cupid_coupling_operator_bytes(use) / 1e6,
                          (double)cupid_csr_bytes(P) / 1e6, prob->slab ? " (rank 0's slab)" : "");
   cupid_linear_operator L;
-  cupid_coupling_operator_linear(A, &L); /* on a slab: its rows (cupid_krylov_solve) */
+  cupid_coupling_operator_linear(use, &L); /* on a slab: its rows (cupid_krylov_solve) */
   if (cupid_problem_balanced(prob)) /* K' = K - W C^T around L (P stays K's twin) */
-    CUPID_TRY(cupid_problem_balanced_operator(prob, A, &L, &B, &L));
-  cupid_method_operator owner = {.ctx = A, .destroy = destroy_operator};
+    CUPID_TRY(cupid_problem_balanced_operator(prob, use, &L, &B, &L));
+  /* the kept operator is the state's: the solve frees neither it nor its owner */
+  cupid_method_operator owner = {.ctx = A, .destroy = A ? destroy_operator : NULL};
   st = cupid_method_krylov_solve(prob, &L, &P, &owner);
   A = owner.ctx; /* NULL once a slab freed it */
 cleanup:
@@ -108,6 +190,117 @@ cleanup:
   cupid_free(&boxes);
   cupid_free(&mats);
   return st;
+}
+
+/* Growth on the matrix-free path (the PETSc engine, one process or PD slabs): the kept
+ * operator (its bonds break with prob->op's through crack_copy), balanced around it when the
+ * model asks, and the LU of its cheap twin, made on the intact grid (growth_matrix_free.c). */
+typedef struct {
+  cupid_coupling_balance B;
+} growth_owner;
+
+static void destroy_growth_owner(void **ctx) {
+  growth_owner *o = *ctx;
+  if (o) cupid_coupling_balance_destroy(&o->B);
+  cupid_free(&o);
+  *ctx = NULL;
+}
+
+static cupid_status growth_operator(cupid_problem_state *prob, cupid_linear_operator *L, cupid_csr *P,
+                                    cupid_method_operator *owner) {
+  cupid_coupling_operator A = NULL;
+  growth_owner *o = NULL;
+  cupid_status st = kept_operator(prob, &A);
+  if (st == CUPID_SUCCESS) st = cupid_coupling_preconditioner(A, 1.5, P);
+  if (st == CUPID_SUCCESS) st = cupid_calloc(1, sizeof *o, "growth operator", &o);
+  CUPID_TRY(prob->slab ? cupid_problem_slab_agree(st) : st);
+  cupid_coupling_operator_linear(A, L);
+  if (cupid_problem_balanced(prob)) CUPID_TRY(cupid_problem_balanced_operator(prob, A, L, &o->B, L));
+  *owner = (cupid_method_operator){.ctx = o, .destroy = destroy_growth_owner};
+  return CUPID_SUCCESS;
+cleanup:
+  if (o) cupid_coupling_balance_destroy(&o->B);
+  cupid_free(&o);
+  cupid_csr_destroy(P);
+  return st;
+}
+
+/* The nodes inside the span of a fictitious FE element (the fit boxes of the FE rows that read
+ * PD columns; on slabs joined over the ranks): *core, one flag per PD node of the grid. */
+static cupid_status fit_core(cupid_problem_state *prob, cupid_coupling_operator A, unsigned char *core) {
+  const cupid_int nfe = prob->fe_info.n_fe_nodes;
+  double *b = NULL;
+  cupid_status st = cupid_malloc(6 * (size_t)nfe + 1, sizeof *b, "fit boxes", &b);
+  if (st == CUPID_SUCCESS) st = cupid_coupling_operator_fit_boxes(A, prob->beam, b);
+  if (prob->slab) CUPID_TRY(cupid_problem_slab_agree(st));
+  CUPID_TRY(st);
+  if (prob->slab) { /* lo by the max of -lo */
+    for (cupid_int a = 0; a < nfe; a++)
+      for (int c = 0; c < 3; c++) b[6 * a + c] = -b[6 * a + c];
+    cupid_petsc_max_doubles(b, 6 * nfe);
+    for (cupid_int a = 0; a < nfe; a++)
+      for (int c = 0; c < 3; c++) b[6 * a + c] = -b[6 * a + c];
+  }
+  /* the distinct boxes (the section nodes of one interface share theirs, nearly) */
+  cupid_int nb = 0;
+  const double tol = 1e-9 * prob->model->pd.spacing;
+  for (cupid_int a = 0; a < nfe; a++) {
+    const double *q = b + 6 * a;
+    if (!(q[0] <= q[3])) continue;
+    int seen = 0;
+    for (cupid_int k = 0; k < nb && !seen; k++) {
+      const double *p = b + 6 * k;
+      seen = p[0] <= q[0] + tol && p[1] <= q[1] + tol && p[2] <= q[2] + tol &&
+             p[3] >= q[3] - tol && p[4] >= q[4] - tol && p[5] >= q[5] - tol;
+    }
+    if (!seen) memmove(b + 6 * nb++, q, 6 * sizeof *b);
+  }
+  const double *x = cupid_pd_grid_coords(prob->grid);
+  for (cupid_int i = 0; i < prob->n_pd; i++)
+    for (cupid_int k = 0; k < nb && !core[i]; k++) {
+      const double *p = b + 6 * k, *xi = x + 3 * i;
+      core[i] = xi[0] >= p[0] - tol && xi[0] <= p[3] + tol && xi[1] >= p[1] - tol &&
+                xi[1] <= p[4] + tol && xi[2] >= p[2] - tol && xi[2] <= p[5] + tol;
+    }
+cleanup:
+  cupid_free(&b);
+  return st;
+}
+
+/* The coupling zone, whose bonds never break: the real nodes inside a fictitious FE element's
+ * span (a crack between an interface and the planes its element reads would be bridged by the
+ * beam's stiffness) and every node whose family reaches one of them or a fictitious node (their
+ * rows of Eq. 38 read the beam through Eqs. 29-30). A pre-crack there is a model error, a crack
+ * that comes there stops the run (growth.c, check_blocked). */
+static cupid_status fracture_protect(const cupid_problem_state *prob, unsigned char *protect) {
+  cupid_problem_state *p = (cupid_problem_state *)prob; /* the state is the problem's */
+  cupid_coupling_operator A = NULL;
+  unsigned char *core = NULL;
+  CUPID_CALL(kept_operator(p, &A));
+  cupid_status st = CUPID_SUCCESS;
+  CUPID_TRY(cupid_calloc((size_t)prob->n_pd + 1, 1, "fit spans", &core));
+  CUPID_TRY(fit_core(p, A, core));
+  CUPID_TRY(cupid_coupling_operator_zone(A, core, protect));
+cleanup:
+  cupid_free(&core);
+  return st;
+}
+
+/* The stop message's name of the zone at x: the region holding it, with its line. */
+static void protected_zone(const cupid_problem_state *prob, const double x[3], char *buf, size_t len) {
+  const cupid_model_t *m = prob->model;
+  const double h = m->pd.spacing;
+  for (int r = 0; r < m->pd.n_regions; r++)
+    if (cupid_box_contains(&m->pd.regions[r].box, x, 1e-9 * h)) {
+      snprintf(buf, len, "the fictitious-node coupling zone of PD region %d (peridynamics.regions[%d], "
+               "line %d: the span of its fictitious FE elements and a family beyond, near "
+               "(%g, %g, %g); a shorter coupling.fictitious_fe or finer beam elements next to "
+               "the region narrow it)",
+               r, r, m->pd.regions[r].mark.line, x[0], x[1], x[2]);
+      return;
+    }
+  snprintf(buf, len, "the fictitious-node coupling zone (the span of the fictitious FE elements "
+           "and a family beyond, near (%g, %g, %g))", x[0], x[1], x[2]);
 }
 
 /* Matrix-free Eq. 38 + LU of the cheap twin. Memory: ~1.6 kB a PD node for the operator and
@@ -130,7 +323,7 @@ static int estimate_matrix_free(const cupid_problem_state *prob, double *bytes, 
 
 const cupid_method_ops cupid_method_fictitious = {
     .name = "fictitious",
-    .caps = CUPID_METHOD_SLABS | CUPID_METHOD_GUARD_MATRIX_FREE,
+    .caps = CUPID_METHOD_SLABS | CUPID_METHOD_GUARD_MATRIX_FREE | CUPID_METHOD_FRACTURE,
     .matrix = CUPID_MATRIX_GENERAL, /* Eq. 38 is not symmetric: UMFPACK, GMRES */
     .check = check,
     .prepare = cupid_method_deactivate_regions,
@@ -142,4 +335,8 @@ const cupid_method_ops cupid_method_fictitious = {
     .solve_matrix_free = solve_matrix_free,
     .report = cupid_method_print_equilibrium,
     .estimate_matrix_free = estimate_matrix_free,
+    .fracture_protect = fracture_protect,
+    .protected_zone = protected_zone,
+    .growth_operator = growth_operator,
+    .free_state = free_state,
 };

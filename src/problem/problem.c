@@ -291,6 +291,7 @@ static cupid_status run_dynamic(cupid_problem_state *prob) {
   if (prob->method->report) CUPID_TRY(prob->method->report(prob));
 cleanup:
   prob->crack_copy = NULL; /* it goes with the operator */
+  prob->crack_map = NULL;
   if (op.destroy) op.destroy(&op.ctx);
   return st;
 }
@@ -321,6 +322,7 @@ cupid_status cupid_problem_solve(cupid_problem_state *prob) {
 /* -------------------------------------------------------------------- the life cycle */
 
 void cupid_problem_state_free(cupid_problem_state *prob) {
+  if (prob->method && prob->method->free_state) prob->method->free_state(prob);
   cupid_coupling_destroy(&prob->coupling);
   cupid_pd_operator_destroy(&prob->op);
   cupid_pd_grid_destroy(&prob->grid);

@@ -113,6 +113,8 @@ typedef struct cupid_problem_private {
   double arlequin_penalty;       /**< method arlequin: kappa in use (given, or `auto`'s choice) */
   double arlequin_node_stiffness; /**< method arlequin: k_node (cupid_arlequin_node_stiffness) */
   cupid_int n_fictitious;  /**< fictitious PD nodes */
+  void *method_state;      /**< what the method keeps between its stages (freed by its
+                                free_state; method.h) */
 
   double load_sum[3], reaction_sum[3];
   cupid_problem_quality quality; /**< coupled models (quality.c) */
@@ -167,6 +169,9 @@ typedef struct cupid_problem_private {
   double *damage;                   /**< per PD node, for the outputs (NULL: no fracture) */
   cupid_pd_operator crack_copy;     /**< a method's own PD operator that must lose the same
                                          bonds as prob->op (borrowed, during its run), or NULL */
+  const cupid_int *crack_map;       /**< crack_copy on another grid: its node of each prob->op
+                                         node (cupid_pd_operator_copy_broken_mapped); NULL: the
+                                         same grid */
   cupid_int damaged_nodes;
   double max_damage;
   /* static growth (growth.c): how the solves went, for summary.json's fracture block */
@@ -246,6 +251,33 @@ typedef struct {
 cupid_status cupid_growth_downdate_terms(const cupid_csr_t *Kold, const cupid_csr_t *Knew,
                                          cupid_growth_downdate *u, int *ok);
 void cupid_growth_downdate_free(cupid_growth_downdate *u);
+
+/* growth_lu.c: the re-solves of a non-symmetric coupling (fictitious nodes, Eq. 38, either
+ * balance) on the direct engine: GMRES on the current K (or the balanced K' = K - W C^T) from
+ * the last solution, preconditioned by the UMFPACK LU of the last factorised K, renewed by the
+ * rent rule of growth.c's CG. */
+typedef struct {
+  cupid_direct_factor F;        /* LU of K_ff at the last factorisation (its own free DOFs) */
+  cupid_int bonds_at_factor;    /* broken bonds then */
+  double factor_flops;          /* the factorisation's operations ... */
+  double iteration_flops;       /* ... and one GMRES iteration's (two triangular solves, K x) */
+  cupid_int since_factor;       /* GMRES iterations since the last factorisation */
+  cupid_int factorisations, resolves, iterations;
+  double t_factor, t_resolve;
+  double *t, *z;                /* ndof work vectors */
+  cupid_solve_info factor_info; /* the last factorisation's (summary.json's solver block) */
+  int patch_tested;
+} cupid_growth_lu;
+/** 1 when growth solves prob's assembled system by cupid_growth_lu_solve (a non-symmetric
+ *  method on the direct engine). */
+int cupid_growth_lu_applies(const cupid_problem_state *prob);
+/** Solve the assembled prob->K (balanced when the model asks) at the current load and
+ *  conditions: prob->u (the last solution is GMRES's guess), f_int = K u (K' u), prob->solve.
+ *  A factorisation that breaks down: CUPID_ERR_NUMERIC with prob->solve.failed_dof. */
+cupid_status cupid_growth_lu_solve(cupid_problem_state *prob, cupid_growth_lu *s);
+/** Drop the factor (a new load step after breaks starts from a fresh one, as growth.c's CG). */
+void cupid_growth_lu_renew(cupid_growth_lu *s);
+void cupid_growth_lu_free(cupid_growth_lu *s);
 
 /* growth_matrix_free.c: load steps and crack growth on the petsc engine, matrix-free (the
  * whole model on one process, or slabs under mpirun): one kept PETSc solve re-run from the last
