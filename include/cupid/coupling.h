@@ -514,6 +514,19 @@ void cupid_coupling_balance_correct(const cupid_coupling_balance B, const double
 cupid_status cupid_coupling_balance_solve(const cupid_coupling_balance B, const cupid_csr_t *K,
                                           cupid_direct_factor F, const cupid_dirichlet_t *bc,
                                           const double *f, double *u);
+/** The Sherman-Morrison-Woodbury form of cupid_coupling_balance_solve() kept with its factor:
+ *  _create solves for (K_ff)^-1 W once (F: the factor of K_ff with the free DOFs of @p bc,
+ *  borrowed), _apply gives z = (K'_ff)^-1 r for full-length r (free entries read; z zero on
+ *  the fixed DOFs of bc) by one solve with F: the exact inverse of the balanced K whose K F
+ *  factors, e.g. the preconditioner of re-solves after bonds broke (C and W do not change
+ *  then: docs/theory.md). */
+typedef struct cupid_coupling_balance_smw_private *cupid_coupling_balance_smw;
+cupid_status cupid_coupling_balance_smw_create(const cupid_coupling_balance B, cupid_direct_factor F,
+                                               const cupid_dirichlet_t *bc,
+                                               cupid_coupling_balance_smw *M);
+cupid_status cupid_coupling_balance_smw_apply(const cupid_coupling_balance_smw M, const double *r,
+                                              double *z);
+void cupid_coupling_balance_smw_destroy(cupid_coupling_balance_smw *M);
 /** *out: the operator K' around the matrix-free K of @p L (kept by B; whole grids only:
  *  CUPID_ERR_UNSUPPORTED on a slab). */
 cupid_status cupid_coupling_balance_linear(cupid_coupling_balance B, const cupid_linear_operator *L,

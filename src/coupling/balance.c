@@ -215,6 +215,81 @@ cleanup:
   return st;
 }
 
+/* The SMW form kept with its factor (cupid_coupling_balance_smw). */
+struct cupid_coupling_balance_smw_private {
+  cupid_int n;
+  int k;
+  cupid_direct_factor F; /* borrowed */
+  double *Cf;            /* k columns: C on the factor's free DOFs, 0 on its fixed ones */
+  double *Z;             /* k columns: (K_ff)^-1 W_f, 0 on the fixed DOFs */
+  double *S;             /* k x k: I - C_f^T Z */
+};
+
+cupid_status cupid_coupling_balance_smw_create(const cupid_coupling_balance B, cupid_direct_factor F,
+                                               const cupid_dirichlet_t *bc,
+                                               cupid_coupling_balance_smw *out) {
+  const cupid_int n = B->n;
+  const int k = B->k;
+  cupid_coupling_balance_smw M = NULL;
+  cupid_status st = CUPID_SUCCESS;
+  *out = NULL;
+  CUPID_CHECK(bc->n == n, CUPID_ERR_ARGUMENT, "balance SMW: %lld conditions for %lld DOFs",
+              (long long)bc->n, (long long)n);
+  CUPID_CALL(cupid_calloc(1, sizeof *M, "balance SMW", &M));
+  M->n = n, M->k = k, M->F = F;
+  CUPID_TRY(cupid_calloc((size_t)k * (size_t)n + 1, sizeof *M->Cf, "balance SMW", &M->Cf));
+  CUPID_TRY(cupid_calloc((size_t)k * (size_t)n + 1, sizeof *M->Z, "balance SMW", &M->Z));
+  CUPID_TRY(cupid_calloc((size_t)(k * k) + 1, sizeof *M->S, "balance SMW", &M->S));
+  for (int c = 0; c < k; c++) {
+    double *Cc = M->Cf + (size_t)c * n, *Zc = M->Z + (size_t)c * n;
+    const double *Wc = B->W + (size_t)c * n;
+    for (cupid_int j = 0; j < n; j++) Cc[j] = bc->fixed[j] ? 0.0 : B->C[(size_t)c * n + j];
+    CUPID_TRY(cupid_direct_factor_solve(F, Wc, Zc));
+    for (cupid_int j = 0; j < n; j++)
+      if (bc->fixed[j]) Zc[j] = 0.0;
+  }
+  for (int a = 0; a < k; a++)
+    for (int c = 0; c < k; c++)
+      M->S[a * k + c] = (a == c) - dot(n, M->Cf + (size_t)a * n, M->Z + (size_t)c * n);
+  *out = M;
+  M = NULL;
+cleanup:
+  cupid_coupling_balance_smw_destroy(&M);
+  return st;
+}
+
+cupid_status cupid_coupling_balance_smw_apply(const cupid_coupling_balance_smw M, const double *r,
+                                              double *z) {
+  const cupid_int n = M->n;
+  const int k = M->k;
+  for (cupid_int j = 0; j < n; j++) z[j] = 0.0;
+  CUPID_CALL(cupid_direct_factor_solve(M->F, r, z));
+  if (k == 0) return CUPID_SUCCESS;
+  double *S = NULL, g[NR * CUPID_BALANCE_GROUPS_MAX];
+  CUPID_CALL(cupid_malloc((size_t)(k * k), sizeof *S, "balance SMW", &S));
+  memcpy(S, M->S, (size_t)(k * k) * sizeof *S);
+  for (int a = 0; a < k; a++) g[a] = dot(n, M->Cf + (size_t)a * n, z);
+  const int ok = dense_solve(S, g, k);
+  cupid_free(&S);
+  CUPID_CHECK(ok, CUPID_ERR_NUMERIC, "coupling.balance: the balanced operator is singular on the "
+              "free DOFs");
+#pragma omp parallel for schedule(static) if (n > 100000)
+  for (cupid_int j = 0; j < n; j++) {
+    double v = 0.0;
+    for (int c = 0; c < k; c++) v += M->Z[(size_t)c * n + j] * g[c];
+    z[j] += v;
+  }
+  return CUPID_SUCCESS;
+}
+
+void cupid_coupling_balance_smw_destroy(cupid_coupling_balance_smw *M) {
+  if (!M || !*M) return;
+  cupid_free(&(*M)->Cf);
+  cupid_free(&(*M)->Z);
+  cupid_free(&(*M)->S);
+  cupid_free(M);
+}
+
 static cupid_status balanced_apply(void *ctx, const double *x, double *y) {
   const cupid_coupling_balance B = ctx;
   CUPID_CALL(B->inner.apply(B->inner.ctx, x, y));

@@ -30,10 +30,13 @@ int cupid_growth_lu_applies(const cupid_problem_state *prob) {
   return prob->method->matrix == CUPID_MATRIX_GENERAL && !prob->engine->iterative && prob->K;
 }
 
-void cupid_growth_lu_renew(cupid_growth_lu *s) { cupid_direct_factor_destroy(&s->F); }
+void cupid_growth_lu_renew(cupid_growth_lu *s) {
+  cupid_coupling_balance_smw_destroy(&s->smw);
+  cupid_direct_factor_destroy(&s->F);
+}
 
 void cupid_growth_lu_free(cupid_growth_lu *s) {
-  cupid_direct_factor_destroy(&s->F);
+  cupid_growth_lu_renew(s);
   cupid_free(&s->t);
   cupid_free(&s->z);
 }
@@ -53,26 +56,30 @@ static cupid_status system_apply(void *ctx, const double *x, double *y) {
 
 typedef struct {
   cupid_direct_factor F;
+  cupid_coupling_balance_smw smw; /* balanced: the factor's K' exactly */
   const cupid_dirichlet_t *bc;
   double *t;
 } lu_pc;
 
-/* z = P F^-1 P^T r: the factor keeps the free DOFs it was made with; nodes held since then are
- * fixed now (r and z zero there), so this is F restricted to the current free DOFs. */
+/* z = P M^-1 P^T r, M the factorised K (balanced: K - W C^T by SMW, whose C and W breaks do not
+ * change): the factor keeps the free DOFs it was made with; nodes held since then are fixed now
+ * (r and z zero there), so this is M restricted to the current free DOFs. */
 static cupid_status lu_apply(void *ctx, const double *r, double *z) {
   const lu_pc *p = ctx;
   const cupid_int n = p->bc->n;
   for (cupid_int d = 0; d < n; d++) p->t[d] = p->bc->fixed[d] ? 0.0 : r[d];
-  CUPID_CALL(cupid_direct_factor_solve(p->F, p->t, z));
+  if (p->smw) CUPID_CALL(cupid_coupling_balance_smw_apply(p->smw, p->t, z));
+  else CUPID_CALL(cupid_direct_factor_solve(p->F, p->t, z));
   for (cupid_int d = 0; d < n; d++)
     if (p->bc->fixed[d]) z[d] = 0.0;
   return CUPID_SUCCESS;
 }
 
-static cupid_status factorise(cupid_problem_state *prob, cupid_growth_lu *s) {
+static cupid_status factorise(cupid_problem_state *prob, cupid_growth_lu *s,
+                              const cupid_coupling_balance B) {
   cupid_solve_info info;
   const double t0 = cupid_wtime();
-  cupid_direct_factor_destroy(&s->F);
+  cupid_growth_lu_renew(s);
   cupid_status st = cupid_direct_factor_create_kind(prob->K, CUPID_MATRIX_GENERAL, prob->bc, &s->F, &info);
   prob->solve = info; /* a breakdown names its DOF (growth.c holds its node) */
   CUPID_CALL(st);
@@ -83,6 +90,7 @@ static cupid_status factorise(cupid_problem_state *prob, cupid_growth_lu *s) {
   const double nnz_k = (double)prob->K->rowptr[prob->K->nrows] * prob->K->bs * prob->K->bs;
   s->iteration_flops = 4.0 * info.nnz_factor + 2.0 * nnz_k;
   s->since_factor = 0;
+  if (B) CUPID_CALL(cupid_coupling_balance_smw_create(B, s->F, prob->bc, &s->smw));
   s->t_factor += cupid_wtime() - t0;
   return CUPID_SUCCESS;
 }
@@ -93,7 +101,7 @@ static cupid_status resolve(cupid_problem_state *prob, cupid_growth_lu *s,
                             const cupid_linear_operator *L, int *done) {
   const size_t n = (size_t)prob->ndof;
   const double t0 = cupid_wtime();
-  lu_pc pc = {s->F, prob->bc, s->t};
+  lu_pc pc = {s->F, s->smw, prob->bc, s->t};
   cupid_solve_info info;
   memcpy(s->z, prob->u, n * sizeof *s->z);
   CUPID_CALL(cupid_gmres_resolve(L, prob->bc, lu_apply, &pc, prob->f_ext, s->z, LU_RTOL,
@@ -135,15 +143,16 @@ cupid_status cupid_growth_lu_solve(cupid_problem_state *prob, cupid_growth_lu *s
   int done = 0;
   if (s->F) CUPID_TRY(resolve(prob, s, &L, &done));
   if (!done) {
-    CUPID_TRY(factorise(prob, s));
+    CUPID_TRY(factorise(prob, s, op.B));
     for (cupid_int d = 0; d < prob->ndof; d++) /* the factor's own solution as the guess */
       s->t[d] = prob->bc->fixed[d] ? prob->bc->value[d] : 0.0;
     CUPID_TRY(system_apply(&op, s->t, s->z));
     for (cupid_int d = 0; d < prob->ndof; d++) s->z[d] = prob->bc->fixed[d] ? 0.0 : prob->f_ext[d] - s->z[d];
-    CUPID_TRY(cupid_direct_factor_solve(s->F, s->z, prob->u));
+    lu_pc pc = {s->F, s->smw, prob->bc, s->t};
+    CUPID_TRY(lu_apply(&pc, s->z, prob->u));
     for (cupid_int d = 0; d < prob->ndof; d++)
       if (prob->bc->fixed[d]) prob->u[d] = prob->bc->value[d];
-    CUPID_TRY(resolve(prob, s, &L, &done)); /* checked, refined (K' needs a few iterations) */
+    CUPID_TRY(resolve(prob, s, &L, &done)); /* checked, refined if need be */
     CUPID_TRY_CHECK(done, CUPID_ERR_NUMERIC,
                     "growth: GMRES on the fresh LU of K did not reach a relative residual of "
                     "%.0e in %d iterations (the coupled system is too ill-conditioned)",
@@ -153,7 +162,7 @@ cupid_status cupid_growth_lu_solve(cupid_problem_state *prob, cupid_growth_lu *s
   cupid_problem_record_solve(prob);
   /* rent: renew once the iterations since the factorisation cost as much as it did */
   if ((double)s->since_factor * LU_FLOP_WEIGHT * s->iteration_flops > s->factor_flops)
-    cupid_direct_factor_destroy(&s->F);
+    cupid_growth_lu_renew(s);
   CUPID_TRY(system_apply(&op, prob->u, prob->f_int));
 cleanup:
   cupid_coupling_balance_destroy(&op.B);
