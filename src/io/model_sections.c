@@ -913,6 +913,7 @@ static cupid_status read_coupling(model_reader *rd, yaml_node_t *node) {
     return mr_error(rd, balance, "coupling.balance",
                     "is only used with method: fictitious (lagrange and arlequin conserve "
                     "momentum already)");
+  c->balance = c->method == CUPID_COUPLING_FICTITIOUS; /* the default (set_defaults) */
   if (balance) CUPID_CALL(mr_enum(rd, balance, "coupling.balance", balances, COUNT(balances), &c->balance));
   if (c->method == CUPID_COUPLING_ARLEQUIN) {
     if (!arlequin)
@@ -1406,6 +1407,8 @@ static void set_defaults(cupid_model_t *m) {
   m->pd.material = -1;
   m->pd.dimension = 3;
   m->coupling.weight = CUPID_WEIGHT_LINEAR;
+  m->coupling.balance = 1; /* method fictitious, the default: each interface balanced (issue 34;
+                              `balance: none` is paper 000's Eq. 38 as printed) */
   m->output.vtu = 1;
   m->output.plots = 1;
 }

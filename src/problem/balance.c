@@ -81,17 +81,62 @@ static double dof_y(const cupid_problem_state *prob, const double *x, cupid_int 
   return cupid_cuf_beam_node_y(prob->beam, fe_node / prob->fe_info.M);
 }
 
-/* The balance's groups: `momentum` with interface planes, each DOF in the group of the nearest
- * plane (the imbalance of an interface comes from the DOFs within its fictitious element and
- * fictitious nodes, far closer to it than to any other); else one group (`global`, or a
- * region over part of the section). *group is the caller's (NULL for one group). */
-static cupid_status balance_groups(const cupid_problem_state *prob, int *ng, int **group) {
-  double planes[CUPID_BALANCE_GROUPS_MAX];
+/* The y span [z[0], z[1]] of the DOFs whose columns the coupling at the plane y_p makes out of
+ * balance: the PD nodes its FE rows read (the fictitious FE element's fits, @p fe_rows), the
+ * beam elements its fictitious PD nodes fall in (2 (delta + h) beyond the plane, a bound of
+ * the extended grid's reach for either PD model), and the PD nodes whose families reach those
+ * (as far again on the region's side). */
+static void plane_zone(const cupid_problem_state *prob, const cupid_csr_t *fe_rows, double y_p,
+                       double z[2]) {
+  const double *x = cupid_pd_grid_coords(prob->grid);
+  const double h = prob->model->pd.spacing, reach = 2.0 * (prob->model->pd.horizon + h);
+  const double tol = 1e-9 * (prob->fe_info.y_max - prob->fe_info.y_min);
+  const cupid_int M = prob->fe_info.M;
+  z[0] = y_p - reach, z[1] = y_p + reach;
+  for (cupid_int a = 0; a < fe_rows->nrows; a++) {
+    if (fabs(cupid_cuf_beam_node_y(prob->beam, a / M) - y_p) > tol) continue;
+    for (cupid_int k = fe_rows->rowptr[a]; k < fe_rows->rowptr[a + 1]; k++) {
+      const cupid_int c = fe_rows->col[k];
+      if (c >= prob->n_pd) continue;
+      z[0] = fmin(z[0], x[3 * c + 1]), z[1] = fmax(z[1], x[3 * c + 1]);
+    }
+  }
+  for (cupid_int e = 0; e < prob->fe_info.n_beam_elements; e++) {
+    cupid_int first;
+    double y0, y1;
+    cupid_cuf_beam_element(prob->beam, e, &first, &y0, &y1);
+    if (y1 < y_p - reach - tol || y0 > y_p + reach + tol) continue;
+    int active = 0; /* the elements inside a region gave way: they hold no fictitious node */
+    for (cupid_int se = 0; se < prob->fe_info.n_section_elements && !active; se++)
+      active = cupid_cuf_is_active(prob->beam, e, se);
+    if (!active) continue;
+    z[0] = fmin(z[0], y0), z[1] = fmax(z[1], y1);
+  }
+}
+
+/* The balance's groups: `momentum` with interface planes whose zones (plane_zone) are apart,
+ * each DOF in the group of the zone holding it (else the nearest plane's: its column is in
+ * balance); else one group (`global`, a region over part of the section, or zones that meet:
+ * a fictitious FE element that reaches across the region, as the one B2 element of a bar,
+ * reads PD nodes the other interface's coupling also makes out of balance). *group is the
+ * caller's (NULL for one group). */
+static cupid_status balance_groups(const cupid_problem_state *prob, const cupid_csr_t *fe_rows,
+                                   int *ng, int **group) {
+  double planes[CUPID_BALANCE_GROUPS_MAX], zone[CUPID_BALANCE_GROUPS_MAX][2];
   int np = 0;
   *ng = 1;
   *group = NULL;
   if (prob->model->coupling.balance == 1) CUPID_CALL(interface_planes(prob, planes, &np));
   if (np < 2) return CUPID_SUCCESS;
+  for (int k = 0; k < np; k++) plane_zone(prob, fe_rows, planes[k], zone[k]);
+  for (int a = 0; a < np; a++)
+    for (int b = a + 1; b < np; b++)
+      if (zone[a][0] <= zone[b][1] && zone[b][0] <= zone[a][1]) {
+        cupid_problem_progress(prob, "balance: the coupling zones of the interfaces at y = %g and "
+                               "%g meet (y in [%g, %g] and [%g, %g]): one balance for the model",
+                               planes[a], planes[b], zone[a][0], zone[a][1], zone[b][0], zone[b][1]);
+        return CUPID_SUCCESS;
+      }
   CUPID_CALL(cupid_malloc((size_t)prob->ndof, sizeof **group, "balance groups", group));
   const double *x = cupid_pd_grid_coords(prob->grid);
   for (cupid_int d = 0; d < prob->ndof; d++) {
@@ -99,6 +144,8 @@ static cupid_status balance_groups(const cupid_problem_state *prob, int *ng, int
     int best = 0;
     for (int k = 1; k < np; k++)
       if (fabs(planes[k] - y) < fabs(planes[best] - y)) best = k;
+    for (int k = 0; k < np; k++)
+      if (y >= zone[k][0] && y <= zone[k][1]) best = k;
     (*group)[d] = best;
   }
   *ng = np;
@@ -120,7 +167,7 @@ static cupid_status balance_create(const cupid_problem_state *prob, transpose_fn
   CUPID_TRY(rigid_modes(prob, R));
   for (int k = 0; k < CUPID_BALANCE_MODES; k++) CUPID_TRY(transpose(ctx, R + k * n, C + k * n));
   CUPID_TRY(cupid_coupling_balance_weights(fe_rows, prob->n_pd, d));
-  CUPID_TRY(balance_groups(prob, &ng, &group));
+  CUPID_TRY(balance_groups(prob, fe_rows, &ng, &group));
   CUPID_TRY(cupid_coupling_balance_create_grouped(prob->ndof, R, C, d, ng, group, B));
 cleanup:
   cupid_free(&group);

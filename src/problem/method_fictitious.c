@@ -79,10 +79,6 @@ static cupid_status check(const cupid_problem_state *prob) {
     return cupid_model_error(m, &m->pd.mark,
                              "a coupled model needs a 3D peridynamic grid (dimension: 3) with "
                              "method fictitious (1D grids: methods lagrange and arlequin)");
-  if (m->coupling.balance && m->analysis.type == CUPID_ANALYSIS_DYNAMIC)
-    return cupid_model_error(m, &m->coupling.mark,
-                             "balance: momentum runs static solves (load steps too) and type "
-                             "evaluate, not type dynamic; use balance: none there");
   if (m->analysis.type == CUPID_ANALYSIS_DYNAMIC)
     return cupid_model_error(m, &m->analysis.mark,
                              "type dynamic is not supported with coupling method fictitious: its "

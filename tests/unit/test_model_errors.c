@@ -510,7 +510,7 @@ static const bad_case cases[] = {
     {"fictitious_fe_unknown.yaml",
      "28:47: coupling.fictitious_fe: must be one of removed | adjacent | plane, got 'half'", NULL},
     {"balance_unknown.yaml",
-     "28:41: coupling.balance: must be one of none | momentum, got 'yes'", NULL},
+     "28:41: coupling.balance: must be one of none | momentum | global, got 'yes'", NULL},
     {"balance_lagrange.yaml",
      "28:39: coupling.balance: is only used with method: fictitious (lagrange and arlequin "
      "conserve momentum already)", NULL},
