@@ -448,9 +448,9 @@ cupid_status cupid_coupling_operator_fit_boxes(const cupid_coupling_operator A,
                                                const cupid_cuf_beam beam, double *boxes);
 /**
  * The coupling zone of fracture: zone[r] = 1 for every real PD node r (one entry per real node
- * of the grid: a slab's local nodes) that is fictitious-adjacent, i.e. whose family on the
- * extended grid holds a fictitious node or a node of @p core (NULL: none; one flag per real
- * node, e.g. those inside cupid_coupling_operator_fit_boxes), or that is in @p core; else 0.
+ * of the grid: a slab's local nodes) whose family on the extended grid holds a fictitious node,
+ * or that is in @p core (NULL: none; one flag per real node, e.g. those inside
+ * cupid_coupling_operator_fit_boxes); else 0.
  * Any bond (i, j) with neither end in the zone changes the PD rows of Eq. 38 in real columns
  * only, by the same symmetric, rigid-mode-free terms as on the model grid: the fits of
  * Eqs. 33-36 and the balance's C = K^T R stay as they were (docs/theory.md, "Fracture with
@@ -527,8 +527,15 @@ cupid_status cupid_coupling_balance_smw_create(const cupid_coupling_balance B, c
 cupid_status cupid_coupling_balance_smw_apply(const cupid_coupling_balance_smw M, const double *r,
                                               double *z);
 void cupid_coupling_balance_smw_destroy(cupid_coupling_balance_smw *M);
-/** *out: the operator K' around the matrix-free K of @p L (kept by B; whole grids only:
- *  CUPID_ERR_UNSUPPORTED on a slab). */
+/** On a PD slab under mpirun: B holds this slab's share of C (its owned PD DOFs and, on one
+ *  rank, the FE DOFs; R, W and the weights on every local DOF), @p sum adds a few doubles over
+ *  the ranks (collective), and the FE rows' correction is added where @p apply_here is 1 (the
+ *  rank whose share of the FE rows holds their FE columns). */
+void cupid_coupling_balance_set_slab(cupid_coupling_balance B, void (*sum)(double *v, int n),
+                                     int apply_here);
+/** *out: the operator K' around the matrix-free K of @p L (kept by B), with apply_rows when L
+ *  has it (the FE rows' call collective on a slab, which needs cupid_coupling_balance_set_slab:
+ *  else CUPID_ERR_ARGUMENT). */
 cupid_status cupid_coupling_balance_linear(cupid_coupling_balance B, const cupid_linear_operator *L,
                                            cupid_linear_operator *out);
 /** The weights d of the FE rows @p Kfe (block rows of FE nodes, block columns [PD | FE], n_pd

@@ -27,6 +27,10 @@ struct cupid_coupling_balance_private {
   int k;         /* columns: NR per group that takes a correction */
   double *C, *W; /* k columns of n each: group g's C_g = its DOFs' entries of K^T R, W_g */
   cupid_linear_operator inner; /* the wrapped operator (cupid_coupling_balance_linear) */
+  /* on a slab (cupid_coupling_balance_set_slab): C holds this slab's share, the partial C^T x
+   * are summed over the ranks by sum, and the FE rows' correction is added on one rank */
+  void (*sum)(double *v, int n);
+  int apply_here;
 };
 
 /* A z = b in place (A: n x n row-major) by Gaussian elimination with partial pivoting; 0 if singular to
@@ -107,6 +111,7 @@ cupid_status cupid_coupling_balance_create_grouped(cupid_int n, const double *R,
               CUPID_BALANCE_GROUPS_MAX, n_groups);
   CUPID_CALL(cupid_calloc(1, sizeof *B, "balanced coupling", &B));
   B->n = n;
+  B->apply_here = 1;
   const size_t cap = (size_t)NR * (size_t)n_groups * (size_t)n;
   CUPID_TRY(cupid_calloc(cap + 1, sizeof *B->C, "K^T R", &B->C));
   CUPID_TRY(cupid_calloc(cap + 1, sizeof *B->W, "balance distribution", &B->W));
@@ -297,18 +302,44 @@ static cupid_status balanced_apply(void *ctx, const double *x, double *y) {
   return CUPID_SUCCESS;
 }
 
+/* The rows [d0, d1) of K' x: W is zero on the PD rows, so a call for PD rows only is K's; the
+ * FE rows' call sums C^T x over the ranks (collective on a slab: every rank makes it). */
+static cupid_status balanced_apply_rows(void *ctx, const double *x, cupid_int d0, cupid_int d1,
+                                        double *y) {
+  const cupid_coupling_balance B = ctx;
+  CUPID_CALL(B->inner.apply_rows(B->inner.ctx, x, d0, d1, y));
+  const cupid_int fe0 = B->inner.n_pd_dofs, n = B->n;
+  if (d1 <= fe0 || B->k == 0) return CUPID_SUCCESS;
+  double c[NR * CUPID_BALANCE_GROUPS_MAX];
+  for (int a = 0; a < B->k; a++) c[a] = dot(n, B->C + (size_t)a * n, x);
+  if (B->sum) B->sum(c, B->k);
+  if (!B->apply_here) return CUPID_SUCCESS;
+  for (cupid_int j = d0 > fe0 ? d0 : fe0; j < d1; j++) {
+    double v = 0.0;
+    for (int a = 0; a < B->k; a++) v += B->W[(size_t)a * n + j] * c[a];
+    y[j] -= v;
+  }
+  return CUPID_SUCCESS;
+}
+
+void cupid_coupling_balance_set_slab(cupid_coupling_balance B, void (*sum)(double *v, int n),
+                                     int apply_here) {
+  B->sum = sum;
+  B->apply_here = apply_here;
+}
+
 cupid_status cupid_coupling_balance_linear(cupid_coupling_balance B, const cupid_linear_operator *L,
                                            cupid_linear_operator *out) {
-  CUPID_CHECK(!L->part || L->part->parts <= 1,
-              CUPID_ERR_UNSUPPORTED,
-              "coupling.balance: momentum is not available on PD slabs under mpirun yet (its "
-              "correction needs the whole K^T R); run on one rank or with balance: none");
+  const int slab = L->part && L->part->parts > 1;
+  CUPID_CHECK(!slab || (B->sum && L->apply_rows), CUPID_ERR_ARGUMENT,
+              "balanced operator on a slab: the balance needs its slab share "
+              "(cupid_coupling_balance_set_slab) and the operator its rows");
   CUPID_CHECK(L->n == B->n, CUPID_ERR_ARGUMENT, "balanced operator: %lld DOFs, balance %lld",
               (long long)L->n, (long long)B->n);
   B->inner = *L;
   *out = *L;
   out->apply = balanced_apply;
-  out->apply_rows = NULL;
+  out->apply_rows = L->apply_rows ? balanced_apply_rows : NULL;
   out->ctx = B;
   return CUPID_SUCCESS;
 }

@@ -252,13 +252,9 @@ cupid_status cupid_coupling_operator_zone(const cupid_coupling_operator A,
   cupid_status st = CUPID_SUCCESS;
   CUPID_TRY(cupid_calloc((size_t)n_ext + 1, 1, "fictitious nodes", &mark));
   CUPID_TRY(cupid_calloc((size_t)n_ext + 1, 1, "coupling zone", &near));
-  for (cupid_int i = 0; i < n_ext; i++) {
-    const cupid_int r = A->parts.map.real[i];
-    mark[i] = r < 0 || (core && core[r]);
-    near[i] = mark[i];
-  }
+  for (cupid_int i = 0; i < n_ext; i++) mark[i] = A->parts.map.real[i] < 0;
   cupid_pd_operator_mark_families(A->op, mark, near);
-  for (cupid_int r = 0; r < n_pd; r++) zone[r] = near[A->ext_of[r]];
+  for (cupid_int r = 0; r < n_pd; r++) zone[r] = near[A->ext_of[r]] || (core && core[r]);
 cleanup:
   cupid_free(&mark);
   cupid_free(&near);

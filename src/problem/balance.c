@@ -35,13 +35,30 @@ static void rigid_fn(void *ctx, const double p[3], double density, double u[3]) 
   u[b] = -(p[c] - m->p0[c]);
 }
 
-/* R: the rigid modes in the system's layout (inactive FE nodes 0, as the solve holds them),
- * rotations about the middle of the beam's axis (any centre spans the same space; the middle
- * keeps the columns' scales alike). */
-static cupid_status rigid_modes(const cupid_problem_state *prob, double *R) {
+/* A system's DOF layout: [3 per PD node | the beam's], the PD nodes at x. prob's own, or on a
+ * slab the whole model's (slab_balance). */
+typedef struct {
+  cupid_int n_pd, fe_offset, ndof;
+  const double *x;
+} layout;
+
+static layout prob_layout(const cupid_problem_state *prob) {
+  return (layout){prob->n_pd, prob->fe_offset, prob->ndof, cupid_pd_grid_coords(prob->grid)};
+}
+
+/* R: the rigid modes in the layout (inactive FE nodes 0, as the solve holds them; the beam's
+ * DOF offset must be the layout's), rotations about the middle of the beam's axis (any centre
+ * spans the same space; the middle keeps the columns' scales alike). */
+static cupid_status rigid_modes(const cupid_problem_state *prob, const layout *L, double *R) {
   rigid_mode m = {0, {0.0, 0.5 * (prob->fe_info.y_min + prob->fe_info.y_max), 0.0}};
-  for (m.k = 0; m.k < CUPID_BALANCE_MODES; m.k++)
-    CUPID_CALL(cupid_problem_system_field(prob, rigid_fn, &m, R + (size_t)m.k * (size_t)prob->ndof));
+  for (m.k = 0; m.k < CUPID_BALANCE_MODES; m.k++) {
+    double *r = R + (size_t)m.k * (size_t)L->ndof;
+    for (cupid_int i = 0; i < L->n_pd; i++) rigid_fn(&m, L->x + 3 * i, 0.0, r + 3 * i);
+    CUPID_CALL(cupid_cuf_interpolate(prob->beam, rigid_fn, &m, r));
+    for (cupid_int n = 0; n < prob->fe_info.n_fe_nodes; n++)
+      if (!cupid_cuf_node_used(prob->beam, (int)(n % prob->fe_info.M), n / prob->fe_info.M))
+        for (int c = 0; c < 3; c++) r[L->fe_offset + 3 * n + c] = 0.0;
+  }
   return CUPID_SUCCESS;
 }
 
@@ -75,9 +92,9 @@ static cupid_status interface_planes(const cupid_problem_state *prob, double *pl
 }
 
 /* The y of DOF d: its PD node's, or its FE node's beam node's. */
-static double dof_y(const cupid_problem_state *prob, const double *x, cupid_int d) {
-  if (d < prob->fe_offset) return x[3 * (d / 3) + 1];
-  const cupid_int fe_node = (d - prob->fe_offset) / 3;
+static double dof_y(const cupid_problem_state *prob, const layout *L, cupid_int d) {
+  if (d < L->fe_offset) return L->x[3 * (d / 3) + 1];
+  const cupid_int fe_node = (d - L->fe_offset) / 3;
   return cupid_cuf_beam_node_y(prob->beam, fe_node / prob->fe_info.M);
 }
 
@@ -86,9 +103,9 @@ static double dof_y(const cupid_problem_state *prob, const double *x, cupid_int 
  * beam elements its fictitious PD nodes fall in (2 (delta + h) beyond the plane, a bound of
  * the extended grid's reach for either PD model), and the PD nodes whose families reach those
  * (as far again on the region's side). */
-static void plane_zone(const cupid_problem_state *prob, const cupid_csr_t *fe_rows, double y_p,
-                       double z[2]) {
-  const double *x = cupid_pd_grid_coords(prob->grid);
+static void plane_zone(const cupid_problem_state *prob, const layout *L, const cupid_csr_t *fe_rows,
+                       double y_p, double z[2]) {
+  const double *x = L->x;
   const double h = prob->model->pd.spacing, reach = 2.0 * (prob->model->pd.horizon + h);
   const double tol = 1e-9 * (prob->fe_info.y_max - prob->fe_info.y_min);
   const cupid_int M = prob->fe_info.M;
@@ -97,7 +114,7 @@ static void plane_zone(const cupid_problem_state *prob, const cupid_csr_t *fe_ro
     if (fabs(cupid_cuf_beam_node_y(prob->beam, a / M) - y_p) > tol) continue;
     for (cupid_int k = fe_rows->rowptr[a]; k < fe_rows->rowptr[a + 1]; k++) {
       const cupid_int c = fe_rows->col[k];
-      if (c >= prob->n_pd) continue;
+      if (c >= L->n_pd) continue;
       z[0] = fmin(z[0], x[3 * c + 1]), z[1] = fmax(z[1], x[3 * c + 1]);
     }
   }
@@ -120,15 +137,15 @@ static void plane_zone(const cupid_problem_state *prob, const cupid_csr_t *fe_ro
  * a fictitious FE element that reaches across the region, as the one B2 element of a bar,
  * reads PD nodes the other interface's coupling also makes out of balance). *group is the
  * caller's (NULL for one group). */
-static cupid_status balance_groups(const cupid_problem_state *prob, const cupid_csr_t *fe_rows,
-                                   int *ng, int **group) {
+static cupid_status balance_groups(const cupid_problem_state *prob, const layout *L,
+                                   const cupid_csr_t *fe_rows, int *ng, int **group) {
   double planes[CUPID_BALANCE_GROUPS_MAX], zone[CUPID_BALANCE_GROUPS_MAX][2];
   int np = 0;
   *ng = 1;
   *group = NULL;
   if (prob->model->coupling.balance == 1) CUPID_CALL(interface_planes(prob, planes, &np));
   if (np < 2) return CUPID_SUCCESS;
-  for (int k = 0; k < np; k++) plane_zone(prob, fe_rows, planes[k], zone[k]);
+  for (int k = 0; k < np; k++) plane_zone(prob, L, fe_rows, planes[k], zone[k]);
   for (int a = 0; a < np; a++)
     for (int b = a + 1; b < np; b++)
       if (zone[a][0] <= zone[b][1] && zone[b][0] <= zone[a][1]) {
@@ -137,10 +154,9 @@ static cupid_status balance_groups(const cupid_problem_state *prob, const cupid_
                                planes[a], planes[b], zone[a][0], zone[a][1], zone[b][0], zone[b][1]);
         return CUPID_SUCCESS;
       }
-  CUPID_CALL(cupid_malloc((size_t)prob->ndof, sizeof **group, "balance groups", group));
-  const double *x = cupid_pd_grid_coords(prob->grid);
-  for (cupid_int d = 0; d < prob->ndof; d++) {
-    const double y = dof_y(prob, x, d);
+  CUPID_CALL(cupid_malloc((size_t)L->ndof, sizeof **group, "balance groups", group));
+  for (cupid_int d = 0; d < L->ndof; d++) {
+    const double y = dof_y(prob, L, d);
     int best = 0;
     for (int k = 1; k < np; k++)
       if (fabs(planes[k] - y) < fabs(planes[best] - y)) best = k;
@@ -154,21 +170,30 @@ static cupid_status balance_groups(const cupid_problem_state *prob, const cupid_
 
 typedef cupid_status (*transpose_fn)(void *ctx, const double *w, double *z);
 
-/* B from R, C = K^T R (by @p transpose) and the weights of the FE rows @p fe_rows. */
+/* R, C = K^T R (by @p transpose), the weights d of the FE rows @p fe_rows and the groups, in
+ * the layout L (*R, *C, *d, *group: the caller's to free, also after a failure). */
+static cupid_status balance_parts(const cupid_problem_state *prob, const layout *L,
+                                  transpose_fn transpose, void *ctx, const cupid_csr_t *fe_rows,
+                                  double **R, double **C, double **d, int *ng, int **group) {
+  const size_t n = (size_t)L->ndof, sz = CUPID_BALANCE_MODES * n;
+  CUPID_CALL(cupid_calloc(sz, sizeof **R, "rigid modes", R));
+  CUPID_CALL(cupid_calloc(sz, sizeof **C, "K^T R", C));
+  CUPID_CALL(cupid_calloc(n, sizeof **d, "balance weights", d));
+  CUPID_CALL(rigid_modes(prob, L, *R));
+  for (int k = 0; k < CUPID_BALANCE_MODES; k++) CUPID_CALL(transpose(ctx, *R + k * n, *C + k * n));
+  CUPID_CALL(cupid_coupling_balance_weights(fe_rows, L->n_pd, *d));
+  return balance_groups(prob, L, fe_rows, ng, group);
+}
+
+/* B on prob's own layout (a whole grid). */
 static cupid_status balance_create(const cupid_problem_state *prob, transpose_fn transpose,
                                    void *ctx, const cupid_csr_t *fe_rows, cupid_coupling_balance *B) {
-  const size_t n = (size_t)prob->ndof, sz = CUPID_BALANCE_MODES * n;
+  const layout L = prob_layout(prob);
   double *R = NULL, *C = NULL, *d = NULL;
   int *group = NULL, ng = 1;
   cupid_status st = CUPID_SUCCESS;
-  CUPID_TRY(cupid_calloc(sz, sizeof *R, "rigid modes", &R));
-  CUPID_TRY(cupid_calloc(sz, sizeof *C, "K^T R", &C));
-  CUPID_TRY(cupid_calloc(n, sizeof *d, "balance weights", &d));
-  CUPID_TRY(rigid_modes(prob, R));
-  for (int k = 0; k < CUPID_BALANCE_MODES; k++) CUPID_TRY(transpose(ctx, R + k * n, C + k * n));
-  CUPID_TRY(cupid_coupling_balance_weights(fe_rows, prob->n_pd, d));
-  CUPID_TRY(balance_groups(prob, fe_rows, &ng, &group));
-  CUPID_TRY(cupid_coupling_balance_create_grouped(prob->ndof, R, C, d, ng, group, B));
+  CUPID_TRY(balance_parts(prob, &L, transpose, ctx, fe_rows, &R, &C, &d, &ng, &group));
+  CUPID_TRY(cupid_coupling_balance_create_grouped(L.ndof, R, C, d, ng, group, B));
 cleanup:
   cupid_free(&group);
   cupid_free(&R);
@@ -256,8 +281,75 @@ cleanup:
 }
 
 static cupid_status linear_apply(void *ctx, const double *x, double *y) {
-  const cupid_linear_operator *L = ctx;
-  return L->apply(L->ctx, x, y);
+  return cupid_krylov_apply(ctx, x, y); /* a slab: its owned and FE rows */
+}
+
+/* The whole model's DOF of the slab's local DOF d (G: the whole grid's nodes). */
+static cupid_int whole_dof(const cupid_problem_state *prob, cupid_int G, cupid_int d) {
+  if (d < prob->fe_offset) return 3 * (prob->part.first_global + d / 3) + d % 3;
+  return 3 * G + (d - prob->fe_offset);
+}
+
+/* On a slab: R, C = K^T R, the weights and the groups of the whole model on every rank (the
+ * whole grid and the coupling operator on it, for six transposed products once per run: C
+ * does not change as bonds break), then this slab's share: R, the weights and the groups on
+ * every local DOF, C on its owned PD DOFs and, on the last slab (which adds the FE rows'
+ * FE columns, krylov.c), its FE DOFs, so that the shares' C^T x sum to the whole C^T x. */
+static cupid_status slab_balance(cupid_problem_state *prob, cupid_coupling_balance *B) {
+  cupid_pd_grid whole = NULL;
+  cupid_coupling_operator A = NULL;
+  cupid_box *boxes = NULL;
+  int *mats = NULL, *gw = NULL, *g = NULL, ng = 1;
+  double *Rw = NULL, *Cw = NULL, *dw = NULL, *R = NULL, *C = NULL, *d = NULL;
+  cupid_coupling_options co;
+  cupid_status st = cupid_pd_grid_create_from_model(prob->model, &whole);
+  const cupid_int G = whole ? cupid_pd_grid_num_nodes(whole) : 0;
+  const cupid_int n_fe = prob->ndof - prob->fe_offset, n = prob->ndof;
+  if (st == CUPID_SUCCESS) st = cupid_cuf_set_dof_offset(prob->beam, 3 * G);
+  if (st == CUPID_SUCCESS) st = cupid_method_coupling_options(prob, &co, &boxes, &mats);
+  if (st == CUPID_SUCCESS) st = cupid_coupling_operator_create(prob->beam, whole, &co, &A);
+  const layout Lw = {G, 3 * G, 3 * G + n_fe, whole ? cupid_pd_grid_coords(whole) : NULL};
+  if (st == CUPID_SUCCESS)
+    st = balance_parts(prob, &Lw, operator_transpose, A, cupid_coupling_operator_fe_rows(A), &Rw,
+                       &Cw, &dw, &ng, &gw);
+  const cupid_status back = cupid_cuf_set_dof_offset(prob->beam, prob->fe_offset);
+  if (st == CUPID_SUCCESS) st = back;
+  CUPID_TRY(cupid_problem_slab_agree(st));
+  const size_t sz = CUPID_BALANCE_MODES * (size_t)n;
+  st = cupid_calloc(sz + 1, sizeof *R, "rigid modes", &R);
+  if (st == CUPID_SUCCESS) st = cupid_calloc(sz + 1, sizeof *C, "K^T R", &C);
+  if (st == CUPID_SUCCESS) st = cupid_calloc((size_t)n + 1, sizeof *d, "balance weights", &d);
+  if (st == CUPID_SUCCESS && gw) st = cupid_calloc((size_t)n + 1, sizeof *g, "balance groups", &g);
+  CUPID_TRY(cupid_problem_slab_agree(st));
+  const int last = prob->part.part == prob->part.parts - 1;
+  const cupid_int o0 = 3 * prob->part.owned_first, o1 = 3 * prob->part.owned_last;
+  for (cupid_int j = 0; j < n; j++) {
+    const cupid_int w = whole_dof(prob, G, j);
+    const int counted = (j >= o0 && j < o1) || (j >= prob->fe_offset && last);
+    for (int k = 0; k < CUPID_BALANCE_MODES; k++) {
+      R[(size_t)k * n + j] = Rw[(size_t)k * Lw.ndof + w];
+      C[(size_t)k * n + j] = counted ? Cw[(size_t)k * Lw.ndof + w] : 0.0;
+    }
+    d[j] = dw[w];
+    if (g) g[j] = gw[w];
+  }
+  st = cupid_coupling_balance_create_grouped(n, R, C, d, ng, g, B);
+  CUPID_TRY(cupid_problem_slab_agree(st));
+  cupid_coupling_balance_set_slab(*B, cupid_petsc_sum_doubles, last);
+cleanup:
+  cupid_coupling_operator_destroy(&A);
+  cupid_pd_grid_destroy(&whole);
+  cupid_free(&boxes);
+  cupid_free(&mats);
+  cupid_free(&gw);
+  cupid_free(&g);
+  cupid_free(&Rw);
+  cupid_free(&Cw);
+  cupid_free(&dw);
+  cupid_free(&R);
+  cupid_free(&C);
+  cupid_free(&d);
+  return st;
 }
 
 cupid_status cupid_problem_balanced_operator(cupid_problem_state *prob, cupid_coupling_operator A,
@@ -265,9 +357,10 @@ cupid_status cupid_problem_balanced_operator(cupid_problem_state *prob, cupid_co
                                              cupid_coupling_balance *B, cupid_linear_operator *out) {
   /* the patch test reads Eq. 38 itself (see the head of this file) */
   CUPID_CALL(cupid_problem_patch_test(prob, linear_apply, (void *)L));
-  CUPID_CHECK(!prob->slab, CUPID_ERR_UNSUPPORTED,
-              "coupling.balance: momentum is not available on PD slabs under mpirun yet (its "
-              "correction needs the whole K^T R); run on one rank or with balance: none");
+  if (prob->slab) {
+    CUPID_CALL(slab_balance(prob, B));
+    return cupid_coupling_balance_linear(*B, L, out);
+  }
   CUPID_CALL(balance_create(prob, operator_transpose, A, cupid_coupling_operator_fe_rows(A), B));
   return cupid_coupling_balance_linear(*B, L, out);
 }

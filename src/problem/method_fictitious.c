@@ -9,7 +9,7 @@
  * nodes) loses every bond prob->op loses (cupid_pd_operator_copy_broken_mapped, through
  * prob->crack_copy and crack_map). The coupling zone, whose bonds never break, is the span of
  * the fictitious FE elements (the PD nodes their fits read, and what lies between them and the
- * interface) and every real node whose family reaches it or a fictitious node
+ * interface) and every real node whose family reaches a fictitious node
  * (cupid_coupling_operator_zone): a bond broken outside it changes Eq. 38 in real rows and
  * columns only, by the same symmetric, rigid-mode-free terms as on the model grid, so the fits
  * of Eqs. 33-36 and the balance's C = K^T R stay valid without rebuilding (docs/theory.md,
@@ -265,8 +265,8 @@ cleanup:
 
 /* The coupling zone, whose bonds never break: the real nodes inside a fictitious FE element's
  * span (a crack between an interface and the planes its element reads would be bridged by the
- * beam's stiffness) and every node whose family reaches one of them or a fictitious node (their
- * rows of Eq. 38 read the beam through Eqs. 29-30). A pre-crack there is a model error, a crack
+ * beam's stiffness; a crack may come up to those planes) and every node whose family reaches a
+ * fictitious node (their rows of Eq. 38 read the beam through Eqs. 29-30). A pre-crack there is a model error, a crack
  * that comes there stops the run (growth.c, check_blocked). */
 static cupid_status fracture_protect(const cupid_problem_state *prob, unsigned char *protect) {
   cupid_problem_state *p = (cupid_problem_state *)prob; /* the state is the problem's */
@@ -289,14 +289,15 @@ static void protected_zone(const cupid_problem_state *prob, const double x[3], c
   for (int r = 0; r < m->pd.n_regions; r++)
     if (cupid_box_contains(&m->pd.regions[r].box, x, 1e-9 * h)) {
       snprintf(buf, len, "the fictitious-node coupling zone of PD region %d (peridynamics.regions[%d], "
-               "line %d: the span of its fictitious FE elements and a family beyond, near "
+               "line %d: the span of its fictitious FE elements and the families of its "
+               "fictitious nodes, near "
                "(%g, %g, %g); a shorter coupling.fictitious_fe or finer beam elements next to "
                "the region narrow it)",
                r, r, m->pd.regions[r].mark.line, x[0], x[1], x[2]);
       return;
     }
   snprintf(buf, len, "the fictitious-node coupling zone (the span of the fictitious FE elements "
-           "and a family beyond, near (%g, %g, %g))", x[0], x[1], x[2]);
+           "and the families of the fictitious nodes, near (%g, %g, %g))", x[0], x[1], x[2]);
 }
 
 /* Matrix-free Eq. 38 + LU of the cheap twin. Memory: ~1.6 kB a PD node for the operator and

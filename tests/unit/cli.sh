@@ -66,7 +66,7 @@ sys.exit(not (a == 'PASSIVE' and b == 'active'))"; then pass=$((pass+1))
 else echo "FAIL: the OpenMP wait policy (default PASSIVE, the user's kept)"; fail=$((fail+1)); fi
 # Lagrange multipliers hold cracks now (issue 34), whose tie is their coupling zone: a pre-crack
 # that reaches it is a model error naming its line; so do fictitious nodes, whose zone is the
-# span of their fictitious FE elements and a family beyond
+# span of their fictitious FE elements and the families of their fictitious nodes
 expect 1 'senb_coupled.yaml: --set peridynamics.precracks\[0\].at=32: peridynamics.precracks\[0\] \(.*senb_coupled.yaml:[0-9]+:[0-9]+\): a pre-crack reaches the coupling zone at the PD node \(0.5, 30.5, 0.5\) \(coupling method lagrange' -- "$CUPID" check "$SRC/examples/fracture/senb_coupled.yaml" --set 'coupling={method: lagrange}' --set 'peridynamics.precracks[0].at=32'
 expect 1 'senb_coupled.yaml: --set peridynamics.precracks\[0\].at=36: peridynamics.precracks\[0\] \(.*senb_coupled.yaml:[0-9]+:[0-9]+\): a pre-crack reaches the coupling zone at the PD node .* \(coupling method fictitious: the fictitious-node coupling zone of PD region 0 \(peridynamics.regions\[0\], line [0-9]+' -- "$CUPID" check "$SRC/examples/fracture/senb_coupled.yaml" --set 'coupling={method: fictitious}' --set 'peridynamics.precracks[0].at=36'
 expect 0 'the model is valid' -- "$CUPID" check "$SRC/examples/fracture/senb_coupled.yaml" --set 'coupling={method: fictitious}'

@@ -21,8 +21,12 @@
 #    solves (set up afresh for every re-solve: 35 s for the whole SENB above, so the short
 #    run here);
 #  - the SENB tied by Lagrange multipliers (issue 34) on 2 and 3 ranks of the PETSc engine's
-#    assembled solves (about 30 s each) against its direct path.
-# Skipped (77) without PETSc. 140-200 s on 2 cores (the 3-rank runs oversubscribe them).
+#    assembled solves (about 30 s each) against its direct path;
+#  - the SENB with fictitious nodes (issue 34, each interface balanced: the default) on one
+#    process and 2 and 3 slabs against its direct path (GMRES on the last LU; 510 bonds);
+#  - the balance on slabs (C = K^T R of the whole model on each rank, its share): two bars on 2
+#    and 3 slabs against the direct path (1e-8 of the largest displacement).
+# Skipped (77) without PETSc. 200-280 s on 2 cores (the 3-rank runs oversubscribe them).
 if [ "${CUPID_HAVE_PETSC:-0}" != 1 ]; then
   echo "SKIP: cupid was built without PETSc (scripts/build.sh --with-petsc builds build-petsc/)"
   exit 77
@@ -58,6 +62,43 @@ lag=(--set 'coupling={method: lagrange}')
 for n in 2 3; do
   "$MPIEXEC" -n $n "$CUPID" run "$E" -o lg$n "${coarse[@]}" "${lag[@]}" --solver petsc && ok || bad "Lagrange, $n ranks"
 done
+# Fictitious nodes (issue 34; the default, each interface balanced): the same SENB on the direct
+# path (GMRES on the last LU), the kept matrix-free solve on one process and 2 and 3 PD slabs
+fic=(--set 'coupling={method: fictitious}' --set output.pd_nodes=true)
+"$CUPID" run "$E" -o fidirect "${coarse[@]}" "${fic[@]}" --solver direct && ok || bad "fictitious, direct"
+"$CUPID" run "$E" -o fipetsc1 "${coarse[@]}" "${fic[@]}" --solver petsc && ok || bad "fictitious, PETSc, one process"
+for n in 2 3; do
+  "$MPIEXEC" -n $n "$CUPID" run "$E" -o fislab$n "${coarse[@]}" "${fic[@]}" && ok || bad "fictitious, $n slabs"
+done
+# The balance on slabs (C = K^T R of the whole model, each rank its share): the pre-cracked bar
+# with a 5 mm fictitious element (each interface balanced) and the small bar of
+# verification.coupling_quality (one balance: its one B2 reaches across the region) on 2 and 3
+# slabs against the direct path: u within 1e-8 of the largest (measured 3e-11: the Krylov
+# solves' 1e-10), every run balanced (imbalance <= 1e-8)
+B=$SRC/tests/models/fracture/fictitious.yaml
+Q=$SRC/tests/models/coupling/quality_bar.yaml
+bo=(--quiet --set output.pd_nodes=true --set output.vtu=false --set output.plots=false)
+"$CUPID" run "$B" -o bbdirect "${bo[@]}" --set coupling.fictitious_fe=5 --solver direct && ok || bad "bar, direct"
+"$CUPID" run "$Q" -o bqdirect "${bo[@]}" --solver direct && ok || bad "small bar, direct"
+for n in 2 3; do
+  "$MPIEXEC" -n $n "$CUPID" run "$B" -o bb$n "${bo[@]}" --set coupling.fictitious_fe=5 && ok || bad "bar, $n slabs"
+  "$MPIEXEC" -n $n "$CUPID" run "$Q" -o bq$n "${bo[@]}" && ok || bad "small bar, $n slabs"
+done
+"$PY" - <<'PY' && ok || bad "the balance on slabs against the direct path"
+import csv, json
+def u(d):
+    return {(r["x"], r["y"], r["z"]): [float(r[c]) for c in ("ux", "uy", "uz")]
+            for r in csv.DictReader(open(d + "/pd_nodes.csv"))}
+for ref, runs in (("bbdirect", ("bb2", "bb3")), ("bqdirect", ("bq2", "bq3"))):
+    a = u(ref)
+    top = max(abs(v) for w in a.values() for v in w)
+    for d in runs:
+        b = u(d)
+        diff = max(abs(x - y) for k in a for x, y in zip(a[k], b[k])) / top
+        imb = json.load(open(d + "/summary.json"))["coupling_quality"]["imbalance"]
+        print("%s against %s: %.1e, imbalance %.1e" % (d, ref, diff, imb))
+        assert diff <= 1e-8 and imb <= 1e-8, (d, diff, imb)
+PY
 "$MPIEXEC" -n 2 "$CUPID" run "$I" -o stoprepl2 --quiet --solver petsc --replicate 2> stoprepl2.err
 [ $? -eq 2 ] && ok || bad "2 ranks replicated into an overlap: exit status 2"
 msg() { grep -o "cupid: crack growth stopped.*" "$1"; }
@@ -88,6 +129,9 @@ same("stopdirect", "stopslab3", nodes=False)
 same("stopdirect", "stoprepl2", nodes=False)
 for d in ("lg2", "lg3"):
     same("lgdirect", d)
+for d in ("fipetsc1", "fislab2", "fislab3"):
+    same("fidirect", d)
+assert int(rows("fidirect")[-1]["broken_bonds"]) > 400, rows("fidirect")[-1]
 assert int(rows("lgdirect")[-1]["broken_bonds"]) > 400, rows("lgdirect")[-1]
 assert int(rows("direct")[-1]["broken_bonds"]) > 400, rows("direct")[-1]
 assert int(rows("lpsdirect")[-1]["broken_bonds"]) > 400, rows("lpsdirect")[-1]
