@@ -9,7 +9,10 @@
 #             factor of the bond-based twin (growth_matrix_free.c), needs build-petsc/cupid,
 #   slabs     the same on 2 PD slabs under mpirun (2 ranks of one thread),
 #   lagrange  the same beam coupled by Lagrange multipliers instead (issue 34), the default
-#             re-solves.
+#             re-solves,
+#   fictitious  the same beam coupled by fictitious nodes (paper 000; issue 34, the default
+#             balance: each interface balanced), GMRES on the last LU (growth_lu.c),
+#   fictitious_slabs  the same on 2 PD slabs under mpirun (matrix-free).
 # Prints per run: seconds, PD nodes, load steps, solves, broken bonds, the time per broken bond
 # and per load step, the factorisations, downdates, CG solves, peak memory, and the peak load
 # (which must agree between the ways: the same bonds break). Reported figures, not a timed
@@ -40,7 +43,9 @@ row() { # model, way, dir, seconds
 import csv, json, sys
 model, way, d, t = sys.argv[1], sys.argv[2], sys.argv[3], float(sys.argv[4])
 label = {"petsc": "matrix-free, 1 process", "slabs": "matrix-free, 2 slabs",
-         "lagrange": "Lagrange multipliers, downdate"}
+         "lagrange": "Lagrange multipliers, downdate",
+         "fictitious": "fictitious nodes, GMRES on the last LU",
+         "fictitious_slabs": "fictitious nodes, matrix-free, 2 slabs"}
 s = json.load(open(d + "/summary.json"))
 f = s["fracture"]; v = f["solves"]
 steps = len(list(csv.DictReader(open(d + "/damage.csv"))))
@@ -59,6 +64,9 @@ run() { # model file, way
     petsc) OMP_NUM_THREADS=1 "$pcupid" run "$m" -o "$d" "${set[@]}" --solver petsc ;;
     slabs) OMP_NUM_THREADS=1 "$mpiexec" -n 2 "$pcupid" run "$m" -o "$d" "${set[@]}" ;;
     lagrange) "$cupid" run "$m" -o "$d" "${set[@]}" --set 'coupling={method: lagrange}' ;;
+    fictitious) "$cupid" run "$m" -o "$d" "${set[@]}" --set 'coupling={method: fictitious}' ;;
+    fictitious_slabs) OMP_NUM_THREADS=1 "$mpiexec" -n 2 "$pcupid" run "$m" -o "$d" "${set[@]}" \
+                        --set 'coupling={method: fictitious}' ;;
     *) CUPID_GROWTH_RESOLVE=$2 "$cupid" run "$m" -o "$d" "${set[@]}" ;;
   esac
   t1=$(date +%s.%N)

@@ -126,8 +126,10 @@ static cupid_status solve_assembled(cupid_problem_state *prob) {
   /* the balanced solve reuses a SuiteSparse factor; an iterative engine's assembled path
    * (--assembled) has none, and silently factoring instead would not be what was asked */
   CUPID_CHECK(!prob->engine->iterative, CUPID_ERR_UNSUPPORTED,
-              "coupling.balance: momentum runs on the direct solver or the matrix-free path of "
-              "solver %s, not on its assembled path (--assembled)", prob->engine->name);
+              "coupling.balance (momentum, the default, or global) runs on the direct solver or "
+              "the matrix-free path of solver %s, not on its assembled path (--assembled): drop "
+              "--assembled, or set coupling.balance: none for paper 000's Eq. 38 as printed",
+              prob->engine->name);
   return cupid_problem_balanced_direct_solve(prob);
 }
 
