@@ -257,6 +257,40 @@ cleanup:
   return st;
 }
 
+/* The free system of @p bc: S's DOF map and work vectors, b_f = f_f - A_fc u_c (A times the
+ * vector holding only the prescribed values; S->xw left zero: fixed DOFs stay 0 in products). */
+static cupid_status free_system(system_free *S, const cupid_dirichlet_t *bc, const double *f,
+                                double *b) {
+  CUPID_CALL(cupid_malloc((size_t)S->nf + 1, sizeof *S->global, "free DOFs", &S->global));
+  CUPID_CALL(cupid_calloc((size_t)S->n + 1, sizeof *S->xw, "work vector", &S->xw));
+  CUPID_CALL(cupid_calloc((size_t)S->n + 1, sizeof *S->yw, "work vector", &S->yw));
+  for (cupid_int d = 0, k = 0; d < S->n; d++)
+    if (!bc->fixed[d]) S->global[k++] = d;
+  for (cupid_int d = 0; d < S->n; d++) S->xw[d] = bc->fixed[d] ? bc->value[d] : 0.0;
+  CUPID_CALL(S->A->apply(S->A->ctx, S->xw, S->yw));
+  for (cupid_int k = 0; k < S->nf; k++) b[k] = f[S->global[k]] - S->yw[S->global[k]];
+  memset(S->xw, 0, (size_t)S->n * sizeof *S->xw);
+  return CUPID_SUCCESS;
+}
+
+/* The true relative residual |b_f - A_ff x_f| / |b_f| into info, recomputed (ax: scratch);
+ * a non-finite x is a NUMERIC error naming its DOF. */
+static cupid_status true_residual(system_free *S, const double *b, const double *x, double *ax,
+                                  cupid_solve_info *info) {
+  CUPID_CALL(apply_free(S, x, ax));
+  double r2 = 0.0, b2 = 0.0;
+  for (cupid_int k = 0; k < S->nf; k++) {
+    const double r = b[k] - ax[k];
+    r2 += r * r;
+    b2 += b[k] * b[k];
+  }
+  info->residual = b2 > 0 ? sqrt(r2 / b2) : sqrt(r2);
+  for (cupid_int k = 0; k < S->nf; k++)
+    CUPID_CHECK(isfinite(x[k]), CUPID_ERR_NUMERIC, "the Krylov solve: non-finite solution at DOF %lld",
+                (long long)S->global[k]);
+  return CUPID_SUCCESS;
+}
+
 cupid_status cupid_iterative_solve(const cupid_linear_operator *A, const cupid_csr_t *P,
                                    const cupid_dirichlet_t *bc, const double *f, double *u,
                                    const cupid_krylov_options *opts, cupid_solve_info *info) {
@@ -281,39 +315,21 @@ cupid_status cupid_iterative_solve(const cupid_linear_operator *A, const cupid_c
   cupid_status st = CUPID_SUCCESS;
   double *b = NULL, *x = NULL, *ax = NULL, t0 = cupid_wtime();
   info->n = S.nf;
-  CUPID_TRY(cupid_malloc((size_t)S.nf + 1, sizeof *S.global, "free DOFs", &S.global));
-  CUPID_TRY(cupid_calloc((size_t)S.n + 1, sizeof *S.xw, "work vector", &S.xw));
-  CUPID_TRY(cupid_calloc((size_t)S.n + 1, sizeof *S.yw, "work vector", &S.yw));
   CUPID_TRY(cupid_calloc((size_t)S.nf + 1, sizeof *b, "right-hand side", &b));
   CUPID_TRY(cupid_calloc((size_t)S.nf + 1, sizeof *x, "solution", &x));
-  for (cupid_int d = 0, k = 0; d < S.n; d++)
-    if (!bc->fixed[d]) S.global[k++] = d;
-  /* b_f = f_f - A_fc u_c: A times the vector holding only the prescribed values */
+  CUPID_TRY(free_system(&S, bc, f, b));
   for (cupid_int d = 0; d < S.n; d++) u[d] = bc->fixed[d] ? bc->value[d] : 0.0;
-  CUPID_TRY(A->apply(A->ctx, u, S.yw));
-  for (cupid_int k = 0; k < S.nf; k++) b[k] = f[S.global[k]] - S.yw[S.global[k]];
-  memset(S.xw, 0, (size_t)S.n * sizeof *S.xw); /* fixed DOFs stay 0 in products */
   CUPID_TRY(cupid_direct_factor_create_kind(P, A->symmetric ? CUPID_MATRIX_SPD : CUPID_MATRIX_GENERAL,
                                             bc, &S.F, NULL));
   info->time_factor = cupid_wtime() - t0;
   t0 = cupid_wtime();
   if (A->symmetric) CUPID_TRY(solve_cg(&S, b, x, rtol, max_it, info));
   else CUPID_TRY(solve_gmres(&S, b, x, rtol, max_it, restart, info));
-  /* u = [x_f ; u_c]; the true residual |b_f - A_ff x_f| / |b_f|, recomputed */
+  /* u = [x_f ; u_c]; the true residual, recomputed */
   for (cupid_int k = 0; k < S.nf; k++) u[S.global[k]] = x[k];
   CUPID_TRY(cupid_calloc((size_t)S.nf + 1, sizeof *ax, "residual", &ax));
-  CUPID_TRY(apply_free(&S, x, ax));
-  double r2 = 0.0, b2 = 0.0;
-  for (cupid_int k = 0; k < S.nf; k++) {
-    const double r = b[k] - ax[k];
-    r2 += r * r;
-    b2 += b[k] * b[k];
-  }
-  info->residual = b2 > 0 ? sqrt(r2 / b2) : sqrt(r2);
+  CUPID_TRY(true_residual(&S, b, x, ax, info));
   info->time_solve = cupid_wtime() - t0;
-  for (cupid_int k = 0; k < S.nf; k++)
-    CUPID_TRY_CHECK(isfinite(x[k]), CUPID_ERR_NUMERIC,
-                    "solver krylov: non-finite solution at DOF %lld", (long long)S.global[k]);
   CUPID_TRY_CHECK(strcmp(info->converged_reason, "DIVERGED_TRUE_RESIDUAL"), CUPID_ERR_NUMERIC,
                   "the Krylov solve (%s + %s) met its tolerance on its residual estimate, but "
                   "the true relative residual is %.2e after %d iterations and %d restarts (rtol "
@@ -351,38 +367,17 @@ cupid_status cupid_gmres_resolve(const cupid_linear_operator *A, const cupid_dir
   cupid_status st = CUPID_SUCCESS;
   double *b = NULL, *x = NULL, *ax = NULL, t0 = cupid_wtime();
   info->n = S.nf;
-  CUPID_TRY(cupid_malloc((size_t)S.nf + 1, sizeof *S.global, "free DOFs", &S.global));
-  CUPID_TRY(cupid_calloc((size_t)S.n + 1, sizeof *S.xw, "work vector", &S.xw));
-  CUPID_TRY(cupid_calloc((size_t)S.n + 1, sizeof *S.yw, "work vector", &S.yw));
   CUPID_TRY(cupid_calloc((size_t)S.n + 1, sizeof *S.pr, "work vector", &S.pr));
   CUPID_TRY(cupid_calloc((size_t)S.n + 1, sizeof *S.pz, "work vector", &S.pz));
   CUPID_TRY(cupid_calloc((size_t)S.nf + 1, sizeof *b, "right-hand side", &b));
   CUPID_TRY(cupid_calloc((size_t)S.nf + 1, sizeof *x, "solution", &x));
   CUPID_TRY(cupid_calloc((size_t)S.nf + 1, sizeof *ax, "residual", &ax));
-  for (cupid_int d = 0, k = 0; d < S.n; d++)
-    if (!bc->fixed[d]) S.global[k++] = d;
-  /* b_f = f_f - A_fc u_c; the guess: u's free values */
-  for (cupid_int d = 0; d < S.n; d++) S.xw[d] = bc->fixed[d] ? bc->value[d] : 0.0;
-  CUPID_TRY(A->apply(A->ctx, S.xw, S.yw));
-  for (cupid_int k = 0; k < S.nf; k++) {
-    b[k] = f[S.global[k]] - S.yw[S.global[k]];
-    x[k] = u[S.global[k]];
-  }
-  memset(S.xw, 0, (size_t)S.n * sizeof *S.xw); /* fixed DOFs stay 0 in products */
+  CUPID_TRY(free_system(&S, bc, f, b));
+  for (cupid_int k = 0; k < S.nf; k++) x[k] = u[S.global[k]]; /* the guess: u's free values */
   const int restart = max_it < DEFAULT_RESTART ? max_it : DEFAULT_RESTART;
   CUPID_TRY(solve_gmres(&S, b, x, rtol, max_it, restart, info));
-  CUPID_TRY(apply_free(&S, x, ax));
-  double r2 = 0.0, b2 = 0.0;
-  for (cupid_int k = 0; k < S.nf; k++) {
-    const double r = b[k] - ax[k];
-    r2 += r * r;
-    b2 += b[k] * b[k];
-  }
-  info->residual = b2 > 0 ? sqrt(r2 / b2) : sqrt(r2);
+  CUPID_TRY(true_residual(&S, b, x, ax, info));
   info->time_solve = cupid_wtime() - t0;
-  for (cupid_int k = 0; k < S.nf; k++)
-    CUPID_TRY_CHECK(isfinite(x[k]), CUPID_ERR_NUMERIC, "GMRES: non-finite iterate at DOF %lld",
-                    (long long)S.global[k]);
   for (cupid_int d = 0; d < S.n; d++)
     if (bc->fixed[d]) u[d] = bc->value[d];
   for (cupid_int k = 0; k < S.nf; k++) u[S.global[k]] = x[k];
