@@ -713,14 +713,14 @@ static cupid_status check_blocked(growth_run *g, int k, double lambda, int *stop
   if (prob->slab) /* the owned bonds of every rank: the count summed, the worst one's place */
     CUPID_CALL(blocked_over_ranks(prob, &count, &ratio, x));
   if (count == 0) return CUPID_SUCCESS;
-  char zone[256];
+  char zone[480];
   snprintf(zone, sizeof zone, "the coupling zone of method %s", prob->method->name);
   if (prob->method->protected_zone) prob->method->protected_zone(prob, x, zone, sizeof zone);
   snprintf(prob->growth.stopped, sizeof prob->growth.stopped,
            "crack growth stopped at load step %d (load factor %.6g): %lld bond%s of %s reached "
            "the breaking limit (up to %.3g times) near (%g, %g, %g), where a crack cannot go: "
            "the bonds of a coupling zone never break (its PD nodes share their load with the "
-           "beam). Extend the PD region, or move the overlap, away from where the crack runs; "
+           "beam). Extend the PD region, or move the coupling zone, away from where the crack runs; "
            "the steps before are in the steps' file, the fields written are this solve's",
            k, lambda, (long long)count, count == 1 ? "" : "s", zone, ratio, x[0], x[1], x[2]);
   prob->growth.stopped_step = k;
