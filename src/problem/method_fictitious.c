@@ -13,9 +13,9 @@
  * (cupid_coupling_operator_zone): a bond broken outside it changes Eq. 38 in real rows and
  * columns only, by the same symmetric, rigid-mode-free terms as on the model grid, so the fits
  * of Eqs. 33-36 and the balance's C = K^T R stay valid without rebuilding (docs/theory.md,
- * "Fracture with fictitious nodes"). The assembled K
- * is the kept operator's, assembled again after breaks; growth re-solves it by GMRES on the
- * last LU (growth_lu.c), or on the PETSc engine by the kept matrix-free solve. */
+ * "Fracture with fictitious nodes"). The assembled K is the kept operator's, assembled again
+ * after breaks; growth re-solves it by GMRES on the last LU (growth_lu.c), or on the PETSc
+ * engine by the kept matrix-free solve. */
 #include <stdio.h>
 #include <string.h>
 
@@ -36,39 +36,41 @@ static void free_state(cupid_problem_state *prob) {
   prob->crack_map = NULL;
 }
 
-/* The kept operator (built at the first call), its PD bonds brought to prob->op's: the
- * pre-cracks, and on a path that did not see them, the breaks (crack_copy carries those of
- * each fracture step as they happen). */
+/* The state: the coupled operator of the model, built once (timed as the coupling phase);
+ * crack_copy and crack_map point into it, so that every fracture step's breaks reach it. */
+static cupid_status create_state(cupid_problem_state *prob) {
+  cupid_status st = CUPID_SUCCESS;
+  fict_state *s = NULL;
+  cupid_box *boxes = NULL;
+  int *mats = NULL;
+  cupid_coupling_options co;
+  const double t0 = cupid_wtime();
+  CUPID_TRY(cupid_calloc(1, sizeof *s, "fictitious-node state", &s));
+  CUPID_TRY(cupid_method_coupling_options(prob, &co, &boxes, &mats));
+  st = cupid_coupling_operator_create(prob->beam, prob->grid, &co, &s->A);
+  CUPID_TRY(prob->slab ? cupid_problem_slab_agree(st) : st);
+  cupid_coupling_info ci;
+  cupid_coupling_operator_get_info(s->A, &ci);
+  prob->n_fictitious = ci.n_fictitious_pd;
+  prob->crack_copy = cupid_coupling_operator_pd(s->A);
+  prob->crack_map = cupid_coupling_operator_extended_nodes(s->A);
+  prob->method_state = s;
+  s = NULL;
+  cupid_problem_phase_end(prob, CUPID_PHASE_COUPLING, t0);
+cleanup:
+  if (s) cupid_coupling_operator_destroy(&s->A);
+  cupid_free(&s);
+  cupid_free(&boxes);
+  cupid_free(&mats);
+  return st;
+}
+
+/* The kept operator, its PD bonds brought to prob->op's: the pre-cracks, and on a path that did
+ * not see them, the breaks (crack_copy carries those of each fracture step as they happen). */
 static cupid_status kept_operator(cupid_problem_state *prob, cupid_coupling_operator *out) {
-  fict_state *s = prob->method_state;
-  if (!s) {
-    cupid_status st = CUPID_SUCCESS;
-    cupid_box *boxes = NULL;
-    int *mats = NULL;
-    cupid_coupling_options co;
-    const double t0 = cupid_wtime();
-    CUPID_TRY(cupid_calloc(1, sizeof *s, "fictitious-node state", &s));
-    CUPID_TRY(cupid_method_coupling_options(prob, &co, &boxes, &mats));
-    st = cupid_coupling_operator_create(prob->beam, prob->grid, &co, &s->A);
-    CUPID_TRY(prob->slab ? cupid_problem_slab_agree(st) : st);
-    prob->method_state = s;
-    s = NULL;
-    cupid_problem_phase_end(prob, CUPID_PHASE_COUPLING, t0);
-  cleanup:
-    if (s) cupid_coupling_operator_destroy(&s->A);
-    cupid_free(&s);
-    cupid_free(&boxes);
-    cupid_free(&mats);
-    CUPID_CALL(st);
-    s = prob->method_state;
-    cupid_coupling_info ci;
-    cupid_coupling_operator_get_info(s->A, &ci);
-    prob->n_fictitious = ci.n_fictitious_pd;
-    prob->crack_copy = cupid_coupling_operator_pd(s->A);
-    prob->crack_map = cupid_coupling_operator_extended_nodes(s->A);
-  }
+  if (!prob->method_state) CUPID_CALL(create_state(prob));
   CUPID_CALL(cupid_pd_operator_copy_broken_mapped(prob->crack_copy, prob->op, prob->crack_map));
-  *out = s->A;
+  *out = ((fict_state *)prob->method_state)->A;
   return CUPID_SUCCESS;
 }
 
