@@ -183,6 +183,10 @@ cupid_status cupid_direct_factor_create_kind(const cupid_csr_t *K, cupid_matrix_
                                              cupid_direct_factor *F, cupid_solve_info *info);
 /** The free DOFs the factor solves for. */
 cupid_int cupid_direct_factor_size(const cupid_direct_factor F);
+/** The DOF (global numbering) of an LU factor's smallest pivot: where a nearly singular matrix,
+ *  whose factorisation passed the pivot bound but whose solves cannot be refined, is weakest
+ *  (crack growth holds that node). GENERAL factors only. */
+cupid_status cupid_direct_factor_weakest_dof(const cupid_direct_factor F, cupid_int *dof);
 /** Solve K_ff x = b in the free numbering (b and x of cupid_direct_factor_size() entries, the
  *  free DOFs in increasing global order; b and x must not alias). */
 cupid_status cupid_direct_factor_solve_free(cupid_direct_factor F, const double *b, double *x);

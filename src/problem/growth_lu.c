@@ -153,10 +153,20 @@ cupid_status cupid_growth_lu_solve(cupid_problem_state *prob, cupid_growth_lu *s
     for (cupid_int d = 0; d < prob->ndof; d++)
       if (prob->bc->fixed[d]) prob->u[d] = prob->bc->value[d];
     CUPID_TRY(resolve(prob, s, &L, &done)); /* checked, refined if need be */
-    CUPID_TRY_CHECK(done, CUPID_ERR_NUMERIC,
-                    "growth: GMRES on the fresh LU of K did not reach a relative residual of "
-                    "%.0e in %d iterations (the coupled system is too ill-conditioned)",
-                    LU_RTOL, LU_RESOLVE_MAX);
+    if (!done) { /* the fresh factor of this K cannot solve it: K is singular but for round-off
+                    (a mechanism breaking left, that passed the pivot bound); its weakest pivot
+                    names the node growth.c holds, as for a factorisation that broke down */
+      cupid_int dof = -1;
+      CUPID_TRY(cupid_direct_factor_weakest_dof(s->F, &dof));
+      prob->solve.failed_dof = dof;
+      cupid_growth_lu_renew(s);
+      st = CUPID_ERROR(CUPID_ERR_NUMERIC,
+                       "growth: GMRES on the fresh LU of K did not reach a relative residual of "
+                       "%.0e in %d iterations: K is singular to round-off at DOF %lld (a part "
+                       "that breaking left loose)",
+                       LU_RTOL, LU_RESOLVE_MAX, (long long)dof);
+      goto cleanup;
+    }
   }
   prob->solved = 1;
   cupid_problem_record_solve(prob);

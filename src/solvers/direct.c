@@ -11,6 +11,7 @@
 #include <umfpack.h>
 
 #include "cupid/solvers.h"
+#include "solvers_internal.h"
 
 /* cupid_int and SuiteSparse_long must be the same type: arrays are handed over as they are. */
 _Static_assert(sizeof(SuiteSparse_long) == sizeof(cupid_int), "SuiteSparse_long is not 64-bit");
@@ -287,24 +288,7 @@ static cupid_status umfpack_failure(const direct_factor *F, const char *step,
 
 /* The free DOF of the smallest |U_kk| (a zero pivot of a singular matrix). */
 static cupid_status umfpack_weakest_pivot(const direct_factor *F, cupid_int *col) {
-  cupid_status st = CUPID_SUCCESS;
-  const cupid_int n = F->A.n;
-  SuiteSparse_long *Q = NULL, do_recip;
-  double *D = NULL;
-  CUPID_TRY(cupid_malloc((size_t)n, sizeof *Q, "UMFPACK column order", &Q));
-  CUPID_TRY(cupid_malloc((size_t)n, sizeof *D, "UMFPACK pivots", &D));
-  const SuiteSparse_long s = umfpack_dl_get_numeric(NULL, NULL, NULL, NULL, NULL, NULL, NULL, Q,
-                                                    D, &do_recip, NULL, F->numeric);
-  CUPID_TRY_CHECK(s == UMFPACK_OK, CUPID_ERR_INTERNAL, "UMFPACK get_numeric failed (status %ld)",
-                  (long)s);
-  cupid_int kmin = 0;
-  for (cupid_int k = 1; k < n; k++)
-    if (fabs(D[k]) < fabs(D[kmin])) kmin = k;
-  *col = Q[kmin];
-cleanup:
-  cupid_free(&Q);
-  cupid_free(&D);
-  return st;
+  return cupid_umfpack_weakest_pivot(F->numeric, F->A.n, col);
 }
 
 /*

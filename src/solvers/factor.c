@@ -14,6 +14,7 @@
 #include <umfpack.h>
 
 #include "cupid/solvers.h"
+#include "solvers_internal.h"
 
 _Static_assert(sizeof(SuiteSparse_long) == sizeof(cupid_int), "SuiteSparse_long is not 64-bit");
 
@@ -117,6 +118,26 @@ cleanup:
  * residual of 6e-5 (tests/unit/test_coupling_operator.c, full_l9_lps). The factor is checked
  * by one solve; a backward error above LU_BACKWARD_ERROR_MAX refactors with partial pivoting
  * (pivot tolerance 1), and if that is still above, the solves refine iteratively. */
+cupid_status cupid_umfpack_weakest_pivot(void *numeric, cupid_int n, cupid_int *col) {
+  cupid_status st = CUPID_SUCCESS;
+  SuiteSparse_long *Q = NULL, do_recip;
+  double *D = NULL;
+  CUPID_TRY(cupid_malloc((size_t)n, sizeof *Q, "UMFPACK column order", &Q));
+  CUPID_TRY(cupid_malloc((size_t)n, sizeof *D, "UMFPACK pivots", &D));
+  const SuiteSparse_long s = umfpack_dl_get_numeric(NULL, NULL, NULL, NULL, NULL, NULL, NULL, Q,
+                                                    D, &do_recip, NULL, numeric);
+  CUPID_TRY_CHECK(s == UMFPACK_OK, CUPID_ERR_INTERNAL, "UMFPACK get_numeric failed (status %ld)",
+                  (long)s);
+  cupid_int kmin = 0;
+  for (cupid_int k = 1; k < n; k++)
+    if (fabs(D[k]) < fabs(D[kmin])) kmin = k;
+  *col = Q[kmin];
+cleanup:
+  cupid_free(&Q);
+  cupid_free(&D);
+  return st;
+}
+
 static cupid_status factorise_lu(cupid_direct_factor F, cupid_solve_info *info) {
   umfpack_dl_defaults(F->control);
   F->control[UMFPACK_PRL] = 0;
@@ -138,9 +159,20 @@ static cupid_status factorise_lu(cupid_direct_factor F, cupid_solve_info *info) 
       info->memory_factor = (int64_t)(uinfo[UMFPACK_PEAK_MEMORY] * uinfo[UMFPACK_SIZE_OF_UNIT]);
       info->pivot_ratio = uinfo[UMFPACK_RCOND];
     }
-    CUPID_CHECK(s != UMFPACK_WARNING_singular_matrix, CUPID_ERR_NUMERIC,
-                "the matrix is singular (zero pivot in its LU factorisation): the model may be "
-                "unconstrained");
+    /* singular, or to round-off (the bound of the CHOLMOD path and the direct solver): the
+     * weakest pivot's DOF named (crack growth holds its node) */
+    const double bound = CUPID_DIRECT_PIVOT_TOL * (double)(F->n > 64 ? F->n : 64);
+    if (s == UMFPACK_WARNING_singular_matrix || !(uinfo[UMFPACK_RCOND] >= bound)) {
+      cupid_int col = 0;
+      CUPID_CALL(cupid_umfpack_weakest_pivot(F->numeric, F->n, &col));
+      if (info) info->failed_dof = F->global[col];
+      return CUPID_ERROR(CUPID_ERR_NUMERIC,
+                         "the matrix is singular%s (%s in its LU factorisation at DOF %lld): the "
+                         "model may be unconstrained",
+                         s == UMFPACK_WARNING_singular_matrix ? "" : " to round-off",
+                         s == UMFPACK_WARNING_singular_matrix ? "zero pivot" : "pivot ratio below the bound",
+                         (long long)F->global[col]);
+    }
     CUPID_CHECK(s == UMFPACK_OK, s == UMFPACK_ERROR_out_of_memory ? CUPID_ERR_MEMORY : CUPID_ERR_INTERNAL,
                 "UMFPACK factorisation failed (status %ld)", (long)s);
     double eta = 0.0;
@@ -300,6 +332,15 @@ cupid_status cupid_direct_factor_solve(cupid_direct_factor F, const double *b, d
 }
 
 cupid_int cupid_direct_factor_size(const cupid_direct_factor F) { return F ? F->n : 0; }
+
+cupid_status cupid_direct_factor_weakest_dof(const cupid_direct_factor F, cupid_int *dof) {
+  CUPID_CHECK(F && dof && F->kind == CUPID_MATRIX_GENERAL, CUPID_ERR_ARGUMENT,
+              "cupid_direct_factor_weakest_dof: an LU factor (UMFPACK) is needed");
+  cupid_int col = 0;
+  CUPID_CALL(cupid_umfpack_weakest_pivot(F->numeric, F->n, &col));
+  *dof = F->global[col];
+  return CUPID_SUCCESS;
+}
 
 cupid_status cupid_direct_factor_solve_free(cupid_direct_factor F, const double *b, double *x) {
   CUPID_CHECK(F && b && x, CUPID_ERR_ARGUMENT, "cupid_direct_factor_solve_free: NULL argument");

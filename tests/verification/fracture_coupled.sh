@@ -85,6 +85,18 @@ for b, lo, hi in (("momentum", 0.0, 1e-5), ("global", 0.1, 1.0), ("none", 0.1, 1
     print("fictitious, balance %s: the opening within %.2e of Lagrange's (largest %.5f)" % (b, d, top))
     assert lo <= d <= hi, (b, d)
 PY
+# ... and grown (issue 34) until it is cut through under its end traction: the loose nodes held
+# where the factorisation or the support search finds them carry the load, a collapse (exit 2,
+# fracture.collapse), as the Arlequin bar of verification.fracture_growth
+expect 2 'the body collapsed at load step [0-9]+' -- "$CUPID" run "$M/fictitious.yaml" -o fi_cut --quiet \
+  --set coupling.fictitious_fe=5 --set 'peridynamics.fracture={critical_stretch: 3.0e-4}' --set analysis.steps=10
+"$PY" - <<'PY' && ok || bad "the fictitious bar cut through: a collapse"
+import json
+f = json.load(open("fi_cut/summary.json"))["fracture"]
+print("fictitious bar cut through: collapse at step %d, held share %.3f, %d nodes held, re-solves %s"
+      % (f["collapse"]["step"], f["collapse"]["held_share"], f["held_nodes"], f["solves"]["resolve"]))
+assert f["collapse"]["held_share"] > 0.5 and f["held_nodes"] > 0 and f["solves"]["resolve"] == "gmres"
+PY
 # ... but not bond breaking in explicit dynamics: it has no explicit operator (a model error,
 # before anything is assembled; it was an unsupported-feature failure after the assembly)
 expect 1 'lagrange.yaml: --set peridynamics.fracture=\{critical_stretch: 1.0e-3\}: peridynamics.fracture: bond breaking in dynamics needs the method.s matrix-free explicit operator, which coupling method lagrange has not' -- "$CUPID" check "$M/lagrange.yaml" --set 'peridynamics.fracture={critical_stretch: 1.0e-3}' --set 'analysis={type: dynamic, dynamic: {dt: 1.0e-8, duration: 1.0e-7, integrator: central, lumped: true}}'
