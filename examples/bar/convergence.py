@@ -29,6 +29,9 @@ ap.add_argument("--library", help="libcupid to load (default: $CUPID_LIBRARY, el
                 "build/libcupid.so); build-petsc/libcupid.so for --solver petsc")
 ap.add_argument("--cupid", help=argparse.SUPPRESS)  # old form: the library beside this binary
 ap.add_argument("--method", default="fictitious")
+ap.add_argument("--balance", default="none", choices=["none", "momentum", "global"],
+                help="coupling.balance of the fictitious-node runs (default none: paper 000's "
+                     "Eq. 38 as printed, the figures of docs/coupling.md)")
 ap.add_argument("--expansion", default="te2")
 ap.add_argument("--solver", help="analysis solver of the coupled runs (e.g. petsc)")
 ap.add_argument("--clamp-elements", type=int, default=1)
@@ -65,6 +68,8 @@ def clamped(txt):
     return re.sub(r"elements: \[1, ", f"elements: [{a.clamp_elements}, ", txt, count=1)
 
 def coupling(h):
+    if a.method == "fictitious":
+        return f"coupling: {{method: fictitious, balance: {a.balance}}}"
     if a.method != "arlequin":
         return f"coupling: {{method: {a.method}}}"
     return ("coupling: {method: arlequin, arlequin: {penalty: %g, overlap: [{y: [30, 35]}, "
@@ -83,7 +88,7 @@ for case in a.cases:
     h, d = (float(v) for v in case.split(":"))
     txt = re.sub(r"spacing: [0-9.]+", f"spacing: {h!r}", src)
     txt = re.sub(r"horizon: [0-9.]+", f"horizon: {d!r}", txt)
-    txt = txt.replace("coupling: {method: fictitious}", coupling(h))
+    txt = re.sub(r"coupling: \{method: fictitious[^}]*\}", coupling(h), txt)
     name = f"h{h:.3f}_d{d:g}_{a.method}_c{a.clamp_elements}_{a.surface_correction}"
     model = os.path.join(out, name + ".yaml")
     open(model, "w").write(txt)

@@ -34,9 +34,9 @@ CUPID=$(realpath "${CUPID:-build/cupid}")
 SRC=$(realpath "${CUPID_SOURCE_DIR:-.}")
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
-# paper 000's Eq. 38 as printed (balance: none; the default balances each interface, issue 34)
-sed 's/horizon: 3.0/horizon: 1.5/; s/coupling: {method: fictitious}/coupling: {method: fictitious, balance: none}/' "$SRC/examples/bar/bar_coupled_te2.yaml" > "$work/fict.yaml"
-sed 's/horizon: 3.0/horizon: 1.5/; s/method: fictitious/method: lagrange/' "$SRC/examples/bar/bar_coupled_te2.yaml" > "$work/lagr.yaml"
+# paper 000's Eq. 38 as printed (the example pins balance: none; the default balances, issue 34)
+sed 's/horizon: 3.0/horizon: 1.5/' "$SRC/examples/bar/bar_coupled_te2.yaml" > "$work/fict.yaml"
+sed 's/horizon: 3.0/horizon: 1.5/; s/coupling: {method: fictitious, balance: none}/coupling: {method: lagrange}/' "$SRC/examples/bar/bar_coupled_te2.yaml" > "$work/lagr.yaml"
 c3='s/elements: \[1, 1, 1\]/elements: [3, 1, 1]/'
 sed "$c3" "$work/fict.yaml" > "$work/fict_c3.yaml"
 sed "$c3; s/  partial_volume: pdlammps/  partial_volume: pdlammps\n  surface_correction: energy/" "$work/fict.yaml" > "$work/fict_c3e.yaml"
@@ -45,7 +45,7 @@ arl='s/elements: \[1, 1, 1\], type: B2/elements: [1, 1, 1, 1, 1], type: B2/; s/y
 sed "$arl" "$work/fict.yaml" > "$work/arl.yaml"
 sed "s/elements: \[1, 1, 1, 1, 1\]/elements: [3, 1, 1, 1, 1]/; s/  partial_volume: pdlammps/  partial_volume: pdlammps\n  surface_correction: energy/" "$work/arl.yaml" > "$work/arl_c3e.yaml"
 grep -q "elements: \[3, 1, 1, 1, 1\]" "$work/arl_c3e.yaml" && grep -q "method: arlequin" "$work/arl_c3e.yaml" || { echo "FAIL: arlequin model edits"; exit 1; }
-grep -q "elements: \[3, 1, 1\]" "$work/fe_c3.yaml" && grep -q "surface_correction: energy" "$work/fict_c3e.yaml" && grep -q "balance: none" "$work/fict.yaml" || { echo "FAIL: model edits"; exit 1; }
+grep -q "elements: \[3, 1, 1\]" "$work/fe_c3.yaml" && grep -q "surface_correction: energy" "$work/fict_c3e.yaml" && grep -q "balance: none" "$work/fict.yaml" && grep -q "method: lagrange}" "$work/lagr.yaml" || { echo "FAIL: model edits"; exit 1; }
 for m in fict lagr fict_c3 fict_c3e fe_c3 arl arl_c3e; do "$CUPID" run "$work/$m.yaml" -o "$work/$m" --quiet || { echo "FAIL: $m run"; exit 1; }; done
 "$CUPID" run "$SRC/examples/bar/bar_fe_te2.yaml" -o "$work/fe" --quiet || { echo "FAIL: fe run"; exit 1; }
 python3 - "$work" <<'PY'
