@@ -5,9 +5,11 @@
  *
  * Why GMRES on the last LU: a break changes K by the terms of a few bonds (bond-based: rank one
  * each), so K_last^-1 K_now is the identity plus a change of that rank, and GMRES converges in
- * about as many iterations; an LU of the SENB's coupled K costs hundreds of them. The balanced
- * K' = K - W C^T (balance.c) is K plus a rank-6 term, so the LU of K preconditions it as well
- * (the one-shot balanced solve's Sherman-Morrison-Woodbury is the exact form of this). The
+ * about as many iterations; an LU of the SENB's coupled K costs about 50 of them. The balanced
+ * K' = K - W C^T (balance.c: six terms per balanced group) is preconditioned by the factorised
+ * K' exactly, by Sherman-Morrison-Woodbury on the LU (cupid_coupling_balance_smw): breaks change
+ * neither W nor C (docs/theory.md), so K'_last^-1 K'_now differs from the identity by the broken
+ * bonds alone, as unbalanced (101 -> 75 s on the SENB at h = 1 against the LU of K alone). The
  * factor is renewed by the rent rule of growth.c (the GMRES iterations since the factorisation
  * cost as much as it did, by operation counts, so that the choice does not depend on the
  * machine's load), when a re-solve needs more than LU_RESOLVE_MAX iterations, and at the first
