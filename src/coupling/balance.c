@@ -297,6 +297,9 @@ void cupid_coupling_balance_smw_destroy(cupid_coupling_balance_smw *M) {
 
 static cupid_status balanced_apply(void *ctx, const double *x, double *y) {
   const cupid_coupling_balance B = ctx;
+  /* a slab's share of C gives a slab's share of C^T x: its products go by rows */
+  CUPID_CHECK(!B->sum, CUPID_ERR_ARGUMENT, "a balanced operator on a slab applies by rows "
+              "(cupid_krylov_apply)");
   CUPID_CALL(B->inner.apply(B->inner.ctx, x, y));
   cupid_coupling_balance_correct(B, x, y);
   return CUPID_SUCCESS;
