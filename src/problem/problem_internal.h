@@ -259,6 +259,9 @@ void cupid_growth_downdate_free(cupid_growth_downdate *u);
 typedef struct {
   cupid_direct_factor F;        /* LU of K_ff at the last factorisation (its own free DOFs) */
   cupid_coupling_balance_smw smw; /* balanced: F's K' inverted exactly (SMW), or NULL */
+  cupid_coupling_balance B;     /* balanced: W and C = K^T R, built at the first solve and kept:
+                                   breaks outside the coupling zone change neither, and held
+                                   nodes change the conditions, not K (docs/theory.md) */
   cupid_int bonds_at_factor;    /* broken bonds then */
   double factor_flops;          /* the factorisation's operations ... */
   double iteration_flops;       /* ... and one GMRES iteration's (two triangular solves, K x) */
