@@ -169,54 +169,24 @@ cupid_status cupid_coupling_balance_solve(const cupid_coupling_balance B, const 
                                           cupid_direct_factor F, const cupid_dirichlet_t *bc,
                                           const double *f, double *u) {
   const cupid_int n = B->n;
-  const int k = B->k;
-  const size_t sz = (size_t)k * (size_t)n;
-  double *Z = NULL, *b = NULL, *y = NULL, *S = NULL, *g = NULL;
+  double *b = NULL, *y = NULL;
+  cupid_coupling_balance_smw M = NULL;
   cupid_status st = CUPID_SUCCESS;
-  CUPID_TRY(cupid_calloc(sz + 1, sizeof *Z, "K_ff^-1 W", &Z));
   CUPID_TRY(cupid_calloc((size_t)n, sizeof *b, "balanced right-hand side", &b));
   CUPID_TRY(cupid_calloc((size_t)n, sizeof *y, "balanced solve", &y));
-  CUPID_TRY(cupid_calloc((size_t)(k * k) + 1, sizeof *S, "capacitance", &S));
-  CUPID_TRY(cupid_calloc((size_t)k + 1, sizeof *g, "capacitance", &g));
   /* b = f - K' u_c (u_c: the prescribed values, 0 on the free DOFs) */
   for (cupid_int j = 0; j < n; j++) y[j] = bc->fixed[j] ? bc->value[j] : 0.0;
   cupid_csr_matvec(K, y, b);
   cupid_coupling_balance_correct(B, y, b);
-  for (cupid_int j = 0; j < n; j++) b[j] = f[j] - b[j];
-  memset(y, 0, (size_t)n * sizeof *y);
-  CUPID_TRY(cupid_direct_factor_solve(F, b, y));
-  for (int c = 0; c < k; c++) CUPID_TRY(cupid_direct_factor_solve(F, B->W + (size_t)c * n, Z + (size_t)c * n));
-  /* K'_ff = K_ff - W_f C_f^T: u_f = y + Z (I - C_f^T Z)^-1 C_f^T y */
-  for (int a = 0; a < k; a++) {
-    const double *ca = B->C + (size_t)a * n;
-    g[a] = 0.0;
-    for (cupid_int j = 0; j < n; j++)
-      if (!bc->fixed[j]) g[a] += ca[j] * y[j];
-    for (int c = 0; c < k; c++) {
-      const double *zc = Z + (size_t)c * n;
-      double v = 0.0;
-      for (cupid_int j = 0; j < n; j++)
-        if (!bc->fixed[j]) v += ca[j] * zc[j];
-      S[a * k + c] = (a == c) - v;
-    }
-  }
-  CUPID_TRY_CHECK(dense_solve(S, g, k), CUPID_ERR_NUMERIC,
-                  "coupling.balance: the balanced operator is singular on the free DOFs");
-  for (cupid_int j = 0; j < n; j++) {
-    if (bc->fixed[j]) {
-      u[j] = bc->value[j];
-      continue;
-    }
-    double v = y[j];
-    for (int c = 0; c < k; c++) v += Z[(size_t)c * n + j] * g[c];
-    u[j] = v;
-  }
+  for (cupid_int j = 0; j < n; j++) b[j] = bc->fixed[j] ? 0.0 : f[j] - b[j];
+  /* K'_ff = K_ff - W_f C_f^T by Sherman-Morrison-Woodbury on F */
+  CUPID_TRY(cupid_coupling_balance_smw_create(B, F, bc, &M));
+  CUPID_TRY(cupid_coupling_balance_smw_apply(M, b, y));
+  for (cupid_int j = 0; j < n; j++) u[j] = bc->fixed[j] ? bc->value[j] : y[j];
 cleanup:
-  cupid_free(&Z);
+  cupid_coupling_balance_smw_destroy(&M);
   cupid_free(&b);
   cupid_free(&y);
-  cupid_free(&S);
-  cupid_free(&g);
   return st;
 }
 
@@ -227,7 +197,7 @@ struct cupid_coupling_balance_smw_private {
   cupid_direct_factor F; /* borrowed */
   double *Cf;            /* k columns: C on the factor's free DOFs, 0 on its fixed ones */
   double *Z;             /* k columns: (K_ff)^-1 W_f, 0 on the fixed DOFs */
-  double *S;             /* k x k: I - C_f^T Z */
+  double *Si;            /* k x k: (I - C_f^T Z)^-1, made once (row-major) */
 };
 
 cupid_status cupid_coupling_balance_smw_create(const cupid_coupling_balance B, cupid_direct_factor F,
@@ -236,6 +206,7 @@ cupid_status cupid_coupling_balance_smw_create(const cupid_coupling_balance B, c
   const cupid_int n = B->n;
   const int k = B->k;
   cupid_coupling_balance_smw M = NULL;
+  double *S = NULL, *A = NULL;
   cupid_status st = CUPID_SUCCESS;
   *out = NULL;
   CUPID_CHECK(bc->n == n, CUPID_ERR_ARGUMENT, "balance SMW: %lld conditions for %lld DOFs",
@@ -244,7 +215,9 @@ cupid_status cupid_coupling_balance_smw_create(const cupid_coupling_balance B, c
   M->n = n, M->k = k, M->F = F;
   CUPID_TRY(cupid_calloc((size_t)k * (size_t)n + 1, sizeof *M->Cf, "balance SMW", &M->Cf));
   CUPID_TRY(cupid_calloc((size_t)k * (size_t)n + 1, sizeof *M->Z, "balance SMW", &M->Z));
-  CUPID_TRY(cupid_calloc((size_t)(k * k) + 1, sizeof *M->S, "balance SMW", &M->S));
+  CUPID_TRY(cupid_calloc((size_t)(k * k) + 1, sizeof *M->Si, "balance SMW", &M->Si));
+  CUPID_TRY(cupid_calloc((size_t)(k * k) + 1, sizeof *S, "capacitance", &S));
+  CUPID_TRY(cupid_calloc((size_t)(k * k) + 1, sizeof *A, "capacitance", &A));
   for (int c = 0; c < k; c++) {
     double *Cc = M->Cf + (size_t)c * n, *Zc = M->Z + (size_t)c * n;
     const double *Wc = B->W + (size_t)c * n;
@@ -255,10 +228,20 @@ cupid_status cupid_coupling_balance_smw_create(const cupid_coupling_balance B, c
   }
   for (int a = 0; a < k; a++)
     for (int c = 0; c < k; c++)
-      M->S[a * k + c] = (a == c) - dot(n, M->Cf + (size_t)a * n, M->Z + (size_t)c * n);
+      S[a * k + c] = (a == c) - dot(n, M->Cf + (size_t)a * n, M->Z + (size_t)c * n);
+  for (int c = 0; c < k; c++) { /* column c of the inverse */
+    double e[NR * CUPID_BALANCE_GROUPS_MAX] = {0};
+    e[c] = 1.0;
+    memcpy(A, S, (size_t)(k * k) * sizeof *A);
+    CUPID_TRY_CHECK(dense_solve(A, e, k), CUPID_ERR_NUMERIC,
+                    "coupling.balance: the balanced operator is singular on the free DOFs");
+    for (int a = 0; a < k; a++) M->Si[a * k + c] = e[a];
+  }
   *out = M;
   M = NULL;
 cleanup:
+  cupid_free(&S);
+  cupid_free(&A);
   cupid_coupling_balance_smw_destroy(&M);
   return st;
 }
@@ -270,14 +253,12 @@ cupid_status cupid_coupling_balance_smw_apply(const cupid_coupling_balance_smw M
   for (cupid_int j = 0; j < n; j++) z[j] = 0.0;
   CUPID_CALL(cupid_direct_factor_solve(M->F, r, z));
   if (k == 0) return CUPID_SUCCESS;
-  double *S = NULL, g[NR * CUPID_BALANCE_GROUPS_MAX];
-  CUPID_CALL(cupid_malloc((size_t)(k * k), sizeof *S, "balance SMW", &S));
-  memcpy(S, M->S, (size_t)(k * k) * sizeof *S);
-  for (int a = 0; a < k; a++) g[a] = dot(n, M->Cf + (size_t)a * n, z);
-  const int ok = dense_solve(S, g, k);
-  cupid_free(&S);
-  CUPID_CHECK(ok, CUPID_ERR_NUMERIC, "coupling.balance: the balanced operator is singular on the "
-              "free DOFs");
+  double t[NR * CUPID_BALANCE_GROUPS_MAX], g[NR * CUPID_BALANCE_GROUPS_MAX];
+  for (int a = 0; a < k; a++) t[a] = dot(n, M->Cf + (size_t)a * n, z);
+  for (int a = 0; a < k; a++) { /* g = (I - C_f^T Z)^-1 C_f^T y */
+    g[a] = 0.0;
+    for (int c = 0; c < k; c++) g[a] += M->Si[a * k + c] * t[c];
+  }
 #pragma omp parallel for schedule(static) if (n > 100000)
   for (cupid_int j = 0; j < n; j++) {
     double v = 0.0;
@@ -291,7 +272,7 @@ void cupid_coupling_balance_smw_destroy(cupid_coupling_balance_smw *M) {
   if (!M || !*M) return;
   cupid_free(&(*M)->Cf);
   cupid_free(&(*M)->Z);
-  cupid_free(&(*M)->S);
+  cupid_free(&(*M)->Si);
   cupid_free(M);
 }
 
