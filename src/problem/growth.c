@@ -633,14 +633,17 @@ static cupid_status solve(growth_run *g, int reassemble) {
     return CUPID_SUCCESS;
   }
   cupid_csr Kold = NULL;
-  if (reassemble && g->F && g->downdate) Kold = prob->K, prob->K = NULL;
+  const int lu = cupid_growth_lu_applies(prob);
+  if (reassemble && ((g->F && g->downdate) || (lu && g->lu.F && !g->lu.no_update)))
+    Kold = prob->K, prob->K = NULL;
   if (reassemble) cupid_csr_destroy(&prob->K);
   cupid_status st0 = prob->method->assemble(prob);
-  if (st0 == CUPID_SUCCESS && Kold) st0 = downdate_factor(g, Kold);
+  if (st0 == CUPID_SUCCESS && Kold)
+    st0 = lu ? cupid_growth_lu_update(prob, &g->lu, Kold) : downdate_factor(g, Kold);
   cupid_csr_destroy(&Kold);
   CUPID_CALL(st0);
-  if (cupid_growth_lu_applies(prob)) { /* non-symmetric (fictitious nodes, either balance): GMRES
-                                          on the last LU (growth_lu.c) */
+  if (lu) { /* non-symmetric (fictitious nodes, either balance): the last LU, updated by the
+               broken bonds, and GMRES (growth_lu.c) */
     CUPID_CALL(cupid_growth_lu_solve(prob, &g->lu));
     prob->growth.solves++;
     return CUPID_SUCCESS;
@@ -1029,7 +1032,7 @@ cupid_status cupid_problem_run_growth(cupid_problem_state *prob) {
   prob->phases[CUPID_PHASE_SOLVE] = (cupid_phase_record){cupid_wtime() - t0, cupid_peak_memory(), 1};
   const int lu = g.lu.factorisations > 0;
   prob->growth.resolve = g.matrix_free       ? "matrix-free"
-                         : lu                ? "gmres"
+                         : lu                ? (g.lu.updates ? "lu update" : "gmres")
                          : !own_factor(prob) ? "engine"
                          : g.downdates       ? "downdate"
                          : g.krylov          ? "krylov"
@@ -1050,6 +1053,9 @@ cupid_status cupid_problem_run_growth(cupid_problem_state *prob) {
     prob->growth.cg_iterations = g.lu.iterations;
     prob->growth.factor_s = g.lu.t_factor;
     prob->growth.cg_s = g.lu.t_resolve;
+    prob->growth.downdates = g.lu.updates; /* the LU's Sherman-Morrison-Woodbury updates */
+    prob->growth.downdate_columns = g.lu.update_columns;
+    prob->growth.downdate_s = g.lu.t_update;
     prob->phases[CUPID_PHASE_FACTORISATION] = (cupid_phase_record){g.lu.t_factor, cupid_peak_memory(), 1};
   }
   if (g.matrix_free) { /* the CG + GAMG solves */

@@ -8,7 +8,9 @@
  * difference of the two assembled matrices: an off-diagonal block that changed is -k e e^T,
  * and the diagonal blocks must have changed by exactly the sum of the removed terms. Anything
  * else (LPS, where a bond enters the dilatation of both families and so couples their
- * neighbours) is no sum of such terms, and the caller keeps its Krylov re-solves. */
+ * neighbours) is no sum of such terms, and the caller keeps its Krylov re-solves. K need not be
+ * symmetric (the fictitious-node K of paper 000 Eq. 38 is not): each lower block that changed
+ * must have changed by its pair's term, so Kold - Knew = C C^T holds in both triangles. */
 #include <math.h>
 #include <string.h>
 
@@ -72,6 +74,24 @@ static cupid_status push_column(cupid_growth_downdate *u, cupid_int i, cupid_int
   return CUPID_SUCCESS;
 }
 
+/* The change d = old - new of the lower block (i, j), j < i, is -w w^T of the column pushed for
+ * the pair (j, i): the columns are in the order of their pairs, found by bisection. */
+static int lower_matches(const cupid_growth_downdate *u, cupid_int i, cupid_int j, const double d[9]) {
+  cupid_int lo = 0, hi = u->r;
+  while (lo < hi) {
+    const cupid_int mid = lo + (hi - lo) / 2, a = u->rows[6 * mid] / 3, b = u->rows[6 * mid + 3] / 3;
+    if (a < j || (a == j && b < i)) lo = mid + 1;
+    else hi = mid;
+  }
+  if (lo == u->r || u->rows[6 * lo] / 3 != j || u->rows[6 * lo + 3] / 3 != i) return 0;
+  const double *w = u->vals + 6 * lo;
+  const double scale = max_abs(d, 9);
+  for (int a = 0; a < 3; a++)
+    for (int b = 0; b < 3; b++)
+      if (fabs(d[3 * a + b] + w[a] * w[b]) > RANK_ONE_TOL * scale) return 0;
+  return 1;
+}
+
 /* Block q of a 3 x 3 block matrix. */
 static const double *block_at(const cupid_csr_t *A, cupid_int q) { return A->val + 9 * q; }
 
@@ -81,6 +101,7 @@ cupid_status cupid_growth_downdate_terms(const cupid_csr_t *Kold, const cupid_cs
   *ok = Kold->bs == 3 && Knew->bs == 3 && Kold->nrows == Knew->nrows;
   if (!*ok) return CUPID_SUCCESS;
   const cupid_int nb = Kold->nrows;
+  cupid_int lower = 0; /* changed blocks below the diagonal */
   double *diag = NULL; /* per node: the old - new change of its diagonal block, less the terms */
   cupid_status st = CUPID_SUCCESS;
   CUPID_TRY(cupid_calloc(9 * (size_t)nb + 1, sizeof *diag, "downdate check", &diag));
@@ -99,7 +120,13 @@ cupid_status cupid_growth_downdate_terms(const cupid_csr_t *Kold, const cupid_cs
         for (int t = 0; t < 9; t++) diag[9 * i + t] += d[t];
         continue;
       }
-      if (j < i || max_abs(d, 9) == 0.0) continue; /* each pair once: its upper block */
+      if (max_abs(d, 9) == 0.0) continue;
+      if (j < i) { /* the lower block: the transpose of its pair's upper term (a K that is not
+                      symmetric, as Eq. 38's, changes so only where bonds broke) */
+        lower++;
+        *ok = lower_matches(u, i, j, d);
+        continue;
+      }
       double w[3];
       rank_one(d, w, ok);
       if (!*ok) break;
@@ -111,6 +138,7 @@ cupid_status cupid_growth_downdate_terms(const cupid_csr_t *Kold, const cupid_cs
         }
     }
   }
+  *ok = *ok && lower == u->r; /* every pair's lower block changed, by the same term */
   /* every diagonal block changed by the removed terms alone */
   for (cupid_int i = 0; i < nb && *ok; i++) {
     const cupid_int q = Knew->rowptr[i];

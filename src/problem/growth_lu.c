@@ -1,21 +1,29 @@
 /* Crack growth with a non-symmetric coupling on the direct engine (fictitious nodes, paper 000
- * Eq. 38, with `balance: none` or `momentum`; issue 34): each solve after bonds broke is GMRES
- * on the current K from the last solution, right-preconditioned by the UMFPACK LU of the last
- * factorised K (growth.c's CG on the last CHOLMOD factor, for a matrix CG cannot take).
+ * Eq. 38, with `balance: none` or `momentum`; issue 34): the UMFPACK LU of the last factorised
+ * K, brought to the current K exactly as bonds break, and a re-solve from the last solution.
  *
- * Why GMRES on the last LU: a break changes K by the terms of a few bonds (bond-based: rank one
- * each), so K_last^-1 K_now is the identity plus a change of that rank, and GMRES converges in
- * about as many iterations; an LU of the SENB's coupled K costs about 50 of them. The balanced
- * K' = K - W C^T (balance.c: six terms per balanced group) is preconditioned by the factorised
- * K' exactly, by Sherman-Morrison-Woodbury on the LU (cupid_coupling_balance_smw): breaks change
- * neither W nor C (docs/theory.md), so K'_last^-1 K'_now differs from the identity by the broken
- * bonds alone, as unbalanced (101 -> 75 s on the SENB at h = 1 against the LU of K alone). The
- * factor is renewed by the rent rule of growth.c (the GMRES iterations since the factorisation
- * cost as much as it did, by operation counts, so that the choice does not depend on the
- * machine's load), when a re-solve needs more than LU_RESOLVE_MAX iterations, and at the first
- * solve of a load step after breaks (growth.c: a mechanism the support search misses shows as
- * a singular factorisation, which names its node). Every scalar product is cupid_dot's, so the
- * iterates, hence the bonds that break, are the same for any thread count. */
+ * SuiteSparse cannot downdate an LU as CHOLMOD downdates the Arlequin factor. But a bond broken
+ * outside the coupling zone changes K by its symmetric rank-one pair term alone (growth_downdate.c
+ * checks both triangles; docs/theory.md), so the factor is updated by Sherman-Morrison-Woodbury
+ * (growth_smw.c): one solve with the factor per broken bond, when it breaks, and then every
+ * re-solve is one step x += M^-1 (f - K x) on the current K, checked by its residual (GMRES
+ * from there if a node held since the factorisation made it inexact). The balanced
+ * K' = K - W C^T (balance.c: six terms per balanced group) is the factor's exactly by its own
+ * SMW (cupid_coupling_balance_smw): breaks change neither W nor C. On the SENB at h = 1, 20
+ * steps: 75 s with GMRES on the last LU (41 factorisations, 1,555 iterations) -> 37 s (3
+ * factorisations, 1,610 update columns of 11 ms, one step per re-solve); Arlequin 19 s.
+ *
+ * The factor is renewed when a round breaks more bonds than a factorisation is worth in solves
+ * (a crack running through), when the update columns would outgrow the LU itself (n r > its
+ * nonzeros), by the rent rule of growth.c for what is left (GMRES iterations past the check,
+ * the products with the update's columns), when a re-solve needs more than LU_RESOLVE_MAX
+ * iterations, when the update finds K singular (the factorisation then names the node), and at
+ * the first solve of a load step after breaks that were not brought in. Counted, not timed, so
+ * that the choice is the same in every run. A change that is no sum of bond terms (LPS) turns
+ * the updates off for the run: each re-solve is then GMRES on the last LU, right-preconditioned
+ * by it (K_last^-1 K_now is the identity plus a change of the broken bonds' rank). Every scalar
+ * product is cupid_dot's or in a fixed order, so the iterates, hence the bonds that break, are
+ * the same for any thread count. */
 #include <math.h>
 #include <stdio.h>
 #include <string.h>
@@ -33,6 +41,7 @@ int cupid_growth_lu_applies(const cupid_problem_state *prob) {
 }
 
 void cupid_growth_lu_renew(cupid_growth_lu *s) {
+  cupid_growth_smw_reset(&s->upd);
   cupid_coupling_balance_smw_destroy(&s->smw);
   cupid_direct_factor_destroy(&s->F);
 }
@@ -40,8 +49,11 @@ void cupid_growth_lu_renew(cupid_growth_lu *s) {
 void cupid_growth_lu_free(cupid_growth_lu *s) {
   cupid_growth_lu_renew(s);
   cupid_coupling_balance_destroy(&s->B);
+  cupid_growth_smw_free(&s->upd);
+  cupid_growth_downdate_free(&s->dd);
   cupid_free(&s->t);
   cupid_free(&s->z);
+  cupid_free(&s->w);
 }
 
 /* The system's operator: K, or K' = K - W C^T with C = K^T R of this K. */
@@ -60,19 +72,22 @@ static cupid_status system_apply(void *ctx, const double *x, double *y) {
 typedef struct {
   cupid_direct_factor F;
   cupid_coupling_balance_smw smw; /* balanced: the factor's K' exactly */
+  const cupid_growth_smw *upd;    /* the bonds broken since (NULL: the factor's K) */
   const cupid_dirichlet_t *bc;
   double *t;
 } lu_pc;
 
 /* z = P M^-1 P^T r, M the factorised K (balanced: K - W C^T by SMW, whose C and W breaks do not
- * change): the factor keeps the free DOFs it was made with; nodes held since then are fixed now
- * (r and z zero there), so this is M restricted to the current free DOFs. */
+ * change) less the bonds broken since (growth_smw.c): the factor keeps the free DOFs it was made
+ * with; nodes held since then are fixed now (r and z zero there), so this is M restricted to the
+ * current free DOFs, exact while no node was held since the factorisation. */
 static cupid_status lu_apply(void *ctx, const double *r, double *z) {
   const lu_pc *p = ctx;
   const cupid_int n = p->bc->n;
   for (cupid_int d = 0; d < n; d++) p->t[d] = p->bc->fixed[d] ? 0.0 : r[d];
   if (p->smw) CUPID_CALL(cupid_coupling_balance_smw_apply(p->smw, p->t, z));
   else CUPID_CALL(cupid_direct_factor_solve(p->F, p->t, z));
+  if (p->upd) cupid_growth_smw_correct(p->upd, z);
   for (cupid_int d = 0; d < n; d++)
     if (p->bc->fixed[d]) z[d] = 0.0;
   return CUPID_SUCCESS;
@@ -98,33 +113,126 @@ static cupid_status factorise(cupid_problem_state *prob, cupid_growth_lu *s,
   return CUPID_SUCCESS;
 }
 
-/* GMRES from prob->u; *done = 1 when it converged within LU_RESOLVE_MAX (u then the solution,
- * else as it was). */
+/* |f_f - K_f x| over the free DOFs into r (0 on the fixed ones), x holding the prescribed
+ * values on the fixed DOFs. */
+static double free_residual(const cupid_problem_state *prob, const cupid_linear_operator *L,
+                            const double *x, double *r) {
+  const cupid_dirichlet_t *bc = prob->bc;
+  L->apply(L->ctx, x, r);
+  for (cupid_int d = 0; d < prob->ndof; d++) r[d] = bc->fixed[d] ? 0.0 : prob->f_ext[d] - r[d];
+  return sqrt(cupid_dot(prob->ndof, r, r));
+}
+
+/* One step x += M^-1 (f - K x) from x = s->z: with the factor brought to the current K by the
+ * updates it is the solution but for round-off, in two products and a solve where a GMRES cycle
+ * of one iteration takes three and two. info->converged_reason says CONVERGED when the residual
+ * meets GMRES's own test (LU_RTOL |f_f - K_fc u_c|); else GMRES goes on from x. */
+static cupid_status one_step(cupid_problem_state *prob, cupid_growth_lu *s,
+                             const cupid_linear_operator *L, lu_pc *pc, cupid_solve_info *info) {
+  const cupid_dirichlet_t *bc = prob->bc;
+  const cupid_int n = prob->ndof;
+  double *x = s->z, *r = s->w, *dz = s->w + n;
+  for (cupid_int d = 0; d < n; d++) dz[d] = bc->fixed[d] ? bc->value[d] : 0.0;
+  const double bnorm = free_residual(prob, L, dz, r);
+  for (cupid_int d = 0; d < n; d++)
+    if (bc->fixed[d]) x[d] = bc->value[d];
+  double rnorm = free_residual(prob, L, x, r);
+  memset(info, 0, sizeof *info);
+  if (rnorm > LU_RTOL * bnorm) {
+    CUPID_CALL(lu_apply(pc, r, dz));
+    for (cupid_int d = 0; d < n; d++)
+      if (!bc->fixed[d]) x[d] += dz[d];
+    rnorm = free_residual(prob, L, x, r);
+    info->iterations = 1;
+  }
+  CUPID_CHECK(isfinite(rnorm), CUPID_ERR_NUMERIC, "growth: a non-finite residual in the re-solve");
+  info->residual = bnorm > 0.0 ? rnorm / bnorm : 0.0;
+  snprintf(info->converged_reason, sizeof info->converged_reason, "%s",
+           rnorm <= LU_RTOL * bnorm ? "CONVERGED_RTOL" : "NOT_YET");
+  return CUPID_SUCCESS;
+}
+
+/* From prob->u: one step on the updated factor, then GMRES if need be; *done = 1 when it
+ * converged within LU_RESOLVE_MAX iterations (u then the solution, else as it was). */
 static cupid_status resolve(cupid_problem_state *prob, cupid_growth_lu *s,
                             const cupid_linear_operator *L, int *done) {
   const size_t n = (size_t)prob->ndof;
   const double t0 = cupid_wtime();
-  lu_pc pc = {s->F, s->smw, prob->bc, s->t};
+  lu_pc pc = {s->F, s->smw, &s->upd, prob->bc, s->t};
   cupid_solve_info info;
   memcpy(s->z, prob->u, n * sizeof *s->z);
-  CUPID_CALL(cupid_gmres_resolve(L, prob->bc, lu_apply, &pc, prob->f_ext, s->z, LU_RTOL,
-                                 LU_RESOLVE_MAX, &info));
+  int stepped = 0;
+  if (!s->no_update) {
+    CUPID_CALL(one_step(prob, s, L, &pc, &info));
+    stepped = strncmp(info.converged_reason, "CONVERGED", 9) == 0;
+  }
+  if (!stepped) {
+    const int before = s->no_update ? 0 : info.iterations; /* the step's */
+    CUPID_CALL(cupid_gmres_resolve(L, prob->bc, lu_apply, &pc, prob->f_ext, s->z, LU_RTOL,
+                                   LU_RESOLVE_MAX, &info));
+    info.iterations += before;
+  }
   s->t_resolve += cupid_wtime() - t0;
   *done = strncmp(info.converged_reason, "CONVERGED", 9) == 0;
   if (!*done) return CUPID_SUCCESS;
   memcpy(prob->u, s->z, n * sizeof *s->z);
   s->resolves += info.iterations > 0;
   s->iterations += info.iterations;
-  s->since_factor += info.iterations;
+  /* an updated factor is the current K's: its one iteration is the check, not rent */
+  s->since_factor += info.iterations - (s->upd.r > 0 && info.iterations > 0);
+  s->since_factor += info.iterations * 2.0 * (double)s->upd.r * (double)prob->ndof / s->iteration_flops;
   prob->solve = s->factor_info; /* the factor's figures, the re-solve's outcome */
-  prob->solve.method = "umfpack + gmres";
+  prob->solve.method = stepped ? "umfpack, updated" : "umfpack + gmres";
   prob->solve.iterations = info.iterations;
   prob->solve.residual = info.residual;
   prob->solve.time_solve = info.time_solve;
-  snprintf(prob->solve.ksp_type, sizeof prob->solve.ksp_type, "gmres");
-  snprintf(prob->solve.pc_type, sizeof prob->solve.pc_type, "lu of the last K");
+  snprintf(prob->solve.ksp_type, sizeof prob->solve.ksp_type, stepped ? "richardson" : "gmres");
+  snprintf(prob->solve.pc_type, sizeof prob->solve.pc_type,
+           s->upd.r ? "lu of the last K, updated" : "lu of the last K");
   snprintf(prob->solve.converged_reason, sizeof prob->solve.converged_reason, "%s",
            info.converged_reason);
+  return CUPID_SUCCESS;
+}
+
+/* Bring the last LU to the K that broken bonds left (Kold: the K of the last solve): their
+ * rank-one terms (growth_downdate.c, both triangles checked) join the Sherman-Morrison-Woodbury
+ * update of the factor (growth_smw.c), so that it inverts the current K and a re-solve is one
+ * GMRES iteration, as a downdated CHOLMOD factor is for Arlequin. A change that is no sum of
+ * bond terms (LPS) turns updates off for the run (GMRES on the last LU as before); a round that
+ * leaves K singular drops the factor, and the factorisation names the node. */
+cupid_status cupid_growth_lu_update(cupid_problem_state *prob, cupid_growth_lu *s,
+                                    const cupid_csr_t *Kold) {
+  if (!s->F || s->no_update) return CUPID_SUCCESS;
+  const double t0 = cupid_wtime();
+  int ok = 0;
+  CUPID_CALL(cupid_growth_downdate_terms(Kold, prob->K, &s->dd, &ok));
+  if (!ok) {
+    s->no_update = 1;
+    cupid_problem_progress(prob, "growth: the broken bonds changed K by more than a rank-one term "
+                           "each (LPS): re-solves by GMRES on the last LU, no updates");
+    return CUPID_SUCCESS;
+  }
+  if (s->dd.r == 0) return CUPID_SUCCESS;
+  /* A column costs a solve, paid whether or not the factor is renewed later (the bond is
+   * broken in every later K): renewing saves only the round's own columns, and then only when
+   * they cost more than a factorisation (a crack running through); and Z is kept no larger
+   * than the LU itself. The products with Z are rent (cupid_growth_lu_solve). */
+  const double columns_per_factor = s->factor_flops / (LU_FLOP_WEIGHT * s->iteration_flops);
+  if ((double)s->dd.r > columns_per_factor ||
+      (double)(s->upd.r + s->dd.r) * (double)prob->ndof > s->factor_info.nnz_factor) {
+    cupid_growth_lu_renew(s);
+    s->t_update += cupid_wtime() - t0;
+    return CUPID_SUCCESS;
+  }
+  lu_pc pc = {s->F, s->smw, NULL, prob->bc, s->t};
+  CUPID_CALL(cupid_growth_smw_add(&s->upd, prob->ndof, &s->dd, lu_apply, &pc, &ok));
+  if (!ok) cupid_growth_lu_renew(s); /* K singular: the factorisation names the node */
+  else {
+    s->bonds_at_factor = prob->broken_bonds;
+    s->updates++;
+    s->update_columns += s->dd.r;
+  }
+  s->t_update += cupid_wtime() - t0;
   return CUPID_SUCCESS;
 }
 
@@ -133,6 +241,7 @@ cupid_status cupid_growth_lu_solve(cupid_problem_state *prob, cupid_growth_lu *s
   cupid_status st = CUPID_SUCCESS;
   if (!s->t) CUPID_CALL(cupid_calloc(n + 1, sizeof *s->t, "growth work vector", &s->t));
   if (!s->z) CUPID_CALL(cupid_calloc(n + 1, sizeof *s->z, "growth work vector", &s->z));
+  if (!s->w) CUPID_CALL(cupid_calloc(2 * n + 1, sizeof *s->w, "growth work vector", &s->w));
   /* W and C = K^T R of the first K, kept for the run: a break away from the interfaces leaves
    * both as they were (docs/theory.md; unit.coupling_fracture) */
   if (cupid_problem_balanced(prob) && !s->B)
@@ -152,7 +261,7 @@ cupid_status cupid_growth_lu_solve(cupid_problem_state *prob, cupid_growth_lu *s
       s->t[d] = prob->bc->fixed[d] ? prob->bc->value[d] : 0.0;
     CUPID_TRY(system_apply(&op, s->t, s->z));
     for (cupid_int d = 0; d < prob->ndof; d++) s->z[d] = prob->bc->fixed[d] ? 0.0 : prob->f_ext[d] - s->z[d];
-    lu_pc pc = {s->F, s->smw, prob->bc, s->t};
+    lu_pc pc = {s->F, s->smw, NULL, prob->bc, s->t};
     CUPID_TRY(lu_apply(&pc, s->z, prob->u));
     for (cupid_int d = 0; d < prob->ndof; d++)
       if (prob->bc->fixed[d]) prob->u[d] = prob->bc->value[d];
@@ -175,7 +284,7 @@ cupid_status cupid_growth_lu_solve(cupid_problem_state *prob, cupid_growth_lu *s
   prob->solved = 1;
   cupid_problem_record_solve(prob);
   /* rent: renew once the iterations since the factorisation cost as much as it did */
-  if ((double)s->since_factor * LU_FLOP_WEIGHT * s->iteration_flops > s->factor_flops)
+  if (s->since_factor * LU_FLOP_WEIGHT * s->iteration_flops > s->factor_flops)
     cupid_growth_lu_renew(s);
   CUPID_TRY(system_apply(&op, prob->u, prob->f_int));
 cleanup:

@@ -178,6 +178,9 @@ typedef struct cupid_problem_private {
   struct {
     const char *resolve;            /**< "downdate" (the last factor downdated by the broken
                                          bonds), "krylov" (CG on the last factor), "factor",
+                                         "lu update" / "gmres" (a non-symmetric K: the last LU
+                                         updated by the broken bonds / GMRES on it; the
+                                         downdate fields count the updates), "matrix-free",
                                          or "engine" (every solve by an iterative engine) */
     cupid_int solves, factorisations, cg_solves, cg_iterations, downdates, downdate_columns;
     double factor_s, cg_s, downdate_s;
@@ -252,10 +255,32 @@ cupid_status cupid_growth_downdate_terms(const cupid_csr_t *Kold, const cupid_cs
                                          cupid_growth_downdate *u, int *ok);
 void cupid_growth_downdate_free(cupid_growth_downdate *u);
 
+/* growth_smw.c: the inverse of a factorised M brought to M - V V^T exactly by Sherman-Morrison-
+ * Woodbury (V: the broken bonds' columns of cupid_growth_downdate_terms), for a factor that
+ * cannot be downdated (the LU of growth_lu.c). */
+typedef struct {
+  cupid_int n, r, cap; /* DOFs, columns held, room */
+  cupid_int *rows;     /* 6 per column: its DOFs */
+  double *vals;        /* ... and entries */
+  double *Z;           /* n per column: M^-1 v */
+  double *Si;          /* (I - V^T Z)^-1, rows of cap */
+  double *w;           /* 2 cap work */
+} cupid_growth_smw;
+/** Append dd's columns: each solved by solve(ctx, v, z) (z = M^-1 v, the factor's own inverse),
+ *  S^-1 grown by bordering. *ok = 0 when M - V V^T is singular (a pivot of the new block under
+ *  1e-10: a part that breaking left loose); u is then as it was. */
+cupid_status cupid_growth_smw_add(cupid_growth_smw *u, cupid_int n, const cupid_growth_downdate *dd,
+                                  cupid_status (*solve)(void *ctx, const double *b, double *x),
+                                  void *ctx, int *ok);
+/** y = M^-1 b to (M - V V^T)^-1 b, in place: y += Z S^-1 V^T y. */
+void cupid_growth_smw_correct(const cupid_growth_smw *u, double *y);
+void cupid_growth_smw_reset(cupid_growth_smw *u);
+void cupid_growth_smw_free(cupid_growth_smw *u);
+
 /* growth_lu.c: the re-solves of a non-symmetric coupling (fictitious nodes, Eq. 38, either
- * balance) on the direct engine: GMRES on the current K (or the balanced K' = K - W C^T) from
- * the last solution, preconditioned by the UMFPACK LU of the last factorised K, renewed by the
- * rent rule of growth.c's CG. */
+ * balance) on the direct engine: the UMFPACK LU of the last factorised K (or the balanced
+ * K' = K - W C^T), brought to the current K by the broken bonds' terms (growth_smw.c), one step
+ * per re-solve; GMRES on the last LU where the change is no sum of bond terms (LPS). */
 typedef struct {
   cupid_direct_factor F;        /* LU of K_ff at the last factorisation (its own free DOFs) */
   cupid_coupling_balance_smw smw; /* balanced: F's K' inverted exactly (SMW), or NULL */
@@ -265,10 +290,16 @@ typedef struct {
   cupid_int bonds_at_factor;    /* broken bonds then */
   double factor_flops;          /* the factorisation's operations ... */
   double iteration_flops;       /* ... and one GMRES iteration's (two triangular solves, K x) */
-  cupid_int since_factor;       /* GMRES iterations since the last factorisation */
+  double since_factor;          /* solves since the last factorisation: GMRES iterations, the
+                                   update's columns, its products (in solves) */
+  cupid_growth_smw upd;         /* the factor brought to the current K by the broken bonds */
+  cupid_growth_downdate dd;     /* a round's bond terms */
+  int no_update;                /* a change was no sum of bond terms (LPS): GMRES alone */
+  cupid_int updates, update_columns; /* rounds and columns applied by the update */
+  double t_update;
   cupid_int factorisations, resolves, iterations;
   double t_factor, t_resolve;
-  double *t, *z;                /* ndof work vectors */
+  double *t, *z, *w;            /* ndof work vectors (w: two) */
   cupid_solve_info factor_info; /* the last factorisation's (summary.json's solver block) */
   int patch_tested;
 } cupid_growth_lu;
@@ -279,6 +310,10 @@ int cupid_growth_lu_applies(const cupid_problem_state *prob);
  *  conditions: prob->u (the last solution is GMRES's guess), f_int = K u (K' u), prob->solve.
  *  A factorisation that breaks down: CUPID_ERR_NUMERIC with prob->solve.failed_dof. */
 cupid_status cupid_growth_lu_solve(cupid_problem_state *prob, cupid_growth_lu *s);
+/** Before the solve after bonds broke (prob->K assembled again; Kold the K of the last solve):
+ *  the factor brought to the current K by the bonds' terms, or dropped. */
+cupid_status cupid_growth_lu_update(cupid_problem_state *prob, cupid_growth_lu *s,
+                                    const cupid_csr_t *Kold);
 /** Drop the factor (a new load step after breaks starts from a fresh one, as growth.c's CG). */
 void cupid_growth_lu_renew(cupid_growth_lu *s);
 void cupid_growth_lu_free(cupid_growth_lu *s);
