@@ -1,11 +1,13 @@
 #!/usr/bin/python3
 """The single-edge-notched beam's horizon study: peak load against ASTM E399, PD-only and coupled.
 
-    /usr/bin/python3 examples/fracture/senb_study.py [--h 5/3 1.25 1 5/6] [--models pd coupled]
-        [--cupid build/cupid] [--out out/fracture/study] [--threads N] [--reuse]
+    /usr/bin/python3 examples/fracture/senb_study.py [--h 5/3 1.25 1 5/6]
+        [--models pd coupled fictitious] [--cupid build/cupid] [--out out/fracture/study]
+        [--threads N] [--reuse]
 
 Runs examples/fracture/senb_pd.yaml (all PD) and senb_coupled.yaml (CUF beam + PD around the
-notch, Arlequin) at each grid spacing h with m = 3 (horizon 3.015 h), and writes into OUT:
+notch, Arlequin; `fictitious`: the same beam coupled by fictitious nodes, paper 000, with the
+default balance) at each grid spacing h with m = 3 (horizon 3.015 h), and writes into OUT:
   study.csv, study.md       per run: h, delta, nodes, the peak load P (constraint 0's reaction on
                             the sawtooth envelope, summary.json fracture.peak_reactions), the
                             load of the first break, P against E399, bonds broken, seconds;
@@ -30,7 +32,10 @@ from fractions import Fraction
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(os.path.dirname(HERE))
-MODELS = {"pd": "senb_pd.yaml", "coupled": "senb_coupled.yaml"}
+MODELS = {"pd": "senb_pd.yaml", "coupled": "senb_coupled.yaml", "fictitious": "senb_coupled.yaml"}
+EXTRA = {"fictitious": ["--set", "coupling={method: fictitious}"]}
+LABEL = {"pd": "PD only", "coupled": "CUF + PD (Arlequin)", "fictitious": "CUF + PD (fictitious nodes)"}
+STYLE = {"pd": (7, 1), "coupled": (5, 2), "fictitious": (9, 4)}  # gnuplot point type, dash type
 W, S, B, A, E, NU, G0 = 20.0, 80.0, 5.0, 10.0, 22350.0, 0.25, 0.01006
 M_RATIO = 3.015
 WARP = 30  # the side views' displacement scale
@@ -67,7 +72,7 @@ def run(cupid, model, h, out, threads, reuse):
     if not (reuse and os.path.exists(os.path.join(d, "summary.json"))):
         cmd = [cupid, "run", os.path.join(HERE, MODELS[model]), "-o", d, "--quiet",
                "--set", "peridynamics.spacing=%.17g" % hf,
-               "--set", "peridynamics.horizon=%.17g" % (M_RATIO * hf)]
+               "--set", "peridynamics.horizon=%.17g" % (M_RATIO * hf)] + EXTRA.get(model, [])
         if threads:
             cmd += ["--threads", str(threads)]
         subprocess.run(cmd, check=True, cwd=ROOT)
@@ -106,7 +111,7 @@ def side_view(info, out):
     png = os.path.join(out, "damage_%s_h%s.png" % (info["model"], info["h"].replace("/", "_")))
     ps = 0.95 * float(Fraction(info["h"]))
     beam = ""
-    if info["model"] == "coupled":  # the beam's outline and the overlaps, where PD is not alone
+    if info["model"] != "pd":  # the beam's outline and the overlaps, where PD is not alone
         beam = ("set object 1 rect from 0, 0 to 90, 20 fs empty border lc rgb 'gray' dt 2\n"
                 "set object 2 rect from 30, 0 to 35, 20 fc rgb '#e0e0e0' fs solid noborder behind\n"
                 "set object 3 rect from 55, 0 to 60, 20 fc rgb '#e0e0e0' fs solid noborder behind\n"
@@ -125,7 +130,8 @@ set xrange [-2:92]
 set yrange [-3:22]
 %s
 plot "%s" u 1:2:3 w p pt 5 ps %.2f lc palette notitle
-""" % (png, "peridynamics only" if info["model"] == "pd" else "CUF beam + PD (Arlequin)",
+""" % (png, {"pd": "peridynamics only", "coupled": "CUF beam + PD (Arlequin)",
+              "fictitious": "CUF beam + PD (fictitious nodes)"}[info["model"]],
        info["h"], info["delta"], WARP, beam, dat, ps))
     return png
 
@@ -133,7 +139,7 @@ plot "%s" u 1:2:3 w p pt 5 ps %.2f lc palette notitle
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--h", nargs="+", default=["5/3", "1.25", "1", "5/6"])
-    ap.add_argument("--models", nargs="+", choices=sorted(MODELS), default=["pd", "coupled"])
+    ap.add_argument("--models", nargs="+", choices=sorted(MODELS), default=["pd", "coupled", "fictitious"])
     ap.add_argument("--cupid", default=os.path.join(ROOT, "build", "cupid"))
     ap.add_argument("--out", default=os.path.join(ROOT, "out", "fracture", "study"))
     ap.add_argument("--threads", type=int, default=0)
@@ -177,8 +183,7 @@ def main():
         with open(dat, "w") as f:
             f.write("0 0\n" + "".join("%g %g\n" % p for p in c))
         plots.append('"%s" u 1:2 w lp pt %d ps 0.5 lw 2 dt %d t "%s, h = %s"' % (
-            dat, 7 if model == "pd" else 5, 1 if model == "pd" else 2,
-            "PD only" if model == "pd" else "CUF + PD", h))
+            dat, STYLE[model][0], STYLE[model][1], LABEL[model], h))
     gnuplot("""set terminal pngcairo size 900,550 font ",11"
 set output "%s/load_displacement.png"
 set title "SENB in three-point bending: load against load-point deflection"
@@ -198,9 +203,8 @@ plot %s
                 if i["model"] == model:
                     f.write("%g %g\n" % (i["delta"], i["peak_N"]))
             f.write("\n\n")
-    series = ['"%s" index %d u 1:2 w lp pt %d ps 1 lw 2 t "%s"' % (
-        pk, k, 7 if m == "pd" else 5, "PD only" if m == "pd" else "CUF + PD (Arlequin)")
-        for k, m in enumerate(args.models)]
+    series = ['"%s" index %d u 1:2 w lp pt %d ps 1 lw 2 t "%s"' % (pk, k, STYLE[m][0], LABEL[m])
+              for k, m in enumerate(args.models)]
     # E399 with the slab's own fracture energy and stiffness (both a fraction G_eff / G0 of the
     # bulk's near the faces): P ~ sqrt(E G) ~ P_c G_eff / G0
     est = os.path.join(args.out, "surface.dat")
