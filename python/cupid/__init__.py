@@ -9,8 +9,9 @@
     p.write_outputs()                            # the model's output files, as `cupid run`
 
 The library is loaded with ctypes (python3 and python3-numpy from Debian; nothing else):
-from $CUPID_LIBRARY, else the build tree beside this package (build/libcupid.so), else the
-system's (an installed libcupid). Errors raise cupid.Error, whose message carries the model
+from $CUPID_LIBRARY, else the package's own copy (`pip install ./python` puts one beside this
+file), else the build tree beside this package (build/libcupid.so), else the system's (an
+installed libcupid). Errors raise cupid.Error, whose message carries the model
 file's file:line:col, and whose exit_code is the command line's (1 model, 2 numerical, 3 I/O,
 4 internal).
 """
@@ -79,6 +80,9 @@ def library_path():
     if env:
         return env
     here = os.path.dirname(os.path.abspath(__file__))
+    bundled = os.path.join(here, "libcupid.so")  # pip install ./python put it here
+    if os.path.exists(bundled):
+        return bundled
     local = os.path.join(here, "..", "..", "build", "libcupid.so")
     if os.path.exists(local):
         return os.path.normpath(local)
