@@ -25,20 +25,33 @@
  * break): a node left with under 1e-10 of it is loose for any purpose. */
 #define SMW_PIVOT_MIN 1e-10
 
+/* Room for r_new columns: every buffer made anew and filled before any is swapped in, so that
+ * a failed allocation leaves u as it was. */
 static cupid_status grow(cupid_growth_smw *u, cupid_int r_new) {
   if (r_new <= u->cap) return CUPID_SUCCESS;
   cupid_int cap = u->cap ? 2 * u->cap : 64;
   while (cap < r_new) cap *= 2;
-  double *Si = NULL;
-  CUPID_CALL(cupid_calloc((size_t)cap * (size_t)cap + 1, sizeof *Si, "SMW inverse", &Si));
-  for (cupid_int a = 0; a < u->r; a++) memcpy(Si + (size_t)a * cap, u->Si + (size_t)a * u->cap, (size_t)u->r * sizeof *Si);
-  cupid_free(&u->Si);
-  u->Si = Si;
-  cupid_status st = cupid_realloc((size_t)cap * (size_t)u->n + 1, sizeof *u->Z, "SMW columns", &u->Z);
-  if (st == CUPID_SUCCESS) st = cupid_realloc(6 * (size_t)cap, sizeof *u->rows, "SMW columns", &u->rows);
-  if (st == CUPID_SUCCESS) st = cupid_realloc(6 * (size_t)cap, sizeof *u->vals, "SMW columns", &u->vals);
-  if (st == CUPID_SUCCESS) st = cupid_realloc(2 * (size_t)cap + 1, sizeof *u->w, "SMW work", &u->w);
-  if (st == CUPID_SUCCESS) u->cap = cap;
+  const size_t n = (size_t)u->n, r = (size_t)u->r;
+  double *Si = NULL, *Z = NULL, *vals = NULL, *w = NULL;
+  cupid_int *rows = NULL;
+  cupid_status st = CUPID_SUCCESS;
+  CUPID_TRY(cupid_calloc((size_t)cap * (size_t)cap + 1, sizeof *Si, "SMW inverse", &Si));
+  CUPID_TRY(cupid_malloc((size_t)cap * n + 1, sizeof *Z, "SMW columns", &Z));
+  CUPID_TRY(cupid_malloc(6 * (size_t)cap, sizeof *rows, "SMW columns", &rows));
+  CUPID_TRY(cupid_malloc(6 * (size_t)cap, sizeof *vals, "SMW columns", &vals));
+  CUPID_TRY(cupid_calloc(2 * (size_t)cap + 1, sizeof *w, "SMW work", &w));
+  for (size_t a = 0; a < r; a++) memcpy(Si + a * (size_t)cap, u->Si + a * (size_t)u->cap, r * sizeof *Si);
+  if (r) {
+    memcpy(Z, u->Z, r * n * sizeof *Z);
+    memcpy(rows, u->rows, 6 * r * sizeof *rows);
+    memcpy(vals, u->vals, 6 * r * sizeof *vals);
+  }
+  cupid_free(&u->Si), cupid_free(&u->Z), cupid_free(&u->rows), cupid_free(&u->vals), cupid_free(&u->w);
+  u->Si = Si, u->Z = Z, u->rows = rows, u->vals = vals, u->w = w;
+  Si = Z = vals = w = NULL, rows = NULL;
+  u->cap = cap;
+cleanup:
+  cupid_free(&Si), cupid_free(&Z), cupid_free(&rows), cupid_free(&vals), cupid_free(&w);
   return st;
 }
 
@@ -86,6 +99,8 @@ cupid_status cupid_growth_smw_add(cupid_growth_smw *u, cupid_int n, const cupid_
   cupid_status st = CUPID_SUCCESS;
   *ok = 1;
   if (k == 0) return CUPID_SUCCESS;
+  CUPID_CHECK(u->r == 0 || u->n == n, CUPID_ERR_ARGUMENT, "SMW update: %lld DOFs, its columns %lld",
+              (long long)n, (long long)u->n);
   u->n = n;
   CUPID_CALL(grow(u, r1));
   const cupid_int cap = u->cap;
