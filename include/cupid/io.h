@@ -39,6 +39,9 @@ FILE *cupid_atomic_stream(cupid_atomic_file file);
  * failure the temporary file is removed and CUPID_ERR_IO names the final path.
  */
 cupid_status cupid_atomic_commit(cupid_atomic_file *file);
+/** Make the commit durable: the file is fsync'ed before the rename and its directory after it
+ *  (checkpoints: a power cut leaves the old file or the new one, whole). */
+void cupid_atomic_set_durable(cupid_atomic_file file);
 /** Close and remove the temporary file, target untouched (NULL-safe; harmless after commit). */
 void cupid_atomic_abort(cupid_atomic_file *file);
 /**
@@ -52,6 +55,40 @@ void cupid_atomic_abort(cupid_atomic_file *file);
  * Up to 64 simultaneously open files are tracked (more still work, but are not cleaned here).
  */
 void cupid_atomic_cleanup_all(void);
+
+/* ---- Checkpoints (src/io/checkpoint.c; issue 36) ----
+ * A long run's state as named binary sections in one file, written durably (temporary file,
+ * fsync, rename, directory fsync) with a CRC-32 (zlib) and the run's identity, the checkpoint it
+ * replaces kept as PATH.prev. Reading takes PATH if intact, else PATH.prev. */
+typedef struct cupid_checkpoint_writer_private *cupid_checkpoint_writer;
+typedef struct cupid_checkpoint_private *cupid_checkpoint;
+/** Start a checkpoint for @p path. @p identity: what the results depend on (the model file's
+ *  contents, the result-changing options), in words: stored, and compared on opening. */
+cupid_status cupid_checkpoint_write_begin(const char *path, const char *identity,
+                                          cupid_checkpoint_writer *w);
+/** Append section @p name (1 to 255 characters) of @p bytes bytes. */
+cupid_status cupid_checkpoint_write(cupid_checkpoint_writer w, const char *name, const void *data,
+                                    size_t bytes);
+/** Finish: the trailer, fsync, the old checkpoint kept as PATH.prev, rename over PATH. Consumes
+ *  the writer. On failure (CUPID_ERR_IO: a full disk, say) PATH and PATH.prev are as they were
+ *  but for PATH.prev becoming a link to PATH. */
+cupid_status cupid_checkpoint_write_commit(cupid_checkpoint_writer *w);
+/** Drop a checkpoint being written; the files on disk are untouched (NULL-safe). */
+void cupid_checkpoint_write_abort(cupid_checkpoint_writer *w);
+/** Open the intact one of PATH and PATH.prev (PATH first). CUPID_ERR_IO: neither exists
+ *  ("nothing to resume") or neither is intact (truncated, a flipped byte); CUPID_ERR_MODEL: it
+ *  was written for another identity (the message quotes both). */
+cupid_status cupid_checkpoint_open(const char *path, const char *identity, cupid_checkpoint *ck);
+/** 1 when the checkpoint opened is PATH.prev (PATH was missing or damaged). */
+int cupid_checkpoint_is_previous(const cupid_checkpoint ck);
+/** Section @p name: a pointer into the checkpoint (valid until close) and its size;
+ *  CUPID_ERR_IO when it has none. */
+cupid_status cupid_checkpoint_section(const cupid_checkpoint ck, const char *name,
+                                      const void **data, size_t *bytes);
+/** Copy section @p name, which must hold exactly @p bytes bytes (else CUPID_ERR_IO). */
+cupid_status cupid_checkpoint_read(const cupid_checkpoint ck, const char *name, void *data,
+                                   size_t bytes);
+void cupid_checkpoint_close(cupid_checkpoint *ck);
 
 /**
  * The output files of one run as a set (src/io/output_set.c): begin stages a folder beside the

@@ -201,9 +201,23 @@ struct cupid_atomic_file_private {
   char *temp;   /* the temporary sibling */
   char *buffer; /* stdio buffer of stream */
   int slot;     /* registry slot or -1 */
+  int durable;  /* fsync the file before the rename and the directory after it */
 };
 
 static atomic_ulong temp_counter;
+
+/* fsync the directory that holds path (best effort: some file systems refuse it). */
+static void sync_directory(const char *path) {
+  const char *slash = strrchr(path, '/');
+  char dir[4096];
+  if (!slash) snprintf(dir, sizeof dir, ".");
+  else if (slash == path) snprintf(dir, sizeof dir, "/");
+  else snprintf(dir, sizeof dir, "%.*s", (int)(slash - path), path);
+  const int fd = open(dir, O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+  if (fd < 0) return;
+  (void)fsync(fd);
+  close(fd);
+}
 
 static void atomic_free(struct cupid_atomic_file_private *f) {
   cupid_free(&f->path);
@@ -276,6 +290,10 @@ cleanup:
 
 FILE *cupid_atomic_stream(cupid_atomic_file file) { return file ? file->stream : NULL; }
 
+void cupid_atomic_set_durable(cupid_atomic_file file) {
+  if (file) file->durable = 1;
+}
+
 cupid_status cupid_atomic_commit(cupid_atomic_file *file) {
   CUPID_CHECK(file && *file, CUPID_ERR_ARGUMENT, "cupid_atomic_commit: NULL handle");
   struct cupid_atomic_file_private *f = *file;
@@ -288,6 +306,10 @@ cupid_status cupid_atomic_commit(cupid_atomic_file *file) {
     err = errno;
   }
   if (!what && ferror(f->stream)) what = "write failed";
+  if (!what && f->durable && fsync(fileno(f->stream)) != 0) {
+    what = "fsync failed";
+    err = errno;
+  }
   if (fclose(f->stream) != 0 && !what) {
     what = "close failed";
     err = errno;
@@ -302,6 +324,8 @@ cupid_status cupid_atomic_commit(cupid_atomic_file *file) {
     unlink(f->temp);
     st = CUPID_ERROR(CUPID_ERR_IO, "cannot write '%s': %s%s%s", f->path, what, err ? ": " : "",
                      err ? strerror(err) : "");
+  } else if (f->durable) {
+    sync_directory(f->path); /* the rename itself on disk */
   }
   registry_remove(f->slot);
   atomic_free(f);
