@@ -137,6 +137,9 @@ typedef struct {
   double energy_release_rate;        /**< G0 > 0 when has_energy_release_rate */
   int has_energy_release_rate;       /**< exactly one of the two is given for `stretch`;
                                           `energy` needs G0 */
+  int calibration_grid;              /**< s0 from G0: 0 the continuum formula (default), 1 the
+                                          lattice's own cut energy (`calibration: grid`,
+                                          bond-based; docs/theory.md "Fracture") */
   int per_iteration_all;             /**< static growth: 1 all bonds over their limit per
                                           re-solve (default), 0 only the most critical one */
   cupid_mark per_iteration_mark;     /**< line > 0 when the key is given (static only) */

@@ -242,6 +242,10 @@ cupid_status cupid_pd_operator_dilatation(const cupid_pd_operator op, const doub
  */
 cupid_status cupid_pd_operator_stress(const cupid_pd_operator op, const double *u, double *sigma);
 
+/** A full (uncut) family's sums over its bonds: *m = sum omega beta |xi|^2 V (its weighted
+ *  volume) and *S = sum omega beta |xi| V (the bond-based micromodulus is c = 18 K / S), with
+ *  the operator's influence function and partial volumes. */
+void cupid_pd_operator_full_family(const cupid_pd_operator op, double *m, double *S);
 /** Weighted volume m_i of each node (Eq. 18; also for bond-based). */
 const double *cupid_pd_operator_weighted_volume(const cupid_pd_operator op);
 

@@ -746,8 +746,9 @@ static cupid_status read_fracture_limit(model_reader *rd, const mr_map *map, cup
 
 static cupid_status read_fracture(model_reader *rd, yaml_node_t *node, cupid_peridynamics *pd) {
   static const char *const keys[] = {"criterion", "critical_stretch", "energy_release_rate",
-                                     "per_iteration", "no_fail"};
+                                     "calibration", "per_iteration", "no_fail"};
   static const char *const criteria[] = {"stretch", "energy"};
+  static const char *const calibrations[] = {"continuum", "grid"};
   static const char *const per_iteration[] = {"all", "one"};
   cupid_fracture *f = &pd->fracture;
   mr_map map;
@@ -768,6 +769,22 @@ static cupid_status read_fracture(model_reader *rd, yaml_node_t *node, cupid_per
                       "bond-based");
   }
   CUPID_CALL(read_fracture_limit(rd, &map, f));
+  if ((v = mr_get(&map, "calibration"))) {
+    CUPID_CALL(mr_enum(rd, v, "peridynamics.fracture.calibration", calibrations,
+                       COUNT(calibrations), &k));
+    f->calibration_grid = k == 1;
+    if (!f->has_energy_release_rate || f->criterion != CUPID_FRACTURE_STRETCH)
+      return mr_error(rd, v, "peridynamics.fracture.calibration",
+                      "calibrates the critical stretch from energy_release_rate (G0): it needs "
+                      "criterion: stretch with energy_release_rate, not critical_stretch");
+    /* LPS: a cut releases the dilatation energy of whole families, not a sum of bond
+     * energies, so "the bonds across the plane at s0" does not define it */
+    if (f->calibration_grid && pd->model == CUPID_PD_LPS)
+      return mr_error(rd, v, "peridynamics.fracture.calibration",
+                      "grid is defined for model: bond (the energy a cut releases is the sum of "
+                      "the energies of the bonds it cuts); with lps a cut also releases the "
+                      "dilatation energy of whole families: use calibration: continuum");
+  }
   if ((v = mr_get(&map, "per_iteration"))) {
     CUPID_CALL(mr_enum(rd, v, "peridynamics.fracture.per_iteration", per_iteration,
                        COUNT(per_iteration), &k));

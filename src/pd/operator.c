@@ -87,6 +87,7 @@ static cupid_status node_data(struct cupid_pd_operator_private *op,
     m_full += S->wb[s] * S->x[s] * S->x[s] * op->V;
     for (int c = 0; c < 3; c++) gs_full[c] += S->wxn[3 * s + c];
   }
+  op->m_full = m_full, op->S_full = Sfull;
   cupid_int empty = -1;
 #pragma omp parallel for schedule(static) if (nn > PD_OMP_MIN_NODES)
   for (cupid_int i = 0; i < nn; i++) {
@@ -326,4 +327,9 @@ void cupid_pd_node_operator(const cupid_pd_operator op, const cupid_pd_grid grid
                              .diagonal = node_diagonal,
                              .preconditioner_rows = node_preconditioner_rows};
   cupid_pd_grid_get_partition(grid, &A->part);
+}
+
+void cupid_pd_operator_full_family(const cupid_pd_operator op, double *m, double *S) {
+  *m = op->m_full;
+  *S = op->S_full;
 }

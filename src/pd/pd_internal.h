@@ -115,6 +115,7 @@ struct cupid_pd_operator_private {
   cupid_influence influence;
   cupid_partial_volume rule;
   double delta, h, V;
+  double m_full, S_full; /* a full family's sum omega beta |xi|^2 V and omega beta |xi| V */
   int dim;
   cupid_int nnodes;
   pd_stencil st;

@@ -102,20 +102,45 @@ static cupid_status check_protected(cupid_problem_state *prob) {
 
 /* s0 from G0 per node (fracture.md, docs/theory.md): bond-based sqrt(5 G0 / (9 K delta))
  * (Silling & Askari 2005), LPS sqrt(G0 / ((3 mu + (3/4)^4 (K - 5 mu / 3)) delta)). */
+/* The critical stretch of node i's material from G0.
+ * continuum (Silling & Askari 2005; fracture.md): bond-based s0 = sqrt(5 G0 / (9 K delta)),
+ *   LPS s0 = sqrt(G0 / ((3 mu + (3/4)^4 (K - 5 mu / 3)) delta));
+ * grid (bond-based, issue 38): the energy that cutting a plane releases, summed over the
+ *   lattice's own bonds. A pair's energy at stretch s is c omega beta s^2 |xi| V^2 / 2, and per
+ *   unit area of a plane with normal n, averaged over its positions, |xi . n| / V pairs of
+ *   offset xi cross it; averaged over orientations, |xi . n| -> |xi| / 2. So
+ *   G = c s^2 / 8 sum omega beta |xi|^2 V = (9/4) K s^2 R, R = m_full / S_full with
+ *   c = 18 K / S_full: s0 = sqrt(G0 / ((9/4) K R)). In the continuum R = 4 delta / 5 and this
+ *   is the formula above; on a lattice R is the operator's (influence, partial volumes). */
+static double stretch_from_g0(const cupid_problem_state *prob, const cupid_material *mt, double G0,
+                              int grid) {
+  const double delta = prob->model->pd.horizon;
+  const double K = mt->E / (3.0 * (1.0 - 2.0 * mt->nu)), mu = mt->E / (2.0 * (1.0 + mt->nu));
+  if (prob->model->pd.model != CUPID_PD_BOND) {
+    const double q = 0.75 * 0.75 * 0.75 * 0.75;
+    return sqrt(G0 / ((3.0 * mu + q * (K - 5.0 * mu / 3.0)) * delta));
+  }
+  if (!grid) return sqrt(5.0 * G0 / (9.0 * K * delta));
+  double m_full = 0.0, S_full = 0.0;
+  cupid_pd_operator_full_family(prob->op, &m_full, &S_full);
+  return sqrt(G0 / (2.25 * K * (m_full / S_full)));
+}
+
+/* The lattice's cut energy at the continuum s0 over G0 (bond-based): 5 R / (4 delta). */
+static double lattice_energy_fraction(const cupid_problem_state *prob) {
+  double m_full = 0.0, S_full = 0.0;
+  cupid_pd_operator_full_family(prob->op, &m_full, &S_full);
+  return 5.0 * (m_full / S_full) / (4.0 * prob->model->pd.horizon);
+}
+
 static cupid_status node_stretch(cupid_problem_state *prob, double G0) {
   const cupid_model_t *m = prob->model;
   const int *mat = cupid_pd_grid_materials(prob->grid);
-  const double delta = m->pd.horizon;
   CUPID_CALL(cupid_malloc((size_t)prob->n_pd, sizeof *prob->node_stretch, "critical stretches",
                           &prob->node_stretch));
-  for (cupid_int i = 0; i < prob->n_pd; i++) {
-    const cupid_material *mt = &m->materials[mat[i]];
-    const double K = mt->E / (3.0 * (1.0 - 2.0 * mt->nu)), mu = mt->E / (2.0 * (1.0 + mt->nu));
-    const double q = 0.75 * 0.75 * 0.75 * 0.75;
-    prob->node_stretch[i] = m->pd.model == CUPID_PD_BOND
-                                ? sqrt(5.0 * G0 / (9.0 * K * delta))
-                                : sqrt(G0 / ((3.0 * mu + q * (K - 5.0 * mu / 3.0)) * delta));
-  }
+  for (cupid_int i = 0; i < prob->n_pd; i++)
+    prob->node_stretch[i] =
+        stretch_from_g0(prob, &m->materials[mat[i]], G0, m->pd.fracture.calibration_grid);
   return CUPID_SUCCESS;
 }
 
@@ -323,9 +348,19 @@ void cupid_problem_fracture_print(const cupid_problem_state *prob) {
   if (o->criterion == CUPID_PD_BREAK_ENERGY)
     printf("fracture: critical bond energy %.6g (from G0 = %g)\n", o->critical_energy,
            m->pd.fracture.energy_release_rate);
-  else if (prob->node_stretch)
-    printf("fracture: critical stretch %.6g (from G0 = %g; the first node's material)\n",
-           prob->n_pd ? prob->node_stretch[0] : 0.0, m->pd.fracture.energy_release_rate);
+  else if (prob->node_stretch) {
+    printf("fracture: critical stretch %.6g (from G0 = %g, calibration %s; the first node's "
+           "material)\n",
+           prob->n_pd ? prob->node_stretch[0] : 0.0, m->pd.fracture.energy_release_rate,
+           m->pd.fracture.calibration_grid ? "grid" : "continuum");
+    if (m->pd.model == CUPID_PD_BOND && prob->n_pd > 0) {
+      const cupid_material *mt = &m->materials[cupid_pd_grid_materials(prob->grid)[0]];
+      const double G0 = m->pd.fracture.energy_release_rate, f = lattice_energy_fraction(prob);
+      printf("fracture: s0 continuum %.6g (the lattice's cut energy G_eff / G0 = %.4f), grid "
+             "%.6g (G_eff / G0 = 1)\n",
+             stretch_from_g0(prob, mt, G0, 0), f, stretch_from_g0(prob, mt, G0, 1));
+    }
+  }
   else
     printf("fracture: critical stretch %.6g\n", o->critical_stretch);
 }
@@ -344,8 +379,17 @@ void cupid_problem_fracture_json(cupid_json js, const cupid_problem_state *prob)
     else if (!prob->node_stretch)
       cupid_json_number(js, "critical_stretch", prob->fracture.critical_stretch);
     if (fr->has_energy_release_rate) cupid_json_number(js, "energy_release_rate", fr->energy_release_rate);
-    if (prob->node_stretch && prob->n_pd > 0) /* the first node's: one material is the usual */
+    if (prob->node_stretch && prob->n_pd > 0) { /* the first node's: one material is the usual */
       cupid_json_number(js, "critical_stretch_from_G0", prob->node_stretch[0]);
+      cupid_json_string(js, "calibration", fr->calibration_grid ? "grid" : "continuum");
+      if (m->pd.model == CUPID_PD_BOND) { /* both calibrations and the lattice's cut energy */
+        const cupid_material *mt = &m->materials[cupid_pd_grid_materials(prob->grid)[0]];
+        const double G0 = fr->energy_release_rate;
+        cupid_json_number(js, "critical_stretch_continuum", stretch_from_g0(prob, mt, G0, 0));
+        cupid_json_number(js, "critical_stretch_grid", stretch_from_g0(prob, mt, G0, 1));
+        cupid_json_number(js, "g_eff_over_g0_continuum", lattice_energy_fraction(prob));
+      }
+    }
     cupid_json_integer(js, "broken_bonds", prob->broken_bonds);
     if (prob->first_break_load > 0) cupid_json_number(js, "first_break_load_factor", prob->first_break_load);
     if (prob->first_break_step >= 0) {

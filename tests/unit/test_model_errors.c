@@ -237,6 +237,19 @@ static const bad_case cases[] = {
      "9:16: peridynamics.fracture.criterion: the energy criterion needs model: lps; use "
      "criterion: stretch for bond-based",
      NULL},
+    {"fracture_calibration_lps.yaml",
+     "11:18: peridynamics.fracture.calibration: grid is defined for model: bond (the energy a cut "
+     "releases is the sum of the energies of the bonds it cuts); with lps a cut also releases "
+     "the dilatation energy of whole families: use calibration: continuum",
+     NULL},
+    {"fracture_calibration_s0.yaml",
+     "9:52: peridynamics.fracture.calibration: calibrates the critical stretch from "
+     "energy_release_rate (G0): it needs criterion: stretch with energy_release_rate, not "
+     "critical_stretch",
+     NULL},
+    {"fracture_calibration_bad.yaml",
+     "9:53: peridynamics.fracture.calibration: must be one of continuum | grid, got 'lattice'",
+     NULL},
     {"fracture_energy_no_g0.yaml",
      "9:5: peridynamics.fracture: missing required key 'energy_release_rate' (criterion "
      "energy needs G0)",
