@@ -197,7 +197,7 @@ static cupid_status resolve(cupid_problem_state *prob, cupid_growth_lu *s,
 /* Bring the last LU to the K that broken bonds left (Kold: the K of the last solve): their
  * rank-one terms (growth_downdate.c, both triangles checked) join the Sherman-Morrison-Woodbury
  * update of the factor (growth_smw.c), so that it inverts the current K and a re-solve is one
- * GMRES iteration, as a downdated CHOLMOD factor is for Arlequin. A change that is no sum of
+ * step, as it is one CG iteration on a downdated CHOLMOD factor for Arlequin. A change that is no sum of
  * bond terms (LPS) turns updates off for the run (GMRES on the last LU as before); a round that
  * leaves K singular drops the factor, and the factorisation names the node. */
 cupid_status cupid_growth_lu_update(cupid_problem_state *prob, cupid_growth_lu *s,
