@@ -10,9 +10,10 @@ set -euo pipefail
 
 # python3-numpy, python3-meshio and python3-vtk9: regression.vtu_readers opens every VTU cupid
 # writes with meshio and VTK's own reader (run by /usr/bin/python3, which these serve).
-# python3-pip, python3-setuptools: `pip install ./python` (unit.python_install).
+# python3-pip, python3-setuptools, python3-venv: `pip install ./python` into a virtual
+# environment (unit.python_install).
 pkgs=(cmake make gcc pkg-config libsuitesparse-dev libopenblas-dev libyaml-dev zlib1g-dev libcmocka-dev gnuplot-nox python3
-      python3-numpy python3-meshio python3-vtk9 python3-pytest python3-pip python3-setuptools)
+      python3-numpy python3-meshio python3-vtk9 python3-pytest python3-pip python3-setuptools python3-venv)
 for arg in "$@"; do
   case $arg in
     --with-petsc) pkgs+=(petsc-dev) ;;

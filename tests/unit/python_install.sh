@@ -14,6 +14,11 @@ CUPID=$(realpath "${CUPID:-build/cupid}")
 SRC=$(realpath "${CUPID_SOURCE_DIR:-.}")
 LIB=$(realpath "$(dirname "$CUPID")/libcupid.so")
 PY=/usr/bin/python3
+# A sanitized build (CUPID_SANITIZE) needs the ASan runtime loaded first into the plain
+# interpreter that imports it (as unit.python); the interpreter's allocations are not ours.
+asan=$(ldd "$LIB" 2>/dev/null | awk '/libasan/ {print $3}')
+pyenv=()
+[ -n "$asan" ] && pyenv=(LD_PRELOAD="$asan" ASAN_OPTIONS=detect_leaks=0)
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 fail=0
@@ -35,7 +40,7 @@ done
 # the command line's answer for the bar
 "$CUPID" run "$SRC/examples/bar/bar.yaml" -o "$work/cli" --quiet || die "cupid run bar.yaml"
 check_import() { # venv, what
-  (cd "$work/elsewhere" && env -u CUPID_LIBRARY -u PYTHONPATH "$1/bin/python" - "$1" "$SRC" \
+  (cd "$work/elsewhere" && env -u CUPID_LIBRARY -u PYTHONPATH "${pyenv[@]}" "$1/bin/python" - "$1" "$SRC" \
      "$work/cli/summary.json" "$("$CUPID" --version)" "$work/py_$2" <<'EOF'
 import json, os, sys
 import cupid
