@@ -121,26 +121,31 @@ static double stretch_from_g0(const cupid_problem_state *prob, const cupid_mater
     return sqrt(G0 / ((3.0 * mu + q * (K - 5.0 * mu / 3.0)) * delta));
   }
   if (!grid) return sqrt(5.0 * G0 / (9.0 * K * delta));
-  double m_full = 0.0, S_full = 0.0;
-  cupid_pd_operator_full_family(prob->op, &m_full, &S_full);
-  return sqrt(G0 / (2.25 * K * (m_full / S_full)));
+  return sqrt(G0 / (2.25 * K * prob->lattice_ratio));
 }
 
 /* The lattice's cut energy at the continuum s0 over G0 (bond-based): 5 R / (4 delta). */
 static double lattice_energy_fraction(const cupid_problem_state *prob) {
-  double m_full = 0.0, S_full = 0.0;
-  cupid_pd_operator_full_family(prob->op, &m_full, &S_full);
-  return 5.0 * (m_full / S_full) / (4.0 * prob->model->pd.horizon);
+  return 5.0 * prob->lattice_ratio / (4.0 * prob->model->pd.horizon);
 }
 
 static cupid_status node_stretch(cupid_problem_state *prob, double G0) {
   const cupid_model_t *m = prob->model;
   const int *mat = cupid_pd_grid_materials(prob->grid);
+  if (m->pd.model == CUPID_PD_BOND) { /* R = m / S, read now: the reports come after the
+                                        solve, when a slab run may hold no operator */
+    double m_full = 0.0, S_full = 0.0;
+    cupid_pd_operator_full_family(prob->op, &m_full, &S_full);
+    prob->lattice_ratio = m_full / S_full;
+  }
   CUPID_CALL(cupid_malloc((size_t)prob->n_pd, sizeof *prob->node_stretch, "critical stretches",
                           &prob->node_stretch));
   for (cupid_int i = 0; i < prob->n_pd; i++)
     prob->node_stretch[i] =
         stretch_from_g0(prob, &m->materials[mat[i]], G0, m->pd.fracture.calibration_grid);
+  if (m->pd.model == CUPID_PD_BOND && prob->n_pd > 0)
+    for (int g = 0; g < 2; g++)
+      prob->s0_calibrations[g] = stretch_from_g0(prob, &m->materials[mat[0]], G0, g);
   return CUPID_SUCCESS;
 }
 
@@ -353,13 +358,10 @@ void cupid_problem_fracture_print(const cupid_problem_state *prob) {
            "material)\n",
            prob->n_pd ? prob->node_stretch[0] : 0.0, m->pd.fracture.energy_release_rate,
            m->pd.fracture.calibration_grid ? "grid" : "continuum");
-    if (m->pd.model == CUPID_PD_BOND && prob->n_pd > 0) {
-      const cupid_material *mt = &m->materials[cupid_pd_grid_materials(prob->grid)[0]];
-      const double G0 = m->pd.fracture.energy_release_rate, f = lattice_energy_fraction(prob);
+    if (prob->lattice_ratio > 0.0)
       printf("fracture: s0 continuum %.6g (the lattice's cut energy G_eff / G0 = %.4f), grid "
              "%.6g (G_eff / G0 = 1)\n",
-             stretch_from_g0(prob, mt, G0, 0), f, stretch_from_g0(prob, mt, G0, 1));
-    }
+             prob->s0_calibrations[0], lattice_energy_fraction(prob), prob->s0_calibrations[1]);
   }
   else
     printf("fracture: critical stretch %.6g\n", o->critical_stretch);
@@ -382,11 +384,9 @@ void cupid_problem_fracture_json(cupid_json js, const cupid_problem_state *prob)
     if (prob->node_stretch && prob->n_pd > 0) { /* the first node's: one material is the usual */
       cupid_json_number(js, "critical_stretch_from_G0", prob->node_stretch[0]);
       cupid_json_string(js, "calibration", fr->calibration_grid ? "grid" : "continuum");
-      if (m->pd.model == CUPID_PD_BOND) { /* both calibrations and the lattice's cut energy */
-        const cupid_material *mt = &m->materials[cupid_pd_grid_materials(prob->grid)[0]];
-        const double G0 = fr->energy_release_rate;
-        cupid_json_number(js, "critical_stretch_continuum", stretch_from_g0(prob, mt, G0, 0));
-        cupid_json_number(js, "critical_stretch_grid", stretch_from_g0(prob, mt, G0, 1));
+      if (prob->lattice_ratio > 0.0) { /* bond-based: both calibrations and the cut energy */
+        cupid_json_number(js, "critical_stretch_continuum", prob->s0_calibrations[0]);
+        cupid_json_number(js, "critical_stretch_grid", prob->s0_calibrations[1]);
         cupid_json_number(js, "g_eff_over_g0_continuum", lattice_energy_fraction(prob));
       }
     }

@@ -155,6 +155,10 @@ typedef struct cupid_problem_private {
   unsigned char *protect;           /**< per PD node: its bonds never break (method stage) */
   uint32_t *no_fail;                /**< per PD node: the no-fail boxes holding it */
   double *node_stretch;             /**< per PD node s0 (from G0), or NULL */
+  double lattice_ratio;             /**< bond-based: m / S of a full family (fracture.c's
+                                         calibrations), taken when s0 is, 0 before */
+  double s0_calibrations[2];        /**< bond-based, the first node's material: s0 continuum
+                                         and grid (the reports; 0 when not from G0) */
   /* A slab run with the critical-energy criterion, or a static one (fracture.c): each rank
    * decides the bonds of its owned nodes and sends their bits to the ranks that hold them as
    * halo. */
