@@ -48,6 +48,14 @@ double cupid_wtime(void);
  *  break use it, so that a crack does not depend on OMP_NUM_THREADS. */
 double cupid_dot(cupid_int n, const double *a, const double *b);
 
+/** Solve A X = B for a small dense system (src/core/dense.c): A n x n row-major (overwritten by
+ *  its elimination), B n x nrhs row-major (overwritten by X); Gaussian elimination with partial
+ *  pivoting, one elimination for all right-hand sides, the same bits for any thread count.
+ *  Returns 0 (B undefined) when a pivot is not above @p pivot_min in magnitude. */
+int cupid_dense_solve(int n, double *A, double *B, int nrhs, double pivot_min);
+/** max |A_ij| of an n x n matrix (a relative pivot bound's scale). */
+double cupid_dense_max_abs(int n, const double *A);
+
 /** Peak resident memory of this process so far, in bytes (0 if unknown). */
 int64_t cupid_peak_memory(void);
 

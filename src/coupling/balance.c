@@ -33,37 +33,10 @@ struct cupid_coupling_balance_private {
   int apply_here;
 };
 
-/* A z = b in place (A: n x n row-major) by Gaussian elimination with partial pivoting; 0 if singular to
- * working precision (a pivot below 1e-12 of the largest entry: the rank a dense 6 x 6 system
- * can be trusted with). */
-static int dense_solve(double *A, double *b, int n) {
-  double amax = 0.0;
-  for (int r = 0; r < n; r++)
-    for (int c = 0; c < n; c++) amax = fmax(amax, fabs(A[r * n + c]));
-  for (int c = 0; c < n; c++) {
-    int p = c;
-    for (int r = c + 1; r < n; r++)
-      if (fabs(A[r * n + c]) > fabs(A[p * n + c])) p = r;
-    if (!(fabs(A[p * n + c]) > 1e-12 * amax)) return 0;
-    for (int k = 0; k < n && p != c; k++) {
-      double t = A[c * n + k];
-      A[c * n + k] = A[p * n + k];
-      A[p * n + k] = t;
-    }
-    double t = b[c];
-    b[c] = b[p];
-    b[p] = t;
-    for (int r = c + 1; r < n; r++) {
-      double f = A[r * n + c] / A[c * n + c];
-      for (int k = c; k < n; k++) A[r * n + k] -= f * A[c * n + k];
-      b[r] -= f * b[c];
-    }
-  }
-  for (int c = n - 1; c >= 0; c--) {
-    for (int k = c + 1; k < n; k++) b[c] -= A[c * n + k] * b[k];
-    b[c] /= A[c * n + c];
-  }
-  return 1;
+/* A Z = B in place (A: n x n, B: n x nrhs, row-major); 0 if singular to working precision (a
+ * pivot below 1e-12 of the largest entry: the rank a dense 6 x 6 system can be trusted with). */
+static int dense_solve(double *A, double *B, int n, int nrhs) {
+  return cupid_dense_solve(n, A, B, nrhs, 1e-12 * cupid_dense_max_abs(n, A));
 }
 
 /* the same to the bit for any thread count (a growth's iterates decide which bonds break) */
@@ -84,15 +57,14 @@ static int group_weights(cupid_int n, const double *R, const double *d, const in
   double G[NR * NR];
   for (int a = 0; a < NR; a++)
     for (int b = 0; b < NR; b++) G[a * NR + b] = dot(n, R + (size_t)a * n, dr + (size_t)b * n);
+  double Gi[NR * NR] = {0}; /* G^-1: one elimination for the NR columns */
+  for (int b = 0; b < NR; b++) Gi[b * NR + b] = 1.0;
+  if (!dense_solve(G, Gi, NR, NR)) return 0;
   for (int b = 0; b < NR; b++) { /* column b of W = D R G^-1 e_b */
-    double A[NR * NR], x[NR] = {0};
-    memcpy(A, G, sizeof A);
-    x[b] = 1.0;
-    if (!dense_solve(A, x, NR)) return 0;
     double *w = W + (size_t)b * n;
     for (cupid_int j = 0; j < n; j++) {
       double v = 0.0;
-      for (int a = 0; a < NR; a++) v += dr[(size_t)a * n + j] * x[a];
+      for (int a = 0; a < NR; a++) v += dr[(size_t)a * n + j] * Gi[a * NR + b];
       w[j] = v;
     }
   }
@@ -206,7 +178,7 @@ cupid_status cupid_coupling_balance_smw_create(const cupid_coupling_balance B, c
   const cupid_int n = B->n;
   const int k = B->k;
   cupid_coupling_balance_smw M = NULL;
-  double *S = NULL, *A = NULL;
+  double *S = NULL;
   cupid_status st = CUPID_SUCCESS;
   *out = NULL;
   CUPID_CHECK(bc->n == n, CUPID_ERR_ARGUMENT, "balance SMW: %lld conditions for %lld DOFs",
@@ -217,7 +189,6 @@ cupid_status cupid_coupling_balance_smw_create(const cupid_coupling_balance B, c
   CUPID_TRY(cupid_calloc((size_t)k * (size_t)n + 1, sizeof *M->Z, "balance SMW", &M->Z));
   CUPID_TRY(cupid_calloc((size_t)(k * k) + 1, sizeof *M->Si, "balance SMW", &M->Si));
   CUPID_TRY(cupid_calloc((size_t)(k * k) + 1, sizeof *S, "capacitance", &S));
-  CUPID_TRY(cupid_calloc((size_t)(k * k) + 1, sizeof *A, "capacitance", &A));
   for (int c = 0; c < k; c++) {
     double *Cc = M->Cf + (size_t)c * n, *Zc = M->Z + (size_t)c * n;
     const double *Wc = B->W + (size_t)c * n;
@@ -229,19 +200,13 @@ cupid_status cupid_coupling_balance_smw_create(const cupid_coupling_balance B, c
   for (int a = 0; a < k; a++)
     for (int c = 0; c < k; c++)
       S[a * k + c] = (a == c) - dot(n, M->Cf + (size_t)a * n, M->Z + (size_t)c * n);
-  for (int c = 0; c < k; c++) { /* column c of the inverse */
-    double e[NR * CUPID_BALANCE_GROUPS_MAX] = {0};
-    e[c] = 1.0;
-    memcpy(A, S, (size_t)(k * k) * sizeof *A);
-    CUPID_TRY_CHECK(dense_solve(A, e, k), CUPID_ERR_NUMERIC,
-                    "coupling.balance: the balanced operator is singular on the free DOFs");
-    for (int a = 0; a < k; a++) M->Si[a * k + c] = e[a];
-  }
+  for (int c = 0; c < k; c++) M->Si[c * k + c] = 1.0; /* the inverse: one elimination */
+  CUPID_TRY_CHECK(dense_solve(S, M->Si, k, k), CUPID_ERR_NUMERIC,
+                  "coupling.balance: the balanced operator is singular on the free DOFs");
   *out = M;
   M = NULL;
 cleanup:
   cupid_free(&S);
-  cupid_free(&A);
   cupid_coupling_balance_smw_destroy(&M);
   return st;
 }

@@ -38,7 +38,6 @@ struct cupid_checkpoint_writer_private {
 
 struct cupid_checkpoint_private {
   unsigned char *data; /* the whole file */
-  size_t size;
   uint64_t count;
   int previous;       /* 1: read from PATH.prev */
 };
@@ -217,7 +216,7 @@ cupid_status cupid_checkpoint_open(const char *path, const char *identity, cupid
     size_t n = 0;
     CUPID_TRY(slurp(paths[k], &d, &n));
     found += d != NULL;
-    if (d && intact(d, n, &ck->count)) ck->data = d, ck->size = n, ck->previous = k;
+    if (d && intact(d, n, &ck->count)) ck->data = d, ck->previous = k;
     else cupid_free(&d);
   }
   CUPID_TRY_CHECK(found, CUPID_ERR_IO, "nothing to resume: no checkpoint '%s'", path);

@@ -108,38 +108,10 @@ static void node_sums(const struct cupid_pd_operator_private *op, cupid_int i, i
   }
 }
 
-/* Solve the n x n system A x = b (row-major, overwritten) by Gaussian elimination with
- * partial pivoting; 0 when a pivot is below 1e-12 of the largest entry (singular). */
+/* Solve the n x n system A x = b (row-major, overwritten); 0 when a pivot is below 1e-12 of
+ * the largest entry (singular). */
 static int solve_n(int n, double *A, double *b) {
-  double scale = 0.0;
-  for (int q = 0; q < n * n; q++) scale = fmax(scale, fabs(A[q]));
-  for (int c = 0; c < n; c++) {
-    int p = c;
-    for (int r = c + 1; r < n; r++)
-      if (fabs(A[r * n + c]) > fabs(A[p * n + c])) p = r;
-    if (!(fabs(A[p * n + c]) > 1e-12 * scale)) return 0;
-    if (p != c) {
-      for (int k = 0; k < n; k++) {
-        const double t = A[c * n + k];
-        A[c * n + k] = A[p * n + k];
-        A[p * n + k] = t;
-      }
-      const double t = b[c];
-      b[c] = b[p];
-      b[p] = t;
-    }
-    for (int r = c + 1; r < n; r++) {
-      const double f = A[r * n + c] / A[c * n + c];
-      for (int k = c; k < n; k++) A[r * n + k] -= f * A[c * n + k];
-      b[r] -= f * b[c];
-    }
-  }
-  for (int c = n - 1; c >= 0; c--) {
-    double t = b[c];
-    for (int k = c + 1; k < n; k++) t -= A[c * n + k] * b[k];
-    b[c] = t / A[c * n + c];
-  }
-  return 1;
+  return cupid_dense_solve(n, A, b, 1, 1e-12 * cupid_dense_max_abs(n, A));
 }
 
 /* The six-parameter energy fit of node i: G(n) = sum_k g_k n_k^2 + q_k n_k^4 such that

@@ -11,8 +11,9 @@
  *   S' = [S B; C D],  Sigma = D - C S^-1 B,
  *   S'^-1 = [S^-1 + S^-1 B Sigma^-1 C S^-1, -S^-1 B Sigma^-1; -Sigma^-1 C S^-1, Sigma^-1],
  *
- * O(r^2 k) a round, in plain loops of a fixed order (no threaded BLAS), so that the iterates,
- * hence the bonds that break, are the same for any thread count. det S' = det S det Sigma and
+ * O(r^2 k) a round, in plain loops of a fixed order (no threaded BLAS; Sigma by
+ * cupid_dense_solve), so that the iterates, hence the bonds that break, are the same for any
+ * thread count. det S' = det S det Sigma and
  * det(M - V V^T) = det M det S: a round whose Sigma is singular (a pivot under SMW_PIVOT_MIN)
  * left the matrix singular (a part that breaking left loose), and the caller factorises afresh,
  * whose pivot names the node. */
@@ -62,31 +63,13 @@ static double vdot(const cupid_growth_smw *u, cupid_int a, const double *x) {
   return s;
 }
 
-/* Invert the k x k matrix A (row-major) in place by Gauss-Jordan with partial pivoting; 0 when
- * a pivot is under SMW_PIVOT_MIN. */
+/* Invert the k x k matrix A (row-major) in place (work: k x k); 0 when a pivot is under
+ * SMW_PIVOT_MIN. */
 static int invert_small(double *A, cupid_int k, double *work) {
-  double *I = work;
-  for (cupid_int a = 0; a < k * k; a++) I[a] = 0.0;
-  for (cupid_int a = 0; a < k; a++) I[a * k + a] = 1.0;
-  for (cupid_int c = 0; c < k; c++) {
-    cupid_int p = c;
-    for (cupid_int a = c + 1; a < k; a++)
-      if (fabs(A[a * k + c]) > fabs(A[p * k + c])) p = a;
-    if (!(fabs(A[p * k + c]) >= SMW_PIVOT_MIN)) return 0;
-    if (p != c)
-      for (cupid_int b = 0; b < k; b++) {
-        double t = A[c * k + b]; A[c * k + b] = A[p * k + b]; A[p * k + b] = t;
-        t = I[c * k + b]; I[c * k + b] = I[p * k + b]; I[p * k + b] = t;
-      }
-    const double d = A[c * k + c];
-    for (cupid_int b = 0; b < k; b++) A[c * k + b] /= d, I[c * k + b] /= d;
-    for (cupid_int a = 0; a < k; a++) {
-      if (a == c || A[a * k + c] == 0.0) continue;
-      const double f = A[a * k + c];
-      for (cupid_int b = 0; b < k; b++) A[a * k + b] -= f * A[c * k + b], I[a * k + b] -= f * I[c * k + b];
-    }
-  }
-  memcpy(A, I, (size_t)(k * k) * sizeof *A);
+  for (cupid_int a = 0; a < k * k; a++) work[a] = 0.0;
+  for (cupid_int a = 0; a < k; a++) work[a * k + a] = 1.0;
+  if (!cupid_dense_solve((int)k, A, work, (int)k, SMW_PIVOT_MIN)) return 0;
+  memcpy(A, work, (size_t)(k * k) * sizeof *A);
   return 1;
 }
 

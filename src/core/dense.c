@@ -1,0 +1,47 @@
+/* Small dense systems: the balance's Gram and capacitance matrices (src/coupling/balance.c),
+ * the surface correction's fits (src/pd/surface.c) and the capacitance of growth's updated LU
+ * (src/problem/growth_smw.c), each a few to a few hundred unknowns. One elimination for every
+ * right-hand side; plain loops in a fixed order, so that the same inputs give the same bits for
+ * any thread count (a growth's iterates decide which bonds break). */
+#include <math.h>
+
+#include "cupid/base.h"
+
+int cupid_dense_solve(int n, double *A, double *B, int nrhs, double pivot_min) {
+  for (int c = 0; c < n; c++) {
+    int p = c;
+    for (int r = c + 1; r < n; r++)
+      if (fabs(A[r * n + c]) > fabs(A[p * n + c])) p = r;
+    if (!(fabs(A[p * n + c]) > pivot_min)) return 0;
+    if (p != c) {
+      for (int k = 0; k < n; k++) {
+        const double t = A[c * n + k];
+        A[c * n + k] = A[p * n + k];
+        A[p * n + k] = t;
+      }
+      for (int j = 0; j < nrhs; j++) {
+        const double t = B[c * nrhs + j];
+        B[c * nrhs + j] = B[p * nrhs + j];
+        B[p * nrhs + j] = t;
+      }
+    }
+    for (int r = c + 1; r < n; r++) {
+      const double f = A[r * n + c] / A[c * n + c];
+      for (int k = c; k < n; k++) A[r * n + k] -= f * A[c * n + k];
+      for (int j = 0; j < nrhs; j++) B[r * nrhs + j] -= f * B[c * nrhs + j];
+    }
+  }
+  for (int c = n - 1; c >= 0; c--)
+    for (int j = 0; j < nrhs; j++) {
+      double t = B[c * nrhs + j];
+      for (int k = c + 1; k < n; k++) t -= A[c * n + k] * B[k * nrhs + j];
+      B[c * nrhs + j] = t / A[c * n + c];
+    }
+  return 1;
+}
+
+double cupid_dense_max_abs(int n, const double *A) {
+  double m = 0.0;
+  for (int q = 0; q < n * n; q++) m = fmax(m, fabs(A[q]));
+  return m;
+}
