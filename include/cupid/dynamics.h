@@ -34,6 +34,38 @@ typedef struct {
   const double *f;               /**< constant external force (n entries), or NULL */
 } cupid_dynamics_system;
 
+/** Energies at one instant. With E0 the initial kinetic + strain energy, the balance is
+ *  kinetic + strain + damping + fracture - external = E0 (drift reported as its residual). */
+typedef struct {
+  double kinetic;   /**< v.M v / 2 */
+  double strain;    /**< u.K u / 2 */
+  double damping;   /**< energy dissipated by C since t = 0 (midpoint rule) */
+  double external;  /**< work of f (and of moving supports) since t = 0 */
+  double fracture;  /**< strain energy removed by hooks->after_forces (broken bonds) */
+  double balance;   /**< kinetic + strain + damping + fracture - external - E0 */
+} cupid_dynamics_energy;
+
+/**
+ * The integrator's whole state at the end of a step (issue 36): what a run needs to continue
+ * from there exactly, to the bit, as if it had never stopped. hooks->safe_point gets it at
+ * every output step (pointers into the integrator, valid during the call); a run given it in
+ * cupid_dynamics_options.resume continues from its step (the vectors copied in). Vectors have
+ * n entries; those a run does not use are NULL (react, load: no time-dependent conditions).
+ * In a distributed run each process has its own.
+ */
+typedef struct {
+  cupid_int step;            /**< the last step done */
+  cupid_int n;
+  const double *u, *v, *a;   /**< displacement, velocity, acceleration */
+  const double *react;       /**< the supports' reactions at the step's end, or NULL */
+  const double *load;        /**< the load of the step's end, or NULL */
+  cupid_dynamics_energy shares; /**< this process's damping, external and fracture sums */
+  cupid_dynamics_energy whole;  /**< the energies of the last output step, whole system */
+  double e0, scale, max_balance; /**< E0, the largest energy, the largest |balance| so far */
+  double omega_max, dt_critical, dt_bound; /**< the stable-step check of step 0 */
+  int lanczos_steps;
+} cupid_dynamics_restart;
+
 /** Optional hooks of a run (cupid_dynamics_options.hooks). */
 typedef struct {
   /** Time-dependent conditions: at time t, the prescribed values of the fixed DOFs (into
@@ -54,6 +86,10 @@ typedef struct {
    *  NULL: none. */
   cupid_status (*after_forces)(void *ctx, cupid_int step, double t, const double *u, double *ku,
                                double *dissipated, int *changed);
+  /** At the end of every output step after the monitor (issue 36): the state to keep for a
+   *  resumption (e.g. write a checkpoint). A non-success return stops the run with it. NULL:
+   *  none. */
+  cupid_status (*safe_point)(void *ctx, const cupid_dynamics_restart *state);
   void *ctx;
 } cupid_dynamics_hooks;
 
@@ -74,18 +110,11 @@ typedef struct {
    *  nothing else needs v_{n+1}: no load, fixed DOF, damping or hook. 0 (default): v and a
    *  at every step. */
   int velocity_at_outputs;
+  /** Continue from this state (a safe point's, of the same system and options) instead of
+   *  starting at t = 0: no initial acceleration, stable-step check or step-0 call; the run's
+   *  results are bit for bit those of the run that reached it. NULL: start at t = 0. */
+  const cupid_dynamics_restart *resume;
 } cupid_dynamics_options;
-
-/** Energies at one instant. With E0 the initial kinetic + strain energy, the balance is
- *  kinetic + strain + damping + fracture - external = E0 (drift reported as its residual). */
-typedef struct {
-  double kinetic;   /**< v.M v / 2 */
-  double strain;    /**< u.K u / 2 */
-  double damping;   /**< energy dissipated by C since t = 0 (midpoint rule) */
-  double external;  /**< work of f (and of moving supports) since t = 0 */
-  double fracture;  /**< strain energy removed by hooks->after_forces (broken bonds) */
-  double balance;   /**< kinetic + strain + damping + fracture - external - E0 */
-} cupid_dynamics_energy;
 
 /** What a run did. */
 typedef struct {

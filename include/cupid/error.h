@@ -28,7 +28,9 @@ typedef enum cupid_status {
   CUPID_ERR_MEMORY = 4,      /**< an allocation failed or a size overflowed (exit 4) */
   CUPID_ERR_ARGUMENT = 5,    /**< a library function got an invalid argument (exit 4) */
   CUPID_ERR_UNSUPPORTED = 6, /**< a valid request that this build cannot serve (exit 1) */
-  CUPID_ERR_INTERNAL = 7     /**< a bug: an invariant was violated (exit 4) */
+  CUPID_ERR_INTERNAL = 7,    /**< a bug: an invariant was violated (exit 4) */
+  CUPID_ERR_INTERRUPTED = 8  /**< stopped by a signal after writing a checkpoint: resume it
+                                  (`cupid run --resume`; exit 5) */
 } cupid_status;
 
 /** Record an error message (printf-style) and return @p code. Use via CUPID_ERROR(). */

@@ -44,6 +44,18 @@ cupid_status cupid_atomic_commit(cupid_atomic_file *file);
 void cupid_atomic_set_durable(cupid_atomic_file file);
 /** Close and remove the temporary file, target untouched (NULL-safe; harmless after commit). */
 void cupid_atomic_abort(cupid_atomic_file *file);
+/** A resumable stream (issue 36): as cupid_atomic_open(), but its temporary file has a fixed
+ *  name (".NAME.partial" beside @p path: a resumable run's staging folder) and is not removed
+ *  by cupid_atomic_cleanup_all(), so that a resumed run continues it. @p keep < 0 starts it
+ *  empty; keep >= 0 continues the one there, cut to its first @p keep bytes (CUPID_ERR_IO if
+ *  it is missing or shorter: the checkpoint that recorded the length is not this file's). */
+cupid_status cupid_atomic_open_partial(const char *path, int64_t keep, cupid_atomic_file *file);
+/** Write what @p file holds to disk (fflush, fdatasync) and give its length in bytes: what a
+ *  checkpoint records of a stream. */
+cupid_status cupid_atomic_sync(cupid_atomic_file file, int64_t *bytes);
+/** Close @p file keeping its temporary file, target untouched (a run interrupted after a
+ *  checkpoint: its resumption continues the file). NULL-safe; consumes the handle. */
+void cupid_atomic_suspend(cupid_atomic_file *file);
 /**
  * Unlink the temporary file of every atomic file still open in this process, after killing
  * and reaping a gnuplot still writing its PNG (which is unlinked too). It is
@@ -106,6 +118,18 @@ cupid_status cupid_output_set_begin(const char *dir, cupid_output_set *set);
 const char *cupid_output_set_dir(const cupid_output_set set);
 cupid_status cupid_output_set_publish(cupid_output_set *set);
 void cupid_output_set_abort(cupid_output_set *set);
+/** As cupid_output_set_begin(), for a run that may be interrupted and resumed (issue 36): the
+ *  staging folder has a fixed name (cupid_output_set_partial_dir()) that a signal leaves, and
+ *  holds the run's checkpoints as dot files (never published; removed with the folder).
+ *  @p resume 0 starts it empty (an interrupted run's folder is removed, as every other begin
+ *  does); 1 keeps what it holds (CUPID_ERR_IO, "nothing to resume", when there is none). */
+cupid_status cupid_output_set_begin_resumable(const char *dir, int resume, cupid_output_set *set);
+/** The staging folder of a resumable run into @p dir (parent/.base.cupid-partial; every rank of
+ *  an MPI run keeps its checkpoint there). Free with cupid_free(). */
+cupid_status cupid_output_set_partial_dir(const char *dir, char **path);
+/** Release the lock and keep the staging folder as it is (an interrupted resumable run, whose
+ *  checkpoint is there). Consumes the handle (NULL-safe). */
+void cupid_output_set_suspend(cupid_output_set *set);
 /** publish leaves every file of @p dir that the set does not write alone (no stale files
  *  removed): a second publish of the same run's outputs, whose first one holds files (time
  *  series written as the run went) that this one does not. */

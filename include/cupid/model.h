@@ -279,6 +279,8 @@ typedef struct {
 typedef struct {
   char *directory;        /**< default "out/<model file stem>" */
   int vtu, pd_nodes, plots;
+  double checkpoint;      /**< seconds of run time between checkpoints (issue 36); 0: none;
+                               -1 (default): every 600 s for a run estimated over 10 minutes */
   cupid_output_line *lines;
   int n_lines;
   cupid_output_point *points;
@@ -289,6 +291,8 @@ typedef struct {
 /** A whole model. Sections absent from the file have has_* == 0. */
 typedef struct cupid_model {
   char *file;  /**< path as given */
+  uint32_t source_crc;   /**< CRC-32 of the model text (a checkpoint's identity, issue 36) */
+  uint64_t source_bytes; /**< its length */
   char **sets; /**< the --set overrides applied (key.path=value), for messages */
   int n_sets;
   char *title; /**< "" if absent */

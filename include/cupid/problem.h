@@ -49,6 +49,8 @@ typedef struct {
                                  matrix instead of the matrix-free operator */
   int allow_large;          /**< --allow-large: run a dynamic analysis estimated beyond a day,
                                  50 GB or 10^5 output files */
+  int resume;               /**< --resume: continue an interrupted run from its checkpoint
+                                 (issue 36; CUPID_ERR_IO when there is none) */
   const char *const *sets;  /**< --set key.path=value overrides of the model file (create_from_
                                  file, create_from_string; model.h cupid_model_read_with) */
   int n_sets;

@@ -2,11 +2,12 @@
  * solve and write the problem (include/cupid/problem.h), and turn the status into the exit code.
  *   cupid run MODEL.yaml [-o DIR] [--solver auto|direct|krylov|petsc] [--threads N]
  *                        [--max-memory GB] [--quiet] [--replicate] [--assembled]
- *                        [-PETSC_OPTION [VALUE]]...
+ *                        [--resume] [-PETSC_OPTION [VALUE]]...
  *   mpirun -n N cupid run MODEL.yaml --solver petsc [...]   (every rank runs, rank 0 writes)
  *   cupid check MODEL.yaml
  *   cupid --version | --help
- * Exit status: 0 success, 1 model error, 2 numerical failure, 3 I/O failure, 4 internal. */
+ * Exit status: 0 success, 1 model error, 2 numerical failure, 3 I/O failure, 4 internal,
+ * 5 interrupted after a checkpoint (resume with --resume). */
 #include <math.h>
 #include <signal.h>
 #include <stdio.h>
@@ -22,7 +23,7 @@
 static const char usage_text[] =
     "usage: cupid run MODEL.yaml [-o DIR] [--solver auto|direct|krylov|petsc] [--threads N]\n"
     "                            [--max-memory GB] [--quiet] [--replicate] [--assembled]\n"
-    "                            [--allow-large] [--set key.path=value]...\n"
+    "                            [--allow-large] [--set key.path=value]... [--resume]\n"
     "                            [-petsc_option [value]]...\n"
     "       mpirun -n N cupid run MODEL.yaml --solver petsc [...]\n"
     "       cupid check MODEL.yaml\n"
@@ -55,15 +56,31 @@ static const char help_text[] =
     "                     --set loads[0].traction.value=[0,50,0]\n"
     "  --allow-large      run a dynamic analysis estimated to take more than a day\n"
     "                     or write more than 50 GB or 10^5 files (refused otherwise)\n"
+    "  --resume           continue an interrupted run (type dynamic) from its last\n"
+    "                     checkpoint, kept beside the output folder: the same files,\n"
+    "                     byte for byte, as a run that was never interrupted\n"
     "  -ksp_*, -pc_*, -log_view, ... (one dash) go to PETSc (--solver petsc; builds\n"
     "                     with PETSc only), e.g. -ksp_monitor -pc_type hypre\n"
     "\n"
     "Exit status: 0 success, 1 model error, 2 numerical failure (singular or\n"
-    "unconstrained system), 3 I/O failure, 4 internal error or out of memory.\n"
+    "unconstrained system), 3 I/O failure, 4 internal error or out of memory,\n"
+    "5 interrupted by SIGINT or SIGTERM after writing a checkpoint (a dynamic run:\n"
+    "continue it with --resume; a second signal stops at once).\n"
     "The model file format is described in docs/model-format.md.\n";
 
-/* Interrupted runs leave no half-written files: temporary outputs are removed. */
+/* A resumable run (issue 36) asked to stop: it writes a checkpoint at its next output step and
+ * ends with status 5. Any other run, or a second signal: interrupted runs leave no half-written
+ * files (temporary outputs are removed; a resumable run's staging folder and its last
+ * checkpoint stay). */
 static void on_signal(int sig) {
+  if (cupid_interrupt_request()) {
+    static const char msg[] = "\ncupid: interrupt: a checkpoint is written at the next output "
+                              "step, then the run stops (a second signal stops it at once)\n";
+    if (write(STDERR_FILENO, msg, sizeof msg - 1) < 0) {
+      /* nothing to do in a signal handler */
+    }
+    return;
+  }
   cupid_atomic_cleanup_all();
   signal(sig, SIG_DFL);
   raise(sig);
@@ -146,6 +163,8 @@ static int parse_options(int argc, char **argv, int first, cupid_run_options *op
       opts->assembled = 1;
     } else if (!strcmp(a, "--allow-large")) {
       opts->allow_large = 1;
+    } else if (!strcmp(a, "--resume")) {
+      opts->resume = 1;
     } else if (!strcmp(a, "--set")) {
       static const char *sets[256];
       if (!has_value) return usage_error("option %s needs key.path=value", a);

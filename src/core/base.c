@@ -2,6 +2,7 @@
 #define _POSIX_C_SOURCE 200809L /* clock_gettime; gcc -fopenmp only gets it via -D_REENTRANT */
 #include "cupid/base.h"
 
+#include <stdatomic.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -132,3 +133,19 @@ void cupid_set_num_threads(int n) {
   (void)n;
 #endif
 }
+
+/* ---------------------------------------------------------------- interrupts (issue 36) */
+
+static atomic_int interrupt_armed, interrupt_pending;
+
+void cupid_interrupt_arm(int armed) {
+  atomic_store(&interrupt_pending, 0);
+  atomic_store(&interrupt_armed, armed ? 1 : 0);
+}
+
+int cupid_interrupt_request(void) {
+  if (!atomic_load(&interrupt_armed)) return 0;
+  return atomic_exchange(&interrupt_pending, 1) == 0; /* a second request: stop at once */
+}
+
+int cupid_interrupt_pending(void) { return atomic_load(&interrupt_pending); }

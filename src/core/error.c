@@ -38,6 +38,7 @@ const char *cupid_status_name(cupid_status code) {
   case CUPID_ERR_ARGUMENT: return "invalid argument";
   case CUPID_ERR_UNSUPPORTED: return "not supported";
   case CUPID_ERR_INTERNAL: return "internal error";
+  case CUPID_ERR_INTERRUPTED: return "interrupted";
   }
   return "unknown error";
 }
@@ -49,6 +50,7 @@ int cupid_status_exit_code(cupid_status code) {
   case CUPID_ERR_UNSUPPORTED: return 1;
   case CUPID_ERR_NUMERIC: return 2;
   case CUPID_ERR_IO: return 3;
+  case CUPID_ERR_INTERRUPTED: return 5;
   default: return 4;
   }
 }

@@ -280,6 +280,50 @@ static cupid_status notify(dyn_state *s, cupid_dynamics_monitor fn, void *ctx, c
             &s->eg);
 }
 
+/* hooks->safe_point at the end of an output step (after the monitor): the state a resumption
+ * continues from. K u, the work vectors and the previous load are not in it: every step makes
+ * them before it reads them. */
+static cupid_status safe_point(dyn_state *s, const cupid_dynamics_info *info, cupid_int step,
+                               const double *u, const double *v) {
+  if (!s->hooks || !s->hooks->safe_point || !output_step(s, step)) return CUPID_SUCCESS;
+  const cupid_dynamics_restart r = {
+      .step = step, .n = s->n, .u = u, .v = v, .a = s->a, .react = s->react,
+      .load = s->react ? s->fcur : NULL, .shares = s->e, .whole = s->eg, .e0 = s->e0,
+      .scale = s->scale, .max_balance = s->max_balance, .omega_max = info->omega_max,
+      .dt_critical = info->dt_critical, .dt_bound = info->dt_bound,
+      .lanczos_steps = info->lanczos_steps};
+  return s->hooks->safe_point(s->hooks->ctx, &r);
+}
+
+/* A resumption (opts->resume): the state of its safe point copied in, in place of the start
+ * at t = 0 (E0, the conditions at 0, the fixed DOFs' values: all in it). */
+static cupid_status resume_state(dyn_state *s, const cupid_dynamics_restart *r, double *u,
+                                 double *v, cupid_dynamics_info *info) {
+  CUPID_CHECK(r->n == s->n && r->step >= 0 && r->step <= s->opt->steps && r->u && r->v && r->a &&
+                  !r->react == !s->react && !r->load == !s->react,
+              CUPID_ERR_ARGUMENT, "cupid_dynamics_run: the state to resume (step %lld of %lld "
+              "DOFs) is not one of this run's (%lld steps of %lld DOFs)",
+              (long long)r->step, (long long)r->n, (long long)s->opt->steps, (long long)s->n);
+  const size_t bytes = sizeof(double) * (size_t)s->n;
+  memcpy(u, r->u, bytes);
+  memcpy(v, r->v, bytes);
+  memcpy(s->a, r->a, bytes);
+  if (s->react) {
+    memcpy(s->react, r->react, bytes);
+    memcpy(s->fcur, r->load, bytes);
+  }
+  s->e = r->shares;
+  s->eg = r->whole;
+  s->e0 = r->e0;
+  s->scale = r->scale;
+  s->max_balance = r->max_balance;
+  info->omega_max = r->omega_max;
+  info->dt_critical = r->dt_critical;
+  info->dt_bound = r->dt_bound;
+  info->lanczos_steps = r->lanczos_steps;
+  return CUPID_SUCCESS;
+}
+
 /* K_eff = (1 + a1 b) K + (a0 + a1 a) M. */
 static cupid_status effective_matrix(const dyn_state *s, double cm, double ck, cupid_csr *Keff) {
   const cupid_dynamics_system *sys = s->sys;
@@ -307,16 +351,19 @@ static cupid_status run_newmark(dyn_state *s, double *u, double *v, cupid_dynami
   double ra = o->rayleigh_mass, rb = o->rayleigh_stiffness;
   cupid_csr Keff = NULL;
   cupid_direct_factor F = NULL;
-  CUPID_TRY(initial_acceleration(s, u, v));
-  if (s->react) initial_reactions(s);
+  const cupid_int first = o->resume ? o->resume->step + 1 : 1;
+  if (!o->resume) {
+    CUPID_TRY(initial_acceleration(s, u, v));
+    if (s->react) initial_reactions(s);
+  }
   CUPID_TRY(effective_matrix(s, a0 + a1 * ra, 1.0 + a1 * rb, &Keff));
   CUPID_TRY(cupid_direct_factor_create(Keff, bc, &F, &info->factor));
   /* g = K_eff u_c: the prescribed values moved to the right-hand side (constant). */
   for (cupid_int d = 0; d < s->n; d++) s->t1[d] = dyn_fixed(bc, d) ? u[d] : 0.0;
   cupid_csr_matvec(Keff, s->t1, s->g);
-  CUPID_TRY(notify(s, fn, ctx, 0, u, v));
+  if (!o->resume) CUPID_TRY(notify(s, fn, ctx, 0, u, v));
   double t0 = cupid_wtime();
-  for (cupid_int step = 1; step <= o->steps; step++) {
+  for (cupid_int step = first; step <= o->steps; step++) {
     if (s->react) { /* moving supports: g = K_eff u_c at the step's end */
       CUPID_TRY(conditions_at(s, (double)step * dt));
       for (cupid_int d = 0; d < s->n; d++) s->t1[d] = dyn_fixed(bc, d) ? s->ufix[d] : 0.0;
@@ -360,6 +407,7 @@ static cupid_status run_newmark(dyn_state *s, double *u, double *v, cupid_dynami
       support_work(s, s->w2);
     }
     CUPID_TRY(notify(s, fn, ctx, step, u, v));
+    CUPID_TRY(safe_point(s, info, step, u, v));
   }
   info->time_step_s = cupid_wtime() - t0;
 cleanup:
@@ -596,19 +644,21 @@ static cupid_status run_central(dyn_state *s, double *u, double *v, cupid_dynami
   }
   CUPID_CALL(cupid_calloc((size_t)s->n + 1, sizeof *s->minv, "inverse masses", &s->minv));
   for (cupid_int d = 0; d < s->n; d++) s->minv[d] = dyn_fixed(bc, d) ? 0.0 : 1.0 / s->sys->m_lumped[d];
-  CUPID_CALL(check_stable(s, info));
-  CUPID_CALL(initial_acceleration(s, u, v));
-  s->ku_ok = 1;
-  if (s->react) initial_reactions(s);
-  CUPID_CALL(s->kst);
-  CUPID_CALL(after_break(s, 0, u, v));
-  CUPID_CALL(notify(s, fn, ctx, 0, u, v));
+  if (!o->resume) { /* a resumption has all of this in its state */
+    CUPID_CALL(check_stable(s, info));
+    CUPID_CALL(initial_acceleration(s, u, v));
+    s->ku_ok = 1;
+    if (s->react) initial_reactions(s);
+    CUPID_CALL(s->kst);
+    CUPID_CALL(after_break(s, 0, u, v));
+    CUPID_CALL(notify(s, fn, ctx, 0, u, v));
+  }
   double t0 = cupid_wtime();
   const int stiff_damping = o->rayleigh_stiffness != 0.0;
   const int merge = merge_kicks(s);
   const double mu = merge ? uniform_value(s->n, s->minv) : NAN;
   int drifted = 0; /* u holds u_{n+1} and vn v_{n+1/2} already (a merged kick and drift) */
-  for (cupid_int step = 1; step <= o->steps; step++) {
+  for (cupid_int step = o->resume ? o->resume->step + 1 : 1; step <= o->steps; step++) {
     if (s->react) CUPID_CALL(conditions_at(s, (double)step * dt));
     double *vh = s->vn; /* v_{n+1/2} */
     if (!drifted) central_drift(s, u, v, s->react ? s->ufix : u, vh);
@@ -637,6 +687,7 @@ static cupid_status run_central(dyn_state *s, double *u, double *v, cupid_dynami
     CUPID_CALL(after_break(s, step, u, v));
     CUPID_CALL(notify(s, fn, ctx, step, u, v));
     CUPID_CALL(s->kst);
+    CUPID_CALL(safe_point(s, info, step, u, v));
   }
   info->time_step_s = cupid_wtime() - t0;
   return CUPID_SUCCESS;
@@ -665,16 +716,20 @@ static cupid_status run(dyn_state *s, double *u, double *v, cupid_dynamics_monit
               "(Newmark factors K once)");
   CUPID_TRY(state_alloc(s));
   const cupid_dirichlet_t *bc = sys->bc;
-  if (s->react) CUPID_TRY(conditions_at(s, 0.0));
-  for (cupid_int d = 0; d < s->n; d++)
-    if (dyn_fixed(bc, d)) u[d] = s->react ? s->ufix[d] : bc->value[d], v[d] = 0.0;
-  /* E0: the energy at t = 0, the reference of the balance. */
-  CUPID_TRY(refresh(s, u));
-  CUPID_TRY(refresh(s, v));
-  energies(s, u, v);
-  CUPID_TRY(s->kst);
-  s->e0 = s->eg.kinetic + s->eg.strain;
-  s->scale = s->max_balance = 0.0;
+  if (opts->resume) {
+    CUPID_TRY(resume_state(s, opts->resume, u, v, info));
+  } else {
+    if (s->react) CUPID_TRY(conditions_at(s, 0.0));
+    for (cupid_int d = 0; d < s->n; d++)
+      if (dyn_fixed(bc, d)) u[d] = s->react ? s->ufix[d] : bc->value[d], v[d] = 0.0;
+    /* E0: the energy at t = 0, the reference of the balance. */
+    CUPID_TRY(refresh(s, u));
+    CUPID_TRY(refresh(s, v));
+    energies(s, u, v);
+    CUPID_TRY(s->kst);
+    s->e0 = s->eg.kinetic + s->eg.strain;
+    s->scale = s->max_balance = 0.0;
+  }
   if (opts->integrator == CUPID_INTEGRATOR_NEWMARK)
     CUPID_TRY(run_newmark(s, u, v, monitor, ctx, info));
   else

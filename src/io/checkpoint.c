@@ -201,6 +201,23 @@ static void find(const struct cupid_checkpoint_private *ck, const char *name, co
   }
 }
 
+/* The offset of the first line where identity a (na bytes) and b differ, and that line's
+ * length in each. */
+static size_t first_difference(const char *a, size_t na, const char *b, int *la, int *lb) {
+  const size_t nb = strlen(b);
+  size_t line = 0, k = 0;
+  while (k < na && k < nb && a[k] == b[k]) {
+    if (a[k] == '\n') line = k + 1;
+    k++;
+  }
+  size_t ea = line, eb = line;
+  while (ea < na && a[ea] != '\n') ea++;
+  while (eb < nb && b[eb] != '\n') eb++;
+  *la = (int)(ea - line);
+  *lb = (int)(eb - line);
+  return line;
+}
+
 cupid_status cupid_checkpoint_open(const char *path, const char *identity, cupid_checkpoint *out) {
   CUPID_CHECK(path && identity && out, CUPID_ERR_ARGUMENT, "checkpoint: NULL argument");
   *out = NULL;
@@ -225,10 +242,15 @@ cupid_status cupid_checkpoint_open(const char *path, const char *identity, cupid
   const unsigned char *id = NULL;
   size_t idn = 0;
   find(ck, "identity", &id, &idn);
-  CUPID_TRY_CHECK(id && idn == strlen(identity) && memcmp(id, identity, idn) == 0, CUPID_ERR_MODEL,
-                  "the checkpoint '%s' belongs to another run: it was written for\n  %.*s\n"
-                  "and this run is\n  %s",
-                  paths[ck->previous], id ? (int)idn : 0, id ? (const char *)id : "", identity);
+  if (!(id && idn == strlen(identity) && memcmp(id, identity, idn) == 0)) {
+    int was = 0, is = 0; /* the first line that differs (identities are a fact per line) */
+    const size_t off = first_difference((const char *)id, id ? idn : 0, identity, &was, &is);
+    st = CUPID_ERROR(CUPID_ERR_MODEL,
+                     "the checkpoint '%s' belongs to another run: it was written for\n  %.*s\n"
+                     "and this run has\n  %.*s\n(run without --resume to start again)",
+                     paths[ck->previous], was, id ? (const char *)id + off : "", is, identity + off);
+    goto cleanup;
+  }
   *out = ck;
   return CUPID_SUCCESS;
 cleanup:

@@ -185,7 +185,8 @@ void cupid_atomic_cleanup_all(void) {
     if (atomic_load(&registry[i].state) == SLOT_ACTIVE) unlink(registry[i].path);
   for (int i = 0; i < SET_SLOTS; i++) /* the staged files, their folder, then the lock */
     if (atomic_load(&set_registry[i].state) == SLOT_ACTIVE) {
-      remove_folder_signal_safe(set_registry[i].staging);
+      if (set_registry[i].staging[0]) /* "": a resumable run's, kept for --resume */
+        remove_folder_signal_safe(set_registry[i].staging);
       unlink(set_registry[i].lock);
     }
   errno = saved;
@@ -338,6 +339,69 @@ void cupid_atomic_abort(cupid_atomic_file *file) {
   *file = NULL;
   if (f->stream) fclose(f->stream); /* its result is irrelevant: the file is discarded */
   unlink(f->temp);
+  registry_remove(f->slot);
+  atomic_free(f);
+}
+
+/* ---------------------------------------------------------------- resumable streams */
+
+cupid_status cupid_atomic_open_partial(const char *path, int64_t keep, cupid_atomic_file *file) {
+  CUPID_CHECK(file && path && path[0], CUPID_ERR_ARGUMENT, "cupid_atomic_open_partial: no file");
+  *file = NULL;
+  cupid_status st = CUPID_SUCCESS;
+  struct cupid_atomic_file_private *f = NULL;
+  int fd = -1;
+  CUPID_CALL(cupid_calloc(1, sizeof *f, "atomic file", &f));
+  f->slot = -1; /* not registered: a signal keeps it for the resumption */
+  CUPID_TRY(cupid_strdup(path, &f->path));
+  CUPID_TRY(cupid_malloc(ATOMIC_BUFFER_SIZE, 1, "file buffer", &f->buffer));
+  const char *slash = strrchr(path, '/');
+  const size_t size = strlen(path) + 16;
+  CUPID_TRY(cupid_malloc(size, 1, "temporary file name", &f->temp));
+  snprintf(f->temp, size, "%.*s.%s.partial", slash ? (int)(slash - path + 1) : 0, path,
+           slash ? slash + 1 : path);
+  fd = open(f->temp, keep < 0 ? O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC : O_WRONLY | O_CLOEXEC,
+            0666);
+  CUPID_TRY_CHECK(fd >= 0, CUPID_ERR_IO, "cannot %s '%s': %s", keep < 0 ? "write" : "continue",
+                  f->temp, strerror(errno));
+  if (keep >= 0) {
+    struct stat sb;
+    CUPID_TRY_CHECK(fstat(fd, &sb) == 0 && sb.st_size >= keep, CUPID_ERR_IO,
+                    "cannot continue '%s': it holds %lld bytes, the checkpoint recorded %lld",
+                    f->temp, (long long)sb.st_size, (long long)keep);
+    CUPID_TRY_CHECK(ftruncate(fd, (off_t)keep) == 0 && lseek(fd, 0, SEEK_END) == (off_t)keep,
+                    CUPID_ERR_IO, "cannot continue '%s': %s", f->temp, strerror(errno));
+  }
+  f->stream = fdopen(fd, "wb");
+  CUPID_TRY_CHECK(f->stream, CUPID_ERR_IO, "cannot write '%s': fdopen: %s", path, strerror(errno));
+  fd = -1;
+  CUPID_TRY_CHECK(setvbuf(f->stream, f->buffer, _IOFBF, ATOMIC_BUFFER_SIZE) == 0, CUPID_ERR_IO,
+                  "cannot write '%s': setvbuf failed", path);
+  *file = f;
+  return CUPID_SUCCESS;
+cleanup:
+  if (f->stream) fclose(f->stream);
+  if (fd >= 0) close(fd);
+  atomic_free(f);
+  return st;
+}
+
+cupid_status cupid_atomic_sync(cupid_atomic_file file, int64_t *bytes) {
+  CUPID_CHECK(file && bytes, CUPID_ERR_ARGUMENT, "cupid_atomic_sync: NULL argument");
+  const int fd = fileno(file->stream);
+  CUPID_CHECK(fflush(file->stream) == 0 && !ferror(file->stream) && fdatasync(fd) == 0,
+              CUPID_ERR_IO, "cannot write '%s': %s", file->path, strerror(errno));
+  const off_t at = lseek(fd, 0, SEEK_CUR);
+  CUPID_CHECK(at >= 0, CUPID_ERR_IO, "cannot write '%s': %s", file->path, strerror(errno));
+  *bytes = (int64_t)at;
+  return CUPID_SUCCESS;
+}
+
+void cupid_atomic_suspend(cupid_atomic_file *file) {
+  if (!file || !*file) return;
+  struct cupid_atomic_file_private *f = *file;
+  *file = NULL;
+  if (f->stream) fclose(f->stream);
   registry_remove(f->slot);
   atomic_free(f);
 }

@@ -6,6 +6,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <zlib.h>
 
 #include "io/model_internal.h"
 
@@ -74,6 +75,13 @@ cupid_status cupid_model_read_string_with(const char *text, size_t length, const
   cupid_model_t *m = NULL;
   CUPID_TRY(cupid_calloc(1, sizeof *m, "the model", &m));
   CUPID_TRY(cupid_strdup(name, &m->file));
+  m->source_bytes = length; /* what a checkpoint's run was read from (issue 36) */
+  m->source_crc = (uint32_t)crc32(0L, Z_NULL, 0);
+  for (size_t at = 0; at < length;) { /* crc32 takes at most UINT_MAX bytes a call */
+    const size_t chunk = length - at < (1u << 30) ? length - at : (1u << 30);
+    m->source_crc = (uint32_t)crc32(m->source_crc, (const Bytef *)text + at, (uInt)chunk);
+    at += chunk;
+  }
   /* the overrides, kept for the messages about their values (cupid_model_error) */
   CUPID_TRY(cupid_calloc((size_t)n_sets + 1, sizeof *m->sets, "overrides", &m->sets));
   for (int k = 0; k < n_sets; k++) CUPID_TRY(cupid_strdup(sets[k], &m->sets[k]));

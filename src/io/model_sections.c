@@ -1388,7 +1388,8 @@ static cupid_status default_directory(const char *file, char **out) {
 }
 
 static cupid_status read_output(model_reader *rd, yaml_node_t *node) {
-  static const char *const keys[] = {"directory", "vtu", "pd_nodes", "plots", "lines", "points"};
+  static const char *const keys[] = {"directory", "vtu", "pd_nodes", "plots", "lines", "points",
+                                     "checkpoint"};
   cupid_output *o = &rd->model->output;
   mr_map map;
   yaml_node_t *v;
@@ -1406,6 +1407,12 @@ static cupid_status read_output(model_reader *rd, yaml_node_t *node) {
   if ((v = mr_get(&map, "vtu"))) CUPID_CALL(mr_bool(rd, v, "output.vtu", &o->vtu));
   if ((v = mr_get(&map, "pd_nodes"))) CUPID_CALL(mr_bool(rd, v, "output.pd_nodes", &o->pd_nodes));
   if ((v = mr_get(&map, "plots"))) CUPID_CALL(mr_bool(rd, v, "output.plots", &o->plots));
+  if ((v = mr_get(&map, "checkpoint"))) {
+    CUPID_CALL(mr_number(rd, v, "output.checkpoint", &o->checkpoint));
+    if (!(o->checkpoint >= 0 && o->checkpoint <= 1e9))
+      return mr_error(rd, v, "output.checkpoint", "must be seconds between checkpoints, from 0 "
+                      "(none) to 1e9");
+  }
   return read_output_lists(rd, &map, o);
 }
 
@@ -1428,6 +1435,7 @@ static void set_defaults(cupid_model_t *m) {
                               `balance: none` is paper 000's Eq. 38 as printed) */
   m->output.vtu = 1;
   m->output.plots = 1;
+  m->output.checkpoint = -1; /* auto: cupid_problem_checkpoint_period() */
 }
 
 cupid_status mr_read_model(model_reader *rd, yaml_node_t *root) {

@@ -7,6 +7,11 @@
  * results stay as they were. A lock file beside the output folder (flock) refuses a second run
  * into the same folder while one is running; staging folders of runs that died (SIGKILL) are
  * removed by the next run into that folder.
+ *
+ * A resumable run (issue 36) stages into a folder of fixed name, parent/.base.cupid-partial,
+ * that a signal leaves: it holds the files written so far and the run's checkpoints (dot
+ * files, never published), and `--resume` continues in it. Any other run into the folder
+ * removes it.
  */
 #define _GNU_SOURCE
 #include "cupid/io.h"
@@ -29,11 +34,12 @@ struct cupid_output_set_private {
   char *dir;     /* the output folder */
   char *parent;  /* its parent ("." for a relative name without a slash) */
   char *base;    /* its last component */
-  char *staging; /* parent/.base.cupid-run-PID */
+  char *staging; /* parent/.base.cupid-run-PID, or parent/.base.cupid-partial (resumable) */
   char *lock;    /* parent/.base.cupid-lock */
   int lock_fd;
   int slot;      /* cupid_io_set_register's, or -1 */
   int keep;      /* publish leaves the folder's other files alone (keep_others) */
+  int suspend;   /* abort keeps the staging folder (an interrupted resumable run) */
 };
 
 /* The files a run writes, by pattern: the folder's other files are the user's and stay. */
@@ -120,24 +126,25 @@ static cupid_status split_path(struct cupid_output_set_private *s, const char *d
   return CUPID_SUCCESS;
 }
 
-cupid_status cupid_output_set_begin(const char *dir, cupid_output_set *set) {
-  CUPID_CHECK(dir && dir[0] && set, CUPID_ERR_ARGUMENT, "cupid_output_set_begin: empty folder name");
-  *set = NULL;
-  struct cupid_output_set_private *s = NULL;
-  cupid_status st = CUPID_SUCCESS;
-  CUPID_CALL(cupid_calloc(1, sizeof *s, "output set", &s));
-  s->lock_fd = -1;
-  s->slot = -1;
-  CUPID_TRY(split_path(s, dir));
-  CUPID_TRY_CHECK(strcmp(s->base, ".") && strcmp(s->base, ".."), CUPID_ERR_IO,
-                  "output folder '%s': name it by its own name (not '.' or '..')", dir);
-  CUPID_TRY(cupid_mkdir_p(s->parent));
+/* The fixed name of a resumable run's staging folder. */
+static cupid_status partial_name(const struct cupid_output_set_private *s, char **out) {
+  char name[600];
+  snprintf(name, sizeof name, ".%s.cupid-partial", s->base);
+  return join(s->parent, name, out);
+}
+
+/* The lock of @p dir, its parent made; CUPID_ERR_IO naming the other run's pid if held. */
+static cupid_status take_lock(struct cupid_output_set_private *s, const char *dir) {
+  CUPID_CALL(split_path(s, dir));
+  CUPID_CHECK(strcmp(s->base, ".") && strcmp(s->base, ".."), CUPID_ERR_IO,
+              "output folder '%s': name it by its own name (not '.' or '..')", dir);
+  CUPID_CALL(cupid_mkdir_p(s->parent));
   char name[600];
   snprintf(name, sizeof name, ".%s.cupid-lock", s->base);
-  CUPID_TRY(join(s->parent, name, &s->lock));
+  CUPID_CALL(join(s->parent, name, &s->lock));
   s->lock_fd = open(s->lock, O_RDWR | O_CREAT | O_CLOEXEC, 0666);
-  CUPID_TRY_CHECK(s->lock_fd >= 0, CUPID_ERR_IO, "cannot create the lock file '%s': %s", s->lock,
-                  strerror(errno));
+  CUPID_CHECK(s->lock_fd >= 0, CUPID_ERR_IO, "cannot create the lock file '%s': %s", s->lock,
+              strerror(errno));
   if (flock(s->lock_fd, LOCK_EX | LOCK_NB) != 0) {
     char owner[32] = "?";
     ssize_t r = pread(s->lock_fd, owner, sizeof owner - 1, 0);
@@ -145,28 +152,81 @@ cupid_status cupid_output_set_begin(const char *dir, cupid_output_set *set) {
     owner[strcspn(owner, "\n")] = '\0';
     close(s->lock_fd); /* not ours to unlink */
     s->lock_fd = -1;
-    st = CUPID_ERROR(CUPID_ERR_IO,
-                     "another cupid run (pid %s) is writing into '%s': wait for it, or write to "
-                     "another folder (-o DIR)",
-                     owner, dir);
-    goto cleanup;
+    return CUPID_ERROR(CUPID_ERR_IO,
+                       "another cupid run (pid %s) is writing into '%s': wait for it, or write to "
+                       "another folder (-o DIR)",
+                       owner, dir);
   }
   char pid[32];
   int len = snprintf(pid, sizeof pid, "%ld\n", (long)getpid());
   if (ftruncate(s->lock_fd, 0) != 0 || pwrite(s->lock_fd, pid, (size_t)len, 0) != len) {
     /* the pid is for the message of a refused run only: not worth failing over */
   }
+  return CUPID_SUCCESS;
+}
+
+/* mode 0: an ordinary run; 1: a resumable run from the start; 2: a resumption. */
+static cupid_status begin(const char *dir, int mode, cupid_output_set *set) {
+  CUPID_CHECK(dir && dir[0] && set, CUPID_ERR_ARGUMENT, "cupid_output_set_begin: empty folder name");
+  *set = NULL;
+  struct cupid_output_set_private *s = NULL;
+  cupid_status st = CUPID_SUCCESS;
+  char *partial = NULL;
+  CUPID_CALL(cupid_calloc(1, sizeof *s, "output set", &s));
+  s->lock_fd = -1;
+  s->slot = -1;
+  CUPID_TRY(take_lock(s, dir));
   remove_dead_staging(s);
-  snprintf(name, sizeof name, ".%s.cupid-run-%ld", s->base, (long)getpid());
-  CUPID_TRY(join(s->parent, name, &s->staging));
-  remove_flat(s->staging); /* a leftover of this pid's earlier set */
-  CUPID_TRY_CHECK(mkdir(s->staging, 0777) == 0, CUPID_ERR_IO,
-                  "cannot create the staging folder '%s': %s", s->staging, strerror(errno));
-  s->slot = cupid_io_set_register(s->staging, s->lock); /* a signal removes both */
+  CUPID_TRY(partial_name(s, &partial));
+  if (mode == 2) {
+    struct stat sb;
+    CUPID_TRY_CHECK(stat(partial, &sb) == 0 && S_ISDIR(sb.st_mode), CUPID_ERR_IO,
+                    "nothing to resume: no interrupted run into '%s' (its folder '%s' is not "
+                    "there); run without --resume to start",
+                    dir, partial);
+  } else {
+    remove_flat(partial); /* an interrupted run's files: this run starts over */
+  }
+  if (mode) {
+    s->staging = partial;
+    partial = NULL;
+  } else {
+    char name[600];
+    snprintf(name, sizeof name, ".%s.cupid-run-%ld", s->base, (long)getpid());
+    CUPID_TRY(join(s->parent, name, &s->staging));
+    remove_flat(s->staging); /* a leftover of this pid's earlier set */
+  }
+  if (mode != 2)
+    CUPID_TRY_CHECK(mkdir(s->staging, 0777) == 0, CUPID_ERR_IO,
+                    "cannot create the staging folder '%s': %s", s->staging, strerror(errno));
+  /* a signal removes an ordinary run's staging folder and the lock; a resumable run's folder
+   * stays for --resume */
+  s->slot = cupid_io_set_register(mode ? "" : s->staging, s->lock);
   *set = s;
   s = NULL;
 cleanup:
+  cupid_free(&partial);
   if (s) set_free(s);
+  return st;
+}
+
+cupid_status cupid_output_set_begin(const char *dir, cupid_output_set *set) {
+  return begin(dir, 0, set);
+}
+
+cupid_status cupid_output_set_begin_resumable(const char *dir, int resume, cupid_output_set *set) {
+  return begin(dir, resume ? 2 : 1, set);
+}
+
+cupid_status cupid_output_set_partial_dir(const char *dir, char **path) {
+  CUPID_CHECK(dir && dir[0] && path, CUPID_ERR_ARGUMENT, "cupid_output_set_partial_dir: no folder");
+  *path = NULL;
+  struct cupid_output_set_private s = {0};
+  cupid_status st = split_path(&s, dir);
+  if (st == CUPID_SUCCESS) st = partial_name(&s, path);
+  cupid_free(&s.dir);
+  cupid_free(&s.parent);
+  cupid_free(&s.base);
   return st;
 }
 
@@ -180,7 +240,7 @@ static cupid_status check_targets(const struct cupid_output_set_private *s) {
   cupid_status st = CUPID_SUCCESS;
   struct dirent *e;
   while (st == CUPID_SUCCESS && (e = readdir(d))) {
-    if (!strcmp(e->d_name, ".") || !strcmp(e->d_name, "..")) continue;
+    if (e->d_name[0] == '.') continue; /* ".", "..", a resumable run's checkpoints */
     char *target = NULL;
     st = join(s->dir, e->d_name, &target);
     struct stat sb;
@@ -233,7 +293,7 @@ cupid_status cupid_output_set_publish(cupid_output_set *set) {
   struct dirent *e;
   int has_summary = 0;
   while (st == CUPID_SUCCESS && (e = readdir(d))) {
-    if (!strcmp(e->d_name, ".") || !strcmp(e->d_name, "..")) continue;
+    if (e->d_name[0] == '.') continue; /* ".", "..", a resumable run's checkpoints */
     if (!strcmp(e->d_name, "summary.json")) { /* last: it names the run the set is from */
       has_summary = 1;
       continue;
@@ -251,9 +311,14 @@ void cupid_output_set_keep_others(cupid_output_set set) {
   if (set) set->keep = 1;
 }
 
+void cupid_output_set_suspend(cupid_output_set *set) {
+  if (set && *set) (*set)->suspend = 1;
+  cupid_output_set_abort(set);
+}
+
 void cupid_output_set_abort(cupid_output_set *set) {
   if (!set || !*set) return;
-  remove_flat((*set)->staging);
+  if (!(*set)->suspend) remove_flat((*set)->staging);
   set_free(*set);
   *set = NULL;
 }

@@ -33,6 +33,10 @@ typedef struct {
   /* a slab run (slab.c): rank 0's whole grid (coordinates only) for the VTU series */
   cupid_pd_grid whole;
   const double *u_out; /* the displacements the outputs of this step show (u or u_view) */
+  /* a resumption (--resume): the integrator's state and the streams' lengths of its checkpoint */
+  cupid_dynamics_restart restart;
+  double *restart_vectors;  /* a, react, load (n each) */
+  int64_t keep[3];          /* history, energies, damage: bytes to keep (-1: start them) */
 } dyn_output;
 
 static cupid_status out_path(const cupid_problem_state *prob, const char *name, char *path, size_t len) {
@@ -328,24 +332,35 @@ static cupid_status monitor_outputs(dyn_output *o, cupid_int step, double t, int
   return CUPID_SUCCESS;
 }
 
+/* A time series of the run: a resumable stream (io.h, cupid_atomic_open_partial), started
+ * with its header, or continued at the length the checkpoint recorded (*header 0). */
+static cupid_status open_series(dyn_output *o, const char *name, int which, cupid_atomic_file *f,
+                                int *header) {
+  char path[4096];
+  CUPID_CALL(out_path(o->prob, name, path, sizeof path));
+  CUPID_CALL(cupid_atomic_open_partial(path, o->keep[which], f));
+  *header = o->keep[which] < 0;
+  return CUPID_SUCCESS;
+}
+
 static cupid_status open_outputs(dyn_output *o) {
   cupid_problem_state *prob = o->prob;
   const cupid_output *out = &prob->model->output;
-  char path[4096];
+  int header = 1;
   if (!prob->writedir) return CUPID_SUCCESS; /* an MPI rank other than 0: no files */
   if (prob->damage) { /* damage.csv (model-format.md, fracture outputs) */
-    CUPID_CALL(out_path(prob, "damage.csv", path, sizeof path));
-    CUPID_CALL(cupid_atomic_open(path, &o->damage));
-    fprintf(cupid_atomic_stream(o->damage),
-            "step,t,broken_bonds,damaged_nodes,max_damage,nodes_broken\n");
+    CUPID_CALL(open_series(o, "damage.csv", 2, &o->damage, &header));
+    if (header)
+      fprintf(cupid_atomic_stream(o->damage),
+              "step,t,broken_bonds,damaged_nodes,max_damage,nodes_broken\n");
   }
-  CUPID_CALL(out_path(prob, "energies.csv", path, sizeof path));
-  CUPID_CALL(cupid_atomic_open(path, &o->energies));
-  fprintf(cupid_atomic_stream(o->energies), "t,step,kinetic,strain,damping_dissipated,%s"
-          "external_work,total,balance\n", o->damage ? "fracture_dissipated," : "");
+  CUPID_CALL(open_series(o, "energies.csv", 1, &o->energies, &header));
+  if (header)
+    fprintf(cupid_atomic_stream(o->energies), "t,step,kinetic,strain,damping_dissipated,%s"
+            "external_work,total,balance\n", o->damage ? "fracture_dissipated," : "");
   if (out->n_points == 0) return CUPID_SUCCESS;
-  CUPID_CALL(out_path(prob, "history.csv", path, sizeof path));
-  CUPID_CALL(cupid_atomic_open(path, &o->history));
+  CUPID_CALL(open_series(o, "history.csv", 0, &o->history, &header));
+  if (!header) return CUPID_SUCCESS;
   FILE *f = cupid_atomic_stream(o->history);
   fprintf(f, "t");
   for (int k = 0; k < out->n_points; k++)
@@ -520,6 +535,115 @@ static cupid_status break_bonds(void *ctx, cupid_int step, double t, const doubl
   return st;
 }
 
+/* ---- Checkpoints (resume.c; issue 36): the integrator's state, the outputs so far ---- */
+
+/* The scalars of a safe point and of the outputs. */
+typedef struct {
+  cupid_dynamics_energy shares, whole, last;
+  double e0, scale, max_balance, omega_max, dt_critical, dt_bound;
+  int lanczos_steps, n_files;
+  cupid_int out_count, broken_reported;
+  int64_t streams[3]; /* the lengths of history, energies, damage (-1: none) */
+} dyn_scalars;
+
+static cupid_status write_state(dyn_output *o, const cupid_dynamics_restart *r,
+                                cupid_checkpoint_writer w) {
+  cupid_problem_state *prob = o->prob;
+  dyn_scalars c = {.shares = r->shares, .whole = r->whole, .last = prob->dyn.energy, .e0 = r->e0,
+                   .scale = r->scale, .max_balance = r->max_balance, .omega_max = r->omega_max,
+                   .dt_critical = r->dt_critical, .dt_bound = r->dt_bound,
+                   .lanczos_steps = r->lanczos_steps, .n_files = o->n_files,
+                   .out_count = o->out_count, .broken_reported = o->broken_reported,
+                   .streams = {-1, -1, -1}};
+  cupid_atomic_file streams[3] = {o->history, o->energies, o->damage};
+  for (int k = 0; k < 3; k++)
+    if (streams[k]) CUPID_CALL(cupid_atomic_sync(streams[k], &c.streams[k]));
+  const size_t bytes = sizeof(double) * (size_t)r->n;
+  CUPID_CALL(cupid_checkpoint_write(w, "step", &r->step, sizeof r->step));
+  CUPID_CALL(cupid_checkpoint_write(w, "dynamics", &c, sizeof c));
+  CUPID_CALL(cupid_checkpoint_write(w, "u", r->u, bytes));
+  CUPID_CALL(cupid_checkpoint_write(w, "v", r->v, bytes));
+  CUPID_CALL(cupid_checkpoint_write(w, "a", r->a, bytes));
+  if (r->react) CUPID_CALL(cupid_checkpoint_write(w, "reactions", r->react, bytes));
+  if (r->load) CUPID_CALL(cupid_checkpoint_write(w, "load", r->load, bytes));
+  if (o->n_files) {
+    CUPID_CALL(cupid_checkpoint_write(w, "files", o->files, sizeof *o->files * (size_t)o->n_files));
+    CUPID_CALL(cupid_checkpoint_write(w, "times", o->times, sizeof *o->times * (size_t)o->n_files));
+  }
+  return cupid_problem_checkpoint_common(prob, w);
+}
+
+/* hooks->safe_point: a checkpoint when one is due; after a signal's, the run stops. */
+static cupid_status save_point(void *ctx, const cupid_dynamics_restart *r) {
+  dyn_output *o = ctx;
+  cupid_problem_state *prob = o->prob;
+  const int due = cupid_problem_checkpoint_due(prob);
+  if (!due) return CUPID_SUCCESS;
+  cupid_checkpoint_writer w = NULL;
+  cupid_status st = cupid_problem_checkpoint_start(prob, &w);
+  if (st == CUPID_SUCCESS) st = write_state(o, r, w);
+  cupid_problem_checkpoint_commit(prob, &w, st, r->step);
+  if (due < 2) return CUPID_SUCCESS;
+  prob->ckpt.interrupted = 1;
+  return CUPID_ERROR(CUPID_ERR_INTERRUPTED, "interrupted at step %lld of %lld (t = %g): continue "
+                     "with `cupid run %s --resume` (the same options)",
+                     (long long)r->step, (long long)prob->dyn.steps,
+                     (double)r->step * prob->model->analysis.dynamic.dt, prob->model->file);
+}
+
+/* --resume: the checkpoint's state into o->restart (u and v into prob->u and v), the outputs'
+ * bookkeeping, and (resume.c) the fracture state and history. */
+static cupid_status read_state(dyn_output *o, const cupid_checkpoint ck, double *v) {
+  cupid_problem_state *prob = o->prob;
+  const cupid_int n = prob->ndof;
+  const size_t bytes = sizeof(double) * (size_t)n;
+  dyn_scalars c;
+  cupid_dynamics_restart *r = &o->restart;
+  CUPID_CALL(cupid_checkpoint_read(ck, "step", &r->step, sizeof r->step));
+  CUPID_CALL(cupid_checkpoint_read(ck, "dynamics", &c, sizeof c));
+  CUPID_CALL(cupid_calloc(3 * (size_t)n + 1, sizeof(double), "resumed state", &o->restart_vectors));
+  double *a = o->restart_vectors, *react = a + n, *load = react + n;
+  CUPID_CALL(cupid_checkpoint_read(ck, "u", prob->u, bytes));
+  CUPID_CALL(cupid_checkpoint_read(ck, "v", v, bytes));
+  CUPID_CALL(cupid_checkpoint_read(ck, "a", a, bytes));
+  const void *data = NULL;
+  size_t got = 0;
+  const int timed = cupid_checkpoint_section(ck, "load", &data, &got) == CUPID_SUCCESS;
+  cupid_error_clear();
+  if (timed) {
+    CUPID_CALL(cupid_checkpoint_read(ck, "reactions", react, bytes));
+    CUPID_CALL(cupid_checkpoint_read(ck, "load", load, bytes));
+  }
+  *r = (cupid_dynamics_restart){.step = r->step, .n = n, .u = prob->u, .v = v, .a = a,
+                                .react = timed ? react : NULL, .load = timed ? load : NULL,
+                                .shares = c.shares, .whole = c.whole, .e0 = c.e0,
+                                .scale = c.scale, .max_balance = c.max_balance,
+                                .omega_max = c.omega_max, .dt_critical = c.dt_critical,
+                                .dt_bound = c.dt_bound, .lanczos_steps = c.lanczos_steps};
+  prob->dyn.energy = c.last;
+  o->out_count = c.out_count;
+  o->broken_reported = c.broken_reported;
+  for (int k = 0; k < 3; k++) o->keep[k] = c.streams[k];
+  for (int k = 0; k < c.n_files; k++) CUPID_CALL(record_file(o, "", 0.0));
+  if (c.n_files) {
+    CUPID_CALL(cupid_checkpoint_read(ck, "files", o->files, sizeof *o->files * (size_t)c.n_files));
+    CUPID_CALL(cupid_checkpoint_read(ck, "times", o->times, sizeof *o->times * (size_t)c.n_files));
+  }
+  cupid_problem_progress(prob, "resume: from step %lld of %lld (t = %g), %lld broken bonds",
+                         (long long)r->step, (long long)prob->dyn.steps,
+                         (double)r->step * prob->model->analysis.dynamic.dt,
+                         (long long)prob->broken_bonds);
+  return CUPID_SUCCESS;
+}
+
+static cupid_status resume_from_checkpoint(dyn_output *o, double *v) {
+  cupid_checkpoint ck = NULL;
+  CUPID_CALL(cupid_problem_checkpoint_open(o->prob, "step", &ck));
+  cupid_status st = read_state(o, ck, v);
+  cupid_checkpoint_close(&ck);
+  return st;
+}
+
 /* A slab's stiffness product: its owned rows (the halo's rows are not needed, and not
  * right: their families reach beyond the slab). */
 static cupid_status slab_apply(void *ctx, const double *x, double *y) {
@@ -539,7 +663,7 @@ cupid_status cupid_problem_run_dynamic(cupid_problem_state *prob, const cupid_me
   cupid_status st = CUPID_SUCCESS;
   cupid_csr M = NULL;
   double *m_lumped = NULL, *v = NULL, *rbound = NULL, t0 = cupid_wtime();
-  dyn_output o = {.prob = prob};
+  dyn_output o = {.prob = prob, .keep = {-1, -1, -1}};
   const int mf = op != NULL;
   cupid_petsc_halo halo = NULL;
   cupid_dynamics_partition part;
@@ -584,7 +708,18 @@ cupid_status cupid_problem_run_dynamic(cupid_problem_state *prob, const cupid_me
   if (prob->method->recover)
     CUPID_TRY(cupid_malloc((size_t)prob->ndof, sizeof *o.u_view, "recovered displacements",
                            &o.u_view));
-  CUPID_TRY(open_outputs(&o));
+  if (!prob->opts->check_only) { /* checkpoints, and a resumption's state */
+    double cost_s = 0, bytes = 0, files = 0;
+    cupid_problem_run_cost(prob, &cost_s, &bytes, &files);
+    CUPID_TRY(agreed(prob, cupid_problem_checkpoint_begin(prob, cost_s)));
+    hooks.safe_point = save_point;
+    opt.hooks = &hooks;
+    if (prob->opts->resume) {
+      CUPID_TRY(agreed(prob, resume_from_checkpoint(&o, v)));
+      opt.resume = &o.restart;
+    }
+  }
+  CUPID_TRY(agreed(prob, open_outputs(&o)));
   if (prob->opts->check_only)
     cupid_problem_progress(prob, "dynamics: the step %g of central differences checked as a "
                            "run checks it", opt.dt);
@@ -635,9 +770,16 @@ cupid_status cupid_problem_run_dynamic(cupid_problem_state *prob, const cupid_me
             "energies.csv's columns (docs/dynamics.md, \"Energies\")\n",
             prob->dyn.info.max_balance, CUPID_ENERGY_BALANCE_BOUND);
 cleanup:
+  if (prob->ckpt.interrupted) { /* the checkpoint recorded their lengths: --resume goes on */
+    cupid_atomic_suspend(&o.history);
+    cupid_atomic_suspend(&o.damage);
+    cupid_atomic_suspend(&o.energies);
+  }
   cupid_atomic_abort(&o.history);
   cupid_atomic_abort(&o.damage);
   cupid_atomic_abort(&o.energies);
+  cupid_problem_checkpoint_end(prob);
+  cupid_free(&o.restart_vectors);
   for (int k = 0; o.cnodes && k < m->n_constraints; k++) cupid_free(&o.cnodes[k]);
   cupid_free(&o.cnodes);
   cupid_free(&o.n_cnodes);

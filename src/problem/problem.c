@@ -117,6 +117,10 @@ cupid_status cupid_problem_setup(cupid_problem_state *prob) {
   CUPID_CHECK(prob->stage == CUPID_STAGE_CREATED, CUPID_ERR_ARGUMENT,
               "cupid_problem_setup: the problem is already set up");
   CUPID_CALL(prob->method->check(prob));
+  CUPID_CHECK(!prob->opts->resume || model->analysis.type == CUPID_ANALYSIS_DYNAMIC,
+              CUPID_ERR_UNSUPPORTED, "--resume: only type: dynamic runs write checkpoints in "
+              "cupid %s (this model is type %s); run it without --resume",
+              cupid_version(), model->analysis.type == CUPID_ANALYSIS_STATIC ? "static" : "evaluate");
   CUPID_CALL(cupid_problem_fracture_check(prob));
   CUPID_CALL(cupid_problem_check_engine_request(prob));
   CUPID_CALL(cupid_problem_guard_size(prob)); /* before anything that scales with the model */
@@ -254,7 +258,12 @@ static cupid_status run_static(cupid_problem_state *prob) {
  * results as they were. Rank 0 writes. */
 static cupid_status begin_outputs(cupid_problem_state *prob) {
   if (prob->outputs || cupid_petsc_rank() != 0) return CUPID_SUCCESS;
-  CUPID_CALL(cupid_output_set_begin(prob->outdir, &prob->outputs));
+  /* a dynamic run can stop at a checkpoint and be resumed (resume.c): its staging folder has
+   * a fixed name and outlives a signal */
+  if (prob->model->analysis.type == CUPID_ANALYSIS_DYNAMIC && !prob->outputs_written)
+    CUPID_CALL(cupid_output_set_begin_resumable(prob->outdir, prob->opts->resume, &prob->outputs));
+  else
+    CUPID_CALL(cupid_output_set_begin(prob->outdir, &prob->outputs));
   prob->writedir = cupid_output_set_dir(prob->outputs);
   return CUPID_SUCCESS;
 }
@@ -338,7 +347,11 @@ void cupid_problem_state_free(cupid_problem_state *prob) {
   cupid_free(&prob->beam_points);
   cupid_free(&prob->beam_u);
   cupid_free(&prob->history);
+  /* kept for --resume: an interrupted run's checkpoint, and a failed resumption's (refused, or
+   * stopped again: the checkpoint it started from stays for another try) */
+  if (prob->ckpt.interrupted || prob->opts->resume) cupid_output_set_suspend(&prob->outputs);
   cupid_output_set_abort(&prob->outputs); /* not published: the previous results stay */
+  cupid_problem_checkpoint_end(prob);
   cupid_free(&prob->region_boxes);
   cupid_free(&prob->region_materials);
   cupid_free(&prob->protect);

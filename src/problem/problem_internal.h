@@ -105,6 +105,16 @@ typedef struct cupid_problem_private {
   int solved;              /**< a linear solve was done */
 
   cupid_problem_dynamic dyn;   /**< type: dynamic */
+  /* Checkpoints of a resumable run (resume.c, issue 36). */
+  struct {
+    double period;   /**< seconds between periodic checkpoints (0: on a signal only) */
+    double last;     /**< when the last one was written (or the run began) */
+    char *path;      /**< this rank's checkpoint file, in the resumable staging folder */
+    int armed;       /**< signals ask for a checkpoint (cupid_interrupt_arm) */
+    int interrupted; /**< the run stopped at a checkpoint: keep its staging folder */
+    cupid_int written;
+    double seconds;  /**< spent writing them */
+  } ckpt;
 
   /* Coupled models (method_*.c) */
   cupid_coupling_h coupling;
@@ -516,6 +526,30 @@ cupid_status cupid_problem_fe_write_vtu(const cupid_problem_state *prob, const d
 cupid_status cupid_problem_dynamic_check(const cupid_problem_state *prob);
 /** The "dynamic" block of summary.json. */
 void cupid_problem_dynamic_json(cupid_json js, const cupid_problem_state *prob);
+
+/* resume.c: checkpoints and resumption of long runs (issue 36; docs/hardening.md). */
+/** Start a resumable run's checkpoints: the period (output.checkpoint, or 600 s when the run is
+ *  estimated over 10 minutes), this rank's file, interrupts armed. */
+cupid_status cupid_problem_checkpoint_begin(cupid_problem_state *prob, double estimated_seconds);
+/** Disarm the interrupts, free the path (at the end of the run, whatever its status). */
+void cupid_problem_checkpoint_end(cupid_problem_state *prob);
+/** Whether to write a checkpoint now (collective on a slab run: every rank agrees): 0 no, 1 the
+ *  period is up, 2 a signal asked for one (the run then stops after it). */
+int cupid_problem_checkpoint_due(cupid_problem_state *prob);
+/** A checkpoint writer on this rank's file, its identity written. */
+cupid_status cupid_problem_checkpoint_start(cupid_problem_state *prob, cupid_checkpoint_writer *w);
+/** The sections every resumable run has: the fracture state (the operator's broken bonds, the
+ *  counts, the first break, damage) and the history rows. */
+cupid_status cupid_problem_checkpoint_common(cupid_problem_state *prob, cupid_checkpoint_writer w);
+/** Commit @p w when @p filled (the status of writing its sections) is a success, else drop it
+ *  (collective on a slab run: every rank's or none). A failure (a full disk) is a warning: the
+ *  previous checkpoint stays and the run goes on. @p step names it in the message. */
+void cupid_problem_checkpoint_commit(cupid_problem_state *prob, cupid_checkpoint_writer *w,
+                                     cupid_status filled, cupid_int step);
+/** Open this rank's checkpoint for --resume (every rank: the same step @p step_section, a
+ *  cupid_int, else CUPID_ERR_IO); the common sections restored into prob and its operator. */
+cupid_status cupid_problem_checkpoint_open(cupid_problem_state *prob, const char *step_section,
+                                           cupid_checkpoint *ck);
 
 /* estimate.c: `cupid check` and the memory guard of `cupid run`. */
 cupid_status cupid_problem_estimate(const cupid_problem_state *prob, int print);

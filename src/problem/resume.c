@@ -1,0 +1,220 @@
+/* Checkpoints and the resumption of long runs (issue 36; docs/hardening.md, "Checkpoints").
+ *
+ * A resumable run (type dynamic) stages its files in a folder of fixed name beside the output
+ * folder (io.h, cupid_output_set_begin_resumable) and keeps its checkpoints there: one file per
+ * rank (.checkpoint, .checkpoint-rank-R), written by src/io/checkpoint.c (temporary file, CRC,
+ * fsync, rename; the one before kept as .prev). The stage writes its own state; this file
+ * holds what every resumable run shares: when a checkpoint is due (the period, or a signal
+ * through cupid_interrupt_request), the run's identity (the model text, the overrides, the
+ * result-changing options, the ranks), and the fracture state and history rows of prob. */
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+
+#include "problem_internal.h"
+
+/* The default period: a run estimated over 10 minutes is checkpointed every 10 minutes. */
+#define CHECKPOINT_AUTO_OVER_S 600.0
+#define CHECKPOINT_AUTO_PERIOD_S 600.0
+
+/* The identity: what the results depend on, one fact per line, so that a refused resumption
+ * can name the line that differs. --threads is not in it: results do not depend on it. */
+static cupid_status identity(const cupid_problem_state *prob, char *buf, size_t len) {
+  const cupid_model_t *m = prob->model;
+  size_t at = 0;
+#define ADD(...)                                                                            \
+  do {                                                                                      \
+    int k_ = snprintf(buf + at, len - at, __VA_ARGS__);                                     \
+    CUPID_CHECK(k_ >= 0 && (size_t)k_ < len - at, CUPID_ERR_ARGUMENT,                       \
+                "checkpoint identity: too long (the overrides?)");                          \
+    at += (size_t)k_;                                                                       \
+  } while (0)
+  ADD("cupid %s\n", cupid_version());
+  ADD("model %s: %llu bytes, CRC-32 %08x\n", m->file, (unsigned long long)m->source_bytes,
+      (unsigned)m->source_crc);
+  for (int k = 0; k < m->n_sets; k++) ADD("--set %s\n", m->sets[k]);
+  ADD("solver %s%s%s\n", prob->engine ? prob->engine->name : "auto",
+      prob->opts->assembled ? ", --assembled" : "", prob->opts->replicate ? ", --replicate" : "");
+  ADD("processes %d, this one %d\n", cupid_petsc_size(), cupid_petsc_rank());
+#undef ADD
+  return CUPID_SUCCESS;
+}
+
+cupid_status cupid_problem_checkpoint_begin(cupid_problem_state *prob, double estimated_seconds) {
+  const double given = prob->model->output.checkpoint;
+  prob->ckpt.period = given >= 0 ? given
+                      : estimated_seconds > CHECKPOINT_AUTO_OVER_S ? CHECKPOINT_AUTO_PERIOD_S
+                                                                   : 0.0;
+  prob->ckpt.last = cupid_wtime();
+  char *dir = NULL;
+  CUPID_CALL(cupid_output_set_partial_dir(prob->outdir, &dir));
+  const size_t n = strlen(dir) + 40;
+  cupid_status st = cupid_malloc(n, 1, "checkpoint path", &prob->ckpt.path);
+  if (st == CUPID_SUCCESS) {
+    const int rank = cupid_petsc_rank();
+    if (rank == 0) snprintf(prob->ckpt.path, n, "%s/.checkpoint", dir);
+    else snprintf(prob->ckpt.path, n, "%s/.checkpoint-rank-%d", dir, rank);
+  }
+  cupid_free(&dir);
+  CUPID_CALL(st);
+  cupid_interrupt_arm(1);
+  prob->ckpt.armed = 1;
+  if (prob->ckpt.period > 0)
+    cupid_problem_progress(prob, "checkpoints: every %g s (output.checkpoint), and on SIGINT or "
+                           "SIGTERM", prob->ckpt.period);
+  return CUPID_SUCCESS;
+}
+
+void cupid_problem_checkpoint_end(cupid_problem_state *prob) {
+  if (prob->ckpt.armed) cupid_interrupt_arm(0);
+  prob->ckpt.armed = 0;
+  cupid_free(&prob->ckpt.path);
+}
+
+int cupid_problem_checkpoint_due(cupid_problem_state *prob) {
+  if (!prob->ckpt.path) return 0;
+  int due = cupid_interrupt_pending() ? 2
+            : prob->ckpt.period > 0 && cupid_wtime() - prob->ckpt.last >= prob->ckpt.period ? 1
+                                                                                          : 0;
+  if (cupid_petsc_size() > 1) due = cupid_petsc_max_int(due); /* one rank's signal stops all */
+  return due;
+}
+
+cupid_status cupid_problem_checkpoint_start(cupid_problem_state *prob, cupid_checkpoint_writer *w) {
+  char id[8192];
+  CUPID_CALL(identity(prob, id, sizeof id));
+  return cupid_checkpoint_write_begin(prob->ckpt.path, id, w);
+}
+
+/* The scalars of the fracture state and of the run's clock. */
+typedef struct {
+  cupid_int broken_bonds, first_break_step, damaged_nodes, history_rows, history_cols;
+  double first_break_t, fracture_energy, first_break_at[3], max_damage, time;
+} common_scalars;
+
+cupid_status cupid_problem_checkpoint_common(cupid_problem_state *prob, cupid_checkpoint_writer w) {
+  const common_scalars c = {.broken_bonds = prob->broken_bonds,
+                            .first_break_step = prob->first_break_step,
+                            .damaged_nodes = prob->damaged_nodes,
+                            .history_rows = prob->history_rows,
+                            .history_cols = prob->history_cols,
+                            .first_break_t = prob->first_break_t,
+                            .fracture_energy = prob->fracture_energy,
+                            .first_break_at = {prob->first_break_at[0], prob->first_break_at[1],
+                                               prob->first_break_at[2]},
+                            .max_damage = prob->max_damage,
+                            .time = prob->time};
+  CUPID_CALL(cupid_checkpoint_write(w, "problem", &c, sizeof c));
+  if (prob->history_rows)
+    CUPID_CALL(cupid_checkpoint_write(w, "history", prob->history,
+                                      sizeof(double) * (size_t)prob->history_rows *
+                                          (size_t)prob->history_cols));
+  if (!prob->op || !prob->damage) return CUPID_SUCCESS;
+  CUPID_CALL(cupid_checkpoint_write(w, "damage", prob->damage, sizeof(double) * (size_t)prob->n_pd));
+  const size_t words = (size_t)cupid_pd_operator_broken_words(prob->op) * (size_t)prob->n_pd;
+  double *bits = NULL;
+  CUPID_CALL(cupid_malloc(words + 1, sizeof *bits, "broken-bond bits", &bits));
+  cupid_pd_operator_pack_broken(prob->op, 0, prob->n_pd, bits);
+  cupid_status st = cupid_checkpoint_write(w, "broken bonds", bits, sizeof *bits * words);
+  cupid_free(&bits);
+  return st;
+}
+
+void cupid_problem_checkpoint_commit(cupid_problem_state *prob, cupid_checkpoint_writer *w,
+                                     cupid_status filled, cupid_int step) {
+  const double t0 = cupid_wtime();
+  cupid_status st = filled;
+  if (st == CUPID_SUCCESS) st = cupid_checkpoint_write_commit(w);
+  cupid_checkpoint_write_abort(w); /* NULL after a commit */
+  int failed = st != CUPID_SUCCESS;
+  if (cupid_petsc_size() > 1) failed = cupid_petsc_max_int(failed); /* all ranks' or none */
+  prob->ckpt.last = cupid_wtime();
+  prob->ckpt.seconds += prob->ckpt.last - t0;
+  if (!failed) {
+    prob->ckpt.written++;
+    return;
+  }
+  /* The previous checkpoint is intact (checkpoint.c): a periodic one's failure costs the run
+   * nothing but the protection it gave; after a signal the run stops all the same. */
+  if (!prob->quiet)
+    fprintf(stderr, "cupid: warning: the checkpoint of step %lld could not be written (%s); the "
+            "previous one stays\n", (long long)step,
+            st != CUPID_SUCCESS ? cupid_error_message() : "on another rank");
+  cupid_error_clear();
+}
+
+/* The fracture state of the checkpoint: the broken bonds into the operator (and a method's copy
+ * of it), the damage and the counts. */
+static cupid_status restore_fracture(cupid_problem_state *prob, const cupid_checkpoint ck) {
+  if (!prob->op || !prob->damage) return CUPID_SUCCESS;
+  CUPID_CALL(cupid_checkpoint_read(ck, "damage", prob->damage, sizeof(double) * (size_t)prob->n_pd));
+  const size_t words = (size_t)cupid_pd_operator_broken_words(prob->op) * (size_t)prob->n_pd;
+  const void *bits = NULL;
+  size_t bytes = 0;
+  CUPID_CALL(cupid_checkpoint_section(ck, "broken bonds", &bits, &bytes));
+  CUPID_CHECK(bytes == words * sizeof(double), CUPID_ERR_IO,
+              "the checkpoint's broken bonds are not of this model's operator");
+  cupid_int added = 0;
+  double dissipated = 0.0;
+  double *copy = NULL; /* the section may not be aligned for doubles */
+  CUPID_CALL(cupid_malloc(words + 1, sizeof *copy, "broken-bond bits", &copy));
+  memcpy(copy, bits, bytes);
+  cupid_pd_fracture_options o = prob->fracture;
+  o.ku = NULL;
+  cupid_status st = cupid_pd_operator_unpack_broken(prob->op, 0, prob->n_pd, copy, prob->u, &o,
+                                                    &added, &dissipated);
+  cupid_free(&copy);
+  CUPID_CALL(st);
+  if (prob->crack_copy)
+    CUPID_CALL(cupid_pd_operator_copy_broken_mapped(prob->crack_copy, prob->op, prob->crack_map));
+  return CUPID_SUCCESS;
+}
+
+static cupid_status restore_common(cupid_problem_state *prob, const cupid_checkpoint ck) {
+  common_scalars c;
+  CUPID_CALL(cupid_checkpoint_read(ck, "problem", &c, sizeof c));
+  prob->broken_bonds = c.broken_bonds;
+  prob->first_break_step = c.first_break_step;
+  prob->damaged_nodes = c.damaged_nodes;
+  prob->first_break_t = c.first_break_t;
+  prob->fracture_energy = c.fracture_energy;
+  for (int a = 0; a < 3; a++) prob->first_break_at[a] = c.first_break_at[a];
+  prob->max_damage = c.max_damage;
+  prob->time = c.time;
+  cupid_free(&prob->history);
+  prob->history_rows = prob->history_cap = 0;
+  if (c.history_rows > 0) {
+    const size_t n = (size_t)c.history_rows * (size_t)c.history_cols;
+    CUPID_CALL(cupid_malloc(n, sizeof *prob->history, "history", &prob->history));
+    CUPID_CALL(cupid_checkpoint_read(ck, "history", prob->history, n * sizeof *prob->history));
+    prob->history_rows = prob->history_cap = c.history_rows;
+    prob->history_cols = (int)c.history_cols;
+  }
+  return restore_fracture(prob, ck);
+}
+
+cupid_status cupid_problem_checkpoint_open(cupid_problem_state *prob, const char *step_section,
+                                           cupid_checkpoint *ck) {
+  char id[8192];
+  *ck = NULL;
+  CUPID_CALL(identity(prob, id, sizeof id));
+  cupid_status st = cupid_checkpoint_open(prob->ckpt.path, id, ck);
+  cupid_int step = -1;
+  if (st == CUPID_SUCCESS) st = cupid_checkpoint_read(*ck, step_section, &step, sizeof step);
+  if (cupid_petsc_size() > 1) { /* every rank at the same step, or none resumes */
+    const int worst = cupid_petsc_max_int(st == CUPID_SUCCESS ? 0 : cupid_status_exit_code(st));
+    if (st == CUPID_SUCCESS && worst)
+      st = CUPID_ERROR(worst == 1 ? CUPID_ERR_MODEL : CUPID_ERR_IO,
+                       "another rank cannot resume from its checkpoint");
+    const int lo = -cupid_petsc_max_int(-(int)step), hi = cupid_petsc_max_int((int)step);
+    if (st == CUPID_SUCCESS && lo != hi)
+      st = CUPID_ERROR(CUPID_ERR_IO, "the ranks' checkpoints are of different steps (%d to %d): "
+                       "one rank's latest was lost; run again without --resume", lo, hi);
+  }
+  if (st == CUPID_SUCCESS && cupid_checkpoint_is_previous(*ck))
+    cupid_problem_progress(prob, "resume: '%s' was damaged or missing; its previous one is used",
+                           prob->ckpt.path);
+  if (st == CUPID_SUCCESS) st = restore_common(prob, *ck);
+  if (st != CUPID_SUCCESS) cupid_checkpoint_close(ck);
+  return st;
+}

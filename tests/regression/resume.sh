@@ -1,0 +1,172 @@
+#!/usr/bin/env bash
+# Interrupted and resumed runs (issue 36; docs/hardening.md, "Checkpoints"). A dynamic run
+# stopped by SIGTERM (a checkpoint at the next output step, exit 5) or killed by SIGKILL (the
+# last periodic checkpoint) at a pseudo-random moment, then continued with --resume (stopped
+# again, sometimes), must end with the files of the run that was never interrupted, byte for
+# byte; summary.json to the bit but for its timings and memory (keys *_s, *memory*). Covered:
+# explicit fracture with moving grips (PMB and LPS), the Arlequin beam with explicit fracture,
+# Newmark with Rayleigh damping, Newmark with a moving grip and a load in t, a Lagrange tie, the
+# plots. And the refusals: a changed model or option (exit 1, naming the line that differs),
+# nothing to resume and no intact checkpoint (exit 3), a damaged checkpoint (its previous one is
+# used, the results unchanged), a disk that fills while checkpointing (a warning; the run goes
+# on), a second signal (stops at once; the last periodic checkpoint resumes).
+set -u
+CUPID=$(realpath "${CUPID:-build/cupid}")
+SRC=$(realpath "${CUPID_SOURCE_DIR:-.}")
+work=$(mktemp -d)
+trap 'rm -rf "$work"' EXIT
+cd "$work"
+pass=0; fail=0
+RANDOM=36
+ok() { pass=$((pass + 1)); }
+bad() { echo "FAIL: $*"; fail=$((fail + 1)); }
+
+# same REF DIR: every file of REF in DIR and equal (summary.json but for timings); no other file
+same() {
+  python3 - "$1" "$2" <<'EOF'
+import json, os, sys
+ref, got = sys.argv[1], sys.argv[2]
+def strip(v):
+    if isinstance(v, dict):
+        return {k: strip(x) for k, x in v.items() if not (k.endswith("_s") or "memory" in k)}
+    if isinstance(v, list):
+        return [strip(x) for x in v]
+    return v
+a, b = sorted(os.listdir(ref)), sorted(os.listdir(got))
+if a != b:
+    sys.exit(f"files differ: {sorted(set(a) ^ set(b))}")
+for f in a:
+    pa, pb = os.path.join(ref, f), os.path.join(got, f)
+    if f == "summary.json":
+        if strip(json.load(open(pa))) != strip(json.load(open(pb))):
+            sys.exit(f"{f} differs beyond its timings")
+    elif open(pa, "rb").read() != open(pb, "rb").read():
+        sys.exit(f"{f} differs")
+EOF
+}
+
+# interrupt_and_resume NAME MODEL OPTIONS...: a reference run, then runs killed at random moments
+# (TERM or KILL, alternately; the resumptions too, twice at most) until one ends; compared.
+interrupt_and_resume() {
+  local name=$1 model=$2; shift 2
+  rm -rf "ref_$name"
+  local t0=$(date +%s%N)
+  "$CUPID" run "$model" -o "ref_$name" -q "$@" || { bad "$name: the reference run failed"; return; }
+  local ms=$(( ($(date +%s%N) - t0) / 1000000 ))
+  local trial
+  for trial in 1 2; do
+    local out="run_${name}_$trial" resume="" rc=1 kills=0 sig
+    rm -rf "$out" ".$out.cupid-partial"
+    while :; do
+      "$CUPID" run "$model" -o "$out" -q "$@" $resume 2>err.txt &
+      local pid=$!
+      if [ $kills -lt 2 ]; then
+        sig=$([ $(( (trial + kills) % 2 )) -eq 0 ] && echo KILL || echo TERM)
+        sleep "$(awk -v r=$RANDOM -v ms=$ms 'BEGIN { printf "%.3f", (0.15 + 0.7 * r / 32767) * ms / 1000 }')"
+        kill -$sig $pid 2>/dev/null
+        kills=$((kills + 1))
+      fi
+      wait $pid 2>/dev/null; rc=$?
+      [ $rc -eq 0 ] && break
+      if [ $rc -eq 3 ] && grep -q "nothing to resume" err.txt; then resume=""; continue; fi
+      if [ $rc -ne 5 ] && [ $rc -ne 137 ]; then bad "$name: exit $rc: $(cat err.txt)"; return; fi
+      resume=--resume
+    done
+    if msg=$(same "ref_$name" "$out" 2>&1); then ok; else bad "$name trial $trial: $msg"; fi
+    [ -e ".$out.cupid-partial" ] && bad "$name: the staging folder stayed after the run ended"
+  done
+}
+
+cp "$SRC/examples/notched_plate/notched_plate.yaml" plate.yaml
+cp "$SRC/examples/notched_plate/notched_plate_lps.yaml" plate_lps.yaml
+cp "$SRC/examples/notched_bar/notched_bar_arlequin.yaml" bar.yaml
+cp "$SRC/examples/truss/truss_arlequin_damped.yaml" truss_damped.yaml
+cp "$SRC/examples/truss/truss_lagrange.yaml" truss_lagrange.yaml
+cat > grip.yaml <<'EOF'
+title: FE bar, Newmark, a moving grip and a load in t
+materials:
+  steel: {E: 2.0e11, nu: 0.3, density: 7800}
+beam:
+  material: steel
+  axis: {y: [0, 1], elements: [20], type: B3}
+  section:
+    expansion: TE1
+    components:
+      - {x: [-0.05, 0.05], z: [-0.05, 0.05]}
+constraints:
+  - displacement: {box: {y: [0, 0]}, value: [0, "1e-4*sin(2000*t)", 0]}
+loads:
+  - point: {at: [0, 1, 0], value: [0, 0, "1e3*t"]}
+analysis:
+  type: dynamic
+  dynamic: {integrator: newmark, dt: 2.0e-6, duration: 0.02, every: 200, lumped: true}
+output:
+  vtu: true
+  points:
+    - {name: tip, at: [0, 1, 0]}
+  plots: false
+EOF
+P=(--set output.plots=false --set output.checkpoint=0.05)
+interrupt_and_resume pmb plate.yaml "${P[@]}"
+interrupt_and_resume lps plate_lps.yaml "${P[@]}"
+interrupt_and_resume arlequin bar.yaml "${P[@]}"
+interrupt_and_resume damped truss_damped.yaml --set analysis.dynamic.duration=0.5 "${P[@]}"
+interrupt_and_resume grip grip.yaml --set output.checkpoint=0.05
+interrupt_and_resume lagrange truss_lagrange.yaml --set analysis.dynamic.duration=0.3 "${P[@]}"
+interrupt_and_resume plots plate.yaml --set output.checkpoint=0.05
+
+# ---- refusals, on the PMB plate stopped half-way
+stop_half() { # stop_half DIR: a run of the plate stopped by SIGTERM (exit 5), periodic checkpoints
+  rm -rf "$1"
+  "$CUPID" run plate.yaml -o "$1" -q "${P[@]}" 2>/dev/null &
+  local pid=$!
+  sleep 0.5; kill -TERM $pid; wait $pid
+}
+stop_half h; rc=$?
+[ $rc -eq 5 ] && [ -f .h.cupid-partial/.checkpoint ] && ok || bad "SIGTERM: exit $rc, no checkpoint"
+
+sed 's/E: 72000/E: 72001/' plate.yaml > plate2.yaml && cp plate.yaml keep.yaml && cp plate2.yaml plate.yaml
+"$CUPID" run plate.yaml -o h -q "${P[@]}" --resume 2>err.txt; rc=$?
+cp keep.yaml plate.yaml
+[ $rc -eq 1 ] && grep -q "belongs to another run" err.txt && grep -q "CRC-32" err.txt && ok ||
+  bad "a changed model: exit $rc: $(cat err.txt)"
+"$CUPID" run plate.yaml -o h -q "${P[@]}" --set analysis.dynamic.every=25 --resume 2>err.txt; rc=$?
+[ $rc -eq 1 ] && grep -q "every=25" err.txt && ok || bad "a changed option: exit $rc: $(cat err.txt)"
+"$CUPID" run plate.yaml -o nowhere -q "${P[@]}" --resume 2>err.txt; rc=$?
+[ $rc -eq 3 ] && grep -q "nothing to resume" err.txt && ok || bad "nothing to resume: exit $rc: $(cat err.txt)"
+
+# a damaged checkpoint: its previous one (the run's periodic one before it) resumes
+if [ -f .h.cupid-partial/.checkpoint.prev ]; then
+  printf '\x55' | dd of=.h.cupid-partial/.checkpoint bs=1 seek=5000 conv=notrunc 2>/dev/null
+  "$CUPID" run plate.yaml -o h "${P[@]}" --resume 2>err.txt; rc=$?
+  [ $rc -eq 0 ] && grep -q "previous one is used" err.txt && same ref_pmb h && ok ||
+    bad "a damaged checkpoint: exit $rc: $(grep -v '^cupid \[' err.txt)"
+else
+  bad "no previous checkpoint after 0.5 s at a 0.05 s period"
+fi
+stop_half h2
+for f in .h2.cupid-partial/.checkpoint .h2.cupid-partial/.checkpoint.prev; do
+  [ -f $f ] && printf '\x55' | dd of=$f bs=1 seek=3000 conv=notrunc 2>/dev/null
+done
+"$CUPID" run plate.yaml -o h2 -q "${P[@]}" --resume 2>err.txt; rc=$?
+[ $rc -eq 3 ] && grep -q "no intact checkpoint" err.txt && ok || bad "both damaged: exit $rc: $(cat err.txt)"
+
+# a disk that fills while checkpointing (files may not grow past 650 KiB: every output file
+# fits, the 690 KB checkpoint does not): warnings, and the results of the uninterrupted run
+( trap '' XFSZ; ulimit -f 650; "$CUPID" run plate.yaml -o full "${P[@]}" 2>err.txt ); rc=$?
+[ $rc -eq 0 ] && grep -q "could not be written" err.txt && same ref_pmb full && ok ||
+  bad "a full disk: exit $rc: $(head -3 err.txt)"
+
+# a second signal stops at once (no checkpoint at the next step); the periodic one resumes
+rm -rf twice
+"$CUPID" run plate.yaml -o twice -q "${P[@]}" 2>/dev/null &
+pid=$!
+sleep 0.5; kill -TERM $pid; kill -TERM $pid; wait $pid; rc=$?
+if [ $rc -eq 5 ]; then ok # the checkpoint was written before the second signal came: fine
+elif [ $rc -eq 143 ]; then
+  "$CUPID" run plate.yaml -o twice -q "${P[@]}" --resume 2>err.txt; rc=$?
+  [ $rc -eq 0 ] && same ref_pmb twice && ok || bad "after a second signal: exit $rc: $(cat err.txt)"
+else bad "a second signal: exit $rc"; fi
+
+echo "resume: $pass passed, $fail failed"
+[ $fail -eq 0 ]
