@@ -47,7 +47,8 @@ class _RunOptions(ctypes.Structure):  # cupid_run_options (problem.h)
                 ("threads", ctypes.c_int), ("max_memory_gb", ctypes.c_double),
                 ("quiet", ctypes.c_int), ("check_only", ctypes.c_int),
                 ("replicate", ctypes.c_int), ("assembled", ctypes.c_int),
-                ("allow_large", ctypes.c_int), ("sets", ctypes.POINTER(ctypes.c_char_p)),
+                ("allow_large", ctypes.c_int), ("resume", ctypes.c_int),
+                ("sets", ctypes.POINTER(ctypes.c_char_p)),
                 ("n_sets", ctypes.c_int)]
 
 
@@ -166,7 +167,9 @@ class Problem:
 
     model: a path to a model file, or a dict with the model file's keys (model-format.md).
     output_dir, solver ("auto", "direct", "krylov", "petsc"), threads, max_memory_gb, quiet: as the
-    command line's -o, --solver, --threads, --max-memory, --quiet. Without output_dir the files
+    command line's -o, --solver, --threads, --max-memory, --quiet. resume=True continues an
+    interrupted dynamic run from its checkpoint, as --resume (solve() then ends with the files of
+    a run that was never interrupted). Without output_dir the files
     go to the model's output.directory, by default out/<file name> (out/model for a dict).
     write_outputs() may be called again: it rewrites the report beside what the run wrote.
     """
@@ -177,13 +180,14 @@ class Problem:
         return cls(_Text(text, name), **options)
 
     def __init__(self, model, output_dir=None, solver=None, threads=0, max_memory_gb=0.0,
-                 quiet=True):
+                 quiet=True, resume=False):
         lib = _load()
         if solver not in _SOLVERS:
             raise ValueError("solver must be one of auto, direct, krylov, petsc")
         self._out = output_dir.encode() if output_dir else None
         opts = _RunOptions(output_dir=self._out, solver=_SOLVERS[solver], threads=int(threads),
-                           max_memory_gb=float(max_memory_gb), quiet=1 if quiet else 0)
+                           max_memory_gb=float(max_memory_gb), quiet=1 if quiet else 0,
+                           resume=1 if resume else 0)
         self._p = ctypes.c_void_p()
         if isinstance(model, (dict, _Text)):
             # JSON is YAML (flow style): the reader takes a dict as a model file's text.

@@ -228,3 +228,32 @@ def test_growth_outputs_twice_quiet_and_dict_folder(tmp_path, capfd, monkeypatch
     assert r.output_dir == "out/model"
     r.solve().write_outputs()
     assert os.path.exists(tmp_path / "out" / "model" / "summary.json")
+
+
+def test_resume_an_interrupted_run(tmp_path):
+    """Issue 36: a run stopped by SIGTERM (exit 5, a checkpoint) continued from Python with
+    resume=True ends with the uninterrupted run's files and history, to the bit."""
+    import signal
+    import time
+    text = open(os.path.join(SRC, "examples", "notched_plate", "notched_plate.yaml")).read()
+    text = text.replace("  plots: true", "  plots: false\n  checkpoint: 0.05\n  points:\n"
+                        "    - {name: tip, at: [10.5, 20.5, 1.5]}")
+    model = tmp_path / "plate.yaml"
+    model.write_text(text)
+    ref = cupid.Problem(str(model), output_dir=str(tmp_path / "ref")).solve().write_outputs()
+    out = tmp_path / "run"
+    proc = subprocess.Popen([CLI, "run", str(model), "-o", str(out), "--quiet"],
+                            stderr=subprocess.PIPE)
+    time.sleep(0.4)
+    proc.send_signal(signal.SIGTERM)
+    assert proc.wait() in (0, 5), proc.stderr.read()
+    if proc.returncode == 5:
+        assert b"--resume" in proc.stderr.read()
+        p = cupid.Problem(str(model), output_dir=str(out), resume=True).solve().write_outputs()
+        for name in ref.history:
+            assert np.array_equal(p.history[name], ref.history[name])
+    for name in ("damage.csv", "energies.csv", "history.csv", "pd_002500.vtu", "model.pvd"):
+        assert (out / name).read_bytes() == (tmp_path / "ref" / name).read_bytes(), name
+    with pytest.raises(cupid.Error) as e:
+        cupid.Problem(str(model), output_dir=str(tmp_path / "none"), resume=True).solve()
+    assert e.value.exit_code == 3 and "nothing to resume" in str(e.value)

@@ -579,10 +579,12 @@ static cupid_status save_point(void *ctx, const cupid_dynamics_restart *r) {
   cupid_problem_state *prob = o->prob;
   const int due = cupid_problem_checkpoint_due(prob);
   if (!due) return CUPID_SUCCESS;
+  const double t0 = cupid_wtime();
   cupid_checkpoint_writer w = NULL;
   cupid_status st = cupid_problem_checkpoint_start(prob, &w);
   if (st == CUPID_SUCCESS) st = write_state(o, r, w);
   cupid_problem_checkpoint_commit(prob, &w, st, r->step);
+  prob->ckpt.seconds += cupid_wtime() - t0;
   if (due < 2) return CUPID_SUCCESS;
   prob->ckpt.interrupted = 1;
   return CUPID_ERROR(CUPID_ERR_INTERRUPTED, "interrupted at step %lld of %lld (t = %g): continue "
@@ -761,6 +763,9 @@ cupid_status cupid_problem_run_dynamic(cupid_problem_state *prob, const cupid_me
   CUPID_TRY(finish_outputs(&o));
   cupid_problem_phase_end(prob, CUPID_PHASE_OUTPUT, t0);
   prob->dyn.done = 1;
+  if (prob->ckpt.written)
+    cupid_problem_progress(prob, "checkpoints: %lld written, %.3g s in all",
+                           (long long)prob->ckpt.written, prob->ckpt.seconds);
   cupid_problem_progress(prob, "dynamics: done, %lld output steps, energy balance %.2e (relative)",
                      (long long)o.out_count, prob->dyn.info.max_balance);
   if (prob->dyn.info.max_balance > CUPID_ENERGY_BALANCE_BOUND && !prob->quiet &&

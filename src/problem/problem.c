@@ -290,7 +290,11 @@ static cupid_status run_dynamic(cupid_problem_state *prob) {
                      prob->method->name);
     goto cleanup;
   }
-  if (!prob->opts->check_only) CUPID_TRY(begin_outputs(prob)); /* the series, as it goes */
+  if (!prob->opts->check_only) { /* the series, as it goes; every rank stops if rank 0 cannot
+                                     (another run's lock, nothing to resume) */
+    st = begin_outputs(prob);
+    CUPID_TRY(cupid_petsc_size() > 1 ? cupid_problem_slab_agree(st) : st);
+  }
   CUPID_TRY(cupid_problem_run_dynamic(prob, op.apply ? &op : NULL));
   if (prob->opts->check_only) goto cleanup; /* cupid check: no step, nothing to report */
   if (prob->method->recover) { /* the eliminated unknowns, and K u with them */

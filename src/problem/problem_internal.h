@@ -113,7 +113,7 @@ typedef struct cupid_problem_private {
     int armed;       /**< signals ask for a checkpoint (cupid_interrupt_arm) */
     int interrupted; /**< the run stopped at a checkpoint: keep its staging folder */
     cupid_int written;
-    double seconds;  /**< spent writing them */
+    double seconds;  /**< spent writing them (the stage times them) */
   } ckpt;
 
   /* Coupled models (method_*.c) */

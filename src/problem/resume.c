@@ -33,9 +33,9 @@ static cupid_status identity(const cupid_problem_state *prob, char *buf, size_t 
   ADD("model %s: %llu bytes, CRC-32 %08x\n", m->file, (unsigned long long)m->source_bytes,
       (unsigned)m->source_crc);
   for (int k = 0; k < m->n_sets; k++) ADD("--set %s\n", m->sets[k]);
+  ADD("processes %d, this one %d\n", cupid_petsc_size(), cupid_petsc_rank());
   ADD("solver %s%s%s\n", prob->engine ? prob->engine->name : "auto",
       prob->opts->assembled ? ", --assembled" : "", prob->opts->replicate ? ", --replicate" : "");
-  ADD("processes %d, this one %d\n", cupid_petsc_size(), cupid_petsc_rank());
 #undef ADD
   return CUPID_SUCCESS;
 }
@@ -122,14 +122,12 @@ cupid_status cupid_problem_checkpoint_common(cupid_problem_state *prob, cupid_ch
 
 void cupid_problem_checkpoint_commit(cupid_problem_state *prob, cupid_checkpoint_writer *w,
                                      cupid_status filled, cupid_int step) {
-  const double t0 = cupid_wtime();
   cupid_status st = filled;
   if (st == CUPID_SUCCESS) st = cupid_checkpoint_write_commit(w);
   cupid_checkpoint_write_abort(w); /* NULL after a commit */
   int failed = st != CUPID_SUCCESS;
   if (cupid_petsc_size() > 1) failed = cupid_petsc_max_int(failed); /* all ranks' or none */
   prob->ckpt.last = cupid_wtime();
-  prob->ckpt.seconds += prob->ckpt.last - t0;
   if (!failed) {
     prob->ckpt.written++;
     return;

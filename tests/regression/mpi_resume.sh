@@ -1,0 +1,77 @@
+#!/usr/bin/env bash
+# Resumed runs under mpirun (issue 36): the LPS plate of tests/models/mpi in z slabs on 2 ranks,
+# each rank checkpointing its slab (.checkpoint, .checkpoint-rank-1), stopped by SIGTERM to
+# mpiexec (forwarded to the ranks: a checkpoint at the next output step) or by SIGKILL to the
+# ranks (the last periodic checkpoint), then resumed with --resume on 2 ranks: the files of the
+# uninterrupted 2-rank run, byte for byte (summary.json but for its timings). Resuming on
+# another number of ranks is refused naming the line that differs (exit 1); --resume with
+# nothing to resume stops every rank (exit 3, no rank left waiting). Skipped (77) without PETSc.
+if [ "${CUPID_HAVE_PETSC:-0}" != 1 ]; then
+  echo "SKIP: cupid was built without PETSc (scripts/build.sh --with-petsc builds build-petsc/)"
+  exit 77
+fi
+set -u
+CUPID=$(realpath "${CUPID:-build-petsc/cupid}")
+SRC=$(realpath "${CUPID_SOURCE_DIR:-.}")
+MPIEXEC=${CUPID_MPIEXEC:-mpiexec}
+export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMP_NUM_THREADS=1
+export OMPI_MCA_rmaps_base_oversubscribe=1
+work=$(mktemp -d)
+trap 'pkill -KILL -f "$work" 2>/dev/null; rm -rf "$work"' EXIT
+cd "$work"
+pass=0; fail=0
+ok() { pass=$((pass + 1)); }
+bad() { echo "FAIL: $*"; fail=$((fail + 1)); }
+cp "$SRC/tests/models/mpi/plate_slabs_lps.yaml" plate.yaml
+P=(--set output.plots=false --set output.checkpoint=0.1)
+
+same() { # REF DIR
+  python3 - "$1" "$2" <<'EOF'
+import json, os, sys
+ref, got = sys.argv[1], sys.argv[2]
+def strip(v):
+    if isinstance(v, dict):
+        return {k: strip(x) for k, x in v.items() if not (k.endswith("_s") or "memory" in k)}
+    return [strip(x) for x in v] if isinstance(v, list) else v
+a, b = sorted(os.listdir(ref)), sorted(os.listdir(got))
+if a != b:
+    sys.exit(f"files differ: {sorted(set(a) ^ set(b))}")
+for f in a:
+    pa, pb = os.path.join(ref, f), os.path.join(got, f)
+    if f == "summary.json":
+        if strip(json.load(open(pa))) != strip(json.load(open(pb))):
+            sys.exit("summary.json differs beyond its timings")
+    elif open(pa, "rb").read() != open(pb, "rb").read():
+        sys.exit(f"{f} differs")
+EOF
+}
+
+timeout 300 "$MPIEXEC" -n 2 "$CUPID" run plate.yaml -o ref -q "${P[@]}" || bad "the reference run"
+
+for sig in TERM KILL; do
+  out=$work/run_$sig
+  timeout 300 "$MPIEXEC" -n 2 "$CUPID" run plate.yaml -o "$out" -q "${P[@]}" 2>err.txt &
+  pid=$!
+  sleep 1.0
+  if [ $sig = TERM ]; then kill -TERM $pid; else pkill -KILL -f "cupid run plate.yaml -o $out"; fi
+  wait $pid 2>/dev/null
+  [ -f "$work/.run_$sig.cupid-partial/.checkpoint-rank-1" ] && ok ||
+    bad "$sig: no checkpoint of rank 1 ($(tail -2 err.txt))"
+  timeout 300 "$MPIEXEC" -n 2 "$CUPID" run plate.yaml -o "$out" -q "${P[@]}" --resume 2>err.txt; rc=$?
+  [ $rc -eq 0 ] && msg=$(same ref "$out" 2>&1) && ok || bad "$sig, resumed: exit $rc: ${msg:-} $(head -3 err.txt)"
+done
+
+# another number of ranks: refused, the checkpoint kept
+timeout 300 "$MPIEXEC" -n 2 "$CUPID" run plate.yaml -o ranks -q "${P[@]}" 2>/dev/null &
+pid=$!
+sleep 1.0; kill -TERM $pid; wait $pid 2>/dev/null
+"$CUPID" run plate.yaml -o ranks -q "${P[@]}" --resume 2>err.txt; rc=$?
+[ $rc -eq 1 ] && grep -q "processes 2" err.txt && ok || bad "1 rank resuming 2: exit $rc: $(cat err.txt)"
+timeout 300 "$MPIEXEC" -n 2 "$CUPID" run plate.yaml -o ranks -q "${P[@]}" --resume 2>err.txt; rc=$?
+[ $rc -eq 0 ] && same ref ranks && ok || bad "2 ranks after the refusal: exit $rc"
+
+timeout 120 "$MPIEXEC" -n 2 "$CUPID" run plate.yaml -o nothing -q "${P[@]}" --resume >/dev/null 2>err.txt; rc=$?
+[ $rc -eq 3 ] && grep -q "nothing to resume" err.txt && ok || bad "nothing to resume on 2 ranks: exit $rc"
+
+echo "mpi_resume: $pass passed, $fail failed"
+[ $fail -eq 0 ]
