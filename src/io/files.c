@@ -360,6 +360,10 @@ cupid_status cupid_atomic_open_partial(const char *path, int64_t keep, cupid_ato
   CUPID_TRY(cupid_malloc(size, 1, "temporary file name", &f->temp));
   snprintf(f->temp, size, "%.*s.%s.partial", slash ? (int)(slash - path + 1) : 0, path,
            slash ? slash + 1 : path);
+  /* a run stopped after it committed the stream (its last steps done, its outputs being
+   * finished) left it under its own name: it continues from there */
+  if (keep >= 0 && access(f->temp, F_OK) != 0 && access(path, F_OK) == 0)
+    (void)rename(path, f->temp);
   fd = open(f->temp, keep < 0 ? O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC : O_WRONLY | O_CLOEXEC,
             0666);
   CUPID_TRY_CHECK(fd >= 0, CUPID_ERR_IO, "cannot %s '%s': %s", keep < 0 ? "write" : "continue",

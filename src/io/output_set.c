@@ -269,6 +269,20 @@ static void remove_stale(const struct cupid_output_set_private *s) {
   closedir(d);
 }
 
+/* A resumable run's checkpoints (its staging folder's dot files). */
+static void remove_checkpoints(const struct cupid_output_set_private *s) {
+  DIR *d = opendir(s->staging);
+  if (!d) return;
+  struct dirent *e;
+  while ((e = readdir(d))) {
+    if (e->d_name[0] != '.' || !strcmp(e->d_name, ".") || !strcmp(e->d_name, "..")) continue;
+    char *p = NULL;
+    if (join(s->staging, e->d_name, &p) == CUPID_SUCCESS) unlink(p);
+    cupid_free(&p);
+  }
+  closedir(d);
+}
+
 static cupid_status move_in(const struct cupid_output_set_private *s, const char *name) {
   char *from = NULL, *to = NULL;
   cupid_status st = join(s->staging, name, &from);
@@ -286,6 +300,7 @@ cupid_status cupid_output_set_publish(cupid_output_set *set) {
   cupid_status st = CUPID_SUCCESS;
   CUPID_TRY(cupid_mkdir_p(s->dir));
   CUPID_TRY(check_targets(s));
+  remove_checkpoints(s); /* the run is whole: a stop while its files move in starts it over */
   if (!s->keep) remove_stale(s);
   DIR *d = opendir(s->staging);
   CUPID_TRY_CHECK(d, CUPID_ERR_IO, "cannot read the staging folder '%s': %s", s->staging,

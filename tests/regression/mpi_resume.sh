@@ -31,7 +31,7 @@ import json, os, sys
 ref, got = sys.argv[1], sys.argv[2]
 def strip(v):
     if isinstance(v, dict):
-        return {k: strip(x) for k, x in v.items() if not (k.endswith("_s") or "memory" in k)}
+        return {k: strip(x) for k, x in v.items() if not (k.endswith("_s") or "memory" in k or k == "threads")}
     return [strip(x) for x in v] if isinstance(v, list) else v
 a, b = sorted(os.listdir(ref)), sorted(os.listdir(got))
 if a != b:
