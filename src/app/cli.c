@@ -75,7 +75,8 @@ static const char help_text[] =
 static void on_signal(int sig) {
   if (cupid_interrupt_request()) {
     static const char msg[] = "\ncupid: interrupt: a checkpoint is written at the next output "
-                              "step, then the run stops (a second signal stops it at once)\n";
+                              "step (dynamics) or step's end (load steps), then the run stops "
+                              "(a second signal stops it at once)\n";
     if (write(STDERR_FILENO, msg, sizeof msg - 1) < 0) {
       /* nothing to do in a signal handler */
     }

@@ -641,7 +641,8 @@ static cupid_status read_state(dyn_output *o, const cupid_checkpoint ck, double 
 static cupid_status resume_from_checkpoint(dyn_output *o, double *v) {
   cupid_checkpoint ck = NULL;
   CUPID_CALL(cupid_problem_checkpoint_open(o->prob, "step", &ck));
-  cupid_status st = read_state(o, ck, v);
+  cupid_status st = cupid_problem_checkpoint_fracture(o->prob, ck);
+  if (st == CUPID_SUCCESS) st = read_state(o, ck, v);
   cupid_checkpoint_close(&ck);
   return st;
 }

@@ -18,55 +18,9 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "growth_run.h"
 #include "method.h"
-#include "problem_internal.h"
 
-/* The run's state. */
-typedef struct {
-  cupid_problem_state *prob;
-  double *f_full, *g_full;      /* the load and the prescribed values at load factor 1 */
-  unsigned char *fixed0;        /* the model's constrained DOFs */
-  unsigned char *anchored, *release;
-  unsigned char *weak_scan;     /* a copy of release, scratch */
-  unsigned char *weak;          /* per node: released as weakly held (at most 2 bonds, or all
-                                   in one plane; held_forces) */
-  unsigned char *masks;         /* per constraint k: ndof flags, the DOFs it fixes */
-  double *T;                    /* the unit translations, 3 ndof (cupid_problem_translations) */
-  double *u1;                   /* without fracture: u and K u at load factor 1 */
-  double u0[3];                 /* the first output point's displacement, last step */
-  double next_ratio;            /* fracture: the settled step's largest ratio (next_break) */
-  double ratio_per_load;        /* the first scanned solve's largest ratio per load factor */
-  int cut_through;              /* the crack has cut the load path (carries_load) */
-  int substep;                  /* sub-steps to each break's load (load_step) */
-  double t_line;                /* when the last step's progress line was printed */
-  cupid_atomic_file csv;
-  cupid_int released;
-  /* Re-solves after breaks (below): the factor of the last factorised K, reused as the
-   * preconditioner of CG on the current K. */
-  cupid_direct_factor F;
-  int krylov;                   /* 0: refactorise after every break (CUPID_GROWTH_RESOLVE) */
-  int downdate;                 /* 1: downdate F by the broken bonds (bond-based), so that it
-                                   stays the factor of the current K; 0 after a K change that
-                                   is no sum of bond terms (LPS), or CUPID_GROWTH_RESOLVE */
-  cupid_growth_downdate dd;
-  cupid_int downdates, downdate_columns;
-  double t_downdate;
-  double *w[4];                 /* CG work vectors */
-  cupid_int factorisations, cg_solves, cg_iterations;
-  cupid_int bonds_at_factor;    /* broken bonds when F was made */
-  double factor_flops;          /* the last factorisation's operations, and those of one */
-  double cg_iteration_flops;    /* CG iteration with its factor (two triangular solves, K x) */
-  cupid_int cg_since_factor;    /* CG iterations since the last factorisation */
-  double t_factor, t_cg;
-  double *react;                /* 3 per constraint: the reactions of the last solution */
-  double held_share;            /* the held nodes' share of the forces on the body (collapse) */
-  double weak_share;            /* the weakly held nodes' share (held_forces) */
-  double force_scale;           /* the largest |P| + sum |R_k| of the run (held_forces) */
-  double *points;               /* 3 per output point */
-  cupid_growth_lu lu;           /* a non-symmetric method on the direct engine (growth_lu.c) */
-  int matrix_free;              /* solves by the kept matrix-free PETSc solve ... */
-  cupid_growth_mf mf;           /* ... (growth_matrix_free.c) */
-} growth_run;
 
 static void growth_free(growth_run *g) {
   cupid_free(&g->f_full);
@@ -87,6 +41,7 @@ static void growth_free(growth_run *g) {
   cupid_free(&g->points);
   cupid_growth_mf_free(&g->mf);
   cupid_growth_lu_free(&g->lu);
+  growth_journal_free(&g->journal);
 }
 
 /* The DOFs each constraint fixes (one byte a DOF and constraint), and the unit translations:
@@ -133,7 +88,9 @@ static cupid_status open_csv(growth_run *g) {
   char path[4096];
   int len = snprintf(path, sizeof path, "%s/%s", prob->writedir, csv_name(prob));
   CUPID_CHECK(len > 0 && (size_t)len < sizeof path, CUPID_ERR_IO, "output path too long");
-  CUPID_CALL(cupid_atomic_open(path, &g->csv));
+  /* a resumable stream (issue 36): a resumption continues it at the checkpoint's length */
+  CUPID_CALL(cupid_atomic_open_partial(path, g->csv_keep, &g->csv));
+  if (g->csv_keep >= 0) return CUPID_SUCCESS;
   FILE *f = cupid_atomic_stream(g->csv);
   fprintf(f, "step,t,load_factor,iterations");
   if (cupid_problem_has_damage(prob))
@@ -494,6 +451,7 @@ static cupid_status factor_solve(growth_run *g) {
   if (st != CUPID_SUCCESS) return st;
   g->factorisations++;
   g->bonds_at_factor = prob->broken_bonds;
+  CUPID_CALL(growth_journal_factored(g)); /* what a resumption replays (growth_resume.c) */
   g->factor_flops = info.flops_factor;
   const double nnz_k = (double)prob->K->rowptr[prob->K->nrows] * prob->K->bs * prob->K->bs;
   g->cg_iteration_flops = 4.0 * info.nnz_factor + 2.0 * nnz_k;
@@ -596,6 +554,7 @@ static cupid_status downdate_factor(growth_run *g, const cupid_csr_t *Kold) {
   } else {
     CUPID_CALL(st);
     g->bonds_at_factor = prob->broken_bonds;
+    CUPID_CALL(growth_journal_downdated(g));
   }
   g->downdates++;
   g->downdate_columns += g->dd.r;
@@ -638,13 +597,16 @@ static cupid_status solve(growth_run *g, int reassemble) {
     Kold = prob->K, prob->K = NULL;
   if (reassemble) cupid_csr_destroy(&prob->K);
   cupid_status st0 = prob->method->assemble(prob);
+  const cupid_int updates = g->lu.updates, factorisations = g->lu.factorisations;
   if (st0 == CUPID_SUCCESS && Kold)
     st0 = lu ? cupid_growth_lu_update(prob, &g->lu, Kold) : downdate_factor(g, Kold);
   cupid_csr_destroy(&Kold);
   CUPID_CALL(st0);
+  if (lu && g->lu.updates > updates) CUPID_CALL(growth_journal_downdated(g)); /* issue 36 */
   if (lu) { /* non-symmetric (fictitious nodes, either balance): the last LU, updated by the
                broken bonds, and GMRES (growth_lu.c) */
     CUPID_CALL(cupid_growth_lu_solve(prob, &g->lu));
+    if (g->lu.factorisations > factorisations) CUPID_CALL(growth_journal_factored(g));
     prob->growth.solves++;
     return CUPID_SUCCESS;
   }
@@ -977,7 +939,36 @@ static cupid_status setup_run(growth_run *g) {
   g->matrix_free = matrix_free(prob);
   const char *sub = getenv("CUPID_GROWTH_SUBSTEP");
   g->substep = !(sub && strcmp(sub, "0") == 0);
+  return CUPID_SUCCESS;
+}
+
+/* Checkpoints (growth_resume.c; issue 36): on paths that can be resumed, periodic ones and on a
+ * signal; with --resume, the checkpoint's state. Then the steps' file, new or continued. */
+static cupid_status begin_resumable(growth_run *g) {
+  cupid_problem_state *prob = g->prob;
+  const int N = prob->model->analysis.steps > 0 ? prob->model->analysis.steps : 1;
+  g->first_step = 1;
+  g->csv_keep = -1;
+  if (!cupid_problem_growth_resumable(prob)) {
+    CUPID_CHECK(!prob->opts->resume, CUPID_ERR_UNSUPPORTED,
+                "--resume: crack growth with coupling method %s (its LU updated by the broken "
+                "bonds) writes no checkpoints in cupid %s; run it without --resume",
+                prob->method->name, cupid_version());
+    return open_csv(g);
+  }
+  /* the estimate: a solve of the chosen engine per load step, at least */
+  CUPID_CALL(cupid_problem_checkpoint_begin(prob, prob->estimate.seconds * N));
+  if (prob->opts->resume) CUPID_CALL(growth_resume(g));
   return open_csv(g);
+}
+
+static int fracture_run(const cupid_problem_state *prob) {
+  return prob->model->has_peridynamics && prob->model->pd.fracture.has_fracture;
+}
+
+/* A status agreed over the ranks of an MPI run (a slab's, or a replicated model's). */
+static cupid_status agreed_growth(const cupid_problem_state *prob, cupid_status st) {
+  return cupid_petsc_size() > 1 ? cupid_problem_slab_agree(st) : st;
 }
 
 cupid_status cupid_problem_run_growth(cupid_problem_state *prob) {
@@ -986,6 +977,11 @@ cupid_status cupid_problem_run_growth(cupid_problem_state *prob) {
   growth_run g = {.prob = prob};
   cupid_status st = CUPID_SUCCESS;
   CUPID_TRY(setup_run(&g));
+  if (fracture_run(prob))
+    CUPID_TRY(cupid_calloc(6 * (size_t)(m->n_constraints ? m->n_constraints : 1), sizeof(double),
+                           "peak reactions", &prob->growth.peak));
+  if (fracture_run(prob)) CUPID_TRY(agreed_growth(prob, begin_resumable(&g)));
+  else CUPID_TRY(open_csv(&g));
   const size_t n = (size_t)prob->ndof;
   double t0 = cupid_wtime();
   const int fracture = m->has_peridynamics && m->pd.fracture.has_fracture;
@@ -1005,10 +1001,7 @@ cupid_status cupid_problem_run_growth(cupid_problem_state *prob) {
     }
     CUPID_TRY(write_row(&g, k, lambda, k == 1));
   }
-  if (fracture)
-    CUPID_TRY(cupid_calloc(6 * (size_t)(m->n_constraints ? m->n_constraints : 1), sizeof(double),
-                           "peak reactions", &prob->growth.peak));
-  for (int k = 1; k <= N && fracture && !prob->growth.stopped_step; k++) {
+  for (int k = g.first_step; k <= N && fracture && !prob->growth.stopped_step; k++) {
     const double lambda = (double)k / N;
     for (size_t d = 0; d < n; d++) {
       prob->f_ext[d] = lambda * g.f_full[d];
@@ -1027,7 +1020,11 @@ cupid_status cupid_problem_run_growth(cupid_problem_state *prob) {
                            "broken (+%lld), %lld nodes held",
                            k, N, lambda, it, it == 1 ? "" : "s", (long long)prob->broken_bonds,
                            (long long)(prob->broken_bonds - before), (long long)g.released);
+    CUPID_TRY(growth_safe_point(&g, k)); /* a checkpoint when one is due */
   }
+  if (prob->ckpt.written)
+    cupid_problem_progress(prob, "checkpoints: %lld written, %.3g s in all",
+                           (long long)prob->ckpt.written, prob->ckpt.seconds);
   prob->solved = 1;
   prob->phases[CUPID_PHASE_SOLVE] = (cupid_phase_record){cupid_wtime() - t0, cupid_peak_memory(), 1};
   const int lu = g.lu.factorisations > 0;
@@ -1086,6 +1083,8 @@ cupid_status cupid_problem_run_growth(cupid_problem_state *prob) {
   CUPID_TRY(plots(&g));
   if (prob->method->report) CUPID_TRY(prob->method->report(prob));
 cleanup:
+  if (prob->ckpt.interrupted) cupid_atomic_suspend(&g.csv); /* --resume continues it */
+  cupid_problem_checkpoint_end(prob);
   growth_free(&g);
   return st;
 }

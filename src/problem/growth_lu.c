@@ -236,9 +236,8 @@ cupid_status cupid_growth_lu_update(cupid_problem_state *prob, cupid_growth_lu *
   return CUPID_SUCCESS;
 }
 
-cupid_status cupid_growth_lu_solve(cupid_problem_state *prob, cupid_growth_lu *s) {
+cupid_status cupid_growth_lu_prepare(cupid_problem_state *prob, cupid_growth_lu *s) {
   const size_t n = (size_t)prob->ndof;
-  cupid_status st = CUPID_SUCCESS;
   if (!s->t) CUPID_CALL(cupid_calloc(n + 1, sizeof *s->t, "growth work vector", &s->t));
   if (!s->z) CUPID_CALL(cupid_calloc(n + 1, sizeof *s->z, "growth work vector", &s->z));
   if (!s->w) CUPID_CALL(cupid_calloc(2 * n + 1, sizeof *s->w, "growth work vector", &s->w));
@@ -246,6 +245,16 @@ cupid_status cupid_growth_lu_solve(cupid_problem_state *prob, cupid_growth_lu *s
    * both as they were (docs/theory.md; unit.coupling_fracture) */
   if (cupid_problem_balanced(prob) && !s->B)
     CUPID_CALL(cupid_problem_balance_assembled(prob, prob->K, &s->B));
+  return CUPID_SUCCESS;
+}
+
+cupid_status cupid_growth_lu_factorise(cupid_problem_state *prob, cupid_growth_lu *s) {
+  return factorise(prob, s, s->B);
+}
+
+cupid_status cupid_growth_lu_solve(cupid_problem_state *prob, cupid_growth_lu *s) {
+  cupid_status st = CUPID_SUCCESS;
+  CUPID_CALL(cupid_growth_lu_prepare(prob, s));
   system_op op = {prob->K, s->B};
   if (!s->patch_tested) { /* the first K, as the one-shot solves test theirs (Eq. 38 itself:
                              balance.c says why) */

@@ -88,6 +88,19 @@ static cupid_status create_solver(cupid_problem_state *prob, cupid_growth_mf *gs
   return st;
 }
 
+cupid_status cupid_growth_mf_prepare(cupid_problem_state *prob, cupid_growth_mf *gs) {
+  CUPID_CALL(setup(prob, gs));
+  if (!gs->solver && !gs->coupled) CUPID_CALL(create_solver(prob, gs));
+  return CUPID_SUCCESS;
+}
+
+cupid_status cupid_growth_mf_set_limit(cupid_growth_mf *gs, int limit) {
+  gs->limit = limit;
+  if (gs->solver) cupid_petsc_nodes_solver_limit(gs->solver, limit);
+  if (gs->coupled) cupid_krylov_solver_limit(gs->coupled, limit);
+  return CUPID_SUCCESS;
+}
+
 cupid_status cupid_growth_mf_solve(cupid_problem_state *prob, cupid_growth_mf *gs) {
   CUPID_CALL(setup(prob, gs));
   const double t0 = cupid_wtime();
@@ -106,8 +119,7 @@ cupid_status cupid_growth_mf_solve(cupid_problem_state *prob, cupid_growth_mf *g
   const int limit = RUNAWAY_FACTOR * prob->solve.iterations > RUNAWAY_MIN
                         ? RUNAWAY_FACTOR * prob->solve.iterations
                         : RUNAWAY_MIN;
-  if (!guess && gs->solver) cupid_petsc_nodes_solver_limit(gs->solver, limit);
-  if (!guess && gs->coupled) cupid_krylov_solver_limit(gs->coupled, limit);
+  if (!guess) CUPID_CALL(cupid_growth_mf_set_limit(gs, limit));
   gs->setup_s += prob->solve.time_factor;
   gs->solve_s += cupid_wtime() - t0 - prob->solve.time_factor;
   if (gs->coupled) /* u on every local DOF from the solve; the owned and the beam's rows */

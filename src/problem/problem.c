@@ -117,10 +117,13 @@ cupid_status cupid_problem_setup(cupid_problem_state *prob) {
   CUPID_CHECK(prob->stage == CUPID_STAGE_CREATED, CUPID_ERR_ARGUMENT,
               "cupid_problem_setup: the problem is already set up");
   CUPID_CALL(prob->method->check(prob));
-  CUPID_CHECK(!prob->opts->resume || model->analysis.type == CUPID_ANALYSIS_DYNAMIC,
-              CUPID_ERR_UNSUPPORTED, "--resume: only type: dynamic runs write checkpoints in "
-              "cupid %s (this model is type %s); run it without --resume",
-              cupid_version(), model->analysis.type == CUPID_ANALYSIS_STATIC ? "static" : "evaluate");
+  CUPID_CHECK(!prob->opts->resume || model->analysis.type == CUPID_ANALYSIS_DYNAMIC ||
+                  (model->analysis.type == CUPID_ANALYSIS_STATIC && model->has_peridynamics &&
+                   model->pd.fracture.has_fracture),
+              CUPID_ERR_UNSUPPORTED, "--resume: only dynamic runs and crack growth write "
+              "checkpoints in cupid %s (this model is type %s%s); run it without --resume",
+              cupid_version(), model->analysis.type == CUPID_ANALYSIS_STATIC ? "static" : "evaluate",
+              model->analysis.type == CUPID_ANALYSIS_STATIC ? " without fracture" : "");
   CUPID_CALL(cupid_problem_fracture_check(prob));
   CUPID_CALL(cupid_problem_check_engine_request(prob));
   CUPID_CALL(cupid_problem_guard_size(prob)); /* before anything that scales with the model */
@@ -235,7 +238,9 @@ static cupid_status run_static(cupid_problem_state *prob) {
     /* load steps, crack growth: assembled K and the direct path, re-solved as bonds break, or
      * (PD only, slabs under mpirun) the kept matrix-free solve */
     if (!prob->slab) CUPID_CALL(cupid_problem_estimate(prob, 0));
-    CUPID_CALL(begin_outputs(prob)); /* the steps' rows are written as the run goes */
+    /* the steps' rows are written as the run goes; every rank stops if rank 0 cannot */
+    const cupid_status st = begin_outputs(prob);
+    CUPID_CALL(cupid_petsc_size() > 1 ? cupid_problem_slab_agree(st) : st);
     return cupid_problem_run_growth(prob);
   }
   if (prob->method->matrix_free(prob, prob->engine)) {
@@ -260,7 +265,9 @@ static cupid_status begin_outputs(cupid_problem_state *prob) {
   if (prob->outputs || cupid_petsc_rank() != 0) return CUPID_SUCCESS;
   /* a dynamic run can stop at a checkpoint and be resumed (resume.c): its staging folder has
    * a fixed name and outlives a signal */
-  if (prob->model->analysis.type == CUPID_ANALYSIS_DYNAMIC && !prob->outputs_written)
+  const cupid_model_t *m = prob->model;
+  const int growth = m->analysis.type == CUPID_ANALYSIS_STATIC && cupid_problem_growth_resumable(prob);
+  if ((m->analysis.type == CUPID_ANALYSIS_DYNAMIC || growth) && !prob->outputs_written)
     CUPID_CALL(cupid_output_set_begin_resumable(prob->outdir, prob->opts->resume, &prob->outputs));
   else
     CUPID_CALL(cupid_output_set_begin(prob->outdir, &prob->outputs));

@@ -330,6 +330,11 @@ cupid_status cupid_growth_lu_update(cupid_problem_state *prob, cupid_growth_lu *
                                     const cupid_csr_t *Kold);
 /** Drop the factor (a new load step after breaks starts from a fresh one, as growth.c's CG). */
 void cupid_growth_lu_renew(cupid_growth_lu *s);
+/** The work vectors and, balanced, W and C of prob->K (the first solve's K), kept for the run:
+ *  a resumption makes them on the intact K before it restores the broken bonds. */
+cupid_status cupid_growth_lu_prepare(cupid_problem_state *prob, cupid_growth_lu *s);
+/** Factorise prob->K under prob->bc now, as a solve does (a resumption's replay). */
+cupid_status cupid_growth_lu_factorise(cupid_problem_state *prob, cupid_growth_lu *s);
 void cupid_growth_lu_free(cupid_growth_lu *s);
 
 /* growth_matrix_free.c: load steps and crack growth on the petsc engine, matrix-free (the
@@ -350,7 +355,13 @@ typedef struct {
   double *u_last;               /* the last solution (CG's first guess) */
   cupid_int iterations;         /* CG iterations over the run */
   double setup_s, solve_s;
+  int limit;                    /* the iteration limit set after the first solve (0: none) */
 } cupid_growth_mf;
+/** The kept solver built now, as the first solve builds it (a resumption, before it restores
+ *  the broken bonds: the preconditioner is the intact grid's; collective). */
+cupid_status cupid_growth_mf_prepare(cupid_problem_state *prob, cupid_growth_mf *gs);
+/** The limit of iterations a resumed run's solves had (cupid_growth_mf.limit). */
+cupid_status cupid_growth_mf_set_limit(cupid_growth_mf *gs, int limit);
 /** Solve at the current load and conditions (u: the last solution, CG's first guess after the
  *  first solve): u on every DOF of the slab (owned from the solve, halo by the exchange, the
  *  beam's the same on every rank), exactly the prescribed values on fixed DOFs, f_int on the
@@ -547,9 +558,14 @@ cupid_status cupid_problem_checkpoint_common(cupid_problem_state *prob, cupid_ch
 void cupid_problem_checkpoint_commit(cupid_problem_state *prob, cupid_checkpoint_writer *w,
                                      cupid_status filled, cupid_int step);
 /** Open this rank's checkpoint for --resume (every rank: the same step @p step_section, a
- *  cupid_int, else CUPID_ERR_IO); the common sections restored into prob and its operator. */
+ *  cupid_int, else CUPID_ERR_IO); the counts and history restored into prob. */
 cupid_status cupid_problem_checkpoint_open(cupid_problem_state *prob, const char *step_section,
                                            cupid_checkpoint *ck);
+/** The checkpoint's broken bonds into prob->op (and a method's copy of it) and the damage. */
+cupid_status cupid_problem_checkpoint_fracture(cupid_problem_state *prob, const cupid_checkpoint ck);
+/** 1 when crack growth over load steps can be resumed (growth_resume.c): every path but a
+ *  non-symmetric coupling's LU (fictitious nodes). */
+int cupid_problem_growth_resumable(const cupid_problem_state *prob);
 
 /* estimate.c: `cupid check` and the memory guard of `cupid run`. */
 cupid_status cupid_problem_estimate(const cupid_problem_state *prob, int print);

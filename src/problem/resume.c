@@ -188,6 +188,10 @@ static cupid_status restore_common(cupid_problem_state *prob, const cupid_checkp
     prob->history_rows = prob->history_cap = c.history_rows;
     prob->history_cols = (int)c.history_cols;
   }
+  return CUPID_SUCCESS;
+}
+
+cupid_status cupid_problem_checkpoint_fracture(cupid_problem_state *prob, const cupid_checkpoint ck) {
   return restore_fracture(prob, ck);
 }
 

@@ -5,7 +5,8 @@
 # ranks (the last periodic checkpoint), then resumed with --resume on 2 ranks: the files of the
 # uninterrupted 2-rank run, byte for byte (summary.json but for its timings). Resuming on
 # another number of ranks is refused naming the line that differs (exit 1); --resume with
-# nothing to resume stops every rank (exit 3, no rank left waiting). Skipped (77) without PETSc.
+# nothing to resume stops every rank (exit 3, no rank left waiting). And crack growth over load
+# steps, on 2 slabs and on 1 process, on the matrix-free PETSc path. Skipped (77) without PETSc.
 if [ "${CUPID_HAVE_PETSC:-0}" != 1 ]; then
   echo "SKIP: cupid was built without PETSc (scripts/build.sh --with-petsc builds build-petsc/)"
   exit 77
@@ -59,6 +60,37 @@ for sig in TERM KILL; do
     bad "$sig: no checkpoint of rank 1 ($(tail -2 err.txt))"
   timeout 300 "$MPIEXEC" -n 2 "$CUPID" run plate.yaml -o "$out" -q "${P[@]}" --resume 2>err.txt; rc=$?
   [ $rc -eq 0 ] && msg=$(same ref "$out" 2>&1) && ok || bad "$sig, resumed: exit $rc: ${msg:-} $(head -3 err.txt)"
+done
+
+# crack growth over load steps on 2 slabs (the kept matrix-free CG + GAMG, its preconditioner
+# built on the intact grid again before the bonds are restored), and on 1 process with
+# --solver petsc (the same path on the whole grid)
+cp "$SRC/tests/models/growth/plate_z.yaml" growth.yaml
+GP=(--set "peridynamics.regions=[{x: [0, 20], y: [0, 2], z: [0, 36]}]"
+    --set "peridynamics.precracks=[{normal: z, at: 18, x: [0, 5], y: [0, 2]}]"
+    --set "constraints[1].displacement.box={z: [33, 36]}" --set analysis.steps=20
+    --set output.checkpoint=0.2 --set output.plots=false)
+for ranks in 2 1; do
+  launch=("$MPIEXEC" -n $ranks)
+  [ $ranks = 1 ] && launch=()
+  timeout 300 "${launch[@]}" "$CUPID" run growth.yaml -o gref$ranks -q "${GP[@]}" --solver petsc ||
+    bad "growth on $ranks rank(s)"
+  t0=$(date +%s%N)
+  resumed=0
+  for wait in 0.8 1.2 1.6; do # a moment inside the run: the crack runs from about 0.5 s to 2 s
+    rm -rf "g$ranks" ".g$ranks.cupid-partial"
+    timeout 300 "${launch[@]}" "$CUPID" run growth.yaml -o "g$ranks" -q "${GP[@]}" --solver petsc 2>/dev/null &
+    pid=$!
+    sleep $wait; kill -TERM $pid 2>/dev/null; wait $pid 2>/dev/null
+    [ -f ".g$ranks.cupid-partial/.checkpoint" ] || continue
+    timeout 300 "${launch[@]}" "$CUPID" run growth.yaml -o "g$ranks" -q "${GP[@]}" --solver petsc \
+      --resume 2>err.txt; rc=$?
+    [ $rc -eq 0 ] && msg=$(same "gref$ranks" "g$ranks" 2>&1) && ok ||
+      bad "growth on $ranks rank(s), resumed: exit $rc: ${msg:-} $(head -3 err.txt)"
+    resumed=1
+    break
+  done
+  [ $resumed = 1 ] || bad "growth on $ranks rank(s): no run was stopped at a checkpoint"
 done
 
 # another number of ranks: refused, the checkpoint kept

@@ -7,7 +7,9 @@
 # threads). Covered:
 # explicit fracture with moving grips (PMB and LPS), the Arlequin beam with explicit fracture,
 # Newmark with Rayleigh damping, Newmark with a moving grip and a load in t, a Lagrange tie, the
-# plots. And the refusals: a changed model or option (exit 1, naming the line that differs),
+# plots; and crack growth over load steps (the factor rebuilt from its journal: downdates, a
+# held node; LPS; the Arlequin SENB; the SENB with fictitious nodes, its LU updated by SMW and
+# balanced). And the refusals: a changed model or option (exit 1, naming the line that differs),
 # nothing to resume and no intact checkpoint (exit 3), a damaged checkpoint (its previous one is
 # used, the results unchanged), a disk that fills while checkpointing (a warning; the run goes
 # on), a second signal (stops at once; the last periodic checkpoint resumes).
@@ -119,6 +121,22 @@ interrupt_and_resume damped truss_damped.yaml --set analysis.dynamic.duration=0.
 interrupt_and_resume grip grip.yaml --set output.checkpoint=0.05
 interrupt_and_resume lagrange truss_lagrange.yaml --set analysis.dynamic.duration=0.3 "${P[@]}"
 interrupt_and_resume plots plate.yaml --set output.checkpoint=0.05
+
+# crack growth over load steps: the factor downdated by every round of breaks (a node held), LPS
+# (CG on the last factor), the Arlequin SENB; checkpoints after load steps
+cp "$SRC/tests/models/growth/plate.yaml" growth.yaml
+cp "$SRC/examples/fracture/senb_coupled.yaml" senb.yaml
+GP=(--set "peridynamics.regions=[{x: [0, 30], y: [0, 24], z: [0, 2]}]"
+    --set "peridynamics.precracks=[{normal: y, at: 12, x: [0, 8], z: [0, 2]}]"
+    --set analysis.steps=20 --set output.checkpoint=0.05)
+interrupt_and_resume growth growth.yaml "${GP[@]}"
+interrupt_and_resume growth_lps growth.yaml "${GP[@]}" --set peridynamics.model=lps \
+  --set "peridynamics.fracture={criterion: energy, energy_release_rate: 0.01}" \
+  --set "peridynamics.regions=[{x: [0, 20], y: [0, 24], z: [0, 2]}]" --set analysis.steps=10
+interrupt_and_resume senb senb.yaml --set peridynamics.spacing=1.6666666666666667 \
+  --set peridynamics.horizon=5.025 "${P[@]}"
+interrupt_and_resume senb_fictitious senb.yaml --set "coupling={method: fictitious}" \
+  --set peridynamics.spacing=1.6666666666666667 --set peridynamics.horizon=5.025 "${P[@]}"
 
 # ---- refusals, on the PMB plate stopped half-way
 stop_half() { # stop_half DIR: a run of the plate stopped by SIGTERM (exit 5), periodic checkpoints

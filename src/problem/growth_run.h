@@ -1,0 +1,89 @@
+/* Private to growth.c and growth_resume.c: the state of a run of load steps (issue 17) and the
+ * journal that lets a resumption rebuild its factor to the bit (issue 36). */
+#ifndef CUPID_GROWTH_RUN_H
+#define CUPID_GROWTH_RUN_H
+
+#include "problem_internal.h"
+
+/* The factor's journal: the broken bonds (as cupid_pd_operator_pack_broken packs them) and the
+ * fixed DOFs when the factor (g->F, or the LU's g->lu.F) was made, and what each downdate or
+ * update since changed (the words of the bits, the DOFs held), so that a resumption factorises
+ * the same K and brings it up to date by the same rounds (growth_resume.c). */
+typedef struct {
+  double *bits;         /* every node's words at the factorisation */
+  double *now;          /* the words after the last round */
+  unsigned char *fixed; /* bc->fixed at the factorisation */
+  unsigned char *fixed_now; /* ... after the last round */
+  double *pairs;        /* (word index, word) of each round's changed words, in order */
+  cupid_int n_pairs, cap_pairs;
+  cupid_int *held;      /* the DOFs each round found newly fixed (held nodes), in order */
+  cupid_int n_held, cap_held;
+  cupid_int *ends;      /* 2 per round: pairs and held DOFs at its end */
+  cupid_int n_rounds, cap_rounds;
+  cupid_int words;      /* words of every node */
+} growth_journal;
+
+/* The run's state. */
+typedef struct {
+  cupid_problem_state *prob;
+  double *f_full, *g_full;      /* the load and the prescribed values at load factor 1 */
+  unsigned char *fixed0;        /* the model's constrained DOFs */
+  unsigned char *anchored, *release;
+  unsigned char *weak_scan;     /* a copy of release, scratch */
+  unsigned char *weak;          /* per node: released as weakly held (at most 2 bonds, or all
+                                   in one plane; held_forces) */
+  unsigned char *masks;         /* per constraint k: ndof flags, the DOFs it fixes */
+  double *T;                    /* the unit translations, 3 ndof (cupid_problem_translations) */
+  double *u1;                   /* without fracture: u and K u at load factor 1 */
+  double u0[3];                 /* the first output point's displacement, last step */
+  double next_ratio;            /* fracture: the settled step's largest ratio (next_break) */
+  double ratio_per_load;        /* the first scanned solve's largest ratio per load factor */
+  int cut_through;              /* the crack has cut the load path (carries_load) */
+  int substep;                  /* sub-steps to each break's load (load_step) */
+  double t_line;                /* when the last step's progress line was printed */
+  cupid_atomic_file csv;
+  cupid_int released;
+  /* Re-solves after breaks (below): the factor of the last factorised K, reused as the
+   * preconditioner of CG on the current K. */
+  cupid_direct_factor F;
+  int krylov;                   /* 0: refactorise after every break (CUPID_GROWTH_RESOLVE) */
+  int downdate;                 /* 1: downdate F by the broken bonds (bond-based), so that it
+                                   stays the factor of the current K; 0 after a K change that
+                                   is no sum of bond terms (LPS), or CUPID_GROWTH_RESOLVE */
+  cupid_growth_downdate dd;
+  cupid_int downdates, downdate_columns;
+  double t_downdate;
+  double *w[4];                 /* CG work vectors */
+  cupid_int factorisations, cg_solves, cg_iterations;
+  cupid_int bonds_at_factor;    /* broken bonds when F was made */
+  double factor_flops;          /* the last factorisation's operations, and those of one */
+  double cg_iteration_flops;    /* CG iteration with its factor (two triangular solves, K x) */
+  cupid_int cg_since_factor;    /* CG iterations since the last factorisation */
+  double t_factor, t_cg;
+  double *react;                /* 3 per constraint: the reactions of the last solution */
+  double held_share;            /* the held nodes' share of the forces on the body (collapse) */
+  double weak_share;            /* the weakly held nodes' share (held_forces) */
+  double force_scale;           /* the largest |P| + sum |R_k| of the run (held_forces) */
+  double *points;               /* 3 per output point */
+  cupid_growth_lu lu;           /* a non-symmetric method on the direct engine (growth_lu.c) */
+  int matrix_free;              /* solves by the kept matrix-free PETSc solve ... */
+  cupid_growth_mf mf;           /* ... (growth_matrix_free.c) */
+  growth_journal journal;       /* how g->F came to be (growth_resume.c) */
+  int first_step;               /* 1, or a resumption's step after its checkpoint */
+  int64_t csv_keep;             /* a resumption: the bytes of the steps' file to keep (-1) */
+} growth_run;
+
+/* growth_resume.c */
+/** g->F was just factorised: the journal starts again from the operator and the conditions. */
+cupid_status growth_journal_factored(growth_run *g);
+/** g->F was just downdated by a round of broken bonds: the words they changed, appended. */
+cupid_status growth_journal_downdated(growth_run *g);
+void growth_journal_free(growth_journal *j);
+/** After load step @p k (its row written): a checkpoint when one is due; after a signal's,
+ *  CUPID_ERR_INTERRUPTED (the run stops). */
+cupid_status growth_safe_point(growth_run *g, int k);
+/** --resume (after setup_run): the checkpoint's state into g and prob, the factor rebuilt from
+ *  its journal, g->first_step the step after it. */
+cupid_status growth_resume(growth_run *g);
+
+#endif
