@@ -56,19 +56,20 @@ static const char help_text[] =
     "                     --set loads[0].traction.value=[0,50,0]\n"
     "  --allow-large      run a dynamic analysis estimated to take more than a day\n"
     "                     or write more than 50 GB or 10^5 files (refused otherwise)\n"
-    "  --resume           continue an interrupted run (type dynamic) from its last\n"
-    "                     checkpoint, kept beside the output folder: the same files,\n"
-    "                     byte for byte, as a run that was never interrupted\n"
+    "  --resume           continue an interrupted run (dynamics, crack growth) from\n"
+    "                     its last checkpoint, kept beside the output folder: the\n"
+    "                     same files, byte for byte, as a run never interrupted\n"
     "  -ksp_*, -pc_*, -log_view, ... (one dash) go to PETSc (--solver petsc; builds\n"
     "                     with PETSc only), e.g. -ksp_monitor -pc_type hypre\n"
     "\n"
     "Exit status: 0 success, 1 model error, 2 numerical failure (singular or\n"
     "unconstrained system), 3 I/O failure, 4 internal error or out of memory,\n"
-    "5 interrupted by SIGINT or SIGTERM after writing a checkpoint (a dynamic run:\n"
-    "continue it with --resume; a second signal stops at once).\n"
+    "5 interrupted by SIGINT or SIGTERM after writing a checkpoint (dynamics, crack\n"
+    "growth: continue with --resume; a second signal stops at once).\n"
     "The model file format is described in docs/model-format.md.\n";
 
-/* A resumable run (issue 36) asked to stop: it writes a checkpoint at its next output step and
+/* A resumable run (issue 36) asked to stop: it writes a checkpoint at its next safe point (an
+ * output step, a load step's end) and
  * ends with status 5. Any other run, or a second signal: interrupted runs leave no half-written
  * files (temporary outputs are removed; a resumable run's staging folder and its last
  * checkpoint stay). */

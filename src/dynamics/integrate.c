@@ -528,7 +528,10 @@ static double uniform_value(cupid_int n, const double *x) {
  * fixed DOF or damping needs it or changes the update). */
 static int merge_kicks(const dyn_state *s) {
   const cupid_dynamics_options *o = s->opt;
-  return o->velocity_at_outputs && !s->hooks && !s->f && !s->du && !s->react &&
+  /* a safe point (checkpoints) is at output steps, where the kick is whole: it does not stop
+   * the merge */
+  const int hooked = s->hooks && (s->hooks->conditions || s->hooks->after_forces);
+  return o->velocity_at_outputs && !hooked && !s->f && !s->du && !s->react &&
          !dyn_any_fixed(s->sys->bc) && o->rayleigh_mass == 0.0 && o->rayleigh_stiffness == 0.0;
 }
 

@@ -211,6 +211,10 @@ cupid_status cupid_problem_estimate(const cupid_problem_state *prob, int print) 
              rs, rb / 1e9, rf,
              rs > RUN_SECONDS_LIMIT || rb > OUTPUT_BYTES_LIMIT || rf > OUTPUT_FILES_LIMIT
                  ? " (over the limits: run refuses it without --allow-large)" : "");
+      const double period = cupid_problem_checkpoint_period(prob, rs);
+      if (period > 0) printf("checkpoints: every %g s (output.checkpoint), and on SIGINT or SIGTERM\n", period);
+      else printf("checkpoints: on SIGINT or SIGTERM only (output.checkpoint: 0, or a run under "
+                  "10 minutes)\n");
     }
     printf("the model is valid%s\n", limit > 0 && e.total_bytes > limit
                                           ? ", but too large for the direct solver on this machine"

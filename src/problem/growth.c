@@ -947,8 +947,6 @@ static cupid_status setup_run(growth_run *g) {
 static cupid_status begin_resumable(growth_run *g) {
   cupid_problem_state *prob = g->prob;
   const int N = prob->model->analysis.steps > 0 ? prob->model->analysis.steps : 1;
-  g->first_step = 1;
-  g->csv_keep = -1;
   if (!cupid_problem_growth_resumable(prob)) {
     CUPID_CHECK(!prob->opts->resume, CUPID_ERR_UNSUPPORTED,
                 "--resume: crack growth with coupling method %s (its LU updated by the broken "
@@ -974,7 +972,7 @@ static cupid_status agreed_growth(const cupid_problem_state *prob, cupid_status 
 cupid_status cupid_problem_run_growth(cupid_problem_state *prob) {
   const cupid_model_t *m = prob->model;
   const int N = m->analysis.steps > 0 ? m->analysis.steps : 1;
-  growth_run g = {.prob = prob};
+  growth_run g = {.prob = prob, .first_step = 1, .csv_keep = -1};
   cupid_status st = CUPID_SUCCESS;
   CUPID_TRY(setup_run(&g));
   if (fracture_run(prob))

@@ -542,6 +542,9 @@ void cupid_problem_dynamic_json(cupid_json js, const cupid_problem_state *prob);
 /** Start a resumable run's checkpoints: the period (output.checkpoint, or 600 s when the run is
  *  estimated over 10 minutes), this rank's file, interrupts armed. */
 cupid_status cupid_problem_checkpoint_begin(cupid_problem_state *prob, double estimated_seconds);
+/** The seconds between periodic checkpoints of a run estimated to take @p estimated_seconds
+ *  (output.checkpoint, or its default; 0: on a signal only). */
+double cupid_problem_checkpoint_period(const cupid_problem_state *prob, double estimated_seconds);
 /** Disarm the interrupts, free the path (at the end of the run, whatever its status). */
 void cupid_problem_checkpoint_end(cupid_problem_state *prob);
 /** Whether to write a checkpoint now (collective on a slab run: every rank agrees): 0 no, 1 the

@@ -40,11 +40,15 @@ static cupid_status identity(const cupid_problem_state *prob, char *buf, size_t 
   return CUPID_SUCCESS;
 }
 
-cupid_status cupid_problem_checkpoint_begin(cupid_problem_state *prob, double estimated_seconds) {
+double cupid_problem_checkpoint_period(const cupid_problem_state *prob, double estimated_seconds) {
   const double given = prob->model->output.checkpoint;
-  prob->ckpt.period = given >= 0 ? given
-                      : estimated_seconds > CHECKPOINT_AUTO_OVER_S ? CHECKPOINT_AUTO_PERIOD_S
-                                                                   : 0.0;
+  return given >= 0 ? given
+         : estimated_seconds > CHECKPOINT_AUTO_OVER_S ? CHECKPOINT_AUTO_PERIOD_S
+                                                      : 0.0;
+}
+
+cupid_status cupid_problem_checkpoint_begin(cupid_problem_state *prob, double estimated_seconds) {
+  prob->ckpt.period = cupid_problem_checkpoint_period(prob, estimated_seconds);
   prob->ckpt.last = cupid_wtime();
   char *dir = NULL;
   CUPID_CALL(cupid_output_set_partial_dir(prob->outdir, &dir));

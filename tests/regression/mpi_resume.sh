@@ -75,22 +75,27 @@ for ranks in 2 1; do
   [ $ranks = 1 ] && launch=()
   timeout 300 "${launch[@]}" "$CUPID" run growth.yaml -o gref$ranks -q "${GP[@]}" --solver petsc ||
     bad "growth on $ranks rank(s)"
-  t0=$(date +%s%N)
-  resumed=0
-  for wait in 0.8 1.2 1.6; do # a moment inside the run: the crack runs from about 0.5 s to 2 s
-    rm -rf "g$ranks" ".g$ranks.cupid-partial"
-    timeout 300 "${launch[@]}" "$CUPID" run growth.yaml -o "g$ranks" -q "${GP[@]}" --solver petsc 2>/dev/null &
-    pid=$!
-    sleep $wait; kill -TERM $pid 2>/dev/null; wait $pid 2>/dev/null
-    [ -f ".g$ranks.cupid-partial/.checkpoint" ] || continue
-    timeout 300 "${launch[@]}" "$CUPID" run growth.yaml -o "g$ranks" -q "${GP[@]}" --solver petsc \
-      --resume 2>err.txt; rc=$?
-    [ $rc -eq 0 ] && msg=$(same "gref$ranks" "g$ranks" 2>&1) && ok ||
-      bad "growth on $ranks rank(s), resumed: exit $rc: ${msg:-} $(head -3 err.txt)"
-    resumed=1
-    break
+  for sig in TERM KILL; do
+    resumed=0
+    for wait in 0.8 1.2 1.6; do # a moment inside the run: the crack runs from about 0.5 s to 2 s
+      out="$work/g${ranks}_$sig"
+      rm -rf "$out" "$work/.g${ranks}_$sig.cupid-partial"
+      timeout 300 "${launch[@]}" "$CUPID" run growth.yaml -o "$out" -q "${GP[@]}" --solver petsc 2>/dev/null &
+      pid=$!
+      sleep $wait
+      if [ $sig = TERM ]; then kill -TERM $pid 2>/dev/null
+      else pkill -KILL -f "cupid run growth.yaml -o $out" 2>/dev/null; fi
+      wait $pid 2>/dev/null
+      [ -f "$work/.g${ranks}_$sig.cupid-partial/.checkpoint" ] || continue
+      timeout 300 "${launch[@]}" "$CUPID" run growth.yaml -o "$out" -q "${GP[@]}" --solver petsc \
+        --resume 2>err.txt; rc=$?
+      [ $rc -eq 0 ] && msg=$(same "gref$ranks" "$out" 2>&1) && ok ||
+        bad "growth on $ranks rank(s), $sig, resumed: exit $rc: ${msg:-} $(head -3 err.txt)"
+      resumed=1
+      break
+    done
+    [ $resumed = 1 ] || bad "growth on $ranks rank(s): no run was stopped ($sig) after a checkpoint"
   done
-  [ $resumed = 1 ] || bad "growth on $ranks rank(s): no run was stopped at a checkpoint"
 done
 
 # another number of ranks: refused, the checkpoint kept

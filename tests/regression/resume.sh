@@ -5,7 +5,8 @@
 # again, sometimes), must end with the files of the run that was never interrupted, byte for
 # byte; summary.json to the bit but for its timings, memory and threads (keys *_s, *memory*,
 # threads). Covered:
-# explicit fracture with moving grips (PMB and LPS), the Arlequin beam with explicit fracture,
+# a free LPS block (central differences with merged half-kicks between outputs), explicit
+# fracture with moving grips (PMB and LPS), the Arlequin beam with explicit fracture,
 # Newmark with Rayleigh damping, Newmark with a moving grip and a load in t, a Lagrange tie, the
 # plots; and crack growth over load steps (the factor rebuilt from its journal: downdates, a
 # held node; LPS; the Arlequin SENB; the SENB with fictitious nodes, its LU updated by SMW and
@@ -113,7 +114,34 @@ output:
     - {name: tip, at: [0, 1, 0]}
   plots: false
 EOF
+cat > free.yaml <<'EOF'
+title: a free LPS block in vibration (central differences merge the half-kicks between outputs)
+materials:
+  m: {E: 1000, nu: 0.25, density: 1.0e-3}
+peridynamics:
+  spacing: 1.0
+  horizon: 3.015
+  model: lps
+  material: m
+  regions:
+    - {x: [0, 24], y: [0, 24], z: [0, 12]}
+analysis:
+  type: dynamic
+  dynamic:
+    integrator: central
+    dt: 1.0e-4
+    duration: 0.15
+    every: 100
+    lumped: true
+    initial: {displacement: ["0", "0", "0"], velocity: ["1e-3*(x-12)", "0", "-1e-3*(z-6)"]}
+output:
+  vtu: true
+  points:
+    - {name: corner, at: [0.5, 0.5, 0.5]}
+  plots: false
+EOF
 P=(--set output.plots=false --set output.checkpoint=0.05)
+interrupt_and_resume free free.yaml "${P[@]}"
 interrupt_and_resume pmb plate.yaml "${P[@]}"
 interrupt_and_resume lps plate_lps.yaml "${P[@]}"
 interrupt_and_resume arlequin bar.yaml "${P[@]}"
