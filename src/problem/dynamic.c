@@ -776,7 +776,9 @@ cupid_status cupid_problem_run_dynamic(cupid_problem_state *prob, const cupid_me
             "energies.csv's columns (docs/dynamics.md, \"Energies\")\n",
             prob->dyn.info.max_balance, CUPID_ENERGY_BALANCE_BOUND);
 cleanup:
-  if (prob->ckpt.interrupted) { /* the checkpoint recorded their lengths: --resume goes on */
+  /* the checkpoint recorded their lengths: --resume goes on (after an interrupt, or again
+   * after a resumption that failed) */
+  if (prob->ckpt.interrupted || prob->opts->resume) {
     cupid_atomic_suspend(&o.history);
     cupid_atomic_suspend(&o.damage);
     cupid_atomic_suspend(&o.energies);

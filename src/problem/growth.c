@@ -942,26 +942,19 @@ static cupid_status setup_run(growth_run *g) {
   return CUPID_SUCCESS;
 }
 
-/* Checkpoints (growth_resume.c; issue 36): on paths that can be resumed, periodic ones and on a
- * signal; with --resume, the checkpoint's state. Then the steps' file, new or continued. */
-static cupid_status begin_resumable(growth_run *g) {
+/* Crack growth (growth_resume.c; issue 36): checkpoints, periodic and on a signal, and with
+ * --resume the checkpoint's state; the peaks' array first (a checkpoint holds them). Then the
+ * steps' file, new or continued. */
+static cupid_status begin_growth(growth_run *g) {
   cupid_problem_state *prob = g->prob;
-  const int N = prob->model->analysis.steps > 0 ? prob->model->analysis.steps : 1;
-  if (!cupid_problem_growth_resumable(prob)) {
-    CUPID_CHECK(!prob->opts->resume, CUPID_ERR_UNSUPPORTED,
-                "--resume: crack growth with coupling method %s (its LU updated by the broken "
-                "bonds) writes no checkpoints in cupid %s; run it without --resume",
-                prob->method->name, cupid_version());
-    return open_csv(g);
-  }
+  const cupid_model_t *m = prob->model;
+  const int N = m->analysis.steps > 0 ? m->analysis.steps : 1;
+  CUPID_CALL(cupid_calloc(6 * (size_t)(m->n_constraints ? m->n_constraints : 1), sizeof(double),
+                          "peak reactions", &prob->growth.peak));
   /* the estimate: a solve of the chosen engine per load step, at least */
   CUPID_CALL(cupid_problem_checkpoint_begin(prob, prob->estimate.seconds * N));
   if (prob->opts->resume) CUPID_CALL(growth_resume(g));
   return open_csv(g);
-}
-
-static int fracture_run(const cupid_problem_state *prob) {
-  return prob->model->has_peridynamics && prob->model->pd.fracture.has_fracture;
 }
 
 /* A status agreed over the ranks of an MPI run (a slab's, or a replicated model's). */
@@ -975,14 +968,10 @@ cupid_status cupid_problem_run_growth(cupid_problem_state *prob) {
   growth_run g = {.prob = prob, .first_step = 1, .csv_keep = -1};
   cupid_status st = CUPID_SUCCESS;
   CUPID_TRY(setup_run(&g));
-  if (fracture_run(prob))
-    CUPID_TRY(cupid_calloc(6 * (size_t)(m->n_constraints ? m->n_constraints : 1), sizeof(double),
-                           "peak reactions", &prob->growth.peak));
-  if (fracture_run(prob)) CUPID_TRY(agreed_growth(prob, begin_resumable(&g)));
-  else CUPID_TRY(open_csv(&g));
+  const int fracture = cupid_problem_growth_resumable(prob); /* crack growth: resumable */
+  CUPID_TRY(fracture ? agreed_growth(prob, begin_growth(&g)) : open_csv(&g));
   const size_t n = (size_t)prob->ndof;
   double t0 = cupid_wtime();
-  const int fracture = m->has_peridynamics && m->pd.fracture.has_fracture;
   if (!fracture) { /* linear: one solve at load factor 1 (one factorisation), each step its
                       multiple: the last step's is the solution */
     CUPID_TRY(solve(&g, 0));
@@ -1081,7 +1070,8 @@ cupid_status cupid_problem_run_growth(cupid_problem_state *prob) {
   CUPID_TRY(plots(&g));
   if (prob->method->report) CUPID_TRY(prob->method->report(prob));
 cleanup:
-  if (prob->ckpt.interrupted) cupid_atomic_suspend(&g.csv); /* --resume continues it */
+  /* --resume continues it (after an interrupt, or again after a resumption that failed) */
+  if (prob->ckpt.interrupted || prob->opts->resume) cupid_atomic_suspend(&g.csv);
   cupid_problem_checkpoint_end(prob);
   growth_free(&g);
   return st;

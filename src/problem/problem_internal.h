@@ -566,8 +566,8 @@ cupid_status cupid_problem_checkpoint_open(cupid_problem_state *prob, const char
                                            cupid_checkpoint *ck);
 /** The checkpoint's broken bonds into prob->op (and a method's copy of it) and the damage. */
 cupid_status cupid_problem_checkpoint_fracture(cupid_problem_state *prob, const cupid_checkpoint ck);
-/** 1 when crack growth over load steps can be resumed (growth_resume.c): every path but a
- *  non-symmetric coupling's LU (fictitious nodes). */
+/** 1 for a run of load steps that grows cracks (PD with fracture): it writes checkpoints and
+ *  can be resumed, on every path (growth_resume.c). */
 int cupid_problem_growth_resumable(const cupid_problem_state *prob);
 
 /* estimate.c: `cupid check` and the memory guard of `cupid run`. */
