@@ -247,6 +247,9 @@ static const bad_case cases[] = {
      "energy_release_rate (G0): it needs criterion: stretch with energy_release_rate, not "
      "critical_stretch",
      NULL},
+    {"output_checkpoint_negative.yaml",
+     "13:15: output.checkpoint: must be seconds between checkpoints, from 0 (none) to 1e9",
+     NULL},
     {"fracture_calibration_bad.yaml",
      "9:53: peridynamics.fracture.calibration: must be one of continuum | grid, got 'lattice'",
      NULL},
