@@ -546,8 +546,16 @@ typedef struct {
   int64_t streams[3]; /* the lengths of history, energies, damage (-1: none) */
 } dyn_scalars;
 
-static cupid_status write_state(dyn_output *o, const cupid_dynamics_restart *r,
-                                cupid_checkpoint_writer w) {
+/* A safe point's state, for cupid_problem_checkpoint_save. */
+typedef struct {
+  dyn_output *o;
+  const cupid_dynamics_restart *r;
+} dyn_point;
+
+static cupid_status write_state(void *ctx, cupid_checkpoint_writer w) {
+  const dyn_point *p = ctx;
+  dyn_output *o = p->o;
+  const cupid_dynamics_restart *r = p->r;
   cupid_problem_state *prob = o->prob;
   dyn_scalars c = {.shares = r->shares, .whole = r->whole, .last = prob->dyn.energy, .e0 = r->e0,
                    .scale = r->scale, .max_balance = r->max_balance, .omega_max = r->omega_max,
@@ -570,27 +578,18 @@ static cupid_status write_state(dyn_output *o, const cupid_dynamics_restart *r,
     CUPID_CALL(cupid_checkpoint_write(w, "files", o->files, sizeof *o->files * (size_t)o->n_files));
     CUPID_CALL(cupid_checkpoint_write(w, "times", o->times, sizeof *o->times * (size_t)o->n_files));
   }
-  return cupid_problem_checkpoint_common(prob, w);
+  return CUPID_SUCCESS;
 }
 
 /* hooks->safe_point: a checkpoint when one is due; after a signal's, the run stops. */
 static cupid_status save_point(void *ctx, const cupid_dynamics_restart *r) {
   dyn_output *o = ctx;
-  cupid_problem_state *prob = o->prob;
-  const int due = cupid_problem_checkpoint_due(prob);
-  if (!due) return CUPID_SUCCESS;
-  const double t0 = cupid_wtime();
-  cupid_checkpoint_writer w = NULL;
-  cupid_status st = cupid_problem_checkpoint_start(prob, &w);
-  if (st == CUPID_SUCCESS) st = write_state(o, r, w);
-  cupid_problem_checkpoint_commit(prob, &w, st, r->step);
-  prob->ckpt.seconds += cupid_wtime() - t0;
-  if (due < 2) return CUPID_SUCCESS;
-  prob->ckpt.interrupted = 1;
-  return CUPID_ERROR(CUPID_ERR_INTERRUPTED, "interrupted at step %lld of %lld (t = %g): continue "
-                     "with `cupid run %s --resume` (the same options)",
-                     (long long)r->step, (long long)prob->dyn.steps,
-                     (double)r->step * prob->model->analysis.dynamic.dt, prob->model->file);
+  const cupid_problem_state *prob = o->prob;
+  dyn_point p = {o, r};
+  char where[160];
+  snprintf(where, sizeof where, "at step %lld of %lld (t = %g)", (long long)r->step,
+           (long long)prob->dyn.steps, (double)r->step * prob->model->analysis.dynamic.dt);
+  return cupid_problem_checkpoint_save(o->prob, r->step, write_state, &p, where);
 }
 
 /* --resume: the checkpoint's state into o->restart (u and v into prob->u and v), the outputs'

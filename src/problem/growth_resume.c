@@ -14,6 +14,7 @@
  * way: its Sherman-Morrison-Woodbury columns are solves under the conditions of their round, so
  * the journal has the DOFs each round held too, and the balance's W and C are made on the
  * intact K first, as at the run's first solve. */
+#include <stdio.h>
 #include <string.h>
 
 #include "growth_run.h"
@@ -180,7 +181,16 @@ static void fill_scalars(const growth_run *g, int k, growth_scalars *c) {
     snprintf(c->lu_method, sizeof c->lu_method, "%s", g->lu.factor_info.method);
 }
 
-static cupid_status write_growth(growth_run *g, int k, cupid_checkpoint_writer w) {
+/* A load step's end, for cupid_problem_checkpoint_save. */
+typedef struct {
+  growth_run *g;
+  int k;
+} growth_point;
+
+static cupid_status write_growth(void *ctx, cupid_checkpoint_writer w) {
+  const growth_point *p = ctx;
+  growth_run *g = p->g;
+  const int k = p->k;
   cupid_problem_state *prob = g->prob;
   const size_t n = (size_t)prob->ndof, np = (size_t)prob->n_pd;
   const size_t nk = (size_t)prob->model->n_constraints;
@@ -218,25 +228,16 @@ static cupid_status write_growth(growth_run *g, int k, cupid_checkpoint_writer w
       CUPID_CALL(cupid_checkpoint_write(w, "journal ends", j->ends,
                                         2 * (size_t)j->n_rounds * sizeof(cupid_int)));
   }
-  return cupid_problem_checkpoint_common(prob, w);
+  return CUPID_SUCCESS;
 }
 
 cupid_status growth_safe_point(growth_run *g, int k) {
-  cupid_problem_state *prob = g->prob;
-  const int due = cupid_problem_checkpoint_due(prob);
-  if (!due) return CUPID_SUCCESS;
-  const double t0 = cupid_wtime();
-  cupid_checkpoint_writer w = NULL;
-  cupid_status st = cupid_problem_checkpoint_start(prob, &w);
-  if (st == CUPID_SUCCESS) st = write_growth(g, k, w);
-  cupid_problem_checkpoint_commit(prob, &w, st, k);
-  prob->ckpt.seconds += cupid_wtime() - t0;
-  if (due < 2) return CUPID_SUCCESS;
-  prob->ckpt.interrupted = 1;
-  return CUPID_ERROR(CUPID_ERR_INTERRUPTED, "interrupted after load step %d of %d: continue "
-                     "with `cupid run %s --resume` (the same options)",
-                     k, prob->model->analysis.steps > 0 ? prob->model->analysis.steps : 1,
-                     prob->model->file);
+  const cupid_problem_state *prob = g->prob;
+  growth_point p = {g, k};
+  char where[96];
+  snprintf(where, sizeof where, "after load step %d of %d", k,
+           prob->model->analysis.steps > 0 ? prob->model->analysis.steps : 1);
+  return cupid_problem_checkpoint_save(g->prob, k, write_growth, &p, where);
 }
 
 /* ---- the resumption ---- */

@@ -547,19 +547,12 @@ cupid_status cupid_problem_checkpoint_begin(cupid_problem_state *prob, double es
 double cupid_problem_checkpoint_period(const cupid_problem_state *prob, double estimated_seconds);
 /** Disarm the interrupts, free the path (at the end of the run, whatever its status). */
 void cupid_problem_checkpoint_end(cupid_problem_state *prob);
-/** Whether to write a checkpoint now (collective on a slab run: every rank agrees): 0 no, 1 the
- *  period is up, 2 a signal asked for one (the run then stops after it). */
-int cupid_problem_checkpoint_due(cupid_problem_state *prob);
-/** A checkpoint writer on this rank's file, its identity written. */
-cupid_status cupid_problem_checkpoint_start(cupid_problem_state *prob, cupid_checkpoint_writer *w);
-/** The sections every resumable run has: the fracture state (the operator's broken bonds, the
- *  counts, the first break, damage) and the history rows. */
-cupid_status cupid_problem_checkpoint_common(cupid_problem_state *prob, cupid_checkpoint_writer w);
-/** Commit @p w when @p filled (the status of writing its sections) is a success, else drop it
- *  (collective on a slab run: every rank's or none). A failure (a full disk) is a warning: the
- *  previous checkpoint stays and the run goes on. @p step names it in the message. */
-void cupid_problem_checkpoint_commit(cupid_problem_state *prob, cupid_checkpoint_writer *w,
-                                     cupid_status filled, cupid_int step);
+/** At a stage's safe point: a checkpoint when one is due (collective), @p fill writing the
+ *  stage's sections and this file the common ones; after a signal's, CUPID_ERR_INTERRUPTED
+ *  saying the run stopped @p where ("at step 40 of 100 (t = 0.02)"). */
+cupid_status cupid_problem_checkpoint_save(cupid_problem_state *prob, cupid_int step,
+                                           cupid_status (*fill)(void *ctx, cupid_checkpoint_writer w),
+                                           void *ctx, const char *where);
 /** Open this rank's checkpoint for --resume (every rank: the same step @p step_section, a
  *  cupid_int, else CUPID_ERR_IO); the counts and history restored into prob. */
 cupid_status cupid_problem_checkpoint_open(cupid_problem_state *prob, const char *step_section,

@@ -75,7 +75,9 @@ void cupid_problem_checkpoint_end(cupid_problem_state *prob) {
   cupid_free(&prob->ckpt.path);
 }
 
-int cupid_problem_checkpoint_due(cupid_problem_state *prob) {
+/* Whether to write a checkpoint now (collective on several ranks: every rank agrees): 0 no, 1
+ * the period is up, 2 a signal asked for one (the run then stops after it). */
+static int checkpoint_due(cupid_problem_state *prob) {
   if (!prob->ckpt.path) return 0;
   int due = cupid_interrupt_pending() ? 2
             : prob->ckpt.period > 0 && cupid_wtime() - prob->ckpt.last >= prob->ckpt.period ? 1
@@ -84,7 +86,8 @@ int cupid_problem_checkpoint_due(cupid_problem_state *prob) {
   return due;
 }
 
-cupid_status cupid_problem_checkpoint_start(cupid_problem_state *prob, cupid_checkpoint_writer *w) {
+/* A writer on this rank's file, its identity written. */
+static cupid_status checkpoint_start(cupid_problem_state *prob, cupid_checkpoint_writer *w) {
   char id[8192];
   CUPID_CALL(identity(prob, id, sizeof id));
   return cupid_checkpoint_write_begin(prob->ckpt.path, id, w);
@@ -96,7 +99,9 @@ typedef struct {
   double first_break_t, fracture_energy, first_break_at[3], max_damage, time;
 } common_scalars;
 
-cupid_status cupid_problem_checkpoint_common(cupid_problem_state *prob, cupid_checkpoint_writer w) {
+/* The sections every resumable run has: the fracture state (the operator's broken bonds, the
+ * counts, the first break, damage) and the history rows. */
+static cupid_status checkpoint_common(cupid_problem_state *prob, cupid_checkpoint_writer w) {
   const common_scalars c = {.broken_bonds = prob->broken_bonds,
                             .first_break_step = prob->first_break_step,
                             .damaged_nodes = prob->damaged_nodes,
@@ -124,8 +129,11 @@ cupid_status cupid_problem_checkpoint_common(cupid_problem_state *prob, cupid_ch
   return st;
 }
 
-void cupid_problem_checkpoint_commit(cupid_problem_state *prob, cupid_checkpoint_writer *w,
-                                     cupid_status filled, cupid_int step) {
+/* Commit @p w when @p filled (the status of writing its sections) is a success, else drop it
+ * (collective on several ranks: every rank's or none). A failure (a full disk) is a warning:
+ * the previous checkpoint stays and the run goes on. */
+static void checkpoint_commit(cupid_problem_state *prob, cupid_checkpoint_writer *w,
+                              cupid_status filled, cupid_int step) {
   cupid_status st = filled;
   if (st == CUPID_SUCCESS) st = cupid_checkpoint_write_commit(w);
   cupid_checkpoint_write_abort(w); /* NULL after a commit */
@@ -223,4 +231,22 @@ cupid_status cupid_problem_checkpoint_open(cupid_problem_state *prob, const char
   if (st == CUPID_SUCCESS) st = restore_common(prob, *ck);
   if (st != CUPID_SUCCESS) cupid_checkpoint_close(ck);
   return st;
+}
+
+cupid_status cupid_problem_checkpoint_save(cupid_problem_state *prob, cupid_int step,
+                                           cupid_status (*fill)(void *ctx, cupid_checkpoint_writer w),
+                                           void *ctx, const char *where) {
+  const int due = checkpoint_due(prob);
+  if (!due) return CUPID_SUCCESS;
+  const double t0 = cupid_wtime();
+  cupid_checkpoint_writer w = NULL;
+  cupid_status st = checkpoint_start(prob, &w);
+  if (st == CUPID_SUCCESS) st = fill(ctx, w);
+  if (st == CUPID_SUCCESS) st = checkpoint_common(prob, w);
+  checkpoint_commit(prob, &w, st, step);
+  prob->ckpt.seconds += cupid_wtime() - t0;
+  if (due < 2) return CUPID_SUCCESS;
+  prob->ckpt.interrupted = 1;
+  return CUPID_ERROR(CUPID_ERR_INTERRUPTED, "interrupted %s: continue with `cupid run %s "
+                     "--resume` (the same options)", where, prob->model->file);
 }

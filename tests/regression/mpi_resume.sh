@@ -26,26 +26,7 @@ bad() { echo "FAIL: $*"; fail=$((fail + 1)); }
 cp "$SRC/tests/models/mpi/plate_slabs_lps.yaml" plate.yaml
 P=(--set output.plots=false --set output.checkpoint=0.1)
 
-same() { # REF DIR
-  python3 - "$1" "$2" <<'EOF'
-import json, os, sys
-ref, got = sys.argv[1], sys.argv[2]
-def strip(v):
-    if isinstance(v, dict):
-        return {k: strip(x) for k, x in v.items() if not (k.endswith("_s") or "memory" in k or k == "threads")}
-    return [strip(x) for x in v] if isinstance(v, list) else v
-a, b = sorted(os.listdir(ref)), sorted(os.listdir(got))
-if a != b:
-    sys.exit(f"files differ: {sorted(set(a) ^ set(b))}")
-for f in a:
-    pa, pb = os.path.join(ref, f), os.path.join(got, f)
-    if f == "summary.json":
-        if strip(json.load(open(pa))) != strip(json.load(open(pb))):
-            sys.exit("summary.json differs beyond its timings")
-    elif open(pa, "rb").read() != open(pb, "rb").read():
-        sys.exit(f"{f} differs")
-EOF
-}
+same() { python3 "$SRC/tests/tools/same_outputs.py" "$1" "$2"; } # REF DIR
 
 timeout 300 "$MPIEXEC" -n 2 "$CUPID" run plate.yaml -o ref -q "${P[@]}" || bad "the reference run"
 

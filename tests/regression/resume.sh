@@ -25,29 +25,8 @@ RANDOM=36
 ok() { pass=$((pass + 1)); }
 bad() { echo "FAIL: $*"; fail=$((fail + 1)); }
 
-# same REF DIR: every file of REF in DIR and equal (summary.json but for timings); no other file
-same() {
-  python3 - "$1" "$2" <<'EOF'
-import json, os, sys
-ref, got = sys.argv[1], sys.argv[2]
-def strip(v):
-    if isinstance(v, dict):
-        return {k: strip(x) for k, x in v.items() if not (k.endswith("_s") or "memory" in k or k == "threads")}
-    if isinstance(v, list):
-        return [strip(x) for x in v]
-    return v
-a, b = sorted(os.listdir(ref)), sorted(os.listdir(got))
-if a != b:
-    sys.exit(f"files differ: {sorted(set(a) ^ set(b))}")
-for f in a:
-    pa, pb = os.path.join(ref, f), os.path.join(got, f)
-    if f == "summary.json":
-        if strip(json.load(open(pa))) != strip(json.load(open(pb))):
-            sys.exit(f"{f} differs beyond its timings")
-    elif open(pa, "rb").read() != open(pb, "rb").read():
-        sys.exit(f"{f} differs")
-EOF
-}
+# same REF DIR: the same files, byte for byte (summary.json but for timings; tests/tools)
+same() { python3 "$SRC/tests/tools/same_outputs.py" "$1" "$2"; } # REF DIR
 
 # interrupt_and_resume NAME MODEL OPTIONS...: a reference run, then runs killed at random moments
 # (TERM or KILL, alternately; the resumptions too, twice at most) until one ends; compared.
