@@ -152,6 +152,14 @@ cupid_status cupid_problem_costs(const cupid_problem_state *prob, cupid_solver_c
   return CUPID_SUCCESS;
 }
 
+/* When a run estimated to take @p seconds writes checkpoints (resume.c; issue 36). */
+static void print_checkpoints(const cupid_problem_state *prob, double seconds) {
+  const double period = cupid_problem_checkpoint_period(prob, seconds);
+  if (period > 0) printf("checkpoints: every %g s (output.checkpoint), and on SIGINT or SIGTERM\n", period);
+  else printf("checkpoints: on SIGINT or SIGTERM only (output.checkpoint: 0, or a run estimated "
+              "under 10 minutes)\n");
+}
+
 cupid_status cupid_problem_estimate(const cupid_problem_state *prob, int print) {
   cupid_estimate e;
   CUPID_CALL(estimate_all(prob, &e));
@@ -211,10 +219,10 @@ cupid_status cupid_problem_estimate(const cupid_problem_state *prob, int print) 
              rs, rb / 1e9, rf,
              rs > RUN_SECONDS_LIMIT || rb > OUTPUT_BYTES_LIMIT || rf > OUTPUT_FILES_LIMIT
                  ? " (over the limits: run refuses it without --allow-large)" : "");
-      const double period = cupid_problem_checkpoint_period(prob, rs);
-      if (period > 0) printf("checkpoints: every %g s (output.checkpoint), and on SIGINT or SIGTERM\n", period);
-      else printf("checkpoints: on SIGINT or SIGTERM only (output.checkpoint: 0, or a run under "
-                  "10 minutes)\n");
+      print_checkpoints(prob, rs);
+    } else if (m->analysis.type == CUPID_ANALYSIS_STATIC && cupid_problem_growth_resumable(prob)) {
+      /* crack growth: at least a solve of the chosen engine per load step */
+      print_checkpoints(prob, prob->estimate.seconds * (m->analysis.steps > 0 ? m->analysis.steps : 1));
     }
     printf("the model is valid%s\n", limit > 0 && e.total_bytes > limit
                                           ? ", but too large for the direct solver on this machine"
