@@ -1,6 +1,6 @@
 /* Checkpoints and the resumption of long runs (issue 36; docs/hardening.md, "Checkpoints").
  *
- * A resumable run (type dynamic) stages its files in a folder of fixed name beside the output
+ * A resumable run (dynamics, crack growth) stages its files in a folder of fixed name beside the output
  * folder (io.h, cupid_output_set_begin_resumable) and keeps its checkpoints there: one file per
  * rank (.checkpoint, .checkpoint-rank-R), written by src/io/checkpoint.c (temporary file, CRC,
  * fsync, rename; the one before kept as .prev). The stage writes its own state; this file
@@ -30,9 +30,11 @@ static cupid_status identity(const cupid_problem_state *prob, char *buf, size_t 
     at += (size_t)k_;                                                                       \
   } while (0)
   ADD("cupid %s\n", cupid_version());
-  ADD("model %s: %llu bytes, CRC-32 %08x\n", m->file, (unsigned long long)m->source_bytes,
+  /* the text, not the path: the same file reached from another folder is the same model */
+  ADD("model text: %llu bytes, CRC-32 %08x\n", (unsigned long long)m->source_bytes,
       (unsigned)m->source_crc);
-  for (int k = 0; k < m->n_sets; k++) ADD("--set %s\n", m->sets[k]);
+  for (int k = 0; k < m->n_sets; k++) /* the checkpoints' period changes no result */
+    if (strncmp(m->sets[k], "output.checkpoint=", 18)) ADD("--set %s\n", m->sets[k]);
   ADD("processes %d, this one %d\n", cupid_petsc_size(), cupid_petsc_rank());
   ADD("solver %s%s%s\n", prob->engine ? prob->engine->name : "auto",
       prob->opts->assembled ? ", --assembled" : "", prob->opts->replicate ? ", --replicate" : "");
@@ -213,6 +215,11 @@ cupid_status cupid_problem_checkpoint_open(cupid_problem_state *prob, const char
   *ck = NULL;
   CUPID_CALL(identity(prob, id, sizeof id));
   cupid_status st = cupid_checkpoint_open(prob->ckpt.path, id, ck);
+  if (st == CUPID_ERR_MODEL) { /* another run's: the model file this run read, named */
+    char why[2048];
+    snprintf(why, sizeof why, "%s", cupid_error_message());
+    st = CUPID_ERROR(CUPID_ERR_MODEL, "%s: --resume: %s", prob->model->file, why);
+  }
   cupid_int step = -1;
   if (st == CUPID_SUCCESS) st = cupid_checkpoint_read(*ck, step_section, &step, sizeof step);
   if (cupid_petsc_size() > 1) { /* every rank at the same step, or none resumes */
