@@ -28,13 +28,15 @@ P=(--set output.plots=false --set output.checkpoint=0.1)
 
 same() { python3 "$SRC/tests/tools/same_outputs.py" "$1" "$2"; } # REF DIR
 
+t0=$(date +%s%N)
 timeout 300 "$MPIEXEC" -n 2 "$CUPID" run plate.yaml -o ref -q "${P[@]}" || bad "the reference run"
+half=$(awk -v ms=$(( ($(date +%s%N) - t0) / 1000000 )) 'BEGIN { printf "%.3f", 0.45 * ms / 1000 }')
 
 for sig in TERM KILL; do
   out=$work/run_$sig
   timeout 300 "$MPIEXEC" -n 2 "$CUPID" run plate.yaml -o "$out" -q "${P[@]}" 2>err.txt &
   pid=$!
-  sleep 1.0
+  sleep "$half"
   if [ $sig = TERM ]; then kill -TERM $pid; else pkill -KILL -f "cupid run plate.yaml -o $out"; fi
   wait $pid 2>/dev/null
   [ -f "$work/.run_$sig.cupid-partial/.checkpoint-rank-1" ] && ok ||
@@ -54,11 +56,14 @@ GP=(--set "peridynamics.regions=[{x: [0, 20], y: [0, 2], z: [0, 36]}]"
 for ranks in 2 1; do
   launch=("$MPIEXEC" -n $ranks)
   [ $ranks = 1 ] && launch=()
+  t0=$(date +%s%N)
   timeout 300 "${launch[@]}" "$CUPID" run growth.yaml -o gref$ranks -q "${GP[@]}" --solver petsc ||
     bad "growth on $ranks rank(s)"
+  ms=$(( ($(date +%s%N) - t0) / 1000000 ))
   for sig in TERM KILL; do
     resumed=0
-    for wait in 0.8 1.2 1.6; do # a moment inside the run: the crack runs from about 0.5 s to 2 s
+    for share in 0.35 0.55 0.75; do # moments inside the run (the crack grows in its second half)
+      wait=$(awk -v s=$share -v ms=$ms 'BEGIN { printf "%.3f", s * ms / 1000 }')
       out="$work/g${ranks}_$sig"
       rm -rf "$out" "$work/.g${ranks}_$sig.cupid-partial"
       timeout 300 "${launch[@]}" "$CUPID" run growth.yaml -o "$out" -q "${GP[@]}" --solver petsc 2>/dev/null &
@@ -82,7 +87,7 @@ done
 # another number of ranks: refused, the checkpoint kept
 timeout 300 "$MPIEXEC" -n 2 "$CUPID" run plate.yaml -o ranks -q "${P[@]}" 2>/dev/null &
 pid=$!
-sleep 1.0; kill -TERM $pid; wait $pid 2>/dev/null
+sleep "$half"; kill -TERM $pid; wait $pid 2>/dev/null
 "$CUPID" run plate.yaml -o ranks -q "${P[@]}" --resume 2>err.txt; rc=$?
 [ $rc -eq 1 ] && grep -q "processes 2" err.txt && ok || bad "1 rank resuming 2: exit $rc: $(cat err.txt)"
 timeout 300 "$MPIEXEC" -n 2 "$CUPID" run plate.yaml -o ranks -q "${P[@]}" --resume 2>err.txt; rc=$?
