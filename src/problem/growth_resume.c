@@ -20,11 +20,6 @@
 #include "growth_run.h"
 #include "method.h"
 
-int cupid_problem_growth_resumable(const cupid_problem_state *prob) {
-  const cupid_model_t *m = prob->model;
-  return m->has_peridynamics && m->pd.fracture.has_fracture;
-}
-
 /* ---- the journal ---- */
 
 void growth_journal_free(growth_journal *j) {

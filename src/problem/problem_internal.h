@@ -560,7 +560,7 @@ cupid_status cupid_problem_checkpoint_open(cupid_problem_state *prob, const char
 /** The checkpoint's broken bonds into prob->op (and a method's copy of it) and the damage. */
 cupid_status cupid_problem_checkpoint_fracture(cupid_problem_state *prob, const cupid_checkpoint ck);
 /** 1 for a run of load steps that grows cracks (PD with fracture): it writes checkpoints and
- *  can be resumed, on every path (growth_resume.c). */
+ *  can be resumed, on every path (growth_resume.c does it). */
 int cupid_problem_growth_resumable(const cupid_problem_state *prob);
 
 /* estimate.c: `cupid check` and the memory guard of `cupid run`. */

@@ -42,6 +42,11 @@ static cupid_status identity(const cupid_problem_state *prob, char *buf, size_t 
   return CUPID_SUCCESS;
 }
 
+int cupid_problem_growth_resumable(const cupid_problem_state *prob) {
+  const cupid_model_t *m = prob->model;
+  return m->has_peridynamics && m->pd.fracture.has_fracture;
+}
+
 double cupid_problem_checkpoint_period(const cupid_problem_state *prob, double estimated_seconds) {
   const double given = prob->model->output.checkpoint;
   return given >= 0 ? given
