@@ -59,7 +59,7 @@ double cupid_dense_max_abs(int n, const double *A);
 /* ---- Interrupts (issue 36): a run that can stop at a safe point with a checkpoint arms them
  * while it runs; the command line's SIGINT/SIGTERM handler then records a request instead of
  * ending the process, and the run writes a checkpoint at its next safe point and returns
- * CUPID_ERR_INTERRUPTED. All four are async-signal-safe (lock-free atomics). */
+ * CUPID_ERR_INTERRUPTED. All three are async-signal-safe (lock-free atomics). */
 /** Arm (1) or disarm (0) interrupts for the run now going (disarming clears a request). */
 void cupid_interrupt_arm(int armed);
 /** From a signal handler: record a request. Returns 1 if an armed run will act on it, 0 if none

@@ -47,8 +47,9 @@ void cupid_atomic_abort(cupid_atomic_file *file);
 /** A resumable stream (issue 36): as cupid_atomic_open(), but its temporary file has a fixed
  *  name (".NAME.partial" beside @p path: a resumable run's staging folder) and is not removed
  *  by cupid_atomic_cleanup_all(), so that a resumed run continues it. @p keep < 0 starts it
- *  empty; keep >= 0 continues the one there, cut to its first @p keep bytes (CUPID_ERR_IO if
- *  it is missing or shorter: the checkpoint that recorded the length is not this file's). */
+ *  empty; keep >= 0 continues the one there (or @p path itself, when the stream was committed
+ *  before the stop), cut to its first @p keep bytes (CUPID_ERR_IO if it is missing or shorter:
+ *  the checkpoint that recorded the length is not this file's). */
 cupid_status cupid_atomic_open_partial(const char *path, int64_t keep, cupid_atomic_file *file);
 /** Write what @p file holds to disk (fflush, fdatasync) and give its length in bytes: what a
  *  checkpoint records of a stream. */
