@@ -67,6 +67,12 @@ void cupid_interrupt_arm(int armed);
 int cupid_interrupt_request(void);
 /** 1 while a request is pending. */
 int cupid_interrupt_pending(void);
+/** For a program without handlers of its own (the Python package during solve()): SIGINT and
+ *  SIGTERM handlers that request an interrupt of an armed run; with none armed, or at a second
+ *  signal, the handlers that were there before take it (re-raised). Returns 0, or -1 (errno)
+ *  when sigaction failed. cupid_interrupt_uninstall() puts the previous handlers back. */
+int cupid_interrupt_install(void);
+void cupid_interrupt_uninstall(void);
 
 /** Peak resident memory of this process so far, in bytes (0 if unknown). */
 int64_t cupid_peak_memory(void);

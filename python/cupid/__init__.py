@@ -22,7 +22,7 @@ import os
 
 import numpy as np
 
-__all__ = ["Problem", "Error", "library_path"]
+__all__ = ["Problem", "Error", "GrowthStopped", "Interrupted", "library_path"]
 
 _c_int64 = ctypes.c_int64
 
@@ -40,6 +40,14 @@ class GrowthStopped(Error):
     """Crack growth stopped before its last load step (a crack reached a coupling zone, or the
     body collapsed): the message says which. The problem stays solved up to there: its fields,
     info and write_outputs() hold the steps that ran (the command line exits with status 2)."""
+
+
+class Interrupted(Error):
+    """SIGINT (Ctrl-C) or SIGTERM stopped solve() at a checkpoint (a dynamic run or crack growth;
+    the command line exits with status 5): Problem(..., resume=True) continues the run from it."""
+
+
+_INTERRUPTED = 8  # CUPID_ERR_INTERRUPTED (error.h)
 
 
 class _RunOptions(ctypes.Structure):  # cupid_run_options (problem.h)
@@ -128,6 +136,8 @@ def _load():
         "cupid_status_name": ([ctypes.c_int], ctypes.c_char_p),
         "cupid_status_exit_code": ([ctypes.c_int], ctypes.c_int),
         "cupid_version": ([], ctypes.c_char_p),
+        "cupid_interrupt_install": ([], ctypes.c_int),
+        "cupid_interrupt_uninstall": ([], None),
         "cupid_problem_output_directory": ([P], ctypes.c_char_p),
         "cupid_problem_output_point_count": ([P], ctypes.c_int),
         "cupid_problem_get_history": ([P, ctypes.POINTER(ctypes.POINTER(ctypes.c_double)),
@@ -147,8 +157,9 @@ def _load():
 def _check(status):
     if status != 0:
         lib = _lib
-        raise Error(lib.cupid_error_message().decode(), lib.cupid_status_name(status).decode(),
-                    lib.cupid_status_exit_code(status))
+        kind = Interrupted if status == _INTERRUPTED else Error
+        raise kind(lib.cupid_error_message().decode(), lib.cupid_status_name(status).decode(),
+                   lib.cupid_status_exit_code(status))
 
 
 def version():
@@ -223,10 +234,19 @@ class Problem:
     def solve(self):
         """The analysis (static, dynamic or evaluate); sets the problem up first if needed.
         Raises GrowthStopped when crack growth stopped before its last step (the problem is
-        solved up to there: write_outputs() still writes it)."""
+        solved up to there: write_outputs() still writes it), and Interrupted when Ctrl-C or
+        SIGTERM stopped a dynamic run or crack growth at a checkpoint (resume=True goes on)."""
         self.setup()
         if self._stage < 2:
-            _check(_lib.cupid_problem_solve(self._p))
+            # Python's own handlers run between bytecodes, not during the solve: while it runs,
+            # SIGINT/SIGTERM go to cupid's, which stop a resumable run at its next checkpoint
+            # (Interrupted); a second signal, or one outside the steps, goes to Python's
+            _lib.cupid_interrupt_install()
+            try:
+                status = _lib.cupid_problem_solve(self._p)
+            finally:
+                _lib.cupid_interrupt_uninstall()
+            _check(status)
             self._stage = 2
             stopped = self.info["stopped"]
             if stopped:

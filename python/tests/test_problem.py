@@ -257,3 +257,39 @@ def test_resume_an_interrupted_run(tmp_path):
     with pytest.raises(cupid.Error) as e:
         cupid.Problem(str(model), output_dir=str(tmp_path / "none"), resume=True).solve()
     assert e.value.exit_code == 3 and "nothing to resume" in str(e.value)
+
+
+def test_ctrl_c_stops_solve_at_a_checkpoint(tmp_path):
+    """Issue 36: SIGINT during solve() (cupid's handlers while it runs) writes a checkpoint and
+    raises cupid.Interrupted (exit code 5); resume=True then ends with the uninterrupted files."""
+    import signal
+    import sys
+    import time
+    text = open(os.path.join(SRC, "examples", "notched_plate", "notched_plate.yaml")).read()
+    text = text.replace("  plots: true", "  plots: false")
+    model = tmp_path / "plate.yaml"
+    model.write_text(text)
+    ref = cupid.Problem(str(model), output_dir=str(tmp_path / "ref")).setup()
+    t0 = time.monotonic()
+    ref.solve().write_outputs()
+    seconds = time.monotonic() - t0
+    script = ("import sys, cupid\n"
+              f"p = cupid.Problem({str(model)!r}, output_dir={str(tmp_path / 'run')!r}).setup()\n"
+              "print('set up', flush=True)\n"
+              "try:\n"
+              "    p.solve()\n"
+              "except cupid.Interrupted as e:\n"
+              "    print('interrupted', e.exit_code)\n"
+              "    sys.exit(5)\n")
+    proc = subprocess.Popen([sys.executable, "-c", script], stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, env=os.environ)
+    assert proc.stdout.readline() == b"set up\n"
+    time.sleep(0.5 * seconds)  # half-way through the steps, as the reference ran them
+    proc.send_signal(signal.SIGINT)
+    out, err = proc.communicate()
+    if proc.returncode == 0:
+        pytest.skip("the run ended before the signal came")
+    assert proc.returncode == 5 and b"interrupted 5" in out, (out, err)
+    cupid.Problem(str(model), output_dir=str(tmp_path / "run"), resume=True).solve().write_outputs()
+    for name in ("damage.csv", "energies.csv", "pd_002500.vtu", "model.pvd"):
+        assert (tmp_path / "run" / name).read_bytes() == (tmp_path / "ref" / name).read_bytes(), name

@@ -2,6 +2,7 @@
 #define _POSIX_C_SOURCE 200809L /* clock_gettime; gcc -fopenmp only gets it via -D_REENTRANT */
 #include "cupid/base.h"
 
+#include <signal.h>
 #include <stdatomic.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -149,3 +150,35 @@ int cupid_interrupt_request(void) {
 }
 
 int cupid_interrupt_pending(void) { return atomic_load(&interrupt_pending); }
+
+/* The handlers of cupid_interrupt_install: the previous ones, kept to hand signals back. */
+static struct sigaction previous[2];
+static const int handled[2] = {SIGINT, SIGTERM};
+static atomic_int installed;
+
+static void on_interrupt(int sig) {
+  if (cupid_interrupt_request()) return; /* the run stops at its next safe point */
+  const int k = sig == SIGINT ? 0 : 1;   /* not armed, or a second signal: as before */
+  sigaction(sig, &previous[k], NULL);
+  raise(sig);
+}
+
+int cupid_interrupt_install(void) {
+  if (atomic_exchange(&installed, 1)) return 0;
+  struct sigaction sa;
+  memset(&sa, 0, sizeof sa);
+  sa.sa_handler = on_interrupt;
+  sigemptyset(&sa.sa_mask);
+  for (int k = 0; k < 2; k++)
+    if (sigaction(handled[k], &sa, &previous[k]) != 0) {
+      for (int j = 0; j < k; j++) sigaction(handled[j], &previous[j], NULL);
+      atomic_store(&installed, 0);
+      return -1;
+    }
+  return 0;
+}
+
+void cupid_interrupt_uninstall(void) {
+  if (!atomic_exchange(&installed, 0)) return;
+  for (int k = 0; k < 2; k++) sigaction(handled[k], &previous[k], NULL);
+}
