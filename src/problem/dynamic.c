@@ -35,7 +35,7 @@ typedef struct {
   const double *u_out; /* the displacements the outputs of this step show (u or u_view) */
   /* a resumption (--resume): the integrator's state and the streams' lengths of its checkpoint */
   cupid_dynamics_restart restart;
-  double *restart_vectors;  /* a, react, load (n each) */
+  double *restart_vectors;  /* a, react, load, and two scratch vectors (n each) */
   int64_t keep[3];          /* history, energies, damage: bytes to keep (-1: start them) */
 } dyn_output;
 
@@ -602,7 +602,7 @@ static cupid_status read_state(dyn_output *o, const cupid_checkpoint ck, double 
   cupid_dynamics_restart *r = &o->restart;
   CUPID_CALL(cupid_checkpoint_read(ck, "step", &r->step, sizeof r->step));
   CUPID_CALL(cupid_checkpoint_read(ck, "dynamics", &c, sizeof c));
-  CUPID_CALL(cupid_calloc(3 * (size_t)n + 1, sizeof(double), "resumed state", &o->restart_vectors));
+  CUPID_CALL(cupid_calloc(5 * (size_t)n + 1, sizeof(double), "resumed state", &o->restart_vectors));
   double *a = o->restart_vectors, *react = a + n, *load = react + n;
   CUPID_CALL(cupid_checkpoint_read(ck, "u", prob->u, bytes));
   CUPID_CALL(cupid_checkpoint_read(ck, "v", v, bytes));
@@ -719,6 +719,14 @@ cupid_status cupid_problem_run_dynamic(cupid_problem_state *prob, const cupid_me
     if (prob->opts->resume) {
       CUPID_TRY(agreed(prob, resume_from_checkpoint(&o, v)));
       opt.resume = &o.restart;
+      /* the conditions as the checkpoint's step left them (the load, the grips' values, the
+       * clock of the expressions): the steps after it make their own, but a run resumed at its
+       * last step makes none, and its report reads them (the applied load, the reactions) */
+      if (hooks.conditions) {
+        double *scratch = o.restart_vectors + 3 * (size_t)prob->ndof;
+        CUPID_TRY(agreed(prob, hooks.conditions(hooks.ctx, (double)o.restart.step * opt.dt,
+                                                scratch, scratch + prob->ndof)));
+      }
     }
   }
   CUPID_TRY(agreed(prob, open_outputs(&o)));

@@ -9,6 +9,7 @@
  * result-changing options, the ranks), and the fracture state and history rows of prob. */
 #include <math.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 
 #include "problem_internal.h"
@@ -248,6 +249,10 @@ cupid_status cupid_problem_checkpoint_open(cupid_problem_state *prob, const char
 cupid_status cupid_problem_checkpoint_save(cupid_problem_state *prob, cupid_int step,
                                            cupid_status (*fill)(void *ctx, cupid_checkpoint_writer w),
                                            void *ctx, const char *where) {
+  /* the tests' deterministic signal: CUPID_TEST_INTERRUPT_STEP=N acts as a SIGTERM that came
+   * during step N (or before: the first safe point from N on stops) */
+  const char *test_step = getenv("CUPID_TEST_INTERRUPT_STEP");
+  if (test_step && step >= strtoll(test_step, NULL, 10)) (void)cupid_interrupt_request();
   const int due = checkpoint_due(prob);
   if (!due) return CUPID_SUCCESS;
   const double t0 = cupid_wtime();

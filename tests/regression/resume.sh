@@ -146,6 +146,21 @@ interrupt_and_resume senb senb.yaml --set peridynamics.spacing=1.666666666666666
 interrupt_and_resume senb_fictitious senb.yaml --set "coupling={method: fictitious}" \
   --set peridynamics.spacing=1.6666666666666667 --set peridynamics.horizon=5.025 "${P[@]}"
 
+# stopped at the last step (CUPID_TEST_INTERRUPT_STEP: a signal during that step, made
+# deterministic): the resumption takes no step, and its report still reads the conditions of
+# the last one (the applied load, the reactions: issue 36, found by a SIGTERM that came there)
+rm -rf last .last.cupid-partial
+CUPID_TEST_INTERRUPT_STEP=10000 "$CUPID" run grip.yaml -o last -q --set output.checkpoint=0.05 2>/dev/null
+rc=$?
+"$CUPID" run grip.yaml -o last -q --set output.checkpoint=0.05 --resume 2>err.txt; rc2=$?
+[ $rc -eq 5 ] && [ $rc2 -eq 0 ] && msg=$(same ref_grip last 2>&1) && ok ||
+  bad "grip stopped at its last step: exit $rc, then $rc2: ${msg:-} $(head -2 err.txt)"
+rm -rf glast .glast.cupid-partial
+CUPID_TEST_INTERRUPT_STEP=20 "$CUPID" run growth.yaml -o glast -q "${GP[@]}" 2>/dev/null; rc=$?
+"$CUPID" run growth.yaml -o glast -q "${GP[@]}" --resume 2>err.txt; rc2=$?
+[ $rc -eq 5 ] && [ $rc2 -eq 0 ] && msg=$(same ref_growth glast 2>&1) && ok ||
+  bad "growth stopped at its last step: exit $rc, then $rc2: ${msg:-} $(head -2 err.txt)"
+
 # ---- refusals, on the PMB plate stopped half-way
 # half-way through the plate's run, as measured (a slower machine, or ASan, stops it as late)
 half=$(awk -v ms=$ms_pmb 'BEGIN { printf "%.3f", 0.5 * ms / 1000 }')

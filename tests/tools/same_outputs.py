@@ -19,6 +19,19 @@ def strip(v):
     return v
 
 
+def first_difference(a, b, path=""):
+    """The first key path where a and b differ, with both values."""
+    if isinstance(a, dict) and isinstance(b, dict):
+        for k in list(a) + [k for k in b if k not in a]:
+            if a.get(k) != b.get(k):
+                return first_difference(a.get(k), b.get(k), f"{path}.{k}")
+    if isinstance(a, list) and isinstance(b, list) and len(a) == len(b):
+        for i, (x, y) in enumerate(zip(a, b)):
+            if x != y:
+                return first_difference(x, y, f"{path}[{i}]")
+    return f"{path}: {a!r} against {b!r}"
+
+
 def main():
     ref, got = sys.argv[1], sys.argv[2]
     a, b = sorted(os.listdir(ref)), sorted(os.listdir(got))
@@ -27,8 +40,9 @@ def main():
     for f in a:
         pa, pb = os.path.join(ref, f), os.path.join(got, f)
         if f == "summary.json":
-            if strip(json.load(open(pa))) != strip(json.load(open(pb))):
-                sys.exit("summary.json differs beyond its timings")
+            a_, b_ = strip(json.load(open(pa))), strip(json.load(open(pb)))
+            if a_ != b_:
+                sys.exit(f"summary.json differs beyond its timings: {first_difference(a_, b_)}")
         elif open(pa, "rb").read() != open(pb, "rb").read():
             sys.exit(f"{f} differs")
     return 0
