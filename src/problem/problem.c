@@ -263,8 +263,8 @@ static cupid_status run_static(cupid_problem_state *prob) {
  * results as they were. Rank 0 writes. */
 static cupid_status begin_outputs(cupid_problem_state *prob) {
   if (prob->outputs || cupid_petsc_rank() != 0) return CUPID_SUCCESS;
-  /* a dynamic run can stop at a checkpoint and be resumed (resume.c): its staging folder has
-   * a fixed name and outlives a signal */
+  /* a dynamic run or crack growth can stop at a checkpoint and be resumed (resume.c): its
+   * staging folder has a fixed name and outlives a signal */
   const cupid_model_t *m = prob->model;
   const int growth = m->analysis.type == CUPID_ANALYSIS_STATIC && cupid_problem_growth_resumable(prob);
   if ((m->analysis.type == CUPID_ANALYSIS_DYNAMIC || growth) && !prob->outputs_written)
