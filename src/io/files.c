@@ -258,6 +258,17 @@ static cupid_status create_temp(struct cupid_atomic_file_private *f, int *fd_out
   return CUPID_ERROR(CUPID_ERR_IO, "cannot write '%s': no free temporary file name", f->path);
 }
 
+/* The buffered stream of f on its temporary file's descriptor *fd (the stream owns it then:
+ * *fd becomes -1). */
+static cupid_status attach_stream(struct cupid_atomic_file_private *f, int *fd) {
+  f->stream = fdopen(*fd, "wb");
+  CUPID_CHECK(f->stream, CUPID_ERR_IO, "cannot write '%s': fdopen: %s", f->path, strerror(errno));
+  *fd = -1;
+  CUPID_CHECK(setvbuf(f->stream, f->buffer, _IOFBF, ATOMIC_BUFFER_SIZE) == 0, CUPID_ERR_IO,
+              "cannot write '%s': setvbuf failed", f->path);
+  return CUPID_SUCCESS;
+}
+
 cupid_status cupid_atomic_open(const char *path, cupid_atomic_file *file) {
   CUPID_CHECK(file, CUPID_ERR_ARGUMENT, "cupid_atomic_open: NULL handle");
   *file = NULL;
@@ -273,11 +284,7 @@ cupid_status cupid_atomic_open(const char *path, cupid_atomic_file *file) {
   CUPID_TRY(cupid_strdup(path, &f->path));
   CUPID_TRY(cupid_malloc(ATOMIC_BUFFER_SIZE, 1, "file buffer", &f->buffer));
   CUPID_TRY(create_temp(f, &fd)); /* registers the temporary name (f->slot) */
-  f->stream = fdopen(fd, "wb");
-  CUPID_TRY_CHECK(f->stream, CUPID_ERR_IO, "cannot write '%s': fdopen: %s", path, strerror(errno));
-  fd = -1; /* owned by the stream now */
-  CUPID_TRY_CHECK(setvbuf(f->stream, f->buffer, _IOFBF, ATOMIC_BUFFER_SIZE) == 0, CUPID_ERR_IO,
-                  "cannot write '%s': setvbuf failed", path);
+  CUPID_TRY(attach_stream(f, &fd));
   *file = f;
   return CUPID_SUCCESS;
 cleanup:
@@ -376,11 +383,7 @@ cupid_status cupid_atomic_open_partial(const char *path, int64_t keep, cupid_ato
     CUPID_TRY_CHECK(ftruncate(fd, (off_t)keep) == 0 && lseek(fd, 0, SEEK_END) == (off_t)keep,
                     CUPID_ERR_IO, "cannot continue '%s': %s", f->temp, strerror(errno));
   }
-  f->stream = fdopen(fd, "wb");
-  CUPID_TRY_CHECK(f->stream, CUPID_ERR_IO, "cannot write '%s': fdopen: %s", path, strerror(errno));
-  fd = -1;
-  CUPID_TRY_CHECK(setvbuf(f->stream, f->buffer, _IOFBF, ATOMIC_BUFFER_SIZE) == 0, CUPID_ERR_IO,
-                  "cannot write '%s': setvbuf failed", path);
+  CUPID_TRY(attach_stream(f, &fd));
   *file = f;
   return CUPID_SUCCESS;
 cleanup:

@@ -25,6 +25,7 @@
 void growth_journal_free(growth_journal *j) {
   cupid_free(&j->bits);
   cupid_free(&j->now);
+  cupid_free(&j->fresh);
   cupid_free(&j->fixed);
   cupid_free(&j->fixed_now);
   cupid_free(&j->pairs);
@@ -43,6 +44,7 @@ static cupid_status journal_alloc(growth_run *g) {
   j->words = (cupid_int)cupid_pd_operator_broken_words(prob->op) * prob->n_pd;
   CUPID_CALL(cupid_malloc((size_t)j->words + 1, sizeof *j->bits, "factor journal", &j->bits));
   CUPID_CALL(cupid_malloc((size_t)j->words + 1, sizeof *j->now, "factor journal", &j->now));
+  CUPID_CALL(cupid_malloc((size_t)j->words + 1, sizeof *j->fresh, "factor journal", &j->fresh));
   CUPID_CALL(cupid_malloc((size_t)prob->ndof + 1, 1, "factor journal", &j->fixed));
   return cupid_malloc((size_t)prob->ndof + 1, 1, "factor journal", &j->fixed_now);
 }
@@ -74,8 +76,7 @@ cupid_status growth_journal_downdated(growth_run *g) {
   const cupid_problem_state *prob = g->prob;
   growth_journal *j = &g->journal;
   if (!journaled(g) || !j->bits) return CUPID_SUCCESS;
-  double *fresh = NULL;
-  CUPID_CALL(cupid_malloc((size_t)j->words + 1, sizeof *fresh, "broken-bond bits", &fresh));
+  double *fresh = j->fresh; /* kept: a round is a downdate's milliseconds, not an allocation's */
   cupid_pd_operator_pack_broken(prob->op, 0, prob->n_pd, fresh);
   cupid_int changed = 0, held = 0;
   for (cupid_int k = 0; k < j->words; k++) changed += fresh[k] != j->now[k];
@@ -97,7 +98,6 @@ cupid_status growth_journal_downdated(growth_run *g) {
     j->ends[2 * j->n_rounds + 1] = j->n_held;
     j->n_rounds++;
   }
-  cupid_free(&fresh);
   return st;
 }
 

@@ -12,6 +12,7 @@
 typedef struct {
   double *bits;         /* every node's words at the factorisation */
   double *now;          /* the words after the last round */
+  double *fresh;        /* scratch: the words now, packed at each round */
   unsigned char *fixed; /* bc->fixed at the factorisation */
   unsigned char *fixed_now; /* ... after the last round */
   double *pairs;        /* (word index, word) of each round's changed words, in order */
