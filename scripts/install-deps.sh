@@ -16,7 +16,7 @@ pkgs=(cmake make gcc pkg-config libsuitesparse-dev libopenblas-dev libyaml-dev z
       python3-numpy python3-meshio python3-vtk9 python3-pytest python3-pip python3-setuptools python3-venv)
 for arg in "$@"; do
   case $arg in
-    --with-petsc) pkgs+=(petsc-dev) ;;
+    --with-petsc) pkgs+=(petsc-dev procps) ;; # procps: pkill, SIGKILL to the ranks (mpi_resume)
     --with-fuzz) pkgs+=(clang-14 libclang-rt-14-dev libomp-14-dev) ;;
     --with-valgrind) pkgs+=(valgrind) ;;
     --with-lammps) pkgs+=(lammps) ;;
