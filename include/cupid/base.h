@@ -53,6 +53,12 @@ double cupid_dot(cupid_int n, const double *a, const double *b);
  *  pivoting, one elimination for all right-hand sides, the same bits for any thread count.
  *  Returns 0 (B undefined) when a pivot is not above @p pivot_min in magnitude. */
 int cupid_dense_solve(int n, double *A, double *B, int nrhs, double pivot_min);
+/** The LU factorisation P A = L U of a small dense matrix in place (A n x n row-major; L unit
+ *  lower below the diagonal, U on and above; piv[c]: the row swapped with c at step c), kept
+ *  for many solves; 0 when a pivot is not above @p pivot_min in magnitude. */
+int cupid_dense_lu(int n, double *A, int *piv, double pivot_min);
+/** b = A^-1 b with the factorisation of cupid_dense_lu(). */
+void cupid_dense_lu_solve(int n, const double *A, const int *piv, double *b);
 /** max |A_ij| of an n x n matrix (a relative pivot bound's scale). */
 double cupid_dense_max_abs(int n, const double *A);
 

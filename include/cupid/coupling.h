@@ -509,6 +509,11 @@ cupid_status cupid_coupling_balance_create_grouped(cupid_int n, const double *R,
 void cupid_coupling_balance_destroy(cupid_coupling_balance *B);
 /** y -= W (C^T x): turns y = K x into K' x. */
 void cupid_coupling_balance_correct(const cupid_coupling_balance B, const double *x, double *y);
+/** The terms of K' = K - W C^T as they are kept: *k columns of n entries each, column after
+ *  column (W zero on the PD rows), for solvers that fold them into their own elimination
+ *  (src/problem/growth_block.c). The arrays are B's. */
+void cupid_coupling_balance_terms(const cupid_coupling_balance B, int *k, const double **C,
+                                  const double **W);
 /** u with K'_ff u_f = f_f - K'_fc u_c (u_c = bc's values) from the factor F of K_ff
  *  (Sherman-Morrison-Woodbury: CUPID_BALANCE_MODES more solves per group). */
 cupid_status cupid_coupling_balance_solve(const cupid_coupling_balance B, const cupid_csr_t *K,

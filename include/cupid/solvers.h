@@ -183,13 +183,19 @@ cupid_status cupid_direct_factor_create_kind(const cupid_csr_t *K, cupid_matrix_
                                              cupid_direct_factor *F, cupid_solve_info *info);
 /** The free DOFs the factor solves for. */
 cupid_int cupid_direct_factor_size(const cupid_direct_factor F);
-/** The DOF (global numbering) of an LU factor's smallest pivot: where a nearly singular matrix,
- *  whose factorisation passed the pivot bound but whose solves cannot be refined, is weakest
- *  (crack growth holds that node). GENERAL factors only. */
+/** The DOF (global numbering) of a factor's smallest pivot (LU: |U_kk|; Cholesky: L_kk^2, or
+ *  |D_kk| once downdated): where a nearly singular matrix, whose factorisation passed the
+ *  pivot bound but whose solves cannot be refined, is weakest (crack growth holds that node). */
 cupid_status cupid_direct_factor_weakest_dof(const cupid_direct_factor F, cupid_int *dof);
 /** Solve K_ff x = b in the free numbering (b and x of cupid_direct_factor_size() entries, the
  *  free DOFs in increasing global order; b and x must not alias). */
 cupid_status cupid_direct_factor_solve_free(cupid_direct_factor F, const double *b, double *x);
+
+/** As cupid_direct_factor_solve_free() for @p nrhs right-hand sides at once (b and x column
+ *  after column, cupid_direct_factor_size() entries each; must not alias): a Cholesky factor
+ *  is read once for all of them. */
+cupid_status cupid_direct_factor_solve_free_many(cupid_direct_factor F, cupid_int nrhs,
+                                                const double *b, double *x);
 
 /**
  * Solve K_ff x_f = b_f for full-length vectors: b and x have K->nrows*bs entries, only the

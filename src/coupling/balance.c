@@ -137,6 +137,13 @@ void cupid_coupling_balance_correct(const cupid_coupling_balance B, const double
   }
 }
 
+void cupid_coupling_balance_terms(const cupid_coupling_balance B, int *k, const double **C,
+                                  const double **W) {
+  *k = B ? B->k : 0;
+  *C = B ? B->C : NULL;
+  *W = B ? B->W : NULL;
+}
+
 cupid_status cupid_coupling_balance_solve(const cupid_coupling_balance B, const cupid_csr_t *K,
                                           cupid_direct_factor F, const cupid_dirichlet_t *bc,
                                           const double *f, double *u) {

@@ -593,7 +593,7 @@ static cupid_status solve(growth_run *g, int reassemble) {
   }
   cupid_csr Kold = NULL;
   const int lu = cupid_growth_lu_applies(prob);
-  if (reassemble && ((g->F && g->downdate) || (lu && g->lu.F && !g->lu.no_update)))
+  if (reassemble && ((g->F && g->downdate) || (lu && cupid_growth_lu_has_factor(&g->lu) && !g->lu.no_update)))
     Kold = prob->K, prob->K = NULL;
   if (reassemble) cupid_csr_destroy(&prob->K);
   cupid_status st0 = prob->method->assemble(prob);
@@ -815,7 +815,7 @@ static cupid_status load_step(growth_run *g, int k, double lambda, int *iteratio
   int runaways = 0;   /* nodes held where the matrix-free solve ran away, this step */
   *iterations = 0;
   if (g->F && g->bonds_at_factor != prob->broken_bonds) cupid_direct_factor_destroy(&g->F);
-  if (g->lu.F && g->lu.bonds_at_factor != prob->broken_bonds) cupid_growth_lu_renew(&g->lu);
+  if (cupid_growth_lu_has_factor(&g->lu) && g->lu.bonds_at_factor != prob->broken_bonds) cupid_growth_lu_renew(&g->lu);
   for (;;) {
     const int quiet = prob->quiet; /* the first solve reports its assembly; the others would
                                       repeat it per broken bond */
@@ -1016,7 +1016,7 @@ cupid_status cupid_problem_run_growth(cupid_problem_state *prob) {
   prob->phases[CUPID_PHASE_SOLVE] = (cupid_phase_record){cupid_wtime() - t0, cupid_peak_memory(), 1};
   const int lu = g.lu.factorisations > 0;
   prob->growth.resolve = g.matrix_free       ? "matrix-free"
-                         : lu                ? (g.lu.updates ? "lu update" : "gmres")
+                         : lu                ? (!g.lu.updates ? "gmres" : g.lu.whole ? "lu update" : "block downdate")
                          : !own_factor(prob) ? "engine"
                          : g.downdates       ? "downdate"
                          : g.krylov          ? "krylov"

@@ -33,14 +33,16 @@
 
 #define LU_RTOL 1e-12        /* growth.c's CG_RTOL */
 #define LU_RESOLVE_MAX 60    /* growth.c's CG_REFACTOR */
+#define BLOCK_MAX_SHARE 50  /* growth.c's DOWNDATE_MAX_SHARE */
 #define LU_FLOP_WEIGHT 5.0   /* growth.c's CG_FLOP_WEIGHT: a triangular solve's operation is
                                 memory-bound, ~5 times one of the factorisation's */
 
 int cupid_growth_lu_applies(const cupid_problem_state *prob) {
-  return prob->method->matrix == CUPID_MATRIX_GENERAL && !prob->engine->iterative && prob->K;
+  return prob->method->matrix == CUPID_MATRIX_GENERAL && !prob->engine->iterative;
 }
 
 void cupid_growth_lu_renew(cupid_growth_lu *s) {
+  cupid_growth_block_destroy(&s->M);
   cupid_growth_smw_reset(&s->upd);
   cupid_coupling_balance_smw_destroy(&s->smw);
   cupid_direct_factor_destroy(&s->F);
@@ -70,6 +72,7 @@ static cupid_status system_apply(void *ctx, const double *x, double *y) {
 }
 
 typedef struct {
+  cupid_growth_block M;           /* the block factor (balanced within), or NULL and: */
   cupid_direct_factor F;
   cupid_coupling_balance_smw smw; /* balanced: the factor's K' exactly */
   const cupid_growth_smw *upd;    /* the bonds broken since (NULL: the factor's K) */
@@ -85,7 +88,8 @@ static cupid_status lu_apply(void *ctx, const double *r, double *z) {
   const lu_pc *p = ctx;
   const cupid_int n = p->bc->n;
   for (cupid_int d = 0; d < n; d++) p->t[d] = p->bc->fixed[d] ? 0.0 : r[d];
-  if (p->smw) CUPID_CALL(cupid_coupling_balance_smw_apply(p->smw, p->t, z));
+  if (p->M) CUPID_CALL(cupid_growth_block_solve(p->M, p->t, z));
+  else if (p->smw) CUPID_CALL(cupid_coupling_balance_smw_apply(p->smw, p->t, z));
   else CUPID_CALL(cupid_direct_factor_solve(p->F, p->t, z));
   if (p->upd) cupid_growth_smw_correct(p->upd, z);
   for (cupid_int d = 0; d < n; d++)
@@ -98,7 +102,26 @@ static cupid_status factorise(cupid_problem_state *prob, cupid_growth_lu *s,
   cupid_solve_info info;
   const double t0 = cupid_wtime();
   cupid_growth_lu_renew(s);
-  cupid_status st = cupid_direct_factor_create_kind(prob->K, CUPID_MATRIX_GENERAL, prob->bc, &s->F, &info);
+  cupid_status st = CUPID_SUCCESS;
+  if (!s->whole) { /* block elimination: the symmetric PD block's CHOLMOD factor */
+    st = cupid_growth_block_create(prob->K, prob->fe_offset, prob->bc, B, &s->M, &info);
+    if (st == CUPID_SUCCESS && !s->M) {
+      s->whole = 1;
+      cupid_problem_progress(prob, "growth: K is not two blocks the elimination takes (a PD block "
+                             "that is not symmetric, or a singular FE block): the LU of the "
+                             "whole K, updated by Sherman-Morrison-Woodbury");
+    } else if (st == CUPID_SUCCESS && s->factorisations == 0) {
+      cupid_int nic = 0, nib = 0;
+      const cupid_int ns = cupid_growth_block_interface(s->M, &nic, &nib);
+      cupid_problem_progress(prob, "growth: block elimination: CHOLMOD of the PD block (%lld "
+                             "equations), the LU of the Schur complement on the %lld free FE "
+                             "DOFs (interface %lld x %lld); factor %.3g M entries",
+                             (long long)(info.n - ns), (long long)ns, (long long)nic,
+                             (long long)nib, info.nnz_factor / 1e6);
+    }
+  }
+  if (st == CUPID_SUCCESS && !s->M)
+    st = cupid_direct_factor_create_kind(prob->K, CUPID_MATRIX_GENERAL, prob->bc, &s->F, &info);
   prob->solve = info; /* a breakdown names its DOF (growth.c holds its node) */
   CUPID_CALL(st);
   s->factor_info = info;
@@ -106,9 +129,11 @@ static cupid_status factorise(cupid_problem_state *prob, cupid_growth_lu *s,
   s->bonds_at_factor = prob->broken_bonds;
   s->factor_flops = info.flops_factor;
   const double nnz_k = (double)prob->K->rowptr[prob->K->nrows] * prob->K->bs * prob->K->bs;
-  s->iteration_flops = 4.0 * info.nnz_factor + 2.0 * nnz_k;
+  /* a block solve is two with the Cholesky factor (4 passes) and one with S's LU */
+  s->iteration_flops = (s->M ? 8.0 : 4.0) * info.nnz_factor + 2.0 * nnz_k;
   s->since_factor = 0;
-  if (B) CUPID_CALL(cupid_coupling_balance_smw_create(B, s->F, prob->bc, &s->smw));
+  s->updates_since = 0;
+  if (B && s->F) CUPID_CALL(cupid_coupling_balance_smw_create(B, s->F, prob->bc, &s->smw));
   s->t_factor += cupid_wtime() - t0;
   return CUPID_SUCCESS;
 }
@@ -158,7 +183,7 @@ static cupid_status resolve(cupid_problem_state *prob, cupid_growth_lu *s,
                             const cupid_linear_operator *L, int *done) {
   const size_t n = (size_t)prob->ndof;
   const double t0 = cupid_wtime();
-  lu_pc pc = {s->F, s->smw, &s->upd, prob->bc, s->t};
+  lu_pc pc = {s->M, s->F, s->smw, &s->upd, prob->bc, s->t};
   cupid_solve_info info;
   memcpy(s->z, prob->u, n * sizeof *s->z);
   int stepped = 0;
@@ -179,18 +204,42 @@ static cupid_status resolve(cupid_problem_state *prob, cupid_growth_lu *s,
   s->resolves += info.iterations > 0;
   s->iterations += info.iterations;
   /* an updated factor is the current K's: its one iteration is the check, not rent */
-  s->since_factor += info.iterations - (s->upd.r > 0 && info.iterations > 0);
+  s->since_factor += info.iterations - ((s->M || s->upd.r > 0) && stepped && info.iterations > 0);
   s->since_factor += info.iterations * 2.0 * (double)s->upd.r * (double)prob->ndof / s->iteration_flops;
   prob->solve = s->factor_info; /* the factor's figures, the re-solve's outcome */
-  prob->solve.method = stepped ? "umfpack, updated" : "umfpack + gmres";
+  prob->solve.method = s->M ? (stepped ? "cholmod + schur, updated" : "cholmod + schur + gmres")
+                            : (stepped ? "umfpack, updated" : "umfpack + gmres");
   prob->solve.iterations = info.iterations;
   prob->solve.residual = info.residual;
   prob->solve.time_solve = info.time_solve;
   snprintf(prob->solve.ksp_type, sizeof prob->solve.ksp_type, stepped ? "richardson" : "gmres");
-  snprintf(prob->solve.pc_type, sizeof prob->solve.pc_type,
-           s->upd.r ? "lu of the last K, updated" : "lu of the last K");
+  snprintf(prob->solve.pc_type, sizeof prob->solve.pc_type, "%s",
+           s->M       ? (s->updates_since ? "block factor, downdated" : "block lu of the last K")
+           : s->upd.r ? "lu of the last K, updated"
+                      : "lu of the last K");
   snprintf(prob->solve.converged_reason, sizeof prob->solve.converged_reason, "%s",
            info.converged_reason);
+  return CUPID_SUCCESS;
+}
+
+/* The block factor downdated by the round's bonds (growth_block.c), as growth.c downdates
+ * Arlequin's CHOLMOD factor, and renewed on the same count: a round that broke more than
+ * 1/BLOCK_MAX_SHARE of its PD equations' worth of bonds (a crack running through) is cheaper
+ * to factorise afresh. */
+static cupid_status block_downdate(cupid_problem_state *prob, cupid_growth_lu *s, double t0) {
+  int ok = 0;
+  cupid_int nic = 0, nib = 0;
+  const cupid_int na = s->factor_info.n - cupid_growth_block_interface(s->M, &nic, &nib);
+  if (s->dd.r > na / BLOCK_MAX_SHARE) ok = 0;
+  else CUPID_CALL(cupid_growth_block_downdate(s->M, &s->dd, &ok));
+  if (!ok) cupid_growth_lu_renew(s); /* or K singular: the factorisation names the node */
+  else {
+    s->bonds_at_factor = prob->broken_bonds;
+    s->updates++;
+    s->updates_since++;
+    s->update_columns += s->dd.r;
+  }
+  s->t_update += cupid_wtime() - t0;
   return CUPID_SUCCESS;
 }
 
@@ -202,7 +251,7 @@ static cupid_status resolve(cupid_problem_state *prob, cupid_growth_lu *s,
  * leaves K singular drops the factor, and the factorisation names the node. */
 cupid_status cupid_growth_lu_update(cupid_problem_state *prob, cupid_growth_lu *s,
                                     const cupid_csr_t *Kold) {
-  if (!s->F || s->no_update) return CUPID_SUCCESS;
+  if (!cupid_growth_lu_has_factor(s) || s->no_update) return CUPID_SUCCESS;
   const double t0 = cupid_wtime();
   int ok = 0;
   CUPID_CALL(cupid_growth_downdate_terms(Kold, prob->K, &s->dd, &ok));
@@ -213,6 +262,7 @@ cupid_status cupid_growth_lu_update(cupid_problem_state *prob, cupid_growth_lu *
     return CUPID_SUCCESS;
   }
   if (s->dd.r == 0) return CUPID_SUCCESS;
+  if (s->M) return block_downdate(prob, s, t0);
   /* A column costs a solve, paid whether or not the factor is renewed later (the bond is
    * broken in every later K): renewing saves only the round's own columns, and then only when
    * they cost more than a factorisation (a crack running through); and Z is kept no larger
@@ -224,7 +274,7 @@ cupid_status cupid_growth_lu_update(cupid_problem_state *prob, cupid_growth_lu *
     s->t_update += cupid_wtime() - t0;
     return CUPID_SUCCESS;
   }
-  lu_pc pc = {s->F, s->smw, NULL, prob->bc, s->t};
+  lu_pc pc = {NULL, s->F, s->smw, NULL, prob->bc, s->t};
   CUPID_CALL(cupid_growth_smw_add(&s->upd, prob->ndof, &s->dd, lu_apply, &pc, &ok));
   if (!ok) cupid_growth_lu_renew(s); /* K singular: the factorisation names the node */
   else {
@@ -263,14 +313,14 @@ cupid_status cupid_growth_lu_solve(cupid_problem_state *prob, cupid_growth_lu *s
   }
   const cupid_linear_operator L = {.n = prob->ndof, .apply = system_apply, .ctx = &op};
   int done = 0;
-  if (s->F) CUPID_TRY(resolve(prob, s, &L, &done));
+  if (cupid_growth_lu_has_factor(s)) CUPID_TRY(resolve(prob, s, &L, &done));
   if (!done) {
     CUPID_TRY(factorise(prob, s, op.B));
     for (cupid_int d = 0; d < prob->ndof; d++) /* the factor's own solution as the guess */
       s->t[d] = prob->bc->fixed[d] ? prob->bc->value[d] : 0.0;
     CUPID_TRY(system_apply(&op, s->t, s->z));
     for (cupid_int d = 0; d < prob->ndof; d++) s->z[d] = prob->bc->fixed[d] ? 0.0 : prob->f_ext[d] - s->z[d];
-    lu_pc pc = {s->F, s->smw, NULL, prob->bc, s->t};
+    lu_pc pc = {s->M, s->F, s->smw, NULL, prob->bc, s->t};
     CUPID_TRY(lu_apply(&pc, s->z, prob->u));
     for (cupid_int d = 0; d < prob->ndof; d++)
       if (prob->bc->fixed[d]) prob->u[d] = prob->bc->value[d];
@@ -279,7 +329,8 @@ cupid_status cupid_growth_lu_solve(cupid_problem_state *prob, cupid_growth_lu *s
                     (a mechanism breaking left, that passed the pivot bound); its weakest pivot
                     names the node growth.c holds, as for a factorisation that broke down */
       cupid_int dof = -1;
-      CUPID_TRY(cupid_direct_factor_weakest_dof(s->F, &dof));
+      CUPID_TRY(s->M ? cupid_growth_block_weakest_dof(s->M, &dof)
+                     : cupid_direct_factor_weakest_dof(s->F, &dof));
       prob->solve.failed_dof = dof;
       cupid_growth_lu_renew(s);
       st = CUPID_ERROR(CUPID_ERR_NUMERIC,

@@ -130,13 +130,14 @@ static int lu_path(const cupid_problem_state *prob) {
 
 /* The factor a resumption rebuilds: the LU's on the non-symmetric path, else the CHOLMOD one. */
 static int has_factor(const growth_run *g) {
-  return lu_path(g->prob) ? g->lu.F != NULL : g->F != NULL;
+  return lu_path(g->prob) ? cupid_growth_lu_has_factor(&g->lu) : g->F != NULL;
 }
 
 /* A solve's method name (a string of this process) from its text in a checkpoint. */
 static const char *method_named(const char *text, const char *otherwise) {
   static const char *const methods[] = {"cholmod", "umfpack", "petsc", "krylov", "gmres",
-                                        "umfpack, updated", "umfpack + gmres"};
+                                        "umfpack, updated", "umfpack + gmres", "cholmod + schur",
+                                        "cholmod + schur, updated", "cholmod + schur + gmres"};
   for (size_t k = 0; k < sizeof methods / sizeof *methods; k++)
     if (!strcmp(text, methods[k])) return methods[k];
   return otherwise;
@@ -333,7 +334,7 @@ static cupid_status replay_factor(growth_run *g) {
     int ok = 1;
     if (lu) {
       CUPID_TRY(cupid_growth_lu_update(prob, &g->lu, Kold));
-      ok = g->lu.updates == updates + 1 && g->lu.F;
+      ok = g->lu.updates == updates + 1 && cupid_growth_lu_has_factor(&g->lu);
     } else {
       CUPID_TRY(cupid_growth_downdate_terms(Kold, prob->K, &g->dd, &ok));
       if (ok)

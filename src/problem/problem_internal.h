@@ -291,11 +291,37 @@ void cupid_growth_smw_correct(const cupid_growth_smw *u, double *y);
 void cupid_growth_smw_reset(cupid_growth_smw *u);
 void cupid_growth_smw_free(cupid_growth_smw *u);
 
+/* growth_block.c: the fictitious-node K' = [A B; C' D'] by block elimination: CHOLMOD of its
+ * symmetric PD block A, downdated as bonds break, and the UMFPACK LU of the Schur complement
+ * S = D' - C' A^-1 B on the FE DOFs (the balance's W C^T folded into C' and D'). */
+typedef struct cupid_growth_block_private *cupid_growth_block;
+/** Factor @p K (balanced by @p B when not NULL; its PD DOFs first, the FE DOFs from @p fe0) for
+ *  the free DOFs of @p bc. *M stays NULL (and CUPID_SUCCESS) when K is not two such blocks (no
+ *  FE DOFs, a PD block that is not symmetric, or a singular D'): the caller factorises K whole.
+ *  A singular K: CUPID_ERR_NUMERIC with info->failed_dof (global). */
+cupid_status cupid_growth_block_create(const cupid_csr_t *K, cupid_int fe0, const cupid_dirichlet_t *bc,
+                                       const cupid_coupling_balance B, cupid_growth_block *M,
+                                       cupid_solve_info *info);
+/** z = K'^-1 r on the factor's free DOFs (r full-length, its free entries read; z full-length,
+ *  zero on the factor's fixed DOFs; no aliasing). */
+cupid_status cupid_growth_block_solve(cupid_growth_block M, const double *r, double *z);
+/** The factor brought to K - V V^T (dd's columns, on PD DOFs): A downdated, S changed by the
+ *  rank-r term and factorised again. *ok = 0 when that K is singular (the caller drops M). */
+cupid_status cupid_growth_block_downdate(cupid_growth_block M, const cupid_growth_downdate *dd, int *ok);
+/** The DOF of the weaker factor's smallest pivot (A's or S's). */
+cupid_status cupid_growth_block_weakest_dof(const cupid_growth_block M, cupid_int *dof);
+/** S's size; *nic and *nib the interface rows and columns of its dense block. */
+cupid_int cupid_growth_block_interface(const cupid_growth_block M, cupid_int *nic, cupid_int *nib);
+void cupid_growth_block_destroy(cupid_growth_block *M);
+
 /* growth_lu.c: the re-solves of a non-symmetric coupling (fictitious nodes, Eq. 38, either
  * balance) on the direct engine: the UMFPACK LU of the last factorised K (or the balanced
  * K' = K - W C^T), brought to the current K by the broken bonds' terms (growth_smw.c), one step
  * per re-solve; GMRES on the last LU where the change is no sum of bond terms (LPS). */
 typedef struct {
+  cupid_growth_block M;         /* the last factorisation by block elimination (growth_block.c),
+                                   downdated to the current K; or NULL and ... */
+  int whole;                    /* ... K is not two such blocks: */
   cupid_direct_factor F;        /* LU of K_ff at the last factorisation (its own free DOFs) */
   cupid_coupling_balance_smw smw; /* balanced: F's K' inverted exactly (SMW), or NULL */
   cupid_coupling_balance B;     /* balanced: W and C = K^T R, built at the first solve and kept:
@@ -310,6 +336,7 @@ typedef struct {
   cupid_growth_downdate dd;     /* a round's bond terms */
   int no_update;                /* a change was no sum of bond terms (LPS): GMRES alone */
   cupid_int updates, update_columns; /* rounds and columns applied by the update */
+  cupid_int updates_since;      /* rounds since the factorisation */
   double t_update;
   cupid_int factorisations, resolves, iterations;
   double t_factor, t_resolve;
@@ -317,6 +344,8 @@ typedef struct {
   cupid_solve_info factor_info; /* the last factorisation's (summary.json's solver block) */
   int patch_tested;
 } cupid_growth_lu;
+/** 1 when s holds a factor (block or LU). */
+static inline int cupid_growth_lu_has_factor(const cupid_growth_lu *s) { return s->M || s->F; }
 /** 1 when growth solves prob's assembled system by cupid_growth_lu_solve (a non-symmetric
  *  method on the direct engine). */
 int cupid_growth_lu_applies(const cupid_problem_state *prob);

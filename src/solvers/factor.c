@@ -334,8 +334,14 @@ cupid_status cupid_direct_factor_solve(cupid_direct_factor F, const double *b, d
 cupid_int cupid_direct_factor_size(const cupid_direct_factor F) { return F ? F->n : 0; }
 
 cupid_status cupid_direct_factor_weakest_dof(const cupid_direct_factor F, cupid_int *dof) {
-  CUPID_CHECK(F && dof && F->kind == CUPID_MATRIX_GENERAL, CUPID_ERR_ARGUMENT,
-              "cupid_direct_factor_weakest_dof: an LU factor (UMFPACK) is needed");
+  CUPID_CHECK(F && dof, CUPID_ERR_ARGUMENT, "cupid_direct_factor_weakest_dof: NULL argument");
+  if (F->kind == CUPID_MATRIX_SPD) { /* the smallest L_kk^2 (or |D_kk| once downdated) */
+    cupid_int kmin = 0;
+    (void)pivot_ratio(F->L, &kmin);
+    const SuiteSparse_long *perm = F->L->Perm;
+    *dof = F->global[perm ? perm[kmin] : kmin];
+    return CUPID_SUCCESS;
+  }
   cupid_int col = 0;
   CUPID_CALL(cupid_umfpack_weakest_pivot(F->numeric, F->n, &col));
   *dof = F->global[col];
@@ -364,6 +370,39 @@ cupid_status cupid_direct_factor_solve_free(cupid_direct_factor F, const double 
     return CUPID_ERROR(CUPID_ERR_INTERNAL, "CHOLMOD solve failed (status %d)", F->cc.status);
   }
   memcpy(x, X->x, (size_t)F->n * sizeof *x);
+  cholmod_l_free_dense(&X, &F->cc);
+  return CUPID_SUCCESS;
+}
+
+cupid_status cupid_direct_factor_solve_free_many(cupid_direct_factor F, cupid_int nrhs,
+                                                const double *b, double *x) {
+  CUPID_CHECK(F && nrhs >= 0 && (nrhs == 0 || (b && x)), CUPID_ERR_ARGUMENT,
+              "cupid_direct_factor_solve_free_many: NULL argument");
+  const size_t n = (size_t)F->n;
+  if (nrhs == 0) return CUPID_SUCCESS;
+  if (F->kind == CUPID_MATRIX_GENERAL) { /* UMFPACK solves one right-hand side at a time */
+    for (cupid_int c = 0; c < nrhs; c++)
+      CUPID_CALL(cupid_direct_factor_solve_free(F, b + (size_t)c * n, x + (size_t)c * n));
+    return CUPID_SUCCESS;
+  }
+  /* CHOLMOD: one pass over the factor for every column (supernodal: BLAS-3 triangular solves;
+   * simplicial: up to four columns a sweep) */
+  cholmod_dense B;
+  memset(&B, 0, sizeof B);
+  B.nrow = B.d = n;
+  B.ncol = (size_t)nrhs;
+  B.nzmax = n * (size_t)nrhs;
+  B.x = (double *)b;
+  B.xtype = CHOLMOD_REAL;
+  B.dtype = CHOLMOD_DOUBLE;
+  cholmod_dense *X = cholmod_l_solve(CHOLMOD_A, F->L, &B, &F->cc);
+  if (!X || F->cc.status < CHOLMOD_OK) {
+    cholmod_l_free_dense(&X, &F->cc);
+    return CUPID_ERROR(F->cc.status == CHOLMOD_OUT_OF_MEMORY ? CUPID_ERR_MEMORY : CUPID_ERR_INTERNAL,
+                       "CHOLMOD solve of %lld right-hand sides failed (status %d)", (long long)nrhs,
+                       F->cc.status);
+  }
+  memcpy(x, X->x, n * (size_t)nrhs * sizeof *x);
   cholmod_l_free_dense(&X, &F->cc);
   return CUPID_SUCCESS;
 }
