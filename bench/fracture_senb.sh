@@ -11,8 +11,8 @@
 #   lagrange  the same beam coupled by Lagrange multipliers instead (issue 34), the default
 #             re-solves,
 #   fictitious  the same beam coupled by fictitious nodes (paper 000; issue 34, the default
-#             balance: each interface balanced), the last LU updated by the broken bonds
-#             (growth_lu.c, growth_smw.c),
+#             balance: each interface balanced), the block factor (CHOLMOD of the PD block,
+#             the beam's LU, growth_block.c) downdated by the broken bonds,
 #   fictitious_slabs  the same on 2 PD slabs under mpirun (matrix-free).
 # Prints per run: seconds, PD nodes, load steps, solves, broken bonds, the time per broken bond
 # and per load step, the factorisations, downdates, CG solves, peak memory, and the peak load
@@ -45,7 +45,7 @@ import csv, json, sys
 model, way, d, t = sys.argv[1], sys.argv[2], sys.argv[3], float(sys.argv[4])
 label = {"petsc": "matrix-free, 1 process", "slabs": "matrix-free, 2 slabs",
          "lagrange": "Lagrange multipliers, downdate",
-         "fictitious": "fictitious nodes, the LU updated (SMW)",
+         "fictitious": "fictitious nodes, block factor downdated",
          "fictitious_slabs": "fictitious nodes, matrix-free, 2 slabs"}
 s = json.load(open(d + "/summary.json"))
 f = s["fracture"]; v = f["solves"]

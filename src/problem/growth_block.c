@@ -35,8 +35,9 @@
 
 #include "problem_internal.h"
 
-#define BLOCK_CHUNK 64      /* columns of A^-1 B solved at once (bounds the dense work) */
-#define BLOCK_SYMMETRY 1e-12 /* |x^T (A - A^T) y| against |A| |x| |y|: round-off of assembly */
+#define BLOCK_CHUNK 64       /* columns of G = A^-1 C'^T solved at once (bounds the work space) */
+#define BLOCK_SYMMETRY 1e-12 /* |x^T A y - y^T A x| against sum |x_i A_ij y_j|: round-off of
+                                the assembly, where a non-symmetric block differs at O(1) */
 
 struct cupid_growth_block_private {
   cupid_int n, fe0;          /* all DOFs; the first FE DOF (3 n_pd) */
@@ -56,7 +57,8 @@ struct cupid_growth_block_private {
   double *Wf, *Cp, *Cf;
   /* the interface: S rows that read a PD column (K_fp or W_f), S columns that a PD row reads */
   cupid_int nic, nib, *ic, *ib;
-  double *E;                 /* nic x nib, row-major: C' A^-1 B on them */
+  double *Gc;                /* nic columns of na: A^-1 C'^T (C' row ic[a] as a PD vector) */
+  double *E;                 /* nic x nib, row-major: C' A^-1 B on them = Gc^T B */
   cupid_csr D;               /* D', scalar, ns x ns */
   cupid_direct_factor Df;    /* its UMFPACK LU */
   double *Y;                 /* nic columns of ns: D'^-1 on the unit vectors of ic */
@@ -96,7 +98,7 @@ void cupid_growth_block_destroy(cupid_growth_block *M) {
   cupid_free(&m->c_ptr), cupid_free(&m->c_col), cupid_free(&m->c_val);
   cupid_free(&m->Wf), cupid_free(&m->Cp), cupid_free(&m->Cf);
   cupid_free(&m->ic), cupid_free(&m->ib);
-  cupid_free(&m->E), cupid_free(&m->Y), cupid_free(&m->Yb);
+  cupid_free(&m->Gc), cupid_free(&m->E), cupid_free(&m->Y), cupid_free(&m->Yb);
   cupid_free(&m->H), cupid_free(&m->Hlu), cupid_free(&m->Hpiv), cupid_free(&m->hs);
   cupid_free(&m->ya), cupid_free(&m->ta), cupid_free(&m->xa), cupid_free(&m->ts), cupid_free(&m->xs);
   cupid_free(M);
@@ -239,35 +241,41 @@ static void interface_rows(const cupid_growth_block m, const double *y, double *
   }
 }
 
-/* E = C' A^-1 B on the interface, BLOCK_CHUNK columns of B at a time. */
+/* Gc = A^-1 C'^T (BLOCK_CHUNK rows of C' at a time: the interface rows are fewer than B's
+ * columns, 162 against 648 on the SENB) and E = Gc^T B. */
 static cupid_status schur_block(cupid_growth_block m) {
-  const size_t na = (size_t)m->na;
+  const size_t na = (size_t)m->na, ns = (size_t)m->ns;
   const cupid_int nib = m->nib, nic = m->nic;
-  double *R = NULL, *G = NULL, *col = NULL, cy[CUPID_BALANCE_MODES * CUPID_BALANCE_GROUPS_MAX];
+  double *R = NULL;
   cupid_status st = CUPID_SUCCESS;
-  CUPID_TRY(cupid_calloc((size_t)nic * (size_t)nib + 1, sizeof *m->E, "interface Schur block", &m->E));
-  CUPID_TRY(cupid_calloc(na * BLOCK_CHUNK + 1, sizeof *R, "interface solves", &R));
-  CUPID_TRY(cupid_malloc(na * BLOCK_CHUNK + 1, sizeof *G, "interface solves", &G));
-  CUPID_TRY(cupid_malloc((size_t)nic + 1, sizeof *col, "interface solves", &col));
-  for (cupid_int b0 = 0; b0 < nib; b0 += BLOCK_CHUNK) {
-    const cupid_int w = nib - b0 < BLOCK_CHUNK ? nib - b0 : BLOCK_CHUNK;
-    for (cupid_int j = 0; j < w; j++) {
-      const cupid_int s = m->ib[b0 + j];
-      for (cupid_int t = m->bt_ptr[s]; t < m->bt_ptr[s + 1]; t++)
-        R[(size_t)j * na + (size_t)m->bt_row[t]] = m->bt_val[t];
+  CUPID_TRY(cupid_malloc((size_t)nic * na + 1, sizeof *m->Gc, "interface solves", &m->Gc));
+  CUPID_TRY(cupid_malloc((size_t)nic * (size_t)nib + 1, sizeof *m->E, "interface Schur block", &m->E));
+  CUPID_TRY(cupid_malloc(na * BLOCK_CHUNK + 1, sizeof *R, "interface solves", &R));
+  for (cupid_int a0 = 0; a0 < nic; a0 += BLOCK_CHUNK) {
+    const cupid_int w = nic - a0 < BLOCK_CHUNK ? nic - a0 : BLOCK_CHUNK;
+    for (cupid_int j = 0; j < w; j++) { /* row ic[a] of C' = K_fp - W_f C_p^T */
+      const cupid_int s = m->ic[a0 + j];
+      double *rj = R + (size_t)j * na;
+      for (size_t q = 0; q < na; q++) {
+        double v = 0.0;
+        for (int c = 0; c < m->k; c++) v -= m->Wf[(size_t)c * ns + (size_t)s] * m->Cp[(size_t)c * na + q];
+        rj[q] = v;
+      }
+      for (cupid_int t = m->c_ptr[s]; t < m->c_ptr[s + 1]; t++) rj[m->c_col[t]] += m->c_val[t];
     }
-    CUPID_TRY(cupid_direct_factor_solve_free_many(m->A, w, R, G));
-    for (cupid_int j = 0; j < w; j++) {
-      const cupid_int s = m->ib[b0 + j];
-      for (cupid_int t = m->bt_ptr[s]; t < m->bt_ptr[s + 1]; t++) R[(size_t)j * na + (size_t)m->bt_row[t]] = 0.0;
-      interface_rows(m, G + (size_t)j * na, col, cy);
-      for (cupid_int a = 0; a < nic; a++) m->E[(size_t)a * (size_t)nib + (size_t)(b0 + j)] = col[a];
+    CUPID_TRY(cupid_direct_factor_solve_free_many(m->A, w, R, m->Gc + (size_t)a0 * na));
+  }
+  for (cupid_int a = 0; a < nic; a++) {
+    const double *g = m->Gc + (size_t)a * na;
+    for (cupid_int b = 0; b < nib; b++) {
+      const cupid_int s = m->ib[b];
+      double v = 0.0;
+      for (cupid_int t = m->bt_ptr[s]; t < m->bt_ptr[s + 1]; t++) v += g[m->bt_row[t]] * m->bt_val[t];
+      m->E[(size_t)a * (size_t)nib + (size_t)b] = v;
     }
   }
 cleanup:
   cupid_free(&R);
-  cupid_free(&G);
-  cupid_free(&col);
   return st;
 }
 
@@ -458,27 +466,21 @@ cupid_int cupid_growth_block_interface(const cupid_growth_block M, cupid_int *ni
 }
 
 cupid_status cupid_growth_block_solve(cupid_growth_block m, const double *r, double *z) {
-  double cy[CUPID_BALANCE_MODES * CUPID_BALANCE_GROUPS_MAX];
-  const cupid_int na = m->na, ns = m->ns;
+  const cupid_int na = m->na, ns = m->ns, nic = m->nic;
   for (cupid_int a = 0; a < na; a++) m->ta[a] = r[m->pd[a]];
-  CUPID_CALL(cupid_direct_factor_solve_free(m->A, m->ta, m->ya)); /* y = A^-1 r_p */
-  /* r_f - C' y: K_fp y on every row, the balance's rows by interface_rows */
-  for (int c = 0; c < m->k; c++) cy[c] = cupid_dot(na, m->Cp + (size_t)c * (size_t)na, m->ya);
-  for (cupid_int s = 0; s < ns; s++) {
-    double v = r[m->fe[s]];
-    for (cupid_int t = m->c_ptr[s]; t < m->c_ptr[s + 1]; t++) v -= m->c_val[t] * m->ya[m->c_col[t]];
-    for (int c = 0; c < m->k; c++) v += m->Wf[(size_t)c * (size_t)ns + (size_t)s] * cy[c];
-    m->ts[s] = v;
+  /* x_f = S^-1 (r_f - C' A^-1 r_p), C' A^-1 r_p = Gc^T r_p on the interface rows */
+  for (cupid_int s = 0; s < ns; s++) m->ts[s] = r[m->fe[s]];
+  for (cupid_int a = 0; a < nic; a++) m->ts[m->ic[a]] -= cupid_dot(na, m->Gc + (size_t)a * (size_t)na, m->ta);
+  CUPID_CALL(schur_solve(m, m->ts, m->xs));
+  /* x_p = A^-1 (r_p - B x_f): the one solve with the Cholesky factor */
+  for (cupid_int a = 0; a < na; a++) {
+    double v = m->ta[a];
+    for (cupid_int t = m->b_ptr[a]; t < m->b_ptr[a + 1]; t++) v -= m->b_val[t] * m->xs[m->b_col[t]];
+    m->ya[a] = v;
   }
-  CUPID_CALL(schur_solve(m, m->ts, m->xs)); /* x_f = S^-1 (r_f - C' y) */
-  for (cupid_int a = 0; a < na; a++) { /* x_p = y - A^-1 B x_f */
-    double v = 0.0;
-    for (cupid_int t = m->b_ptr[a]; t < m->b_ptr[a + 1]; t++) v += m->b_val[t] * m->xs[m->b_col[t]];
-    m->ta[a] = v;
-  }
-  CUPID_CALL(cupid_direct_factor_solve_free(m->A, m->ta, m->xa));
+  CUPID_CALL(cupid_direct_factor_solve_free(m->A, m->ya, m->xa));
   for (cupid_int d = 0; d < m->n; d++) z[d] = 0.0; /* the factor's fixed DOFs */
-  for (cupid_int a = 0; a < na; a++) z[m->pd[a]] = m->ya[a] - m->xa[a];
+  for (cupid_int a = 0; a < na; a++) z[m->pd[a]] = m->xa[a];
   for (cupid_int s = 0; s < ns; s++) z[m->fe[s]] = m->xs[s];
   return CUPID_SUCCESS;
 }
@@ -557,6 +559,22 @@ cupid_status cupid_growth_block_downdate(cupid_growth_block m, const cupid_growt
       for (cupid_int e = 0; e < r; e++) v += P[(size_t)a * (size_t)r + (size_t)e] * N[e * r + c];
       PN[(size_t)a * (size_t)r + (size_t)c] = v;
     }
+  /* Gc += Z (P N)^T (A_old^-1 = A^-1 - Z N Z^T, Z^T C'^T = P^T; N symmetric), by chunks of
+   * rows, the columns of Z in order within each */
+  {
+    const cupid_int chunk = 1024, nchunks = (cupid_int)((na + chunk - 1) / chunk);
+#pragma omp parallel for schedule(static) if ((double)na * (double)nic * (double)r > 1e6)
+    for (cupid_int q = 0; q < nchunks; q++) {
+      const size_t j0 = (size_t)q * (size_t)chunk, j1 = j0 + (size_t)chunk < na ? j0 + (size_t)chunk : na;
+      for (cupid_int a = 0; a < nic; a++) {
+        double *g = m->Gc + (size_t)a * na;
+        for (cupid_int c = 0; c < r; c++) {
+          const double f = PN[(size_t)a * (size_t)r + (size_t)c], *z = Z + (size_t)c * na;
+          for (size_t j = j0; j < j1; j++) g[j] += z[j] * f;
+        }
+      }
+    }
+  }
   /* QY = Q^T Y(ib, :) (r x nic), for H -= (P N) QY, and E += (P N) Q^T */
   CUPID_TRY(cupid_calloc((size_t)r * (size_t)nic + 1, sizeof *QY, "interface change", &QY));
   for (cupid_int b = 0; b < nib; b++) {

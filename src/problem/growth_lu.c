@@ -1,29 +1,36 @@
 /* Crack growth with a non-symmetric coupling on the direct engine (fictitious nodes, paper 000
- * Eq. 38, with `balance: none` or `momentum`; issue 34): the UMFPACK LU of the last factorised
- * K, brought to the current K exactly as bonds break, and a re-solve from the last solution.
+ * Eq. 38, with `balance: none` or `momentum`; issue 34): the factor of the last factorised K,
+ * brought to the current K exactly as bonds break, and a re-solve from the last solution.
  *
- * SuiteSparse cannot downdate an LU as CHOLMOD downdates the Arlequin factor. But a bond broken
- * outside the coupling zone changes K by its symmetric rank-one pair term alone (growth_downdate.c
- * checks both triangles; docs/theory.md), so the factor is updated by Sherman-Morrison-Woodbury
- * (growth_smw.c): one solve with the factor per broken bond, when it breaks, and then every
- * re-solve is one step x += M^-1 (f - K x) on the current K, checked by its residual (GMRES
- * from there if a node held since the factorisation made it inexact). The balanced
- * K' = K - W C^T (balance.c: six terms per balanced group) is the factor's exactly by its own
- * SMW (cupid_coupling_balance_smw): breaks change neither W nor C. On the SENB at h = 1, 20
- * steps: 75 s with GMRES on the last LU (41 factorisations, 1,555 iterations) -> 37 s (3
- * factorisations, 1,610 update columns of 11 ms, one step per re-solve); Arlequin 19 s.
+ * The factor is the block elimination of growth_block.c: CHOLMOD of the symmetric PD block,
+ * downdated by the broken bonds as growth.c downdates Arlequin's factor, the beam block's LU and
+ * a small capacitance on the interface (the balance's W C^T folded in). A round costs its
+ * downdate and one solve with the round's columns; every re-solve is one step
+ * x += M^-1 (f - K x) on the current K, checked by its residual (GMRES from there if a node
+ * held since the factorisation made it inexact). On the SENB at h = 1, 20 steps: 28 s and 358
+ * MB against Arlequin's 21 s and 310 MB (bench/README.md).
  *
- * The factor is renewed when a round breaks more bonds than a factorisation is worth in solves
- * (a crack running through), when the update columns would outgrow the LU itself (n r > its
- * nonzeros), by the rent rule of growth.c for what is left (GMRES iterations past the check,
- * the products with the update's columns), when a re-solve needs more than LU_RESOLVE_MAX
- * iterations, when the update finds K singular (the factorisation then names the node), and at
- * the first solve of a load step after breaks that were not brought in. Counted, not timed, so
- * that the choice is the same in every run. A change that is no sum of bond terms (LPS) turns
- * the updates off for the run: each re-solve is then GMRES on the last LU, right-preconditioned
- * by it (K_last^-1 K_now is the identity plus a change of the broken bonds' rank). Every scalar
- * product is cupid_dot's or in a fixed order, so the iterates, hence the bonds that break, are
- * the same for any thread count. */
+ * Where K is not two such blocks (a PD block that is not symmetric, a singular beam block) the
+ * factor is UMFPACK's LU of the whole K. SuiteSparse cannot downdate an LU, but a bond broken
+ * outside the coupling zone changes K by its symmetric rank-one pair term alone
+ * (growth_downdate.c checks both triangles; docs/theory.md), so that LU is updated by
+ * Sherman-Morrison-Woodbury (growth_smw.c): one solve with it per broken bond, when it breaks.
+ * The balanced K' = K - W C^T (balance.c: six terms per balanced group) is that LU's exactly by
+ * its own SMW (cupid_coupling_balance_smw): breaks change neither W nor C. That path took 37 s
+ * and 593 MB on the same SENB (1,610 update columns of 12 ms).
+ *
+ * The factor is renewed when a round breaks more bonds than a factorisation is worth (a crack
+ * running through: 1/BLOCK_MAX_SHARE of the PD equations for the block factor, as growth.c's
+ * downdates; for the LU, more columns than a factorisation is worth in solves, or more than
+ * the LU holds), by the rent rule of growth.c for what is left (GMRES iterations past the
+ * check, the products with the LU's update columns), when a re-solve needs more than
+ * LU_RESOLVE_MAX iterations, when the update finds K singular (the factorisation then names
+ * the node), and at the first solve of a load step after breaks that were not brought in.
+ * Counted, not timed, so that the choice is the same in every run. A change that is no sum of
+ * bond terms (LPS) turns the updates off for the run: each re-solve is then GMRES on the last
+ * factor, right-preconditioned by it (K_last^-1 K_now is the identity plus a change of the
+ * broken bonds' rank). Every scalar product is cupid_dot's or in a fixed order, so the
+ * iterates, hence the bonds that break, are the same for any thread count. */
 #include <math.h>
 #include <stdio.h>
 #include <string.h>

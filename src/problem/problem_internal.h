@@ -192,9 +192,10 @@ typedef struct cupid_problem_private {
   struct {
     const char *resolve;            /**< "downdate" (the last factor downdated by the broken
                                          bonds), "krylov" (CG on the last factor), "factor",
-                                         "lu update" / "gmres" (a non-symmetric K: the last LU
-                                         updated by the broken bonds / GMRES on it; the
-                                         downdate fields count the updates), "matrix-free",
+                                         "block downdate" / "lu update" / "gmres" (a
+                                         non-symmetric K: the last block factor downdated or
+                                         LU updated by the broken bonds / GMRES on it; the
+                                         downdate fields count them), "matrix-free",
                                          or "engine" (every solve by an iterative engine) */
     cupid_int solves, factorisations, cg_solves, cg_iterations, downdates, downdate_columns;
     double factor_s, cg_s, downdate_s;

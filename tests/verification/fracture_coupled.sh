@@ -97,6 +97,24 @@ print("fictitious bar cut through: collapse at step %d, held share %.3f, %d node
       % (f["collapse"]["step"], f["collapse"]["held_share"], f["held_nodes"], f["solves"]["resolve"]))
 assert f["collapse"]["held_share"] > 0.5 and f["held_nodes"] > 0 and f["solves"]["resolve"] in ("gmres", "lu update", "block downdate")
 PY
+# ... and the growth of the coupled SENB (examples/fracture, h = 5/3, 20 steps) by the block
+# factor (growth_block.c): the same steps, bonds and reactions, to the bit, on 1 and 2 threads
+# (the loops in a fixed order; OpenBLAS on one thread, as every test)
+S=$SRC/examples/fracture/senb_coupled.yaml
+for t in 1 2; do
+  OMP_NUM_THREADS=$t "$CUPID" run "$S" -o "fi_senb_$t" --quiet --set analysis.steps=20 \
+    --set "constraints[0].displacement.value=[-0.03, null, null]" --set peridynamics.spacing=1.6666666666666667 \
+    --set peridynamics.horizon=5.025 --set output.vtu=false --set output.plots=false \
+    --set 'coupling={method: fictitious}' && ok || bad "the fictitious SENB on $t threads"
+done
+cmp -s fi_senb_1/damage.csv fi_senb_2/damage.csv && ok || bad "the fictitious SENB's steps differ on 1 and 2 threads"
+"$PY" - <<'PY' && ok || bad "the fictitious SENB's re-solves"
+import json
+f = [json.load(open("fi_senb_%d/summary.json" % t))["fracture"] for t in (1, 2)]
+print("fictitious SENB, 1 / 2 threads: %d / %d bonds, re-solves %s" % (f[0]["broken_bonds"], f[1]["broken_bonds"], f[0]["solves"]["resolve"]))
+assert f[0]["broken_bonds"] == f[1]["broken_bonds"] > 0 and f[0]["solves"]["resolve"] == "block downdate"
+assert f[0]["peak_reactions"] == f[1]["peak_reactions"]
+PY
 # ... but not bond breaking in explicit dynamics: it has no explicit operator (a model error,
 # before anything is assembled; it was an unsupported-feature failure after the assembly)
 expect 1 'lagrange.yaml: --set peridynamics.fracture=\{critical_stretch: 1.0e-3\}: peridynamics.fracture: bond breaking in dynamics needs the method.s matrix-free explicit operator, which coupling method lagrange has not' -- "$CUPID" check "$M/lagrange.yaml" --set 'peridynamics.fracture={critical_stretch: 1.0e-3}' --set 'analysis={type: dynamic, dynamic: {dt: 1.0e-8, duration: 1.0e-7, integrator: central, lumped: true}}'
