@@ -348,6 +348,31 @@ cupid_status cupid_direct_factor_weakest_dof(const cupid_direct_factor F, cupid_
   return CUPID_SUCCESS;
 }
 
+/* CHOLMOD's solve of nrhs columns (column after column, n each): one pass over the factor for
+ * all of them (supernodal: BLAS-3 triangular solves; simplicial: up to four columns a sweep). */
+static cupid_status cholmod_solve_columns(cupid_direct_factor F, cupid_int nrhs, const double *b,
+                                          double *x) {
+  const size_t n = (size_t)F->n;
+  cholmod_dense B;
+  memset(&B, 0, sizeof B);
+  B.nrow = B.d = n;
+  B.ncol = (size_t)nrhs;
+  B.nzmax = n * (size_t)nrhs;
+  B.x = (double *)b;
+  B.xtype = CHOLMOD_REAL;
+  B.dtype = CHOLMOD_DOUBLE;
+  cholmod_dense *X = cholmod_l_solve(CHOLMOD_A, F->L, &B, &F->cc);
+  if (!X || F->cc.status < CHOLMOD_OK) {
+    cholmod_l_free_dense(&X, &F->cc);
+    return CUPID_ERROR(F->cc.status == CHOLMOD_OUT_OF_MEMORY ? CUPID_ERR_MEMORY : CUPID_ERR_INTERNAL,
+                       "CHOLMOD solve of %lld right-hand side(s) failed (status %d)", (long long)nrhs,
+                       F->cc.status);
+  }
+  memcpy(x, X->x, n * (size_t)nrhs * sizeof *x);
+  cholmod_l_free_dense(&X, &F->cc);
+  return CUPID_SUCCESS;
+}
+
 cupid_status cupid_direct_factor_solve_free(cupid_direct_factor F, const double *b, double *x) {
   CUPID_CHECK(F && b && x, CUPID_ERR_ARGUMENT, "cupid_direct_factor_solve_free: NULL argument");
   if (F->kind == CUPID_MATRIX_GENERAL) {
@@ -357,21 +382,7 @@ cupid_status cupid_direct_factor_solve_free(cupid_direct_factor F, const double 
     CUPID_CHECK(s == UMFPACK_OK, CUPID_ERR_INTERNAL, "UMFPACK solve failed (status %ld)", (long)s);
     return CUPID_SUCCESS;
   }
-  cholmod_dense B;
-  memset(&B, 0, sizeof B);
-  B.nrow = B.nzmax = B.d = (size_t)F->n;
-  B.ncol = 1;
-  B.x = (double *)b;
-  B.xtype = CHOLMOD_REAL;
-  B.dtype = CHOLMOD_DOUBLE;
-  cholmod_dense *X = cholmod_l_solve(CHOLMOD_A, F->L, &B, &F->cc);
-  if (!X || F->cc.status < CHOLMOD_OK) {
-    cholmod_l_free_dense(&X, &F->cc);
-    return CUPID_ERROR(CUPID_ERR_INTERNAL, "CHOLMOD solve failed (status %d)", F->cc.status);
-  }
-  memcpy(x, X->x, (size_t)F->n * sizeof *x);
-  cholmod_l_free_dense(&X, &F->cc);
-  return CUPID_SUCCESS;
+  return cholmod_solve_columns(F, 1, b, x);
 }
 
 cupid_status cupid_direct_factor_solve_free_many(cupid_direct_factor F, cupid_int nrhs,
@@ -385,26 +396,7 @@ cupid_status cupid_direct_factor_solve_free_many(cupid_direct_factor F, cupid_in
       CUPID_CALL(cupid_direct_factor_solve_free(F, b + (size_t)c * n, x + (size_t)c * n));
     return CUPID_SUCCESS;
   }
-  /* CHOLMOD: one pass over the factor for every column (supernodal: BLAS-3 triangular solves;
-   * simplicial: up to four columns a sweep) */
-  cholmod_dense B;
-  memset(&B, 0, sizeof B);
-  B.nrow = B.d = n;
-  B.ncol = (size_t)nrhs;
-  B.nzmax = n * (size_t)nrhs;
-  B.x = (double *)b;
-  B.xtype = CHOLMOD_REAL;
-  B.dtype = CHOLMOD_DOUBLE;
-  cholmod_dense *X = cholmod_l_solve(CHOLMOD_A, F->L, &B, &F->cc);
-  if (!X || F->cc.status < CHOLMOD_OK) {
-    cholmod_l_free_dense(&X, &F->cc);
-    return CUPID_ERROR(F->cc.status == CHOLMOD_OUT_OF_MEMORY ? CUPID_ERR_MEMORY : CUPID_ERR_INTERNAL,
-                       "CHOLMOD solve of %lld right-hand sides failed (status %d)", (long long)nrhs,
-                       F->cc.status);
-  }
-  memcpy(x, X->x, n * (size_t)nrhs * sizeof *x);
-  cholmod_l_free_dense(&X, &F->cc);
-  return CUPID_SUCCESS;
+  return cholmod_solve_columns(F, nrhs, b, x);
 }
 
 /* Row indices ascending within each column (insertion sort: a column holds a few entries). */
