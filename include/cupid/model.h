@@ -45,6 +45,20 @@ typedef struct {
 /** 1 if point p lies in the box, with tolerance @p tol on every bound. */
 int cupid_box_contains(const cupid_box *box, const double p[3], double tol);
 
+/** The shape of a PD region or hole (peridynamics.regions[k], peridynamics.holes[k]; issue 35). */
+typedef enum { CUPID_SHAPE_BOX = 0, CUPID_SHAPE_CYLINDER = 1, CUPID_SHAPE_SPHERE = 2 } cupid_shape_kind;
+typedef struct {
+  cupid_shape_kind kind;
+  int axis;         /**< cylinder: 0 x, 1 y, 2 z */
+  double center[3]; /**< sphere: the centre; cylinder: a point of the axis (its axis entry 0) */
+  double radius;    /**< cylinder, sphere */
+  cupid_box box;    /**< box: the box; cylinder, sphere: the bounding box (a cylinder's ends
+                         from/to along the axis, unbounded there when not given) */
+} cupid_shape;
+
+/** 1 if point p lies in the shape (on its surface counts as inside). */
+int cupid_shape_contains(const cupid_shape *shape, const double p[3]);
+
 typedef struct {
   char *name;
   int orthotropic;  /**< 0: isotropic (E, nu); 1: orthotropic (Ex.., nu_xy.., Gxy..) */
@@ -105,9 +119,11 @@ typedef enum {
 } cupid_surface_correction;
 
 typedef struct {
-  cupid_box box; /**< lo < hi on every axis given; for dimension 1 only y is set */
+  cupid_box box; /**< lo < hi on every axis given; for dimension 1 only y is set; a cylinder's
+                      or sphere's bounding box */
+  cupid_shape shape; /**< CUPID_SHAPE_BOX (box the same), or a cylinder or sphere */
   int material;  /**< index into materials: the region's, else peridynamics.material, else the
-                      only material */
+                      only material (unused for holes) */
   cupid_mark mark;
 } cupid_pd_region;
 
@@ -160,6 +176,8 @@ typedef struct {
   int material;    /**< default region material, -1 if not given */
   cupid_pd_region *regions;
   int n_regions;
+  cupid_pd_region *holes; /**< removed from every region (peridynamics.holes) */
+  int n_holes;
   cupid_precrack *precracks;
   int n_precracks;
   cupid_fracture fracture;

@@ -37,6 +37,13 @@ typedef struct {
    *  balanced split: a second grid cut like another grid's slab (the extended grid of the
    *  fictitious-node coupling). */
   double own_z[2];
+  /** Shapes (issue 35): NULL, or one per box, the box then its bounding box (a cylinder's or a
+   *  sphere's cells are those whose centres lie in it; its bounds need not be on the lattice,
+   *  which is anchored at the boxes' lowest corner when some region is a box); and holes,
+   *  whose cells (centres) are removed from every box. */
+  const cupid_shape *shapes;
+  int n_holes;
+  const cupid_shape *holes;
 } cupid_pd_grid_options;
 
 /* cupid_pd_grid_partition, where a grid sits in the whole union, is in solvers.h (the

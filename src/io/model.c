@@ -123,6 +123,7 @@ void cupid_model_destroy(cupid_model *model) {
   cupid_free(&b->section_elements);
   cupid_free(&b->section_element_material);
   cupid_free(&m->pd.regions);
+  cupid_free(&m->pd.holes);
   cupid_free(&m->pd.precracks);
   for (int i = 0; i < m->n_constraints; i++) values_clear(m->constraints[i].value, 3);
   cupid_free(&m->constraints);
@@ -200,4 +201,15 @@ int cupid_box_contains(const cupid_box *box, const double p[3], double tol) {
   for (int a = 0; a < 3; a++)
     if (box->has[a] && (p[a] < box->lo[a] - tol || p[a] > box->hi[a] + tol)) return 0;
   return 1;
+}
+
+int cupid_shape_contains(const cupid_shape *shape, const double p[3]) {
+  if (!cupid_box_contains(&shape->box, p, 0.0)) return 0;
+  double r2 = 0.0;
+  for (int a = 0; a < 3; a++) {
+    if (shape->kind == CUPID_SHAPE_CYLINDER && a == shape->axis) continue;
+    const double d = p[a] - shape->center[a];
+    r2 += d * d;
+  }
+  return shape->kind == CUPID_SHAPE_BOX || r2 <= shape->radius * shape->radius;
 }

@@ -426,18 +426,85 @@ static cupid_status read_beam(model_reader *rd, yaml_node_t *node) {
 
 /* --------------------------------------------------------------------------- peridynamics */
 
-static cupid_status read_region(model_reader *rd, yaml_node_t *node, const char *path,
-                                cupid_pd_region *r) {
-  static const char *const keys[] = {"x", "y", "z", "material"};
+/* A cylinder {axis, center: [a, b], radius, from, to} (center in the plane normal to the axis,
+ * in the order x, y, z less the axis) or a sphere {center: [x, y, z], radius} into s, with its
+ * bounding box. A cylinder without from/to runs through the body along its axis (allowed for
+ * holes only: @p need_ends). */
+static cupid_status read_round(model_reader *rd, yaml_node_t *node, const char *path, int cylinder,
+                               int need_ends, cupid_shape *s) {
+  static const char *const ckeys[] = {"axis", "center", "radius", "from", "to"};
+  static const char *const skeys[] = {"center", "radius"};
+  static const char *const axes[] = {"x", "y", "z"};
+  mr_map map;
+  char p[PATH_SIZE];
+  CUPID_CALL(mr_map_open(rd, node, path, cylinder ? ckeys : skeys, cylinder ? 5 : 2, &map));
+  memset(s, 0, sizeof *s);
+  s->kind = cylinder ? CUPID_SHAPE_CYLINDER : CUPID_SHAPE_SPHERE;
+  yaml_node_t *v;
+  if (cylinder) {
+    CUPID_CALL(mr_require(rd, &map, "axis", &v));
+    mr_path(p, path, "axis");
+    CUPID_CALL(mr_enum(rd, v, p, axes, 3, &s->axis));
+  }
+  CUPID_CALL(mr_require(rd, &map, "center", &v));
+  mr_path(p, path, "center");
+  double c[3] = {0.0, 0.0, 0.0};
+  CUPID_CALL(mr_numbers(rd, v, p, cylinder ? 2 : 3, cylinder ? "[a, b] (the axis point, x y z less the axis)" : "[x, y, z]", c));
+  for (int a = 0, t = 0; a < 3; a++)
+    if (!cylinder || a != s->axis) s->center[a] = c[t++];
+  CUPID_CALL(mr_require(rd, &map, "radius", &v));
+  mr_path(p, path, "radius");
+  CUPID_CALL(mr_positive(rd, v, p, &s->radius));
+  for (int a = 0; a < 3; a++) {
+    s->box.has[a] = 1;
+    s->box.lo[a] = s->center[a] - s->radius;
+    s->box.hi[a] = s->center[a] + s->radius;
+  }
+  if (!cylinder) return CUPID_SUCCESS;
+  yaml_node_t *from = mr_get(&map, "from"), *to = mr_get(&map, "to");
+  const int ax = s->axis;
+  s->box.has[ax] = 0;
+  s->box.lo[ax] = -INFINITY;
+  s->box.hi[ax] = INFINITY;
+  if (!from && !to && !need_ends) return CUPID_SUCCESS; /* through the body */
+  if (!from || !to)
+    return mr_error(rd, map.node, path, "a cylinder %s needs both from and to (its ends along %s)",
+                    need_ends ? "region" : "hole with either end", axes[ax]);
+  mr_path(p, path, "from");
+  CUPID_CALL(mr_number(rd, from, p, &s->box.lo[ax]));
+  mr_path(p, path, "to");
+  CUPID_CALL(mr_number(rd, to, p, &s->box.hi[ax]));
+  if (!(s->box.lo[ax] < s->box.hi[ax]))
+    return mr_error(rd, to, p, "must be above from (%.15g), got %.15g", s->box.lo[ax], s->box.hi[ax]);
+  s->box.has[ax] = 1;
+  return CUPID_SUCCESS;
+}
+
+/* A region or hole's shape: a box {x, y, z} (a region: all three; a hole: at least one, the
+ * others unbounded), or one of {cylinder: {..}}, {sphere: {..}}. */
+static cupid_status read_shape(model_reader *rd, const mr_map *map, const char *path, int hole,
+                               cupid_pd_region *r) {
   static const char *const axes[] = {"x", "y", "z"};
   const cupid_peridynamics *pd = &rd->model->pd;
-  mr_map map;
-  mr_mark(node, path, &r->mark);
-  CUPID_CALL(mr_map_open(rd, node, path, keys, COUNT(keys), &map));
+  yaml_node_t *cyl = mr_get(map, "cylinder"), *sph = mr_get(map, "sphere");
+  int any_axis = 0;
+  for (int a = 0; a < 3; a++) any_axis |= mr_get(map, axes[a]) != NULL;
+  if (cyl || sph) {
+    if ((cyl && sph) || any_axis)
+      return mr_error(rd, map->node, path, "a %s is one shape: a box {x, y, z}, or {cylinder: "
+                      "{..}}, or {sphere: {..}}", hole ? "hole" : "region");
+    if (pd->dimension == 1)
+      return mr_error(rd, map->node, path, "cylinders and spheres need dimension 3");
+    char p[PATH_SIZE];
+    mr_path(p, path, cyl ? "cylinder" : "sphere");
+    CUPID_CALL(read_round(rd, cyl ? cyl : sph, p, cyl != NULL, !hole, &r->shape));
+    r->box = r->shape.box;
+    return CUPID_SUCCESS;
+  }
   for (int a = 0; a < 3; a++) {
     char p[PATH_SIZE];
     mr_path(p, path, axes[a]);
-    yaml_node_t *v = map.value[a];
+    yaml_node_t *v = mr_get(map, axes[a]);
     r->box.lo[a] = -INFINITY;
     r->box.hi[a] = INFINITY;
     r->box.has[a] = 0;
@@ -446,16 +513,34 @@ static cupid_status read_region(model_reader *rd, yaml_node_t *node, const char 
         return mr_error(rd, v, p, "dimension 1 regions take only y: [y0, y1] (a bar along y)");
       continue;
     }
+    if (!v && hole) continue;
     if (!v)
-      return mr_error(rd, map.node, path, "missing required key '%s' (%s)", axes[a],
+      return mr_error(rd, map->node, path, "missing required key '%s' (%s)", axes[a],
                       pd->dimension == 1 ? "a dimension 1 region is {y: [y0, y1]}"
-                                         : "a region needs x, y and z, each [min, max]");
+                                         : "a region needs x, y and z, each [min, max], or is "
+                                           "{cylinder: {..}} or {sphere: {..}}");
     double range[2];
     CUPID_CALL(mr_range(rd, v, p, 1, range));
     r->box.lo[a] = range[0];
     r->box.hi[a] = range[1];
     r->box.has[a] = 1;
   }
+  if (hole && !any_axis)
+    return mr_error(rd, map->node, path, "a hole is a box {x, y, z} (at least one axis), "
+                    "{cylinder: {..}} or {sphere: {..}}");
+  r->shape.kind = CUPID_SHAPE_BOX;
+  r->shape.box = r->box;
+  return CUPID_SUCCESS;
+}
+
+static cupid_status read_region(model_reader *rd, yaml_node_t *node, const char *path,
+                                cupid_pd_region *r) {
+  static const char *const keys[] = {"x", "y", "z", "material", "cylinder", "sphere"};
+  const cupid_peridynamics *pd = &rd->model->pd;
+  mr_map map;
+  mr_mark(node, path, &r->mark);
+  CUPID_CALL(mr_map_open(rd, node, path, keys, COUNT(keys), &map));
+  CUPID_CALL(read_shape(rd, &map, path, 0, r));
   yaml_node_t *material = mr_get(&map, "material");
   if (material) {
     char p[PATH_SIZE];
@@ -472,6 +557,31 @@ static cupid_status read_region(model_reader *rd, yaml_node_t *node, const char 
   }
   return mr_error(rd, map.node, path,
                   "no material: give peridynamics.material or material: in this region");
+}
+
+/* peridynamics.holes: shapes removed from every region. */
+static cupid_status read_holes(model_reader *rd, yaml_node_t *holes, cupid_peridynamics *pd) {
+  static const char *const keys[] = {"x", "y", "z", "cylinder", "sphere"};
+  int n;
+  CUPID_CALL(mr_list(rd, holes, "peridynamics.holes", 1, "shapes {x: [..], ..}, {cylinder: {..}}, "
+                     "{sphere: {..}}", &n));
+  if (n == 0) return CUPID_SUCCESS;
+  if (pd->dimension == 1)
+    return mr_error(rd, holes, "peridynamics.holes", "holes need dimension 3");
+  CUPID_CALL(cupid_calloc((size_t)n, sizeof *pd->holes, "PD holes", &pd->holes));
+  pd->n_holes = n;
+  for (int i = 0; i < n; i++) {
+    char p[PATH_SIZE];
+    mr_path_index(p, "peridynamics.holes", i);
+    yaml_node_t *node = mr_item(rd, holes, i);
+    cupid_pd_region *h = &pd->holes[i];
+    mr_map map;
+    mr_mark(node, p, &h->mark);
+    h->material = -1;
+    CUPID_CALL(mr_map_open(rd, node, p, keys, COUNT(keys), &map));
+    CUPID_CALL(read_shape(rd, &map, p, 1, h));
+  }
+  return CUPID_SUCCESS;
 }
 
 static cupid_status read_pd_options(model_reader *rd, const mr_map *map, cupid_peridynamics *pd) {
@@ -531,7 +641,8 @@ static cupid_status read_pd_options(model_reader *rd, const mr_map *map, cupid_p
 
 static cupid_status read_regions(model_reader *rd, yaml_node_t *regions, cupid_peridynamics *pd) {
   int n;
-  CUPID_CALL(mr_list(rd, regions, "peridynamics.regions", 0, "boxes {x: [..], y: [..], z: [..]}",
+  CUPID_CALL(mr_list(rd, regions, "peridynamics.regions", 0, "boxes {x: [..], y: [..], z: [..]}, "
+                     "{cylinder: {..}} or {sphere: {..}}",
                      &n));
   if (n == 0) return mr_error(rd, regions, "peridynamics.regions", "must list at least one region");
   CUPID_CALL(cupid_calloc((size_t)n, sizeof *pd->regions, "PD regions", &pd->regions));
@@ -810,7 +921,8 @@ static cupid_status read_pd_fracture(model_reader *rd, const mr_map *map, cupid_
 static cupid_status read_peridynamics(model_reader *rd, yaml_node_t *node) {
   static const char *const keys[] = {"spacing",   "horizon",   "model",    "influence",
                                      "partial_volume", "surface_correction", "dimension",
-                                     "area", "material", "regions", "precracks", "fracture"};
+                                     "area", "material", "regions", "holes", "precracks",
+                                     "fracture"};
   cupid_peridynamics *pd = &rd->model->pd;
   mr_map map;
   yaml_node_t *spacing, *horizon, *regions, *material;
@@ -836,6 +948,8 @@ static cupid_status read_peridynamics(model_reader *rd, yaml_node_t *node) {
     CUPID_CALL(mr_material(rd, material, "peridynamics.material", &pd->material));
   CUPID_CALL(mr_require(rd, &map, "regions", &regions));
   CUPID_CALL(read_regions(rd, regions, pd));
+  yaml_node_t *holes = mr_get(&map, "holes");
+  if (holes) CUPID_CALL(read_holes(rd, holes, pd));
   return read_pd_fracture(rd, &map, pd);
 }
 

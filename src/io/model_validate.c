@@ -61,6 +61,19 @@ cupid_status mr_validate(model_reader *rd, const mr_map *top) {
   if (m->has_coupling && !(m->has_beam && m->has_peridynamics))
     return mr_error(rd, mr_get(top, "coupling"), "coupling",
                     "only meaningful when the model has both beam and peridynamics");
+  if (m->has_coupling) { /* the couplings build their interfaces on box regions */
+    const cupid_peridynamics *pd = &m->pd;
+    for (int r = 0; r < pd->n_regions; r++)
+      if (pd->regions[r].shape.kind != CUPID_SHAPE_BOX)
+        return cupid_model_error(m, &pd->regions[r].mark,
+                                 "cylinder and sphere regions are for PD-only models so far: the "
+                                 "couplings build their interfaces on box regions (give the PD "
+                                 "region as a box, or model the body in PD alone)");
+    if (pd->n_holes > 0)
+      return cupid_model_error(m, &pd->holes[0].mark,
+                               "holes are for PD-only models so far: the couplings build their "
+                               "interfaces on whole box regions");
+  }
   const cupid_fracture *f = &m->pd.fracture;
   if (m->analysis.type != CUPID_ANALYSIS_STATIC && f->per_iteration_mark.line > 0)
     return cupid_model_error(m, &f->per_iteration_mark,

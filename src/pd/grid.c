@@ -35,24 +35,39 @@ static int bound_index(double value, double origin, double h, int axis, const ch
   return 1;
 }
 
+/* The box whose shape holds cell (i, j, k) of the lattice (origin, h), the first one when
+ * several do, or -1 (none, or a hole holds its centre). */
+static int cell_owner(const cupid_pd_grid_options *opts, int n_boxes, const cupid_int *range,
+                      const double origin[3], double h, cupid_int i, cupid_int j, cupid_int k) {
+  const cupid_int ijk[3] = {i, j, k};
+  double p[3];
+  for (int a = 0; a < 3; a++)
+    p[a] = (opts->dimension == 3 || a == 1) ? origin[a] + ((double)ijk[a] + 0.5) * h : 0.0;
+  int owner = -1;
+  for (int b = 0; b < n_boxes && owner < 0; b++) {
+    const cupid_int *r = range + 6 * b;
+    if (i >= r[0] && i < r[1] && j >= r[2] && j < r[3] && k >= r[4] && k < r[5] &&
+        (!opts->shapes || cupid_shape_contains(&opts->shapes[b], p)))
+      owner = b;
+  }
+  for (int q = 0; q < opts->n_holes && owner >= 0; q++)
+    if (cupid_shape_contains(&opts->holes[q], p)) owner = -1;
+  return owner;
+}
+
 /* Nodes of the union in each z layer [0, nk) of the bounding box (a cell is a node when some
  * box holds it), for splitting the layers into slabs. O(cells x boxes), no per-cell memory. */
-static cupid_status layer_counts(int n_boxes, const cupid_int *range, const cupid_int n[3],
+static cupid_status layer_counts(const cupid_pd_grid_options *opts, int n_boxes,
+                                 const cupid_int *range, const struct cupid_pd_grid_private *g,
                                  cupid_int **counts) {
+  const cupid_int *n = g->n;
   CUPID_CALL(cupid_calloc((size_t)n[2] + 1, sizeof **counts, "PD layer counts", counts));
   cupid_int *cnt = *counts;
 #pragma omp parallel for schedule(dynamic, 1)
   for (cupid_int k = 0; k < n[2]; k++) {
     cupid_int c = 0;
     for (cupid_int j = 0; j < n[1]; j++)
-      for (cupid_int i = 0; i < n[0]; i++)
-        for (int b = 0; b < n_boxes; b++) {
-          const cupid_int *r = range + 6 * b;
-          if (i >= r[0] && i < r[1] && j >= r[2] && j < r[3] && k >= r[4] && k < r[5]) {
-            c++;
-            break;
-          }
-        }
+      for (cupid_int i = 0; i < n[0]; i++) c += cell_owner(opts, n_boxes, range, g->origin, g->h, i, j, k) >= 0;
     cnt[k] = c;
   }
   return CUPID_SUCCESS;
@@ -78,7 +93,7 @@ static cupid_status apply_partition(const cupid_pd_grid_options *opts, int n_box
                        "layer (use fewer ranks)",
                        opts->parts, (long long)nk);
   cupid_int *cnt = NULL;
-  CUPID_CALL(layer_counts(n_boxes, range, g->n, &cnt));
+  CUPID_CALL(layer_counts(opts, n_boxes, range, g, &cnt));
   /* prefix: cnt[k] becomes the nodes of the layers below k */
   cupid_int total = 0;
   for (cupid_int k = 0; k <= nk; k++) {
@@ -172,7 +187,10 @@ cupid_status pd_grid_build(const cupid_pd_grid_options *opts, int n_boxes, const
   g->area = dim == 1 ? opts->area : h * h;
   g->volume = dim == 1 ? opts->area * h : h * h * h;
 
-  /* Lattice origin: the lowest corner of all boxes per axis. */
+  /* Lattice origin: the lowest corner of all boxes per axis (of the box-shaped ones when
+   * some are: a cylinder's or a sphere's bounding box need not be on the lattice). */
+  int any_box = 0;
+  for (int b = 0; b < n_boxes; b++) any_box |= !opts->shapes || opts->shapes[b].kind == CUPID_SHAPE_BOX;
   for (int a = 0; a < 3; a++) {
     int used = dim == 3 || a == 1;
     if (!used) {
@@ -188,8 +206,11 @@ cupid_status pd_grid_build(const cupid_pd_grid_options *opts, int n_boxes, const
         st = CUPID_ERR_MODEL;
         goto cleanup;
       }
-      if (boxes[b].lo[a] < lo) lo = boxes[b].lo[a];
+      const int is_box = !opts->shapes || opts->shapes[b].kind == CUPID_SHAPE_BOX;
+      if ((is_box || !any_box) && boxes[b].lo[a] < lo) lo = boxes[b].lo[a];
     }
+    for (int b = 0; opts->shapes && b < n_boxes; b++) /* whole cells down to the lowest shape */
+      if (boxes[b].lo[a] < lo) lo -= ceil((lo - boxes[b].lo[a]) / h - 1e-9) * h;
     g->origin[a] = lo;
   }
 
@@ -204,8 +225,11 @@ cupid_status pd_grid_build(const cupid_pd_grid_options *opts, int n_boxes, const
         continue;
       }
       cupid_int lo = 0, hi = 0;
-      if (!bound_index(boxes[b].lo[a], g->origin[a], h, a, "lower", msg, len, &lo) ||
-          !bound_index(boxes[b].hi[a], g->origin[a], h, a, "upper", msg, len, &hi)) {
+      if (opts->shapes && opts->shapes[b].kind != CUPID_SHAPE_BOX) { /* the cells it may hold */
+        lo = (cupid_int)floor((boxes[b].lo[a] - g->origin[a]) / h + 1e-9);
+        hi = (cupid_int)ceil((boxes[b].hi[a] - g->origin[a]) / h - 1e-9);
+      } else if (!bound_index(boxes[b].lo[a], g->origin[a], h, a, "lower", msg, len, &lo) ||
+                 !bound_index(boxes[b].hi[a], g->origin[a], h, a, "upper", msg, len, &hi)) {
         *bad_box = b;
         st = CUPID_ERR_MODEL;
         goto cleanup;
@@ -237,8 +261,16 @@ cupid_status pd_grid_build(const cupid_pd_grid_options *opts, int n_boxes, const
   for (cupid_int c = 0; c < ncell; c++) g->dense[c] = -1;
 
   /* Mark owners: the first box containing a cell gives its material (boxes in reverse so
-   * that earlier boxes overwrite later ones). dense holds the box index for now. */
-  for (int b = n_boxes - 1; b >= 0; b--) {
+   * that earlier boxes overwrite later ones). dense holds the box index for now. With shapes
+   * or holes, cell by cell (cell_owner). */
+  if (opts->shapes || opts->n_holes > 0) {
+#pragma omp parallel for schedule(static) if (ncell > PD_OMP_MIN_NODES)
+    for (cupid_int c = 0; c < ncell; c++) {
+      const cupid_int i = c % g->n[0], j = (c / g->n[0]) % g->n[1], k = c / (g->n[0] * g->n[1]);
+      g->dense[c] = cell_owner(opts, n_boxes, range, g->origin, h, i, j, k);
+    }
+  }
+  for (int b = n_boxes - 1; b >= 0 && !(opts->shapes || opts->n_holes > 0); b--) {
     const cupid_int *r = range + 6 * b;
     if (r[5] <= r[4]) continue; /* outside this slab */
 #pragma omp parallel for collapse(2) schedule(static) if ((r[5] - r[4]) * (r[3] - r[2]) * (r[1] - r[0]) > PD_OMP_MIN_NODES)
@@ -250,6 +282,32 @@ cupid_status pd_grid_build(const cupid_pd_grid_options *opts, int n_boxes, const
   for (cupid_int c = 0; c < ncell; c++)
     if (g->dense[c] >= 0) nn++;
   g->nnodes = nn;
+  for (int b = 0; opts->shapes && b < n_boxes; b++) { /* a shape between the cell centres */
+    if (opts->shapes[b].kind == CUPID_SHAPE_BOX || opts->parts > 1) continue;
+    const cupid_int *r = range + 6 * b;
+    int held = 0;
+    for (cupid_int k = r[4]; k < r[5] && !held; k++)
+      for (cupid_int j = r[2]; j < r[3] && !held; j++)
+        for (cupid_int i = r[0]; i < r[1] && !held; i++) {
+          const double p[3] = {g->origin[0] + ((double)i + 0.5) * h,
+                               g->origin[1] + ((double)j + 0.5) * h,
+                               g->origin[2] + ((double)k + 0.5) * h};
+          held = cupid_shape_contains(&opts->shapes[b], p);
+        }
+    if (!held) {
+      *bad_box = b;
+      snprintf(msg, len, "the %s holds no cell centre of the lattice (spacing %.15g): make it "
+               "larger, or the spacing smaller",
+               opts->shapes[b].kind == CUPID_SHAPE_CYLINDER ? "cylinder" : "sphere", h);
+      st = CUPID_ERR_MODEL;
+      goto cleanup;
+    }
+  }
+  if (nn == 0 && opts->parts <= 1) {
+    st = CUPID_ERROR(CUPID_ERR_MODEL, "the regions hold no node%s", opts->n_holes > 0
+                     ? ": the holes remove all of them" : "");
+    goto cleanup;
+  }
   if (opts->parts <= 1) {
     g->part = (cupid_pd_grid_partition){
         .global_nodes = nn, .owned_last = nn, .parts = 1,

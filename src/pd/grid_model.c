@@ -9,6 +9,7 @@ cupid_status cupid_pd_grid_create_part_from_model(const cupid_model_t *model, in
                                                   int halo_layers, cupid_pd_grid *grid) {
   cupid_status st = CUPID_SUCCESS;
   cupid_box *boxes = NULL;
+  cupid_shape *shapes = NULL, *holes = NULL;
   int *mats = NULL;
   *grid = NULL;
   CUPID_CHECK(model, CUPID_ERR_ARGUMENT, "no model");
@@ -17,8 +18,14 @@ cupid_status cupid_pd_grid_create_part_from_model(const cupid_model_t *model, in
     return cupid_model_error(model, &pd->mark, "the peridynamics section needs at least one region");
   CUPID_TRY(cupid_calloc((size_t)pd->n_regions, sizeof *boxes, "PD regions", &boxes));
   CUPID_TRY(cupid_calloc((size_t)pd->n_regions, sizeof *mats, "PD region materials", &mats));
+  CUPID_TRY(cupid_calloc((size_t)pd->n_regions, sizeof *shapes, "PD region shapes", &shapes));
+  CUPID_TRY(cupid_calloc((size_t)pd->n_holes + 1, sizeof *holes, "PD holes", &holes));
+  int any_shape = pd->n_holes > 0;
+  for (int q = 0; q < pd->n_holes; q++) holes[q] = pd->holes[q].shape;
   for (int r = 0; r < pd->n_regions; r++) {
     boxes[r] = pd->regions[r].box;
+    shapes[r] = pd->regions[r].shape;
+    any_shape |= shapes[r].kind != CUPID_SHAPE_BOX;
     mats[r] = pd->regions[r].material >= 0 ? pd->regions[r].material : pd->material;
     if (mats[r] < 0 || mats[r] >= model->n_materials) {
       st = cupid_model_error(model, &pd->regions[r].mark,
@@ -29,7 +36,10 @@ cupid_status cupid_pd_grid_create_part_from_model(const cupid_model_t *model, in
   }
   cupid_pd_grid_options opts = {.spacing = pd->spacing, .dimension = pd->dimension,
                                 .area = pd->area, .parts = parts, .part = part,
-                                .halo_layers = halo_layers};
+                                .halo_layers = halo_layers,
+                                .shapes = any_shape ? shapes : NULL,
+                                .n_holes = pd->n_holes,
+                                .holes = holes};
   char msg[512];
   int bad = -1;
   st = pd_grid_build(&opts, pd->n_regions, boxes, mats, &bad, msg, sizeof msg, grid);
@@ -40,6 +50,8 @@ cupid_status cupid_pd_grid_create_part_from_model(const cupid_model_t *model, in
   }
 cleanup:
   cupid_free(&boxes);
+  cupid_free(&shapes);
+  cupid_free(&holes);
   cupid_free(&mats);
   return st;
 }

@@ -5,7 +5,9 @@
  *    (L defaults to the horizon: the usual fictitious-layer thickness in PD);
  *  - fix / displacement: nodes whose centre lies in the box;
  *  - traction on the plane y = Y: the nodes whose cell has a face on the plane that is a
- *    free surface of the grid, each loaded with t * (face area inside the patch);
+ *    free surface of the grid, each loaded with t * (face area inside the patch); on a body
+ *    with a cylinder or sphere region or holes, the areas scaled so that they sum to the true
+ *    section's (issue 35: its cells are those whose centres lie in it);
  *  - point: the node whose cell contains the point;
  *  - body: force per unit volume times the cell volume, for the nodes in the box. */
 #include <math.h>
@@ -155,29 +157,105 @@ static int on_free_face(const cupid_problem_state *prob, cupid_int node, double 
   return cupid_pd_grid_node_at(prob->grid, ijk[0], across, ijk[2]) < 0;
 }
 
+/* A body with a cylinder or sphere region, or holes (issue 35): its cells are those whose
+ * centres lie in it, so the cell faces on a plane cover its true section there only nearly. */
+static int shaped_body(const cupid_model_t *m) {
+  int shaped = m->pd.n_holes > 0;
+  for (int r = 0; r < m->pd.n_regions; r++) shaped |= m->pd.regions[r].shape.kind != CUPID_SHAPE_BOX;
+  return shaped;
+}
+
+/* 1 if p lies in some region's shape and in no hole. */
+static int in_body(const cupid_model_t *m, const double p[3]) {
+  int in = 0;
+  for (int r = 0; r < m->pd.n_regions && !in; r++) in = cupid_shape_contains(&m->pd.regions[r].shape, p);
+  for (int q = 0; q < m->pd.n_holes && in; q++) in = !cupid_shape_contains(&m->pd.holes[q].shape, p);
+  return in;
+}
+
+/* Samples of the true section: at most about TRUE_AREA_SAMPLES, at most 64 per spacing and
+ * direction (a curved edge's area to ~h / 128 of its length) */
+#define TRUE_AREA_SAMPLES 4.0e6
+
+/* The area of the body's true section on the plane y = Y within the patch, on the side of the
+ * loaded faces (side: +1 the body below the plane, -1 above), over [lo, hi] in x and z (the
+ * loaded faces and a spacing and a half around them, on the lattice's planes): the midpoints of
+ * a grid of h / s. Its lines fall on the lattice's planes, so that a box's edges (on them)
+ * are counted exactly. */
+static double true_section_area(const cupid_model_t *m, const cupid_load *l, int side,
+                                const double lo[2], const double hi[2], double h) {
+  const double Y = l->plane_y - side * 1e-6 * h;
+  const cupid_int c0 = (cupid_int)llround((hi[0] - lo[0]) / h), c1 = (cupid_int)llround((hi[1] - lo[1]) / h);
+  cupid_int sub = (cupid_int)floor(sqrt(TRUE_AREA_SAMPLES / ((double)c0 * (double)c1)));
+  sub = sub < 2 ? 2 : sub > 64 ? 64 : sub;
+  const cupid_int n0 = c0 * sub, n1 = c1 * sub;
+  const double d = h / (double)sub;
+  cupid_int hits = 0; /* counted, so that the area has the same bits for any thread count */
+#pragma omp parallel for reduction(+ : hits) schedule(static)
+  for (cupid_int b = 0; b < n1; b++)
+    for (cupid_int a = 0; a < n0; a++) {
+      const double p[3] = {lo[0] + ((double)a + 0.5) * d, Y, lo[1] + ((double)b + 0.5) * d};
+      if ((l->patch.has[0] && (p[0] < l->patch.lo[0] || p[0] > l->patch.hi[0])) ||
+          (l->patch.has[2] && (p[2] < l->patch.lo[2] || p[2] > l->patch.hi[2])))
+        continue;
+      hits += in_body(m, p);
+    }
+  return (double)hits * d * d;
+}
+
 static cupid_status traction_load(cupid_problem_state *prob, const cupid_load *l, double *f) {
   const cupid_model_t *m = prob->model;
   const double *x = cupid_pd_grid_coords(prob->grid);
   const int *mat = cupid_pd_grid_materials(prob->grid);
   double h = cupid_pd_grid_spacing(prob->grid);
   int dim = cupid_pd_grid_dimension(prob->grid);
+  /* the loaded faces; on a shaped body their areas are scaled to the true section's (a
+   * traction on a cylinder's end face sums to t pi r^2): their extent and the body's side */
+  const int shaped = dim == 3 && shaped_body(m);
   cupid_int count = 0;
+  double lattice_area = 0.0, ext[6] = {-INFINITY, -INFINITY, -INFINITY, -INFINITY, 0.0, 0.0};
   for (cupid_int i = 0; i < prob->n_pd; i++) {
     if (!on_free_face(prob, i, l->plane_y)) continue;
     const double *p = x + 3 * i;
-    double a = face_area(l, p, h, dim, m->pd.area);
-    if (a <= 0) continue;
-    count += cupid_problem_pd_owned(prob, i);
-    for (int c = 0; c < 3; c++)
-      f[3 * i + c] +=
-          a * cupid_value_eval(&l->value[c], p[0], l->plane_y, p[2], prob->time,
-                               m->materials[mat[i]].density);
+    const double a = face_area(l, p, h, dim, m->pd.area);
+    if (a <= 0 || !cupid_problem_pd_owned(prob, i)) continue;
+    count++;
+    lattice_area += a;
+    ext[p[1] < l->plane_y ? 4 : 5] = 1.0; /* the body below the plane (+y faces), or above */
+    for (int k = 0; k < 2; k++) { /* x, z: -lo and hi, a spacing and a half around */
+      ext[k] = fmax(ext[k], -(p[2 * k] - 1.5 * h));
+      ext[2 + k] = fmax(ext[2 + k], p[2 * k] + 1.5 * h);
+    }
   }
   if (cupid_problem_global_count(prob, count) == 0)
     return cupid_model_error(m, &l->mark,
                              "no free PD surface lies on the plane y = %g%s (a traction acts on "
                              "an end face of a PD region)",
                              l->plane_y, l->patch.has[0] || l->patch.has[2] ? " inside the patch" : "");
+  double scale = 1.0;
+  if (shaped) {
+    if (prob->slab) {
+      cupid_petsc_max_doubles(ext, 6);
+      cupid_petsc_sum_doubles(&lattice_area, 1);
+    }
+    if (ext[4] > 0.0 && ext[5] > 0.0)
+      return cupid_model_error(m, &l->mark,
+                               "the plane y = %g is a free surface on both sides of the body (a "
+                               "traction acts on one end face: give a patch x/z that selects it)",
+                               l->plane_y);
+    const double lo[2] = {-ext[0], -ext[1]}, hi[2] = {ext[2], ext[3]};
+    scale = true_section_area(m, l, ext[4] > 0.0 ? 1 : -1, lo, hi, h) / lattice_area;
+  }
+  for (cupid_int i = 0; i < prob->n_pd; i++) {
+    if (!on_free_face(prob, i, l->plane_y)) continue;
+    const double *p = x + 3 * i;
+    const double a = face_area(l, p, h, dim, m->pd.area) * scale;
+    if (a <= 0) continue;
+    for (int c = 0; c < 3; c++)
+      f[3 * i + c] +=
+          a * cupid_value_eval(&l->value[c], p[0], l->plane_y, p[2], prob->time,
+                               m->materials[mat[i]].density);
+  }
   return CUPID_SUCCESS;
 }
 

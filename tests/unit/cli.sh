@@ -81,6 +81,9 @@ expect 1 'point_outside.yaml:[0-9]+:[0-9]+: output.points\[0\].*outside' -- "$CU
 expect 1 'traction_no_face.yaml:[0-9]+:[0-9]+: loads\[0\].*no free PD surface' -- "$CUPID" run "$M/traction_no_face.yaml" -o o6
 expect 1 'point_load_outside.yaml:[0-9]+:[0-9]+: loads\[0\].*outside every PD region' -- "$CUPID" run "$M/point_load_outside.yaml" -o o7
 expect 1 'off_lattice.yaml:[0-9]+:[0-9]+: peridynamics.regions\[1\]' -- "$CUPID" run "$M/off_lattice.yaml" -o o8
+# shapes (issue 35): a sphere between the lattice's cell centres; holes that remove the body
+expect 1 'shape_no_centre.yaml:[0-9]+:[0-9]+: peridynamics.regions\[1\]: the sphere holds no cell centre of the lattice' -- "$CUPID" check "$M/shape_no_centre.yaml"
+expect 1 'hole_removes_all.yaml:[0-9]+:[0-9]+: peridynamics: the regions hold no node: the holes remove all of them' -- "$CUPID" run "$M/hole_removes_all.yaml" -o o8
 # Arlequin: PD regions may touch but not share a volume, and no face may meet the beam and
 # another region (a re-entrant corner facing the beam)
 expect 1 'arlequin_regions_overlap.yaml:[0-9]+:[0-9]+: peridynamics.regions\[1\]: this PD region shares a volume with PD region 0' -- "$CUPID" run "$M/arlequin_regions_overlap.yaml" -o o8

@@ -247,6 +247,35 @@ static const bad_case cases[] = {
      "energy_release_rate (G0): it needs criterion: stretch with energy_release_rate, not "
      "critical_stretch",
      NULL},
+    /* shapes and holes (issue 35) */
+    {"shape_coupled.yaml",
+     "15:7: peridynamics.regions[0]: cylinder and sphere regions are for PD-only models so far: "
+     "the couplings build their interfaces on box regions",
+     NULL},
+    {"shape_cylinder_axis.yaml",
+     "8:25: peridynamics.regions[0].cylinder.axis: must be one of x | y | z, got 'w'", NULL},
+    {"shape_cylinder_no_ends.yaml",
+     "8:18: peridynamics.regions[0].cylinder: a cylinder region needs both from and to (its ends "
+     "along z)",
+     NULL},
+    {"shape_radius_negative.yaml",
+     "8:52: peridynamics.regions[0].cylinder.radius: must be > 0, got -2", NULL},
+    {"shape_sphere_center.yaml",
+     "8:25: peridynamics.regions[0].sphere.center: must be a list of 3 numbers [x, y, z], got 2 "
+     "items",
+     NULL},
+    {"shape_two_shapes.yaml",
+     "8:7: peridynamics.regions[0]: a region is one shape: a box {x, y, z}, or {cylinder: {..}}, "
+     "or {sphere: {..}}",
+     NULL},
+    {"hole_cylinder_one_end.yaml",
+     "10:18: peridynamics.holes[0].cylinder: a cylinder hole with either end needs both from and "
+     "to (its ends along z)",
+     NULL},
+    {"hole_empty.yaml",
+     "10:7: peridynamics.holes[0]: a hole is a box {x, y, z} (at least one axis), {cylinder: "
+     "{..}} or {sphere: {..}}",
+     NULL},
     {"output_checkpoint_negative.yaml",
      "13:15: output.checkpoint: must be seconds between checkpoints, from 0 (none) to 1e9",
      NULL},
