@@ -9,10 +9,11 @@
  *   K' = [A  B ]   A = K_pp (CHOLMOD, downdated as bonds break),  B = K_pf,
  *        [C' D']   C' = K_fp - W_f C_p^T,  D' = K_ff - W_f C_f^T  (balance.c; W = 0 unbalanced),
  *
- * and a solve is y = A^-1 r_p, x_f = S^-1 (r_f - C' y), x_p = y - A^-1 B x_f, with the Schur
- * complement S = D' - C' A^-1 B on the FE DOFs: two solves with the Cholesky factor, which holds
- * half of an LU's entries. C' has few rows (the interface FE nodes' fits, nic: 162 on the SENB)
- * and B few columns (the fictitious elements' FE DOFs, nib: 648), so
+ * and a solve is x_f = S^-1 (r_f - C' A^-1 r_p), x_p = A^-1 (r_p - B x_f), with the Schur
+ * complement S = D' - C' A^-1 B on the FE DOFs. C' has few rows (the interface FE nodes' fits
+ * and W's rows, nic: 162 on the SENB) and B few columns (the fictitious elements' FE DOFs, nib:
+ * 648): G = A^-1 C'^T (nic columns) is kept, so that C' A^-1 r_p = G^T r_p and a solve costs
+ * one solve with the Cholesky factor (which holds half of an LU's entries), and
  *
  *   S = D' - U E V^T,   E = (C' A^-1 B)(ic, ib)  (nic x nib, dense),
  *   S^-1 = D'^-1 + Y H^-1 E V^T D'^-1,   Y = D'^-1 U,   H = I - E Y(ib, :)  (nic x nic)
@@ -22,9 +23,10 @@
  * outside the coupling zone changes A alone, by -v v^T (growth_downdate.c; docs/theory.md): the
  * factor is downdated (cholmod_updown), and with Z = A^-1 V on the downdated A,
  *
- *   A_old^-1 = A^-1 - Z (I + V^T Z)^-1 Z^T,   so   E += (C' Z)(I + V^T Z)^-1 (B^T Z)^T,
+ *   A_old^-1 = A^-1 - Z N Z^T, N = (I + V^T Z)^-1,  so  G += Z N (C' Z)^T,
+ *   E += (C' Z) N (B^T Z)^T,
  *
- * a rank-k change, after which H is updated and its LU made again (nic^3 / 3). A round costs its
+ * rank-k changes, after which H is updated and its LU made again (nic^3 / 3). A round costs its
  * downdate (as Arlequin's) and one solve with k right-hand sides; nothing grows with the bonds
  * broken, where Sherman-Morrison-Woodbury on an LU of the whole K (growth_smw.c) kept a column
  * of n per bond and solved each with the LU. Every loop has a fixed order (no threaded

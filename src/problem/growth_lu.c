@@ -7,8 +7,8 @@
  * a small capacitance on the interface (the balance's W C^T folded in). A round costs its
  * downdate and one solve with the round's columns; every re-solve is one step
  * x += M^-1 (f - K x) on the current K, checked by its residual (GMRES from there if a node
- * held since the factorisation made it inexact). On the SENB at h = 1, 20 steps: 28 s and 358
- * MB against Arlequin's 21 s and 310 MB (bench/README.md).
+ * held since the factorisation made it inexact). On the SENB at h = 1, 20 steps: 28.3 s and
+ * 0.37 GB against Arlequin's 20.2 s and 0.31 GB (bench/README.md).
  *
  * Where K is not two such blocks (a PD block that is not symmetric, a singular beam block) the
  * factor is UMFPACK's LU of the whole K. SuiteSparse cannot downdate an LU, but a bond broken
@@ -121,8 +121,8 @@ static cupid_status factorise(cupid_problem_state *prob, cupid_growth_lu *s,
       cupid_int nic = 0, nib = 0;
       const cupid_int ns = cupid_growth_block_interface(s->M, &nic, &nib);
       cupid_problem_progress(prob, "growth: block elimination: CHOLMOD of the PD block (%lld "
-                             "equations), the LU of the Schur complement on the %lld free FE "
-                             "DOFs (interface %lld x %lld); factor %.3g M entries",
+                             "equations), the LU of the %lld free FE DOFs' block and an "
+                             "interface of %lld x %lld; factors %.3g M entries",
                              (long long)(info.n - ns), (long long)ns, (long long)nic,
                              (long long)nib, info.nnz_factor / 1e6);
     }
@@ -136,8 +136,9 @@ static cupid_status factorise(cupid_problem_state *prob, cupid_growth_lu *s,
   s->bonds_at_factor = prob->broken_bonds;
   s->factor_flops = info.flops_factor;
   const double nnz_k = (double)prob->K->rowptr[prob->K->nrows] * prob->K->bs * prob->K->bs;
-  /* a block solve is two with the Cholesky factor (4 passes) and one with S's LU */
-  s->iteration_flops = (s->M ? 8.0 : 4.0) * info.nnz_factor + 2.0 * nnz_k;
+  /* a solve reads the factor twice (forward, back; the block factor's Cholesky factor once
+   * each, with the beam block's small LU) and K once */
+  s->iteration_flops = 4.0 * info.nnz_factor + 2.0 * nnz_k;
   s->since_factor = 0;
   s->updates_since = 0;
   if (B && s->F) CUPID_CALL(cupid_coupling_balance_smw_create(B, s->F, prob->bc, &s->smw));
