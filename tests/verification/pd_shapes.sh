@@ -7,9 +7,11 @@
 #    the section's samples), and the strain between y = 20.5 and 40.5 is within 2% of t / E
 #    (measured -1.4%: the lattice's section is 1.9% larger than the disc, so the rod is
 #    stiffer by about that until cut cells get their partial volumes);
-#  - a 60 x 60 x 3 plate with a hole (r = 8) in tension: no node in the hole, the load t x 180
-#    exactly (a box face: scale 1), equilibrium; the largest y-strain at the hole's side against
-#    the far field reported (Kirsch: 3 for the stress in an infinite plate).
+#  - a 60 x 60 x 3 plate with a hole (r = 8, LPS with the surface correction) in tension: no
+#    node in the hole, the load t x 180 exactly (a box face: scale 1), equilibrium; the far
+#    field's y-strain within 5% of t / E (measured -3.5%) and the largest at the hole's side
+#    2.6-3.6 times it (measured 2.94 through the thickness; Heywood's gross Kt for d / W = 0.27 is 3.26, Kirsch's 3 in
+#    an infinite plate; the node half a spacing off the edge, PD smoothing over the horizon).
 . "$(dirname "$0")/../tools/checks.sh"
 PY=${CUPID_SYSTEM_PYTHON:-/usr/bin/python3}
 M=$SRC/tests/models/shapes
@@ -44,9 +46,12 @@ assert max(abs(v) for v in imb) <= 1e-10 * 18000, imb  # |R + P| in N
 u = {(float(r["x"]), float(r["y"]), float(r["z"])): float(r["uy"]) for r in rows}
 def strain_at(x, y):  # central difference over the cells at y +- 1, averaged through z
     return sum((u[(x, y + 1, z)] - u[(x, y - 1, z)]) / 2 for z in (0.5, 1.5, 2.5)) / 3
-side, far = strain_at(38.5, 29.5), strain_at(2.5, 45.5)
-print("plate with a hole: %d nodes; y-strain at the hole's side / far field = %.2f (Kirsch's "
-      "stress ratio 3 in an infinite plate)" % (len(rows), side / far))
-assert side / far > 1.5
+far = sum(strain_at(x + 0.5, y + 0.5) for x in range(60) for y in range(45, 55)) / 600
+side = max(strain_at(x, y) for x in (21.5, 38.5) for y in (29.5, 30.5))
+print("plate with a hole: %d nodes; far-field y-strain / (t / E) = %.4f; at the hole's side %.2f "
+      "times the far field (Heywood's gross Kt 3.26 at d / W = 0.27, Kirsch's 3 in an infinite "
+      "plate)" % (len(rows), far / (100 / 70000), side / far))
+assert abs(far / (100 / 70000) - 1) <= 0.05  # measured -3.5% (3 cells thick: Poisson, surfaces)
+assert 2.6 <= side / far <= 3.6  # measured 2.94, half a spacing off the edge, smoothed over delta
 PY
 finish pd_shapes
