@@ -54,7 +54,9 @@ typedef struct {
  * cupid_pd_grid_partition; more parts than z layers is CUPID_ERR_MODEL): the lattice is anchored at the lowest corner of all
  * boxes, nodes sit at cell centres, a cell belongs to the union when its centre lies in
  * some box (first box wins for the material). Box bounds must lie on the lattice (error
- * names the box and bound otherwise). @p materials gives one material index per box.
+ * names the box and bound otherwise); with opts->shapes, a cylinder's or a sphere's cells are
+ * those whose centres lie in it, and opts->holes remove theirs. @p materials gives one
+ * material index per box.
  * Boxes with no node are an error. For dimension 1 only the y bounds are used.
  * Bound check tolerance 1e-9 h. Nodes are numbered lexicographically by cell (i, j, k)
  * with x fastest and z slowest. The bounding box may hold at most 2^31 cells (a dense

@@ -1,4 +1,5 @@
-/* The uniform PD grid of a union of boxes (paper 000 section 2.2: nodes at cell centres). */
+/* The uniform PD grid of a union of boxes (paper 000 section 2.2: nodes at cell centres), or of
+ * cylinders and spheres less holes (issue 35: the cells whose centres lie inside). */
 #include <math.h>
 #include <stdio.h>
 #include <string.h>
