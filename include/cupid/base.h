@@ -47,12 +47,18 @@ double cupid_wtime(void);
  *  of 4096 entries (in parallel), added in order. Solvers whose iterates decide which bonds
  *  break use it, so that a crack does not depend on OMP_NUM_THREADS. */
 double cupid_dot(cupid_int n, const double *a, const double *b);
+/** x[k] in [-0.5, 0.5) from a xorshift64 sequence started at @p seed (non-zero): a fixed probe
+ *  vector for the checks of a factor or a matrix (the same numbers on every run). */
+void cupid_pseudo_random(double *x, cupid_int n, uint64_t seed);
 
 /** Solve A X = B for a small dense system (src/core/dense.c): A n x n row-major (overwritten by
  *  its elimination), B n x nrhs row-major (overwritten by X); Gaussian elimination with partial
  *  pivoting, one elimination for all right-hand sides, the same bits for any thread count.
  *  Returns 0 (B undefined) when a pivot is not above @p pivot_min in magnitude. */
 int cupid_dense_solve(int n, double *A, double *B, int nrhs, double pivot_min);
+/** A = A^-1 in place (n x n row-major; work: n x n) by cupid_dense_solve() on the identity: one
+ *  elimination; 0 (A undefined) when a pivot is not above @p pivot_min. */
+int cupid_dense_invert(int n, double *A, double *work, double pivot_min);
 /** The LU factorisation P A = L U of a small dense matrix in place (A n x n row-major; L unit
  *  lower below the diagonal, U on and above; piv[c]: the row swapped with c at step c), kept
  *  for many solves; 0 when a pivot is not above @p pivot_min in magnitude. */

@@ -81,6 +81,14 @@ static double dot_chunk(cupid_int n, const double *a, const double *b) {
   return s;
 }
 
+void cupid_pseudo_random(double *x, cupid_int n, uint64_t seed) {
+  uint64_t s = seed;
+  for (cupid_int k = 0; k < n; k++) {
+    s ^= s << 13, s ^= s >> 7, s ^= s << 17;
+    x[k] = (double)(s >> 11) / 9007199254740992.0 - 0.5;
+  }
+}
+
 double cupid_dot(cupid_int n, const double *a, const double *b) {
   const cupid_int nc = (n + DOT_CHUNK - 1) / DOT_CHUNK;
   if (nc <= 4) return dot_chunk(n, a, b);

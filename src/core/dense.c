@@ -41,6 +41,14 @@ int cupid_dense_solve(int n, double *A, double *B, int nrhs, double pivot_min) {
   return 1;
 }
 
+int cupid_dense_invert(int n, double *A, double *work, double pivot_min) {
+  for (int q = 0; q < n * n; q++) work[q] = 0.0;
+  for (int a = 0; a < n; a++) work[a * n + a] = 1.0;
+  if (!cupid_dense_solve(n, A, work, n, pivot_min)) return 0;
+  for (int q = 0; q < n * n; q++) A[q] = work[q];
+  return 1;
+}
+
 int cupid_dense_lu(int n, double *A, int *piv, double pivot_min) {
   for (int c = 0; c < n; c++) {
     int p = c;

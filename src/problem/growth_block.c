@@ -32,7 +32,6 @@
  * of n per bond and solved each with the LU. Every loop has a fixed order (no threaded
  * reductions), so the same bonds break for any thread count. */
 #include <math.h>
-#include <stdint.h>
 #include <string.h>
 
 #include "problem_internal.h"
@@ -106,14 +105,6 @@ void cupid_growth_block_destroy(cupid_growth_block *M) {
   cupid_free(M);
 }
 
-/* A deterministic vector of entries in [-0.5, 0.5). */
-static void pseudo_random(double *x, cupid_int n, uint64_t s) {
-  for (cupid_int k = 0; k < n; k++) {
-    s ^= s << 13, s ^= s >> 7, s ^= s << 17;
-    x[k] = (double)(s >> 11) / 9007199254740992.0 - 0.5;
-  }
-}
-
 /* Is K_pp symmetric (the lower triangle is what CHOLMOD reads)? x^T K_pp y against y^T K_pp x
  * for two fixed vectors: a non-symmetric block shows up unless it is so by round-off. */
 static cupid_status pd_block_symmetric(const cupid_csr_t *K, cupid_int fe0, int *sym) {
@@ -121,8 +112,8 @@ static cupid_status pd_block_symmetric(const cupid_csr_t *K, cupid_int fe0, int 
   cupid_status st = CUPID_SUCCESS;
   CUPID_TRY(cupid_malloc((size_t)fe0 + 1, sizeof *x, "symmetry check", &x));
   CUPID_TRY(cupid_malloc((size_t)fe0 + 1, sizeof *y, "symmetry check", &y));
-  pseudo_random(x, fe0, 0x9E3779B97F4A7C15ull);
-  pseudo_random(y, fe0, 0xD1B54A32D192ED03ull);
+  cupid_pseudo_random(x, fe0, 0x9E3779B97F4A7C15ull);
+  cupid_pseudo_random(y, fe0, 0xD1B54A32D192ED03ull);
   double xay = 0.0, yax = 0.0, scale = 0.0;
   for (cupid_int d = 0; d < fe0; d++)
     FOR_ROW(K, d, c, v, if (c < fe0) {
@@ -445,7 +436,7 @@ cupid_status cupid_growth_block_create(const cupid_csr_t *K, cupid_int fe0, cons
     cupid_growth_block_destroy(&m);
     return CUPID_SUCCESS;
   }
-  info->flops_factor += 4.0 * ai.nnz_factor * (double)m->nib; /* the interface solves */
+  info->flops_factor += 4.0 * ai.nnz_factor * (double)m->nic; /* G's solves */
   info->pivot_ratio = fmin(m->pivot_ratio_a, m->pivot_ratio_s);
   info->n = m->na + m->ns;
   info->nnz_matrix = cupid_csr_nnz(K);
@@ -487,16 +478,6 @@ cupid_status cupid_growth_block_solve(cupid_growth_block m, const double *r, dou
   return CUPID_SUCCESS;
 }
 
-/* M = (I + V^T Z)^-1 in place (k x k; work k x k): symmetric positive definite while A is, so
- * a failure means the downdate went wrong. */
-static int invert_capacitance(double *M, cupid_int k, double *work) {
-  for (cupid_int a = 0; a < k * k; a++) work[a] = 0.0;
-  for (cupid_int a = 0; a < k; a++) work[a * k + a] = 1.0;
-  if (!cupid_dense_solve((int)k, M, work, (int)k, 1e-12)) return 0;
-  memcpy(M, work, (size_t)(k * k) * sizeof *M);
-  return 1;
-}
-
 cupid_status cupid_growth_block_downdate(cupid_growth_block m, const cupid_growth_downdate *dd, int *ok) {
   const cupid_int r = dd->r, nic = m->nic, nib = m->nib;
   const size_t na = (size_t)m->na;
@@ -535,7 +516,8 @@ cupid_status cupid_growth_block_downdate(cupid_growth_block m, const cupid_growt
       }
       N[a * r + c] = v;
     }
-  if (!invert_capacitance(N, r, work)) {
+  if (!cupid_dense_invert((int)r, N, work, 1e-12)) { /* SPD while A is: a failure means the
+                                                        downdate went wrong */
     *ok = 0;
     goto cleanup;
   }

@@ -212,7 +212,7 @@ static cupid_status resolve(cupid_problem_state *prob, cupid_growth_lu *s,
   s->resolves += info.iterations > 0;
   s->iterations += info.iterations;
   /* an updated factor is the current K's: its one iteration is the check, not rent */
-  s->since_factor += info.iterations - ((s->M || s->upd.r > 0) && stepped && info.iterations > 0);
+  s->since_factor += info.iterations - ((s->M || s->upd.r > 0) && info.iterations > 0);
   s->since_factor += info.iterations * 2.0 * (double)s->upd.r * (double)prob->ndof / s->iteration_flops;
   prob->solve = s->factor_info; /* the factor's figures, the re-solve's outcome */
   prob->solve.method = s->M ? (stepped ? "cholmod + schur, updated" : "cholmod + schur + gmres")

@@ -63,16 +63,6 @@ static double vdot(const cupid_growth_smw *u, cupid_int a, const double *x) {
   return s;
 }
 
-/* Invert the k x k matrix A (row-major) in place (work: k x k); 0 when a pivot is under
- * SMW_PIVOT_MIN. */
-static int invert_small(double *A, cupid_int k, double *work) {
-  for (cupid_int a = 0; a < k * k; a++) work[a] = 0.0;
-  for (cupid_int a = 0; a < k; a++) work[a * k + a] = 1.0;
-  if (!cupid_dense_solve((int)k, A, work, (int)k, SMW_PIVOT_MIN)) return 0;
-  memcpy(A, work, (size_t)(k * k) * sizeof *A);
-  return 1;
-}
-
 cupid_status cupid_growth_smw_add(cupid_growth_smw *u, cupid_int n, const cupid_growth_downdate *dd,
                                   cupid_status (*solve)(void *ctx, const double *b, double *x),
                                   void *ctx, int *ok) {
@@ -126,7 +116,7 @@ cupid_status cupid_growth_smw_add(cupid_growth_smw *u, cupid_int n, const cupid_
     }
   }
   for (cupid_int e = 0; e < r0; e++) b[e] = 0.0;
-  *ok = invert_small(sig, k, work);
+  *ok = cupid_dense_invert((int)k, sig, work, SMW_PIVOT_MIN);
   if (!*ok) goto cleanup; /* left as it was; the caller drops the factor */
   /* S'^-1: the old block gains P Sigma^-1 Q; the borders -P Sigma^-1 and -Sigma^-1 Q */
   for (cupid_int a = 0; a < r0; a++) {

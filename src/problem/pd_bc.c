@@ -203,6 +203,42 @@ static double true_section_area(const cupid_model_t *m, const cupid_load *l, int
   return (double)hits * d * d;
 }
 
+/* The scale of a traction's loaded faces on a shaped body, as made before for its plane and
+ * patch (NULL: not yet). */
+static const struct cupid_traction_scale *known_scale(const cupid_problem_state *prob,
+                                                      const cupid_load *l) {
+  for (int k = 0; k < prob->n_traction_scales; k++) {
+    const struct cupid_traction_scale *t = &prob->traction_scales[k];
+    if (t->plane_y == l->plane_y && !memcmp(&t->patch, &l->patch, sizeof t->patch)) return t;
+  }
+  return NULL;
+}
+
+/* The loaded faces' scale to the true section on a shaped body (the faces' area and extent
+ * over the ranks: every rank makes the call), kept for the plane and patch. */
+static cupid_status section_scale(cupid_problem_state *prob, const cupid_load *l,
+                                  double lattice_area, double ext[6], double *scale) {
+  const cupid_model_t *m = prob->model;
+  if (prob->slab) {
+    cupid_petsc_max_doubles(ext, 6);
+    cupid_petsc_sum_doubles(&lattice_area, 1);
+  }
+  if (ext[4] > 0.0 && ext[5] > 0.0)
+    return cupid_model_error(m, &l->mark,
+                             "the plane y = %g is a free surface on both sides of the body (a "
+                             "traction acts on one end face: give a patch x/z that selects it)",
+                             l->plane_y);
+  const double lo[2] = {-ext[0], -ext[1]}, hi[2] = {ext[2], ext[3]};
+  *scale = true_section_area(m, l, ext[4] > 0.0 ? 1 : -1, lo, hi, cupid_pd_grid_spacing(prob->grid)) /
+           lattice_area;
+  struct cupid_traction_scale *t = NULL;
+  CUPID_CALL(cupid_realloc((size_t)prob->n_traction_scales + 1, sizeof *t, "traction scales",
+                           &prob->traction_scales));
+  t = &prob->traction_scales[prob->n_traction_scales++];
+  t->plane_y = l->plane_y, t->patch = l->patch, t->scale = *scale;
+  return CUPID_SUCCESS;
+}
+
 static cupid_status traction_load(cupid_problem_state *prob, const cupid_load *l, double *f) {
   const cupid_model_t *m = prob->model;
   const double *x = cupid_pd_grid_coords(prob->grid);
@@ -234,17 +270,9 @@ static cupid_status traction_load(cupid_problem_state *prob, const cupid_load *l
                              l->plane_y, l->patch.has[0] || l->patch.has[2] ? " inside the patch" : "");
   double scale = 1.0;
   if (shaped) {
-    if (prob->slab) {
-      cupid_petsc_max_doubles(ext, 6);
-      cupid_petsc_sum_doubles(&lattice_area, 1);
-    }
-    if (ext[4] > 0.0 && ext[5] > 0.0)
-      return cupid_model_error(m, &l->mark,
-                               "the plane y = %g is a free surface on both sides of the body (a "
-                               "traction acts on one end face: give a patch x/z that selects it)",
-                               l->plane_y);
-    const double lo[2] = {-ext[0], -ext[1]}, hi[2] = {ext[2], ext[3]};
-    scale = true_section_area(m, l, ext[4] > 0.0 ? 1 : -1, lo, hi, h) / lattice_area;
+    const struct cupid_traction_scale *known = known_scale(prob, l);
+    if (known) scale = known->scale;
+    else CUPID_CALL(section_scale(prob, l, lattice_area, ext, &scale));
   }
   for (cupid_int i = 0; i < prob->n_pd; i++) {
     if (!on_free_face(prob, i, l->plane_y)) continue;

@@ -364,6 +364,7 @@ void cupid_problem_state_free(cupid_problem_state *prob) {
   cupid_output_set_abort(&prob->outputs); /* not published: the previous results stay */
   cupid_problem_checkpoint_end(prob);
   cupid_free(&prob->region_boxes);
+  cupid_free(&prob->traction_scales);
   cupid_free(&prob->region_materials);
   cupid_free(&prob->protect);
   cupid_free(&prob->no_fail);

@@ -153,6 +153,14 @@ typedef struct cupid_problem_private {
   cupid_int history_rows, history_cap;
   int history_cols;
   cupid_box *region_boxes;      /**< cupid_problem_coupling_options: one per PD region */
+  /** Tractions on a shaped PD body (pd_bc.c): the scale of each plane and patch's loaded faces
+   *  to the true section, made once (time-dependent loads are assembled every time step). */
+  struct cupid_traction_scale {
+    double plane_y;
+    cupid_box patch;
+    double scale;
+  } *traction_scales;
+  int n_traction_scales;
   int *region_materials;
 
   /* Time-dependent conditions (dynamic.c): the time the model's expressions are evaluated at

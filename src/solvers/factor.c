@@ -74,11 +74,7 @@ static cupid_status lu_backward_error(cupid_direct_factor F, double *eta) {
   double *e = F->work, *x = F->work2, *b = NULL;
   cupid_status st = CUPID_SUCCESS;
   CUPID_CALL(cupid_malloc((size_t)n, sizeof *b, "factor check", &b));
-  uint64_t s = 0x9E3779B97F4A7C15ull;
-  for (cupid_int k = 0; k < n; k++) {
-    s ^= s << 13, s ^= s >> 7, s ^= s << 17;
-    e[k] = (double)(s >> 11) / 9007199254740992.0 - 0.5;
-  }
+  cupid_pseudo_random(e, n, 0x9E3779B97F4A7C15ull);
   /* column k of the stored matrix is row k of K_ff */
   double anorm = 0.0, bnorm = 0.0, xnorm = 0.0, rnorm = 0.0;
   for (cupid_int k = 0; k < n; k++) {
