@@ -219,6 +219,78 @@ cupid_status cupid_pvd_write_named(const char *path, int n, const char *const *f
 cupid_status cupid_pvd_write(const char *path, int n, const char *const *files,
                              const double *times, const int *parts);
 
+/* ---- Output writers (src/io/writer*.c; issue 35) ----
+ * The files of a run's output steps, written by writers chosen from a table, in the manner of
+ * PETSc's viewers: a writer is made for a folder, takes a frame at each output step, records
+ * what a checkpoint needs to continue it, and is ended (its files committed) or dropped (its
+ * temporary files removed, or kept for a resumption). The runs (dynamics, load steps) build
+ * frames; the writers alone write files.
+ *   cupid_writer_csv:    a CSV file, its header and one row per frame (frame->row);
+ *   cupid_writer_vtu:    PART_<step>.vtu per part and frame, and at the end a .pvd listing them
+ *                        with their times (ParaView's blocks are the parts);
+ *   cupid_writer_exodus: one Exodus II file: every part an element block (VTK vertices as
+ *                        SPHERE elements with a volume attribute, hexahedra as HEX8), their
+ *                        nodes one node set, the points written once, the nodal fields at every
+ *                        frame as the time steps (available when the build found libexodusii:
+ *                        cupid_writer_available()). */
+
+/** A column of a CSV writer: printed as "%.10e", or as an integer ("%lld" of the value). */
+typedef struct {
+  const char *name;
+  int integer;
+} cupid_column;
+
+/** One part of a frame: a mesh with its point data (and optionally each cell's volume). */
+typedef struct {
+  const char *name;            /**< "beam", "pd": file stems and Exodus block names */
+  const cupid_vtu_mesh *mesh;  /**< points, cells of one type, point data */
+  const double *cell_volume;   /**< Exodus: the SPHERE elements' volume attribute (or NULL) */
+} cupid_frame_part;
+
+/** What an output step hands to the writers. */
+typedef struct {
+  cupid_int step;      /**< the step's number (file names: PART_<step>.vtu) */
+  double time;         /**< t, or a load step's load factor */
+  const double *row;   /**< a CSV writer's values, one per column */
+  int n_parts;
+  const cupid_frame_part *parts;
+} cupid_frame;
+
+/** What a writer is made for. */
+typedef struct {
+  const char *dir;      /**< the folder its files go into */
+  const char *file;     /**< CSV: the file; VTU: the collection (.pvd); Exodus: the .exo */
+  const char *title;    /**< Exodus: the database's title */
+  const cupid_column *columns; /**< CSV: the header's columns */
+  int n_columns;
+  /** A resumption: the checkpoint whose section @p key the writer saved (NULL: start anew). */
+  cupid_checkpoint resume;
+  const char *key;      /**< the writer's checkpoint section (cupid_writer_save) */
+} cupid_writer_spec;
+
+typedef struct cupid_writer_type cupid_writer_type;
+typedef struct cupid_writer_private *cupid_writer;
+extern const cupid_writer_type cupid_writer_csv, cupid_writer_vtu, cupid_writer_exodus;
+
+/** 1 if this build can make writers of @p type (Exodus needs libexodusii at build time). */
+int cupid_writer_available(const cupid_writer_type *type);
+/** The type's name: "csv", "vtu", "exodus". */
+const char *cupid_writer_name(const cupid_writer_type *type);
+/** Make a writer. CUPID_ERR_IO if its file cannot be made (or, resuming, found as the
+ *  checkpoint left it); CUPID_ERR_ARGUMENT for a type this build lacks. */
+cupid_status cupid_writer_create(const cupid_writer_type *type, const cupid_writer_spec *spec,
+                                 cupid_writer *writer);
+/** Write one frame (a NULL writer: nothing, success: a rank that writes no files). */
+cupid_status cupid_writer_step(cupid_writer writer, const cupid_frame *frame);
+/** Make what was written durable and record in section spec->key of @p ckw what a resumption
+ *  needs to continue it (NULL writer: nothing). */
+cupid_status cupid_writer_save(cupid_writer writer, cupid_checkpoint_writer ckw);
+/** Finish the files (the .pvd, the Exodus file's close) and commit them; consumes the writer. */
+cupid_status cupid_writer_end(cupid_writer *writer);
+/** Drop a writer: its temporary files removed, or with @p keep left for a resumption (after a
+ *  checkpoint). NULL-safe. */
+void cupid_writer_drop(cupid_writer *writer, int keep);
+
 /** A curve for a plot: columns of a CSV file (comma separated). */
 typedef struct {
   const char *csv;    /**< file name relative to the plot's directory */

@@ -297,6 +297,7 @@ typedef struct {
 typedef struct {
   char *directory;        /**< default "out/<model file stem>" */
   int vtu, pd_nodes, plots;
+  int exodus;             /**< model.exo (Exodus II) beside the VTU files (issue 35) */
   double checkpoint;      /**< seconds of run time between checkpoints (issue 36); 0: none;
                                -1 (default): every 600 s for a run estimated over 10 minutes */
   cupid_output_line *lines;

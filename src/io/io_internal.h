@@ -33,4 +33,26 @@ void cupid_io_helper_end(int slot);
 int cupid_io_set_register(const char *staging, const char *lock);
 void cupid_io_set_unregister(int slot);
 
+/* ---- Output writers (writer.c): the table behind cupid_writer_type (io.h) ---- */
+#include "cupid/io.h"
+
+struct cupid_writer_type {
+  const char *name;
+  int available; /* 0: this build lacks the library (create refuses) */
+  cupid_status (*create)(cupid_writer w, const cupid_writer_spec *spec);
+  cupid_status (*step)(cupid_writer w, const cupid_frame *frame);
+  cupid_status (*save)(cupid_writer w, cupid_checkpoint_writer ckw);
+  cupid_status (*end)(cupid_writer w);
+  void (*drop)(cupid_writer w, int keep); /* frees w->data */
+};
+
+struct cupid_writer_private {
+  const cupid_writer_type *type;
+  char *dir, *file, *key, *title;
+  void *data; /* the type's own */
+};
+
+/** dir/file of a writer (or dir/name) into @p path; CUPID_ERR_IO if too long. */
+cupid_status cupid_writer_path(const cupid_writer w, const char *name, char *path, size_t size);
+
 #endif

@@ -7,6 +7,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "cupid/io.h"
 #include "io/model_internal.h"
 
 #define PATH_SIZE sizeof(((cupid_mark *)0)->key)
@@ -1503,7 +1504,7 @@ static cupid_status default_directory(const char *file, char **out) {
 
 static cupid_status read_output(model_reader *rd, yaml_node_t *node) {
   static const char *const keys[] = {"directory", "vtu", "pd_nodes", "plots", "lines", "points",
-                                     "checkpoint"};
+                                     "checkpoint", "exodus"};
   cupid_output *o = &rd->model->output;
   mr_map map;
   yaml_node_t *v;
@@ -1521,6 +1522,12 @@ static cupid_status read_output(model_reader *rd, yaml_node_t *node) {
   if ((v = mr_get(&map, "vtu"))) CUPID_CALL(mr_bool(rd, v, "output.vtu", &o->vtu));
   if ((v = mr_get(&map, "pd_nodes"))) CUPID_CALL(mr_bool(rd, v, "output.pd_nodes", &o->pd_nodes));
   if ((v = mr_get(&map, "plots"))) CUPID_CALL(mr_bool(rd, v, "output.plots", &o->plots));
+  if ((v = mr_get(&map, "exodus"))) {
+    CUPID_CALL(mr_bool(rd, v, "output.exodus", &o->exodus));
+    if (o->exodus && !cupid_writer_available(&cupid_writer_exodus))
+      return mr_error(rd, v, "output.exodus", "this cupid was built without Exodus II (Debian's "
+                      "libexodusii-dev: scripts/install-deps.sh installs it; then build again)");
+  }
   if ((v = mr_get(&map, "checkpoint"))) {
     CUPID_CALL(mr_number(rd, v, "output.checkpoint", &o->checkpoint));
     if (!(o->checkpoint >= 0 && o->checkpoint <= 1e9))

@@ -47,7 +47,8 @@ static const char *const run_kinds[] = {
     "summary.json", "pd_nodes.csv", "pd.vtu", "beam.vtu", "model.pvd", "pd_[0-9]*.vtu",
     "beam_[0-9]*.vtu", "line_*.csv", "line_*.png", "line_*.gp", "history.csv", "history_*.png",
     "history_*.gp", "energies.csv", "energies.png", "energies.gp", "damage.csv", "damage.png",
-    "damage.gp", NULL};
+    "damage.gp", "load_steps.csv", "load_displacement.png", "load_displacement.gp", "model.exo",
+    NULL};
 
 static int run_kind(const char *name) {
   for (int k = 0; run_kinds[k]; k++)

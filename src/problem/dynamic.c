@@ -1,7 +1,9 @@
 /* `type: dynamic` (model-format.md analysis.dynamic; issue 5): mass, initial conditions, time
- * integration by src/dynamics, and the time-series outputs: history.csv (the output points at
- * every step), energies.csv and pd_<step>.vtu / beam_<step>.vtu at every `every` steps,
- * model.pvd with their times, PNG plots, and a "dynamic" block in summary.json.
+ * integration by src/dynamics, and the time-series outputs, made into frames for the output
+ * writers (io.h): history.csv (the output points at every step), energies.csv and
+ * pd_<step>.vtu / beam_<step>.vtu at every `every` steps, model.pvd with their times,
+ * model.exo (output.exodus: the same frames as Exodus II time steps), PNG plots, and a
+ * "dynamic" block in summary.json.
  *
  * FE-only and PD-only models. The global system uses the [3 per PD node | FE DOFs] layout of
  * the prob, so a coupled model only needs its coupling terms in K (and, for Arlequin, the
@@ -20,31 +22,23 @@
 /* The state of the output during a run. */
 typedef struct {
   cupid_problem_state *prob;
-  cupid_atomic_file history, energies, damage;
+  /* the writers (io.h), on the rank that writes files: the series, then the frames' */
+  cupid_writer history, energies, damage, vtu, exodus;
+  cupid_problem_vertices verts; /* the PD nodes of the frames (a slab run: the whole grid) */
   int timed_constraints, timed_loads; /* some value changes with t */
   cupid_int broken_reported;          /* broken bonds at the last progress line */
-  char (*files)[64];
-  double *times;
-  int n_files, cap_files;
   cupid_int out_count;
-  double *velocity; /* for the PD VTU */
   double *u_view;   /* Lagrange: u with the tied PD nodes recovered from the beam (outputs) */
   cupid_int **cnodes, *n_cnodes; /* timed constraints: the PD nodes of each constraint */
-  /* a slab run (slab.c): rank 0's whole grid (coordinates only) for the VTU series */
+  /* a slab run (slab.c): rank 0's whole grid (coordinates only) for the frames */
   cupid_pd_grid whole;
   const double *u_out; /* the displacements the outputs of this step show (u or u_view) */
-  /* a resumption (--resume): the integrator's state and the streams' lengths of its checkpoint */
+  /* a resumption (--resume): the integrator's state; its checkpoint, open until the writers
+   * have read what they saved */
   cupid_dynamics_restart restart;
   double *restart_vectors;  /* a, react, load, and two scratch vectors (n each) */
-  int64_t keep[3];          /* history, energies, damage: bytes to keep (-1: start them) */
+  cupid_checkpoint resume;
 } dyn_output;
-
-static cupid_status out_path(const cupid_problem_state *prob, const char *name, char *path, size_t len) {
-  int n = snprintf(path, len, "%s/%s", prob->writedir, name);
-  CUPID_CHECK(n > 0 && (size_t)n < len, CUPID_ERR_IO, "output path too long: %s/%s", prob->writedir,
-              name);
-  return CUPID_SUCCESS;
-}
 
 /* Every material used by the model needs a density. */
 static cupid_status check_density(const cupid_problem_state *prob) {
@@ -123,89 +117,46 @@ static cupid_status initial_state(cupid_problem_state *prob, double *v) {
   return CUPID_SUCCESS;
 }
 
-/* PD nodes as VTK vertices with displacement, velocity and (with fracture) damage. */
-static cupid_status write_pd_vertices(const char *path, cupid_pd_grid grid, const double *u,
-                                      const double *v, const double *damage) {
-  cupid_status st = CUPID_SUCCESS;
-  cupid_int n = cupid_pd_grid_num_nodes(grid), *conn = NULL, *offs = NULL;
-  unsigned char *types = NULL;
-  CUPID_TRY(cupid_malloc((size_t)n, sizeof *conn, "VTU connectivity", &conn));
-  CUPID_TRY(cupid_malloc((size_t)n, sizeof *offs, "VTU offsets", &offs));
-  CUPID_TRY(cupid_malloc((size_t)n, sizeof *types, "VTU cell types", &types));
-  for (cupid_int i = 0; i < n; i++) conn[i] = i, offs[i] = i + 1, types[i] = CUPID_VTK_VERTEX;
-  cupid_vtu_array pdata[3] = {{"displacement", 3, u}, {"velocity", 3, v}, {"damage", 1, damage}};
-  cupid_vtu_mesh mesh = {.n_points = n, .points = cupid_pd_grid_coords(grid), .n_cells = n,
-                         .connectivity = conn, .offsets = offs, .types = types,
-                         .point_data = pdata, .n_point_data = damage ? 3 : 2};
-  CUPID_TRY(cupid_vtu_write(path, &mesh));
-cleanup:
-  cupid_free(&conn);
-  cupid_free(&offs);
-  cupid_free(&types);
-  return st;
-}
-
-/* The step's PD file: a slab run gathers u, v and damage on rank 0, which writes them on the
- * whole grid (collective). */
-static cupid_status write_pd_step(dyn_output *o, const char *path, const double *v) {
+/* The step's frame for the VTU series and the Exodus file: the beam's reconstruction and the PD
+ * nodes with displacement, velocity and (with fracture) damage. A slab run gathers u, v and
+ * damage on rank 0, which writes them on the whole grid (collective). */
+static cupid_status write_frame(dyn_output *o, cupid_int step, double t, const double *v) {
   cupid_problem_state *prob = o->prob;
-  if (!prob->slab) return write_pd_vertices(path, prob->grid, o->u_out, v, prob->damage);
+  cupid_writer writers[2] = {o->vtu, o->exodus};
+  cupid_frame_part parts[2];
+  cupid_vtu_array pdata[3];
+  cupid_vtu_mesh pd;
+  cupid_cuf_vtu *beam = NULL;
   double *g[3] = {NULL, NULL, NULL};
   cupid_status st = CUPID_SUCCESS;
-  CUPID_TRY(cupid_problem_slab_gather(prob, o->u_out, 3, &g[0]));
-  CUPID_TRY(cupid_problem_slab_gather(prob, v, 3, &g[1]));
-  if (prob->damage) CUPID_TRY(cupid_problem_slab_gather(prob, prob->damage, 1, &g[2]));
-  if (o->whole) st = write_pd_vertices(path, o->whole, g[0], g[1], g[2]);
-  CUPID_TRY(cupid_problem_slab_agree(st));
-cleanup:
-  for (int k = 0; k < 3; k++) cupid_free(&g[k]);
-  return st;
-}
-
-/* Remember a written VTU file and its time for model.pvd. */
-static cupid_status record_file(dyn_output *o, const char *name, double t) {
-  if (o->n_files == o->cap_files) {
-    int cap = o->cap_files ? 2 * o->cap_files : 64;
-    char(*files)[64] = NULL;
-    double *times = NULL;
-    CUPID_CALL(cupid_calloc((size_t)cap, sizeof *files, "VTU file names", &files));
-    if (cupid_calloc((size_t)cap, sizeof *times, "VTU times", &times) != CUPID_SUCCESS) {
-      cupid_free(&files);
-      return CUPID_ERR_MEMORY;
-    }
-    if (o->n_files) {
-      memcpy(files, o->files, sizeof *files * (size_t)o->n_files);
-      memcpy(times, o->times, sizeof *times * (size_t)o->n_files);
-    }
-    cupid_free(&o->files);
-    cupid_free(&o->times);
-    o->files = files;
-    o->times = times;
-    o->cap_files = cap;
-  }
-  snprintf(o->files[o->n_files], 64, "%s", name);
-  o->times[o->n_files++] = t;
-  return CUPID_SUCCESS;
-}
-
-/* The step's VTU files: the beam's (beam_<step>.vtu) and the PD nodes' (pd_<step>.vtu), each
- * part the model has (a coupled model both: model.pvd names them as blocks "beam" and "pd"). */
-static cupid_status write_vtu_step(dyn_output *o, cupid_int step, double t, const double *v) {
-  cupid_problem_state *prob = o->prob;
-  char name[64], path[4096] = "";
-  if (prob->beam) {
-    snprintf(name, sizeof name, "beam_%06lld.vtu", (long long)step);
-    CUPID_CALL(out_path(prob, name, path, sizeof path));
-    CUPID_CALL(cupid_problem_fe_write_vtu(prob, o->u_out, path));
-    CUPID_CALL(record_file(o, name, t));
+  int np = 0;
+  if (prob->beam && prob->writedir) {
+    CUPID_TRY(cupid_cuf_vtu_build(prob->beam, o->u_out, 0, &beam));
+    parts[np++] = (cupid_frame_part){"beam", &beam->mesh, NULL};
   }
   if (prob->grid) {
-    snprintf(name, sizeof name, "pd_%06lld.vtu", (long long)step);
-    if (prob->writedir) CUPID_CALL(out_path(prob, name, path, sizeof path));
-    CUPID_CALL(write_pd_step(o, path, v));
-    if (prob->writedir) CUPID_CALL(record_file(o, name, t));
+    const double *u = o->u_out, *vel = v, *damage = prob->damage;
+    if (prob->slab) {
+      CUPID_TRY(cupid_problem_slab_gather(prob, o->u_out, 3, &g[0]));
+      CUPID_TRY(cupid_problem_slab_gather(prob, v, 3, &g[1]));
+      if (prob->damage) CUPID_TRY(cupid_problem_slab_gather(prob, prob->damage, 1, &g[2]));
+      u = g[0], vel = g[1], damage = g[2];
+    }
+    pdata[0] = (cupid_vtu_array){"displacement", 3, u};
+    pdata[1] = (cupid_vtu_array){"velocity", 3, vel};
+    pdata[2] = (cupid_vtu_array){"damage", 1, damage};
+    if (o->verts.grid) {
+      pd = cupid_problem_vertices_mesh(&o->verts, pdata, damage ? 3 : 2);
+      parts[np++] = (cupid_frame_part){"pd", &pd, o->verts.volume};
+    }
   }
-  return CUPID_SUCCESS;
+  const cupid_frame f = {.step = step, .time = t, .n_parts = np, .parts = parts};
+  st = cupid_problem_frame_write(writers, 2, &f);
+  if (prob->slab) st = cupid_problem_slab_agree(st);
+cleanup:
+  cupid_cuf_vtu_destroy(&beam);
+  for (int k = 0; k < 3; k++) cupid_free(&g[k]);
+  return st;
 }
 
 /* A row of the history (t, then u at every output point) kept in the problem
@@ -231,23 +182,17 @@ static cupid_status history_grow(cupid_problem_state *prob, double **row) {
  * files, in history.csv. */
 static cupid_status history_row(dyn_output *o, double t) {
   const cupid_output *out = &o->prob->model->output;
-  FILE *f = o->history ? cupid_atomic_stream(o->history) : NULL;
   double *row;
   CUPID_CALL(history_grow(o->prob, &row));
   row[0] = t;
-  if (f) fprintf(f, "%.10e", t);
   for (int k = 0; k < out->n_points; k++) {
     double *u = row + 1 + 3 * k;
     cupid_region_kind region;
     CUPID_CALL(cupid_problem_sample_point(o->prob, o->u_out, out->points[k].at, u, NULL, &region));
   }
   if (o->prob->slab) CUPID_CALL(cupid_problem_slab_points(o->prob, row + 1));
-  for (int k = 0; k < out->n_points && f; k++) {
-    const double *u = row + 1 + 3 * k;
-    fprintf(f, ",%.10e,%.10e,%.10e", u[0], u[1], u[2]);
-  }
-  if (f) fputc('\n', f);
-  return CUPID_SUCCESS;
+  const cupid_frame f = {.time = t, .row = row}; /* the row's columns: t, then the points' u */
+  return cupid_writer_step(o->history, &f);
 }
 
 static cupid_status monitor_outputs(dyn_output *o, cupid_int step, double t, int output,
@@ -310,64 +255,82 @@ static cupid_status monitor_outputs(dyn_output *o, cupid_int step, double t, int
   if (!output) return CUPID_SUCCESS;
   o->out_count++;
   cupid_problem_state *prob = o->prob;
-  if (o->energies) {
-    FILE *f = cupid_atomic_stream(o->energies);
-    fprintf(f, "%.10e,%lld,%.10e,%.10e,%.10e,", t, (long long)step, e->kinetic, e->strain,
-            e->damping);
-    if (o->damage) fprintf(f, "%.10e,", e->fracture);
-    fprintf(f, "%.10e,%.10e,%.10e\n", e->external,
-            e->kinetic + e->strain + e->damping + e->fracture - e->external, e->balance);
-  }
+  /* energies.csv's columns (open_outputs) */
+  const double total = e->kinetic + e->strain + e->damping + e->fracture - e->external;
+  const double erow[9] = {t, (double)step, e->kinetic, e->strain, e->damping, e->fracture,
+                          e->external, total, e->balance};
+  double erow_plain[8] = {t, (double)step, e->kinetic, e->strain, e->damping, e->external, total,
+                          e->balance}; /* without the fracture column */
+  const cupid_frame ef = {.step = step, .time = t, .row = prob->damage ? erow : erow_plain};
+  CUPID_CALL(cupid_writer_step(o->energies, &ef));
   if (prob->damage) { /* collective on a slab run: every rank counts, rank 0 writes */
     CUPID_CALL(cupid_problem_fracture_damage(prob));
-    const cupid_int nodes_broken = cupid_problem_fracture_nodes_broken(prob);
-    if (o->damage)
-      fprintf(cupid_atomic_stream(o->damage), "%lld,%.10e,%lld,%lld,%.10e,%lld\n", (long long)step,
-              t, (long long)prob->broken_bonds, (long long)prob->damaged_nodes, prob->max_damage,
-              (long long)nodes_broken);
+    const double drow[6] = {(double)step, t, (double)prob->broken_bonds,
+                            (double)prob->damaged_nodes, prob->max_damage,
+                            (double)cupid_problem_fracture_nodes_broken(prob)};
+    const cupid_frame df = {.step = step, .time = t, .row = drow};
+    CUPID_CALL(cupid_writer_step(o->damage, &df));
   }
-  if (prob->model->output.vtu && (prob->writedir || prob->slab))
-    CUPID_CALL(write_vtu_step(o, step, t, v));
+  const cupid_output *out = &prob->model->output;
+  if ((out->vtu || out->exodus) && (prob->writedir || prob->slab))
+    CUPID_CALL(write_frame(o, step, t, v));
   o->prob->dyn.energy = *e;
   return CUPID_SUCCESS;
 }
 
-/* A time series of the run: a resumable stream (io.h, cupid_atomic_open_partial), started
- * with its header, or continued at the length the checkpoint recorded (*header 0). */
-static cupid_status open_series(dyn_output *o, const char *name, int which, cupid_atomic_file *f,
-                                int *header) {
-  char path[4096];
-  CUPID_CALL(out_path(o->prob, name, path, sizeof path));
-  CUPID_CALL(cupid_atomic_open_partial(path, o->keep[which], f));
-  *header = o->keep[which] < 0;
-  return CUPID_SUCCESS;
+/* A writer of the run's outputs: a resumption continues it from the checkpoint (io.h). */
+static cupid_status open_writer(dyn_output *o, const cupid_writer_type *type, const char *file,
+                                const cupid_column *columns, int n_columns, cupid_writer *w) {
+  const cupid_model_t *m = o->prob->model;
+  char key[64];
+  snprintf(key, sizeof key, "writer %s", file);
+  const cupid_writer_spec spec = {.dir = o->prob->writedir, .file = file, .title = m->title,
+                                  .columns = columns, .n_columns = n_columns,
+                                  .resume = o->resume, .key = key};
+  return cupid_writer_create(type, &spec, w);
 }
 
+/* The writers of rank 0 (a slab run's others write nothing): damage.csv with fracture,
+ * energies.csv, history.csv with output points, the VTU series and model.exo. */
 static cupid_status open_outputs(dyn_output *o) {
   cupid_problem_state *prob = o->prob;
   const cupid_output *out = &prob->model->output;
-  int header = 1;
   if (!prob->writedir) return CUPID_SUCCESS; /* an MPI rank other than 0: no files */
   if (prob->damage) { /* damage.csv (model-format.md, fracture outputs) */
-    CUPID_CALL(open_series(o, "damage.csv", 2, &o->damage, &header));
-    if (header)
-      fprintf(cupid_atomic_stream(o->damage),
-              "step,t,broken_bonds,damaged_nodes,max_damage,nodes_broken\n");
+    static const cupid_column dc[6] = {{"step", 1}, {"t", 0}, {"broken_bonds", 1},
+                                       {"damaged_nodes", 1}, {"max_damage", 0},
+                                       {"nodes_broken", 1}};
+    CUPID_CALL(open_writer(o, &cupid_writer_csv, "damage.csv", dc, 6, &o->damage));
   }
-  CUPID_CALL(open_series(o, "energies.csv", 1, &o->energies, &header));
-  if (header)
-    fprintf(cupid_atomic_stream(o->energies), "t,step,kinetic,strain,damping_dissipated,%s"
-            "external_work,total,balance\n", o->damage ? "fracture_dissipated," : "");
+  static const cupid_column ec[9] = {{"t", 0}, {"step", 1}, {"kinetic", 0}, {"strain", 0},
+                                     {"damping_dissipated", 0}, {"fracture_dissipated", 0},
+                                     {"external_work", 0}, {"total", 0}, {"balance", 0}};
+  static const cupid_column ec_plain[8] = {{"t", 0}, {"step", 1}, {"kinetic", 0}, {"strain", 0},
+                                           {"damping_dissipated", 0}, {"external_work", 0},
+                                           {"total", 0}, {"balance", 0}};
+  CUPID_CALL(open_writer(o, &cupid_writer_csv, "energies.csv", prob->damage ? ec : ec_plain,
+                         prob->damage ? 9 : 8, &o->energies));
+  if (out->vtu) CUPID_CALL(open_writer(o, &cupid_writer_vtu, "model.pvd", NULL, 0, &o->vtu));
+  if (out->exodus)
+    CUPID_CALL(open_writer(o, &cupid_writer_exodus, "model.exo", NULL, 0, &o->exodus));
   if (out->n_points == 0) return CUPID_SUCCESS;
-  CUPID_CALL(open_series(o, "history.csv", 0, &o->history, &header));
-  if (!header) return CUPID_SUCCESS;
-  FILE *f = cupid_atomic_stream(o->history);
-  fprintf(f, "t");
+  const int nc = 1 + 3 * out->n_points;
+  cupid_column *hc = NULL;
+  char (*names)[200] = NULL;
+  cupid_status st = CUPID_SUCCESS;
+  CUPID_TRY(cupid_calloc((size_t)nc, sizeof *hc, "history columns", &hc));
+  CUPID_TRY(cupid_calloc((size_t)nc, sizeof *names, "history columns", &names));
+  hc[0] = (cupid_column){"t", 0};
   for (int k = 0; k < out->n_points; k++)
-    fprintf(f, ",%s_ux,%s_uy,%s_uz", out->points[k].name, out->points[k].name,
-            out->points[k].name);
-  fputc('\n', f);
-  return CUPID_SUCCESS;
+    for (int c = 0; c < 3; c++) {
+      snprintf(names[1 + 3 * k + c], sizeof names[0], "%s_u%c", out->points[k].name, "xyz"[c]);
+      hc[1 + 3 * k + c] = (cupid_column){names[1 + 3 * k + c], 0};
+    }
+  st = open_writer(o, &cupid_writer_csv, "history.csv", hc, nc, &o->history);
+cleanup:
+  cupid_free(&hc);
+  cupid_free(&names);
+  return st;
 }
 
 static cupid_status plots(const cupid_problem_state *prob, int damage) {
@@ -418,22 +381,14 @@ static cupid_status plots(const cupid_problem_state *prob, int damage) {
 
 static cupid_status finish_outputs(dyn_output *o) {
   cupid_problem_state *prob = o->prob;
-  char path[4096];
   if (!prob->writedir) return CUPID_SUCCESS;
-  /* committing closes the handle (sets it NULL): remember whether damage.csv was written */
+  /* ending consumes the handle (sets it NULL): remember whether damage.csv was written */
   const int damage = o->damage != NULL;
-  if (o->history) CUPID_CALL(cupid_atomic_commit(&o->history));
-  if (o->damage) CUPID_CALL(cupid_atomic_commit(&o->damage));
-  CUPID_CALL(cupid_atomic_commit(&o->energies));
-  if (o->n_files) {
-    const char **names = NULL;
-    CUPID_CALL(cupid_calloc((size_t)o->n_files, sizeof *names, "PVD names", &names));
-    for (int k = 0; k < o->n_files; k++) names[k] = o->files[k];
-    cupid_status st = out_path(prob, "model.pvd", path, sizeof path);
-    if (st == CUPID_SUCCESS) st = cupid_pvd_write(path, o->n_files, names, o->times, NULL);
-    cupid_free(&names);
-    CUPID_CALL(st);
-  }
+  CUPID_CALL(cupid_writer_end(&o->history));
+  CUPID_CALL(cupid_writer_end(&o->damage));
+  CUPID_CALL(cupid_writer_end(&o->energies));
+  CUPID_CALL(cupid_writer_end(&o->vtu)); /* model.pvd */
+  CUPID_CALL(cupid_writer_end(&o->exodus));
   if (prob->model->output.plots) CUPID_CALL(plots(prob, damage));
   return CUPID_SUCCESS;
 }
@@ -541,9 +496,8 @@ static cupid_status break_bonds(void *ctx, cupid_int step, double t, const doubl
 typedef struct {
   cupid_dynamics_energy shares, whole, last;
   double e0, scale, max_balance, omega_max, dt_critical, dt_bound;
-  int lanczos_steps, n_files;
+  int lanczos_steps;
   cupid_int out_count, broken_reported;
-  int64_t streams[3]; /* the lengths of history, energies, damage (-1: none) */
 } dyn_scalars;
 
 /* A safe point's state, for cupid_problem_checkpoint_save. */
@@ -560,12 +514,10 @@ static cupid_status write_state(void *ctx, cupid_checkpoint_writer w) {
   dyn_scalars c = {.shares = r->shares, .whole = r->whole, .last = prob->dyn.energy, .e0 = r->e0,
                    .scale = r->scale, .max_balance = r->max_balance, .omega_max = r->omega_max,
                    .dt_critical = r->dt_critical, .dt_bound = r->dt_bound,
-                   .lanczos_steps = r->lanczos_steps, .n_files = o->n_files,
-                   .out_count = o->out_count, .broken_reported = o->broken_reported,
-                   .streams = {-1, -1, -1}};
-  cupid_atomic_file streams[3] = {o->history, o->energies, o->damage};
-  for (int k = 0; k < 3; k++)
-    if (streams[k]) CUPID_CALL(cupid_atomic_sync(streams[k], &c.streams[k]));
+                   .lanczos_steps = r->lanczos_steps,
+                   .out_count = o->out_count, .broken_reported = o->broken_reported};
+  cupid_writer writers[5] = {o->history, o->energies, o->damage, o->vtu, o->exodus};
+  for (int k = 0; k < 5; k++) CUPID_CALL(cupid_writer_save(writers[k], w));
   const size_t bytes = sizeof(double) * (size_t)r->n;
   CUPID_CALL(cupid_checkpoint_write(w, "step", &r->step, sizeof r->step));
   CUPID_CALL(cupid_checkpoint_write(w, "dynamics", &c, sizeof c));
@@ -574,10 +526,6 @@ static cupid_status write_state(void *ctx, cupid_checkpoint_writer w) {
   CUPID_CALL(cupid_checkpoint_write(w, "a", r->a, bytes));
   if (r->react) CUPID_CALL(cupid_checkpoint_write(w, "reactions", r->react, bytes));
   if (r->load) CUPID_CALL(cupid_checkpoint_write(w, "load", r->load, bytes));
-  if (o->n_files) {
-    CUPID_CALL(cupid_checkpoint_write(w, "files", o->files, sizeof *o->files * (size_t)o->n_files));
-    CUPID_CALL(cupid_checkpoint_write(w, "times", o->times, sizeof *o->times * (size_t)o->n_files));
-  }
   return CUPID_SUCCESS;
 }
 
@@ -624,12 +572,6 @@ static cupid_status read_state(dyn_output *o, const cupid_checkpoint ck, double 
   prob->dyn.energy = c.last;
   o->out_count = c.out_count;
   o->broken_reported = c.broken_reported;
-  for (int k = 0; k < 3; k++) o->keep[k] = c.streams[k];
-  for (int k = 0; k < c.n_files; k++) CUPID_CALL(record_file(o, "", 0.0));
-  if (c.n_files) {
-    CUPID_CALL(cupid_checkpoint_read(ck, "files", o->files, sizeof *o->files * (size_t)c.n_files));
-    CUPID_CALL(cupid_checkpoint_read(ck, "times", o->times, sizeof *o->times * (size_t)c.n_files));
-  }
   cupid_problem_progress(prob, "resume: from step %lld of %lld (t = %g), %lld broken bonds",
                          (long long)r->step, (long long)prob->dyn.steps,
                          (double)r->step * prob->model->analysis.dynamic.dt,
@@ -637,13 +579,11 @@ static cupid_status read_state(dyn_output *o, const cupid_checkpoint ck, double 
   return CUPID_SUCCESS;
 }
 
+/* The checkpoint stays open in o->resume until the writers have read theirs (open_outputs). */
 static cupid_status resume_from_checkpoint(dyn_output *o, double *v) {
-  cupid_checkpoint ck = NULL;
-  CUPID_CALL(cupid_problem_checkpoint_open(o->prob, "step", &ck));
-  cupid_status st = cupid_problem_checkpoint_fracture(o->prob, ck);
-  if (st == CUPID_SUCCESS) st = read_state(o, ck, v);
-  cupid_checkpoint_close(&ck);
-  return st;
+  CUPID_CALL(cupid_problem_checkpoint_open(o->prob, "step", &o->resume));
+  CUPID_CALL(cupid_problem_checkpoint_fracture(o->prob, o->resume));
+  return read_state(o, o->resume, v);
 }
 
 /* A slab's stiffness product: its owned rows (the halo's rows are not needed, and not
@@ -665,7 +605,7 @@ cupid_status cupid_problem_run_dynamic(cupid_problem_state *prob, const cupid_me
   cupid_status st = CUPID_SUCCESS;
   cupid_csr M = NULL;
   double *m_lumped = NULL, *v = NULL, *rbound = NULL, t0 = cupid_wtime();
-  dyn_output o = {.prob = prob, .keep = {-1, -1, -1}};
+  dyn_output o = {.prob = prob};
   const int mf = op != NULL;
   cupid_petsc_halo halo = NULL;
   cupid_dynamics_partition part;
@@ -676,11 +616,14 @@ cupid_status cupid_problem_run_dynamic(cupid_problem_state *prob, const cupid_me
   CUPID_TRY(agreed(prob, cupid_problem_check_finite(prob, prob->u, &d->mark,
                                                     "the initial displacement")));
   CUPID_TRY(agreed(prob, cupid_problem_check_finite(prob, v, &d->mark, "the initial velocity")));
-  if (prob->slab) { /* the halo exchange, and rank 0's whole grid for the VTU series */
+  const int frames = m->output.vtu || m->output.exodus;
+  if (prob->slab) { /* the halo exchange, and rank 0's whole grid for the frames */
     CUPID_TRY(cupid_problem_slab_partition(prob, &halo, &part));
-    if (prob->writedir && m->output.vtu)
-      st = cupid_pd_grid_create_from_model(m, &o.whole);
+    if (prob->writedir && frames) st = cupid_pd_grid_create_from_model(m, &o.whole);
+    if (st == CUPID_SUCCESS && o.whole) st = cupid_problem_vertices_build(o.whole, &o.verts);
     CUPID_TRY(cupid_problem_slab_agree(st));
+  } else if (prob->grid && frames) {
+    CUPID_TRY(cupid_problem_vertices_build(prob->grid, &o.verts));
   }
 
   cupid_dynamics_options opt = cupid_dynamics_defaults();
@@ -730,6 +673,7 @@ cupid_status cupid_problem_run_dynamic(cupid_problem_state *prob, const cupid_me
     }
   }
   CUPID_TRY(agreed(prob, open_outputs(&o)));
+  cupid_checkpoint_close(&o.resume);
   if (prob->opts->check_only)
     cupid_problem_progress(prob, "dynamics: the step %g of central differences checked as a "
                            "run checks it", opt.dt);
@@ -785,22 +729,19 @@ cupid_status cupid_problem_run_dynamic(cupid_problem_state *prob, const cupid_me
 cleanup:
   /* the checkpoint recorded their lengths: --resume goes on (after an interrupt, or again
    * after a resumption that failed) */
-  if (prob->ckpt.interrupted || prob->opts->resume) {
-    cupid_atomic_suspend(&o.history);
-    cupid_atomic_suspend(&o.damage);
-    cupid_atomic_suspend(&o.energies);
+  {
+    const int keep = prob->ckpt.interrupted || prob->opts->resume;
+    cupid_writer *writers[5] = {&o.history, &o.damage, &o.energies, &o.vtu, &o.exodus};
+    for (int k = 0; k < 5; k++) cupid_writer_drop(writers[k], keep);
   }
-  cupid_atomic_abort(&o.history);
-  cupid_atomic_abort(&o.damage);
-  cupid_atomic_abort(&o.energies);
+  cupid_checkpoint_close(&o.resume);
+  cupid_problem_vertices_free(&o.verts);
   cupid_problem_checkpoint_end(prob);
   cupid_free(&o.restart_vectors);
   for (int k = 0; o.cnodes && k < m->n_constraints; k++) cupid_free(&o.cnodes[k]);
   cupid_free(&o.cnodes);
   cupid_free(&o.n_cnodes);
-  cupid_free(&o.files);
   cupid_free(&o.u_view);
-  cupid_free(&o.times);
   cupid_csr_destroy(&M);
   cupid_free(&m_lumped);
   cupid_free(&v);

@@ -33,12 +33,17 @@ static void growth_free(growth_run *g) {
   cupid_free(&g->masks);
   cupid_free(&g->T);
   cupid_free(&g->u1);
-  cupid_atomic_abort(&g->csv);
+  cupid_writer_drop(&g->csv, 0);
+  cupid_writer_drop(&g->exodus, 0);
+  cupid_problem_vertices_free(&g->verts);
+  cupid_pd_grid_destroy(&g->whole);
+  cupid_checkpoint_close(&g->resume);
   cupid_direct_factor_destroy(&g->F);
   cupid_growth_downdate_free(&g->dd);
   for (int k = 0; k < 4; k++) cupid_free(&g->w[k]);
   cupid_free(&g->react);
   cupid_free(&g->points);
+  cupid_free(&g->row);
   cupid_growth_mf_free(&g->mf);
   cupid_growth_lu_free(&g->lu);
   growth_journal_free(&g->journal);
@@ -81,29 +86,115 @@ static const char *csv_name(const cupid_problem_state *prob) {
   return cupid_problem_has_damage(prob) ? "damage.csv" : "load_steps.csv";
 }
 
-static cupid_status open_csv(growth_run *g) {
+/* The steps' file's columns (write_row fills a row in this order): step, t, load_factor,
+ * iterations, the damage counts, the next break's load factor, every constraint's reaction and
+ * every output point's displacement. *names: the names made here (freed by the caller). */
+static cupid_status csv_columns(const cupid_problem_state *prob, cupid_column **cols, int *n,
+                                char (**names)[200]) {
+  const cupid_model_t *m = prob->model;
+  static const cupid_column head[4] = {{"step", 1}, {"t", 0}, {"load_factor", 0},
+                                       {"iterations", 1}};
+  static const cupid_column damage[5] = {{"broken_bonds", 1}, {"damaged_nodes", 1},
+                                         {"max_damage", 0}, {"nodes_broken", 1},
+                                         {"released_nodes", 1}};
+  const int most = 4 + 5 + 1 + 3 * (m->n_constraints + m->output.n_points);
+  CUPID_CALL(cupid_calloc((size_t)most, sizeof **cols, "CSV columns", cols));
+  CUPID_CALL(cupid_calloc((size_t)most, sizeof **names, "CSV columns", names));
+  cupid_column *c = *cols;
+  int k = 0;
+  for (int j = 0; j < 4; j++) c[k++] = head[j];
+  if (cupid_problem_has_damage(prob))
+    for (int j = 0; j < 5; j++) c[k++] = damage[j];
+  if (m->has_peridynamics && m->pd.fracture.has_fracture)
+    c[k++] = (cupid_column){"next_break_load_factor", 0};
+  for (int j = 0; j < m->n_constraints; j++)
+    for (int a = 0; a < 3; a++) {
+      snprintf((*names)[k], sizeof **names, "reaction_%d_%c", j, "xyz"[a]);
+      c[k] = (cupid_column){(*names)[k], 0}, k++;
+    }
+  for (int j = 0; j < m->output.n_points; j++)
+    for (int a = 0; a < 3; a++) {
+      snprintf((*names)[k], sizeof **names, "%s_u%c", m->output.points[j].name, "xyz"[a]);
+      c[k] = (cupid_column){(*names)[k], 0}, k++;
+    }
+  *n = k;
+  return CUPID_SUCCESS;
+}
+
+/* The writers, on the rank that writes files (io.h): the steps' file and, with
+ * output.exodus, model.exo; a resumption continues them from its checkpoint (issue 36). */
+static cupid_status open_writers(growth_run *g) {
   cupid_problem_state *prob = g->prob;
   const cupid_model_t *m = prob->model;
-  if (!prob->writedir) return CUPID_SUCCESS;
-  char path[4096];
-  int len = snprintf(path, sizeof path, "%s/%s", prob->writedir, csv_name(prob));
-  CUPID_CHECK(len > 0 && (size_t)len < sizeof path, CUPID_ERR_IO, "output path too long");
-  /* a resumable stream (issue 36): a resumption continues it at the checkpoint's length */
-  CUPID_CALL(cupid_atomic_open_partial(path, g->csv_keep, &g->csv));
-  if (g->csv_keep >= 0) return CUPID_SUCCESS;
-  FILE *f = cupid_atomic_stream(g->csv);
-  fprintf(f, "step,t,load_factor,iterations");
-  if (cupid_problem_has_damage(prob))
-    fprintf(f, ",broken_bonds,damaged_nodes,max_damage,nodes_broken,released_nodes");
-  if (m->has_peridynamics && m->pd.fracture.has_fracture) fprintf(f, ",next_break_load_factor");
-  for (int k = 0; k < m->n_constraints; k++)
-    fprintf(f, ",reaction_%d_x,reaction_%d_y,reaction_%d_z", k, k, k);
-  for (int k = 0; k < m->output.n_points; k++) {
-    const char *p = m->output.points[k].name;
-    fprintf(f, ",%s_ux,%s_uy,%s_uz", p, p, p);
+  cupid_status st = CUPID_SUCCESS;
+  if (m->output.exodus && prob->grid) { /* the frames' PD nodes (a slab run: rank 0's grid) */
+    if (prob->slab && prob->writedir) st = cupid_pd_grid_create_from_model(m, &g->whole);
+    if (st == CUPID_SUCCESS && (g->whole || !prob->slab))
+      st = cupid_problem_vertices_build(g->whole ? g->whole : prob->grid, &g->verts);
+    if (prob->slab) st = cupid_problem_slab_agree(st);
+    CUPID_CALL(st);
   }
-  fputc('\n', f);
-  return CUPID_SUCCESS;
+  if (!prob->writedir) return CUPID_SUCCESS;
+  cupid_column *cols = NULL;
+  char(*names)[200] = NULL;
+  int n = 0;
+  char key[64];
+  snprintf(key, sizeof key, "writer %s", csv_name(prob));
+  CUPID_TRY(csv_columns(prob, &cols, &n, &names));
+  cupid_writer_spec spec = {.dir = prob->writedir, .file = csv_name(prob), .columns = cols,
+                            .n_columns = n, .resume = g->resume, .key = key};
+  CUPID_TRY(cupid_writer_create(&cupid_writer_csv, &spec, &g->csv));
+  if (m->output.exodus) {
+    spec = (cupid_writer_spec){.dir = prob->writedir, .file = "model.exo", .title = m->title,
+                               .resume = g->resume, .key = "writer model.exo"};
+    CUPID_TRY(cupid_writer_create(&cupid_writer_exodus, &spec, &g->exodus));
+  }
+cleanup:
+  cupid_free(&cols);
+  cupid_free(&names);
+  cupid_checkpoint_close(&g->resume);
+  return st;
+}
+
+/* A load step's frame for model.exo: the beam's reconstruction and the PD nodes with their
+ * displacement, internal force and damage (a slab run gathers them on rank 0: collective). */
+static cupid_status write_frame(growth_run *g, int step, double lambda) {
+  cupid_problem_state *prob = g->prob;
+  if (!prob->model->output.exodus) return CUPID_SUCCESS;
+  cupid_frame_part parts[2];
+  cupid_vtu_array pdata[3];
+  cupid_vtu_mesh pd;
+  cupid_cuf_vtu *beam = NULL;
+  double *gathered[3] = {NULL, NULL, NULL};
+  cupid_status st = CUPID_SUCCESS;
+  int np = 0;
+  if (prob->beam && prob->writedir) {
+    CUPID_TRY(cupid_cuf_vtu_build(prob->beam, prob->u, 0, &beam));
+    parts[np++] = (cupid_frame_part){"beam", &beam->mesh, NULL};
+  }
+  if (prob->grid) {
+    const double *u = prob->u, *f = prob->f_int, *damage = prob->damage;
+    if (prob->slab) {
+      CUPID_TRY(cupid_problem_slab_gather(prob, prob->u, 3, &gathered[0]));
+      CUPID_TRY(cupid_problem_slab_gather(prob, prob->f_int, 3, &gathered[1]));
+      if (prob->damage) CUPID_TRY(cupid_problem_slab_gather(prob, prob->damage, 1, &gathered[2]));
+      u = gathered[0], f = gathered[1], damage = gathered[2];
+    }
+    pdata[0] = (cupid_vtu_array){"displacement", 3, u};
+    pdata[1] = (cupid_vtu_array){"force", 3, f};
+    pdata[2] = (cupid_vtu_array){"damage", 1, damage};
+    if (g->verts.grid) {
+      pd = cupid_problem_vertices_mesh(&g->verts, pdata, damage ? 3 : 2);
+      parts[np++] = (cupid_frame_part){"pd", &pd, g->verts.volume};
+    }
+  }
+  const cupid_frame frame = {.step = step, .time = lambda, .n_parts = np, .parts = parts};
+  st = cupid_writer_step(g->exodus, &frame);
+  if (prob->slab) st = cupid_problem_slab_agree(st);
+cleanup:
+  cupid_cuf_vtu_destroy(&beam);
+  for (int k = 0; k < 3; k++) cupid_free(&gathered[k]);
+  return st;
 }
 
 /* The reaction of each constraint k into g->react[3 k ..]: the work of (f_int - f_ext) on its
@@ -254,24 +345,20 @@ static cupid_status write_row(growth_run *g, int step, double lambda, int iterat
   if (prob->slab) CUPID_CALL(cupid_problem_slab_points(prob, g->points));
   for (int c = 0; c < 3 && m->output.n_points > 0; c++) g->u0[c] = g->points[c];
   if (!g->csv) return CUPID_SUCCESS;
-  FILE *f = cupid_atomic_stream(g->csv);
-  /* t is the load factor: the contract's columns step,t,... read as a pseudo-time */
-  fprintf(f, "%d,%.10e,%.10e,%d", step, lambda, lambda, iterations);
-  if (damage)
-    fprintf(f, ",%lld,%lld,%.10e,%lld,%lld", (long long)prob->broken_bonds,
-            (long long)prob->damaged_nodes, prob->max_damage, (long long)nodes_broken,
-            (long long)g->released);
-  if (m->has_peridynamics && m->pd.fracture.has_fracture) fprintf(f, ",%.10e", next_break(g, lambda));
-  for (int k = 0; k < m->n_constraints; k++) {
-    const double *r = g->react + 3 * k;
-    fprintf(f, ",%.10e,%.10e,%.10e", r[0], r[1], r[2]);
+  /* the columns of csv_columns; t is the load factor: the contract's columns step,t,... read
+   * as a pseudo-time */
+  double *row = g->row;
+  int k = 0;
+  row[k++] = step, row[k++] = lambda, row[k++] = lambda, row[k++] = iterations;
+  if (damage) {
+    row[k++] = (double)prob->broken_bonds, row[k++] = (double)prob->damaged_nodes;
+    row[k++] = prob->max_damage, row[k++] = (double)nodes_broken, row[k++] = (double)g->released;
   }
-  for (int k = 0; k < m->output.n_points; k++) {
-    const double *u = g->points + 3 * k;
-    fprintf(f, ",%.10e,%.10e,%.10e", u[0], u[1], u[2]);
-  }
-  fputc('\n', f);
-  return CUPID_SUCCESS;
+  if (m->has_peridynamics && m->pd.fracture.has_fracture) row[k++] = next_break(g, lambda);
+  for (int j = 0; j < 3 * m->n_constraints; j++) row[k++] = g->react[j];
+  for (int j = 0; j < 3 * m->output.n_points; j++) row[k++] = g->points[j];
+  const cupid_frame frame = {.step = step, .time = lambda, .row = row};
+  return cupid_writer_step(g->csv, &frame);
 }
 
 /* damage.png (broken bonds and damaged nodes against the load factor) and, with an output
@@ -932,6 +1019,8 @@ static cupid_status setup_run(growth_run *g) {
                           &g->react));
   CUPID_CALL(cupid_calloc(3 * (size_t)prob->model->output.n_points + 1, sizeof(double),
                           "output points", &g->points));
+  CUPID_CALL(cupid_calloc(10 + 3 * (size_t)(prob->model->n_constraints + prob->model->output.n_points),
+                          sizeof(double), "a row of the steps' file", &g->row));
   /* bench/growth.sh: factor | krylov | downdate (the default) */
   const char *how = getenv("CUPID_GROWTH_RESOLVE");
   g->krylov = !(how && strcmp(how, "factor") == 0);
@@ -954,7 +1043,7 @@ static cupid_status begin_growth(growth_run *g) {
   /* the estimate: a solve of the chosen engine per load step, at least */
   CUPID_CALL(cupid_problem_checkpoint_begin(prob, prob->estimate.seconds * N));
   if (prob->opts->resume) CUPID_CALL(growth_resume(g));
-  return open_csv(g);
+  return open_writers(g);
 }
 
 /* A status agreed over the ranks of an MPI run (a slab's, or a replicated model's). */
@@ -965,11 +1054,11 @@ static cupid_status agreed_growth(const cupid_problem_state *prob, cupid_status 
 cupid_status cupid_problem_run_growth(cupid_problem_state *prob) {
   const cupid_model_t *m = prob->model;
   const int N = m->analysis.steps > 0 ? m->analysis.steps : 1;
-  growth_run g = {.prob = prob, .first_step = 1, .csv_keep = -1};
+  growth_run g = {.prob = prob, .first_step = 1};
   cupid_status st = CUPID_SUCCESS;
   CUPID_TRY(setup_run(&g));
   const int fracture = cupid_problem_growth_resumable(prob); /* crack growth: resumable */
-  CUPID_TRY(fracture ? agreed_growth(prob, begin_growth(&g)) : open_csv(&g));
+  CUPID_TRY(fracture ? agreed_growth(prob, begin_growth(&g)) : open_writers(&g));
   const size_t n = (size_t)prob->ndof;
   double t0 = cupid_wtime();
   if (!fracture) { /* linear: one solve at load factor 1 (one factorisation), each step its
@@ -987,6 +1076,7 @@ cupid_status cupid_problem_run_growth(cupid_problem_state *prob) {
       prob->f_ext[d] = lambda * g.f_full[d];
     }
     CUPID_TRY(write_row(&g, k, lambda, k == 1));
+    CUPID_TRY(write_frame(&g, k, lambda));
   }
   for (int k = g.first_step; k <= N && fracture && !prob->growth.stopped_step; k++) {
     const double lambda = (double)k / N;
@@ -1002,6 +1092,7 @@ cupid_status cupid_problem_run_growth(cupid_problem_state *prob) {
     CUPID_TRY(load_step(&g, k, lambda, &it, &stop));
     if (stop) break; /* the message: cupid_problem_get_info's stopped (the CLI prints it) */
     CUPID_TRY(write_row(&g, k, lambda, it));
+    CUPID_TRY(write_frame(&g, k, lambda));
     if (step_line_due(&g, k, N))
       cupid_problem_progress(prob, "growth: step %d / %d, load factor %.4g: %d solve%s, %lld bonds "
                            "broken (+%lld), %lld nodes held",
@@ -1066,12 +1157,16 @@ cupid_status cupid_problem_run_growth(cupid_problem_state *prob) {
     CUPID_TRY(cupid_problem_slab_collect(prob));
     if (prob->slab) goto cleanup; /* a rank other than 0 */
   }
-  if (g.csv) CUPID_TRY(cupid_atomic_commit(&g.csv));
+  CUPID_TRY(cupid_writer_end(&g.csv));
+  CUPID_TRY(cupid_writer_end(&g.exodus));
   CUPID_TRY(plots(&g));
   if (prob->method->report) CUPID_TRY(prob->method->report(prob));
 cleanup:
   /* --resume continues it (after an interrupt, or again after a resumption that failed) */
-  if (prob->ckpt.interrupted || prob->opts->resume) cupid_atomic_suspend(&g.csv);
+  if (prob->ckpt.interrupted || prob->opts->resume) {
+    cupid_writer_drop(&g.csv, 1);
+    cupid_writer_drop(&g.exodus, 1);
+  }
   cupid_problem_checkpoint_end(prob);
   growth_free(&g);
   return st;

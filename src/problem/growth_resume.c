@@ -110,7 +110,6 @@ typedef struct {
   double next_ratio, ratio_per_load, u0[3], factor_flops, cg_iteration_flops;
   double t_downdate, t_factor, t_cg, held_share, weak_share, force_scale;
   double first_break_load, held_reaction[3], mf_setup_s, mf_solve_s;
-  int64_t csv_bytes;
   int cut_through, downdate, has_factor, mf_limit, n_rounds, lu_no_update;
   cupid_int n_pairs, n_held, words;
   /* the LU of a non-symmetric coupling (growth_lu.c) */
@@ -160,7 +159,7 @@ static void fill_scalars(const growth_run *g, int k, growth_scalars *c) {
       .first_break_load = prob->first_break_load,
       .held_reaction = {prob->growth.held_reaction[0], prob->growth.held_reaction[1],
                         prob->growth.held_reaction[2]},
-      .mf_setup_s = g->mf.setup_s, .mf_solve_s = g->mf.solve_s, .csv_bytes = -1,
+      .mf_setup_s = g->mf.setup_s, .mf_solve_s = g->mf.solve_s,
       .cut_through = g->cut_through, .downdate = g->downdate, .has_factor = has_factor(g),
       .mf_limit = g->mf.limit, .n_rounds = (int)g->journal.n_rounds,
       .lu_no_update = g->lu.no_update, .n_pairs = g->journal.n_pairs,
@@ -192,7 +191,8 @@ static cupid_status write_growth(void *ctx, cupid_checkpoint_writer w) {
   const size_t nk = (size_t)prob->model->n_constraints;
   growth_scalars c;
   fill_scalars(g, k, &c);
-  if (g->csv) CUPID_CALL(cupid_atomic_sync(g->csv, &c.csv_bytes));
+  CUPID_CALL(cupid_writer_save(g->csv, w)); /* NULL writers (the ranks that write no files): nothing */
+  CUPID_CALL(cupid_writer_save(g->exodus, w));
   const cupid_int step = k;
   CUPID_CALL(cupid_checkpoint_write(w, "step", &step, sizeof step));
   CUPID_CALL(cupid_checkpoint_write(w, "growth", &c, sizeof c));
@@ -430,12 +430,12 @@ cupid_status growth_resume(growth_run *g) {
   CUPID_TRY(cupid_problem_checkpoint_fracture(prob, ck)); /* ... the bonds now */
   CUPID_TRY(read_growth(g, ck, &c));
   if (g->matrix_free && c.mf_limit > 0) CUPID_TRY(cupid_growth_mf_set_limit(&g->mf, c.mf_limit));
-  g->csv_keep = c.csv_bytes;
   g->first_step = (int)c.step + 1;
   cupid_problem_progress(prob, "resume: after load step %d of %d, %lld broken bonds, %lld nodes "
                          "held%s", (int)c.step, prob->model->analysis.steps,
                          (long long)prob->broken_bonds, (long long)g->released,
                          c.has_factor ? ", the factor rebuilt from its journal" : "");
+  g->resume = ck, ck = NULL; /* the writers read theirs (growth.c, open_writers) */
 cleanup:
   cupid_checkpoint_close(&ck);
   return st;

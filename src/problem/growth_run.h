@@ -42,7 +42,10 @@ typedef struct {
   int cut_through;              /* the crack has cut the load path (carries_load) */
   int substep;                  /* sub-steps to each break's load (load_step) */
   double t_line;                /* when the last step's progress line was printed */
-  cupid_atomic_file csv;
+  cupid_writer csv;             /* damage.csv or load_steps.csv (io.h's CSV writer) */
+  cupid_writer exodus;          /* model.exo: a time step per load step (output.exodus) */
+  cupid_problem_vertices verts; /* the PD nodes of its frames (a slab run: rank 0's whole grid) */
+  cupid_pd_grid whole;          /* a slab run's whole grid, on rank 0 */
   cupid_int released;
   /* Re-solves after breaks (below): the factor of the last factorised K, reused as the
    * preconditioner of CG on the current K. */
@@ -66,12 +69,13 @@ typedef struct {
   double weak_share;            /* the weakly held nodes' share (held_forces) */
   double force_scale;           /* the largest |P| + sum |R_k| of the run (held_forces) */
   double *points;               /* 3 per output point */
+  double *row;                  /* a row of the steps' file (write_row) */
   cupid_growth_lu lu;           /* a non-symmetric method on the direct engine (growth_lu.c) */
   int matrix_free;              /* solves by the kept matrix-free PETSc solve ... */
   cupid_growth_mf mf;           /* ... (growth_matrix_free.c) */
   growth_journal journal;       /* how g->F came to be (growth_resume.c) */
   int first_step;               /* 1, or a resumption's step after its checkpoint */
-  int64_t csv_keep;             /* a resumption: the bytes of the steps' file to keep (-1) */
+  cupid_checkpoint resume;      /* a resumption's checkpoint, open until the writers read it */
 } growth_run;
 
 /* growth_resume.c */

@@ -233,8 +233,7 @@ static cupid_status begin_outputs(cupid_problem_state *prob);
 
 static cupid_status run_static(cupid_problem_state *prob) {
   CUPID_CALL(require_constraints(prob));
-  const cupid_model_t *m = prob->model;
-  if (m->analysis.steps > 0 || (m->has_peridynamics && m->pd.fracture.has_fracture)) {
+  if (cupid_problem_runs_steps(prob)) {
     /* load steps, crack growth: assembled K and the direct path, re-solved as bonds break, or
      * (PD only, slabs under mpirun) the kept matrix-free solve */
     if (!prob->slab) CUPID_CALL(cupid_problem_estimate(prob, 0));

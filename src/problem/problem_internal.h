@@ -570,6 +570,29 @@ cupid_status cupid_problem_translations(const cupid_problem_state *prob, double 
 cupid_status cupid_problem_fe_write_vtu(const cupid_problem_state *prob, const double *sol,
                                         const char *path);
 
+/* frames.c: what a run hands its output writers (io.h, "Output writers"). */
+/** The PD nodes as VTK vertices (made once per run): connectivity, offsets, cell types, the
+ *  nodes' volumes (the Exodus SPHERE elements' attribute). */
+typedef struct {
+  cupid_pd_grid grid;
+  cupid_int *conn, *offs;
+  unsigned char *types;
+  double *volume;
+} cupid_problem_vertices;
+cupid_status cupid_problem_vertices_build(cupid_pd_grid grid, cupid_problem_vertices *v);
+void cupid_problem_vertices_free(cupid_problem_vertices *v);
+/** The vertices' mesh with @p n_data point-data arrays. */
+cupid_vtu_mesh cupid_problem_vertices_mesh(const cupid_problem_vertices *v,
+                                           const cupid_vtu_array *data, int n_data);
+/** Hand @p f to every writer (NULL ones skipped: a rank that writes no files). */
+cupid_status cupid_problem_frame_write(cupid_writer *writers, int n_writers, const cupid_frame *f);
+
+/** 1 when a static analysis runs load steps (analysis.steps) or crack growth (growth.c). */
+int cupid_problem_runs_steps(const cupid_problem_state *prob);
+/** 1 when the run writes its frames as it goes (dynamics, load steps and crack growth: their
+ *  model.exo time steps), 0 when the report writes the one frame of a static solve. */
+int cupid_problem_writes_frames(const cupid_problem_state *prob);
+
 /* dynamic.c: type dynamic. */
 /** What type dynamic needs of any model (densities, integrator settings, loads constant). */
 cupid_status cupid_problem_dynamic_check(const cupid_problem_state *prob);

@@ -95,62 +95,61 @@ static cupid_status write_pd_nodes(cupid_problem_state *prob) {
   return cupid_atomic_commit(&file);
 }
 
-/* `pd.vtu`: PD nodes as VTK vertices. */
-static cupid_status write_pd_vtu(cupid_problem_state *prob) {
-  cupid_status st = CUPID_SUCCESS;
-  cupid_int n = prob->n_pd, *conn = NULL, *offs = NULL;
-  unsigned char *types = NULL;
-  double *mat = NULL, *fixed = NULL, *stress = NULL;
-  char path[4096];
-  CUPID_TRY(cupid_malloc((size_t)n, sizeof *conn, "VTU connectivity", &conn));
-  CUPID_TRY(cupid_malloc((size_t)n, sizeof *offs, "VTU offsets", &offs));
-  CUPID_TRY(cupid_malloc((size_t)n, sizeof *types, "VTU cell types", &types));
-  CUPID_TRY(cupid_malloc((size_t)n, sizeof *mat, "VTU materials", &mat));
-  CUPID_TRY(cupid_malloc((size_t)n, sizeof *fixed, "VTU constraint flags", &fixed));
+/* The PD nodes of the results (pd.vtu, model.exo): vertices with displacement, force,
+ * material, the constrained components, damage and stress. */
+typedef struct {
+  cupid_problem_vertices verts;
+  double *mat, *fixed, *stress;
+  cupid_vtu_array data[6];
+  cupid_vtu_mesh mesh;
+} pd_part;
+
+static void pd_part_free(pd_part *p) {
+  cupid_problem_vertices_free(&p->verts);
+  cupid_free(&p->mat);
+  cupid_free(&p->fixed);
+  cupid_free(&p->stress);
+}
+
+static cupid_status pd_part_build(const cupid_problem_state *prob, pd_part *p) {
+  const cupid_int n = prob->n_pd;
+  memset(p, 0, sizeof *p);
+  CUPID_CALL(cupid_problem_vertices_build(prob->grid, &p->verts));
+  CUPID_CALL(cupid_malloc((size_t)n + 1, sizeof *p->mat, "VTU materials", &p->mat));
+  CUPID_CALL(cupid_malloc((size_t)n + 1, sizeof *p->fixed, "VTU constraint flags", &p->fixed));
   if (prob->pd_stress) {
     /* VTK's symmetric-tensor order is xx yy zz xy yz xz; cupid's is xx yy zz yz xz xy. */
     static const int vtk_order[6] = {0, 1, 2, 5, 3, 4};
-    CUPID_TRY(cupid_malloc((size_t)(6 * n), sizeof *stress, "VTU stresses", &stress));
+    CUPID_CALL(cupid_malloc((size_t)(6 * n), sizeof *p->stress, "VTU stresses", &p->stress));
     for (cupid_int i = 0; i < n; i++)
-      for (int c = 0; c < 6; c++) stress[6 * i + c] = prob->pd_stress[6 * i + vtk_order[c]];
+      for (int c = 0; c < 6; c++) p->stress[6 * i + c] = prob->pd_stress[6 * i + vtk_order[c]];
   }
   const int *m = cupid_pd_grid_materials(prob->grid);
   for (cupid_int i = 0; i < n; i++) {
-    conn[i] = i;
-    offs[i] = i + 1;
-    types[i] = CUPID_VTK_VERTEX;
-    mat[i] = m[i];
-    fixed[i] = prob->bc ? (double)(prob->bc->fixed[3 * i] + prob->bc->fixed[3 * i + 1] +
-                                  prob->bc->fixed[3 * i + 2])
-                       : 0.0;
+    p->mat[i] = m[i];
+    p->fixed[i] = prob->bc ? (double)(prob->bc->fixed[3 * i] + prob->bc->fixed[3 * i + 1] +
+                                     prob->bc->fixed[3 * i + 2])
+                          : 0.0;
   }
-  cupid_vtu_array pdata[6] = {{"displacement", 3, prob->u},
-                              {"force", 3, prob->f_int},
-                              {"material", 1, mat},
-                              {"constrained_components", 1, fixed},
-                              {"damage", 1, prob->damage},
-                              {"stress", 6, stress}};
-  int np = 4;
-  if (prob->damage) np++;
-  else pdata[4] = pdata[5];
-  if (prob->pd_stress) np++;
-  cupid_vtu_mesh mesh = {.n_points = n,
-                         .points = cupid_pd_grid_coords(prob->grid),
-                         .n_cells = n,
-                         .connectivity = conn,
-                         .offsets = offs,
-                         .types = types,
-                         .point_data = pdata,
-                         .n_point_data = np};
-  CUPID_TRY(join_path(prob->writedir, "pd.vtu", path, sizeof path));
-  CUPID_TRY(cupid_vtu_write(path, &mesh));
-cleanup:
-  cupid_free(&conn);
-  cupid_free(&offs);
-  cupid_free(&types);
-  cupid_free(&mat);
-  cupid_free(&fixed);
-  cupid_free(&stress);
+  int np = 0;
+  p->data[np++] = (cupid_vtu_array){"displacement", 3, prob->u};
+  p->data[np++] = (cupid_vtu_array){"force", 3, prob->f_int};
+  p->data[np++] = (cupid_vtu_array){"material", 1, p->mat};
+  p->data[np++] = (cupid_vtu_array){"constrained_components", 1, p->fixed};
+  if (prob->damage) p->data[np++] = (cupid_vtu_array){"damage", 1, prob->damage};
+  if (prob->pd_stress) p->data[np++] = (cupid_vtu_array){"stress", 6, p->stress};
+  p->mesh = cupid_problem_vertices_mesh(&p->verts, p->data, np);
+  return CUPID_SUCCESS;
+}
+
+/* `pd.vtu`: PD nodes as VTK vertices. */
+static cupid_status write_pd_vtu(cupid_problem_state *prob) {
+  pd_part p;
+  char path[4096];
+  cupid_status st = pd_part_build(prob, &p);
+  if (st == CUPID_SUCCESS) st = join_path(prob->writedir, "pd.vtu", path, sizeof path);
+  if (st == CUPID_SUCCESS) st = cupid_vtu_write(path, &p.mesh);
+  pd_part_free(&p);
   return st;
 }
 
@@ -173,6 +172,37 @@ static cupid_status write_vtu(cupid_problem_state *prob) {
   }
   CUPID_CALL(join_path(prob->writedir, "model.pvd", path, sizeof path));
   return cupid_pvd_write(path, n, files, times, parts);
+}
+
+/* `model.exo` of a static solve or `evaluate` (output.exodus): one time step, the parts and
+ * fields of beam.vtu and pd.vtu (dynamics and load steps write theirs as they go). */
+static cupid_status write_exodus(cupid_problem_state *prob) {
+  cupid_frame_part parts[2];
+  cupid_cuf_vtu *beam = NULL;
+  cupid_writer w = NULL;
+  pd_part pd;
+  int np = 0, have_pd = 0;
+  cupid_status st = CUPID_SUCCESS;
+  if (prob->beam) {
+    CUPID_TRY(cupid_cuf_vtu_build(prob->beam, prob->u, 0, &beam));
+    parts[np++] = (cupid_frame_part){"beam", &beam->mesh, NULL};
+  }
+  if (prob->grid) {
+    have_pd = 1;
+    CUPID_TRY(pd_part_build(prob, &pd));
+    parts[np++] = (cupid_frame_part){"pd", &pd.mesh, pd.verts.volume};
+  }
+  const cupid_writer_spec spec = {.dir = prob->writedir, .file = "model.exo",
+                                  .title = prob->model->title};
+  const cupid_frame f = {.step = 0, .time = 0.0, .n_parts = np, .parts = parts};
+  CUPID_TRY(cupid_writer_create(&cupid_writer_exodus, &spec, &w));
+  CUPID_TRY(cupid_writer_step(w, &f));
+  CUPID_TRY(cupid_writer_end(&w));
+cleanup:
+  cupid_writer_drop(&w, 0);
+  cupid_cuf_vtu_destroy(&beam);
+  if (have_pd) pd_part_free(&pd);
+  return st;
 }
 
 static void json_vec3(cupid_json js, const char *key, const double v[3]) {
@@ -370,6 +400,7 @@ cupid_status cupid_problem_report(cupid_problem_state *prob) {
   if (o->pd_nodes && prob->grid) CUPID_CALL(write_pd_nodes(prob));
   /* dynamic runs wrote their VTU time series (dynamic.c) */
   if (o->vtu && prob->model->analysis.type != CUPID_ANALYSIS_DYNAMIC) CUPID_CALL(write_vtu(prob));
+  if (o->exodus && !cupid_problem_writes_frames(prob)) CUPID_CALL(write_exodus(prob));
   /* The output phase is recorded before summary.json so that the file reports it. */
   cupid_problem_phase_end(prob, CUPID_PHASE_OUTPUT, t0);
   return write_summary(prob);

@@ -93,3 +93,14 @@ void cupid_plot_component_label(const double umax[3], char *label, size_t len) {
     if (umax[c] > 1e-12 * top || top == 0.0)
       n += snprintf(label + n, len - (size_t)n, "%su_%c", n ? ", " : "", "xyz"[c]);
 }
+
+int cupid_problem_runs_steps(const cupid_problem_state *prob) {
+  const cupid_model_t *m = prob->model;
+  return m->analysis.steps > 0 || (m->has_peridynamics && m->pd.fracture.has_fracture);
+}
+
+int cupid_problem_writes_frames(const cupid_problem_state *prob) {
+  const cupid_analysis_type type = prob->model->analysis.type;
+  return type == CUPID_ANALYSIS_DYNAMIC ||
+         (type == CUPID_ANALYSIS_STATIC && cupid_problem_runs_steps(prob));
+}

@@ -6,11 +6,11 @@
 # byte; summary.json to the bit but for its timings, memory and threads (keys *_s, *memory*,
 # threads). Covered:
 # a free LPS block (central differences with merged half-kicks between outputs), explicit
-# fracture with moving grips (PMB and LPS), the Arlequin beam with explicit fracture,
-# Newmark with Rayleigh damping, Newmark with a moving grip and a load in t, a Lagrange tie, the
-# plots; and crack growth over load steps (the factor rebuilt from its journal: downdates, a
-# held node; LPS; the Arlequin SENB; the SENB with fictitious nodes, its LU updated by SMW and
-# balanced). And the refusals: a changed model or option (exit 1, naming the line that differs),
+# fracture with moving grips (PMB and LPS), the Arlequin beam with explicit fracture (and
+# model.exo), Newmark with Rayleigh damping, Newmark with a moving grip and a load in t, a
+# Lagrange tie, the plots; and crack growth over load steps (the factor rebuilt from its
+# journal: downdates, a held node; LPS; the Arlequin SENB with model.exo; the SENB with
+# fictitious nodes by block elimination, balanced). And the refusals: a changed model or option (exit 1, naming the line that differs),
 # nothing to resume and no intact checkpoint (exit 3), a damaged checkpoint (its previous one is
 # used, the results unchanged), a disk that fills while checkpointing (a warning; the run goes
 # on), a second signal (stops at once; the last periodic checkpoint resumes).
@@ -121,10 +121,14 @@ output:
   plots: false
 EOF
 P=(--set output.plots=false --set output.checkpoint=0.05)
+# model.exo (output.exodus, issue 35) where the build has Exodus II: a resumption reopens the
+# partial database and writes on from the checkpoint's time step
+EXO=()
+"$CUPID" check free.yaml --set output.exodus=true >/dev/null 2>&1 && EXO=(--set output.exodus=true)
 interrupt_and_resume free free.yaml "${P[@]}"
 interrupt_and_resume pmb plate.yaml "${P[@]}"
 interrupt_and_resume lps plate_lps.yaml "${P[@]}"
-interrupt_and_resume arlequin bar.yaml "${P[@]}"
+interrupt_and_resume arlequin bar.yaml "${P[@]}" "${EXO[@]}"
 interrupt_and_resume damped truss_damped.yaml --set analysis.dynamic.duration=0.5 "${P[@]}"
 interrupt_and_resume grip grip.yaml --set output.checkpoint=0.05
 interrupt_and_resume lagrange truss_lagrange.yaml --set analysis.dynamic.duration=0.3 "${P[@]}"
@@ -142,7 +146,7 @@ interrupt_and_resume growth_lps growth.yaml "${GP[@]}" --set peridynamics.model=
   --set "peridynamics.fracture={criterion: energy, energy_release_rate: 0.01}" \
   --set "peridynamics.regions=[{x: [0, 20], y: [0, 24], z: [0, 2]}]" --set analysis.steps=10
 interrupt_and_resume senb senb.yaml --set peridynamics.spacing=1.6666666666666667 \
-  --set peridynamics.horizon=5.025 "${P[@]}"
+  --set peridynamics.horizon=5.025 "${P[@]}" "${EXO[@]}"
 interrupt_and_resume senb_fictitious senb.yaml --set "coupling={method: fictitious}" \
   --set peridynamics.spacing=1.6666666666666667 --set peridynamics.horizon=5.025 "${P[@]}"
 

@@ -276,6 +276,7 @@ static const bad_case cases[] = {
      "10:7: peridynamics.holes[0]: a hole is a box {x, y, z} (at least one axis), {cylinder: "
      "{..}} or {sphere: {..}}",
      NULL},
+    {"output_exodus_word.yaml", "12:11: output.exodus: must be true or false, got 'exo'", NULL},
     {"output_checkpoint_negative.yaml",
      "13:15: output.checkpoint: must be seconds between checkpoints, from 0 (none) to 1e9",
      NULL},
