@@ -13,9 +13,10 @@ set -euo pipefail
 # python3-pip, python3-setuptools, python3-venv: `pip install ./python` into a virtual
 # environment (unit.python_install). libexodusii-dev: Exodus II output (output.exodus);
 # python3-netcdf4: meshio and the tests read model.exo back (regression.exodus_readers).
+# libgmsh4.8: section meshes from Gmsh files (beam.section.mesh; loaded at run time, not linked).
 pkgs=(cmake make gcc pkg-config libsuitesparse-dev libopenblas-dev libyaml-dev zlib1g-dev libcmocka-dev gnuplot-nox python3
       python3-numpy python3-meshio python3-vtk9 python3-pytest python3-pip python3-setuptools python3-venv
-      libexodusii-dev python3-netcdf4)
+      libexodusii-dev python3-netcdf4 libgmsh4.8)
 for arg in "$@"; do
   case $arg in
     --with-petsc) pkgs+=(petsc-dev procps) ;; # procps: pkill, SIGKILL to the ranks (mpi_resume)

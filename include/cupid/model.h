@@ -56,6 +56,12 @@ typedef struct {
                          from/to along the axis, unbounded there when not given) */
 } cupid_shape;
 
+/** The node order of LE section elements (L4, L9, L16; cuf.md section 3.1, MUL2_new's): node
+ *  @p k (0-based) of an element with @p npe = n^2 nodes sits at grid point (a, b) of the n x n
+ *  grid of natural coordinates r, s = -1 + 2 a / (n - 1), -1 + 2 b / (n - 1). Explicit section
+ *  elements and meshed sections (beam.section.mesh) list their nodes in this order. */
+void cupid_le_node_grid(int npe, int k, int *a, int *b);
+
 /** 1 if point p lies in the shape (on its surface counts as inside). */
 int cupid_shape_contains(const cupid_shape *shape, const double p[3]);
 

@@ -63,15 +63,10 @@ void cuf_beam_nodes(int p, double *xi) {
 }
 
 void cuf_quad_init(cuf_quad *q, int n) {
-  static const int l4a[4] = {0, 1, 1, 0}, l4b[4] = {0, 0, 1, 1};
-  static const int l9a[9] = {0, 1, 2, 2, 2, 1, 0, 0, 1}, l9b[9] = {0, 0, 0, 1, 2, 2, 2, 1, 1};
-  static const int l16a[16] = {0, 1, 2, 3, 3, 3, 3, 2, 1, 0, 0, 0, 1, 2, 2, 1};
-  static const int l16b[16] = {0, 0, 0, 0, 1, 2, 3, 3, 3, 3, 2, 1, 1, 1, 2, 2};
   q->n = n;
   q->npe = n * n;
   cuf_beam_nodes(n, q->grid);
-  const int *A = n == 2 ? l4a : n == 3 ? l9a : l16a, *B = n == 2 ? l4b : n == 3 ? l9b : l16b;
-  for (int k = 0; k < q->npe; k++) q->ia[k] = A[k], q->ib[k] = B[k];
+  for (int k = 0; k < q->npe; k++) cupid_le_node_grid(q->npe, k, &q->ia[k], &q->ib[k]);
 }
 
 void cuf_quad_shape(const cuf_quad *q, double r, double s, double *F, double *Fr, double *Fs) {

@@ -55,4 +55,26 @@ struct cupid_writer_private {
 /** dir/file of a writer (or dir/name) into @p path; CUPID_ERR_IO if too long. */
 cupid_status cupid_writer_path(const cupid_writer w, const char *name, char *path, size_t size);
 
+/* ---- Gmsh (gmsh.c; issue 35): a section mesh through Gmsh's C API, loaded on first use ---- */
+/** A section's quadrilaterals in cupid's LE node order (model.h, cupid_le_node_grid). */
+typedef struct {
+  double *xz;        /* 2 per node: Gmsh's x and y */
+  cupid_int n_nodes;
+  int *conn;         /* npe per element, 0-based node indices */
+  int *group;        /* per element: its physical group (index into groups), -1 none */
+  cupid_int n_elements;
+  int npe;
+  char **groups;     /* the 2D physical groups' names (an unnamed one: its number) */
+  int n_groups;
+} cupid_gmsh_section;
+/** 1 if Gmsh's library loads (libgmsh.so.4.8, or $CUPID_GMSH_LIBRARY). */
+int cupid_gmsh_available(void);
+/** Read (or mesh) @p path into @p s with elements of @p npe nodes (4, 9, 16: Gmsh makes the
+ *  order). On failure, *why says what, in words for a model error (the caller adds the key's
+ *  file:line:col); CUPID_ERR_UNSUPPORTED without Gmsh, CUPID_ERR_IO for a file that cannot be
+ *  read, CUPID_ERR_MODEL for a mesh that is no section mesh (triangles, not planar). */
+cupid_status cupid_gmsh_read_section(const char *path, int npe, cupid_gmsh_section *s, char *why,
+                                     size_t size);
+void cupid_gmsh_section_free(cupid_gmsh_section *s);
+
 #endif

@@ -213,3 +213,13 @@ int cupid_shape_contains(const cupid_shape *shape, const double p[3]) {
   }
   return shape->kind == CUPID_SHAPE_BOX || r2 <= shape->radius * shape->radius;
 }
+
+void cupid_le_node_grid(int npe, int k, int *a, int *b) {
+  static const int l4a[4] = {0, 1, 1, 0}, l4b[4] = {0, 0, 1, 1};
+  static const int l9a[9] = {0, 1, 2, 2, 2, 1, 0, 0, 1}, l9b[9] = {0, 0, 0, 1, 2, 2, 2, 1, 1};
+  static const int l16a[16] = {0, 1, 2, 3, 3, 3, 3, 2, 1, 0, 0, 0, 1, 2, 2, 1};
+  static const int l16b[16] = {0, 0, 0, 0, 1, 2, 3, 3, 3, 3, 2, 1, 1, 1, 2, 2};
+  const int *A = npe == 4 ? l4a : npe == 9 ? l9a : l16a, *B = npe == 4 ? l4b : npe == 9 ? l9b : l16b;
+  *a = A[k];
+  *b = B[k];
+}

@@ -8,6 +8,7 @@
 #include <string.h>
 
 #include "cupid/io.h"
+#include "io/io_internal.h"
 #include "io/model_internal.h"
 
 #define PATH_SIZE sizeof(((cupid_mark *)0)->key)
@@ -353,13 +354,100 @@ static cupid_status read_section_elements(model_reader *rd, yaml_node_t *node, c
   return CUPID_SUCCESS;
 }
 
+/* A file named in the model, relative to the model file's folder (as given, for a model that
+ * is no file or an absolute path). */
+static cupid_status model_relative(const model_reader *rd, const char *name, char **out) {
+  const char *file = rd->model->file, *slash = file ? strrchr(file, '/') : NULL;
+  if (name[0] == '/' || !slash) return cupid_strdup(name, out);
+  const size_t dir = (size_t)(slash - file + 1), n = dir + strlen(name) + 1;
+  CUPID_CALL(cupid_malloc(n, 1, "file path", out));
+  memcpy(*out, file, dir);
+  memcpy(*out + dir, name, strlen(name) + 1);
+  return CUPID_SUCCESS;
+}
+
+/* beam.section.groups: {Gmsh physical group: material}: each element's material. */
+static cupid_status read_section_groups(model_reader *rd, yaml_node_t *node,
+                                        const cupid_gmsh_section *mesh, const char *file,
+                                        int *group_material) {
+  const char *path = "beam.section.groups";
+  char got[64];
+  for (int g = 0; g < mesh->n_groups; g++) group_material[g] = -1;
+  if (!node) return CUPID_SUCCESS;
+  if (node->type != YAML_MAPPING_NODE)
+    return mr_error(rd, node, path, "must be a mapping {physical group: material}, got %s",
+                    mr_describe(node, got, sizeof got));
+  const int n = (int)(node->data.mapping.pairs.top - node->data.mapping.pairs.start);
+  for (int i = 0; i < n; i++) {
+    yaml_node_pair_t *pair = &node->data.mapping.pairs.start[i];
+    yaml_node_t *key = mr_node(rd, pair->key);
+    if (!mr_is_scalar(key) || mr_is_null(key))
+      return mr_error(rd, key, path, "group names must be plain names, got %s",
+                      mr_describe(key, got, sizeof got));
+    const char *name = text_of(key);
+    int g = -1;
+    for (int k = 0; k < mesh->n_groups && g < 0; k++)
+      if (!strcmp(mesh->groups[k], name)) g = k;
+    if (g < 0) {
+      char have[400] = "";
+      for (int k = 0; k < mesh->n_groups; k++)
+        snprintf(have + strlen(have), sizeof have - strlen(have), "%s'%s'", k ? ", " : "",
+                 mesh->groups[k]);
+      return mr_error(rd, key, path, "%s has no 2D physical group '%s' (%s%s)", file, name,
+                      mesh->n_groups ? "it has " : "it has none", have);
+    }
+    char p[PATH_SIZE];
+    mr_path(p, path, name);
+    CUPID_CALL(mr_material(rd, mr_node(rd, pair->value), p, &group_material[g]));
+  }
+  return CUPID_SUCCESS;
+}
+
+/* beam.section.mesh: the section's quadrilaterals from a Gmsh file (.msh, or .geo / CAD that
+ * Gmsh meshes) become the explicit mesh (nodes + elements, their materials by `groups`). */
+static cupid_status read_section_mesh(model_reader *rd, yaml_node_t *node, yaml_node_t *groups,
+                                      cupid_beam *b) {
+  const char *path = "beam.section.mesh";
+  char *name = NULL, *file = NULL, why[1024];
+  int *group_material = NULL;
+  cupid_gmsh_section mesh = {0};
+  cupid_status st = mr_string(rd, node, path, MODEL_MAX_STRING, &name);
+  if (st == CUPID_SUCCESS && !name[0]) st = mr_error(rd, node, path, "must name a file");
+  if (st == CUPID_SUCCESS) st = model_relative(rd, name, &file);
+  if (st == CUPID_SUCCESS && cupid_gmsh_read_section(file, b->le_nodes, &mesh, why, sizeof why))
+    st = mr_error(rd, node, path, "%s: %s", file, why);
+  if (st == CUPID_SUCCESS && mesh.n_nodes > 2147483647 / 2)
+    st = mr_error(rd, node, path, "%s: %lld nodes: too many for a section", file,
+                  (long long)mesh.n_nodes);
+  if (st == CUPID_SUCCESS)
+    st = cupid_calloc((size_t)mesh.n_groups + 1, sizeof *group_material, "group materials",
+                      &group_material);
+  if (st == CUPID_SUCCESS) st = read_section_groups(rd, groups, &mesh, file, group_material);
+  if (st == CUPID_SUCCESS) {
+    b->section_nodes = mesh.xz, mesh.xz = NULL;
+    b->n_section_nodes = (int)mesh.n_nodes;
+    b->section_elements = mesh.conn, mesh.conn = NULL;
+    b->n_section_elements = (int)mesh.n_elements;
+    st = cupid_calloc((size_t)mesh.n_elements, sizeof *b->section_element_material,
+                      "section element materials", &b->section_element_material);
+  }
+  for (cupid_int e = 0; st == CUPID_SUCCESS && e < mesh.n_elements; e++)
+    b->section_element_material[e] = mesh.group[e] >= 0 ? group_material[mesh.group[e]] : -1;
+  cupid_gmsh_section_free(&mesh);
+  cupid_free(&group_material);
+  cupid_free(&name);
+  cupid_free(&file);
+  return st;
+}
+
 static cupid_status read_section(model_reader *rd, yaml_node_t *node, cupid_beam *b) {
-  static const char *const keys[] = {"expansion", "element", "components", "nodes", "elements"};
+  static const char *const keys[] = {"expansion", "element", "components", "nodes", "elements",
+                                     "mesh", "groups"};
   static const char *const elements[] = {"L4", "L9", "L16"};
   static const int element_nodes[] = {4, 9, 16};
   const char *path = "beam.section";
   mr_map map;
-  yaml_node_t *expansion, *element, *components, *nodes, *elems;
+  yaml_node_t *expansion, *element, *components, *nodes, *elems, *mesh, *groups;
   CUPID_CALL(mr_map_open(rd, node, path, keys, COUNT(keys), &map));
   CUPID_CALL(mr_require(rd, &map, "expansion", &expansion));
   CUPID_CALL(read_expansion(rd, expansion, b));
@@ -367,6 +455,8 @@ static cupid_status read_section(model_reader *rd, yaml_node_t *node, cupid_beam
   components = mr_get(&map, "components");
   nodes = mr_get(&map, "nodes");
   elems = mr_get(&map, "elements");
+  mesh = mr_get(&map, "mesh");
+  groups = mr_get(&map, "groups");
   if (element) {
     int e;
     CUPID_CALL(mr_enum(rd, element, "beam.section.element", elements, COUNT(elements), &e));
@@ -375,13 +465,23 @@ static cupid_status read_section(model_reader *rd, yaml_node_t *node, cupid_beam
     return mr_error(rd, map.node, path,
                     "missing required key 'element': expansion LE needs element: L4 | L9 | L16");
   }
+  if (groups && !mesh)
+    return mr_error(rd, groups, "beam.section.groups", "names the physical groups of a section "
+                    "mesh: give beam.section.mesh");
+  if (mesh && (components || nodes || elems))
+    return mr_error(rd, mesh, "beam.section.mesh", "give one of components, nodes + elements or "
+                    "mesh");
+  if (mesh && !element)
+    return mr_error(rd, map.node, path, "missing required key 'element': a section mesh needs "
+                    "element: L4 | L9 | L16 (Gmsh makes the elements' order)");
+  if (mesh) return read_section_mesh(rd, mesh, groups, b);
   if (components && (nodes || elems))
     return mr_error(rd, nodes ? nodes : elems, nodes ? "beam.section.nodes" : "beam.section.elements",
                     "give either components or nodes + elements, not both");
   if (components) return read_components(rd, components, b);
   if (!nodes && !elems)
-    return mr_error(rd, map.node, path,
-                    "missing required key 'components' (or an explicit mesh: nodes + elements)");
+    return mr_error(rd, map.node, path, "missing required key 'components' (or an explicit mesh: "
+                    "nodes + elements, or a Gmsh file: mesh)");
   if (!nodes || !elems)
     return mr_error(rd, map.node, path, "missing required key '%s' (an explicit mesh needs both "
                     "nodes and elements)", nodes ? "elements" : "nodes");

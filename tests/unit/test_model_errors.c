@@ -276,6 +276,8 @@ static const bad_case cases[] = {
      "10:7: peridynamics.holes[0]: a hole is a box {x, y, z} (at least one axis), {cylinder: "
      "{..}} or {sphere: {..}}",
      NULL},
+    {"section_mesh_missing.yaml",
+     "9:11: beam.section.mesh: ", "no_such_section.msh: cannot open it: No such file or directory"},
     {"output_exodus_word.yaml", "12:11: output.exodus: must be true or false, got 'exo'", NULL},
     {"output_checkpoint_negative.yaml",
      "13:15: output.checkpoint: must be seconds between checkpoints, from 0 (none) to 1e9",

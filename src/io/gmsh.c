@@ -1,0 +1,359 @@
+/* Gmsh's C API (Debian's libgmsh4.8; issue 35): a beam section's 2D mesh from a .msh file, or
+ * from a .geo (or CAD) file that Gmsh meshes. The library is loaded when a model names such a
+ * file (dlopen), not linked: it brings some 90 shared libraries (OpenCASCADE, FLTK, ...) that
+ * would add ~50 ms to every start of cupid, and a build without it still builds and runs.
+ * The functions' types are those of gmshc.h in Gmsh 4.8 (the version Debian 12 ships). */
+#include <dlfcn.h>
+#include <errno.h>
+#include <stdlib.h>
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <string.h>
+
+#include "cupid/model.h"
+#include "io_internal.h"
+
+typedef struct {
+  void (*initialize)(int, char **, const int, int *);
+  void (*clear)(int *);
+  void (*open)(const char *, int *);
+  void (*option_set_number)(const char *, const double, int *);
+  void (*logger_start)(int *);
+  void (*logger_get_last_error)(char **, int *);
+  void (*mesh_generate)(const int, int *);
+  void (*mesh_set_order)(const int, int *);
+  void (*get_entities)(int **, size_t *, const int, int *);
+  void (*get_physical_groups)(int **, size_t *, const int, int *);
+  void (*get_physical_name)(const int, const int, char **, int *);
+  void (*get_entities_for_physical_group)(const int, const int, int **, size_t *, int *);
+  void (*get_nodes)(size_t **, size_t *, double **, size_t *, double **, size_t *, const int,
+                    const int, const int, const int, int *);
+  void (*get_elements)(int **, size_t *, size_t ***, size_t **, size_t *, size_t ***, size_t **,
+                       size_t *, const int, const int, int *);
+  void (*get_element_properties)(const int, char **, int *, int *, int *, double **, size_t *,
+                                 int *, int *);
+  void (*free)(void *);
+} gmsh_api;
+
+static gmsh_api api;
+static int api_state; /* 0: not tried, 1: loaded and initialised, -1: failed */
+static char api_why[512];
+
+static int load_api(void) {
+  if (api_state) return api_state > 0;
+  api_state = -1;
+  /* $CUPID_GMSH_LIBRARY: that library alone (another Gmsh; tests: none) */
+  const char *given = getenv("CUPID_GMSH_LIBRARY");
+  const char *names[] = {given && given[0] ? given : "libgmsh.so.4.8", given && given[0] ? NULL : "libgmsh.so"};
+  void *h = NULL;
+  for (int k = 0; k < 2 && !h; k++)
+    if (names[k]) h = dlopen(names[k], RTLD_NOW | RTLD_LOCAL);
+  if (!h) {
+    snprintf(api_why, sizeof api_why, "Gmsh's library is not installed (Debian's libgmsh4.8; "
+             "scripts/install-deps.sh installs it): %s", dlerror());
+    return 0;
+  }
+  struct {
+    const char *name;
+    void **fn;
+  } syms[] = {{"gmshInitialize", (void **)&api.initialize},
+              {"gmshClear", (void **)&api.clear},
+              {"gmshOpen", (void **)&api.open},
+              {"gmshOptionSetNumber", (void **)&api.option_set_number},
+              {"gmshLoggerStart", (void **)&api.logger_start},
+              {"gmshLoggerGetLastError", (void **)&api.logger_get_last_error},
+              {"gmshModelMeshGenerate", (void **)&api.mesh_generate},
+              {"gmshModelMeshSetOrder", (void **)&api.mesh_set_order},
+              {"gmshModelGetEntities", (void **)&api.get_entities},
+              {"gmshModelGetPhysicalGroups", (void **)&api.get_physical_groups},
+              {"gmshModelGetPhysicalName", (void **)&api.get_physical_name},
+              {"gmshModelGetEntitiesForPhysicalGroup", (void **)&api.get_entities_for_physical_group},
+              {"gmshModelMeshGetNodes", (void **)&api.get_nodes},
+              {"gmshModelMeshGetElements", (void **)&api.get_elements},
+              {"gmshModelMeshGetElementProperties", (void **)&api.get_element_properties},
+              {"gmshFree", (void **)&api.free}};
+  for (size_t k = 0; k < sizeof syms / sizeof *syms; k++) {
+    *syms[k].fn = dlsym(h, syms[k].name);
+    if (!*syms[k].fn) {
+      snprintf(api_why, sizeof api_why, "Gmsh's library has no %s (cupid needs Gmsh 4.8 or "
+               "later)", syms[k].name);
+      return 0;
+    }
+  }
+  int ierr = 0;
+  api.initialize(0, NULL, 0, &ierr);
+  if (!ierr) api.option_set_number("General.Terminal", 0, &ierr); /* quiet: messages are ours */
+  if (!ierr) api.option_set_number("General.Verbosity", 1, &ierr);
+  if (!ierr) api.option_set_number("Mesh.SecondOrderIncomplete", 0, &ierr); /* 9-node quads */
+  if (!ierr) api.logger_start(&ierr);
+  if (ierr) {
+    snprintf(api_why, sizeof api_why, "Gmsh did not start (error %d)", ierr);
+    return 0;
+  }
+  api_state = 1;
+  return 1;
+}
+
+int cupid_gmsh_available(void) { return load_api(); }
+
+/* Gmsh's last error message, or a generic one. */
+static void gmsh_reason(char *why, size_t size, const char *what) {
+  char *msg = NULL;
+  int ierr = 0;
+  api.logger_get_last_error(&msg, &ierr);
+  snprintf(why, size, "%s%s%s", what, msg && msg[0] ? ": " : "", msg && msg[0] ? msg : "");
+  if (msg) api.free(msg);
+}
+
+static cupid_status fail(char *why, size_t size, cupid_status code, const char *fmt, ...)
+    __attribute__((format(printf, 4, 5)));
+static cupid_status fail(char *why, size_t size, cupid_status code, const char *fmt, ...) {
+  va_list ap;
+  va_start(ap, fmt);
+  vsnprintf(why, size, fmt, ap);
+  va_end(ap);
+  return code;
+}
+
+void cupid_gmsh_section_free(cupid_gmsh_section *s) {
+  cupid_free(&s->xz);
+  cupid_free(&s->conn);
+  cupid_free(&s->group);
+  for (int k = 0; k < s->n_groups; k++) cupid_free(&s->groups[k]);
+  cupid_free(&s->groups);
+  memset(s, 0, sizeof *s);
+}
+
+/* The local node of a Gmsh element type at each of cupid's node positions (model.h's
+ * cupid_le_node_grid), and the same for the element's mirror image (u and v swapped), which
+ * turns a clockwise element counter-clockwise. */
+static cupid_status node_maps(int type, int npe, int map[16], int mirror[16], char *why,
+                              size_t size) {
+  char *name = NULL;
+  double *local = NULL;
+  size_t n_local = 0;
+  int dim = 0, order = 0, nodes = 0, primary = 0, ierr = 0;
+  api.get_element_properties(type, &name, &dim, &order, &nodes, &local, &n_local, &primary, &ierr);
+  cupid_status st = CUPID_SUCCESS;
+  if (ierr) st = fail(why, size, CUPID_ERR_MODEL, "Gmsh knows no element type %d", type);
+  else if (strncmp(name, "Quadrilateral", 13) != 0)
+    st = fail(why, size, CUPID_ERR_MODEL, "the mesh has %s elements: a section mesh must be "
+              "quadrilaterals (in Gmsh: Recombine Surface{...}; or Mesh.RecombineAll = 1)", name);
+  else if (nodes != npe)
+    st = fail(why, size, CUPID_ERR_MODEL, "the mesh's quadrilaterals have %d nodes, element: L%d "
+              "needs %d", nodes, npe, npe);
+  const int n = npe == 4 ? 2 : npe == 9 ? 3 : 4;
+  for (int k = 0; k < npe && st == CUPID_SUCCESS; k++) {
+    int a, b;
+    cupid_le_node_grid(npe, k, &a, &b);
+    const double r = -1.0 + 2.0 * a / (n - 1), s = -1.0 + 2.0 * b / (n - 1);
+    map[k] = mirror[k] = -1;
+    for (int j = 0; j < nodes; j++) {
+      const double u = local[(size_t)j * n_local / (size_t)nodes], v = local[(size_t)j * n_local / (size_t)nodes + 1];
+      if (fabs(u - r) < 1e-9 && fabs(v - s) < 1e-9) map[k] = j;
+      if (fabs(v - r) < 1e-9 && fabs(u - s) < 1e-9) mirror[k] = j;
+    }
+    if (map[k] < 0 || mirror[k] < 0)
+      st = fail(why, size, CUPID_ERR_INTERNAL, "Gmsh's %s has no node at (%g, %g)", name, r, s);
+  }
+  api.free(name);
+  api.free(local);
+  return st;
+}
+
+/* The index of node tag t (tags are not contiguous). */
+static cupid_int node_index(const size_t *sorted, const cupid_int *index, cupid_int n, size_t t) {
+  cupid_int lo = 0, hi = n - 1;
+  while (lo <= hi) {
+    cupid_int mid = lo + (hi - lo) / 2;
+    if (sorted[mid] == t) return index[mid];
+    if (sorted[mid] < t) lo = mid + 1;
+    else hi = mid - 1;
+  }
+  return -1;
+}
+
+static _Thread_local const size_t *sort_tags;
+static int by_tag(const void *a, const void *b) {
+  size_t x = sort_tags[*(const cupid_int *)a], y = sort_tags[*(const cupid_int *)b];
+  return (x > y) - (x < y);
+}
+
+/* The physical group (2D) of each surface entity: group[k] for entity tag ents[k], -1 none. */
+static cupid_status entity_groups(cupid_gmsh_section *s, const int *ents, size_t n_ents,
+                                  int *group, char *why, size_t size) {
+  int *pg = NULL, ierr = 0;
+  size_t n_pg = 0;
+  for (size_t k = 0; k < n_ents; k++) group[k] = -1;
+  api.get_physical_groups(&pg, &n_pg, 2, &ierr);
+  if (ierr) return fail(why, size, CUPID_ERR_IO, "Gmsh could not list the physical groups");
+  cupid_status st = CUPID_SUCCESS;
+  s->n_groups = (int)(n_pg / 2);
+  if (s->n_groups) st = cupid_calloc((size_t)s->n_groups, sizeof *s->groups, "group names", &s->groups);
+  for (int g = 0; g < s->n_groups && st == CUPID_SUCCESS; g++) {
+    char *name = NULL;
+    api.get_physical_name(2, pg[2 * g + 1], &name, &ierr);
+    char number[32];
+    snprintf(number, sizeof number, "%d", pg[2 * g + 1]); /* an unnamed group: its number */
+    st = cupid_strdup(name && name[0] ? name : number, &s->groups[g]);
+    if (name) api.free(name);
+    int *tags = NULL;
+    size_t n_tags = 0;
+    api.get_entities_for_physical_group(2, pg[2 * g + 1], &tags, &n_tags, &ierr);
+    for (size_t t = 0; t < n_tags; t++)
+      for (size_t k = 0; k < n_ents; k++)
+        if (ents[k] == tags[t] && group[k] < 0) group[k] = g;
+    if (tags) api.free(tags);
+  }
+  if (pg) api.free(pg);
+  return st;
+}
+
+/* The elements of one surface entity, appended (their nodes in cupid's order). */
+static cupid_status add_elements(cupid_gmsh_section *s, int entity, int group, int npe,
+                                 const size_t *sorted, const cupid_int *index, cupid_int n_nodes,
+                                 char *why, size_t size) {
+  int *types = NULL, ierr = 0;
+  size_t n_types = 0, **etags = NULL, *etags_n = NULL, etags_nn = 0, **ntags = NULL, *ntags_n = NULL,
+         ntags_nn = 0;
+  api.get_elements(&types, &n_types, &etags, &etags_n, &etags_nn, &ntags, &ntags_n, &ntags_nn, 2,
+                   entity, &ierr);
+  cupid_status st = ierr ? fail(why, size, CUPID_ERR_IO, "Gmsh could not list the elements of "
+                                "surface %d", entity) : CUPID_SUCCESS;
+  for (size_t t = 0; t < n_types && st == CUPID_SUCCESS; t++) {
+    int map[16], mirror[16];
+    st = node_maps(types[t], npe, map, mirror, why, size);
+    const size_t ne = etags_n[t];
+    if (st == CUPID_SUCCESS) st = cupid_realloc((size_t)(s->n_elements + (cupid_int)ne) * (size_t)npe, sizeof *s->conn, "section elements", &s->conn);
+    if (st == CUPID_SUCCESS) st = cupid_realloc((size_t)(s->n_elements + (cupid_int)ne) + 1, sizeof *s->group, "section element groups", &s->group);
+    for (size_t e = 0; e < ne && st == CUPID_SUCCESS; e++) {
+      const size_t *nt = ntags[t] + e * (size_t)npe;
+      int *c = s->conn + (size_t)s->n_elements * (size_t)npe;
+      for (int k = 0; k < npe && st == CUPID_SUCCESS; k++) {
+        cupid_int i = node_index(sorted, index, n_nodes, nt[map[k]]);
+        if (i < 0) st = fail(why, size, CUPID_ERR_IO, "element %zu refers to node %zu, which the mesh does not have", etags[t][e], nt[map[k]]);
+        c[k] = (int)i;
+      }
+      /* a clockwise element (its corners' signed area < 0 in x, z): its mirror image's order */
+      double area = 0.0;
+      int corner[4] = {0, 0, 0, 0}, nc = 0;
+      for (int k = 0; k < npe && nc < 4; k++) {
+        int a, b;
+        cupid_le_node_grid(npe, k, &a, &b);
+        const int last = npe == 4 ? 1 : npe == 9 ? 2 : 3;
+        if ((a == 0 || a == last) && (b == 0 || b == last)) corner[nc++] = c[k];
+      }
+      for (int k = 0; k < 4; k++) {
+        const double *p = s->xz + 2 * corner[k], *q = s->xz + 2 * corner[(k + 1) % 4];
+        area += p[0] * q[1] - q[0] * p[1];
+      }
+      if (area < 0)
+        for (int k = 0; k < npe && st == CUPID_SUCCESS; k++)
+          c[k] = (int)node_index(sorted, index, n_nodes, nt[mirror[k]]);
+      s->group[s->n_elements++] = group;
+    }
+  }
+  for (size_t t = 0; t < n_types; t++) {
+    if (etags) api.free(etags[t]);
+    if (ntags) api.free(ntags[t]);
+  }
+  if (types) api.free(types);
+  if (etags) api.free(etags);
+  if (etags_n) api.free(etags_n);
+  if (ntags) api.free(ntags);
+  if (ntags_n) api.free(ntags_n);
+  return st;
+}
+
+cupid_status cupid_gmsh_read_section(const char *path, int npe, cupid_gmsh_section *s, char *why,
+                                     size_t size) {
+  memset(s, 0, sizeof *s);
+  why[0] = '\0';
+  FILE *probe = fopen(path, "rb"); /* the OS's reason first: Gmsh's is vaguer */
+  if (!probe) return fail(why, size, CUPID_ERR_IO, "cannot open it: %s", strerror(errno));
+  fclose(probe);
+  if (!load_api()) return fail(why, size, CUPID_ERR_UNSUPPORTED, "%s", api_why);
+  int ierr = 0;
+  api.clear(&ierr);
+  api.open(path, &ierr);
+  if (ierr) {
+    gmsh_reason(why, size, "Gmsh cannot read the file");
+    return CUPID_ERR_IO;
+  }
+  int *ents = NULL, *group = NULL;
+  size_t n_ents = 0, *tags = NULL, n_tags = 0, n_coord = 0, n_param = 0;
+  double *coord = NULL, *param = NULL;
+  cupid_int *index = NULL, *order = NULL;
+  size_t *sorted = NULL;
+  cupid_status st = CUPID_SUCCESS;
+  /* a geometry without a mesh (.geo, .step): mesh it; then the element order of `element:` */
+  api.get_nodes(&tags, &n_tags, &coord, &n_coord, &param, &n_param, 2, -1, 1, 0, &ierr);
+  if (!ierr && n_tags == 0) {
+    api.mesh_generate(2, &ierr);
+    if (ierr) gmsh_reason(why, size, "Gmsh could not mesh the geometry");
+    if (ierr) st = CUPID_ERR_MODEL;
+  }
+  if (tags) api.free(tags), tags = NULL;
+  if (coord) api.free(coord), coord = NULL;
+  if (param) api.free(param), param = NULL;
+  if (st == CUPID_SUCCESS) {
+    api.mesh_set_order(npe == 4 ? 1 : npe == 9 ? 2 : 3, &ierr);
+    if (ierr) gmsh_reason(why, size, "Gmsh could not make the elements' order");
+    if (ierr) st = CUPID_ERR_MODEL;
+  }
+  if (st == CUPID_SUCCESS) {
+    api.get_nodes(&tags, &n_tags, &coord, &n_coord, &param, &n_param, 2, -1, 1, 0, &ierr);
+    if (ierr || n_tags == 0) st = fail(why, size, CUPID_ERR_MODEL, "the file has no surface mesh");
+  }
+  const cupid_int n = (cupid_int)n_tags;
+  CUPID_TRY(st);
+  CUPID_TRY(cupid_malloc((size_t)n, sizeof *s->xz * 2, "section nodes", &s->xz));
+  CUPID_TRY(cupid_malloc((size_t)n, sizeof *order, "node order", &order));
+  CUPID_TRY(cupid_malloc((size_t)n, sizeof *index, "node index", &index));
+  CUPID_TRY(cupid_malloc((size_t)n, sizeof *sorted, "node tags", &sorted));
+  double zmax = 0.0, span = 0.0;
+  for (cupid_int i = 0; i < n; i++) {
+    s->xz[2 * i] = coord[3 * i], s->xz[2 * i + 1] = coord[3 * i + 1]; /* Gmsh x, y: section x, z */
+    zmax = fmax(zmax, fabs(coord[3 * i + 2]));
+    span = fmax(span, fmax(fabs(coord[3 * i] - coord[0]), fabs(coord[3 * i + 1] - coord[1])));
+    order[i] = i;
+  }
+  if (zmax > 1e-9 * (span > 0 ? span : 1.0)) {
+    st = fail(why, size, CUPID_ERR_MODEL, "the mesh is not in Gmsh's xy plane (z up to %g): a "
+              "section's x and z are Gmsh's x and y", zmax);
+    goto cleanup;
+  }
+  s->n_nodes = n;
+  sort_tags = tags;
+  qsort(order, (size_t)n, sizeof *order, by_tag);
+  sort_tags = NULL;
+  for (cupid_int i = 0; i < n; i++) sorted[i] = tags[order[i]], index[i] = order[i];
+  s->npe = npe;
+  api.get_entities(&ents, &n_ents, 2, &ierr);
+  if (ierr) {
+    st = fail(why, size, CUPID_ERR_IO, "Gmsh could not list the surfaces");
+    goto cleanup;
+  }
+  n_ents /= 2; /* (dim, tag) pairs */
+  for (size_t k = 0; k < n_ents; k++) ents[k] = ents[2 * k + 1];
+  CUPID_TRY(cupid_malloc(n_ents + 1, sizeof *group, "surface groups", &group));
+  CUPID_TRY(entity_groups(s, ents, n_ents, group, why, size));
+  for (size_t k = 0; k < n_ents; k++)
+    CUPID_TRY(add_elements(s, ents[k], group[k], npe, sorted, index, n, why, size));
+  if (s->n_elements == 0) st = fail(why, size, CUPID_ERR_MODEL, "the file has no quadrilaterals");
+cleanup:
+  if (st != CUPID_SUCCESS && why[0] == '\0') snprintf(why, size, "%s", cupid_error_message());
+  if (tags) api.free(tags);
+  if (coord) api.free(coord);
+  if (param) api.free(param);
+  if (ents) api.free(ents);
+  cupid_free(&group);
+  cupid_free(&order);
+  cupid_free(&index);
+  cupid_free(&sorted);
+  if (st != CUPID_SUCCESS) cupid_gmsh_section_free(s);
+  int e2 = 0;
+  api.clear(&e2);
+  return st;
+}

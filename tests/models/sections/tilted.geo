@@ -1,0 +1,7 @@
+// A quadrilateral section out of Gmsh's xy plane: refused (a section's x, z are Gmsh's x, y).
+Point(1) = {0, 0, 0}; Point(2) = {10, 0, 0}; Point(3) = {10, 10, 5}; Point(4) = {0, 10, 5};
+Line(1) = {1, 2}; Line(2) = {2, 3}; Line(3) = {3, 4}; Line(4) = {4, 1};
+Curve Loop(1) = {1, 2, 3, 4}; Surface(1) = {1};
+Transfinite Curve{:} = 3;
+Transfinite Surface{1};
+Recombine Surface{1};

@@ -1,0 +1,7 @@
+// A square section meshed with triangles (no Recombine): refused, cupid's LE sections are
+// quadrilaterals (tests/verification/section_mesh.sh).
+Point(1) = {0, 0, 0}; Point(2) = {10, 0, 0}; Point(3) = {10, 10, 0}; Point(4) = {0, 10, 0};
+Line(1) = {1, 2}; Line(2) = {2, 3}; Line(3) = {3, 4}; Line(4) = {4, 1};
+Curve Loop(1) = {1, 2, 3, 4}; Plane Surface(1) = {1};
+Transfinite Curve{:} = 3;
+Transfinite Surface{1};
