@@ -46,15 +46,27 @@ typedef struct {
 int cupid_box_contains(const cupid_box *box, const double p[3], double tol);
 
 /** The shape of a PD region or hole (peridynamics.regions[k], peridynamics.holes[k]; issue 35). */
-typedef enum { CUPID_SHAPE_BOX = 0, CUPID_SHAPE_CYLINDER = 1, CUPID_SHAPE_SPHERE = 2 } cupid_shape_kind;
+typedef enum {
+  CUPID_SHAPE_BOX = 0,
+  CUPID_SHAPE_CYLINDER = 1,
+  CUPID_SHAPE_SPHERE = 2,
+  CUPID_SHAPE_GEOMETRY = 3 /**< {geometry: FILE}: the volume a closed surface bounds */
+} cupid_shape_kind;
+/** A closed triangulated surface (src/io/surface.c): a geometry shape's boundary. */
+typedef struct cupid_surface_private *cupid_surface;
 typedef struct {
   cupid_shape_kind kind;
   int axis;         /**< cylinder: 0 x, 1 y, 2 z */
   double center[3]; /**< sphere: the centre; cylinder: a point of the axis (its axis entry 0) */
   double radius;    /**< cylinder, sphere */
   cupid_box box;    /**< box: the box; cylinder, sphere: the bounding box (a cylinder's ends
-                         from/to along the axis, unbounded there when not given) */
+                         from/to along the axis, unbounded there when not given); geometry:
+                         the surface's bounding box */
+  cupid_surface surface; /**< geometry: its surface (owned by the model) */
 } cupid_shape;
+
+/** 1 if p lies inside the closed surface (on it counts as inside): a ray's crossings. */
+int cupid_surface_contains(const cupid_surface surface, const double p[3]);
 
 /** The node order of LE section elements (L4, L9, L16; cuf.md section 3.1, MUL2_new's): node
  *  @p k (0-based) of an element with @p npe = n^2 nodes sits at grid point (a, b) of the n x n

@@ -34,6 +34,8 @@ typedef struct {
   void (*get_element_properties)(const int, char **, int *, int *, int *, double **, size_t *,
                                  int *, int *);
   void (*free)(void *);
+  void (*get_boundary)(const int *, size_t, int **, size_t *, const int, const int, const int,
+                       int *);
 } gmsh_api;
 
 static gmsh_api api;
@@ -72,7 +74,8 @@ static int load_api(void) {
               {"gmshModelMeshGetNodes", (void **)&api.get_nodes},
               {"gmshModelMeshGetElements", (void **)&api.get_elements},
               {"gmshModelMeshGetElementProperties", (void **)&api.get_element_properties},
-              {"gmshFree", (void **)&api.free}};
+              {"gmshFree", (void **)&api.free},
+              {"gmshModelGetBoundary", (void **)&api.get_boundary}};
   for (size_t k = 0; k < sizeof syms / sizeof *syms; k++) {
     *syms[k].fn = dlsym(h, syms[k].name);
     if (!*syms[k].fn) {
@@ -355,5 +358,152 @@ cleanup:
   if (st != CUPID_SUCCESS) cupid_gmsh_section_free(s);
   int e2 = 0;
   api.clear(&e2);
+  return st;
+}
+
+/* The triangles of surface entity `entity` (quadrilaterals split in two) appended to *tri, node
+ * tags mapped to indices. */
+static cupid_status add_triangles(int entity, const size_t *sorted, const cupid_int *index,
+                                  cupid_int n_nodes, int64_t **tri, int64_t *n_tri, int64_t *cap,
+                                  char *why, size_t size) {
+  int *types = NULL, ierr = 0;
+  size_t n_types = 0, **etags = NULL, *etags_n = NULL, etags_nn = 0, **ntags = NULL, *ntags_n = NULL,
+         ntags_nn = 0;
+  api.get_elements(&types, &n_types, &etags, &etags_n, &etags_nn, &ntags, &ntags_n, &ntags_nn, 2,
+                   entity, &ierr);
+  cupid_status st = ierr ? fail(why, size, CUPID_ERR_IO, "Gmsh could not list the elements of "
+                                "surface %d", entity) : CUPID_SUCCESS;
+  for (size_t t = 0; t < n_types && st == CUPID_SUCCESS; t++) {
+    char *name = NULL;
+    double *local = NULL;
+    size_t n_local = 0;
+    int dim = 0, order = 0, nodes = 0, primary = 0;
+    api.get_element_properties(types[t], &name, &dim, &order, &nodes, &local, &n_local, &primary,
+                               &ierr);
+    const int quad = primary == 4;
+    if (ierr || !(primary == 3 || primary == 4))
+      st = fail(why, size, CUPID_ERR_MODEL, "the surface mesh has %s elements (triangles and "
+                "quadrilaterals bound a volume)", name ? name : "unknown");
+    if (name) api.free(name);
+    if (local) api.free(local);
+    const size_t ne = etags_n[t];
+    for (size_t e = 0; e < ne && st == CUPID_SUCCESS; e++) {
+      const size_t *nt = ntags[t] + e * (size_t)nodes; /* the corners come first */
+      int64_t c[4];
+      for (int k = 0; k < primary; k++) {
+        c[k] = node_index(sorted, index, n_nodes, nt[k]);
+        if (c[k] < 0) st = fail(why, size, CUPID_ERR_IO, "an element refers to node %zu, which the mesh does not have", nt[k]);
+      }
+      for (int h = 0; h < (quad ? 2 : 1) && st == CUPID_SUCCESS; h++) {
+        if (*n_tri == *cap) {
+          *cap = *cap ? 2 * *cap : 1024;
+          st = cupid_realloc(3 * (size_t)*cap, sizeof **tri, "surface triangles", tri);
+          if (st != CUPID_SUCCESS) break;
+        }
+        int64_t *o = *tri + 3 * *n_tri;
+        o[0] = c[0], o[1] = c[h ? 2 : 1], o[2] = c[h ? 3 : 2];
+        (*n_tri)++;
+      }
+    }
+  }
+  for (size_t t = 0; t < n_types; t++) {
+    if (etags) api.free(etags[t]);
+    if (ntags) api.free(ntags[t]);
+  }
+  if (types) api.free(types);
+  if (etags) api.free(etags);
+  if (etags_n) api.free(etags_n);
+  if (ntags) api.free(ntags);
+  if (ntags_n) api.free(ntags_n);
+  return st;
+}
+
+cupid_status cupid_gmsh_read_surface(const char *path, double size, cupid_surface *surface,
+                                     char *why, size_t why_size) {
+  *surface = NULL;
+  why[0] = '\0';
+  FILE *probe = fopen(path, "rb");
+  if (!probe) return fail(why, why_size, CUPID_ERR_IO, "cannot open it: %s", strerror(errno));
+  fclose(probe);
+  if (!load_api()) return fail(why, why_size, CUPID_ERR_UNSUPPORTED, "%s", api_why);
+  int ierr = 0, *vols = NULL, *bnd = NULL;
+  size_t n_vols = 0, n_bnd = 0, *tags = NULL, n_tags = 0, n_coord = 0, n_param = 0;
+  double *coord = NULL, *param = NULL;
+  cupid_int *index = NULL, *order = NULL;
+  size_t *sorted = NULL;
+  int64_t *tri = NULL, n_tri = 0, cap = 0, open_edges = 0;
+  cupid_status st = CUPID_SUCCESS;
+  api.clear(&ierr);
+  /* The facets' distance to a curved surface decides which cells near it are in: at most
+   * about 1% of a spacing. Flat faces need no small elements: ten spacings at most; a face
+   * curving with radius R takes elements of 2 pi R / 256 (a chord 7.5e-5 R from the arc) */
+  api.option_set_number("Mesh.MeshSizeMax", size > 0 ? 10 * size : 1e22, &ierr);
+  api.option_set_number("Mesh.MeshSizeFromCurvature", 256, &ierr);
+  api.open(path, &ierr);
+  if (ierr) {
+    gmsh_reason(why, why_size, "Gmsh cannot read the file");
+    st = CUPID_ERR_IO;
+    goto cleanup;
+  }
+  /* the surfaces that bound the volumes (a file of surfaces alone: all of them) */
+  api.get_entities(&vols, &n_vols, 3, &ierr);
+  if (n_vols) api.get_boundary(vols, n_vols, &bnd, &n_bnd, 1, 0, 0, &ierr); /* of their union */
+  else api.get_entities(&bnd, &n_bnd, 2, &ierr);
+  if (ierr || n_bnd == 0) {
+    st = fail(why, why_size, CUPID_ERR_MODEL, "the file has no volume or surface");
+    goto cleanup;
+  }
+  api.get_nodes(&tags, &n_tags, &coord, &n_coord, &param, &n_param, 2, -1, 1, 0, &ierr);
+  const int meshed = !ierr && n_tags > 0;
+  if (tags) api.free(tags), tags = NULL;
+  if (coord) api.free(coord), coord = NULL;
+  if (param) api.free(param), param = NULL;
+  if (!meshed) { /* a geometry: mesh its surfaces */
+    api.mesh_generate(2, &ierr);
+    if (ierr) {
+      gmsh_reason(why, why_size, "Gmsh could not mesh the surfaces");
+      st = CUPID_ERR_MODEL;
+      goto cleanup;
+    }
+  }
+  api.get_nodes(&tags, &n_tags, &coord, &n_coord, &param, &n_param, -1, -1, 1, 0, &ierr);
+  const cupid_int n = (cupid_int)n_tags;
+  CUPID_TRY(cupid_malloc((size_t)n + 1, sizeof *order, "node order", &order));
+  CUPID_TRY(cupid_malloc((size_t)n + 1, sizeof *index, "node index", &index));
+  CUPID_TRY(cupid_malloc((size_t)n + 1, sizeof *sorted, "node tags", &sorted));
+  for (cupid_int i = 0; i < n; i++) order[i] = i;
+  sort_tags = tags;
+  qsort(order, (size_t)n, sizeof *order, by_tag);
+  sort_tags = NULL;
+  for (cupid_int i = 0; i < n; i++) sorted[i] = tags[order[i]], index[i] = order[i];
+  for (size_t k = 0; k < n_bnd / 2; k++) /* (dim, tag) pairs; a tag's sign is its orientation */
+    CUPID_TRY(add_triangles(abs(bnd[2 * k + 1]), sorted, index, n, &tri, &n_tri, &cap, why,
+                            why_size));
+  if (n_tri == 0) {
+    st = fail(why, why_size, CUPID_ERR_MODEL, "the file's surfaces have no mesh");
+    goto cleanup;
+  }
+  CUPID_TRY(cupid_surface_create(coord, (int64_t)n, tri, n_tri, surface, &open_edges));
+  if (open_edges) {
+    cupid_surface_destroy(surface);
+    st = fail(why, why_size, CUPID_ERR_MODEL, "the surface is not closed (%lld edges of its "
+              "%lld triangles are not shared by two): no volume to fill",
+              (long long)open_edges, (long long)n_tri);
+  }
+cleanup:
+  if (st != CUPID_SUCCESS && why[0] == '\0') snprintf(why, why_size, "%s", cupid_error_message());
+  if (tags) api.free(tags);
+  if (coord) api.free(coord);
+  if (param) api.free(param);
+  if (vols) api.free(vols);
+  if (bnd) api.free(bnd);
+  cupid_free(&order);
+  cupid_free(&index);
+  cupid_free(&sorted);
+  cupid_free(&tri);
+  int e2 = 0;
+  api.clear(&e2);
+  api.option_set_number("Mesh.MeshSizeMax", 1e22, &e2); /* Gmsh's defaults again */
+  api.option_set_number("Mesh.MeshSizeFromCurvature", 0, &e2);
   return st;
 }

@@ -77,4 +77,19 @@ cupid_status cupid_gmsh_read_section(const char *path, int npe, cupid_gmsh_secti
                                      size_t size);
 void cupid_gmsh_section_free(cupid_gmsh_section *s);
 
+/* ---- Closed surfaces (surface.c): geometry shapes ---- */
+#include "cupid/model.h"
+/** A surface of @p n_tri triangles (3 node indices each) over @p n_nodes nodes (xyz), copied.
+ *  *open_edges (if given): the edges not shared by an even number of triangles (0: closed). */
+cupid_status cupid_surface_create(const double *xyz, int64_t n_nodes, const int64_t *tri,
+                                  int64_t n_tri, cupid_surface *surface, int64_t *open_edges);
+void cupid_surface_destroy(cupid_surface *surface);
+void cupid_surface_bounds(const cupid_surface surface, double lo[3], double hi[3]);
+int64_t cupid_surface_num_triangles(const cupid_surface surface);
+/** The boundary of the volumes of a Gmsh file (.step, .brep, .geo, .msh) as triangles: its
+ *  surface mesh, made by Gmsh where the file has none (elements of 10 @p size at most, 256 a
+ *  turn where the surface curves), quadrilaterals split. *why as for cupid_gmsh_read_section. */
+cupid_status cupid_gmsh_read_surface(const char *path, double size, cupid_surface *surface,
+                                     char *why, size_t why_size);
+
 #endif

@@ -8,6 +8,7 @@
 #include <string.h>
 #include <zlib.h>
 
+#include "io/io_internal.h"
 #include "io/model_internal.h"
 
 cupid_status cupid_model_read(const char *path, cupid_model *model) {
@@ -122,6 +123,8 @@ void cupid_model_destroy(cupid_model *model) {
   cupid_free(&b->section_nodes);
   cupid_free(&b->section_elements);
   cupid_free(&b->section_element_material);
+  for (int i = 0; i < m->pd.n_regions; i++) cupid_surface_destroy(&m->pd.regions[i].shape.surface);
+  for (int i = 0; i < m->pd.n_holes; i++) cupid_surface_destroy(&m->pd.holes[i].shape.surface);
   cupid_free(&m->pd.regions);
   cupid_free(&m->pd.holes);
   cupid_free(&m->pd.precracks);
@@ -205,6 +208,7 @@ int cupid_box_contains(const cupid_box *box, const double p[3], double tol) {
 
 int cupid_shape_contains(const cupid_shape *shape, const double p[3]) {
   if (!cupid_box_contains(&shape->box, p, 0.0)) return 0;
+  if (shape->kind == CUPID_SHAPE_GEOMETRY) return cupid_surface_contains(shape->surface, p);
   double r2 = 0.0;
   for (int a = 0; a < 3; a++) {
     if (shape->kind == CUPID_SHAPE_CYLINDER && a == shape->axis) continue;

@@ -581,15 +581,49 @@ static cupid_status read_round(model_reader *rd, yaml_node_t *node, const char *
   return CUPID_SUCCESS;
 }
 
+/* {geometry: FILE}: the volume a Gmsh file bounds (.step, .brep, .geo, .msh, relative to the
+ * model file), its surface meshed by Gmsh where it has none (elements of a spacing at most). */
+static cupid_status read_geometry(model_reader *rd, yaml_node_t *node, const char *path,
+                                  cupid_shape *s) {
+  char *name = NULL, *file = NULL, why[1024];
+  cupid_status st = mr_string(rd, node, path, MODEL_MAX_STRING, &name);
+  if (st == CUPID_SUCCESS && !name[0]) st = mr_error(rd, node, path, "must name a file");
+  if (st == CUPID_SUCCESS) st = model_relative(rd, name, &file);
+  if (st == CUPID_SUCCESS &&
+      cupid_gmsh_read_surface(file, rd->model->pd.spacing, &s->surface, why, sizeof why))
+    st = mr_error(rd, node, path, "%s: %s", file, why);
+  if (st == CUPID_SUCCESS) {
+    s->kind = CUPID_SHAPE_GEOMETRY;
+    cupid_surface_bounds(s->surface, s->box.lo, s->box.hi);
+    for (int a = 0; a < 3; a++) s->box.has[a] = 1;
+  }
+  cupid_free(&name);
+  cupid_free(&file);
+  return st;
+}
+
 /* A region or hole's shape: a box {x, y, z} (a region: all three; a hole: at least one, the
- * others unbounded), or one of {cylinder: {..}}, {sphere: {..}}. */
+ * others unbounded), or one of {cylinder: {..}}, {sphere: {..}}, {geometry: FILE}. */
 static cupid_status read_shape(model_reader *rd, const mr_map *map, const char *path, int hole,
                                cupid_pd_region *r) {
   static const char *const axes[] = {"x", "y", "z"};
   const cupid_peridynamics *pd = &rd->model->pd;
   yaml_node_t *cyl = mr_get(map, "cylinder"), *sph = mr_get(map, "sphere");
+  yaml_node_t *geo = mr_get(map, "geometry");
   int any_axis = 0;
   for (int a = 0; a < 3; a++) any_axis |= mr_get(map, axes[a]) != NULL;
+  if (geo) {
+    if (cyl || sph || any_axis)
+      return mr_error(rd, map->node, path, "a %s is one shape: a box {x, y, z}, or {cylinder: "
+                      "{..}}, or {sphere: {..}}, or {geometry: FILE}", hole ? "hole" : "region");
+    if (pd->dimension == 1)
+      return mr_error(rd, map->node, path, "geometry files need dimension 3");
+    char p[PATH_SIZE];
+    mr_path(p, path, "geometry");
+    CUPID_CALL(read_geometry(rd, geo, p, &r->shape));
+    r->box = r->shape.box;
+    return CUPID_SUCCESS;
+  }
   if (cyl || sph) {
     if ((cyl && sph) || any_axis)
       return mr_error(rd, map->node, path, "a %s is one shape: a box {x, y, z}, or {cylinder: "
@@ -636,7 +670,7 @@ static cupid_status read_shape(model_reader *rd, const mr_map *map, const char *
 
 static cupid_status read_region(model_reader *rd, yaml_node_t *node, const char *path,
                                 cupid_pd_region *r) {
-  static const char *const keys[] = {"x", "y", "z", "material", "cylinder", "sphere"};
+  static const char *const keys[] = {"x", "y", "z", "material", "cylinder", "sphere", "geometry"};
   const cupid_peridynamics *pd = &rd->model->pd;
   mr_map map;
   mr_mark(node, path, &r->mark);
@@ -662,7 +696,7 @@ static cupid_status read_region(model_reader *rd, yaml_node_t *node, const char 
 
 /* peridynamics.holes: shapes removed from every region. */
 static cupid_status read_holes(model_reader *rd, yaml_node_t *holes, cupid_peridynamics *pd) {
-  static const char *const keys[] = {"x", "y", "z", "cylinder", "sphere"};
+  static const char *const keys[] = {"x", "y", "z", "cylinder", "sphere", "geometry"};
   int n;
   CUPID_CALL(mr_list(rd, holes, "peridynamics.holes", 1, "shapes {x: [..], ..}, {cylinder: {..}}, "
                      "{sphere: {..}}", &n));

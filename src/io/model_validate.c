@@ -66,7 +66,7 @@ cupid_status mr_validate(model_reader *rd, const mr_map *top) {
     for (int r = 0; r < pd->n_regions; r++)
       if (pd->regions[r].shape.kind != CUPID_SHAPE_BOX)
         return cupid_model_error(m, &pd->regions[r].mark,
-                                 "cylinder and sphere regions are for PD-only models so far: the "
+                                 "cylinder, sphere and geometry regions are for PD-only models so far: the "
                                  "couplings build their interfaces on box regions (give the PD "
                                  "region as a box, or model the body in PD alone)");
     if (pd->n_holes > 0)

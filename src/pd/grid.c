@@ -299,7 +299,8 @@ cupid_status pd_grid_build(const cupid_pd_grid_options *opts, int n_boxes, const
       *bad_box = b;
       snprintf(msg, len, "the %s holds no cell centre of the lattice (spacing %.15g): make it "
                "larger, or the spacing smaller",
-               opts->shapes[b].kind == CUPID_SHAPE_CYLINDER ? "cylinder" : "sphere", h);
+               opts->shapes[b].kind == CUPID_SHAPE_CYLINDER ? "cylinder"
+               : opts->shapes[b].kind == CUPID_SHAPE_SPHERE ? "sphere" : "geometry's volume", h);
       st = CUPID_ERR_MODEL;
       goto cleanup;
     }

@@ -1,6 +1,7 @@
 /* The PD grid of a model file: errors are reported against the file (cupid_model_error).
  * Kept in its own file so that programs using only cupid_pd_grid_create() do not pull in
  * the model reader. */
+#include <math.h>
 #include <stdio.h>
 
 #include "pd/pd_internal.h"
@@ -25,6 +26,10 @@ cupid_status cupid_pd_grid_create_part_from_model(const cupid_model_t *model, in
   for (int r = 0; r < pd->n_regions; r++) {
     boxes[r] = pd->regions[r].box;
     shapes[r] = pd->regions[r].shape;
+    /* a geometry file's bounds are its facets' (or its CAD kernel's, with a tolerance): its
+     * lattice planes lie at multiples of the spacing in the file's coordinates instead */
+    if (shapes[r].kind == CUPID_SHAPE_GEOMETRY)
+      for (int a = 0; a < 3; a++) boxes[r].lo[a] = pd->spacing * floor(boxes[r].lo[a] / pd->spacing + 1e-6);
     any_shape |= shapes[r].kind != CUPID_SHAPE_BOX;
     mats[r] = pd->regions[r].material >= 0 ? pd->regions[r].material : pd->material;
     if (mats[r] < 0 || mats[r] >= model->n_materials) {

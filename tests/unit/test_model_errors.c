@@ -249,7 +249,7 @@ static const bad_case cases[] = {
      NULL},
     /* shapes and holes (issue 35) */
     {"shape_coupled.yaml",
-     "15:7: peridynamics.regions[0]: cylinder and sphere regions are for PD-only models so far: "
+     "15:7: peridynamics.regions[0]: cylinder, sphere and geometry regions are for PD-only models so far: "
      "the couplings build their interfaces on box regions",
      NULL},
     {"shape_cylinder_axis.yaml",
@@ -276,6 +276,8 @@ static const bad_case cases[] = {
      "10:7: peridynamics.holes[0]: a hole is a box {x, y, z} (at least one axis), {cylinder: "
      "{..}} or {sphere: {..}}",
      NULL},
+    {"geometry_missing.yaml",
+     "8:18: peridynamics.regions[0].geometry: ", "no_such_part.step: cannot open it: No such file or directory"},
     {"section_mesh_missing.yaml",
      "9:11: beam.section.mesh: ", "no_such_section.msh: cannot open it: No such file or directory"},
     {"output_exodus_word.yaml", "12:11: output.exodus: must be true or false, got 'exo'", NULL},

@@ -1,0 +1,189 @@
+/* A closed triangulated surface and whether a point lies inside it (issue 35: PD regions and
+ * holes from CAD or mesh files, {geometry: FILE}). The test casts a ray from the point along
+ * +x and counts the triangles it crosses (odd: inside). Triangles are found through a bucket
+ * grid over their (y, z) projections; a point whose (y, z) falls on a projected edge or vertex
+ * is counted once by the fill rule of rasterisers (an edge belongs to the triangle on its left,
+ * or above a horizontal one), so that shared edges of a closed surface never count twice.
+ * A point on the surface counts as inside, as for the other shapes. Queries only read: the
+ * lattice asks from many threads at once. */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "io_internal.h"
+
+struct cupid_surface_private {
+  double *xyz;         /* 3 per node */
+  int64_t *tri;        /* 3 per triangle */
+  int64_t n_nodes, n_tri;
+  double lo[3], hi[3]; /* the bounding box */
+  double tol;          /* on-surface tolerance along x: 1e-12 of the box's size */
+  int nb[2];           /* buckets along y, z */
+  double blo[2], bsize[2];
+  int64_t *start;      /* CSR: the triangles of bucket b are list[start[b] .. start[b+1]) */
+  int64_t *list;
+};
+
+void cupid_surface_destroy(cupid_surface *surface) {
+  if (!surface || !*surface) return;
+  cupid_surface s = *surface;
+  cupid_free(&s->xyz);
+  cupid_free(&s->tri);
+  cupid_free(&s->start);
+  cupid_free(&s->list);
+  cupid_free(surface);
+}
+
+void cupid_surface_bounds(const cupid_surface s, double lo[3], double hi[3]) {
+  for (int a = 0; a < 3; a++) lo[a] = s->lo[a], hi[a] = s->hi[a];
+}
+
+int64_t cupid_surface_num_triangles(const cupid_surface s) { return s->n_tri; }
+
+static void bucket_range(const cupid_surface s, const double *p0, const double *p1,
+                         const double *p2, int r[4]) {
+  for (int d = 0; d < 2; d++) {
+    const int a = d + 1; /* y, z */
+    double mn = fmin(p0[a], fmin(p1[a], p2[a])), mx = fmax(p0[a], fmax(p1[a], p2[a]));
+    int b0 = (int)floor((mn - s->blo[d]) / s->bsize[d]), b1 = (int)floor((mx - s->blo[d]) / s->bsize[d]);
+    r[2 * d] = b0 < 0 ? 0 : b0 >= s->nb[d] ? s->nb[d] - 1 : b0;
+    r[2 * d + 1] = b1 < 0 ? 0 : b1 >= s->nb[d] ? s->nb[d] - 1 : b1;
+  }
+}
+
+/* Every edge of a closed surface is shared by an even number of triangles (two, in a
+ * manifold): *open_edges counts the others (edges as sorted node pairs). */
+static int cmp_pair(const void *a, const void *b) {
+  const int64_t *x = a, *y = b;
+  if (x[0] != y[0]) return x[0] < y[0] ? -1 : 1;
+  return (x[1] > y[1]) - (x[1] < y[1]);
+}
+
+static cupid_status count_open_edges(const cupid_surface s, int64_t *open_edges) {
+  int64_t *e = NULL;
+  CUPID_CALL(cupid_malloc(6 * (size_t)s->n_tri + 2, sizeof *e, "surface edges", &e));
+  for (int64_t t = 0; t < s->n_tri; t++)
+    for (int k = 0; k < 3; k++) {
+      int64_t a = s->tri[3 * t + k], b = s->tri[3 * t + (k + 1) % 3];
+      e[6 * t + 2 * k] = a < b ? a : b, e[6 * t + 2 * k + 1] = a < b ? b : a;
+    }
+  qsort(e, 3 * (size_t)s->n_tri, 2 * sizeof *e, cmp_pair);
+  int64_t open = 0;
+  for (int64_t k = 0; k < 3 * s->n_tri;) {
+    int64_t j = k + 1;
+    while (j < 3 * s->n_tri && !cmp_pair(e + 2 * k, e + 2 * j)) j++;
+    if ((j - k) % 2) open++;
+    k = j;
+  }
+  cupid_free(&e);
+  *open_edges = open;
+  return CUPID_SUCCESS;
+}
+
+cupid_status cupid_surface_create(const double *xyz, int64_t n_nodes, const int64_t *tri,
+                                  int64_t n_tri, cupid_surface *surface, int64_t *open_edges) {
+  CUPID_CHECK(n_nodes >= 3 && n_tri >= 1, CUPID_ERR_ARGUMENT, "a surface needs triangles");
+  cupid_surface s = NULL;
+  cupid_status st = CUPID_SUCCESS;
+  CUPID_CALL(cupid_calloc(1, sizeof *s, "surface", &s));
+  s->n_nodes = n_nodes, s->n_tri = n_tri;
+  CUPID_TRY(cupid_malloc(3 * (size_t)n_nodes, sizeof *s->xyz, "surface nodes", &s->xyz));
+  CUPID_TRY(cupid_malloc(3 * (size_t)n_tri, sizeof *s->tri, "surface triangles", &s->tri));
+  memcpy(s->xyz, xyz, 3 * (size_t)n_nodes * sizeof *xyz);
+  memcpy(s->tri, tri, 3 * (size_t)n_tri * sizeof *tri);
+  for (int a = 0; a < 3; a++) s->lo[a] = INFINITY, s->hi[a] = -INFINITY;
+  for (int64_t t = 0; t < 3 * n_tri; t++) {
+    CUPID_TRY_CHECK(tri[t] >= 0 && tri[t] < n_nodes, CUPID_ERR_ARGUMENT,
+                    "surface triangle %lld refers to node %lld of %lld", (long long)(t / 3),
+                    (long long)tri[t], (long long)n_nodes);
+    for (int a = 0; a < 3; a++) {
+      s->lo[a] = fmin(s->lo[a], xyz[3 * tri[t] + a]);
+      s->hi[a] = fmax(s->hi[a], xyz[3 * tri[t] + a]);
+    }
+  }
+  double size = 0.0;
+  for (int a = 0; a < 3; a++) size = fmax(size, s->hi[a] - s->lo[a]);
+  s->tol = 1e-12 * size;
+  /* about two triangles a bucket, at most 2048 x 2048 buckets */
+  const double per = sqrt((double)n_tri / 2.0);
+  for (int d = 0; d < 2; d++) {
+    const double span = s->hi[d + 1] - s->lo[d + 1];
+    s->nb[d] = per < 1 ? 1 : per > 2048 ? 2048 : (int)per;
+    s->blo[d] = s->lo[d + 1];
+    s->bsize[d] = span > 0 ? span / s->nb[d] * (1 + 1e-12) : 1.0;
+  }
+  const int64_t nbk = (int64_t)s->nb[0] * s->nb[1];
+  CUPID_TRY(cupid_calloc((size_t)nbk + 1, sizeof *s->start, "surface buckets", &s->start));
+  for (int pass = 0; pass < 2; pass++) {
+    int64_t *fill = NULL;
+    if (pass) {
+      for (int64_t b = 0; b < nbk; b++) s->start[b + 1] += s->start[b];
+      CUPID_TRY(cupid_malloc((size_t)s->start[nbk] + 1, sizeof *s->list, "surface bucket lists", &s->list));
+      CUPID_TRY(cupid_malloc((size_t)nbk + 1, sizeof *fill, "surface bucket fill", &fill));
+      memcpy(fill, s->start, (size_t)nbk * sizeof *fill);
+    }
+    for (int64_t t = 0; t < n_tri; t++) {
+      int r[4];
+      bucket_range(s, xyz + 3 * tri[3 * t], xyz + 3 * tri[3 * t + 1], xyz + 3 * tri[3 * t + 2], r);
+      for (int j = r[2]; j <= r[3]; j++)
+        for (int i = r[0]; i <= r[1]; i++) {
+          const int64_t b = (int64_t)j * s->nb[0] + i;
+          if (pass) s->list[fill[b]++] = t;
+          else s->start[b + 1]++;
+        }
+    }
+    cupid_free(&fill);
+  }
+  if (open_edges) CUPID_TRY(count_open_edges(s, open_edges));
+  *surface = s;
+  return CUPID_SUCCESS;
+cleanup:
+  cupid_surface_destroy(&s);
+  return st;
+}
+
+/* The fill rule: a point on edge (a -> b) of a counter-clockwise triangle (in y, z) belongs to
+ * it when the edge is a "left" edge (going down in z) or a "top" edge (horizontal, going left
+ * in y); a clockwise triangle's edges are taken reversed. */
+static int owns_edge(double ay, double az, double by, double bz) {
+  return bz < az || (bz == az && by < ay);
+}
+
+/* Is (y, z) inside triangle t's projection (the fill rule on its edges)? */
+static int covers(const cupid_surface s, int64_t t, double y, double z, double *x) {
+  const double *p[3] = {s->xyz + 3 * s->tri[3 * t], s->xyz + 3 * s->tri[3 * t + 1],
+                        s->xyz + 3 * s->tri[3 * t + 2]};
+  const double area = (p[1][1] - p[0][1]) * (p[2][2] - p[0][2]) - (p[2][1] - p[0][1]) * (p[1][2] - p[0][2]);
+  if (area == 0.0) return 0; /* edge-on to the ray: no crossing */
+  const int sgn = area > 0 ? 1 : -1;
+  double w[3];
+  for (int k = 0; k < 3; k++) {
+    const double *a = p[(k + 1) % 3], *b = p[(k + 2) % 3];
+    /* the edge opposite vertex k, oriented counter-clockwise */
+    const double ay = sgn > 0 ? a[1] : b[1], az = sgn > 0 ? a[2] : b[2];
+    const double by = sgn > 0 ? b[1] : a[1], bz = sgn > 0 ? b[2] : a[2];
+    const double e = (by - ay) * (z - az) - (bz - az) * (y - ay); /* > 0: left of the edge */
+    if (e < 0.0 || (e == 0.0 && !owns_edge(ay, az, by, bz))) return 0;
+    w[k] = e;
+  }
+  const double sum = w[0] + w[1] + w[2];
+  *x = (w[0] * p[0][0] + w[1] * p[1][0] + w[2] * p[2][0]) / sum;
+  return 1;
+}
+
+int cupid_surface_contains(const cupid_surface s, const double p[3]) {
+  for (int a = 0; a < 3; a++)
+    if (p[a] < s->lo[a] - s->tol || p[a] > s->hi[a] + s->tol) return 0;
+  int i = (int)floor((p[1] - s->blo[0]) / s->bsize[0]), j = (int)floor((p[2] - s->blo[1]) / s->bsize[1]);
+  i = i < 0 ? 0 : i >= s->nb[0] ? s->nb[0] - 1 : i;
+  j = j < 0 ? 0 : j >= s->nb[1] ? s->nb[1] - 1 : j;
+  const int64_t b = (int64_t)j * s->nb[0] + i;
+  int crossings = 0;
+  for (int64_t k = s->start[b]; k < s->start[b + 1]; k++) {
+    double x;
+    if (!covers(s, s->list[k], p[1], p[2], &x)) continue;
+    if (fabs(x - p[0]) <= s->tol) return 1; /* on the surface */
+    if (x > p[0]) crossings++;
+  }
+  return crossings & 1;
+}
