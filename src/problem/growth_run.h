@@ -40,6 +40,7 @@ typedef struct {
   double next_ratio;            /* fracture: the settled step's largest ratio (next_break) */
   double ratio_per_load;        /* the first scanned solve's largest ratio per load factor */
   int cut_through;              /* the crack has cut the load path (carries_load) */
+  int loaded;                   /* the model applies a load (not prescribed values alone) */
   int substep;                  /* sub-steps to each break's load (load_step) */
   double t_line;                /* when the last step's progress line was printed */
   cupid_writer csv;             /* damage.csv or load_steps.csv (io.h's CSV writer) */

@@ -11,6 +11,9 @@
 #    byte, summary.json's points equal);
 #  - the same plate with its hole from a geometry file (holes: [{geometry: cylinder.geo}]):
 #    the same again;
+#  - cracks growing from the hole (examples/geometry/plate_hole_crack.yaml at spacing 1.5): a
+#    displacement-driven body cut through whose held nodes carry the grips' pull stops, saying
+#    so (exit 2), its steps up to there written;
 #  - the refusals, exit 1 naming the key: a missing file (the system's reason), a surface that
 #    bounds no volume (open edges), a volume between the cell centres (no node), a geometry
 #    region in a coupled model.
@@ -55,6 +58,28 @@ PY
 }
 msg=$(same step analytic 2>&1); [ -z "$msg" ] && ok || bad "plate from STEP: $msg"
 msg=$(same geohole analytic 2>&1); [ -z "$msg" ] && ok || bad "plate with a geometry hole: $msg"
+
+# ---- cracks from the hole (examples/geometry/plate_hole_crack.yaml, displacement-driven) at
+# spacing 1.5: the cracks run through both ligaments at step 5, where four nodes left singular
+# are held while bonded to the pulled top; the run stops there (exit 2) saying the reactions
+# past it would be the holding's (before: "the body collapsed ... the load is more than what is
+# left can carry", of a model without load), with steps 1 to 4 written
+"$CUPID" run "$E/plate_hole_crack.yaml" -o crack -q --set peridynamics.spacing=1.5 \
+  --set peridynamics.horizon=4.5225 --set output.vtu=false --set output.plots=false >out.txt 2>&1; rc=$?
+msg=$(python3 - <<'PY' 2>&1
+import csv, json
+s = json.load(open("crack/summary.json"))
+f = s["fracture"]
+rows = list(csv.DictReader(open("crack/damage.csv")))
+err = []
+if f.get("collapse", {}).get("cause") != "held nodes carry the grips' pull": err.append("cause %s" % f.get("collapse"))
+if [r["step"] for r in rows] != ["1", "2", "3", "4"]: err.append("rows %s" % [r["step"] for r in rows])
+if not (f["first_break_step"] == 4 and f["peak_reactions"][0]["reaction"][1] > 400): err.append("first break / peak %s" % f["peak_reactions"][0])
+print("; ".join(err))
+PY
+)
+if [ $rc -eq 2 ] && grep -q "the crack cut the body at load step 5" out.txt && [ -z "$msg" ]; then ok
+else bad "cracks from the hole: exit $rc, $msg: $(cat out.txt)"; fi
 
 # ---- refusals
 refuse() { # PATTERN ARGS...
