@@ -63,10 +63,13 @@ typedef struct {
                          from/to along the axis, unbounded there when not given); geometry:
                          the surface's bounding box */
   cupid_surface surface; /**< geometry: its surface (owned by the model) */
+  char *file;       /**< geometry: the file read (relative to the model's folder resolved) */
 } cupid_shape;
 
 /** 1 if p lies inside the closed surface (on it counts as inside): a ray's crossings. */
 int cupid_surface_contains(const cupid_surface surface, const double p[3]);
+/** The surface's triangles (summary.json reports them). */
+int64_t cupid_surface_num_triangles(const cupid_surface surface);
 
 /** The node order of LE section elements (L4, L9, L16; cuf.md section 3.1, MUL2_new's): node
  *  @p k (0-based) of an element with @p npe = n^2 nodes sits at grid point (a, b) of the n x n
@@ -115,6 +118,7 @@ typedef struct {
   int *section_elements;         /**< explicit LE elements: le_nodes node indices each, 0-based
                                       (as in the file), all in [0, n_section_nodes) */
   int *section_element_material; /**< per explicit element, -1 = beam material */
+  char *section_mesh;            /**< beam.section.mesh: the Gmsh file read (resolved), or NULL */
   int n_section_elements;
   cupid_mark mark;
 } cupid_beam;

@@ -85,7 +85,6 @@ cupid_status cupid_surface_create(const double *xyz, int64_t n_nodes, const int6
                                   int64_t n_tri, cupid_surface *surface, int64_t *open_edges);
 void cupid_surface_destroy(cupid_surface *surface);
 void cupid_surface_bounds(const cupid_surface surface, double lo[3], double hi[3]);
-int64_t cupid_surface_num_triangles(const cupid_surface surface);
 /** The boundary of the volumes of a Gmsh file (.step, .brep, .geo, .msh) as triangles: its
  *  surface mesh, made by Gmsh where the file has none (elements of 10 @p size at most, 256 a
  *  turn where the surface curves), quadrilaterals split. *why as for cupid_gmsh_read_section. */

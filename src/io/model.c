@@ -123,8 +123,15 @@ void cupid_model_destroy(cupid_model *model) {
   cupid_free(&b->section_nodes);
   cupid_free(&b->section_elements);
   cupid_free(&b->section_element_material);
-  for (int i = 0; i < m->pd.n_regions; i++) cupid_surface_destroy(&m->pd.regions[i].shape.surface);
-  for (int i = 0; i < m->pd.n_holes; i++) cupid_surface_destroy(&m->pd.holes[i].shape.surface);
+  cupid_free(&b->section_mesh);
+  for (int i = 0; i < m->pd.n_regions; i++) {
+    cupid_surface_destroy(&m->pd.regions[i].shape.surface);
+    cupid_free(&m->pd.regions[i].shape.file);
+  }
+  for (int i = 0; i < m->pd.n_holes; i++) {
+    cupid_surface_destroy(&m->pd.holes[i].shape.surface);
+    cupid_free(&m->pd.holes[i].shape.file);
+  }
   cupid_free(&m->pd.regions);
   cupid_free(&m->pd.holes);
   cupid_free(&m->pd.precracks);

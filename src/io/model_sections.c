@@ -424,6 +424,7 @@ static cupid_status read_section_mesh(model_reader *rd, yaml_node_t *node, yaml_
                       &group_material);
   if (st == CUPID_SUCCESS) st = read_section_groups(rd, groups, &mesh, file, group_material);
   if (st == CUPID_SUCCESS) {
+    b->section_mesh = file, file = NULL; /* summary.json names it */
     b->section_nodes = mesh.xz, mesh.xz = NULL;
     b->n_section_nodes = (int)mesh.n_nodes;
     b->section_elements = mesh.conn, mesh.conn = NULL;
@@ -596,6 +597,7 @@ static cupid_status read_geometry(model_reader *rd, yaml_node_t *node, const cha
     s->kind = CUPID_SHAPE_GEOMETRY;
     cupid_surface_bounds(s->surface, s->box.lo, s->box.hi);
     for (int a = 0; a < 3; a++) s->box.has[a] = 1;
+    s->file = file, file = NULL; /* summary.json names it */
   }
   cupid_free(&name);
   cupid_free(&file);

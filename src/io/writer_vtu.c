@@ -22,6 +22,7 @@ static cupid_status record(vtu_writer *v, const char *name, double t) {
     CUPID_CALL(cupid_realloc((size_t)cap, sizeof *v->times, "VTU times", &v->times));
     v->cap = cap;
   }
+  memset(v->files[v->n], 0, NAME); /* whole: a checkpoint stores the slot */
   snprintf(v->files[v->n], NAME, "%s", name);
   v->times[v->n++] = t;
   return CUPID_SUCCESS;

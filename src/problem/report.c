@@ -239,7 +239,34 @@ static void json_beam(cupid_json js, const cupid_problem_state *prob) {
   cupid_json_string(js, "expansion", expansion);
   cupid_json_string(js, "integration", integrations[fi->integration]);
   cupid_json_bool(js, "poisson_correction", fi->poisson_corrected);
+  const cupid_beam *b = &prob->model->beam;
+  if (b->section_mesh) { /* beam.section.mesh: the Gmsh file and what it gave */
+    cupid_json_begin_object(js, "section_mesh");
+    cupid_json_string(js, "file", b->section_mesh);
+    cupid_json_integer(js, "elements", b->n_section_elements);
+    cupid_json_integer(js, "nodes", b->n_section_nodes);
+    cupid_json_end_object(js);
+  }
   cupid_json_end_object(js);
+}
+
+/* The PD bodies' geometry files ({geometry: FILE} regions and holes): the file and the
+ * triangles of its surface. */
+static void json_geometry(cupid_json js, const cupid_problem_state *prob) {
+  const cupid_peridynamics *pd = &prob->model->pd;
+  int any = 0;
+  for (int k = 0; k < pd->n_regions + pd->n_holes; k++) {
+    const cupid_shape *s = k < pd->n_regions ? &pd->regions[k].shape : &pd->holes[k - pd->n_regions].shape;
+    if (s->kind != CUPID_SHAPE_GEOMETRY) continue;
+    if (!any++) cupid_json_begin_array(js, "geometry");
+    cupid_json_begin_object(js, NULL);
+    cupid_json_string(js, "of", k < pd->n_regions ? "region" : "hole");
+    cupid_json_integer(js, "index", k < pd->n_regions ? k : k - pd->n_regions);
+    cupid_json_string(js, "file", s->file ? s->file : "");
+    cupid_json_integer(js, "triangles", cupid_surface_num_triangles(s->surface));
+    cupid_json_end_object(js);
+  }
+  if (any) cupid_json_end_array(js);
 }
 
 static void json_phases(cupid_json js, const cupid_problem_state *prob) {
@@ -340,6 +367,7 @@ static cupid_status write_summary(cupid_problem_state *prob) {
   cupid_json_string(js, "omp_wait_policy", wait ? wait : "");
   json_counts(js, prob);
   if (prob->beam) json_beam(js, prob);
+  json_geometry(js, prob);
   json_phases(js, prob);
   json_solver(js, prob);
   if (prob->arlequin_penalty > 0) { /* method arlequin: the penalty in use and its scale */

@@ -4,11 +4,11 @@
 # crossings). Each check can fail:
 #  - a sphere from a .geo (OpenCASCADE) against the analytic {sphere: ..} at two spacings: the
 #    same nodes (pd_nodes.csv's coordinates equal), the surface's facets being within ~1% of a
-#    spacing of the sphere (the spacings divide the sphere's lowest coordinate, 1: the
+#    spacing of the sphere (the spacings, 1 and 0.5, divide the sphere's lowest coordinate, 1: the
 #    geometry's lattice planes at multiples of the spacing are then the analytic sphere's);
 #  - examples/geometry/plate_hole_step.yaml (a STEP solid) against plate_hole.yaml (a box with
 #    a cylinder hole) at spacing 1.5: the same nodes, bonds and results (pd_nodes.csv byte for
-#    byte, summary.json's points equal);
+#    byte, summary.json's points equal), summary.json naming the file and its triangles;
 #  - the same plate with its hole from a geometry file (holes: [{geometry: cylinder.geo}]):
 #    the same again;
 #  - cracks growing from the hole (examples/geometry/plate_hole_crack.yaml at spacing 1.5): a
@@ -33,7 +33,7 @@ run() { "$CUPID" run "$@" -q >out.txt 2>&1 || { bad "cupid run $*: $(tail -2 out
 xyz() { cut -d, -f1-3 "$1/pd_nodes.csv"; }
 
 # ---- the sphere, at two spacings
-for h in 0.5 0.25; do
+for h in 1 0.5; do
   H="--set peridynamics.spacing=$h --set peridynamics.horizon=$(awk -v h=$h 'BEGIN { print 3 * h }')"
   run "$G/sphere.yaml" -o "geo_$h" $H
   run "$G/sphere.yaml" -o "ana_$h" $H --set "peridynamics.regions=[{sphere: {center: [5, 5, 5], radius: 4}}]"
@@ -57,6 +57,14 @@ if a["counts"] != b["counts"] or a["points"] != b["points"]:
 PY
 }
 msg=$(same step analytic 2>&1); [ -z "$msg" ] && ok || bad "plate from STEP: $msg"
+msg=$(python3 - <<'PY' 2>&1
+import json
+g = json.load(open("step/summary.json")).get("geometry")
+if not (g and g[0]["of"] == "region" and g[0]["index"] == 0 and g[0]["file"].endswith("plate_hole.step") and g[0]["triangles"] > 100):
+    print("summary.json's geometry: %s" % g)
+PY
+)
+[ -z "$msg" ] && ok || bad "plate from STEP: $msg"
 msg=$(same geohole analytic 2>&1); [ -z "$msg" ] && ok || bad "plate with a geometry hole: $msg"
 
 # ---- cracks from the hole (examples/geometry/plate_hole_crack.yaml, displacement-driven) at

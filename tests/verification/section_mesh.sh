@@ -9,6 +9,7 @@
 #    area, within 1e-4 of the ring's pi (Ro^2 - Ri^2) with L9's curved edges (measured 2e-6),
 #    while L4's straight edges (a 32-sided ring) miss by more than 0.3% (0.64% in theory):
 #    the check sees the edges' shape;
+#  - summary.json's beam.section_mesh names the file and its 64 elements;
 #  - beam.vtu's points of the tube lie between the radii and its outer points on the circle
 #    (within 1e-9 of Ro: the reconstruction follows the curved edges);
 #  - the C-beam with its section from a .msh (examples/sections/cbeam_mesh_l9.yaml) equals the
@@ -66,6 +67,9 @@ for d, lo, hi in (("axial", 0.0, 1e-4), ("axial4", 3e-3, 1e-2)):
     a = -json.load(open(d + "/summary.json"))["reaction_sum"][1] / 10.0
     e = abs(a / area - 1)
     if not (lo <= e <= hi): err.append("%s: area %.9g, the ring's %.9g (error %.3g)" % (d, a, area, e))
+sm = s["beam"].get("section_mesh", {})
+if not (sm.get("file", "").endswith("tube_section.geo") and sm.get("elements") == 64):
+    err.append("summary.json's beam.section_mesh: %s" % sm)
 m = meshio.read("torsion/beam.vtu")
 rr = (m.points[:, 0]**2 + m.points[:, 2]**2) ** 0.5
 if rr.min() < Ri - 1e-9 or rr.max() > Ro + 1e-9: err.append("beam.vtu: radii %g to %g" % (rr.min(), rr.max()))
