@@ -165,22 +165,84 @@ static cupid_status node_maps(int type, int npe, int map[16], int mirror[16], ch
   return st;
 }
 
-/* The index of node tag t (tags are not contiguous). */
-static cupid_int node_index(const size_t *sorted, const cupid_int *index, cupid_int n, size_t t) {
-  cupid_int lo = 0, hi = n - 1;
-  while (lo <= hi) {
-    cupid_int mid = lo + (hi - lo) / 2;
-    if (sorted[mid] == t) return index[mid];
-    if (sorted[mid] < t) lo = mid + 1;
-    else hi = mid - 1;
-  }
-  return -1;
+/* The mesh's nodes: Gmsh's tags (not contiguous) and coordinates, the tags sorted. */
+typedef struct {
+  size_t *tags, n;
+  double *coord;  /* 3 per node */
+  size_t *sorted; /* the tags in increasing order ... */
+  cupid_int *index; /* ... and the node each is */
+} node_table;
+
+static void node_table_free(node_table *t) {
+  if (t->tags) api.free(t->tags);
+  if (t->coord) api.free(t->coord);
+  cupid_free(&t->sorted);
+  cupid_free(&t->index);
+  memset(t, 0, sizeof *t);
 }
 
 static _Thread_local const size_t *sort_tags;
 static int by_tag(const void *a, const void *b) {
   size_t x = sort_tags[*(const cupid_int *)a], y = sort_tags[*(const cupid_int *)b];
   return (x > y) - (x < y);
+}
+
+/* The nodes of the entities of dimension @p dim (-1: all) with their boundaries'. */
+static cupid_status node_table_read(int dim, node_table *t) {
+  size_t n_coord = 0, n_param = 0;
+  double *param = NULL;
+  int ierr = 0;
+  memset(t, 0, sizeof *t);
+  api.get_nodes(&t->tags, &t->n, &t->coord, &n_coord, &param, &n_param, dim, -1, 1, 0, &ierr);
+  if (param) api.free(param);
+  CUPID_CHECK(!ierr, CUPID_ERR_IO, "Gmsh could not list the mesh's nodes");
+  CUPID_CALL(cupid_malloc(t->n + 1, sizeof *t->sorted, "node tags", &t->sorted));
+  CUPID_CALL(cupid_malloc(t->n + 1, sizeof *t->index, "node index", &t->index));
+  for (size_t i = 0; i < t->n; i++) t->index[i] = (cupid_int)i;
+  sort_tags = t->tags;
+  qsort(t->index, t->n, sizeof *t->index, by_tag);
+  sort_tags = NULL;
+  for (size_t i = 0; i < t->n; i++) t->sorted[i] = t->tags[t->index[i]];
+  return CUPID_SUCCESS;
+}
+
+/* The node of tag @p tag, or -1. */
+static cupid_int node_table_find(const node_table *t, size_t tag) {
+  size_t lo = 0, hi = t->n;
+  while (lo < hi) {
+    size_t mid = lo + (hi - lo) / 2;
+    if (t->sorted[mid] == tag) return t->index[mid];
+    if (t->sorted[mid] < tag) lo = mid + 1;
+    else hi = mid;
+  }
+  return -1;
+}
+
+/* Open @p path in Gmsh (the system's reason first where it cannot be opened: Gmsh's is vaguer)
+ * and mesh its surfaces where it has no mesh (a .geo, a CAD file). */
+static cupid_status open_meshed(const char *path, char *why, size_t size) {
+  FILE *probe = fopen(path, "rb");
+  if (!probe) return fail(why, size, CUPID_ERR_IO, "cannot open it: %s", strerror(errno));
+  fclose(probe);
+  if (!load_api()) return fail(why, size, CUPID_ERR_UNSUPPORTED, "%s", api_why);
+  int ierr = 0;
+  api.clear(&ierr);
+  api.open(path, &ierr);
+  if (ierr) {
+    gmsh_reason(why, size, "Gmsh cannot read the file");
+    return CUPID_ERR_IO;
+  }
+  size_t *tags = NULL, n = 0, n_coord = 0, n_param = 0;
+  double *coord = NULL, *param = NULL;
+  api.get_nodes(&tags, &n, &coord, &n_coord, &param, &n_param, 2, -1, 1, 0, &ierr);
+  if (tags) api.free(tags);
+  if (coord) api.free(coord);
+  if (param) api.free(param);
+  if (!ierr && n > 0) return CUPID_SUCCESS;
+  api.mesh_generate(2, &ierr);
+  if (!ierr) return CUPID_SUCCESS;
+  gmsh_reason(why, size, "Gmsh could not mesh the surfaces");
+  return CUPID_ERR_MODEL;
 }
 
 /* The physical group (2D) of each surface entity: group[k] for entity tag ents[k], -1 none. */
@@ -213,10 +275,23 @@ static cupid_status entity_groups(cupid_gmsh_section *s, const int *ents, size_t
   return st;
 }
 
+/* What gmshModelMeshGetElements gave, back to Gmsh. */
+static void free_elements(int *types, size_t n_types, size_t **etags, size_t *etags_n,
+                          size_t **ntags, size_t *ntags_n) {
+  for (size_t t = 0; t < n_types; t++) {
+    if (etags) api.free(etags[t]);
+    if (ntags) api.free(ntags[t]);
+  }
+  if (types) api.free(types);
+  if (etags) api.free(etags);
+  if (etags_n) api.free(etags_n);
+  if (ntags) api.free(ntags);
+  if (ntags_n) api.free(ntags_n);
+}
+
 /* The elements of one surface entity, appended (their nodes in cupid's order). */
 static cupid_status add_elements(cupid_gmsh_section *s, int entity, int group, int npe,
-                                 const size_t *sorted, const cupid_int *index, cupid_int n_nodes,
-                                 char *why, size_t size) {
+                                 const node_table *nodes, char *why, size_t size) {
   int *types = NULL, ierr = 0;
   size_t n_types = 0, **etags = NULL, *etags_n = NULL, etags_nn = 0, **ntags = NULL, *ntags_n = NULL,
          ntags_nn = 0;
@@ -234,7 +309,7 @@ static cupid_status add_elements(cupid_gmsh_section *s, int entity, int group, i
       const size_t *nt = ntags[t] + e * (size_t)npe;
       int *c = s->conn + (size_t)s->n_elements * (size_t)npe;
       for (int k = 0; k < npe && st == CUPID_SUCCESS; k++) {
-        cupid_int i = node_index(sorted, index, n_nodes, nt[map[k]]);
+        cupid_int i = node_table_find(nodes, nt[map[k]]);
         if (i < 0) st = fail(why, size, CUPID_ERR_IO, "element %zu refers to node %zu, which the mesh does not have", etags[t][e], nt[map[k]]);
         c[k] = (int)i;
       }
@@ -253,19 +328,11 @@ static cupid_status add_elements(cupid_gmsh_section *s, int entity, int group, i
       }
       if (area < 0)
         for (int k = 0; k < npe && st == CUPID_SUCCESS; k++)
-          c[k] = (int)node_index(sorted, index, n_nodes, nt[mirror[k]]);
+          c[k] = (int)node_table_find(nodes, nt[mirror[k]]);
       s->group[s->n_elements++] = group;
     }
   }
-  for (size_t t = 0; t < n_types; t++) {
-    if (etags) api.free(etags[t]);
-    if (ntags) api.free(ntags[t]);
-  }
-  if (types) api.free(types);
-  if (etags) api.free(etags);
-  if (etags_n) api.free(etags_n);
-  if (ntags) api.free(ntags);
-  if (ntags_n) api.free(ntags_n);
+  free_elements(types, n_types, etags, etags_n, ntags, ntags_n);
   return st;
 }
 
@@ -273,54 +340,31 @@ cupid_status cupid_gmsh_read_section(const char *path, int npe, cupid_gmsh_secti
                                      size_t size) {
   memset(s, 0, sizeof *s);
   why[0] = '\0';
-  FILE *probe = fopen(path, "rb"); /* the OS's reason first: Gmsh's is vaguer */
-  if (!probe) return fail(why, size, CUPID_ERR_IO, "cannot open it: %s", strerror(errno));
-  fclose(probe);
-  if (!load_api()) return fail(why, size, CUPID_ERR_UNSUPPORTED, "%s", api_why);
-  int ierr = 0;
-  api.clear(&ierr);
-  api.open(path, &ierr);
+  int *ents = NULL, *group = NULL, ierr = 0;
+  size_t n_ents = 0;
+  node_table nodes = {0};
+  cupid_status st = open_meshed(path, why, size);
+  if (st != CUPID_SUCCESS) return st;
+  /* the elements' order of `element:`, their new nodes on the geometry */
+  api.mesh_set_order(npe == 4 ? 1 : npe == 9 ? 2 : 3, &ierr);
   if (ierr) {
-    gmsh_reason(why, size, "Gmsh cannot read the file");
-    return CUPID_ERR_IO;
+    gmsh_reason(why, size, "Gmsh could not make the elements' order");
+    st = CUPID_ERR_MODEL;
+    goto cleanup;
   }
-  int *ents = NULL, *group = NULL;
-  size_t n_ents = 0, *tags = NULL, n_tags = 0, n_coord = 0, n_param = 0;
-  double *coord = NULL, *param = NULL;
-  cupid_int *index = NULL, *order = NULL;
-  size_t *sorted = NULL;
-  cupid_status st = CUPID_SUCCESS;
-  /* a geometry without a mesh (.geo, .step): mesh it; then the element order of `element:` */
-  api.get_nodes(&tags, &n_tags, &coord, &n_coord, &param, &n_param, 2, -1, 1, 0, &ierr);
-  if (!ierr && n_tags == 0) {
-    api.mesh_generate(2, &ierr);
-    if (ierr) gmsh_reason(why, size, "Gmsh could not mesh the geometry");
-    if (ierr) st = CUPID_ERR_MODEL;
+  CUPID_TRY(node_table_read(2, &nodes)); /* the surfaces' nodes alone: no stray points */
+  const cupid_int n = (cupid_int)nodes.n;
+  if (n == 0) {
+    st = fail(why, size, CUPID_ERR_MODEL, "the file has no surface mesh");
+    goto cleanup;
   }
-  if (tags) api.free(tags), tags = NULL;
-  if (coord) api.free(coord), coord = NULL;
-  if (param) api.free(param), param = NULL;
-  if (st == CUPID_SUCCESS) {
-    api.mesh_set_order(npe == 4 ? 1 : npe == 9 ? 2 : 3, &ierr);
-    if (ierr) gmsh_reason(why, size, "Gmsh could not make the elements' order");
-    if (ierr) st = CUPID_ERR_MODEL;
-  }
-  if (st == CUPID_SUCCESS) {
-    api.get_nodes(&tags, &n_tags, &coord, &n_coord, &param, &n_param, 2, -1, 1, 0, &ierr);
-    if (ierr || n_tags == 0) st = fail(why, size, CUPID_ERR_MODEL, "the file has no surface mesh");
-  }
-  const cupid_int n = (cupid_int)n_tags;
-  CUPID_TRY(st);
   CUPID_TRY(cupid_malloc((size_t)n, sizeof *s->xz * 2, "section nodes", &s->xz));
-  CUPID_TRY(cupid_malloc((size_t)n, sizeof *order, "node order", &order));
-  CUPID_TRY(cupid_malloc((size_t)n, sizeof *index, "node index", &index));
-  CUPID_TRY(cupid_malloc((size_t)n, sizeof *sorted, "node tags", &sorted));
   double zmax = 0.0, span = 0.0;
+  const double *xyz = nodes.coord;
   for (cupid_int i = 0; i < n; i++) {
-    s->xz[2 * i] = coord[3 * i], s->xz[2 * i + 1] = coord[3 * i + 1]; /* Gmsh x, y: section x, z */
-    zmax = fmax(zmax, fabs(coord[3 * i + 2]));
-    span = fmax(span, fmax(fabs(coord[3 * i] - coord[0]), fabs(coord[3 * i + 1] - coord[1])));
-    order[i] = i;
+    s->xz[2 * i] = xyz[3 * i], s->xz[2 * i + 1] = xyz[3 * i + 1]; /* Gmsh x, y: section x, z */
+    zmax = fmax(zmax, fabs(xyz[3 * i + 2]));
+    span = fmax(span, fmax(fabs(xyz[3 * i] - xyz[0]), fabs(xyz[3 * i + 1] - xyz[1])));
   }
   if (zmax > 1e-9 * (span > 0 ? span : 1.0)) {
     st = fail(why, size, CUPID_ERR_MODEL, "the mesh is not in Gmsh's xy plane (z up to %g): a "
@@ -328,10 +372,6 @@ cupid_status cupid_gmsh_read_section(const char *path, int npe, cupid_gmsh_secti
     goto cleanup;
   }
   s->n_nodes = n;
-  sort_tags = tags;
-  qsort(order, (size_t)n, sizeof *order, by_tag);
-  sort_tags = NULL;
-  for (cupid_int i = 0; i < n; i++) sorted[i] = tags[order[i]], index[i] = order[i];
   s->npe = npe;
   api.get_entities(&ents, &n_ents, 2, &ierr);
   if (ierr) {
@@ -343,18 +383,13 @@ cupid_status cupid_gmsh_read_section(const char *path, int npe, cupid_gmsh_secti
   CUPID_TRY(cupid_malloc(n_ents + 1, sizeof *group, "surface groups", &group));
   CUPID_TRY(entity_groups(s, ents, n_ents, group, why, size));
   for (size_t k = 0; k < n_ents; k++)
-    CUPID_TRY(add_elements(s, ents[k], group[k], npe, sorted, index, n, why, size));
+    CUPID_TRY(add_elements(s, ents[k], group[k], npe, &nodes, why, size));
   if (s->n_elements == 0) st = fail(why, size, CUPID_ERR_MODEL, "the file has no quadrilaterals");
 cleanup:
   if (st != CUPID_SUCCESS && why[0] == '\0') snprintf(why, size, "%s", cupid_error_message());
-  if (tags) api.free(tags);
-  if (coord) api.free(coord);
-  if (param) api.free(param);
   if (ents) api.free(ents);
+  node_table_free(&nodes);
   cupid_free(&group);
-  cupid_free(&order);
-  cupid_free(&index);
-  cupid_free(&sorted);
   if (st != CUPID_SUCCESS) cupid_gmsh_section_free(s);
   int e2 = 0;
   api.clear(&e2);
@@ -363,9 +398,8 @@ cleanup:
 
 /* The triangles of surface entity `entity` (quadrilaterals split in two) appended to *tri, node
  * tags mapped to indices. */
-static cupid_status add_triangles(int entity, const size_t *sorted, const cupid_int *index,
-                                  cupid_int n_nodes, int64_t **tri, int64_t *n_tri, int64_t *cap,
-                                  char *why, size_t size) {
+static cupid_status add_triangles(int entity, const node_table *nodes, int64_t **tri,
+                                  int64_t *n_tri, int64_t *cap, char *why, size_t size) {
   int *types = NULL, ierr = 0;
   size_t n_types = 0, **etags = NULL, *etags_n = NULL, etags_nn = 0, **ntags = NULL, *ntags_n = NULL,
          ntags_nn = 0;
@@ -377,8 +411,8 @@ static cupid_status add_triangles(int entity, const size_t *sorted, const cupid_
     char *name = NULL;
     double *local = NULL;
     size_t n_local = 0;
-    int dim = 0, order = 0, nodes = 0, primary = 0;
-    api.get_element_properties(types[t], &name, &dim, &order, &nodes, &local, &n_local, &primary,
+    int dim = 0, order = 0, per = 0, primary = 0;
+    api.get_element_properties(types[t], &name, &dim, &order, &per, &local, &n_local, &primary,
                                &ierr);
     const int quad = primary == 4;
     if (ierr || !(primary == 3 || primary == 4))
@@ -388,10 +422,10 @@ static cupid_status add_triangles(int entity, const size_t *sorted, const cupid_
     if (local) api.free(local);
     const size_t ne = etags_n[t];
     for (size_t e = 0; e < ne && st == CUPID_SUCCESS; e++) {
-      const size_t *nt = ntags[t] + e * (size_t)nodes; /* the corners come first */
+      const size_t *nt = ntags[t] + e * (size_t)per; /* the corners come first */
       int64_t c[4];
       for (int k = 0; k < primary; k++) {
-        c[k] = node_index(sorted, index, n_nodes, nt[k]);
+        c[k] = node_table_find(nodes, nt[k]);
         if (c[k] < 0) st = fail(why, size, CUPID_ERR_IO, "an element refers to node %zu, which the mesh does not have", nt[k]);
       }
       for (int h = 0; h < (quad ? 2 : 1) && st == CUPID_SUCCESS; h++) {
@@ -406,15 +440,7 @@ static cupid_status add_triangles(int entity, const size_t *sorted, const cupid_
       }
     }
   }
-  for (size_t t = 0; t < n_types; t++) {
-    if (etags) api.free(etags[t]);
-    if (ntags) api.free(ntags[t]);
-  }
-  if (types) api.free(types);
-  if (etags) api.free(etags);
-  if (etags_n) api.free(etags_n);
-  if (ntags) api.free(ntags);
-  if (ntags_n) api.free(ntags_n);
+  free_elements(types, n_types, etags, etags_n, ntags, ntags_n);
   return st;
 }
 
@@ -422,29 +448,19 @@ cupid_status cupid_gmsh_read_surface(const char *path, double size, cupid_surfac
                                      char *why, size_t why_size) {
   *surface = NULL;
   why[0] = '\0';
-  FILE *probe = fopen(path, "rb");
-  if (!probe) return fail(why, why_size, CUPID_ERR_IO, "cannot open it: %s", strerror(errno));
-  fclose(probe);
-  if (!load_api()) return fail(why, why_size, CUPID_ERR_UNSUPPORTED, "%s", api_why);
   int ierr = 0, *vols = NULL, *bnd = NULL;
-  size_t n_vols = 0, n_bnd = 0, *tags = NULL, n_tags = 0, n_coord = 0, n_param = 0;
-  double *coord = NULL, *param = NULL;
-  cupid_int *index = NULL, *order = NULL;
-  size_t *sorted = NULL;
+  size_t n_vols = 0, n_bnd = 0;
+  node_table nodes = {0};
   int64_t *tri = NULL, n_tri = 0, cap = 0, open_edges = 0;
   cupid_status st = CUPID_SUCCESS;
-  api.clear(&ierr);
-  /* The facets' distance to a curved surface decides which cells near it are in: at most
-   * about 1% of a spacing. Flat faces need no small elements: ten spacings at most; a face
-   * curving with radius R takes elements of 2 pi R / 256 (a chord 7.5e-5 R from the arc) */
-  api.option_set_number("Mesh.MeshSizeMax", size > 0 ? 10 * size : 1e22, &ierr);
-  api.option_set_number("Mesh.MeshSizeFromCurvature", 256, &ierr);
-  api.open(path, &ierr);
-  if (ierr) {
-    gmsh_reason(why, why_size, "Gmsh cannot read the file");
-    st = CUPID_ERR_IO;
-    goto cleanup;
+  if (load_api()) {
+    /* The facets' distance to a curved surface decides which cells near it are in: at most
+     * about 1% of a spacing. Flat faces need no small elements: ten spacings at most; a face
+     * curving with radius R takes elements of 2 pi R / 256 (a chord 7.5e-5 R from the arc) */
+    api.option_set_number("Mesh.MeshSizeMax", size > 0 ? 10 * size : 1e22, &ierr);
+    api.option_set_number("Mesh.MeshSizeFromCurvature", 256, &ierr);
   }
+  CUPID_TRY(open_meshed(path, why, why_size));
   /* the surfaces that bound the volumes (a file of surfaces alone: all of them) */
   api.get_entities(&vols, &n_vols, 3, &ierr);
   if (n_vols) api.get_boundary(vols, n_vols, &bnd, &n_bnd, 1, 0, 0, &ierr); /* of their union */
@@ -453,37 +469,14 @@ cupid_status cupid_gmsh_read_surface(const char *path, double size, cupid_surfac
     st = fail(why, why_size, CUPID_ERR_MODEL, "the file has no volume or surface");
     goto cleanup;
   }
-  api.get_nodes(&tags, &n_tags, &coord, &n_coord, &param, &n_param, 2, -1, 1, 0, &ierr);
-  const int meshed = !ierr && n_tags > 0;
-  if (tags) api.free(tags), tags = NULL;
-  if (coord) api.free(coord), coord = NULL;
-  if (param) api.free(param), param = NULL;
-  if (!meshed) { /* a geometry: mesh its surfaces */
-    api.mesh_generate(2, &ierr);
-    if (ierr) {
-      gmsh_reason(why, why_size, "Gmsh could not mesh the surfaces");
-      st = CUPID_ERR_MODEL;
-      goto cleanup;
-    }
-  }
-  api.get_nodes(&tags, &n_tags, &coord, &n_coord, &param, &n_param, -1, -1, 1, 0, &ierr);
-  const cupid_int n = (cupid_int)n_tags;
-  CUPID_TRY(cupid_malloc((size_t)n + 1, sizeof *order, "node order", &order));
-  CUPID_TRY(cupid_malloc((size_t)n + 1, sizeof *index, "node index", &index));
-  CUPID_TRY(cupid_malloc((size_t)n + 1, sizeof *sorted, "node tags", &sorted));
-  for (cupid_int i = 0; i < n; i++) order[i] = i;
-  sort_tags = tags;
-  qsort(order, (size_t)n, sizeof *order, by_tag);
-  sort_tags = NULL;
-  for (cupid_int i = 0; i < n; i++) sorted[i] = tags[order[i]], index[i] = order[i];
+  CUPID_TRY(node_table_read(-1, &nodes));
   for (size_t k = 0; k < n_bnd / 2; k++) /* (dim, tag) pairs; a tag's sign is its orientation */
-    CUPID_TRY(add_triangles(abs(bnd[2 * k + 1]), sorted, index, n, &tri, &n_tri, &cap, why,
-                            why_size));
+    CUPID_TRY(add_triangles(abs(bnd[2 * k + 1]), &nodes, &tri, &n_tri, &cap, why, why_size));
   if (n_tri == 0) {
     st = fail(why, why_size, CUPID_ERR_MODEL, "the file's surfaces have no mesh");
     goto cleanup;
   }
-  CUPID_TRY(cupid_surface_create(coord, (int64_t)n, tri, n_tri, surface, &open_edges));
+  CUPID_TRY(cupid_surface_create(nodes.coord, (int64_t)nodes.n, tri, n_tri, surface, &open_edges));
   if (open_edges) {
     cupid_surface_destroy(surface);
     st = fail(why, why_size, CUPID_ERR_MODEL, "the surface is not closed (%lld edges of its "
@@ -492,18 +485,15 @@ cupid_status cupid_gmsh_read_surface(const char *path, double size, cupid_surfac
   }
 cleanup:
   if (st != CUPID_SUCCESS && why[0] == '\0') snprintf(why, why_size, "%s", cupid_error_message());
-  if (tags) api.free(tags);
-  if (coord) api.free(coord);
-  if (param) api.free(param);
   if (vols) api.free(vols);
   if (bnd) api.free(bnd);
-  cupid_free(&order);
-  cupid_free(&index);
-  cupid_free(&sorted);
+  node_table_free(&nodes);
   cupid_free(&tri);
-  int e2 = 0;
-  api.clear(&e2);
-  api.option_set_number("Mesh.MeshSizeMax", 1e22, &e2); /* Gmsh's defaults again */
-  api.option_set_number("Mesh.MeshSizeFromCurvature", 0, &e2);
+  if (api_state > 0) {
+    int e2 = 0;
+    api.clear(&e2);
+    api.option_set_number("Mesh.MeshSizeMax", 1e22, &e2); /* Gmsh's defaults again */
+    api.option_set_number("Mesh.MeshSizeFromCurvature", 0, &e2);
+  }
   return st;
 }

@@ -118,45 +118,13 @@ static cupid_status initial_state(cupid_problem_state *prob, double *v) {
 }
 
 /* The step's frame for the VTU series and the Exodus file: the beam's reconstruction and the PD
- * nodes with displacement, velocity and (with fracture) damage. A slab run gathers u, v and
- * damage on rank 0, which writes them on the whole grid (collective). */
+ * nodes with displacement, velocity and (with fracture) damage (collective on a slab run). */
 static cupid_status write_frame(dyn_output *o, cupid_int step, double t, const double *v) {
   cupid_problem_state *prob = o->prob;
+  const cupid_vtu_array fields[3] = {{"displacement", 3, o->u_out}, {"velocity", 3, v},
+                                     {"damage", 1, prob->damage}};
   cupid_writer writers[2] = {o->vtu, o->exodus};
-  cupid_frame_part parts[2];
-  cupid_vtu_array pdata[3];
-  cupid_vtu_mesh pd;
-  cupid_cuf_vtu *beam = NULL;
-  double *g[3] = {NULL, NULL, NULL};
-  cupid_status st = CUPID_SUCCESS;
-  int np = 0;
-  if (prob->beam && prob->writedir) {
-    CUPID_TRY(cupid_cuf_vtu_build(prob->beam, o->u_out, 0, &beam));
-    parts[np++] = (cupid_frame_part){"beam", &beam->mesh, NULL};
-  }
-  if (prob->grid) {
-    const double *u = o->u_out, *vel = v, *damage = prob->damage;
-    if (prob->slab) {
-      CUPID_TRY(cupid_problem_slab_gather(prob, o->u_out, 3, &g[0]));
-      CUPID_TRY(cupid_problem_slab_gather(prob, v, 3, &g[1]));
-      if (prob->damage) CUPID_TRY(cupid_problem_slab_gather(prob, prob->damage, 1, &g[2]));
-      u = g[0], vel = g[1], damage = g[2];
-    }
-    pdata[0] = (cupid_vtu_array){"displacement", 3, u};
-    pdata[1] = (cupid_vtu_array){"velocity", 3, vel};
-    pdata[2] = (cupid_vtu_array){"damage", 1, damage};
-    if (o->verts.grid) {
-      pd = cupid_problem_vertices_mesh(&o->verts, pdata, damage ? 3 : 2);
-      parts[np++] = (cupid_frame_part){"pd", &pd, o->verts.volume};
-    }
-  }
-  const cupid_frame f = {.step = step, .time = t, .n_parts = np, .parts = parts};
-  st = cupid_problem_frame_write(writers, 2, &f);
-  if (prob->slab) st = cupid_problem_slab_agree(st);
-cleanup:
-  cupid_cuf_vtu_destroy(&beam);
-  for (int k = 0; k < 3; k++) cupid_free(&g[k]);
-  return st;
+  return cupid_problem_frame_write(prob, &o->verts, step, t, o->u_out, fields, 3, writers, 2);
 }
 
 /* A row of the history (t, then u at every output point) kept in the problem

@@ -157,44 +157,13 @@ cleanup:
 }
 
 /* A load step's frame for model.exo: the beam's reconstruction and the PD nodes with their
- * displacement, internal force and damage (a slab run gathers them on rank 0: collective). */
+ * displacement, internal force and damage (collective on a slab run). */
 static cupid_status write_frame(growth_run *g, int step, double lambda) {
   cupid_problem_state *prob = g->prob;
   if (!prob->model->output.exodus) return CUPID_SUCCESS;
-  cupid_frame_part parts[2];
-  cupid_vtu_array pdata[3];
-  cupid_vtu_mesh pd;
-  cupid_cuf_vtu *beam = NULL;
-  double *gathered[3] = {NULL, NULL, NULL};
-  cupid_status st = CUPID_SUCCESS;
-  int np = 0;
-  if (prob->beam && prob->writedir) {
-    CUPID_TRY(cupid_cuf_vtu_build(prob->beam, prob->u, 0, &beam));
-    parts[np++] = (cupid_frame_part){"beam", &beam->mesh, NULL};
-  }
-  if (prob->grid) {
-    const double *u = prob->u, *f = prob->f_int, *damage = prob->damage;
-    if (prob->slab) {
-      CUPID_TRY(cupid_problem_slab_gather(prob, prob->u, 3, &gathered[0]));
-      CUPID_TRY(cupid_problem_slab_gather(prob, prob->f_int, 3, &gathered[1]));
-      if (prob->damage) CUPID_TRY(cupid_problem_slab_gather(prob, prob->damage, 1, &gathered[2]));
-      u = gathered[0], f = gathered[1], damage = gathered[2];
-    }
-    pdata[0] = (cupid_vtu_array){"displacement", 3, u};
-    pdata[1] = (cupid_vtu_array){"force", 3, f};
-    pdata[2] = (cupid_vtu_array){"damage", 1, damage};
-    if (g->verts.grid) {
-      pd = cupid_problem_vertices_mesh(&g->verts, pdata, damage ? 3 : 2);
-      parts[np++] = (cupid_frame_part){"pd", &pd, g->verts.volume};
-    }
-  }
-  const cupid_frame frame = {.step = step, .time = lambda, .n_parts = np, .parts = parts};
-  st = cupid_writer_step(g->exodus, &frame);
-  if (prob->slab) st = cupid_problem_slab_agree(st);
-cleanup:
-  cupid_cuf_vtu_destroy(&beam);
-  for (int k = 0; k < 3; k++) cupid_free(&gathered[k]);
-  return st;
+  const cupid_vtu_array fields[3] = {{"displacement", 3, prob->u}, {"force", 3, prob->f_int},
+                                     {"damage", 1, prob->damage}};
+  return cupid_problem_frame_write(prob, &g->verts, step, lambda, prob->u, fields, 3, &g->exodus, 1);
 }
 
 /* The reaction of each constraint k into g->react[3 k ..]: the work of (f_int - f_ext) on its
@@ -809,30 +778,22 @@ static cupid_status check_collapse(growth_run *g, int k, double lambda, int with
    * reaction. Its held nodes carry the grips' pull where a node left singular is still bonded
    * to a part the grips move (0.08 of the forces on examples/geometry/plate_hole_crack.yaml
    * at spacing 1.5): past here the reactions would be the holding's, not the body's. */
-  if (!g->loaded) {
-    prob->growth.collapse_cause = "held nodes carry the grips' pull";
-    snprintf(prob->growth.stopped, sizeof prob->growth.stopped,
-             "the crack cut the body at load step %d (load factor %.6g), and the %lld node%s held "
-             "where breaking left %s loose or singular carr%s %.3g of the forces on the body (a "
-             "sum of (%.4g, %.4g, %.4g); more than %.0e is a support the model does not have): "
-             "past this step the reactions would be the holding's, not the body's. Results up "
-             "to the last step written; the fields written are this solve's",
-             k, lambda, (long long)g->released, g->released == 1 ? "" : "s",
-             g->released == 1 ? "it" : "them", g->released == 1 ? "ies" : "y", share, h[0], h[1],
-             h[2], COLLAPSE_SHARE);
-    prob->growth.stopped_step = k;
-    *stop = 1;
-    return CUPID_SUCCESS;
-  }
+  const int grips = !g->loaded;
+  if (grips) prob->growth.collapse_cause = "held nodes carry the grips' pull";
   snprintf(prob->growth.stopped, sizeof prob->growth.stopped,
-           "the body collapsed at load step %d (load factor %.6g): the crack cut the load path, "
-           "and the %lld node%s held where breaking left %s loose carr%s %.3g of the forces on "
-           "the body (a sum of (%.4g, %.4g, %.4g); more than %.0e is a support the model does "
-           "not have). The load is more than what is left of the body can carry: results past "
-           "the last step written are no equilibrium; the fields written are this solve's",
-           k, lambda, (long long)g->released, g->released == 1 ? "" : "s",
-           g->released == 1 ? "it" : "them", g->released == 1 ? "ies" : "y", share, h[0], h[1],
-           h[2], COLLAPSE_SHARE);
+           "%s at load step %d (load factor %.6g)%s, and the %lld node%s held where breaking "
+           "left %s loose%s carr%s %.3g of the forces on the body (a sum of (%.4g, %.4g, %.4g); "
+           "more than %.0e is a support the model does not have)%s",
+           grips ? "the crack cut the body" : "the body collapsed", k, lambda,
+           grips ? "" : ": the crack cut the load path", (long long)g->released,
+           g->released == 1 ? "" : "s", g->released == 1 ? "it" : "them",
+           grips ? " or singular" : "", g->released == 1 ? "ies" : "y", share, h[0], h[1], h[2],
+           COLLAPSE_SHARE,
+           grips ? ": past this step the reactions would be the holding's, not the body's. "
+                   "Results up to the last step written; the fields written are this solve's"
+                 : ". The load is more than what is left of the body can carry: results past "
+                   "the last step written are no equilibrium; the fields written are this "
+                   "solve's");
   prob->growth.stopped_step = k;
   *stop = 1;
   return CUPID_SUCCESS;

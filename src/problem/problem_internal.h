@@ -584,8 +584,16 @@ void cupid_problem_vertices_free(cupid_problem_vertices *v);
 /** The vertices' mesh with @p n_data point-data arrays. */
 cupid_vtu_mesh cupid_problem_vertices_mesh(const cupid_problem_vertices *v,
                                            const cupid_vtu_array *data, int n_data);
-/** Hand @p f to every writer (NULL ones skipped: a rank that writes no files). */
-cupid_status cupid_problem_frame_write(cupid_writer *writers, int n_writers, const cupid_frame *f);
+/** The most PD fields of a frame. */
+#define CUPID_FRAME_FIELDS 4
+/** An output step's frame to every writer (NULL ones skipped: a rank that writes no files):
+ *  the beam's 3D reconstruction at @p u (with a beam, on the rank that writes) and the PD nodes
+ *  (@p verts) with @p fields (this process's values; NULL values: left out). A slab run gathers
+ *  the fields on rank 0 (collective) and agrees on the status. */
+cupid_status cupid_problem_frame_write(cupid_problem_state *prob, const cupid_problem_vertices *verts,
+                                       cupid_int step, double t, const double *u,
+                                       const cupid_vtu_array *fields, int n_fields,
+                                       cupid_writer *writers, int n_writers);
 
 /** 1 when a static analysis runs load steps (analysis.steps) or crack growth (growth.c). */
 int cupid_problem_runs_steps(const cupid_problem_state *prob);
