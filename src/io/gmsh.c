@@ -275,30 +275,40 @@ static cupid_status entity_groups(cupid_gmsh_section *s, const int *ents, size_t
   return st;
 }
 
-/* What gmshModelMeshGetElements gave, back to Gmsh. */
-static void free_elements(int *types, size_t n_types, size_t **etags, size_t *etags_n,
-                          size_t **ntags, size_t *ntags_n) {
-  for (size_t t = 0; t < n_types; t++) {
-    if (etags) api.free(etags[t]);
-    if (ntags) api.free(ntags[t]);
+/* The elements of one surface entity, by type (gmshModelMeshGetElements). */
+typedef struct {
+  int *types;
+  size_t n_types, **etags, *etags_n, etags_nn, **ntags, *ntags_n, ntags_nn;
+} entity_elements;
+
+static void entity_elements_free(entity_elements *el) {
+  for (size_t t = 0; t < el->n_types; t++) {
+    if (el->etags) api.free(el->etags[t]);
+    if (el->ntags) api.free(el->ntags[t]);
   }
-  if (types) api.free(types);
-  if (etags) api.free(etags);
-  if (etags_n) api.free(etags_n);
-  if (ntags) api.free(ntags);
-  if (ntags_n) api.free(ntags_n);
+  if (el->types) api.free(el->types);
+  if (el->etags) api.free(el->etags);
+  if (el->etags_n) api.free(el->etags_n);
+  if (el->ntags) api.free(el->ntags);
+  if (el->ntags_n) api.free(el->ntags_n);
+}
+
+static cupid_status entity_elements_read(int entity, entity_elements *el, char *why, size_t size) {
+  int ierr = 0;
+  memset(el, 0, sizeof *el);
+  api.get_elements(&el->types, &el->n_types, &el->etags, &el->etags_n, &el->etags_nn, &el->ntags,
+                   &el->ntags_n, &el->ntags_nn, 2, entity, &ierr);
+  return ierr ? fail(why, size, CUPID_ERR_IO, "Gmsh could not list the elements of surface %d",
+                     entity) : CUPID_SUCCESS;
 }
 
 /* The elements of one surface entity, appended (their nodes in cupid's order). */
 static cupid_status add_elements(cupid_gmsh_section *s, int entity, int group, int npe,
                                  const node_table *nodes, char *why, size_t size) {
-  int *types = NULL, ierr = 0;
-  size_t n_types = 0, **etags = NULL, *etags_n = NULL, etags_nn = 0, **ntags = NULL, *ntags_n = NULL,
-         ntags_nn = 0;
-  api.get_elements(&types, &n_types, &etags, &etags_n, &etags_nn, &ntags, &ntags_n, &ntags_nn, 2,
-                   entity, &ierr);
-  cupid_status st = ierr ? fail(why, size, CUPID_ERR_IO, "Gmsh could not list the elements of "
-                                "surface %d", entity) : CUPID_SUCCESS;
+  entity_elements el;
+  cupid_status st = entity_elements_read(entity, &el, why, size);
+  int *types = el.types;
+  size_t n_types = el.n_types, **etags = el.etags, *etags_n = el.etags_n, **ntags = el.ntags;
   for (size_t t = 0; t < n_types && st == CUPID_SUCCESS; t++) {
     int map[16], mirror[16];
     st = node_maps(types[t], npe, map, mirror, why, size);
@@ -332,7 +342,7 @@ static cupid_status add_elements(cupid_gmsh_section *s, int entity, int group, i
       s->group[s->n_elements++] = group;
     }
   }
-  free_elements(types, n_types, etags, etags_n, ntags, ntags_n);
+  entity_elements_free(&el);
   return st;
 }
 
@@ -400,13 +410,11 @@ cleanup:
  * tags mapped to indices. */
 static cupid_status add_triangles(int entity, const node_table *nodes, int64_t **tri,
                                   int64_t *n_tri, int64_t *cap, char *why, size_t size) {
-  int *types = NULL, ierr = 0;
-  size_t n_types = 0, **etags = NULL, *etags_n = NULL, etags_nn = 0, **ntags = NULL, *ntags_n = NULL,
-         ntags_nn = 0;
-  api.get_elements(&types, &n_types, &etags, &etags_n, &etags_nn, &ntags, &ntags_n, &ntags_nn, 2,
-                   entity, &ierr);
-  cupid_status st = ierr ? fail(why, size, CUPID_ERR_IO, "Gmsh could not list the elements of "
-                                "surface %d", entity) : CUPID_SUCCESS;
+  entity_elements el;
+  int ierr = 0;
+  cupid_status st = entity_elements_read(entity, &el, why, size);
+  int *types = el.types;
+  size_t n_types = el.n_types, *etags_n = el.etags_n, **ntags = el.ntags;
   for (size_t t = 0; t < n_types && st == CUPID_SUCCESS; t++) {
     char *name = NULL;
     double *local = NULL;
@@ -440,7 +448,7 @@ static cupid_status add_triangles(int entity, const node_table *nodes, int64_t *
       }
     }
   }
-  free_elements(types, n_types, etags, etags_n, ntags, ntags_n);
+  entity_elements_free(&el);
   return st;
 }
 

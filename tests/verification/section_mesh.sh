@@ -25,18 +25,10 @@
 #  - the refusals: a missing file (the OS's reason), triangles, a mesh out of the xy plane, a
 #    degenerate quadrilateral, a group the file does not have, a group naming an unknown
 #    material, and no Gmsh library: each exit 1 naming the key.
-set -u
-CUPID=$(realpath "${CUPID:-build/cupid}")
-SRC=$(realpath "${CUPID_SOURCE_DIR:-.}")
-PY=${CUPID_SYSTEM_PYTHON:-/usr/bin/python3}
-# under ASan (build-asan), Gmsh's own objects at exit are not cupid's leaks (the file says why)
+. "$(dirname "$0")/../tools/checks.sh"
+# under ASan (build-asan), what Gmsh's library keeps at exit is not cupid's (the file says why)
 export LSAN_OPTIONS="${LSAN_OPTIONS:+$LSAN_OPTIONS:}suppressions=$SRC/tests/tools/lsan_gmsh.supp"
-work=$(mktemp -d)
-trap 'rm -rf "$work"' EXIT
-cd "$work"
-pass=0; fail=0
-ok() { pass=$((pass + 1)); }
-bad() { echo "FAIL: $*"; fail=$((fail + 1)); }
+PY=${CUPID_SYSTEM_PYTHON:-/usr/bin/python3}
 if ! "$CUPID" check "$SRC/examples/sections/tube_torsion.yaml" >/dev/null 2>err.txt; then
   if grep -q "Gmsh's library is not installed" err.txt; then
     echo "SKIP: no Gmsh library (Debian's libgmsh4.8)"; exit 77
@@ -127,5 +119,4 @@ refuse "has no 2D physical group 'web' (it has 'plate')" --set "beam.section.gro
 refuse "beam.section.groups.plate: unknown material 'copper'" --set "beam.section.groups={plate: copper}"
 CUPID_GMSH_LIBRARY=/nonexistent/libgmsh.so refuse "Gmsh's library is not installed (Debian's libgmsh4.8"
 
-echo "section_mesh: $pass passed, $fail failed"
-[ $fail -eq 0 ]
+finish section_mesh
