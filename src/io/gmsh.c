@@ -165,45 +165,56 @@ static cupid_status node_maps(int type, int npe, int map[16], int mirror[16], ch
   return st;
 }
 
-/* The mesh's nodes: Gmsh's tags (not contiguous) and coordinates, the tags sorted. */
+/* The mesh's nodes, each once (Gmsh gives a node on a curve shared by two surfaces with each),
+ * in increasing order of Gmsh's tags (which are not contiguous): node k is sorted[k]. */
 typedef struct {
-  size_t *tags, n;
-  double *coord;  /* 3 per node */
-  size_t *sorted; /* the tags in increasing order ... */
-  cupid_int *index; /* ... and the node each is */
+  size_t n;
+  size_t *sorted; /* the tags */
+  double *xyz;    /* 3 per node */
 } node_table;
 
 static void node_table_free(node_table *t) {
-  if (t->tags) api.free(t->tags);
-  if (t->coord) api.free(t->coord);
   cupid_free(&t->sorted);
-  cupid_free(&t->index);
+  cupid_free(&t->xyz);
   memset(t, 0, sizeof *t);
 }
 
 static _Thread_local const size_t *sort_tags;
 static int by_tag(const void *a, const void *b) {
-  size_t x = sort_tags[*(const cupid_int *)a], y = sort_tags[*(const cupid_int *)b];
+  size_t x = sort_tags[*(const size_t *)a], y = sort_tags[*(const size_t *)b];
   return (x > y) - (x < y);
 }
 
 /* The nodes of the entities of dimension @p dim (-1: all) with their boundaries'. */
 static cupid_status node_table_read(int dim, node_table *t) {
-  size_t n_coord = 0, n_param = 0;
-  double *param = NULL;
+  size_t *tags = NULL, n = 0, n_coord = 0, n_param = 0, *order = NULL;
+  double *coord = NULL, *param = NULL;
   int ierr = 0;
   memset(t, 0, sizeof *t);
-  api.get_nodes(&t->tags, &t->n, &t->coord, &n_coord, &param, &n_param, dim, -1, 1, 0, &ierr);
+  api.get_nodes(&tags, &n, &coord, &n_coord, &param, &n_param, dim, -1, 1, 0, &ierr);
   if (param) api.free(param);
-  CUPID_CHECK(!ierr, CUPID_ERR_IO, "Gmsh could not list the mesh's nodes");
-  CUPID_CALL(cupid_malloc(t->n + 1, sizeof *t->sorted, "node tags", &t->sorted));
-  CUPID_CALL(cupid_malloc(t->n + 1, sizeof *t->index, "node index", &t->index));
-  for (size_t i = 0; i < t->n; i++) t->index[i] = (cupid_int)i;
-  sort_tags = t->tags;
-  qsort(t->index, t->n, sizeof *t->index, by_tag);
-  sort_tags = NULL;
-  for (size_t i = 0; i < t->n; i++) t->sorted[i] = t->tags[t->index[i]];
-  return CUPID_SUCCESS;
+  cupid_status st = ierr ? CUPID_ERROR(CUPID_ERR_IO, "Gmsh could not list the mesh's nodes")
+                         : CUPID_SUCCESS;
+  if (st == CUPID_SUCCESS) st = cupid_malloc(n + 1, sizeof *order, "node order", &order);
+  if (st == CUPID_SUCCESS) st = cupid_malloc(n + 1, sizeof *t->sorted, "node tags", &t->sorted);
+  if (st == CUPID_SUCCESS) st = cupid_malloc(3 * n + 1, sizeof *t->xyz, "node coordinates", &t->xyz);
+  if (st == CUPID_SUCCESS) {
+    for (size_t i = 0; i < n; i++) order[i] = i;
+    sort_tags = tags;
+    qsort(order, n, sizeof *order, by_tag);
+    sort_tags = NULL;
+    for (size_t i = 0; i < n; i++) {
+      const size_t tag = tags[order[i]];
+      if (t->n > 0 && t->sorted[t->n - 1] == tag) continue; /* the same node again */
+      t->sorted[t->n] = tag;
+      memcpy(t->xyz + 3 * t->n, coord + 3 * order[i], 3 * sizeof *coord);
+      t->n++;
+    }
+  }
+  if (tags) api.free(tags);
+  if (coord) api.free(coord);
+  cupid_free(&order);
+  return st;
 }
 
 /* The node of tag @p tag, or -1. */
@@ -211,7 +222,7 @@ static cupid_int node_table_find(const node_table *t, size_t tag) {
   size_t lo = 0, hi = t->n;
   while (lo < hi) {
     size_t mid = lo + (hi - lo) / 2;
-    if (t->sorted[mid] == tag) return t->index[mid];
+    if (t->sorted[mid] == tag) return (cupid_int)mid;
     if (t->sorted[mid] < tag) lo = mid + 1;
     else hi = mid;
   }
@@ -370,7 +381,7 @@ cupid_status cupid_gmsh_read_section(const char *path, int npe, cupid_gmsh_secti
   }
   CUPID_TRY(cupid_malloc((size_t)n, sizeof *s->xz * 2, "section nodes", &s->xz));
   double zmax = 0.0, span = 0.0;
-  const double *xyz = nodes.coord;
+  const double *xyz = nodes.xyz;
   for (cupid_int i = 0; i < n; i++) {
     s->xz[2 * i] = xyz[3 * i], s->xz[2 * i + 1] = xyz[3 * i + 1]; /* Gmsh x, y: section x, z */
     zmax = fmax(zmax, fabs(xyz[3 * i + 2]));
@@ -484,7 +495,7 @@ cupid_status cupid_gmsh_read_surface(const char *path, double size, cupid_surfac
     st = fail(why, why_size, CUPID_ERR_MODEL, "the file's surfaces have no mesh");
     goto cleanup;
   }
-  CUPID_TRY(cupid_surface_create(nodes.coord, (int64_t)nodes.n, tri, n_tri, surface, &open_edges));
+  CUPID_TRY(cupid_surface_create(nodes.xyz, (int64_t)nodes.n, tri, n_tri, surface, &open_edges));
   if (open_edges) {
     cupid_surface_destroy(surface);
     st = fail(why, why_size, CUPID_ERR_MODEL, "the surface is not closed (%lld edges of its "

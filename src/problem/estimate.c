@@ -195,8 +195,19 @@ cupid_status cupid_problem_estimate(const cupid_problem_state *prob, int print) 
              prob->fe_info.poisson_corrected ? "; Poisson-locking correction on (TE0/TE1, "
                                                "sigma_xx = sigma_zz = 0; beam.poisson_correction)"
                                              : "");
+    if (prob->beam && m->beam.section_mesh)
+      printf("section: %d L%d elements, %d nodes, from %s (Gmsh)\n", m->beam.n_section_elements,
+             m->beam.le_nodes, m->beam.n_section_nodes, m->beam.section_mesh);
     if (prob->grid)
       printf("PD nodes: %lld\nbonds: %lld\n", (long long)prob->n_pd, (long long)prob->n_bonds);
+    for (int k = 0; prob->grid && k < m->pd.n_regions + m->pd.n_holes; k++) {
+      const int region = k < m->pd.n_regions;
+      const cupid_shape *sh = region ? &m->pd.regions[k].shape : &m->pd.holes[k - m->pd.n_regions].shape;
+      if (sh->kind == CUPID_SHAPE_GEOMETRY)
+        printf("PD %s %d: the volume of %s, a surface of %lld triangles (Gmsh)\n",
+               region ? "region" : "hole", region ? k : k - m->pd.n_regions, sh->file,
+               (long long)cupid_surface_num_triangles(sh->surface));
+    }
     if (prob->grid && cupid_problem_has_damage(prob)) cupid_problem_fracture_print(prob);
     printf("DOFs: %lld\n", (long long)prob->ndof);
     printf("stiffness matrix: about %.3g stored 3x3 blocks, %.3g GB\n", e.matrix_blocks,

@@ -34,6 +34,10 @@ for h in 1 0.5; do
   else bad "sphere at spacing $h: the nodes differ ($(wc -l < "geo_$h/pd_nodes.csv") against $(wc -l < "ana_$h/pd_nodes.csv") lines)"; fi
 done
 
+# `cupid check` names the geometry file and its surface
+"$CUPID" check "$G/sphere.yaml" 2>/dev/null | grep -q "^PD region 0: the volume of .*sphere.geo, a surface of [0-9]* triangles (Gmsh)$" \
+  && ok || bad "cupid check's geometry line"
+
 # ---- the plate: a STEP solid, a box with a cylinder hole, a box with a geometry hole
 P=(--set peridynamics.spacing=1.5 --set peridynamics.horizon=4.5225 --set output.plots=false --set output.vtu=false
    --set "output.points=[{name: side, at: [38.25, 30.75, 0.75], stress: true}, {name: top, at: [30.75, 59.25, 0.75]}]")

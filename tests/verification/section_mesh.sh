@@ -9,7 +9,8 @@
 #    area, within 1e-4 of the ring's pi (Ro^2 - Ri^2) with L9's curved edges (measured 2e-6),
 #    while L4's straight edges (a 32-sided ring) miss by more than 0.3% (0.64% in theory):
 #    the check sees the edges' shape;
-#  - summary.json's beam.section_mesh names the file and its 64 elements;
+#  - summary.json's beam.section_mesh names the file and its 64 elements, `cupid check` them
+#    and the 320 nodes;
 #  - beam.vtu's points of the tube lie between the radii and its outer points on the circle
 #    (within 1e-9 of Ro: the reconstruction follows the curved edges);
 #  - the C-beam with its section from a .msh (examples/sections/cbeam_mesh_l9.yaml) equals the
@@ -71,6 +72,11 @@ print("; ".join(err))
 PY
 2>&1)
 [ -z "$msg" ] && ok || bad "tube: $msg"
+
+# `cupid check` names the section: 64 L9 with 320 nodes (the quarter rings share their edges'
+# nodes, which Gmsh gives once per surface)
+"$CUPID" check "$S/tube_torsion.yaml" 2>/dev/null | grep -q "^section: 64 L9 elements, 320 nodes, from .*tube_section.geo (Gmsh)$" \
+  && ok || bad "cupid check's section line: $("$CUPID" check "$S/tube_torsion.yaml" 2>&1 | grep section)"
 
 # ---- the C-beam: from a .msh against its components; the square with a clockwise element
 run "$S/cbeam_mesh_l9.yaml" -o cmesh --set output.plots=false
