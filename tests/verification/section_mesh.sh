@@ -21,6 +21,8 @@
 #    zone over part of the section, fictitious nodes) on the .msh section against the
 #    components: the same bound (measured 3e-10; the matrix's non-zeros may differ, a fictitious
 #    node on an element edge takes either element's nodes);
+#  - the Arlequin bar (examples/bar/bar_coupled_arlequin_l9.yaml: a coupling zone over the whole
+#    section) on square10.geo's one L9 against its components: the same bound (measured 2e-13);
 #  - a section of one counter-clockwise and one clockwise quadrilateral (clockwise.msh: cupid
 #    turns the second) equals the same square built from components, within 1e-10;
 #  - the refusals: a missing file (the OS's reason), triangles, a mesh out of the xy plane, a
@@ -107,6 +109,10 @@ run "$SRC/examples/cbeam/cbeam_corner.yaml" -o cornercomp --solver direct --set 
 run "$SRC/examples/cbeam/cbeam_corner.yaml" -o cornermesh --solver direct --set output.plots=false \
   --set "beam.section={expansion: LE, element: L9, mesh: ../sections/cbeam_section.msh}"
 msg=$(compare cornermesh cornercomp 1e-8 2>&1); [ -z "$msg" ] && ok || bad "coupled C-beam on the .msh section: $msg"
+run "$SRC/examples/bar/bar_coupled_arlequin_l9.yaml" -o barcomp --set output.plots=false
+run "$SRC/examples/bar/bar_coupled_arlequin_l9.yaml" -o barmesh --set output.plots=false \
+  --set "beam.section={expansion: LE, element: L9, mesh: $M/square10.geo}"
+msg=$(compare barmesh barcomp 1e-8 2>&1); [ -z "$msg" ] && ok || bad "Arlequin bar on a meshed section: $msg"
 msg=$(compare sqmesh sqcomp 1e-10 2>&1); [ -z "$msg" ] && ok || bad "square with a clockwise element: $msg"
 
 # ---- refusals: exit 1, the key and the reason
