@@ -229,15 +229,20 @@ static cupid_int node_table_find(const node_table *t, size_t tag) {
   return -1;
 }
 
-/* Open @p path in Gmsh (the system's reason first where it cannot be opened: Gmsh's is vaguer)
- * and mesh its surfaces where it has no mesh (a .geo, a CAD file). */
-static cupid_status open_meshed(const char *path, char *why, size_t size) {
+/* Open @p path in Gmsh (the system's reason first where it cannot be opened: Gmsh's is vaguer;
+ * Gmsh is not loaded then) and mesh its surfaces where it has no mesh (a .geo, a CAD file):
+ * elements of at most @p max_size (0: Gmsh's default), @p per_turn where a surface curves (0:
+ * not from the curvature). */
+static cupid_status open_meshed(const char *path, double max_size, double per_turn, char *why,
+                                size_t size) {
   FILE *probe = fopen(path, "rb");
   if (!probe) return fail(why, size, CUPID_ERR_IO, "cannot open it: %s", strerror(errno));
   fclose(probe);
   if (!load_api()) return fail(why, size, CUPID_ERR_UNSUPPORTED, "%s", api_why);
   int ierr = 0;
   api.clear(&ierr);
+  api.option_set_number("Mesh.MeshSizeMax", max_size > 0 ? max_size : 1e22, &ierr);
+  api.option_set_number("Mesh.MeshSizeFromCurvature", per_turn, &ierr);
   api.open(path, &ierr);
   if (ierr) {
     gmsh_reason(why, size, "Gmsh cannot read the file");
@@ -364,7 +369,7 @@ cupid_status cupid_gmsh_read_section(const char *path, int npe, cupid_gmsh_secti
   int *ents = NULL, *group = NULL, ierr = 0;
   size_t n_ents = 0;
   node_table nodes = {0};
-  cupid_status st = open_meshed(path, why, size);
+  cupid_status st = open_meshed(path, 0.0, 0.0, why, size);
   if (st != CUPID_SUCCESS) return st;
   /* the elements' order of `element:`, their new nodes on the geometry */
   api.mesh_set_order(npe == 4 ? 1 : npe == 9 ? 2 : 3, &ierr);
@@ -472,14 +477,10 @@ cupid_status cupid_gmsh_read_surface(const char *path, double size, cupid_surfac
   node_table nodes = {0};
   int64_t *tri = NULL, n_tri = 0, cap = 0, open_edges = 0;
   cupid_status st = CUPID_SUCCESS;
-  if (load_api()) {
-    /* The facets' distance to a curved surface decides which cells near it are in: at most
-     * about 1% of a spacing. Flat faces need no small elements: ten spacings at most; a face
-     * curving with radius R takes elements of 2 pi R / 256 (a chord 7.5e-5 R from the arc) */
-    api.option_set_number("Mesh.MeshSizeMax", size > 0 ? 10 * size : 1e22, &ierr);
-    api.option_set_number("Mesh.MeshSizeFromCurvature", 256, &ierr);
-  }
-  CUPID_TRY(open_meshed(path, why, why_size));
+  /* The facets' distance to a curved surface decides which cells near it are in: at most about
+   * 1% of a spacing. Flat faces need no small elements: ten spacings at most; a face curving
+   * with radius R takes elements of 2 pi R / 256 (a chord 7.5e-5 R from the arc) */
+  CUPID_TRY(open_meshed(path, 10 * size, 256, why, why_size));
   /* the surfaces that bound the volumes (a file of surfaces alone: all of them) */
   api.get_entities(&vols, &n_vols, 3, &ierr);
   if (n_vols) api.get_boundary(vols, n_vols, &bnd, &n_bnd, 1, 0, 0, &ierr); /* of their union */
@@ -511,8 +512,6 @@ cleanup:
   if (api_state > 0) {
     int e2 = 0;
     api.clear(&e2);
-    api.option_set_number("Mesh.MeshSizeMax", 1e22, &e2); /* Gmsh's defaults again */
-    api.option_set_number("Mesh.MeshSizeFromCurvature", 0, &e2);
   }
   return st;
 }

@@ -121,19 +121,25 @@ static cupid_status csv_columns(const cupid_problem_state *prob, cupid_column **
   return CUPID_SUCCESS;
 }
 
+/* The PD nodes of model.exo's frames (output.exodus), on the rank that writes (a slab run:
+ * rank 0's whole grid; collective there). */
+static cupid_status frame_vertices(growth_run *g) {
+  cupid_problem_state *prob = g->prob;
+  const cupid_model_t *m = prob->model;
+  cupid_status st = CUPID_SUCCESS;
+  if (!m->output.exodus || !prob->grid) return CUPID_SUCCESS;
+  if (prob->slab && prob->writedir) st = cupid_pd_grid_create_from_model(m, &g->whole);
+  if (st == CUPID_SUCCESS && (g->whole || !prob->slab))
+    st = cupid_problem_vertices_build(g->whole ? g->whole : prob->grid, &g->verts);
+  return prob->slab ? cupid_problem_slab_agree(st) : st;
+}
+
 /* The writers, on the rank that writes files (io.h): the steps' file and, with
  * output.exodus, model.exo; a resumption continues them from its checkpoint (issue 36). */
 static cupid_status open_writers(growth_run *g) {
   cupid_problem_state *prob = g->prob;
   const cupid_model_t *m = prob->model;
   cupid_status st = CUPID_SUCCESS;
-  if (m->output.exodus && prob->grid) { /* the frames' PD nodes (a slab run: rank 0's grid) */
-    if (prob->slab && prob->writedir) st = cupid_pd_grid_create_from_model(m, &g->whole);
-    if (st == CUPID_SUCCESS && (g->whole || !prob->slab))
-      st = cupid_problem_vertices_build(g->whole ? g->whole : prob->grid, &g->verts);
-    if (prob->slab) st = cupid_problem_slab_agree(st);
-    CUPID_CALL(st);
-  }
   if (!prob->writedir) return CUPID_SUCCESS;
   cupid_column *cols = NULL;
   char(*names)[200] = NULL;
@@ -1042,7 +1048,8 @@ cupid_status cupid_problem_run_growth(cupid_problem_state *prob) {
   cupid_status st = CUPID_SUCCESS;
   CUPID_TRY(setup_run(&g));
   const int fracture = cupid_problem_growth_resumable(prob); /* crack growth: resumable */
-  CUPID_TRY(fracture ? agreed_growth(prob, begin_growth(&g)) : open_writers(&g));
+  CUPID_TRY(agreed_growth(prob, fracture ? begin_growth(&g) : open_writers(&g)));
+  CUPID_TRY(frame_vertices(&g));
   const size_t n = (size_t)prob->ndof;
   double t0 = cupid_wtime();
   if (!fracture) { /* linear: one solve at load factor 1 (one factorisation), each step its
