@@ -42,12 +42,15 @@ static gmsh_api api;
 static int api_state; /* 0: not tried, 1: loaded and initialised, -1: failed */
 static char api_why[512];
 
+/* Loaded once and kept for the process's life. Gmsh's state is global: models are read by one
+ * thread at a time (the model reader's callers: the command line, a Problem). */
 static int load_api(void) {
   if (api_state) return api_state > 0;
   api_state = -1;
   /* $CUPID_GMSH_LIBRARY: that library alone (another Gmsh; tests: none) */
   const char *given = getenv("CUPID_GMSH_LIBRARY");
-  const char *names[] = {given && given[0] ? given : "libgmsh.so.4.8", given && given[0] ? NULL : "libgmsh.so"};
+  const int own = given && given[0];
+  const char *names[] = {own ? given : "libgmsh.so.4.8", own ? NULL : "libgmsh.so"};
   void *h = NULL;
   for (int k = 0; k < 2 && !h; k++)
     if (names[k]) h = dlopen(names[k], RTLD_NOW | RTLD_LOCAL);
@@ -70,7 +73,8 @@ static int load_api(void) {
               {"gmshModelGetEntities", (void **)&api.get_entities},
               {"gmshModelGetPhysicalGroups", (void **)&api.get_physical_groups},
               {"gmshModelGetPhysicalName", (void **)&api.get_physical_name},
-              {"gmshModelGetEntitiesForPhysicalGroup", (void **)&api.get_entities_for_physical_group},
+              {"gmshModelGetEntitiesForPhysicalGroup",
+               (void **)&api.get_entities_for_physical_group},
               {"gmshModelMeshGetNodes", (void **)&api.get_nodes},
               {"gmshModelMeshGetElements", (void **)&api.get_elements},
               {"gmshModelMeshGetElementProperties", (void **)&api.get_element_properties},
@@ -153,7 +157,8 @@ static cupid_status node_maps(int type, int npe, int map[16], int mirror[16], ch
     const double r = -1.0 + 2.0 * a / (n - 1), s = -1.0 + 2.0 * b / (n - 1);
     map[k] = mirror[k] = -1;
     for (int j = 0; j < nodes; j++) {
-      const double u = local[(size_t)j * n_local / (size_t)nodes], v = local[(size_t)j * n_local / (size_t)nodes + 1];
+      const double *uv = local + (size_t)j * n_local / (size_t)nodes; /* u, v (, w) */
+      const double u = uv[0], v = uv[1];
       if (fabs(u - r) < 1e-9 && fabs(v - s) < 1e-9) map[k] = j;
       if (fabs(v - r) < 1e-9 && fabs(u - s) < 1e-9) mirror[k] = j;
     }
@@ -197,7 +202,8 @@ static cupid_status node_table_read(int dim, node_table *t) {
                          : CUPID_SUCCESS;
   if (st == CUPID_SUCCESS) st = cupid_malloc(n + 1, sizeof *order, "node order", &order);
   if (st == CUPID_SUCCESS) st = cupid_malloc(n + 1, sizeof *t->sorted, "node tags", &t->sorted);
-  if (st == CUPID_SUCCESS) st = cupid_malloc(3 * n + 1, sizeof *t->xyz, "node coordinates", &t->xyz);
+  if (st == CUPID_SUCCESS)
+    st = cupid_malloc(3 * n + 1, sizeof *t->xyz, "node coordinates", &t->xyz);
   if (st == CUPID_SUCCESS) {
     for (size_t i = 0; i < n; i++) order[i] = i;
     sort_tags = tags;
@@ -271,7 +277,8 @@ static cupid_status entity_groups(cupid_gmsh_section *s, const int *ents, size_t
   if (ierr) return fail(why, size, CUPID_ERR_IO, "Gmsh could not list the physical groups");
   cupid_status st = CUPID_SUCCESS;
   s->n_groups = (int)(n_pg / 2);
-  if (s->n_groups) st = cupid_calloc((size_t)s->n_groups, sizeof *s->groups, "group names", &s->groups);
+  if (s->n_groups)
+    st = cupid_calloc((size_t)s->n_groups, sizeof *s->groups, "group names", &s->groups);
   for (int g = 0; g < s->n_groups && st == CUPID_SUCCESS; g++) {
     char *name = NULL;
     api.get_physical_name(2, pg[2 * g + 1], &name, &ierr);
@@ -329,14 +336,19 @@ static cupid_status add_elements(cupid_gmsh_section *s, int entity, int group, i
     int map[16], mirror[16];
     st = node_maps(types[t], npe, map, mirror, why, size);
     const size_t ne = etags_n[t];
-    if (st == CUPID_SUCCESS) st = cupid_realloc((size_t)(s->n_elements + (cupid_int)ne) * (size_t)npe, sizeof *s->conn, "section elements", &s->conn);
-    if (st == CUPID_SUCCESS) st = cupid_realloc((size_t)(s->n_elements + (cupid_int)ne) + 1, sizeof *s->group, "section element groups", &s->group);
+    const size_t total = (size_t)s->n_elements + ne;
+    if (st == CUPID_SUCCESS)
+      st = cupid_realloc(total * (size_t)npe, sizeof *s->conn, "section elements", &s->conn);
+    if (st == CUPID_SUCCESS)
+      st = cupid_realloc(total + 1, sizeof *s->group, "section element groups", &s->group);
     for (size_t e = 0; e < ne && st == CUPID_SUCCESS; e++) {
       const size_t *nt = ntags[t] + e * (size_t)npe;
       int *c = s->conn + (size_t)s->n_elements * (size_t)npe;
       for (int k = 0; k < npe && st == CUPID_SUCCESS; k++) {
         cupid_int i = node_table_find(nodes, nt[map[k]]);
-        if (i < 0) st = fail(why, size, CUPID_ERR_IO, "element %zu refers to node %zu, which the mesh does not have", etags[t][e], nt[map[k]]);
+        if (i < 0)
+          st = fail(why, size, CUPID_ERR_IO, "element %zu refers to node %zu, which the mesh "
+                    "does not have", etags[t][e], nt[map[k]]);
         c[k] = (int)i;
       }
       /* a clockwise element (its corners' signed area < 0 in x, z): its mirror image's order */
@@ -450,7 +462,9 @@ static cupid_status add_triangles(int entity, const node_table *nodes, int64_t *
       int64_t c[4];
       for (int k = 0; k < primary; k++) {
         c[k] = node_table_find(nodes, nt[k]);
-        if (c[k] < 0) st = fail(why, size, CUPID_ERR_IO, "an element refers to node %zu, which the mesh does not have", nt[k]);
+        if (c[k] < 0)
+          st = fail(why, size, CUPID_ERR_IO, "an element refers to node %zu, which the mesh "
+                    "does not have", nt[k]);
       }
       for (int h = 0; h < (quad ? 2 : 1) && st == CUPID_SUCCESS; h++) {
         if (*n_tri == *cap) {

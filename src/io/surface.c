@@ -45,7 +45,8 @@ static void bucket_range(const cupid_surface s, const double *p0, const double *
   for (int d = 0; d < 2; d++) {
     const int a = d + 1; /* y, z */
     double mn = fmin(p0[a], fmin(p1[a], p2[a])), mx = fmax(p0[a], fmax(p1[a], p2[a]));
-    int b0 = (int)floor((mn - s->blo[d]) / s->bsize[d]), b1 = (int)floor((mx - s->blo[d]) / s->bsize[d]);
+    int b0 = (int)floor((mn - s->blo[d]) / s->bsize[d]);
+    int b1 = (int)floor((mx - s->blo[d]) / s->bsize[d]);
     r[2 * d] = b0 < 0 ? 0 : b0 >= s->nb[d] ? s->nb[d] - 1 : b0;
     r[2 * d + 1] = b1 < 0 ? 0 : b1 >= s->nb[d] ? s->nb[d] - 1 : b1;
   }
@@ -118,7 +119,8 @@ cupid_status cupid_surface_create(const double *xyz, int64_t n_nodes, const int6
     int64_t *fill = NULL;
     if (pass) {
       for (int64_t b = 0; b < nbk; b++) s->start[b + 1] += s->start[b];
-      CUPID_TRY(cupid_malloc((size_t)s->start[nbk] + 1, sizeof *s->list, "surface bucket lists", &s->list));
+      CUPID_TRY(cupid_malloc((size_t)s->start[nbk] + 1, sizeof *s->list, "surface bucket lists",
+                             &s->list));
       CUPID_TRY(cupid_malloc((size_t)nbk + 1, sizeof *fill, "surface bucket fill", &fill));
       memcpy(fill, s->start, (size_t)nbk * sizeof *fill);
     }
