@@ -11,7 +11,8 @@ set -euo pipefail
 # python3-numpy, python3-meshio and python3-vtk9: regression.vtu_readers opens every VTU cupid
 # writes with meshio and VTK's own reader (run by /usr/bin/python3, which these serve).
 # python3-pip, python3-setuptools, python3-venv: `pip install ./python` into a virtual
-# environment (unit.python_install). libexodusii-dev: Exodus II output (output.exodus);
+# environment (unit.python_install). libexodusii-dev: Exodus II output (output.exodus; the
+# header at build time, its library loaded at run time);
 # python3-netcdf4: meshio and the tests read model.exo back (regression.exodus_readers).
 # libgmsh4.8: section meshes from Gmsh files (beam.section.mesh; loaded at run time, not linked).
 pkgs=(cmake make gcc pkg-config libsuitesparse-dev libopenblas-dev libyaml-dev zlib1g-dev libcmocka-dev gnuplot-nox python3

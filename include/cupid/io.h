@@ -231,7 +231,8 @@ cupid_status cupid_pvd_write(const char *path, int n, const char *const *files,
  *   cupid_writer_exodus: one Exodus II file: every part an element block (VTK vertices as
  *                        SPHERE elements with a volume attribute, hexahedra as HEX8), their
  *                        nodes one node set, the points written once, the nodal fields at every
- *                        frame as the time steps (available when the build found libexodusii:
+ *                        frame as the time steps (where the build found exodusII.h and the
+ *                        system has the library, loaded on first use:
  *                        cupid_writer_available()). */
 
 /** A column of a CSV writer: printed as "%.10e", or as an integer ("%lld" of the value). */
@@ -272,8 +273,11 @@ typedef struct cupid_writer_type cupid_writer_type;
 typedef struct cupid_writer_private *cupid_writer;
 extern const cupid_writer_type cupid_writer_csv, cupid_writer_vtu, cupid_writer_exodus;
 
-/** 1 if this build can make writers of @p type (Exodus needs libexodusii at build time). */
+/** 1 if writers of @p type can be made here (Exodus: exodusII.h at build time, its library
+ *  loaded at run time). */
 int cupid_writer_available(const cupid_writer_type *type);
+/** NULL, or why writers of @p type cannot be made here (the package to install). */
+const char *cupid_writer_unavailable(const cupid_writer_type *type);
 /** The type's name: "csv", "vtu", "exodus". */
 const char *cupid_writer_name(const cupid_writer_type *type);
 /** Make a writer. CUPID_ERR_IO if its file cannot be made (or, resuming, found as the

@@ -38,7 +38,9 @@ void cupid_io_set_unregister(int slot);
 
 struct cupid_writer_type {
   const char *name;
-  int available; /* 0: this build lacks the library (create refuses) */
+  /* NULL: always available; else why the type cannot write now (its library missing from the
+   * build or the system), or NULL when it can */
+  const char *(*missing)(void);
   cupid_status (*create)(cupid_writer w, const cupid_writer_spec *spec);
   cupid_status (*step)(cupid_writer w, const cupid_frame *frame);
   cupid_status (*save)(cupid_writer w, cupid_checkpoint_writer ckw);

@@ -1660,9 +1660,8 @@ static cupid_status read_output(model_reader *rd, yaml_node_t *node) {
   if ((v = mr_get(&map, "plots"))) CUPID_CALL(mr_bool(rd, v, "output.plots", &o->plots));
   if ((v = mr_get(&map, "exodus"))) {
     CUPID_CALL(mr_bool(rd, v, "output.exodus", &o->exodus));
-    if (o->exodus && !cupid_writer_available(&cupid_writer_exodus))
-      return mr_error(rd, v, "output.exodus", "this cupid was built without Exodus II (Debian's "
-                      "libexodusii-dev: scripts/install-deps.sh installs it; then build again)");
+    const char *missing = o->exodus ? cupid_writer_unavailable(&cupid_writer_exodus) : NULL;
+    if (missing) return mr_error(rd, v, "output.exodus", "%s", missing);
   }
   if ((v = mr_get(&map, "checkpoint"))) {
     CUPID_CALL(mr_number(rd, v, "output.checkpoint", &o->checkpoint));

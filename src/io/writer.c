@@ -5,7 +5,14 @@
 
 #include "io_internal.h"
 
-int cupid_writer_available(const cupid_writer_type *type) { return type && type->available; }
+const char *cupid_writer_unavailable(const cupid_writer_type *type) {
+  if (!type) return "no writer type";
+  return type->missing ? type->missing() : NULL;
+}
+
+int cupid_writer_available(const cupid_writer_type *type) {
+  return cupid_writer_unavailable(type) == NULL;
+}
 
 const char *cupid_writer_name(const cupid_writer_type *type) { return type ? type->name : ""; }
 
@@ -32,10 +39,9 @@ cupid_status cupid_writer_create(const cupid_writer_type *type, const cupid_writ
   CUPID_CHECK(type && spec && spec->dir && writer, CUPID_ERR_ARGUMENT,
               "cupid_writer_create: no type, spec, folder or handle");
   *writer = NULL;
-  CUPID_CHECK(type->available, CUPID_ERR_UNSUPPORTED,
-              "this cupid was built without the %s writer's library (Exodus II: Debian's "
-              "libexodusii-dev; scripts/install-deps.sh installs it, then build again)",
-              type->name);
+  const char *missing = type->missing ? type->missing() : NULL;
+  CUPID_CHECK(!missing, CUPID_ERR_UNSUPPORTED, "cupid cannot write %s files: %s", type->name,
+              missing);
   cupid_writer w = NULL;
   CUPID_CALL(cupid_calloc(1, sizeof *w, "output writer", &w));
   w->type = type;

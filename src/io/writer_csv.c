@@ -66,5 +66,5 @@ static void csv_drop(cupid_writer w, int keep) {
   w->data = NULL;
 }
 
-const cupid_writer_type cupid_writer_csv = {"csv", 1, csv_create, csv_step, csv_save, csv_end,
+const cupid_writer_type cupid_writer_csv = {"csv", NULL, csv_create, csv_step, csv_save, csv_end,
                                             csv_drop};

@@ -24,7 +24,84 @@
 #include "io_internal.h"
 
 #if CUPID_HAVE_EXODUS
+#include <dlfcn.h>
 #include <exodusII.h>
+
+/* The library is loaded when a model asks for model.exo (dlopen of Debian's libexodusii5), not
+ * linked: through netCDF it brings HDF5 and OpenMPI, some 10 ms at every start of cupid. The
+ * functions' types are exodusII.h's (the build's header). */
+#define EXO_FN(name) __typeof__(name) *name
+static struct {
+  EXO_FN(ex_create_int);
+  EXO_FN(ex_open_int);
+  EXO_FN(ex_close);
+  EXO_FN(ex_get_err);
+  EXO_FN(ex_inquire_int);
+  EXO_FN(ex_opts);
+  EXO_FN(ex_put_coord);
+  EXO_FN(ex_put_coord_names);
+  EXO_FN(ex_put_elem_attr);
+  EXO_FN(ex_put_elem_attr_names);
+  EXO_FN(ex_put_elem_block);
+  EXO_FN(ex_put_elem_conn);
+  EXO_FN(ex_put_init);
+  EXO_FN(ex_put_name);
+  EXO_FN(ex_put_time);
+  EXO_FN(ex_put_var);
+  EXO_FN(ex_put_variable_names);
+  EXO_FN(ex_put_variable_param);
+  EXO_FN(ex_update);
+  EXO_FN(nc_strerror);
+} exo;
+#undef EXO_FN
+static int exo_state; /* 0: not tried, 1: loaded, -1: failed */
+static char exo_why[512];
+
+/* NULL when the library is loaded (once, kept for the process's life), else why not. */
+static const char *exo_missing(void) {
+  if (exo_state) return exo_state > 0 ? NULL : exo_why;
+  exo_state = -1;
+  void *h = dlopen("libexoIIv2c.so.5", RTLD_NOW | RTLD_LOCAL);
+  if (!h) h = dlopen("libexoIIv2c.so", RTLD_NOW | RTLD_LOCAL);
+  if (!h) {
+    snprintf(exo_why, sizeof exo_why, "the Exodus II library is not installed (Debian's "
+             "libexodusii5; scripts/install-deps.sh installs it): %s", dlerror());
+    return exo_why;
+  }
+  struct {
+    const char *name;
+    void **fn;
+  } syms[] = {{"ex_create_int", (void **)&exo.ex_create_int},
+              {"ex_open_int", (void **)&exo.ex_open_int},
+              {"ex_close", (void **)&exo.ex_close},
+              {"ex_get_err", (void **)&exo.ex_get_err},
+              {"ex_inquire_int", (void **)&exo.ex_inquire_int},
+              {"ex_opts", (void **)&exo.ex_opts},
+              {"ex_put_coord", (void **)&exo.ex_put_coord},
+              {"ex_put_coord_names", (void **)&exo.ex_put_coord_names},
+              {"ex_put_elem_attr", (void **)&exo.ex_put_elem_attr},
+              {"ex_put_elem_attr_names", (void **)&exo.ex_put_elem_attr_names},
+              {"ex_put_elem_block", (void **)&exo.ex_put_elem_block},
+              {"ex_put_elem_conn", (void **)&exo.ex_put_elem_conn},
+              {"ex_put_init", (void **)&exo.ex_put_init},
+              {"ex_put_name", (void **)&exo.ex_put_name},
+              {"ex_put_time", (void **)&exo.ex_put_time},
+              {"ex_put_var", (void **)&exo.ex_put_var},
+              {"ex_put_variable_names", (void **)&exo.ex_put_variable_names},
+              {"ex_put_variable_param", (void **)&exo.ex_put_variable_param},
+              {"ex_update", (void **)&exo.ex_update},
+              {"nc_strerror", (void **)&exo.nc_strerror}}; /* netCDF's, through the library */
+  for (size_t k = 0; k < sizeof syms / sizeof *syms; k++) {
+    *syms[k].fn = dlsym(h, syms[k].name);
+    if (!*syms[k].fn) {
+      snprintf(exo_why, sizeof exo_why, "the Exodus II library has no %s (cupid needs the 6.x "
+               "API)", syms[k].name);
+      return exo_why;
+    }
+  }
+  exo_state = 1;
+  return NULL;
+}
 
 enum { MAX_VARS = 64 };
 
@@ -45,9 +122,9 @@ typedef struct {
 static const char *exo_reason(int code) {
   const char *msg = NULL, *func = NULL;
   int err = 0;
-  ex_get_err(&msg, &func, &err);
+  exo.ex_get_err(&msg, &func, &err);
   if (msg && msg[0]) return msg;
-  return code < 0 ? nc_strerror(code) : "the Exodus II library failed";
+  return code < 0 ? exo.nc_strerror(code) : "the Exodus II library failed";
 }
 
 #define EXO(call, what)                                                                        \
@@ -116,23 +193,23 @@ static cupid_status put_block(exo_writer *x, int id, const cupid_frame_part *par
   int per = 0;
   CUPID_CALL(block_type(x, part, &type, &per));
   const int sphere = per == 1;
-  EXO(ex_put_elem_block(x->id, id, type, m->n_cells, per, sphere ? 1 : 0), "the element block");
-  EXO(ex_put_name(x->id, EX_ELEM_BLOCK, id, part->name), "the block's name");
+  EXO(exo.ex_put_elem_block(x->id, id, type, m->n_cells, per, sphere ? 1 : 0), "the element block");
+  EXO(exo.ex_put_name(x->id, EX_ELEM_BLOCK, id, part->name), "the block's name");
   if (m->n_cells == 0) return CUPID_SUCCESS;
   int64_t *conn = NULL;
   const size_t nc = (size_t)m->n_cells * (size_t)per;
   CUPID_CALL(cupid_malloc(nc, sizeof *conn, "Exodus connectivity", &conn));
   for (size_t k = 0; k < nc; k++) conn[k] = first + m->connectivity[k] + 1; /* 1-based */
-  int rc = ex_put_elem_conn(x->id, id, conn);
+  int rc = exo.ex_put_elem_conn(x->id, id, conn);
   cupid_free(&conn);
   EXO(rc, "the connectivity");
   if (!sphere) return CUPID_SUCCESS;
   char *names[1] = {"volume"};
-  EXO(ex_put_elem_attr_names(x->id, id, names), "the attribute's name");
+  EXO(exo.ex_put_elem_attr_names(x->id, id, names), "the attribute's name");
   double *vol = NULL;
   CUPID_CALL(cupid_malloc((size_t)m->n_cells, sizeof *vol, "Exodus volumes", &vol));
   for (cupid_int e = 0; e < m->n_cells; e++) vol[e] = part->cell_volume ? part->cell_volume[e] : 0.0;
-  rc = ex_put_elem_attr(x->id, id, vol);
+  rc = exo.ex_put_elem_attr(x->id, id, vol);
   cupid_free(&vol);
   EXO(rc, "the volumes");
   return CUPID_SUCCESS;
@@ -149,12 +226,13 @@ static cupid_status define(cupid_writer w, exo_writer *x, const cupid_frame *f) 
   x->n_nodes = n;
   CUPID_CALL(list_variables(x, f));
   int cpu = 8, io = 8;
-  x->id = ex_create(x->temp, EX_CLOBBER | EX_LARGE_MODEL | EX_ALL_INT64_API, &cpu, &io);
+  x->id = exo.ex_create_int(x->temp, EX_CLOBBER | EX_LARGE_MODEL | EX_ALL_INT64_API, &cpu, &io,
+                           EX_API_VERS_NODOT);
   CUPID_CHECK(x->id >= 0, CUPID_ERR_IO, "Exodus II: cannot create %s: %s", x->temp,
               exo_reason(x->id));
   char title[MAX_LINE_LENGTH + 1];
   snprintf(title, sizeof title, "%s", w->title[0] ? w->title : "cupid");
-  EXO(ex_put_init(x->id, title, 3, n, ne, f->n_parts, 0, 0), "the header");
+  EXO(exo.ex_put_init(x->id, title, 3, n, ne, f->n_parts, 0, 0), "the header");
   double *xyz = NULL;
   CUPID_CALL(cupid_calloc(3 * (size_t)n + 1, sizeof *xyz, "Exodus coordinates", &xyz));
   cupid_int at = 0;
@@ -163,11 +241,11 @@ static cupid_status define(cupid_writer w, exo_writer *x, const cupid_frame *f) 
     for (cupid_int i = 0; i < m->n_points; i++, at++)
       for (int c = 0; c < 3; c++) xyz[(size_t)c * (size_t)n + (size_t)at] = m->points[3 * i + c];
   }
-  int rc = ex_put_coord(x->id, xyz, xyz + n, xyz + 2 * (size_t)n);
+  int rc = exo.ex_put_coord(x->id, xyz, xyz + n, xyz + 2 * (size_t)n);
   cupid_free(&xyz);
   EXO(rc, "the coordinates");
   char *coord[3] = {"x", "y", "z"};
-  EXO(ex_put_coord_names(x->id, coord), "the coordinates' names");
+  EXO(exo.ex_put_coord_names(x->id, coord), "the coordinates' names");
   int64_t first = 0;
   for (int p = 0; p < f->n_parts; p++) {
     CUPID_CALL(put_block(x, p + 1, &f->parts[p], first));
@@ -176,8 +254,8 @@ static cupid_status define(cupid_writer w, exo_writer *x, const cupid_frame *f) 
   if (x->n_vars) {
     char *names[MAX_VARS];
     for (int v = 0; v < x->n_vars; v++) names[v] = x->names[v];
-    EXO(ex_put_variable_param(x->id, EX_NODAL, x->n_vars), "the variables");
-    EXO(ex_put_variable_names(x->id, EX_NODAL, x->n_vars, names), "the variables' names");
+    EXO(exo.ex_put_variable_param(x->id, EX_NODAL, x->n_vars), "the variables");
+    EXO(exo.ex_put_variable_names(x->id, EX_NODAL, x->n_vars, names), "the variables' names");
   }
   return CUPID_SUCCESS;
 }
@@ -215,10 +293,10 @@ static cupid_status exo_step(cupid_writer w, const cupid_frame *f) {
   if (!x->values)
     CUPID_CALL(cupid_malloc((size_t)x->n_nodes + 1, sizeof *x->values, "Exodus values", &x->values));
   const int step = (int)(x->frames + 1);
-  EXO(ex_put_time(x->id, step, &f->time), "the time");
+  EXO(exo.ex_put_time(x->id, step, &f->time), "the time");
   for (int v = 0; v < x->n_vars; v++) {
     gather(x, f, v);
-    EXO(ex_put_var(x->id, step, EX_NODAL, v + 1, 1, x->n_nodes, x->values), "a nodal variable");
+    EXO(exo.ex_put_var(x->id, step, EX_NODAL, v + 1, 1, x->n_nodes, x->values), "a nodal variable");
   }
   x->frames++;
   return CUPID_SUCCESS;
@@ -228,7 +306,7 @@ static cupid_status exo_step(cupid_writer w, const cupid_frame *f) {
 static cupid_status exo_save(cupid_writer w, cupid_checkpoint_writer ckw) {
   exo_writer *x = w->data;
   if (x->id >= 0) {
-    EXO(ex_update(x->id), "the sync");
+    EXO(exo.ex_update(x->id), "the sync");
     int fd = open(x->temp, O_RDONLY);
     CUPID_CHECK(fd >= 0 && fdatasync(fd) == 0, CUPID_ERR_IO, "cannot sync %s: %s", x->temp,
                 strerror(errno));
@@ -240,7 +318,7 @@ static cupid_status exo_save(cupid_writer w, cupid_checkpoint_writer ckw) {
 static cupid_status exo_end(cupid_writer w) {
   exo_writer *x = w->data;
   if (x->id < 0) return CUPID_SUCCESS; /* no frame: no database */
-  int rc = ex_close(x->id);
+  int rc = exo.ex_close(x->id);
   x->id = -1;
   CUPID_CHECK(rc >= 0, CUPID_ERR_IO, "Exodus II: closing %s failed: %s", x->temp, exo_reason(rc));
   CUPID_CHECK(rename(x->temp, x->path) == 0, CUPID_ERR_IO, "cannot rename %s to %s: %s", x->temp,
@@ -251,7 +329,7 @@ static cupid_status exo_end(cupid_writer w) {
 static void exo_drop(cupid_writer w, int keep) {
   exo_writer *x = w->data;
   if (!x) return;
-  if (x->id >= 0) ex_close(x->id);
+  if (x->id >= 0) exo.ex_close(x->id);
   if (!keep && x->temp[0]) unlink(x->temp);
   cupid_free(&x->values);
   cupid_free(&x);
@@ -265,10 +343,11 @@ static cupid_status exo_reopen(cupid_writer w, exo_writer *x, cupid_checkpoint c
   if (x->frames == 0) return CUPID_SUCCESS;
   int cpu = 8, io = 0;
   float version = 0;
-  x->id = ex_open(x->temp, EX_WRITE | EX_ALL_INT64_API, &cpu, &io, &version);
+  x->id = exo.ex_open_int(x->temp, EX_WRITE | EX_ALL_INT64_API, &cpu, &io, &version,
+                         EX_API_VERS_NODOT);
   CUPID_CHECK(x->id >= 0, CUPID_ERR_IO, "Exodus II: cannot reopen %s to resume: %s", x->temp,
               exo_reason(x->id));
-  int64_t nodes = ex_inquire_int(x->id, EX_INQ_NODES), blocks = ex_inquire_int(x->id, EX_INQ_ELEM_BLK);
+  int64_t nodes = exo.ex_inquire_int(x->id, EX_INQ_NODES), blocks = exo.ex_inquire_int(x->id, EX_INQ_ELEM_BLK);
   x->n_nodes = (cupid_int)nodes;
   x->n_parts = (int)blocks;
   return CUPID_SUCCESS;
@@ -284,15 +363,20 @@ static cupid_status exo_create(cupid_writer w, const cupid_writer_spec *spec) {
   int len = snprintf(name, sizeof name, ".%s.partial", w->file);
   CUPID_CHECK(len > 0 && (size_t)len < sizeof name, CUPID_ERR_IO, "output name too long");
   CUPID_CALL(cupid_writer_path(w, name, x->temp, sizeof x->temp));
-  ex_opts(EX_DEFAULT); /* quiet: the messages are ours */
+  exo.ex_opts(EX_DEFAULT); /* quiet: the messages are ours */
   return spec->resume ? exo_reopen(w, x, spec->resume) : CUPID_SUCCESS;
 }
 
-const cupid_writer_type cupid_writer_exodus = {"exodus", 1, exo_create, exo_step, exo_save,
-                                               exo_end, exo_drop};
+const cupid_writer_type cupid_writer_exodus = {"exodus", exo_missing, exo_create, exo_step,
+                                               exo_save, exo_end, exo_drop};
 
-#else /* no libexodusii: the type is listed, and refused by cupid_writer_create */
+#else /* no exodusII.h at build time: the type is listed, and refused by cupid_writer_create */
 
-const cupid_writer_type cupid_writer_exodus = {"exodus", 0, NULL, NULL, NULL, NULL, NULL};
+static const char *exo_missing(void) {
+  return "this cupid was built without Exodus II (Debian's libexodusii-dev: "
+         "scripts/install-deps.sh installs it; then build again)";
+}
+
+const cupid_writer_type cupid_writer_exodus = {"exodus", exo_missing, NULL, NULL, NULL, NULL, NULL};
 
 #endif

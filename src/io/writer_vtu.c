@@ -111,5 +111,5 @@ static void vtu_drop(cupid_writer w, int keep) {
   w->data = NULL;
 }
 
-const cupid_writer_type cupid_writer_vtu = {"vtu", 1, vtu_create, vtu_step, vtu_save, vtu_end,
+const cupid_writer_type cupid_writer_vtu = {"vtu", NULL, vtu_create, vtu_step, vtu_save, vtu_end,
                                             vtu_drop};
