@@ -151,10 +151,12 @@ int LLVMFuzzerInitialize(int *argc, char ***argv) {
   /* `cupid check` prints its counts on stdout: keep the fuzzer's output readable. */
   if (!freopen("/dev/null", "w", stdout)) return 0;
   cupid_set_num_threads(1);
-  /* Gmsh's library (beam.section.mesh, {geometry: FILE}) stays out: a fuzzed path that opens
-   * (".") would load it, and what it keeps for the process's life would read as leaks. The
-   * reader's side of those keys (the path, the file check, the refusal) is still fuzzed. */
+  /* Gmsh's and Exodus II's libraries (beam.section.mesh, {geometry: FILE}, output.exodus)
+   * stay out: loaded during an input (a fuzzed path that opens, ".", or exodus: true), what
+   * they keep for the process's life would read as that input's leaks. The reader's side of
+   * those keys (the path, the file check, the refusal) is still fuzzed. */
   setenv("CUPID_GMSH_LIBRARY", "/nonexistent/libgmsh-fuzzing.so", 1);
+  setenv("CUPID_EXODUS_LIBRARY", "/nonexistent/libexodus-fuzzing.so", 1);
   return 0;
 }
 

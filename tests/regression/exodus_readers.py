@@ -14,7 +14,9 @@ and checks, for each:
   * the nodal fields at every time step equal the VTU files' (each frame's pd_<step>.vtu in
     dynamics; the final pd.vtu and beam.vtu for a static solve and for the last load step),
     bitwise: both are the same doubles written in binary;
-  * meshio reads the file (points, cells and point data as netCDF4 gives them).
+  * meshio reads the file (points, cells and point data as netCDF4 gives them);
+and that without the library (CUPID_EXODUS_LIBRARY pointing nowhere) output.exodus is a model
+error naming Debian's package.
 
 Under MPI (CUPID_EXODUS_RANKS=N, tests/regression/mpi_exodus.sh): a PD-only explicit run and
 crack growth on N z slabs (--solver petsc), rank 0 writing the gathered frames, checked the same
@@ -209,6 +211,16 @@ def growth_senb():
               "senb: step %d has %d damaged nodes, damage.csv %d" % (k + 1, (d > 0).sum(), broken[k]))
 
 
+def refused_without_library():
+    """No Exodus II library on the system: output.exodus is a model error naming the package."""
+    env = dict(os.environ, CUPID_EXODUS_LIBRARY="/nonexistent/libexoIIv2c.so")
+    r = subprocess.run([CUPID, "check", os.path.join(SRC, "examples/bar/bar.yaml"), "--set",
+                        "output.exodus=true"], capture_output=True, text=True, env=env)
+    check(r.returncode == 1 and "output.exodus: the Exodus II library is not installed "
+          "(Debian's libexodusii5" in r.stderr,
+          "without the library: exit %d, %s" % (r.returncode, r.stderr.strip()))
+
+
 def growth_slabs():
     """PD-only crack growth on slabs: a time step per load step, the last one pd.vtu's."""
     out = run("growth", "tests/models/growth/plate.yaml", solver="petsc")
@@ -234,6 +246,7 @@ with tempfile.TemporaryDirectory() as WORK:
         static_bar()
         dynamic_plate()
         growth_senb()
+        refused_without_library()
 if failures:
     sys.exit("%d failure(s)" % len(failures))
 print("exodus_readers: all checks passed")
