@@ -3,7 +3,6 @@
  * file (dlopen), not linked: it brings some 90 shared libraries (OpenCASCADE, FLTK, ...) that
  * would add ~50 ms to every start of cupid, and a build without it still builds and runs.
  * The functions' types are those of gmshc.h in Gmsh 4.8 (the version Debian 12 ships). */
-#include <dlfcn.h>
 #include <errno.h>
 #include <stdlib.h>
 #include <math.h>
@@ -47,47 +46,28 @@ static char api_why[512];
 static int load_api(void) {
   if (api_state) return api_state > 0;
   api_state = -1;
-  /* $CUPID_GMSH_LIBRARY: that library alone (another Gmsh; tests: none) */
-  const char *given = getenv("CUPID_GMSH_LIBRARY");
-  const int own = given && given[0];
-  const char *names[] = {own ? given : "libgmsh.so.4.8", own ? NULL : "libgmsh.so"};
-  void *h = NULL;
-  for (int k = 0; k < 2 && !h; k++)
-    if (names[k]) h = dlopen(names[k], RTLD_NOW | RTLD_LOCAL);
-  if (!h) {
-    snprintf(api_why, sizeof api_why, "Gmsh's library is not installed (Debian's libgmsh4.8; "
-             "scripts/install-deps.sh installs it): %s", dlerror());
+  const cupid_io_symbol syms[] = {
+      {"gmshInitialize", (void **)&api.initialize},
+      {"gmshClear", (void **)&api.clear},
+      {"gmshOpen", (void **)&api.open},
+      {"gmshOptionSetNumber", (void **)&api.option_set_number},
+      {"gmshLoggerStart", (void **)&api.logger_start},
+      {"gmshLoggerGetLastError", (void **)&api.logger_get_last_error},
+      {"gmshModelMeshGenerate", (void **)&api.mesh_generate},
+      {"gmshModelMeshSetOrder", (void **)&api.mesh_set_order},
+      {"gmshModelGetEntities", (void **)&api.get_entities},
+      {"gmshModelGetPhysicalGroups", (void **)&api.get_physical_groups},
+      {"gmshModelGetPhysicalName", (void **)&api.get_physical_name},
+      {"gmshModelGetEntitiesForPhysicalGroup", (void **)&api.get_entities_for_physical_group},
+      {"gmshModelMeshGetNodes", (void **)&api.get_nodes},
+      {"gmshModelMeshGetElements", (void **)&api.get_elements},
+      {"gmshModelMeshGetElementProperties", (void **)&api.get_element_properties},
+      {"gmshFree", (void **)&api.free},
+      {"gmshModelGetBoundary", (void **)&api.get_boundary}};
+  if (!cupid_io_load_library("CUPID_GMSH_LIBRARY", "libgmsh.so.4.8", "libgmsh.so", syms,
+                             sizeof syms / sizeof *syms, "Gmsh's library", "libgmsh4.8", api_why,
+                             sizeof api_why))
     return 0;
-  }
-  struct {
-    const char *name;
-    void **fn;
-  } syms[] = {{"gmshInitialize", (void **)&api.initialize},
-              {"gmshClear", (void **)&api.clear},
-              {"gmshOpen", (void **)&api.open},
-              {"gmshOptionSetNumber", (void **)&api.option_set_number},
-              {"gmshLoggerStart", (void **)&api.logger_start},
-              {"gmshLoggerGetLastError", (void **)&api.logger_get_last_error},
-              {"gmshModelMeshGenerate", (void **)&api.mesh_generate},
-              {"gmshModelMeshSetOrder", (void **)&api.mesh_set_order},
-              {"gmshModelGetEntities", (void **)&api.get_entities},
-              {"gmshModelGetPhysicalGroups", (void **)&api.get_physical_groups},
-              {"gmshModelGetPhysicalName", (void **)&api.get_physical_name},
-              {"gmshModelGetEntitiesForPhysicalGroup",
-               (void **)&api.get_entities_for_physical_group},
-              {"gmshModelMeshGetNodes", (void **)&api.get_nodes},
-              {"gmshModelMeshGetElements", (void **)&api.get_elements},
-              {"gmshModelMeshGetElementProperties", (void **)&api.get_element_properties},
-              {"gmshFree", (void **)&api.free},
-              {"gmshModelGetBoundary", (void **)&api.get_boundary}};
-  for (size_t k = 0; k < sizeof syms / sizeof *syms; k++) {
-    *syms[k].fn = dlsym(h, syms[k].name);
-    if (!*syms[k].fn) {
-      snprintf(api_why, sizeof api_why, "Gmsh's library has no %s (cupid needs Gmsh 4.8 or "
-               "later)", syms[k].name);
-      return 0;
-    }
-  }
   int ierr = 0;
   api.initialize(0, NULL, 0, &ierr);
   if (!ierr) api.option_set_number("General.Terminal", 0, &ierr); /* quiet: messages are ours */

@@ -93,4 +93,16 @@ void cupid_surface_bounds(const cupid_surface surface, double lo[3], double hi[3
 cupid_status cupid_gmsh_read_surface(const char *path, double size, cupid_surface *surface,
                                      char *why, size_t why_size);
 
+/* ---- Libraries loaded on first use (dynload.c) ---- */
+typedef struct {
+  const char *name;
+  void **fn;
+} cupid_io_symbol;
+/** Load @p soname (else @p devname; or $@p env alone where set: another build, or none in the
+ *  fuzzer) and resolve @p syms. 1 on success; else 0 and *why says what is missing in words
+ *  (@p what, the library's name; @p package, the Debian package that has it). */
+int cupid_io_load_library(const char *env, const char *soname, const char *devname,
+                          const cupid_io_symbol *syms, size_t n_syms, const char *what,
+                          const char *package, char *why, size_t size);
+
 #endif

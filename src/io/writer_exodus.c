@@ -25,7 +25,6 @@
 #include "io_internal.h"
 
 #if CUPID_HAVE_EXODUS
-#include <dlfcn.h>
 #include <exodusII.h>
 
 /* The library is loaded when a model asks for model.exo (dlopen of Debian's libexodusii5), not
@@ -62,47 +61,31 @@ static char exo_why[512];
 static const char *exo_missing(void) {
   if (exo_state) return exo_state > 0 ? NULL : exo_why;
   exo_state = -1;
-  /* $CUPID_EXODUS_LIBRARY: that library alone (another build of it; the fuzzer: none) */
-  const char *given = getenv("CUPID_EXODUS_LIBRARY");
-  const int own = given && given[0];
-  void *h = dlopen(own ? given : "libexoIIv2c.so.5", RTLD_NOW | RTLD_LOCAL);
-  if (!h && !own) h = dlopen("libexoIIv2c.so", RTLD_NOW | RTLD_LOCAL);
-  if (!h) {
-    snprintf(exo_why, sizeof exo_why, "the Exodus II library is not installed (Debian's "
-             "libexodusii5; scripts/install-deps.sh installs it): %s", dlerror());
+  const cupid_io_symbol syms[] = {
+      {"ex_create_int", (void **)&exo.ex_create_int},
+      {"ex_open_int", (void **)&exo.ex_open_int},
+      {"ex_close", (void **)&exo.ex_close},
+      {"ex_get_err", (void **)&exo.ex_get_err},
+      {"ex_inquire_int", (void **)&exo.ex_inquire_int},
+      {"ex_opts", (void **)&exo.ex_opts},
+      {"ex_put_coord", (void **)&exo.ex_put_coord},
+      {"ex_put_coord_names", (void **)&exo.ex_put_coord_names},
+      {"ex_put_elem_attr", (void **)&exo.ex_put_elem_attr},
+      {"ex_put_elem_attr_names", (void **)&exo.ex_put_elem_attr_names},
+      {"ex_put_elem_block", (void **)&exo.ex_put_elem_block},
+      {"ex_put_elem_conn", (void **)&exo.ex_put_elem_conn},
+      {"ex_put_init", (void **)&exo.ex_put_init},
+      {"ex_put_name", (void **)&exo.ex_put_name},
+      {"ex_put_time", (void **)&exo.ex_put_time},
+      {"ex_put_var", (void **)&exo.ex_put_var},
+      {"ex_put_variable_names", (void **)&exo.ex_put_variable_names},
+      {"ex_put_variable_param", (void **)&exo.ex_put_variable_param},
+      {"ex_update", (void **)&exo.ex_update},
+      {"nc_strerror", (void **)&exo.nc_strerror}}; /* netCDF's, through the library */
+  if (!cupid_io_load_library("CUPID_EXODUS_LIBRARY", "libexoIIv2c.so.5", "libexoIIv2c.so", syms,
+                             sizeof syms / sizeof *syms, "the Exodus II library", "libexodusii5",
+                             exo_why, sizeof exo_why))
     return exo_why;
-  }
-  struct {
-    const char *name;
-    void **fn;
-  } syms[] = {{"ex_create_int", (void **)&exo.ex_create_int},
-              {"ex_open_int", (void **)&exo.ex_open_int},
-              {"ex_close", (void **)&exo.ex_close},
-              {"ex_get_err", (void **)&exo.ex_get_err},
-              {"ex_inquire_int", (void **)&exo.ex_inquire_int},
-              {"ex_opts", (void **)&exo.ex_opts},
-              {"ex_put_coord", (void **)&exo.ex_put_coord},
-              {"ex_put_coord_names", (void **)&exo.ex_put_coord_names},
-              {"ex_put_elem_attr", (void **)&exo.ex_put_elem_attr},
-              {"ex_put_elem_attr_names", (void **)&exo.ex_put_elem_attr_names},
-              {"ex_put_elem_block", (void **)&exo.ex_put_elem_block},
-              {"ex_put_elem_conn", (void **)&exo.ex_put_elem_conn},
-              {"ex_put_init", (void **)&exo.ex_put_init},
-              {"ex_put_name", (void **)&exo.ex_put_name},
-              {"ex_put_time", (void **)&exo.ex_put_time},
-              {"ex_put_var", (void **)&exo.ex_put_var},
-              {"ex_put_variable_names", (void **)&exo.ex_put_variable_names},
-              {"ex_put_variable_param", (void **)&exo.ex_put_variable_param},
-              {"ex_update", (void **)&exo.ex_update},
-              {"nc_strerror", (void **)&exo.nc_strerror}}; /* netCDF's, through the library */
-  for (size_t k = 0; k < sizeof syms / sizeof *syms; k++) {
-    *syms[k].fn = dlsym(h, syms[k].name);
-    if (!*syms[k].fn) {
-      snprintf(exo_why, sizeof exo_why, "the Exodus II library has no %s (cupid needs the 6.x "
-               "API)", syms[k].name);
-      return exo_why;
-    }
-  }
   exo_state = 1;
   return NULL;
 }
