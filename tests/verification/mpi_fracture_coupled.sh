@@ -27,15 +27,7 @@
 #  - the balance on slabs (C = K^T R of the whole model on each rank, its share): two bars on 2
 #    and 3 slabs against the direct path (1e-8 of the largest displacement).
 # Skipped (77) without PETSc. 200-280 s on 2 cores (the 3-rank runs oversubscribe them).
-if [ "${CUPID_HAVE_PETSC:-0}" != 1 ]; then
-  echo "SKIP: cupid was built without PETSc (scripts/build.sh --with-petsc builds build-petsc/)"
-  exit 77
-fi
-. "$(dirname "$0")/../tools/checks.sh"
-PY=${CUPID_SYSTEM_PYTHON:-/usr/bin/python3}
-MPIEXEC=${CUPID_MPIEXEC:-mpiexec}
-export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMP_NUM_THREADS=1
-export OMPI_MCA_rmaps_base_oversubscribe=1
+. "$(dirname "$0")/../tools/mpi_checks.sh"
 E=$SRC/examples/fracture/senb_coupled.yaml
 I=$SRC/tests/models/growth/senb_interface.yaml
 coarse=(--quiet --set analysis.steps=20 --set "constraints[0].displacement.value=[-0.03, null, null]"

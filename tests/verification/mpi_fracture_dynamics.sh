@@ -16,14 +16,7 @@
 #     maximum over the slabs' owned rows) makes dt stable without Lanczos on 1 and 2 ranks,
 #     the same bound to 1e-12 (a maximum of the same rows' values).
 # Skipped (77) without PETSc. ~40 s on 2 cores.
-if [ "${CUPID_HAVE_PETSC:-0}" != 1 ]; then
-  echo "SKIP: cupid was built without PETSc (scripts/build.sh --with-petsc builds build-petsc/)"
-  exit 77
-fi
-. "$(dirname "$0")/../tools/checks.sh"
-MPIEXEC=${CUPID_MPIEXEC:-mpiexec}
-export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMP_NUM_THREADS=1
-export OMPI_MCA_rmaps_base_oversubscribe=1
+. "$(dirname "$0")/../tools/mpi_checks.sh"
 models=$SRC/tests/models/mpi
 grep -v "fracture:\|criterion:\|critical_stretch:" "$models/plate_slabs.yaml" > elastic.yaml
 

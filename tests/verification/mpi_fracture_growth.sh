@@ -23,15 +23,7 @@
 #    carries the load that the support no longer does: a collapse, on the slabs and on the
 #    direct path alike (exit 2, summary.json's collapse).
 # Skipped (77) without PETSc. ~45 s on 2 cores.
-if [ "${CUPID_HAVE_PETSC:-0}" != 1 ]; then
-  echo "SKIP: cupid was built without PETSc (scripts/build.sh --with-petsc builds build-petsc/)"
-  exit 77
-fi
-. "$(dirname "$0")/../tools/checks.sh"
-PY=${CUPID_SYSTEM_PYTHON:-/usr/bin/python3}
-MPIEXEC=${CUPID_MPIEXEC:-mpiexec}
-export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMP_NUM_THREADS=1
-export OMPI_MCA_rmaps_base_oversubscribe=1
+. "$(dirname "$0")/../tools/mpi_checks.sh"
 G=$SRC/tests/models/growth
 M=$G/plate.yaml
 Z=$G/plate_z.yaml

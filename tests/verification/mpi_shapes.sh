@@ -7,15 +7,7 @@
 # exactly and its point displacements to 1e-8 (the matrix-free CG's tolerance; measured 5e-14 to
 # 1e-13).
 # Skipped (77) without PETSc. ~20 s on 2 cores.
-if [ "${CUPID_HAVE_PETSC:-0}" != 1 ]; then
-  echo "SKIP: cupid was built without PETSc (scripts/build.sh --with-petsc builds build-petsc/)"
-  exit 77
-fi
-. "$(dirname "$0")/../tools/checks.sh"
-PY=${CUPID_SYSTEM_PYTHON:-/usr/bin/python3}
-MPIEXEC=${CUPID_MPIEXEC:-mpiexec}
-export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMP_NUM_THREADS=1
-export OMPI_MCA_rmaps_base_oversubscribe=1
+. "$(dirname "$0")/../tools/mpi_checks.sh"
 R=$SRC/tests/models/shapes/rod.yaml
 P=$SRC/examples/geometry/plate_hole.yaml
 rod_points=(--set 'output.points=[{name: a, at: [0.5, 20.5, 0.5]}, {name: b, at: [3.5, 59.5, 0.5]}]')
