@@ -3,7 +3,6 @@
 #include <string.h>
 
 #include "problem_internal.h"
-#include "cupid/io.h"
 
 cupid_status cupid_problem_fe_build(cupid_problem_state *prob) {
   double t0 = cupid_wtime();
@@ -55,13 +54,4 @@ cupid_status cupid_problem_translations(const cupid_problem_state *prob, double 
     if (prob->beam) CUPID_CALL(cupid_cuf_interpolate(prob->beam, unit_field, &k, tk));
   }
   return CUPID_SUCCESS;
-}
-
-cupid_status cupid_problem_fe_write_vtu(const cupid_problem_state *prob, const double *sol,
-                                        const char *path) {
-  cupid_cuf_vtu *vtu = NULL;
-  CUPID_CALL(cupid_cuf_vtu_build(prob->beam, sol, 0, &vtu));
-  cupid_status st = cupid_vtu_write(path, &vtu->mesh);
-  cupid_cuf_vtu_destroy(&vtu);
-  return st;
 }

@@ -567,8 +567,6 @@ cupid_status cupid_problem_system_field(const cupid_problem_state *prob, cupid_c
                                         void *ctx, double *x);
 /** Unit-translation vectors: t[k * ndof + d] = generalised DOF d of the field e_k. */
 cupid_status cupid_problem_translations(const cupid_problem_state *prob, double *t);
-cupid_status cupid_problem_fe_write_vtu(const cupid_problem_state *prob, const double *sol,
-                                        const char *path);
 
 /* frames.c: what a run hands its output writers (io.h, "Output writers"). */
 /** The PD nodes as VTK vertices (made once per run): connectivity, offsets, cell types, the

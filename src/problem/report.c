@@ -142,62 +142,47 @@ static cupid_status pd_part_build(const cupid_problem_state *prob, pd_part *p) {
   return CUPID_SUCCESS;
 }
 
-/* `pd.vtu`: PD nodes as VTK vertices. */
-static cupid_status write_pd_vtu(cupid_problem_state *prob) {
-  pd_part p;
-  char path[4096];
-  cupid_status st = pd_part_build(prob, &p);
-  if (st == CUPID_SUCCESS) st = join_path(prob->writedir, "pd.vtu", path, sizeof path);
-  if (st == CUPID_SUCCESS) st = cupid_vtu_write(path, &p.mesh);
-  pd_part_free(&p);
-  return st;
-}
-
-/* `beam.vtu` (the 3D reconstruction of the beam as hexahedra), `pd.vtu`, and `model.pvd`,
- * the collection ParaView opens with both parts. */
-static cupid_status write_vtu(cupid_problem_state *prob) {
-  char path[4096];
+/* The result files of the parts (`vtu`: beam.vtu, the 3D reconstruction of the beam as
+ * hexahedra, pd.vtu, the PD nodes as vertices, and model.pvd, the collection ParaView opens
+ * with both; `exodus`: model.exo, their one time step), each part built once for both. */
+static cupid_status write_parts(cupid_problem_state *prob, int vtu, int exodus) {
+  cupid_frame_part parts[2];
   const char *files[2];
   const double times[2] = {0.0, 0.0};
-  const int parts[2] = {0, 1};
-  int n = 0;
-  if (prob->beam) {
-    CUPID_CALL(join_path(prob->writedir, "beam.vtu", path, sizeof path));
-    CUPID_CALL(cupid_problem_fe_write_vtu(prob, prob->u, path));
-    files[n++] = "beam.vtu";
-  }
-  if (prob->grid) {
-    CUPID_CALL(write_pd_vtu(prob));
-    files[n++] = "pd.vtu";
-  }
-  CUPID_CALL(join_path(prob->writedir, "model.pvd", path, sizeof path));
-  return cupid_pvd_write(path, n, files, times, parts);
-}
-
-/* `model.exo` of a static solve or `evaluate` (output.exodus): one time step, the parts and
- * fields of beam.vtu and pd.vtu (dynamics and load steps write theirs as they go). */
-static cupid_status write_exodus(cupid_problem_state *prob) {
-  cupid_frame_part parts[2];
+  const int ids[2] = {0, 1};
   cupid_cuf_vtu *beam = NULL;
   cupid_writer w = NULL;
   pd_part pd;
+  char path[4096];
   int np = 0, have_pd = 0;
   cupid_status st = CUPID_SUCCESS;
   if (prob->beam) {
     CUPID_TRY(cupid_cuf_vtu_build(prob->beam, prob->u, 0, &beam));
-    parts[np++] = (cupid_frame_part){"beam", &beam->mesh, NULL};
+    parts[np] = (cupid_frame_part){"beam", &beam->mesh, NULL};
+    files[np++] = "beam.vtu";
   }
   if (prob->grid) {
     have_pd = 1;
     CUPID_TRY(pd_part_build(prob, &pd));
-    parts[np++] = (cupid_frame_part){"pd", &pd.mesh, pd.verts.volume};
+    parts[np] = (cupid_frame_part){"pd", &pd.mesh, pd.verts.volume};
+    files[np++] = "pd.vtu";
   }
-  const cupid_writer_spec spec = {.dir = prob->writedir, .file = "model.exo",
-                                  .title = prob->model->title};
-  const cupid_frame f = {.step = 0, .time = 0.0, .n_parts = np, .parts = parts};
-  CUPID_TRY(cupid_writer_create(&cupid_writer_exodus, &spec, &w));
-  CUPID_TRY(cupid_writer_step(w, &f));
-  CUPID_TRY(cupid_writer_end(&w));
+  for (int k = 0; k < np && vtu; k++) {
+    CUPID_TRY(join_path(prob->writedir, files[k], path, sizeof path));
+    CUPID_TRY(cupid_vtu_write(path, parts[k].mesh));
+  }
+  if (vtu) {
+    CUPID_TRY(join_path(prob->writedir, "model.pvd", path, sizeof path));
+    CUPID_TRY(cupid_pvd_write(path, np, files, times, ids));
+  }
+  if (exodus) {
+    const cupid_writer_spec spec = {.dir = prob->writedir, .file = "model.exo",
+                                    .title = prob->model->title};
+    const cupid_frame f = {.step = 0, .time = 0.0, .n_parts = np, .parts = parts};
+    CUPID_TRY(cupid_writer_create(&cupid_writer_exodus, &spec, &w));
+    CUPID_TRY(cupid_writer_step(w, &f));
+    CUPID_TRY(cupid_writer_end(&w));
+  }
 cleanup:
   cupid_writer_drop(&w, 0);
   cupid_cuf_vtu_destroy(&beam);
@@ -426,9 +411,10 @@ cupid_status cupid_problem_report(cupid_problem_state *prob) {
   if (cupid_problem_needs_stress(prob)) CUPID_CALL(cupid_problem_pd_stress(prob));
   for (int k = 0; k < o->n_lines; k++) CUPID_CALL(write_line(prob, &o->lines[k]));
   if (o->pd_nodes && prob->grid) CUPID_CALL(write_pd_nodes(prob));
-  /* dynamic runs wrote their VTU time series (dynamic.c) */
-  if (o->vtu && prob->model->analysis.type != CUPID_ANALYSIS_DYNAMIC) CUPID_CALL(write_vtu(prob));
-  if (o->exodus && !cupid_problem_writes_frames(prob)) CUPID_CALL(write_exodus(prob));
+  /* dynamic runs wrote their VTU series, and runs of steps their model.exo, as they went */
+  const int vtu = o->vtu && prob->model->analysis.type != CUPID_ANALYSIS_DYNAMIC;
+  const int exodus = o->exodus && !cupid_problem_writes_frames(prob);
+  if (vtu || exodus) CUPID_CALL(write_parts(prob, vtu, exodus));
   /* The output phase is recorded before summary.json so that the file reports it. */
   cupid_problem_phase_end(prob, CUPID_PHASE_OUTPUT, t0);
   return write_summary(prob);
