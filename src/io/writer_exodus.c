@@ -295,9 +295,10 @@ static cupid_status exo_save(cupid_writer w, cupid_checkpoint_writer ckw) {
   if (x->id >= 0) {
     EXO(exo.ex_update(x->id), "the sync");
     int fd = open(x->temp, O_RDONLY);
-    CUPID_CHECK(fd >= 0 && fdatasync(fd) == 0, CUPID_ERR_IO, "cannot sync %s: %s", x->temp,
-                strerror(errno));
-    close(fd);
+    const int synced = fd >= 0 && fdatasync(fd) == 0;
+    const int err = errno;
+    if (fd >= 0) close(fd);
+    CUPID_CHECK(synced, CUPID_ERR_IO, "cannot sync %s: %s", x->temp, strerror(err));
   }
   return cupid_checkpoint_write(ckw, w->key, &x->frames, sizeof x->frames);
 }
