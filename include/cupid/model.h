@@ -68,6 +68,12 @@ typedef struct {
 
 /** 1 if p lies inside the closed surface (on it counts as inside): a ray's crossings. */
 int cupid_surface_contains(const cupid_surface surface, const double p[3]);
+/** The chords of the line through (y, z) along x inside the closed surface: *n* intervals
+ *  [x[2k], x[2k+1]], sorted and disjoint, at most @p cap of them (-1: more). */
+int cupid_surface_chords(const cupid_surface surface, double y, double z, double *x, int cap);
+/** 1 if a triangle's bounding box meets the cube of half side @p r about p (the surface may
+ *  pass there; 0: it does not). */
+int cupid_surface_near(const cupid_surface surface, const double p[3], double r);
 /** The surface's triangles (summary.json reports them). */
 int64_t cupid_surface_num_triangles(const cupid_surface surface);
 
@@ -79,6 +85,12 @@ void cupid_le_node_grid(int npe, int k, int *a, int *b);
 
 /** 1 if point p lies in the shape (on its surface counts as inside). */
 int cupid_shape_contains(const cupid_shape *shape, const double p[3]);
+/** The chords of the line through (y, z) along x inside the shape (its bounding box clips
+ *  them): n intervals [x[2k], x[2k+1]], sorted and disjoint, at most @p cap (-1: more). The
+ *  cut-cell volumes of the PD lattice integrate them (src/pd/cut_volume.c). */
+int cupid_shape_chords(const cupid_shape *shape, double y, double z, double *x, int cap);
+/** 0 when the shape's surface lies farther than @p r from p (1: it may come closer). */
+int cupid_shape_near(const cupid_shape *shape, const double p[3], double r);
 
 typedef struct {
   char *name;

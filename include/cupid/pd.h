@@ -44,6 +44,9 @@ typedef struct {
   const cupid_shape *shapes;
   int n_holes;
   const cupid_shape *holes;
+  /** 1: with shapes or holes (3D), each node's volume is the body's nearest it rather than
+   *  the whole cell (`partial_volume: exact`; cupid_pd_grid_volume_fractions). */
+  int cut_volumes;
 } cupid_pd_grid_options;
 
 /* cupid_pd_grid_partition, where a grid sits in the whole union, is in solvers.h (the
@@ -90,6 +93,18 @@ const double *cupid_pd_grid_coords(const cupid_pd_grid grid);
 const int *cupid_pd_grid_materials(const cupid_pd_grid grid);
 /** Cell volume (h^3, or area*h in 1D). */
 double cupid_pd_grid_cell_volume(const cupid_pd_grid grid);
+/**
+ * The nodes' volumes over the cell volume, one per node, or NULL when every node has the
+ * whole cell. With opts->cut_volumes on a shaped body (issue 35): a node has the body's volume
+ * in its cell plus a share of the body's volume in the neighbouring cells that hold no node
+ * (their centres outside), so that the volumes sum to the body's (src/pd/cut_volume.c). The
+ * PD operator, masses, body loads and outputs take them.
+ */
+const double *cupid_pd_grid_volume_fractions(const cupid_pd_grid grid);
+/** Volume of one node: the cell volume times its fraction. */
+double cupid_pd_grid_node_volume(const cupid_pd_grid grid, cupid_int node);
+/** The body's volume in cut cells with no node among their neighbours (given to none). */
+double cupid_pd_grid_unassigned_volume(const cupid_pd_grid grid);
 double cupid_pd_grid_spacing(const cupid_pd_grid grid);
 int cupid_pd_grid_dimension(const cupid_pd_grid grid);
 /** Node at integer lattice position (i, j, k), or -1 (in 1D pass i = k = 0). */

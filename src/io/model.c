@@ -225,6 +225,77 @@ int cupid_shape_contains(const cupid_shape *shape, const double p[3]) {
   return shape->kind == CUPID_SHAPE_BOX || r2 <= shape->radius * shape->radius;
 }
 
+int cupid_shape_chords(const cupid_shape *shape, double y, double z, double *x, int cap) {
+  const cupid_box *b = &shape->box;
+  if ((b->has[1] && (y < b->lo[1] || y > b->hi[1])) || (b->has[2] && (z < b->lo[2] || z > b->hi[2])))
+    return 0;
+  if (cap < 1) return -1;
+  const double lo = b->has[0] ? b->lo[0] : -INFINITY, hi = b->has[0] ? b->hi[0] : INFINITY;
+  const double *c = shape->center, r2 = shape->radius * shape->radius;
+  int n = 1;
+  x[0] = -INFINITY, x[1] = INFINITY;
+  switch (shape->kind) {
+  case CUPID_SHAPE_BOX: break;
+  case CUPID_SHAPE_SPHERE:
+  case CUPID_SHAPE_CYLINDER: {
+    const double dy = y - c[1], dz = z - c[2];
+    /* the half chord across the circle or sphere; along the cylinder's own axis x, the whole
+     * line when (y, z) lies in the disc */
+    double q = r2;
+    if (shape->kind == CUPID_SHAPE_SPHERE || shape->axis == 0) q -= dy * dy + dz * dz;
+    else q -= shape->axis == 1 ? dz * dz : dy * dy;
+    if (q < 0) return 0;
+    if (shape->kind == CUPID_SHAPE_SPHERE || shape->axis != 0)
+      x[0] = c[0] - sqrt(q), x[1] = c[0] + sqrt(q);
+    break;
+  }
+  case CUPID_SHAPE_GEOMETRY: n = cupid_surface_chords(shape->surface, y, z, x, cap); break;
+  }
+  int m = 0;
+  for (int k = 0; k < n; k++) { /* clipped to the box; empty ones dropped */
+    const double a = fmax(x[2 * k], lo), e = fmin(x[2 * k + 1], hi);
+    if (e > a) x[2 * m] = a, x[2 * m + 1] = e, m++;
+  }
+  return n < 0 ? n : m;
+}
+
+/* Distance from t to [lo, hi] along an axis (0 inside; an axis without bounds: 0). */
+static double axis_gap(const cupid_box *b, int a, double t) {
+  if (!b->has[a]) return 0.0;
+  return t < b->lo[a] ? b->lo[a] - t : t > b->hi[a] ? t - b->hi[a] : 0.0;
+}
+
+int cupid_shape_near(const cupid_shape *shape, const double p[3], double r) {
+  const cupid_box *b = &shape->box;
+  for (int a = 0; a < 3; a++)
+    if (axis_gap(b, a, p[a]) > r) return 0; /* outside the box grown by r */
+  switch (shape->kind) {
+  case CUPID_SHAPE_BOX: { /* near a face: not deeper inside than r on every bounded axis */
+    int deep = 1;
+    for (int a = 0; a < 3; a++)
+      if (b->has[a]) deep &= p[a] - b->lo[a] > r && b->hi[a] - p[a] > r;
+    return !deep;
+  }
+  case CUPID_SHAPE_SPHERE: {
+    double d2 = 0.0;
+    for (int a = 0; a < 3; a++) d2 += (p[a] - shape->center[a]) * (p[a] - shape->center[a]);
+    return fabs(sqrt(d2) - shape->radius) <= r;
+  }
+  case CUPID_SHAPE_CYLINDER: {
+    const int ax = shape->axis;
+    double d2 = 0.0;
+    for (int a = 0; a < 3; a++)
+      if (a != ax) d2 += (p[a] - shape->center[a]) * (p[a] - shape->center[a]);
+    const double rho = sqrt(d2);
+    if (fabs(rho - shape->radius) <= r) return 1; /* the side (within the grown ends: above) */
+    return b->has[ax] && rho <= shape->radius + r &&
+           (fabs(p[ax] - b->lo[ax]) <= r || fabs(p[ax] - b->hi[ax]) <= r); /* an end */
+  }
+  case CUPID_SHAPE_GEOMETRY: return cupid_surface_near(shape->surface, p, r);
+  }
+  return 1;
+}
+
 void cupid_le_node_grid(int npe, int k, int *a, int *b) {
   static const int l4a[4] = {0, 1, 1, 0}, l4b[4] = {0, 0, 1, 1};
   static const int l9a[9] = {0, 1, 2, 2, 2, 1, 0, 0, 1}, l9b[9] = {0, 0, 0, 1, 2, 2, 2, 1, 1};

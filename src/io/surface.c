@@ -189,3 +189,55 @@ int cupid_surface_contains(const cupid_surface s, const double p[3]) {
   }
   return crossings & 1;
 }
+
+static int cmp_double(const void *a, const void *b) {
+  const double x = *(const double *)a, y = *(const double *)b;
+  return (x > y) - (x < y);
+}
+
+int cupid_surface_chords(const cupid_surface s, double y, double z, double *x, int cap) {
+  if (y < s->lo[1] || y > s->hi[1] || z < s->lo[2] || z > s->hi[2]) return 0;
+  int i = (int)floor((y - s->blo[0]) / s->bsize[0]), j = (int)floor((z - s->blo[1]) / s->bsize[1]);
+  i = i < 0 ? 0 : i >= s->nb[0] ? s->nb[0] - 1 : i;
+  j = j < 0 ? 0 : j >= s->nb[1] ? s->nb[1] - 1 : j;
+  const int64_t b = (int64_t)j * s->nb[0] + i;
+  int n = 0;
+  for (int64_t k = s->start[b]; k < s->start[b + 1]; k++) {
+    double xc;
+    if (!covers(s, s->list[k], y, z, &xc)) continue;
+    if (n == 2 * cap) return -1;
+    x[n++] = xc;
+  }
+  /* a closed surface is crossed an even number of times (the fill rule counts a shared edge
+   * once); an odd count is a ray through a gap the closedness check let pass: no chord */
+  if (n & 1) return 0;
+  qsort(x, (size_t)n, sizeof *x, cmp_double);
+  return n / 2;
+}
+
+int cupid_surface_near(const cupid_surface s, const double p[3], double r) {
+  for (int a = 0; a < 3; a++)
+    if (p[a] + r < s->lo[a] || p[a] - r > s->hi[a]) return 0;
+  int b0[2], b1[2];
+  for (int d = 0; d < 2; d++) {
+    const int a = d + 1;
+    int lo = (int)floor((p[a] - r - s->blo[d]) / s->bsize[d]), hi = (int)floor((p[a] + r - s->blo[d]) / s->bsize[d]);
+    b0[d] = lo < 0 ? 0 : lo >= s->nb[d] ? s->nb[d] - 1 : lo;
+    b1[d] = hi < 0 ? 0 : hi >= s->nb[d] ? s->nb[d] - 1 : hi;
+  }
+  for (int j = b0[1]; j <= b1[1]; j++)
+    for (int i = b0[0]; i <= b1[0]; i++) {
+      const int64_t b = (int64_t)j * s->nb[0] + i;
+      for (int64_t k = s->start[b]; k < s->start[b + 1]; k++) {
+        const int64_t *t = s->tri + 3 * s->list[k];
+        int apart = 0;
+        for (int a = 0; a < 3 && !apart; a++) {
+          const double u = s->xyz[3 * t[0] + a], v = s->xyz[3 * t[1] + a], w = s->xyz[3 * t[2] + a];
+          apart = fmax(u, fmax(v, w)) < p[a] - r || fmin(u, fmin(v, w)) > p[a] + r;
+        }
+        if (!apart) return 1;
+      }
+    }
+  return 0;
+}
+

@@ -99,15 +99,17 @@ static void add_family(const struct cupid_pd_operator_private *op, const offset_
                        unsigned char *hit, double *acc) {
   const cupid_int *lin = t->lin;
   const double *wxn = op->st.wxn;
-  if (op->sf) { /* surface correction: g_p[k] = Gp D_pk wxn(p->k) */
+  if (op->sf || op->phi) { /* surface factors, cut cells: g_p[k] = Gp D_pk phi_k wxn(p->k) */
     for (int q = 0; q < Fp->n; q++) {
       const int s2 = pd_family_entry(Fp, q);
       if (pd_bond_broken(op, p, s2)) continue;
       const int32_t d = dp[lin[s2]];
+      const cupid_int k = pd_family_node(op, Fp, s2);
       double sfb[4];
-      pd_surface_bond(op, p, pd_family_node(op, Fp, s2), op->st.nrm + 3 * s2, sfb);
+      pd_surface_bond(op, p, k, op->st.nrm + 3 * s2, sfb);
+      const double f = sfb[0] * pd_phi(op, k);
       hit[d] = 1;
-      add_vb(acc + 9 * (size_t)d, sfb[0] * v[0], sfb[0] * v[1], sfb[0] * v[2], wxn + 3 * s2);
+      add_vb(acc + 9 * (size_t)d, f * v[0], f * v[1], f * v[2], wxn + 3 * s2);
     }
     return;
   }
@@ -166,17 +168,18 @@ static void gather_row(const struct cupid_pd_operator_private *op, const offset_
       }
       continue;
     }
-    const double Gp = 3.0 * op->V / op->m[p], cp = op->V * op->kappa[p] / 3.0;
+    const double Gp = 3.0 * op->V / op->m[p], cp = op->V * pd_phi(op, p) * op->kappa[p] / 3.0;
     double gr[3], gp[3]; /* intact self weights (broken bonds leave theta's sums) */
     const double *dir = self ? pd_gself_intact(op, r, gr) : S->wxn + 3 * sr;
     const double *gsp = pd_gself_intact(op, p, gp);
-    double Dpr = 1.0; /* surface factor of bond p -> r in theta_p */
+    double Dpr = 1.0; /* surface factor of bond p -> r in theta_p (times phi_r) */
     if (!self && op->sf) {
       double sfb[4];
       pd_surface_bond(op, r, p, S->nrm + 3 * sr, sfb);
       Dpr = sfb[1];
     }
-    double v[3]; /* c_p g_p[r] Gp, with g_p[r] = -Gp gself_r, or -Gp D_pr wxn(r->p) */
+    if (!self) Dpr *= pd_phi(op, r);
+    double v[3]; /* c_p g_p[r] Gp, with g_p[r] = -Gp gself_r, or -Gp D_pr phi_r wxn(r->p) */
     for (int c = 0; c < 3; c++) v[c] = -cp * Gp * Gp * Dpr * dir[c];
     double mgs[3]; /* g_p[p] / Gp = -gself_p */
     for (int c = 0; c < 3; c++) mgs[c] = -gsp[c];
@@ -362,15 +365,16 @@ cupid_status cupid_pd_operator_diagonal(const cupid_pd_operator op, double *bloc
       const int s = q < 0 ? 0 : pd_family_entry(&F, q);
       if (q >= 0 && pd_bond_broken(op, r, s)) continue;
       const cupid_int p = q < 0 ? r : pd_family_node(op, &F, s);
-      const double Gp = 3.0 * op->V / op->m[p], cp = op->V * op->kappa[p] / 3.0;
+      const double Gp = 3.0 * op->V / op->m[p], cp = op->V * pd_phi(op, p) * op->kappa[p] / 3.0;
       double gr[3];
       const double *dir = q < 0 ? pd_gself_intact(op, r, gr) : S->wxn + 3 * s;
-      double Dpr = 1.0; /* surface factor of bond p -> r in theta_p */
+      double Dpr = 1.0; /* surface factor of bond p -> r in theta_p (times phi_r) */
       if (q >= 0 && op->sf) {
         double sfb[4];
         pd_surface_bond(op, r, p, S->nrm + 3 * s, sfb);
         Dpr = sfb[1];
       }
+      if (q >= 0) Dpr *= pd_phi(op, r);
       add_outer(blk, cp * Gp * Gp * Dpr * Dpr, dir, dir); /* c_p g_p[r] g_p[r]^T, sign squared away */
     }
   }
@@ -385,23 +389,25 @@ static double dilatation_gradient_norm(const struct cupid_pd_operator_private *o
   double gp[3], sum = 0.0;
   const double *self = pd_gself_intact(op, p, gp);
   const int intact = !op->bslot || op->bslot[p] < 0;
-  if (!op->sf && intact && !F.s) sum = wx_full; /* a full, intact family: the stencil's sum */
+  if (!op->sf && !op->phi && intact && !F.s) sum = wx_full; /* a full, intact family */
   else
     for (int q = 0; q < F.n; q++) {
       const int s = pd_family_entry(&F, q);
       if (pd_bond_broken(op, p, s)) continue;
+      const cupid_int j = pd_family_node(op, &F, s);
       double D = 1.0;
       if (op->sf) {
         double sfb[4];
-        pd_surface_bond(op, p, pd_family_node(op, &F, s), S->nrm + 3 * s, sfb);
+        pd_surface_bond(op, p, j, S->nrm + 3 * s, sfb);
         D = sfb[0];
       }
-      sum += S->wb[s] * S->x[s] * fabs(D);
+      sum += S->wb[s] * S->x[s] * fabs(D) * pd_phi(op, j);
     }
   return 3.0 * op->V / op->m[p] * (sum + sqrt(self[0] * self[0] + self[1] * self[1] + self[2] * self[2]));
 }
 
-/* Row i's bound with surface factors: every bond's coefficients through pd_surface_bond. */
+/* Row i's bound with surface factors or cut cells: every bond's coefficients through
+ * pd_surface_bond and pd_phi (|c_j g_j[i]| = |kappa_j| V^2 phi_j / m_j omega beta x D_ji phi_i). */
 static double row_bound_corrected(const struct cupid_pd_operator_private *op, cupid_int i,
                                   const double *G) {
   const pd_stencil *S = &op->st;
@@ -415,7 +421,8 @@ static double row_bound_corrected(const struct cupid_pd_operator_private *op, cu
     if (!G) continue;
     double sfb[4]; /* sfb[1]: the factor of bond j -> i in theta_j */
     pd_surface_bond(op, i, j, S->nrm + 3 * s, sfb);
-    sum += fabs(op->kappa[j]) * op->V * op->V / op->m[j] * S->wb[s] * S->x[s] * fabs(sfb[1]) * G[j];
+    sum += fabs(op->kappa[j]) * op->V * op->V / op->m[j] * S->wb[s] * S->x[s] * fabs(sfb[1]) * G[j] *
+           pd_phi(op, i) * pd_phi(op, j);
   }
   return sum;
 }
@@ -440,7 +447,7 @@ static double row_bound_self(const struct cupid_pd_operator_private *op, const r
 /* The bonds' terms of row i, walked over its family (or with surface factors). */
 static double row_bound_family(const struct cupid_pd_operator_private *op,
                                const row_bound_terms *T, cupid_int i) {
-  if (op->sf) return row_bound_corrected(op, i, T->G);
+  if (op->sf || op->phi) return row_bound_corrected(op, i, T->G);
   const pd_stencil *S = &op->st;
   const pd_family F = pd_family_of(op, i);
   double pair = 0.0, dil = 0.0;
@@ -509,11 +516,11 @@ cupid_status cupid_pd_operator_row_bound(const cupid_pd_operator op, double *r) 
   for (cupid_int p = 0; p < nn; p++) {
     if (lps) G[p] = dilatation_gradient_norm(op, p, wx_full);
     pq[p] = lps ? 15.0 * op->mu[p] / op->m[p] * V2 : 0.5 * op->c[p] * V2;
-    kq[p] = lps ? fabs(op->kappa[p]) * V2 / op->m[p] * G[p] : 0.0;
+    kq[p] = lps ? fabs(op->kappa[p]) * V2 / op->m[p] * G[p] * pd_phi(op, p) : 0.0;
   }
   /* On the padded lattice, the neighbours' terms of full, intact families are read at the
    * stencil's cell offsets (no node lookup a bond): the same terms in the same order. */
-  if (op->padded && !op->sf) {
+  if (op->padded && !op->sf && !op->phi) {
     const size_t pcells = (size_t)op->pn[0] * (size_t)op->pn[1] * (size_t)op->pn[2];
     CUPID_TRY(cupid_calloc(pcells + 1, sizeof *ppq, "row bound terms", &ppq));
     CUPID_TRY(cupid_calloc(pcells + 1, sizeof *pkq, "row bound terms", &pkq));

@@ -21,8 +21,8 @@ void pd_bond_apply(const struct cupid_pd_operator_private *op, cupid_int first, 
   }
 }
 
-/* E = sum_i V/4 sum_j c_ij omega beta V e^2 / x (each pair appears twice; with a surface
- * correction times (G_ij + G_ji)/2, folded into the pair coefficient). */
+/* E = sum_i V phi_i/4 sum_j c_ij omega beta V phi_j e^2 / x (each pair appears twice; with a
+ * surface correction times (G_ij + G_ji)/2; both folded into the pair coefficient). */
 double pd_bond_energy(const struct cupid_pd_operator_private *op, const double *u) {
   const pd_stencil *S = &op->st;
   double E = 0.0;
@@ -40,7 +40,7 @@ double pd_bond_energy(const struct cupid_pd_operator_private *op, const double *
   return E;
 }
 
-/* sigma_i = 1/2 sum_j f_ij (x) xi_ij beta V, f_ij = c_ij omega (e/x) n the pair force
+/* sigma_i = 1/2 sum_j f_ij (x) xi_ij beta V phi_j, f_ij = c_ij omega (e/x) n the pair force
  * density (times (G_ij + G_ji)/2 with a surface correction): 1/2 V sum_j c_ij omega beta e n (x) n. */
 void pd_bond_stress(const struct cupid_pd_operator_private *op, const double *u, double *sigma) {
   const pd_stencil *S = &op->st;
@@ -55,7 +55,8 @@ void pd_bond_stress(const struct cupid_pd_operator_private *op, const double *u,
       const double *n = S->nrm + 3 * s;
       double sfb[4];
       pd_surface_bond(op, i, j, n, sfb);
-      const double t = 0.25 * (op->c[i] + op->c[j]) * (sfb[2] + sfb[3]) * S->wb[s] * pd_extension(n, u, i, j);
+      const double t = 0.25 * (op->c[i] + op->c[j]) * (sfb[2] + sfb[3]) * S->wb[s] * pd_phi(op, j) *
+                       pd_extension(n, u, i, j);
       sg[0] += t * n[0] * n[0];
       sg[1] += t * n[1] * n[1];
       sg[2] += t * n[2] * n[2];

@@ -80,9 +80,10 @@ static cupid_status slot_of(struct cupid_pd_operator_private *op, cupid_int i, i
   return CUPID_SUCCESS;
 }
 
-/* Mark entry s of node i broken (one direction; pre: by a pre-crack); 0 if it already was. */
-static cupid_status mark_broken(struct cupid_pd_operator_private *op, cupid_int i, int s, int pre,
-                                int *fresh) {
+/* Mark entry s of node i (neighbour j) broken (one direction; pre: by a pre-crack); 0 if it
+ * already was. */
+static cupid_status mark_broken(struct cupid_pd_operator_private *op, cupid_int i, cupid_int j, int s,
+                                int pre, int *fresh) {
   int32_t k = -1;
   CUPID_CALL(slot_of(op, i, &k));
   uint64_t *word = op->bmask + (size_t)k * (size_t)op->bwords + (size_t)(s >> 6);
@@ -92,7 +93,7 @@ static cupid_status mark_broken(struct cupid_pd_operator_private *op, cupid_int 
   *word |= bit;
   op->bcount[k]++;
   op->bpre[k] += pre;
-  for (int c = 0; c < 3; c++) op->bgsum[3 * (size_t)k + c] += op->st.wxn[3 * s + c];
+  for (int c = 0; c < 3; c++) op->bgsum[3 * (size_t)k + c] += op->st.wxn[3 * s + c] * pd_phi(op, j);
   return CUPID_SUCCESS;
 }
 
@@ -106,7 +107,7 @@ static void weighted_volume(struct cupid_pd_operator_private *op, cupid_int i) {
   for (int q = 0; q < F.n; q++) {
     const int s = pd_family_entry(&F, q);
     if (pd_bond_broken(op, i, s)) continue;
-    m += S->wb[s] * S->x[s] * S->x[s] * op->V;
+    m += S->wb[s] * S->x[s] * S->x[s] * op->V * pd_phi(op, pd_family_node(op, &F, s));
     intact++;
   }
   op->m[i] = intact ? m : INFINITY;
@@ -118,8 +119,8 @@ static cupid_status remove_bond(struct cupid_pd_operator_private *op, cupid_int 
   const pd_family F = pd_family_of(op, i);
   const cupid_int j = pd_family_node(op, &F, s);
   int a, b;
-  CUPID_CALL(mark_broken(op, i, s, pre, &a));
-  CUPID_CALL(mark_broken(op, j, op->st.n - 1 - s, pre, &b));
+  CUPID_CALL(mark_broken(op, i, j, s, pre, &a));
+  CUPID_CALL(mark_broken(op, j, i, op->st.n - 1 - s, pre, &b));
   *removed = a;
   if (!a) return CUPID_SUCCESS;
   op->nbroken++;
@@ -225,14 +226,15 @@ static double node_energy(const struct cupid_pd_operator_private *op, const doub
     if (op->model == CUPID_PD_BOND) {
       q += 0.25 * pd_pair_coefficient(op, i, j, s) * e * e;
     } else {
-      q += S->wb[s] * e * e;
-      t += S->wb[s] * S->x[s] * e;
+      q += S->wb[s] * pd_phi(op, j) * e * e;
+      t += S->wb[s] * S->x[s] * pd_phi(op, j) * e;
     }
   }
   if (op->model == CUPID_PD_BOND) return q;
   if (isinf(op->m[i])) return 0.0;
   const double theta = 3.0 * op->V * t / op->m[i];
-  return op->V * (op->kappa[i] / 6.0 * theta * theta + 7.5 * op->mu[i] / op->m[i] * q * op->V);
+  return op->V * pd_phi(op, i) *
+         (op->kappa[i] / 6.0 * theta * theta + 7.5 * op->mu[i] / op->m[i] * q * op->V);
 }
 
 /* The critical-energy test of the LPS bond i-j at entry s (fracture.md: w = 1/4 |t_ij +

@@ -161,6 +161,7 @@ void cupid_pd_grid_destroy(cupid_pd_grid *grid) {
   cupid_free(&g->material);
   cupid_free(&g->ijk);
   cupid_free(&g->dense);
+  cupid_free(&g->vfrac);
   cupid_free(grid);
 }
 
@@ -338,6 +339,7 @@ cupid_status pd_grid_build(const cupid_pd_grid_options *opts, int n_boxes, const
               (dim == 3 || a == 1) ? g->origin[a] + ((double)ijk[a] + 0.5) * h : 0.0;
         g->dense[c] = nn++;
       }
+  if (opts->cut_volumes) CUPID_TRY(pd_grid_cut_volumes(g, opts, n_boxes, boxes));
   *grid = g;
   g = NULL;
 cleanup:
@@ -363,6 +365,11 @@ void cupid_pd_grid_get_partition(const cupid_pd_grid grid, cupid_pd_grid_partiti
 const double *cupid_pd_grid_coords(const cupid_pd_grid grid) { return grid->coords; }
 const int *cupid_pd_grid_materials(const cupid_pd_grid grid) { return grid->material; }
 double cupid_pd_grid_cell_volume(const cupid_pd_grid grid) { return grid->volume; }
+const double *cupid_pd_grid_volume_fractions(const cupid_pd_grid grid) { return grid->vfrac; }
+double cupid_pd_grid_node_volume(const cupid_pd_grid grid, cupid_int node) {
+  return grid->vfrac ? grid->volume * grid->vfrac[node] : grid->volume;
+}
+double cupid_pd_grid_unassigned_volume(const cupid_pd_grid grid) { return grid->cut_lost; }
 double cupid_pd_grid_spacing(const cupid_pd_grid grid) { return grid->h; }
 int cupid_pd_grid_dimension(const cupid_pd_grid grid) { return grid->dim; }
 

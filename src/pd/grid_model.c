@@ -44,7 +44,8 @@ cupid_status cupid_pd_grid_create_part_from_model(const cupid_model_t *model, in
                                 .halo_layers = halo_layers,
                                 .shapes = any_shape ? shapes : NULL,
                                 .n_holes = pd->n_holes,
-                                .holes = holes};
+                                .holes = holes,
+                                .cut_volumes = pd->partial_volume == CUPID_PARTIAL_EXACT};
   char msg[512];
   int bad = -1;
   st = pd_grid_build(&opts, pd->n_regions, boxes, mats, &bad, msg, sizeof msg, grid);

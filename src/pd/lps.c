@@ -4,7 +4,7 @@
  * (over the families, any storage). */
 #include "pd/pd_internal.h"
 
-/* theta_i = 3/m_i sum_j omega x D_ij e beta V (Eq. 19, e from Eq. 17; D_ij the surface factor,
+/* theta_i = 3/m_i sum_j omega x D_ij e beta V phi_j (Eq. 19, e from Eq. 17; D_ij the surface factor,
  * 1 without a correction), on the bond lists when they exist (the bond-list path; always with
  * a correction), else on the families. The kernel is instantiated with corr = 0 and 1 so that
  * the uncorrected loop carries no factor work. */
@@ -19,7 +19,8 @@ static inline void lps_dilatation(const struct cupid_pd_operator_private *op, cu
       for (int q = 0; q < F.n; q++) {
         const int s = pd_family_entry(&F, q);
         if (pd_bond_broken(op, i, s)) continue;
-        t += S->wb[s] * S->x[s] * pd_extension(S->nrm + 3 * s, u, i, pd_family_node(op, &F, s));
+        const cupid_int j = pd_family_node(op, &F, s);
+        t += S->wb[s] * S->x[s] * pd_phi(op, j) * pd_extension(S->nrm + 3 * s, u, i, j);
       }
       theta[i] = 3.0 * op->V * t / op->m[i];
     }
@@ -34,7 +35,7 @@ static inline void lps_dilatation(const struct cupid_pd_operator_private *op, cu
       if (pd_bond_broken(op, i, s)) continue;
       double F[4] = {1.0, 1.0, 1.0, 1.0};
       if (corr) pd_surface_bond(op, i, j, S->nrm + 3 * s, F);
-      t += S->wb[s] * S->x[s] * F[0] * pd_extension(S->nrm + 3 * s, u, i, j);
+      t += S->wb[s] * S->x[s] * F[0] * pd_phi(op, j) * pd_extension(S->nrm + 3 * s, u, i, j);
     }
     theta[i] = 3.0 * op->V * t / op->m[i];
   }
@@ -52,7 +53,7 @@ void pd_lps_dilatation(const struct cupid_pd_operator_private *op, cupid_int fir
  *                                   + 15 (mu_i/m_i + mu_j/m_j) e_ij ] n_ij,
  * i.e. -(T_ij - T_ji) beta V^2 of Eq. 21 with T of Eq. 20, kappa = 3K - 5mu. With a surface
  * correction the i terms carry D_ij, G_ij and the j terms D_ji, G_ji (the gradient of the
- * corrected energy). */
+ * corrected energy); with cut cells every term phi_i phi_j. */
 static inline void lps_apply(const struct cupid_pd_operator_private *op, cupid_int first,
                              cupid_int last, const double *u, const double *theta, double *f,
                              const int corr) {
@@ -70,11 +71,12 @@ static inline void lps_apply(const struct cupid_pd_operator_private *op, cupid_i
       const double aj = op->kappa[j] * theta[j] / op->m[j], bj = op->mu[j] / op->m[j];
       double F[4] = {1.0, 1.0, 1.0, 1.0};
       if (corr) pd_surface_bond(op, i, j, n, F);
-      const double t = S->wb[s] * ((ai * F[0] + aj * F[1]) * S->x[s] +
-                                   15.0 * (bi * F[2] + bj * F[3]) * pd_extension(n, u, i, j));
+      const double t = S->wb[s] * pd_phi(op, j) *
+                       ((ai * F[0] + aj * F[1]) * S->x[s] + 15.0 * (bi * F[2] + bj * F[3]) * pd_extension(n, u, i, j));
       for (int c = 0; c < 3; c++) fi[c] += t * n[c];
     }
-    for (int c = 0; c < 3; c++) f[3 * (i - first) + c] = -V2 * fi[c];
+    const double Vi = V2 * pd_phi(op, i);
+    for (int c = 0; c < 3; c++) f[3 * (i - first) + c] = -Vi * fi[c];
   }
 }
 
@@ -86,7 +88,7 @@ void pd_lps_apply(const struct cupid_pd_operator_private *op, cupid_int first, c
     lps_apply(op, first, last, u, theta, f, 0);
 }
 
-/* E = sum_i V [ kappa_i/6 theta_i^2 + 15 mu_i/(2 m_i) sum_j omega G_ij e^2 beta V ]. */
+/* E = sum_i V phi_i [ kappa_i/6 theta_i^2 + 15 mu_i/(2 m_i) sum_j omega G_ij e^2 beta V phi_j ]. */
 double pd_lps_energy(const struct cupid_pd_operator_private *op, const double *u,
                      const double *theta) {
   const pd_stencil *S = &op->st;
@@ -102,14 +104,15 @@ double pd_lps_energy(const struct cupid_pd_operator_private *op, const double *u
       const double e = pd_extension(S->nrm + 3 * s, u, i, j);
       double sfb[4];
       pd_surface_bond(op, i, j, S->nrm + 3 * s, sfb);
-      q += S->wb[s] * sfb[2] * e * e;
+      q += S->wb[s] * sfb[2] * pd_phi(op, j) * e * e;
     }
-    E += op->V * (op->kappa[i] / 6.0 * theta[i] * theta[i] + 7.5 * op->mu[i] / op->m[i] * q * op->V);
+    E += op->V * pd_phi(op, i) *
+         (op->kappa[i] / 6.0 * theta[i] * theta[i] + 7.5 * op->mu[i] / op->m[i] * q * op->V);
   }
   return E;
 }
 
-/* sigma_i = sum_j T_ij (x) xi_ij beta V with T_ij = omega/m_i (kappa_i theta_i x + 15 mu_i e) n
+/* sigma_i = sum_j T_ij (x) xi_ij beta V phi_j with T_ij = omega/m_i (kappa_i theta_i x + 15 mu_i e) n
  * (Eq. 20; with a surface correction D_ij on the first term and G_ij on the second: the
  * derivative of node i's corrected energy by e_ij); T is along n and xi = x n, so sigma is
  * symmetric. Order xx yy zz yz xz xy. */
@@ -129,7 +132,8 @@ void pd_lps_stress(const struct cupid_pd_operator_private *op, const double *u, 
       const double e = pd_extension(n, u, i, j);
       double sfb[4];
       pd_surface_bond(op, i, j, n, sfb);
-      const double t = S->wb[s] * x * (op->kappa[i] * theta[i] * x * sfb[0] + 15.0 * op->mu[i] * e * sfb[2]);
+      const double t = S->wb[s] * pd_phi(op, j) * x *
+                       (op->kappa[i] * theta[i] * x * sfb[0] + 15.0 * op->mu[i] * e * sfb[2]);
       sg[0] += t * n[0] * n[0];
       sg[1] += t * n[1] * n[1];
       sg[2] += t * n[2] * n[2];

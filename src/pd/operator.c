@@ -92,13 +92,14 @@ static cupid_status node_data(struct cupid_pd_operator_private *op,
 #pragma omp parallel for schedule(static) if (nn > PD_OMP_MIN_NODES)
   for (cupid_int i = 0; i < nn; i++) {
     double m = m_full, gs[3] = {gs_full[0], gs_full[1], gs_full[2]};
-    if (!op->full[i]) {
+    if (!op->full[i] || op->phi) { /* cut cells: every family weighs its neighbours' volumes */
       const pd_family F = pd_family_of(op, i);
       m = gs[0] = gs[1] = gs[2] = 0.0;
       for (int q = 0; q < F.n; q++) {
         const int s = pd_family_entry(&F, q);
-        m += S->wb[s] * S->x[s] * S->x[s] * op->V;
-        for (int c = 0; c < 3; c++) gs[c] += S->wxn[3 * s + c];
+        const double phj = pd_phi(op, pd_family_node(op, &F, s));
+        m += S->wb[s] * S->x[s] * S->x[s] * op->V * phj;
+        for (int c = 0; c < 3; c++) gs[c] += S->wxn[3 * s + c] * phj;
       }
     }
     op->m[i] = m;
@@ -150,6 +151,7 @@ cupid_status cupid_pd_operator_create(const cupid_pd_grid grid,
   o->delta = opts->horizon;
   o->h = grid->h;
   o->V = grid->volume;
+  o->phi = grid->vfrac;
   o->dim = grid->dim;
   o->nnodes = grid->nnodes;
   CUPID_TRY(pd_stencil_build(o->dim, o->h, o->delta, o->rule, o->influence, &o->st));
@@ -158,12 +160,10 @@ cupid_status cupid_pd_operator_create(const cupid_pd_grid grid,
   CUPID_TRY(pd_ghosts_build(o));
   CUPID_TRY(pd_uniform_build(o));
   o->surface = opts->surface_correction;
-  /* The corrected kernels carry per-bond factors: they run on explicit bond lists (the
-   * stencil path assumes every full family is the same). */
-  if (o->surface != CUPID_SURFACE_NONE) {
-    CUPID_TRY(pd_operator_use_bond_lists(o));
-    CUPID_TRY(pd_surface_factors(o));
-  }
+  /* The corrected kernels and cut cells carry per-bond factors: they run on explicit bond
+   * lists (the stencil path assumes every full family is the same). */
+  if (o->surface != CUPID_SURFACE_NONE || o->phi) CUPID_TRY(pd_operator_use_bond_lists(o));
+  if (o->surface != CUPID_SURFACE_NONE) CUPID_TRY(pd_surface_factors(o));
   *op = o;
   o = NULL;
 cleanup:

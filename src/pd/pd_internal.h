@@ -24,6 +24,9 @@ struct cupid_pd_grid_private {
   int32_t *ijk;      /* lattice position, 3 per node */
   cupid_int *dense;  /* n[0]*n[1]*n[2]: node index of a cell or -1 */
   cupid_pd_grid_partition part; /* place in the whole union (issue 6: slabs for MPI) */
+  double *vfrac;     /* per node: its volume over the cell volume (cut cells of a shaped body,
+                        cut_volume.c), or NULL: every node has the whole cell */
+  double cut_lost;   /* body volume in cut cells with no node around (not given to any) */
 };
 
 /* Loops over fewer nodes run on one thread (thread start-up and barriers cost more). */
@@ -34,6 +37,11 @@ struct cupid_pd_grid_private {
 cupid_status pd_grid_build(const cupid_pd_grid_options *opts, int n_boxes, const cupid_box *boxes,
                            const int *materials, int *bad_box, char *msg, size_t len,
                            cupid_pd_grid *grid);
+
+/* The cut-cell volumes of a shaped body (cut_volume.c): g->vfrac, left NULL when every node
+ * keeps its whole cell. */
+cupid_status pd_grid_cut_volumes(struct cupid_pd_grid_private *g, const cupid_pd_grid_options *opts,
+                                 int n_boxes, const cupid_box *boxes);
 
 /* Node at lattice position (i, j, k), or -1 outside the union (no bounds assumed). */
 static inline cupid_int pd_grid_lookup(const struct cupid_pd_grid_private *g, cupid_int i,
@@ -175,6 +183,11 @@ struct cupid_pd_operator_private {
   double *gself;          /* sum_j omega beta x D_ij n_ij, 3 per node (LPS: -dtheta_i/du_i m_i/(3V)) */
   cupid_surface_correction surface;
   double *sf;             /* surface factors, PD_SF per node (d[3], g[3], q[3]), or NULL */
+  /* Node volumes over V (the grid's cut cells, cut_volume.c; borrowed), or NULL: all 1. Node
+   * i's energy is V phi_i W_i and its family sums weigh neighbour j by V phi_j (m_i, theta_i),
+   * so every bond term of K carries phi_i phi_j (pd_phi). Like the surface factors, they run on
+   * the bond lists (the stencil kernels assume equal volumes). */
+  const double *phi;
   /* Broken bonds (fracture.c): the families stay the geometric ones and a node with broken
    * bonds gets a slot (bslot[i] >= 0, else -1) holding a mask of its broken stencil entries
    * (bwords 64-bit words, bit s = entry s), their count and the sum of their dilatation
@@ -362,11 +375,17 @@ int pd_stencil_kernel_lanes(void);
 void pd_neighbour_span(const struct cupid_pd_operator_private *op, cupid_int first, cupid_int last,
                        cupid_int *lo, cupid_int *hi);
 
+/* Node i's volume over V (1 without cut cells). */
+static inline double pd_phi(const struct cupid_pd_operator_private *op, cupid_int i) {
+  return op->phi ? op->phi[i] : 1.0;
+}
+
 /* Bond-based pair coefficient c_ij omega beta V^2 / |xi| and LPS pair coefficient
- * 15 (mu_i/m_i + mu_j/m_j) omega beta V^2: the stiffness of the bond spring along n. */
+ * 15 (mu_i/m_i + mu_j/m_j) omega beta V^2: the stiffness of the bond spring along n (times
+ * phi_i phi_j with cut cells). */
 static inline double pd_pair_coefficient(const struct cupid_pd_operator_private *op,
                                          cupid_int i, cupid_int j, int s) {
-  const double V2 = op->V * op->V;
+  const double V2 = op->phi ? op->V * op->V * op->phi[i] * op->phi[j] : op->V * op->V;
   if (op->sf) { /* the surface factors G_ij, G_ji weigh the two nodes' energies */
     double F[4];
     pd_surface_bond(op, i, j, op->st.nrm + 3 * s, F);

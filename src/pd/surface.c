@@ -40,6 +40,9 @@
  * operator.c, fallback: uniaxial stress with nu = 1/4) or S (1D, the y axis only). The pair
  * coefficient takes c_ij (G_ij + G_ji)/2.
  *
+ * With cut cells (pd_phi) every sum weighs the neighbour's volume, so the fit targets the
+ * node's own weighted volume m_i as it is.
+ *
  * K stays symmetric (it is the Hessian of an energy) and rigid motions stay force-free (e_ij
  * vanishes for them whatever the factors). */
 #include <math.h>
@@ -96,7 +99,7 @@ static void node_sums(const struct cupid_pd_operator_private *op, cupid_int i, i
   for (cupid_int b = op->bptr[i]; b < op->bptr[i + 1]; b++) {
     const int s = op->bst[b];
     const double *n = S->nrm + 3 * s;
-    const double c = S->wb[s] * (p == 2 ? S->x[s] * S->x[s] : S->x[s]) * op->V;
+    const double c = S->wb[s] * (p == 2 ? S->x[s] * S->x[s] : S->x[s]) * op->V * pd_phi(op, op->bnbr[b]);
     const double n2[3] = {n[0] * n[0], n[1] * n[1], n[2] * n[2]};
     for (int k = 0; k < 3; k++) {
       const double ek = (1.0 + nu) * n2[k] - nu; /* n.eps n, uniaxial stress along k */
@@ -127,7 +130,7 @@ static int fit6(const struct cupid_pd_operator_private *op, cupid_int i, int p, 
   for (cupid_int bb = op->bptr[i]; bb < op->bptr[i + 1]; bb++) {
     const int s = op->bst[bb];
     const double *n = S->nrm + 3 * s;
-    const double c = S->wb[s] * (p == 2 ? S->x[s] * S->x[s] : S->x[s]) * op->V;
+    const double c = S->wb[s] * (p == 2 ? S->x[s] * S->x[s] : S->x[s]) * op->V * pd_phi(op, op->bnbr[bb]);
     const double n2[3] = {n[0] * n[0], n[1] * n[1], n[2] * n[2]};
     const double phi[6] = {n2[0], n2[1], n2[2], n2[0] * n2[0], n2[1] * n2[1], n2[2] * n2[2]};
     for (int e = 0; e < 6; e++) {
@@ -198,7 +201,7 @@ cupid_status pd_surface_factors(struct cupid_pd_operator_private *op) {
       const int s = op->bst[b];
       double F[4];
       pd_surface_bond(op, i, op->bnbr[b], S->nrm + 3 * s, F);
-      for (int c = 0; c < 3; c++) gs[c] += F[0] * S->wxn[3 * s + c];
+      for (int c = 0; c < 3; c++) gs[c] += F[0] * pd_phi(op, op->bnbr[b]) * S->wxn[3 * s + c];
     }
     for (int c = 0; c < 3; c++) op->gself[3 * i + c] = gs[c];
   }

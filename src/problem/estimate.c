@@ -200,6 +200,13 @@ cupid_status cupid_problem_estimate(const cupid_problem_state *prob, int print) 
              m->beam.le_nodes, m->beam.n_section_nodes, m->beam.section_mesh);
     if (prob->grid)
       printf("PD nodes: %lld\nbonds: %lld\n", (long long)prob->n_pd, (long long)prob->n_bonds);
+    if (prob->grid && prob->n_cut_nodes > 0) {
+      printf("PD volume: %.10g (%lld nodes with cut-cell volumes", prob->pd_volume,
+             (long long)prob->n_cut_nodes);
+      const double lost = cupid_pd_grid_unassigned_volume(prob->grid);
+      if (lost > 0) printf("; %.3g of the body in cut cells with no node around is left out", lost);
+      printf(")\n");
+    }
     for (int k = 0; prob->grid && k < m->pd.n_regions + m->pd.n_holes; k++) {
       const int region = k < m->pd.n_regions;
       const cupid_shape *sh = region ? &m->pd.regions[k].shape : &m->pd.holes[k - m->pd.n_regions].shape;

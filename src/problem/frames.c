@@ -8,14 +8,14 @@
 cupid_status cupid_problem_vertices_build(cupid_pd_grid grid, cupid_problem_vertices *v) {
   memset(v, 0, sizeof *v);
   const cupid_int n = cupid_pd_grid_num_nodes(grid);
-  const double vol = cupid_pd_grid_cell_volume(grid);
   v->grid = grid;
   CUPID_CALL(cupid_malloc((size_t)n + 1, sizeof *v->conn, "VTU connectivity", &v->conn));
   CUPID_CALL(cupid_malloc((size_t)n + 1, sizeof *v->offs, "VTU offsets", &v->offs));
   CUPID_CALL(cupid_malloc((size_t)n + 1, sizeof *v->types, "VTU cell types", &v->types));
   CUPID_CALL(cupid_malloc((size_t)n + 1, sizeof *v->volume, "node volumes", &v->volume));
   for (cupid_int i = 0; i < n; i++)
-    v->conn[i] = i, v->offs[i] = i + 1, v->types[i] = CUPID_VTK_VERTEX, v->volume[i] = vol;
+    v->conn[i] = i, v->offs[i] = i + 1, v->types[i] = CUPID_VTK_VERTEX,
+    v->volume[i] = cupid_pd_grid_node_volume(grid, i);
   return CUPID_SUCCESS;
 }
 

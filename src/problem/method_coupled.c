@@ -253,9 +253,10 @@ cupid_status cupid_method_plain_mass(cupid_problem_state *prob, int move_tied, c
   CUPID_CALL(cupid_calloc((size_t)prob->ndof, sizeof(double), "lumped mass", m_lumped));
   if (prob->grid) {
     const int *mat = cupid_pd_grid_materials(prob->grid);
-    double vol = cupid_pd_grid_cell_volume(prob->grid);
-    for (cupid_int i = 0; i < prob->n_pd; i++)
+    for (cupid_int i = 0; i < prob->n_pd; i++) {
+      const double vol = cupid_pd_grid_node_volume(prob->grid, i); /* cut cells: its part */
       for (int c = 0; c < 3; c++) (*m_lumped)[3 * i + c] = m->materials[mat[i]].density * vol;
+    }
   }
   if (lumped) {
     if (prob->beam) CUPID_CALL(cupid_cuf_mass_lumped(prob->beam, *m_lumped));

@@ -323,6 +323,7 @@ static cupid_status body_load(cupid_problem_state *prob, const cupid_load *l, do
   const double *x = cupid_pd_grid_coords(prob->grid);
   const int *mat = cupid_pd_grid_materials(prob->grid);
   double h = cupid_pd_grid_spacing(prob->grid), vol = cupid_pd_grid_cell_volume(prob->grid);
+  const double *phi = cupid_pd_grid_volume_fractions(prob->grid); /* cut cells */
   cupid_int count = 0;
   for (cupid_int i = 0; i < prob->n_pd; i++) {
     const double *p = x + 3 * i;
@@ -330,7 +331,8 @@ static cupid_status body_load(cupid_problem_state *prob, const cupid_load *l, do
     count += cupid_problem_pd_owned(prob, i);
     double rho = m->materials[mat[i]].density;
     for (int c = 0; c < 3; c++)
-      f[3 * i + c] += vol * cupid_value_eval(&l->value[c], p[0], p[1], p[2], prob->time, rho);
+      f[3 * i + c] += vol * (phi ? phi[i] : 1.0) *
+                      cupid_value_eval(&l->value[c], p[0], p[1], p[2], prob->time, rho);
   }
   if (cupid_problem_global_count(prob, count) == 0)
     return cupid_model_error(m, &l->mark, "the box contains no PD node");

@@ -48,6 +48,21 @@ cupid_status cupid_problem_pd_options(cupid_problem_state *prob) {
   return CUPID_SUCCESS;
 }
 
+/* The body's volume as the nodes carry it (cut cells: their parts), over the owned nodes of
+ * every rank (collective on slabs). */
+static void pd_body_volume(cupid_problem_state *prob) {
+  const double *phi = cupid_pd_grid_volume_fractions(prob->grid);
+  double v[2] = {0.0, 0.0};
+  for (cupid_int i = 0; i < prob->n_pd; i++) {
+    if (!cupid_problem_pd_owned(prob, i)) continue;
+    v[0] += cupid_pd_grid_node_volume(prob->grid, i);
+    v[1] += phi && phi[i] != 1.0;
+  }
+  if (prob->slab) cupid_petsc_sum_doubles(v, 2);
+  prob->pd_volume = v[0];
+  prob->n_cut_nodes = (cupid_int)v[1];
+}
+
 static cupid_status build_pd(cupid_problem_state *prob) {
   const cupid_model_t *m = prob->model;
   double t0 = cupid_wtime();
@@ -64,6 +79,7 @@ static cupid_status build_pd(cupid_problem_state *prob) {
   prob->n_pd = cupid_pd_grid_num_nodes(prob->grid);
   CUPID_CALL(cupid_pd_operator_create(prob->grid, &prob->pd_options, &prob->op));
   prob->n_bonds = cupid_pd_operator_num_bonds(prob->op);
+  pd_body_volume(prob);
   cupid_problem_phase_end(prob, CUPID_PHASE_GRID, t0);
   if (prob->slab)
     cupid_problem_progress(prob, "grid: %lld PD nodes in %d z slabs; rank 0 holds %lld (%lld owned)",

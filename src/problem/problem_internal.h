@@ -87,6 +87,8 @@ typedef struct cupid_problem_private {
   cupid_pd_material *pd_materials;      /**< owned; pd_options.materials points here */
   cupid_int n_pd;          /**< PD nodes */
   cupid_int n_bonds;
+  double pd_volume;        /**< the PD nodes' volumes summed (all ranks) */
+  cupid_int n_cut_nodes;   /**< nodes with cut-cell volumes (partial_volume: exact; all ranks) */
 
   /* CUF beam (FE): its DOFs follow the PD DOFs, from fe_offset = 3 n_pd. */
   cupid_cuf_beam beam;

@@ -203,6 +203,7 @@ static void json_counts(cupid_json js, const cupid_problem_state *prob) {
   cupid_json_integer(js, "fe_nodes", prob->beam ? prob->fe_info.n_fe_nodes : 0);
   cupid_json_integer(js, "fe_dofs", prob->n_fe_dofs);
   cupid_json_integer(js, "pd_nodes", prob->n_pd);
+  cupid_json_integer(js, "pd_cut_cell_nodes", prob->n_cut_nodes);
   cupid_json_integer(js, "bonds", prob->n_bonds);
   cupid_json_integer(js, "pd_dofs", 3 * prob->n_pd);
   cupid_json_integer(js, "fictitious_nodes", prob->n_fictitious);
@@ -353,6 +354,7 @@ static cupid_status write_summary(cupid_problem_state *prob) {
   json_counts(js, prob);
   if (prob->beam) json_beam(js, prob);
   json_geometry(js, prob);
+  if (prob->grid) cupid_json_number(js, "pd_volume", prob->pd_volume); /* the nodes' volumes */
   json_phases(js, prob);
   json_solver(js, prob);
   if (prob->arlequin_penalty > 0) { /* method arlequin: the penalty in use and its scale */
