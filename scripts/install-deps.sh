@@ -15,9 +15,10 @@ set -euo pipefail
 # header at build time, its library loaded at run time);
 # python3-netcdf4: meshio and the tests read model.exo back (regression.exodus_readers).
 # libgmsh4.8: section meshes from Gmsh files (beam.section.mesh; loaded at run time, not linked).
+# calculix-ccx: CalculiX, the reference of verification.pd_plate_calculix (a C3D20R plate).
 pkgs=(cmake make gcc pkg-config libsuitesparse-dev libopenblas-dev libyaml-dev zlib1g-dev libcmocka-dev gnuplot-nox python3
       python3-numpy python3-meshio python3-vtk9 python3-pytest python3-pip python3-setuptools python3-venv
-      libexodusii-dev python3-netcdf4 libgmsh4.8)
+      libexodusii-dev python3-netcdf4 libgmsh4.8 calculix-ccx)
 for arg in "$@"; do
   case $arg in
     --with-petsc) pkgs+=(petsc-dev procps) ;; # procps: pkill, SIGKILL to the ranks (mpi_resume)
