@@ -61,18 +61,21 @@ cupid_status mr_validate(model_reader *rd, const mr_map *top) {
   if (m->has_coupling && !(m->has_beam && m->has_peridynamics))
     return mr_error(rd, mr_get(top, "coupling"), "coupling",
                     "only meaningful when the model has both beam and peridynamics");
-  if (m->has_coupling) { /* the couplings build their interfaces on box regions */
+  if (m->has_coupling && m->coupling.method != CUPID_COUPLING_ARLEQUIN) {
+    /* fictitious nodes and Lagrange multipliers build their interfaces on box regions; the
+     * Arlequin method ties node by node and takes a shape's bounding box as its region */
     const cupid_peridynamics *pd = &m->pd;
     for (int r = 0; r < pd->n_regions; r++)
       if (pd->regions[r].shape.kind != CUPID_SHAPE_BOX)
         return cupid_model_error(m, &pd->regions[r].mark,
-                                 "cylinder, sphere and geometry regions are for PD-only models so far: the "
-                                 "couplings build their interfaces on box regions (give the PD "
-                                 "region as a box, or model the body in PD alone)");
+                                 "cylinder, sphere and geometry regions need coupling.method: "
+                                 "arlequin with a beam: the fictitious-node and Lagrange couplings "
+                                 "build their interfaces on box regions");
     if (pd->n_holes > 0)
       return cupid_model_error(m, &pd->holes[0].mark,
-                               "holes are for PD-only models so far: the couplings build their "
-                               "interfaces on whole box regions");
+                               "holes need coupling.method: arlequin with a beam: the "
+                               "fictitious-node and Lagrange couplings build their interfaces on "
+                               "whole box regions");
   }
   const cupid_fracture *f = &m->pd.fracture;
   if (m->analysis.type != CUPID_ANALYSIS_STATIC && f->per_iteration_mark.line > 0)

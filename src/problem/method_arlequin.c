@@ -388,7 +388,8 @@ static cupid_status prepare(cupid_problem_state *prob) {
       goto cleanup;
     }
     cupid_problem_progress(prob, "Arlequin: the beam gives way on y in [%g, %g]%s", b->lo[1], b->hi[1],
-                           b->has[0] || b->has[2] ? " over part of the section" : "");
+                           cupid_coupling_region_spans_section(prob->beam, b) ? " over the whole section"
+                                                                              : " over part of the section");
   }
 cleanup:
   cupid_free(&core);
@@ -716,9 +717,9 @@ static cupid_status mass(cupid_problem_state *prob, cupid_csr *M, double **m_lum
   double *pd_mass = NULL;
   cupid_arlequin_options o = options(prob);
   const int *mat = cupid_pd_grid_materials(prob->grid);
-  double vol = cupid_pd_grid_cell_volume(prob->grid);
   CUPID_TRY(cupid_malloc((size_t)prob->n_pd + 1, sizeof *pd_mass, "PD masses", &pd_mass));
-  for (cupid_int i = 0; i < prob->n_pd; i++) pd_mass[i] = m->materials[mat[i]].density * vol;
+  for (cupid_int i = 0; i < prob->n_pd; i++) /* cut cells: the node's part of the body */
+    pd_mass[i] = m->materials[mat[i]].density * cupid_pd_grid_node_volume(prob->grid, i);
   if (m->analysis.dynamic.lumped_mass) {
     CUPID_TRY(cupid_calloc((size_t)prob->ndof, sizeof **m_lumped, "lumped mass", m_lumped));
     CUPID_TRY(cupid_arlequin_mass(prob->beam, prob->grid, &o, pd_mass, NULL, *m_lumped));

@@ -249,8 +249,9 @@ static const bad_case cases[] = {
      NULL},
     /* shapes and holes (issue 35) */
     {"shape_coupled.yaml",
-     "15:7: peridynamics.regions[0]: cylinder, sphere and geometry regions are for PD-only models so far: "
-     "the couplings build their interfaces on box regions",
+     "15:7: peridynamics.regions[0]: cylinder, sphere and geometry regions need coupling.method: "
+     "arlequin with a beam: the fictitious-node and Lagrange couplings build their interfaces "
+     "on box regions",
      NULL},
     {"shape_cylinder_axis.yaml",
      "8:25: peridynamics.regions[0].cylinder.axis: must be one of x | y | z, got 'w'", NULL},

@@ -99,7 +99,7 @@ refuse "the geometry's volume holds no cell centre of the lattice" "$G/sphere.ya
   --set peridynamics.spacing=1 --set peridynamics.horizon=3 \
   --set "peridynamics.regions=[{geometry: tiny.geo}, {x: [0, 4], y: [0, 4], z: [0, 4]}]" \
   --set "constraints=[{fix: {box: {x: [0, 1]}, components: [x, y, z]}}]"
-refuse "geometry regions are for PD-only models so far" "$SRC/examples/bar/bar.yaml" \
+refuse "geometry regions need coupling.method: arlequin with a beam" "$SRC/examples/bar/bar.yaml" \
   --set "peridynamics.regions=[{geometry: $G/sphere.geo}]"
 
 finish pd_geometry
