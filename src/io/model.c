@@ -265,7 +265,12 @@ static double axis_gap(const cupid_box *b, int a, double t) {
   return t < b->lo[a] ? b->lo[a] - t : t > b->hi[a] ? t - b->hi[a] : 0.0;
 }
 
-int cupid_shape_near(const cupid_shape *shape, const double p[3], double r) {
+int cupid_shape_cuts_cell(const cupid_shape *shape, const double lo[3], double h) {
+  if (shape->kind == CUPID_SHAPE_GEOMETRY) {
+    const double hi[3] = {lo[0] + h, lo[1] + h, lo[2] + h};
+    return cupid_surface_cuts_box(shape->surface, lo, hi);
+  }
+  const double p[3] = {lo[0] + 0.5 * h, lo[1] + 0.5 * h, lo[2] + 0.5 * h}, r = 0.8661 * h;
   const cupid_box *b = &shape->box;
   for (int a = 0; a < 3; a++)
     if (axis_gap(b, a, p[a]) > r) return 0; /* outside the box grown by r */
@@ -291,7 +296,7 @@ int cupid_shape_near(const cupid_shape *shape, const double p[3], double r) {
     return b->has[ax] && rho <= shape->radius + r &&
            (fabs(p[ax] - b->lo[ax]) <= r || fabs(p[ax] - b->hi[ax]) <= r); /* an end */
   }
-  case CUPID_SHAPE_GEOMETRY: return cupid_surface_near(shape->surface, p, r);
+  case CUPID_SHAPE_GEOMETRY: break; /* above */
   }
   return 1;
 }

@@ -215,29 +215,92 @@ int cupid_surface_chords(const cupid_surface s, double y, double z, double *x, i
   return n / 2;
 }
 
-int cupid_surface_near(const cupid_surface s, const double p[3], double r) {
+/* 1 if triangle (a, b, c) meets the open box centred at m with half sides e: no separating
+ * axis among the box's three, the triangle's normal and the nine edge cross products
+ * (Akenine-Moeller), with touching (a facet in the box's face plane) counted as apart. */
+static int triangle_meets_box(const double *a, const double *b, const double *c, const double m[3],
+                              const double e[3]) {
+  double v[3][3], f[3][3];
+  for (int k = 0; k < 3; k++) v[0][k] = a[k] - m[k], v[1][k] = b[k] - m[k], v[2][k] = c[k] - m[k];
+  for (int k = 0; k < 3; k++)
+    f[0][k] = v[1][k] - v[0][k], f[1][k] = v[2][k] - v[1][k], f[2][k] = v[0][k] - v[2][k];
+  double axes[13][3];
+  int n = 0;
+  for (int k = 0; k < 3; k++) { /* the box's axes */
+    axes[n][0] = axes[n][1] = axes[n][2] = 0.0;
+    axes[n++][k] = 1.0;
+  }
+  axes[n][0] = f[0][1] * f[1][2] - f[0][2] * f[1][1]; /* the triangle's normal */
+  axes[n][1] = f[0][2] * f[1][0] - f[0][0] * f[1][2];
+  axes[n][2] = f[0][0] * f[1][1] - f[0][1] * f[1][0];
+  n++;
+  for (int i = 0; i < 3; i++) /* box axis i x edge j */
+    for (int j = 0; j < 3; j++) {
+      const int i1 = (i + 1) % 3, i2 = (i + 2) % 3;
+      axes[n][i] = 0.0, axes[n][i1] = -f[j][i2], axes[n][i2] = f[j][i1];
+      n++;
+    }
+  for (int q = 0; q < n; q++) {
+    const double *u = axes[q];
+    const double r = e[0] * fabs(u[0]) + e[1] * fabs(u[1]) + e[2] * fabs(u[2]);
+    if (r == 0.0) continue; /* a degenerate axis (parallel edge and box axis) */
+    double lo = INFINITY, hi = -INFINITY;
+    for (int k = 0; k < 3; k++) {
+      const double p = v[k][0] * u[0] + v[k][1] * u[1] + v[k][2] * u[2];
+      lo = fmin(lo, p), hi = fmax(hi, p);
+    }
+    if (lo >= r * (1 - 1e-12) || hi <= -r * (1 - 1e-12)) return 0; /* apart, or only touching */
+  }
+  return 1;
+}
+
+int cupid_surface_cuts_box(const cupid_surface s, const double lo[3], const double hi[3]) {
+  const double m[3] = {0.5 * (lo[0] + hi[0]), 0.5 * (lo[1] + hi[1]), 0.5 * (lo[2] + hi[2])};
+  const double e[3] = {0.5 * (hi[0] - lo[0]), 0.5 * (hi[1] - lo[1]), 0.5 * (hi[2] - lo[2])};
   for (int a = 0; a < 3; a++)
-    if (p[a] + r < s->lo[a] || p[a] - r > s->hi[a]) return 0;
+    if (hi[a] < s->lo[a] || lo[a] > s->hi[a]) return 0;
   int b0[2], b1[2];
   for (int d = 0; d < 2; d++) {
     const int a = d + 1;
-    int lo = (int)floor((p[a] - r - s->blo[d]) / s->bsize[d]), hi = (int)floor((p[a] + r - s->blo[d]) / s->bsize[d]);
-    b0[d] = lo < 0 ? 0 : lo >= s->nb[d] ? s->nb[d] - 1 : lo;
-    b1[d] = hi < 0 ? 0 : hi >= s->nb[d] ? s->nb[d] - 1 : hi;
+    int l = (int)floor((lo[a] - s->blo[d]) / s->bsize[d]), u = (int)floor((hi[a] - s->blo[d]) / s->bsize[d]);
+    b0[d] = l < 0 ? 0 : l >= s->nb[d] ? s->nb[d] - 1 : l;
+    b1[d] = u < 0 ? 0 : u >= s->nb[d] ? s->nb[d] - 1 : u;
   }
   for (int j = b0[1]; j <= b1[1]; j++)
     for (int i = b0[0]; i <= b1[0]; i++) {
       const int64_t b = (int64_t)j * s->nb[0] + i;
       for (int64_t k = s->start[b]; k < s->start[b + 1]; k++) {
         const int64_t *t = s->tri + 3 * s->list[k];
-        int apart = 0;
-        for (int a = 0; a < 3 && !apart; a++) {
-          const double u = s->xyz[3 * t[0] + a], v = s->xyz[3 * t[1] + a], w = s->xyz[3 * t[2] + a];
-          apart = fmax(u, fmax(v, w)) < p[a] - r || fmin(u, fmin(v, w)) > p[a] + r;
-        }
-        if (!apart) return 1;
+        if (triangle_meets_box(s->xyz + 3 * t[0], s->xyz + 3 * t[1], s->xyz + 3 * t[2], m, e)) return 1;
       }
     }
   return 0;
+}
+
+void cupid_surface_cut_cells(const cupid_surface s, const double origin[3], double h,
+                             const int64_t c0[3], const int64_t c1[3],
+                             void (*mark)(void *ctx, int64_t i, int64_t j, int64_t k), void *ctx) {
+#pragma omp parallel for schedule(dynamic, 64) if (s->n_tri > 256)
+  for (int64_t t = 0; t < s->n_tri; t++) {
+    const double *p[3] = {s->xyz + 3 * s->tri[3 * t], s->xyz + 3 * s->tri[3 * t + 1],
+                          s->xyz + 3 * s->tri[3 * t + 2]};
+    int64_t lo[3], hi[3];
+    int empty = 0;
+    for (int a = 0; a < 3; a++) { /* the cells the triangle's box reaches into */
+      const double mn = fmin(p[0][a], fmin(p[1][a], p[2][a])), mx = fmax(p[0][a], fmax(p[1][a], p[2][a]));
+      lo[a] = (int64_t)floor((mn - origin[a]) / h), hi[a] = (int64_t)floor((mx - origin[a]) / h) + 1;
+      lo[a] = lo[a] < c0[a] ? c0[a] : lo[a], hi[a] = hi[a] > c1[a] ? c1[a] : hi[a];
+      empty |= hi[a] <= lo[a];
+    }
+    if (empty) continue;
+    for (int64_t k = lo[2]; k < hi[2]; k++)
+      for (int64_t j = lo[1]; j < hi[1]; j++)
+        for (int64_t i = lo[0]; i < hi[0]; i++) {
+          const double m[3] = {origin[0] + ((double)i + 0.5) * h, origin[1] + ((double)j + 0.5) * h,
+                               origin[2] + ((double)k + 0.5) * h};
+          const double e[3] = {0.5 * h, 0.5 * h, 0.5 * h};
+          if (triangle_meets_box(p[0], p[1], p[2], m, e)) mark(ctx, i, j, k);
+        }
+  }
 }
 

@@ -13,8 +13,9 @@
  * 1/|offset|^2), so that the nodes' volumes sum to the body's: summing only the node cells'
  * parts would lose the slivers of the cells just outside, 5% of a sphere of radius 5 h.
  *
- * Which cells are cut: those that a shape's or a hole's surface passes within half a cell
- * diagonal of (cupid_shape_near: exact for the solids, triangles' boxes for geometry files),
+ * Which cells are cut: those that a solid's surface passes within half a cell diagonal of, or
+ * a geometry's triangle passes through (cupid_shape_cuts_cell; a facet in a cell's face, as a
+ * STEP plate's faces on the lattice planes, cuts nothing),
  * among the cells their bounding boxes touch; a test of the corners would miss a sphere that
  * bulges into a cell through a face (2.7% of a hole of radius 2.5 h). The cells
  * just outside a slab's window count too (computed from the geometry, not from the grid), so
@@ -175,17 +176,49 @@ static double cell_fraction(const cut_body *B, const double lo[3], double h, dou
   return L.crowded ? -1.0 : v / (h * h * h);
 }
 
-/* 1 if a region's shape or a hole's surface may cut the cell at lo (passes within the cell's
- * half diagonal of its centre: cupid_shape_near); *centre = the centre's side. Box regions lie
- * on the lattice and cut no cell. */
-static int cell_is_cut(const cut_body *B, const double lo[3], double h, int *centre) {
-  const double c[3] = {lo[0] + 0.5 * h, lo[1] + 0.5 * h, lo[2] + 0.5 * h}, r = 0.8661 * h;
-  *centre = body_contains(B, c);
+static int solid_cuts(const cupid_shape *s, const double lo[3], double h) {
+  return s->kind != CUPID_SHAPE_GEOMETRY && cupid_shape_cuts_cell(s, lo, h);
+}
+
+/* 1 if a region's or a hole's solid (not a geometry: flag_geometry) may cut the cell at lo
+ * (cupid_shape_cuts_cell: its surface within the cell's half diagonal of its centre). Box
+ * regions lie on the lattice and cut no cell. */
+static int cell_is_cut(const cut_body *B, const double lo[3], double h) {
   for (int b = 0; b < B->n_boxes; b++)
-    if (is_shape(B, b) && cupid_shape_near(&B->opts->shapes[b], c, r)) return 1;
+    if (is_shape(B, b) && solid_cuts(&B->opts->shapes[b], lo, h)) return 1;
   for (int q = 0; q < B->opts->n_holes; q++)
-    if (cupid_shape_near(&B->opts->holes[q], c, r)) return 1;
+    if (solid_cuts(&B->opts->holes[q], lo, h)) return 1;
   return 0;
+}
+
+/* The cells that a geometry's triangles pass through, flagged in a byte per cell of the
+ * tested range (a solid's are tested cell by cell: cheap; a geometry's cell by cell would
+ * ask its triangles at every cell of its box). */
+typedef struct {
+  unsigned char *flag;
+  cupid_int lo[3], n[3];
+} cut_flags;
+
+static void flag_cell(void *ctx, int64_t i, int64_t j, int64_t k) {
+  cut_flags *F = ctx;
+  const size_t c = (size_t)(i - F->lo[0]) + (size_t)F->n[0] * ((size_t)(j - F->lo[1]) + (size_t)F->n[1] * (size_t)(k - F->lo[2]));
+#pragma omp atomic write
+  F->flag[c] = 1;
+}
+
+static cupid_status flag_geometry(const cut_body *B, const struct cupid_pd_grid_private *g,
+                                  cut_flags *F) {
+  const size_t total = (size_t)F->n[0] * (size_t)F->n[1] * (size_t)F->n[2];
+  int any = 0;
+  for (int s = 0; s < B->n_boxes + B->opts->n_holes; s++) {
+    const cupid_shape *sh = s < B->n_boxes ? (is_shape(B, s) ? &B->opts->shapes[s] : NULL) : &B->opts->holes[s - B->n_boxes];
+    if (!sh || sh->kind != CUPID_SHAPE_GEOMETRY) continue;
+    if (!any++) CUPID_CALL(cupid_calloc(total + 1, 1, "cut-cell flags", &F->flag));
+    const int64_t c0[3] = {F->lo[0], F->lo[1], F->lo[2]};
+    const int64_t c1[3] = {F->lo[0] + F->n[0], F->lo[1] + F->n[1], F->lo[2] + F->n[2]};
+    cupid_surface_cut_cells(sh->surface, g->origin, g->h, c0, c1, flag_cell, F);
+  }
+  return CUPID_SUCCESS;
 }
 
 /* The cell range [c0, c1) per axis that a shape's bounding box (grown by a cell) touches;
@@ -270,6 +303,8 @@ cupid_status pd_grid_cut_volumes(struct cupid_pd_grid_private *g, const cupid_pd
   }
   if (hi[0] <= lo[0] || hi[1] <= lo[1] || hi[2] <= lo[2]) return CUPID_SUCCESS;
   const cupid_int nk = hi[2] - lo[2];
+  cut_flags F = {.lo = {lo[0], lo[1], lo[2]}, .n = {hi[0] - lo[0], hi[1] - lo[1], nk}};
+  CUPID_TRY(flag_geometry(&B, g, &F));
   CUPID_TRY(cupid_malloc((size_t)g->nnodes + 1, sizeof *phi, "PD node volumes", &phi));
   for (cupid_int i = 0; i < g->nnodes; i++) phi[i] = 1.0;
   CUPID_TRY(cupid_calloc((size_t)nk, sizeof *lists, "cut cells", &lists));
@@ -283,8 +318,10 @@ cupid_status pd_grid_cut_volumes(struct cupid_pd_grid_private *g, const cupid_pd
         const cupid_int ijk[3] = {i, j, k};
         double c[3];
         for (int a = 0; a < 3; a++) c[a] = g->origin[a] + (double)ijk[a] * g->h;
-        int centre = 0;
-        if (!cell_is_cut(&B, c, g->h, &centre)) continue;
+        const size_t fc = (size_t)(i - lo[0]) + (size_t)F.n[0] * ((size_t)(j - lo[1]) + (size_t)F.n[1] * (size_t)kk);
+        if (!(F.flag && F.flag[fc]) && !cell_is_cut(&B, c, g->h)) continue;
+        const double mid[3] = {c[0] + 0.5 * g->h, c[1] + 0.5 * g->h, c[2] + 0.5 * g->h};
+        const int centre = body_contains(&B, mid);
         double f = cell_fraction(&B, c, g->h, R, H, CUT_CHORDS * 4);
         if (f < 0) {
 #pragma omp atomic write
@@ -320,6 +357,7 @@ cupid_status pd_grid_cut_volumes(struct cupid_pd_grid_private *g, const cupid_pd
   g->cut_lost = lost * g->volume;
   if (!uniform) g->vfrac = phi, phi = NULL;
 cleanup:
+  cupid_free(&F.flag);
   if (lists)
     for (cupid_int kk = 0; kk < nk; kk++) cupid_free(&lists[kk].v);
   cupid_free(&lists);

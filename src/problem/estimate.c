@@ -347,6 +347,15 @@ static cupid_status guard_beam(const cupid_problem_state *prob, double limit) {
                            beam_nodes, terms, dofs, bytes / 1e9, limit / 1e9);
 }
 
+/* The volume of a sphere or a bounded cylinder (0 for other shapes). */
+static double shape_volume(const cupid_shape *s) {
+  const double pi = acos(-1.0), r = s->radius;
+  if (s->kind == CUPID_SHAPE_SPHERE) return 4.0 / 3.0 * pi * r * r * r;
+  if (s->kind == CUPID_SHAPE_CYLINDER && s->box.has[s->axis])
+    return pi * r * r * (s->box.hi[s->axis] - s->box.lo[s->axis]);
+  return 0.0;
+}
+
 cupid_status cupid_problem_guard_size(const cupid_problem_state *prob) {
   const cupid_model_t *m = prob->model;
   const cupid_peridynamics *pd = &m->pd;
@@ -384,6 +393,13 @@ cupid_status cupid_problem_guard_size(const cupid_problem_state *prob) {
       corner *= fmin(na - 1, cube) + 1;
     }
     visits += n;
+    if (pd->regions[r].shape.kind != CUPID_SHAPE_BOX || pd->n_holes > 0) {
+      /* a shape holds fewer nodes than its box, and holes may take any of them: half the
+       * solid's volume is a floor (a sphere's or cylinder's cells whose centres lie inside;
+       * a geometry's, or any region with holes: none known) */
+      nodes = fmax(nodes, pd->n_holes > 0 ? 0.0 : 0.5 * shape_volume(&pd->regions[r].shape) / (h * h * h));
+      continue;
+    }
     nodes = fmax(nodes, n);
     bonds = fmax(bonds, fmax(inner * stencil, n * (corner - 1)));
   }
