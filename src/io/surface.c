@@ -173,13 +173,18 @@ static int covers(const cupid_surface s, int64_t t, double y, double z, double *
   return 1;
 }
 
+/* The bucket of (y, z) (clamped to the grid). */
+static int64_t bucket_of(const cupid_surface s, double y, double z) {
+  int i = (int)floor((y - s->blo[0]) / s->bsize[0]), j = (int)floor((z - s->blo[1]) / s->bsize[1]);
+  i = i < 0 ? 0 : i >= s->nb[0] ? s->nb[0] - 1 : i;
+  j = j < 0 ? 0 : j >= s->nb[1] ? s->nb[1] - 1 : j;
+  return (int64_t)j * s->nb[0] + i;
+}
+
 int cupid_surface_contains(const cupid_surface s, const double p[3]) {
   for (int a = 0; a < 3; a++)
     if (p[a] < s->lo[a] - s->tol || p[a] > s->hi[a] + s->tol) return 0;
-  int i = (int)floor((p[1] - s->blo[0]) / s->bsize[0]), j = (int)floor((p[2] - s->blo[1]) / s->bsize[1]);
-  i = i < 0 ? 0 : i >= s->nb[0] ? s->nb[0] - 1 : i;
-  j = j < 0 ? 0 : j >= s->nb[1] ? s->nb[1] - 1 : j;
-  const int64_t b = (int64_t)j * s->nb[0] + i;
+  const int64_t b = bucket_of(s, p[1], p[2]);
   int crossings = 0;
   for (int64_t k = s->start[b]; k < s->start[b + 1]; k++) {
     double x;
@@ -197,10 +202,7 @@ static int cmp_double(const void *a, const void *b) {
 
 int cupid_surface_chords(const cupid_surface s, double y, double z, double *x, int cap) {
   if (y < s->lo[1] || y > s->hi[1] || z < s->lo[2] || z > s->hi[2]) return 0;
-  int i = (int)floor((y - s->blo[0]) / s->bsize[0]), j = (int)floor((z - s->blo[1]) / s->bsize[1]);
-  i = i < 0 ? 0 : i >= s->nb[0] ? s->nb[0] - 1 : i;
-  j = j < 0 ? 0 : j >= s->nb[1] ? s->nb[1] - 1 : j;
-  const int64_t b = (int64_t)j * s->nb[0] + i;
+  const int64_t b = bucket_of(s, y, z);
   int n = 0;
   for (int64_t k = s->start[b]; k < s->start[b + 1]; k++) {
     double xc;

@@ -96,11 +96,11 @@ static cupid_status write_pd_nodes(cupid_problem_state *prob) {
 }
 
 /* The PD nodes of the results (pd.vtu, model.exo): vertices with displacement, force,
- * material, the constrained components, damage and stress. */
+ * material, the constrained components, damage, stress and (cut cells) the nodes' volumes. */
 typedef struct {
   cupid_problem_vertices verts;
   double *mat, *fixed, *stress;
-  cupid_vtu_array data[6];
+  cupid_vtu_array data[7];
   cupid_vtu_mesh mesh;
 } pd_part;
 
@@ -138,6 +138,8 @@ static cupid_status pd_part_build(const cupid_problem_state *prob, pd_part *p) {
   p->data[np++] = (cupid_vtu_array){"constrained_components", 1, p->fixed};
   if (prob->damage) p->data[np++] = (cupid_vtu_array){"damage", 1, prob->damage};
   if (prob->pd_stress) p->data[np++] = (cupid_vtu_array){"stress", 6, p->stress};
+  if (cupid_pd_grid_volume_fractions(prob->grid)) /* cut cells: each node's own volume */
+    p->data[np++] = (cupid_vtu_array){"volume", 1, p->verts.volume};
   p->mesh = cupid_problem_vertices_mesh(&p->verts, p->data, np);
   return CUPID_SUCCESS;
 }
