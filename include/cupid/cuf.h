@@ -218,6 +218,15 @@ cupid_status cupid_cuf_constraint_apply(const cupid_cuf_beam beam, const cupid_m
 cupid_status cupid_cuf_interpolate(const cupid_cuf_beam beam, cupid_cuf_field_fn fn, void *ctx,
                                    double *u);
 
+/**
+ * The largest principal strain of the solution @p u at the quadrature points of every (beam
+ * element, section element) pair: peak[be * n_section_elements + se] (-inf for an inactive
+ * pair). The points are the stiffness's Gauss rules: the beam element's p points along the
+ * axis, the section's rule on the element. The trigger of adaptive PD zones (issue 37: an
+ * element turns to PD when its peak reaches a fraction of the critical stretch).
+ */
+cupid_status cupid_cuf_strain_peaks(const cupid_cuf_beam beam, const double *u, double *peak);
+
 /** 1 if (x, y, z) lies inside an active part of the beam (tolerance 1e-9 of the size). */
 int cupid_cuf_contains(const cupid_cuf_beam beam, double x, double y, double z);
 

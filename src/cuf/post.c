@@ -130,6 +130,53 @@ cupid_status cupid_cuf_stress_at(const cupid_cuf_beam b, const double *u, double
   return at_point(b, u, x, y, z, NULL, out);
 }
 
+/* The largest eigenvalue of the symmetric strain of gradient g (g[3 k + d] = du_k / dx_d), by
+ * the trigonometric closed form of a symmetric 3x3. */
+static double max_principal(const double g[10]) {
+  const double a = g[0], b = g[4], c = g[8];
+  const double d = 0.5 * (g[1] + g[3]), e = 0.5 * (g[5] + g[7]), f = 0.5 * (g[2] + g[6]); /* xy yz xz */
+  const double q = (a + b + c) / 3.0, p1 = d * d + e * e + f * f;
+  const double p2 = (a - q) * (a - q) + (b - q) * (b - q) + (c - q) * (c - q) + 2.0 * p1;
+  if (p2 <= 1e-300) return q; /* a multiple of the identity */
+  const double p = sqrt(p2 / 6.0);
+  const double A = (a - q) / p, B = (b - q) / p, C = (c - q) / p, D = d / p, E = e / p, F = f / p;
+  const double det = A * (B * C - E * E) - D * (D * C - E * F) + F * (D * E - B * F);
+  const double r = fmax(-1.0, fmin(1.0, 0.5 * det));
+  return q + 2.0 * p * cos(acos(r) / 3.0);
+}
+
+cupid_status cupid_cuf_strain_peaks(const cupid_cuf_beam b, const double *u, double *peak) {
+  CUPID_CHECK(b && u && peak, CUPID_ERR_ARGUMENT, "strain peaks need a beam, u and an output");
+  const int m = cuf_local_m(b), ng = b->sec_ng, na = b->p;
+  double ga[CUF_MAX_GAUSS], gs[CUF_MAX_GAUSS], w[CUF_MAX_GAUSS];
+  cuf_gauss(na, ga, w);
+  cuf_gauss(ng, gs, w);
+  cupid_status st = CUPID_SUCCESS;
+#pragma omp parallel
+  {
+    double *F = NULL, g[10], d[3];
+    if (cupid_malloc(3 * (size_t)m, sizeof *F, "expansion values", &F) != CUPID_SUCCESS) {
+#pragma omp critical(cuf_strain_peaks)
+      st = CUPID_ERR_MEMORY;
+    }
+#pragma omp for schedule(dynamic, 1)
+    for (cupid_int be = 0; be < b->n_belem; be++)
+      for (cupid_int se = 0; se < b->n_selem; se++) {
+        double best = -INFINITY;
+        if (F && b->active[be * b->n_selem + se])
+          for (int i = 0; i < na; i++)
+            for (int j = 0; j < ng; j++)
+              for (int k = 0; k < ng; k++) {
+                evaluate(b, u, be, se, ga[i], gs[j], gs[k], F, F + m, F + 2 * m, d, g);
+                best = fmax(best, max_principal(g));
+              }
+        peak[be * b->n_selem + se] = best;
+      }
+    cupid_free(&F);
+  }
+  return st == CUPID_SUCCESS ? CUPID_SUCCESS : CUPID_ERROR(st, "out of memory for the strain peaks");
+}
+
 cupid_status cupid_cuf_interpolate(const cupid_cuf_beam b, cupid_cuf_field_fn fn, void *ctx, double *u) {
   cupid_status st = CUPID_SUCCESS;
   double *c = NULL;
