@@ -8,18 +8,20 @@
  * chords, cupid_shape_chords: unions of the regions' chords less the holes'), so the error is
  * the midpoint rule's in y and z only: second order where the lengths vary smoothly, and where
  * a surface parallel to x makes them jump (a cylinder along x, a plane normal to y or z), the
- * jump is placed by bisection (cut_integrate); over z the same on the sections' areas. A node keeps the body's volume in its cell; the body's volume in a cell whose centre
- * lies outside (no node) goes to the node cells around it (its 26 neighbours, weighted by
+ * jump is placed by bisection (cut_integrate); over z the same on the sections' areas.
+ *
+ * A node keeps the body's volume in its cell; the body's volume in a cell whose centre lies
+ * outside (no node) goes to the node cells around it (its 26 neighbours, weighted by
  * 1/|offset|^2), so that the nodes' volumes sum to the body's: summing only the node cells'
  * parts would lose the slivers of the cells just outside, 5% of a sphere of radius 5 h.
  *
- * Which cells are cut: those that a solid's surface passes within half a cell diagonal of, or
- * a geometry's triangle passes through (cupid_shape_cuts_cell; a facet in a cell's face, as a
- * STEP plate's faces on the lattice planes, cuts nothing),
- * among the cells their bounding boxes touch; a test of the corners would miss a sphere that
- * bulges into a cell through a face (2.7% of a hole of radius 2.5 h). The cells
- * just outside a slab's window count too (computed from the geometry, not from the grid), so
- * that a slab's nodes get the volumes the whole grid gives them. */
+ * Which cells are cut: among the cells that a shape's or a hole's bounding box touches, those
+ * that a solid's surface passes within half a cell diagonal of, or that a geometry's triangle
+ * passes through (cupid_shape_cuts_cell; a facet in a cell's face, as a STEP plate's faces on
+ * the lattice planes, cuts nothing). A test of the cell's corners alone would miss a sphere
+ * that bulges into a cell through a face. The cells just outside a slab's window count too
+ * (from the geometry, not from the grid), so that a slab's nodes get the volumes the whole
+ * grid gives them. */
 #include <math.h>
 #include <string.h>
 
@@ -40,6 +42,12 @@ typedef struct {
 
 static int is_shape(const cut_body *B, int b) {
   return B->opts->shapes && B->opts->shapes[b].kind != CUPID_SHAPE_BOX;
+}
+
+/* Shape s of the body's list: the regions' (NULL for a box region) then the holes. */
+static const cupid_shape *shape_at(const cut_body *B, int s) {
+  if (s >= B->n_boxes) return &B->opts->holes[s - B->n_boxes];
+  return is_shape(B, s) ? &B->opts->shapes[s] : NULL;
 }
 
 /* 1 if p lies in the body (a region's shape, or its box, and no hole), as grid.c's cells. */
@@ -199,9 +207,14 @@ typedef struct {
   cupid_int lo[3], n[3];
 } cut_flags;
 
+static size_t flag_index(const cut_flags *F, int64_t i, int64_t j, int64_t k) {
+  return (size_t)(i - F->lo[0]) +
+         (size_t)F->n[0] * ((size_t)(j - F->lo[1]) + (size_t)F->n[1] * (size_t)(k - F->lo[2]));
+}
+
 static void flag_cell(void *ctx, int64_t i, int64_t j, int64_t k) {
   cut_flags *F = ctx;
-  const size_t c = (size_t)(i - F->lo[0]) + (size_t)F->n[0] * ((size_t)(j - F->lo[1]) + (size_t)F->n[1] * (size_t)(k - F->lo[2]));
+  const size_t c = flag_index(F, i, j, k);
 #pragma omp atomic write
   F->flag[c] = 1;
 }
@@ -211,7 +224,7 @@ static cupid_status flag_geometry(const cut_body *B, const struct cupid_pd_grid_
   const size_t total = (size_t)F->n[0] * (size_t)F->n[1] * (size_t)F->n[2];
   int any = 0;
   for (int s = 0; s < B->n_boxes + B->opts->n_holes; s++) {
-    const cupid_shape *sh = s < B->n_boxes ? (is_shape(B, s) ? &B->opts->shapes[s] : NULL) : &B->opts->holes[s - B->n_boxes];
+    const cupid_shape *sh = shape_at(B, s);
     if (!sh || sh->kind != CUPID_SHAPE_GEOMETRY) continue;
     if (!any++) CUPID_CALL(cupid_calloc(total + 1, 1, "cut-cell flags", &F->flag));
     const int64_t c0[3] = {F->lo[0], F->lo[1], F->lo[2]};
@@ -295,11 +308,14 @@ cupid_status pd_grid_cut_volumes(struct cupid_pd_grid_private *g, const cupid_pd
   /* The cells to test: those the non-box regions' and the holes' boxes touch. */
   cupid_int lo[3] = {g->n[0] + 1, g->n[1] + 1, g->n[2] + 1}, hi[3] = {-1, -1, -1};
   for (int s = 0; s < n_boxes + opts->n_holes; s++) {
-    const cupid_shape *sh = s < n_boxes ? (is_shape(&B, s) ? &opts->shapes[s] : NULL) : &opts->holes[s - n_boxes];
+    const cupid_shape *sh = shape_at(&B, s);
     if (!sh) continue;
     cupid_int c0[3], c1[3];
     shape_cells(g, &sh->box, c0, c1);
-    for (int a = 0; a < 3; a++) lo[a] = c0[a] < lo[a] ? c0[a] : lo[a], hi[a] = c1[a] > hi[a] ? c1[a] : hi[a];
+    for (int a = 0; a < 3; a++) {
+      lo[a] = c0[a] < lo[a] ? c0[a] : lo[a];
+      hi[a] = c1[a] > hi[a] ? c1[a] : hi[a];
+    }
   }
   if (hi[0] <= lo[0] || hi[1] <= lo[1] || hi[2] <= lo[2]) return CUPID_SUCCESS;
   const cupid_int nk = hi[2] - lo[2];
@@ -318,8 +334,7 @@ cupid_status pd_grid_cut_volumes(struct cupid_pd_grid_private *g, const cupid_pd
         const cupid_int ijk[3] = {i, j, k};
         double c[3];
         for (int a = 0; a < 3; a++) c[a] = g->origin[a] + (double)ijk[a] * g->h;
-        const size_t fc = (size_t)(i - lo[0]) + (size_t)F.n[0] * ((size_t)(j - lo[1]) + (size_t)F.n[1] * (size_t)kk);
-        if (!(F.flag && F.flag[fc]) && !cell_is_cut(&B, c, g->h)) continue;
+        if (!(F.flag && F.flag[flag_index(&F, i, j, k)]) && !cell_is_cut(&B, c, g->h)) continue;
         const double mid[3] = {c[0] + 0.5 * g->h, c[1] + 0.5 * g->h, c[2] + 0.5 * g->h};
         const int centre = body_contains(&B, mid);
         double f = cell_fraction(&B, c, g->h, R, H, CUT_CHORDS * 4);

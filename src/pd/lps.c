@@ -72,7 +72,8 @@ static inline void lps_apply(const struct cupid_pd_operator_private *op, cupid_i
       double F[4] = {1.0, 1.0, 1.0, 1.0};
       if (corr) pd_surface_bond(op, i, j, n, F);
       const double t = S->wb[s] * pd_phi(op, j) *
-                       ((ai * F[0] + aj * F[1]) * S->x[s] + 15.0 * (bi * F[2] + bj * F[3]) * pd_extension(n, u, i, j));
+                       ((ai * F[0] + aj * F[1]) * S->x[s] +
+                        15.0 * (bi * F[2] + bj * F[3]) * pd_extension(n, u, i, j));
       for (int c = 0; c < 3; c++) fi[c] += t * n[c];
     }
     const double Vi = V2 * pd_phi(op, i);
