@@ -47,6 +47,13 @@ typedef struct {
   /** 1: with shapes or holes (3D), each node's volume is the body's nearest it rather than
    *  the whole cell (`partial_volume: exact`; cupid_pd_grid_volume_fractions). */
   int cut_volumes;
+  /** 1: the lattice's planes lie at anchor + k spacing (3D; the origin is the highest such
+   *  plane at or below the lowest region bound), and a box's bounds need not lie on them: its
+   *  cells are those whose centres lie in it. A grid that grows (issue 37: an adaptive zone)
+   *  keeps its lattice, so that its nodes map onto the grown grid's
+   *  (cupid_pd_grid_map_nodes). */
+  int has_anchor;
+  double anchor[3];
 } cupid_pd_grid_options;
 
 /* cupid_pd_grid_partition, where a grid sits in the whole union, is in solvers.h (the
@@ -57,7 +64,8 @@ typedef struct {
  * cupid_pd_grid_partition; more parts than z layers is CUPID_ERR_MODEL): the lattice is anchored at the lowest corner of all
  * boxes, nodes sit at cell centres, a cell belongs to the union when its centre lies in
  * some box (first box wins for the material). Box bounds must lie on the lattice (error
- * names the box and bound otherwise); with opts->shapes, a cylinder's or a sphere's cells are
+ * names the box and bound otherwise), unless opts->has_anchor sets the lattice (then a box's
+ * cells are those whose centres lie in it); with opts->shapes, a cylinder's or a sphere's cells are
  * those whose centres lie in it, and opts->holes remove theirs. @p materials gives one
  * material index per box.
  * Boxes with no node are an error. For dimension 1 only the y bounds are used.
@@ -91,6 +99,14 @@ cupid_status cupid_pd_grid_create_part_from_model(const cupid_model_t *model, in
 const double *cupid_pd_grid_coords(const cupid_pd_grid grid);
 /** Material index of each node. */
 const int *cupid_pd_grid_materials(const cupid_pd_grid grid);
+/**
+ * map[i] = the node of @p to at the place of node i of @p from, or -1 where @p to has none;
+ * both grids on one lattice (the same spacing, origins a whole number of spacings apart, to
+ * 1e-9 of a spacing: else CUPID_ERR_ARGUMENT). With cupid_pd_operator_copy_broken_mapped(), a
+ * grown grid's operator takes the bonds the old one lost.
+ */
+cupid_status cupid_pd_grid_map_nodes(const cupid_pd_grid from, const cupid_pd_grid to,
+                                     cupid_int *map);
 /** Cell volume (h^3, or area*h in 1D). */
 double cupid_pd_grid_cell_volume(const cupid_pd_grid grid);
 /**

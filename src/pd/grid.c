@@ -213,6 +213,10 @@ cupid_status pd_grid_build(const cupid_pd_grid_options *opts, int n_boxes, const
     }
     for (int b = 0; opts->shapes && b < n_boxes; b++) /* whole cells down to the lowest shape */
       if (boxes[b].lo[a] < lo) lo -= ceil((lo - boxes[b].lo[a]) / h - 1e-9) * h;
+    if (opts->has_anchor) { /* the anchor's lattice, down to the lowest bound of all */
+      for (int b = 0; b < n_boxes; b++) lo = fmin(lo, boxes[b].lo[a]);
+      lo = opts->anchor[a] + floor((lo - opts->anchor[a]) / h + 1e-9) * h;
+    }
     g->origin[a] = lo;
   }
 
@@ -230,6 +234,9 @@ cupid_status pd_grid_build(const cupid_pd_grid_options *opts, int n_boxes, const
       if (opts->shapes && opts->shapes[b].kind != CUPID_SHAPE_BOX) { /* the cells it may hold */
         lo = (cupid_int)floor((boxes[b].lo[a] - g->origin[a]) / h + 1e-9);
         hi = (cupid_int)ceil((boxes[b].hi[a] - g->origin[a]) / h - 1e-9);
+      } else if (opts->has_anchor) { /* the cells whose centres lie in the box */
+        lo = (cupid_int)ceil((boxes[b].lo[a] - g->origin[a]) / h - 0.5 - 1e-9);
+        hi = (cupid_int)floor((boxes[b].hi[a] - g->origin[a]) / h - 0.5 + 1e-9) + 1;
       } else if (!bound_index(boxes[b].lo[a], g->origin[a], h, a, "lower", msg, len, &lo) ||
                  !bound_index(boxes[b].hi[a], g->origin[a], h, a, "upper", msg, len, &hi)) {
         *bad_box = b;
@@ -364,6 +371,27 @@ void cupid_pd_grid_get_partition(const cupid_pd_grid grid, cupid_pd_grid_partiti
 }
 const double *cupid_pd_grid_coords(const cupid_pd_grid grid) { return grid->coords; }
 const int *cupid_pd_grid_materials(const cupid_pd_grid grid) { return grid->material; }
+cupid_status cupid_pd_grid_map_nodes(const cupid_pd_grid from, const cupid_pd_grid to,
+                                     cupid_int *map) {
+  CUPID_CHECK(from && to && map, CUPID_ERR_ARGUMENT, "the node map needs two grids and an output");
+  CUPID_CHECK(from->dim == to->dim && fabs(from->h - to->h) <= 1e-12 * to->h, CUPID_ERR_ARGUMENT,
+              "the node map needs grids of one dimension and spacing (%g, %g)", from->h, to->h);
+  cupid_int shift[3];
+  for (int a = 0; a < 3; a++) { /* to's lattice index of from's cell 0 */
+    const double t = (from->origin[a] - to->origin[a]) / to->h;
+    CUPID_CHECK(fabs(t - nearbyint(t)) <= 1e-9, CUPID_ERR_ARGUMENT,
+                "the grids' lattices differ along %c: their origins are %g spacings apart",
+                axis_name[a], t);
+    shift[a] = (cupid_int)nearbyint(t);
+  }
+#pragma omp parallel for schedule(static) if (from->nnodes > PD_OMP_MIN_NODES)
+  for (cupid_int i = 0; i < from->nnodes; i++) {
+    const int32_t *q = from->ijk + 3 * i;
+    map[i] = pd_grid_lookup(to, q[0] + shift[0], q[1] + shift[1], q[2] + shift[2]);
+  }
+  return CUPID_SUCCESS;
+}
+
 double cupid_pd_grid_cell_volume(const cupid_pd_grid grid) { return grid->volume; }
 const double *cupid_pd_grid_volume_fractions(const cupid_pd_grid grid) { return grid->vfrac; }
 double cupid_pd_grid_node_volume(const cupid_pd_grid grid, cupid_int node) {
