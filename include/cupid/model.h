@@ -71,11 +71,9 @@ int cupid_surface_contains(const cupid_surface surface, const double p[3]);
 /** The chords of the line through (y, z) along x inside the closed surface: *n* intervals
  *  [x[2k], x[2k+1]], sorted and disjoint, at most @p cap of them (-1: more). */
 int cupid_surface_chords(const cupid_surface surface, double y, double z, double *x, int cap);
-/** 1 if a triangle of the surface passes through the open box lo .. hi (one lying in a face of
- *  the box does not): the box is cut. */
-int cupid_surface_cuts_box(const cupid_surface surface, const double lo[3], const double hi[3]);
 /** Calls mark(ctx, i, j, k) for every cell (i, j, k), c0 <= (i, j, k) < c1, of the lattice of
- *  spacing h from origin that a triangle passes through (cupid_surface_cuts_box); from several
+ *  spacing h from origin that a triangle passes through (its open cell: a triangle lying in a
+ *  cell's face does not cut it); from several
  *  threads at once, maybe twice for a cell. */
 void cupid_surface_cut_cells(const cupid_surface surface, const double origin[3], double h,
                              const int64_t c0[3], const int64_t c1[3],
@@ -95,9 +93,9 @@ int cupid_shape_contains(const cupid_shape *shape, const double p[3]);
  *  them): n intervals [x[2k], x[2k+1]], sorted and disjoint, at most @p cap (-1: more). The
  *  cut-cell volumes of the PD lattice integrate them (src/pd/cut_volume.c). */
 int cupid_shape_chords(const cupid_shape *shape, double y, double z, double *x, int cap);
-/** 0 when the shape's surface surely misses the cube of side h at lo (1: it may cut it): the
- *  solids by the distance from the cube's centre (within half its diagonal), a geometry's
- *  triangles by an exact test against the open cube. */
+/** 0 when a solid's surface surely misses the cube of side h at lo (1: it may cut it): within
+ *  half the cube's diagonal of its centre. A geometry gives 1 (its cut cells are found
+ *  triangle by triangle: cupid_surface_cut_cells). */
 int cupid_shape_cuts_cell(const cupid_shape *shape, const double lo[3], double h);
 
 typedef struct {

@@ -266,10 +266,7 @@ static double axis_gap(const cupid_box *b, int a, double t) {
 }
 
 int cupid_shape_cuts_cell(const cupid_shape *shape, const double lo[3], double h) {
-  if (shape->kind == CUPID_SHAPE_GEOMETRY) {
-    const double hi[3] = {lo[0] + h, lo[1] + h, lo[2] + h};
-    return cupid_surface_cuts_box(shape->surface, lo, hi);
-  }
+  if (shape->kind == CUPID_SHAPE_GEOMETRY) return 1;
   const double p[3] = {lo[0] + 0.5 * h, lo[1] + 0.5 * h, lo[2] + 0.5 * h}, r = 0.8661 * h;
   const cupid_box *b = &shape->box;
   for (int a = 0; a < 3; a++)

@@ -256,29 +256,6 @@ static int triangle_meets_box(const double *a, const double *b, const double *c,
   return 1;
 }
 
-int cupid_surface_cuts_box(const cupid_surface s, const double lo[3], const double hi[3]) {
-  const double m[3] = {0.5 * (lo[0] + hi[0]), 0.5 * (lo[1] + hi[1]), 0.5 * (lo[2] + hi[2])};
-  const double e[3] = {0.5 * (hi[0] - lo[0]), 0.5 * (hi[1] - lo[1]), 0.5 * (hi[2] - lo[2])};
-  for (int a = 0; a < 3; a++)
-    if (hi[a] < s->lo[a] || lo[a] > s->hi[a]) return 0;
-  int b0[2], b1[2];
-  for (int d = 0; d < 2; d++) {
-    const int a = d + 1;
-    int l = (int)floor((lo[a] - s->blo[d]) / s->bsize[d]), u = (int)floor((hi[a] - s->blo[d]) / s->bsize[d]);
-    b0[d] = l < 0 ? 0 : l >= s->nb[d] ? s->nb[d] - 1 : l;
-    b1[d] = u < 0 ? 0 : u >= s->nb[d] ? s->nb[d] - 1 : u;
-  }
-  for (int j = b0[1]; j <= b1[1]; j++)
-    for (int i = b0[0]; i <= b1[0]; i++) {
-      const int64_t b = (int64_t)j * s->nb[0] + i;
-      for (int64_t k = s->start[b]; k < s->start[b + 1]; k++) {
-        const int64_t *t = s->tri + 3 * s->list[k];
-        if (triangle_meets_box(s->xyz + 3 * t[0], s->xyz + 3 * t[1], s->xyz + 3 * t[2], m, e)) return 1;
-      }
-    }
-  return 0;
-}
-
 void cupid_surface_cut_cells(const cupid_surface s, const double origin[3], double h,
                              const int64_t c0[3], const int64_t c1[3],
                              void (*mark)(void *ctx, int64_t i, int64_t j, int64_t k), void *ctx) {

@@ -16,9 +16,9 @@
  * parts would lose the slivers of the cells just outside, 5% of a sphere of radius 5 h.
  *
  * Which cells are cut: among the cells that a shape's or a hole's bounding box touches, those
- * that a solid's surface passes within half a cell diagonal of, or that a geometry's triangle
- * passes through (cupid_shape_cuts_cell; a facet in a cell's face, as a STEP plate's faces on
- * the lattice planes, cuts nothing). A test of the cell's corners alone would miss a sphere
+ * that a solid's surface passes within half a cell diagonal of (cupid_shape_cuts_cell), or
+ * that a geometry's triangle passes through (cupid_surface_cut_cells; a facet in a cell's
+ * face, as a STEP plate's faces on the lattice planes, cuts nothing). A test of the cell's corners alone would miss a sphere
  * that bulges into a cell through a face. The cells just outside a slab's window count too
  * (from the geometry, not from the grid), so that a slab's nodes get the volumes the whole
  * grid gives them. */
