@@ -205,6 +205,21 @@ typedef struct {
   cupid_mark mark;
 } cupid_fracture;
 
+/** Adaptive PD zones (peridynamics.adaptive; issue 37): the zone grows where the beam nears
+ *  failure, by whole beam elements, and never shrinks. */
+typedef struct {
+  int has_adaptive;
+  double threshold;   /**< (0, 1]: an element turns to PD when its largest principal strain
+                           reaches threshold * s0 */
+  double margin;      /**< horizons: a crack this close to a coupling zone grows the zone
+                           (default 2) */
+  cupid_box within;   /**< the zone never grows outside it (has[] 0: no bound on that axis) */
+  int has_within;
+  int64_t max_nodes;  /**< the zone's largest node count (0: no cap) */
+  cupid_mark within_mark;
+  cupid_mark mark;
+} cupid_adaptive;
+
 typedef struct {
   double spacing, horizon;
   cupid_pd_model_kind model;
@@ -221,6 +236,11 @@ typedef struct {
   cupid_precrack *precracks;
   int n_precracks;
   cupid_fracture fracture;
+  cupid_adaptive adaptive;
+  /** Set by a run, never read from a file: the lattice's planes at anchor + k spacing (an
+   *  adaptive run's grown zone keeps its initial lattice: cupid_pd_grid_options.anchor). */
+  int has_anchor;
+  double anchor[3];
   cupid_mark mark;
 } cupid_peridynamics;
 
@@ -241,7 +261,8 @@ typedef struct {
    *  inside a PD region next to one of its faces (`overlap:` a box or a list of them) */
   cupid_box overlaps[CUPID_MAX_OVERLAPS];
   cupid_mark overlap_marks[CUPID_MAX_OVERLAPS];
-  int n_overlaps;
+  int n_overlaps;        /**< 0 (`overlap: []`) only with an adaptive zone that starts empty */
+  cupid_mark overlap_list_mark; /**< the `overlap:` list (messages about it as a whole) */
   cupid_weight weight;   /**< arlequin */
   int has_arlequin;
   /** fictitious: the fictitious FE element at a normal interface (`fictitious_fe:`): 0 removed

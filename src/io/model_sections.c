@@ -781,7 +781,11 @@ static cupid_status read_regions(model_reader *rd, yaml_node_t *regions, cupid_p
   CUPID_CALL(mr_list(rd, regions, "peridynamics.regions", 0, "boxes {x: [..], y: [..], z: [..]}, "
                      "{cylinder: {..}} or {sphere: {..}}",
                      &n));
-  if (n == 0) return mr_error(rd, regions, "peridynamics.regions", "must list at least one region");
+  /* an adaptive zone may start empty: the lattice is then laid on the beam (adaptive.c) */
+  if (n == 0 && !pd->adaptive.has_adaptive)
+    return mr_error(rd, regions, "peridynamics.regions", "must list at least one region (an "
+                    "empty list needs peridynamics.adaptive: the zone then starts empty)");
+  if (n == 0) return CUPID_SUCCESS;
   CUPID_CALL(cupid_calloc((size_t)n, sizeof *pd->regions, "PD regions", &pd->regions));
   pd->n_regions = n;
   for (int i = 0; i < n; i++) {
@@ -862,6 +866,7 @@ static cupid_status check_precrack_inside(model_reader *rd, const yaml_node_t *n
   const cupid_peridynamics *pd = &rd->model->pd;
   int n = c->normal, u, w, plane = 0;
   other_axes(n, &u, &w);
+  if (pd->n_regions == 0) return CUPID_SUCCESS; /* an adaptive zone grows to it (adaptive.c) */
   for (int r = 0; r < pd->n_regions; r++) {
     const cupid_box *b = &pd->regions[r].box;
     if (precrack_touches(c, b)) return CUPID_SUCCESS;
@@ -949,7 +954,7 @@ static cupid_status read_no_fail(model_reader *rd, yaml_node_t *node, cupid_frac
     int inside = 0;
     for (int r = 0; r < pd->n_regions && !inside; r++)
       inside = box_overlaps(&f->no_fail[i], &pd->regions[r].box);
-    if (!inside)
+    if (!inside && !pd->adaptive.has_adaptive)
       return mr_error(rd, item, p, "no_fail box lies outside the body (it overlaps no PD region)");
   }
   f->n_no_fail = n;
@@ -1043,6 +1048,50 @@ static cupid_status read_fracture(model_reader *rd, yaml_node_t *node, cupid_per
   return CUPID_SUCCESS;
 }
 
+/* peridynamics.adaptive (issue 37): after fracture, which it needs (the trigger is a fraction
+ * of the critical stretch, and the zone follows cracks). */
+static cupid_status read_adaptive(model_reader *rd, yaml_node_t *node, cupid_peridynamics *pd) {
+  static const char *const keys[] = {"threshold", "margin", "within", "max_nodes"};
+  cupid_adaptive *a = &pd->adaptive;
+  mr_map map;
+  yaml_node_t *v;
+  mr_mark(node, "peridynamics.adaptive", &a->mark);
+  if (!pd->fracture.has_fracture)
+    return mr_error(rd, node, "peridynamics.adaptive",
+                    "needs peridynamics.fracture: the zone grows where the beam nears the "
+                    "critical stretch and follows the cracks");
+  a->has_adaptive = 1;
+  a->threshold = 0.5;
+  a->margin = 2.0;
+  CUPID_CALL(mr_map_open(rd, node, "peridynamics.adaptive", keys, COUNT(keys), &map));
+  if ((v = mr_get(&map, "threshold"))) {
+    CUPID_CALL(mr_number(rd, v, "peridynamics.adaptive.threshold", &a->threshold));
+    if (!(a->threshold > 0.0 && a->threshold <= 1.0))
+      return mr_error(rd, v, "peridynamics.adaptive.threshold",
+                      "must lie in (0, 1] (a fraction of the critical stretch s0: an element "
+                      "turns to PD when its largest principal strain reaches threshold * s0), "
+                      "got %g", a->threshold);
+  }
+  if ((v = mr_get(&map, "margin")))
+    CUPID_CALL(mr_nonnegative(rd, v, "peridynamics.adaptive.margin", &a->margin));
+  if ((v = mr_get(&map, "within"))) {
+    CUPID_CALL(mr_box(rd, v, "peridynamics.adaptive.within", &a->within));
+    mr_mark(v, "peridynamics.adaptive.within", &a->within_mark);
+    a->has_within = 1;
+    for (int k = 0; k < 3; k++)
+      if (a->within.has[k] && !(a->within.lo[k] < a->within.hi[k]))
+        return mr_error(rd, v, "peridynamics.adaptive.within",
+                        "the box has no volume along %c ([%g, %g]): give min < max",
+                        "xyz"[k], a->within.lo[k], a->within.hi[k]);
+  }
+  if ((v = mr_get(&map, "max_nodes"))) {
+    int n = 0;
+    CUPID_CALL(mr_integer(rd, v, "peridynamics.adaptive.max_nodes", 1, 2147483647L, &n));
+    a->max_nodes = n;
+  }
+  return CUPID_SUCCESS;
+}
+
 /* After the regions and options, so that the order of the keys does not matter. */
 static cupid_status read_pd_fracture(model_reader *rd, const mr_map *map, cupid_peridynamics *pd) {
   yaml_node_t *precracks = mr_get(map, "precracks"), *fracture = mr_get(map, "fracture");
@@ -1052,6 +1101,8 @@ static cupid_status read_pd_fracture(model_reader *rd, const mr_map *map, cupid_
                     "precracks and fracture need dimension: 3");
   if (precracks) CUPID_CALL(read_precracks(rd, precracks, pd));
   if (fracture) CUPID_CALL(read_fracture(rd, fracture, pd));
+  yaml_node_t *adaptive = mr_get(map, "adaptive");
+  if (adaptive) CUPID_CALL(read_adaptive(rd, adaptive, pd));
   return CUPID_SUCCESS;
 }
 
@@ -1059,7 +1110,7 @@ static cupid_status read_peridynamics(model_reader *rd, yaml_node_t *node) {
   static const char *const keys[] = {"spacing",   "horizon",   "model",    "influence",
                                      "partial_volume", "surface_correction", "dimension",
                                      "area", "material", "regions", "holes", "precracks",
-                                     "fracture"};
+                                     "fracture", "adaptive"};
   cupid_peridynamics *pd = &rd->model->pd;
   mr_map map;
   yaml_node_t *spacing, *horizon, *regions, *material;
@@ -1084,6 +1135,9 @@ static cupid_status read_peridynamics(model_reader *rd, yaml_node_t *node) {
   if ((material = mr_get(&map, "material")))
     CUPID_CALL(mr_material(rd, material, "peridynamics.material", &pd->material));
   CUPID_CALL(mr_require(rd, &map, "regions", &regions));
+  /* set again by read_adaptive: an adaptive zone may start empty, and its no_fail boxes and
+   * pre-cracks may lie where it has not grown yet */
+  pd->adaptive.has_adaptive = mr_get(&map, "adaptive") != NULL;
   CUPID_CALL(read_regions(rd, regions, pd));
   yaml_node_t *holes = mr_get(&map, "holes");
   if (holes) CUPID_CALL(read_holes(rd, holes, pd));
@@ -1106,7 +1160,9 @@ static cupid_status read_arlequin(model_reader *rd, yaml_node_t *node, cupid_cou
   int n = 1;
   if (overlap->type == YAML_SEQUENCE_NODE) {
     CUPID_CALL(mr_list(rd, overlap, "coupling.arlequin.overlap", 0, "slabs {y: [..]}", &n));
-    if (n < 1 || n > CUPID_MAX_OVERLAPS)
+    mr_mark(overlap, "coupling.arlequin.overlap", &c->overlap_list_mark);
+    /* [] only for an adaptive zone that starts empty (checked with the PD section) */
+    if (n < 0 || n > CUPID_MAX_OVERLAPS)
       return mr_error(rd, overlap, "coupling.arlequin.overlap",
                       "lists %d slabs; give 1 to %d (one per interface face of the PD regions)",
                       n, CUPID_MAX_OVERLAPS);

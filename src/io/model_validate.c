@@ -49,6 +49,29 @@ static cupid_status check_no_time(const cupid_model_t *m, const cupid_mark *mark
   return CUPID_SUCCESS;
 }
 
+/* peridynamics.adaptive grows the PD zone into the beam: it needs one, and `within` must
+ * share a length of the beam's axis (else the zone could never grow). */
+static cupid_status check_adaptive(const cupid_model_t *m) {
+  const cupid_adaptive *a = &m->pd.adaptive;
+  if (!m->has_peridynamics || !a->has_adaptive) return CUPID_SUCCESS;
+  if (!m->has_beam)
+    return cupid_model_error(m, &a->mark,
+                             "needs a beam: the PD zone grows by turning beam elements into "
+                             "PD (a PD-only model is PD everywhere already)");
+  const cupid_coupling *c = &m->coupling;
+  if (c->has_arlequin && m->pd.n_regions == 0 && c->n_overlaps > 0)
+    return cupid_model_error(m, &c->overlap_marks[0],
+                             "with peridynamics.regions: [] the zone starts empty and its "
+                             "overlaps are one beam element each: give overlap: []");
+  const double y0 = m->beam.axis_y[0], y1 = m->beam.axis_y[m->beam.n_axis - 1];
+  if (a->has_within && a->within.has[1] && (a->within.hi[1] <= y0 || a->within.lo[1] >= y1))
+    return cupid_model_error(m, &a->within_mark,
+                             "the box y in [%g, %g] lies outside the beam (y in [%g, %g]): the "
+                             "zone could never grow",
+                             a->within.lo[1], a->within.hi[1], y0, y1);
+  return CUPID_SUCCESS;
+}
+
 cupid_status mr_validate(model_reader *rd, const mr_map *top) {
   const cupid_model_t *m = rd->model;
   if (!m->has_beam && !m->has_peridynamics)
@@ -77,6 +100,14 @@ cupid_status mr_validate(model_reader *rd, const mr_map *top) {
                                "fictitious-node and Lagrange couplings build their interfaces on "
                                "whole box regions");
   }
+  CUPID_CALL(check_adaptive(m));
+  if (m->has_coupling && m->coupling.has_arlequin && m->coupling.n_overlaps == 0 &&
+      !(m->pd.adaptive.has_adaptive && m->pd.n_regions == 0))
+    return cupid_model_error(m, &m->coupling.overlap_list_mark,
+                             "lists no slab; give 1 to %d (one per interface face of the PD "
+                             "regions; an empty list is for an adaptive zone that starts empty, "
+                             "peridynamics.regions: [])",
+                             CUPID_MAX_OVERLAPS);
   const cupid_fracture *f = &m->pd.fracture;
   if (m->analysis.type != CUPID_ANALYSIS_STATIC && f->per_iteration_mark.line > 0)
     return cupid_model_error(m, &f->per_iteration_mark,

@@ -45,7 +45,9 @@ cupid_status cupid_pd_grid_create_part_from_model(const cupid_model_t *model, in
                                 .shapes = any_shape ? shapes : NULL,
                                 .n_holes = pd->n_holes,
                                 .holes = holes,
-                                .cut_volumes = pd->partial_volume == CUPID_PARTIAL_EXACT};
+                                .cut_volumes = pd->partial_volume == CUPID_PARTIAL_EXACT,
+                                .has_anchor = pd->has_anchor,
+                                .anchor = {pd->anchor[0], pd->anchor[1], pd->anchor[2]}};
   char msg[512];
   int bad = -1;
   st = pd_grid_build(&opts, pd->n_regions, boxes, mats, &bad, msg, sizeof msg, grid);

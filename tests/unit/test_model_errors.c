@@ -222,6 +222,30 @@ static const bad_case cases[] = {
     {"flow_duplicate_key.yaml",
      "2:30: materials.resin.E: duplicate key (first given at line 2)",
      NULL},
+    {"adaptive_no_fracture.yaml",
+     "9:13: peridynamics.adaptive: needs peridynamics.fracture: the zone grows where the beam "
+     "nears the critical stretch and follows the cracks",
+     NULL},
+    {"adaptive_threshold.yaml",
+     "10:25: peridynamics.adaptive.threshold: must lie in (0, 1] (a fraction of the critical "
+     "stretch s0",
+     "got 1.5"},
+    {"adaptive_no_beam.yaml",
+     "10:13: peridynamics.adaptive: needs a beam: the PD zone grows by turning beam elements into "
+     "PD",
+     NULL},
+    {"adaptive_within_outside.yaml",
+     "13:38: peridynamics.adaptive.within: the box y in [120, 140] lies outside the beam (y in "
+     "[0, 100]): the zone could never grow",
+     NULL},
+    {"overlap_empty.yaml",
+     "16:38: coupling.arlequin.overlap: lists no slab; give 1 to 32 (one per interface face of "
+     "the PD regions; an empty list is for an adaptive zone that starts empty",
+     NULL},
+    {"adaptive_empty_overlaps.yaml",
+     "15:39: coupling.arlequin.overlap[0]: with peridynamics.regions: [] the zone starts empty "
+     "and its overlaps are one beam element each: give overlap: []",
+     NULL},
     {"fracture_both_limits.yaml",
      "10:26: peridynamics.fracture.energy_release_rate: give critical_stretch (s0) or "
      "energy_release_rate (G0), not both",
