@@ -77,9 +77,10 @@ PY
 
 # 3. load steps and type evaluate balance too (issue 34: both were refused); an iterative
 # engine's assembled path is still refused. Load steps without fracture are one balanced solve
-# scaled: the tip as the one static solve's to 1e-12, the reactions equal to the load. The
-# balanced operator conserves momentum: an evaluation's internal forces sum to 0 (1e-10 of
-# their magnitudes) where paper 000's operator leaves its imbalance.
+# scaled: the tip as the one static solve's to 1e-11 (two factorisations' round-off), the
+# reactions equal to the load. The balanced operator conserves momentum: an evaluation's
+# internal forces sum to 0 (1e-10 of their magnitudes) where paper 000's operator leaves its
+# imbalance.
 run "$Q" -o "$work/steps" "${OLD[@]}" --solver direct --set coupling.balance=momentum --set analysis.steps=3
 field=(--set analysis.type=evaluate --set 'analysis.field=["1e-3*x", "1e-3*y*y", "1e-4*z"]')
 run "$Q" -o "$work/ev_none" "${OLD[@]}" "${field[@]}" --set coupling.balance=none
@@ -99,7 +100,11 @@ ev = {k: json.load(open(f"{w}/{k}/summary.json")) for k in ("ev_none", "ev_bal")
 rel = {k: max(abs(v) for v in s["internal_force_sum"]) / s["internal_force_magnitude"] for k, s in ev.items()}
 print(f"evaluate: internal forces' resultant {rel['ev_none']:.2e} (paper 000's operator), "
       f"{rel['ev_bal']:.2e} (balanced) of their magnitudes")
-sys.exit(0 if len(rows) == 3 and diff <= 1e-12 and imb <= 1e-10 and rel["ev_bal"] <= 1e-10
+# diff: the steps' one solve (CHOLMOD + the Schur block, growth_block.c) against the static one
+# (UMFPACK's LU) of the same K: two factorisations, whose solutions differ by the system's
+# round-off (the residuals are 1e-13): 1.2e-12 measured on an AMD EPYC with AVX-512, under
+# 1e-12 elsewhere; 1e-11 is round-off still, and any real difference is far above it
+sys.exit(0 if len(rows) == 3 and diff <= 1e-11 and imb <= 1e-10 and rel["ev_bal"] <= 1e-10
          and rel["ev_none"] > 1e-4 else 1)
 PY
 out=$("$CUPID" run "$Q" -o "$work/refused" --set coupling.balance=momentum --set analysis.type=dynamic --set materials.steel.density=7.8e-9 \
