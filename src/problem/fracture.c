@@ -77,8 +77,9 @@ static cupid_status apply_precracks(cupid_problem_state *prob) {
   return CUPID_SUCCESS;
 }
 
-/* A pre-crack must not reach a node whose bonds never break (the coupling zone). */
-static cupid_status check_protected(cupid_problem_state *prob) {
+/* A pre-crack must not reach a node whose bonds never break (the coupling zone). An adaptive
+ * zone grows away from its pre-cracks first (adaptive.c), then checks. */
+cupid_status cupid_problem_fracture_check_protected(cupid_problem_state *prob) {
   const cupid_model_t *m = prob->model;
   if (!prob->protect || m->pd.n_precracks == 0) return CUPID_SUCCESS;
   CUPID_CALL(cupid_problem_fracture_damage(prob));
@@ -122,6 +123,12 @@ static double stretch_from_g0(const cupid_problem_state *prob, const cupid_mater
   }
   if (!grid) return sqrt(5.0 * G0 / (9.0 * K * delta));
   return sqrt(G0 / (2.25 * K * prob->lattice_ratio));
+}
+
+double cupid_problem_fracture_s0_of(const cupid_problem_state *prob, int material) {
+  const cupid_fracture *fr = &prob->model->pd.fracture;
+  if (fr->has_critical_stretch) return fr->critical_stretch;
+  return stretch_from_g0(prob, &prob->model->materials[material], fr->energy_release_rate, 0);
 }
 
 /* The lattice's cut energy at the continuum s0 over G0 (bond-based): 5 R / (4 delta). */
@@ -199,14 +206,15 @@ static cupid_status break_exchange(cupid_problem_state *prob, const double *u, d
 cupid_status cupid_problem_fracture_setup(cupid_problem_state *prob) {
   const cupid_model_t *m = prob->model;
   prob->first_break_step = -1;
-  if (!cupid_problem_has_damage(prob)) return CUPID_SUCCESS;
+  /* an adaptive zone that starts empty has no grid until its first conversion */
+  if (!cupid_problem_has_damage(prob) || !prob->grid) return CUPID_SUCCESS;
   CUPID_CALL(cupid_calloc((size_t)prob->n_pd, sizeof *prob->damage, "damage", &prob->damage));
   if (prob->method->fracture_protect) {
     CUPID_CALL(cupid_calloc((size_t)prob->n_pd, 1, "protected nodes", &prob->protect));
     CUPID_CALL(prob->method->fracture_protect(prob, prob->protect));
   }
   CUPID_CALL(apply_precracks(prob));
-  CUPID_CALL(check_protected(prob));
+  if (!prob->adaptive) CUPID_CALL(cupid_problem_fracture_check_protected(prob));
   const cupid_fracture *fr = &m->pd.fracture;
   if (!fr->has_fracture) return CUPID_SUCCESS;
   cupid_pd_fracture_options *o = &prob->fracture;
@@ -236,6 +244,8 @@ cupid_status cupid_problem_fracture_setup(cupid_problem_state *prob) {
 }
 
 cupid_status cupid_problem_max_ratio(const cupid_problem_state *prob, const double *u, double *r) {
+  *r = 0.0;
+  if (!prob->op) return CUPID_SUCCESS; /* an adaptive zone not grown yet: no bond */
   CUPID_CALL(cupid_pd_operator_max_ratio(prob->op, u, &prob->fracture, r));
   if (prob->slab) cupid_petsc_max_doubles(r, 1); /* each rank its owned bonds (owned_only) */
   return CUPID_SUCCESS;
@@ -275,6 +285,7 @@ static cupid_status first_break_place(cupid_problem_state *prob) {
 }
 
 cupid_int cupid_problem_fracture_nodes_broken(const cupid_problem_state *prob) {
+  if (!prob->op) return 0;
   if (!prob->slab) return cupid_pd_operator_nodes_broken(prob->op, NULL);
   cupid_int *nodes = NULL, owned = 0;
   cupid_status st = cupid_malloc((size_t)prob->n_pd + 1, sizeof *nodes, "broken nodes", &nodes);
@@ -290,7 +301,7 @@ cupid_status cupid_problem_fracture_step(cupid_problem_state *prob, cupid_int st
   *dissipated = 0.0;
   cupid_int broken = 0;
   if (n_broken) *n_broken = 0;
-  if (!prob->model->pd.fracture.has_fracture) return CUPID_SUCCESS;
+  if (!prob->model->pd.fracture.has_fracture || !prob->op) return CUPID_SUCCESS;
   int here = 1;
   cupid_pd_fracture_options o = prob->fracture;
   if (prob->slab && only_most)

@@ -35,6 +35,7 @@ static void growth_free(growth_run *g) {
   cupid_free(&g->u1);
   cupid_writer_drop(&g->csv, 0);
   cupid_writer_drop(&g->exodus, 0);
+  cupid_writer_drop(&g->zones, 0);
   cupid_problem_vertices_free(&g->verts);
   cupid_pd_grid_destroy(&g->whole);
   cupid_checkpoint_close(&g->resume);
@@ -97,7 +98,7 @@ static cupid_status csv_columns(const cupid_problem_state *prob, cupid_column **
   static const cupid_column damage[5] = {{"broken_bonds", 1}, {"damaged_nodes", 1},
                                          {"max_damage", 0}, {"nodes_broken", 1},
                                          {"released_nodes", 1}};
-  const int most = 4 + 5 + 1 + 3 * (m->n_constraints + m->output.n_points);
+  const int most = 4 + 5 + 2 + 3 * (m->n_constraints + m->output.n_points);
   CUPID_CALL(cupid_calloc((size_t)most, sizeof **cols, "CSV columns", cols));
   CUPID_CALL(cupid_calloc((size_t)most, sizeof **names, "CSV columns", names));
   cupid_column *c = *cols;
@@ -107,6 +108,7 @@ static cupid_status csv_columns(const cupid_problem_state *prob, cupid_column **
     for (int j = 0; j < 5; j++) c[k++] = damage[j];
   if (m->has_peridynamics && m->pd.fracture.has_fracture)
     c[k++] = (cupid_column){"next_break_load_factor", 0};
+  if (prob->adaptive) c[k++] = (cupid_column){"pd_nodes", 1};
   for (int j = 0; j < m->n_constraints; j++)
     for (int a = 0; a < 3; a++) {
       snprintf((*names)[k], sizeof **names, "reaction_%d_%c", j, "xyz"[a]);
@@ -127,7 +129,7 @@ static cupid_status frame_vertices(growth_run *g) {
   cupid_problem_state *prob = g->prob;
   const cupid_model_t *m = prob->model;
   cupid_status st = CUPID_SUCCESS;
-  if (!m->output.exodus || !prob->grid) return CUPID_SUCCESS;
+  if (!(m->output.exodus || (prob->adaptive && m->output.vtu)) || !prob->grid) return CUPID_SUCCESS;
   if (prob->slab && prob->writedir) st = cupid_pd_grid_create_from_model(m, &g->whole);
   if (st == CUPID_SUCCESS && (g->whole || !prob->slab))
     st = cupid_problem_vertices_build(g->whole ? g->whole : prob->grid, &g->verts);
@@ -155,6 +157,11 @@ static cupid_status open_writers(growth_run *g) {
                                .resume = g->resume, .key = "writer model.exo"};
     CUPID_TRY(cupid_writer_create(&cupid_writer_exodus, &spec, &g->exodus));
   }
+  if (prob->adaptive && m->output.vtu) { /* the zone at each conversion (zone_frame) */
+    spec = (cupid_writer_spec){.dir = prob->writedir, .file = "adaptive.pvd", .title = m->title,
+                               .key = "writer adaptive.pvd"};
+    CUPID_TRY(cupid_writer_create(&cupid_writer_vtu, &spec, &g->zones));
+  }
 cleanup:
   cupid_free(&cols);
   cupid_free(&names);
@@ -170,6 +177,17 @@ static cupid_status write_frame(growth_run *g, int step, double lambda) {
   const cupid_vtu_array fields[3] = {{"displacement", 3, prob->u}, {"force", 3, prob->f_int},
                                      {"damage", 1, prob->damage}};
   return cupid_problem_frame_write(prob, &g->verts, step, lambda, prob->u, fields, 3, &g->exodus, 1);
+}
+
+/* adaptive.pvd (adaptive zones with output.vtu): the zone and its fields at the settled
+ * solution before each conversion, and at the end of the run; frame k's time is its load
+ * factor, its step number the load step. */
+static cupid_status zone_frame(growth_run *g, int step, double lambda) {
+  cupid_problem_state *prob = g->prob;
+  if (!g->zones) return CUPID_SUCCESS;
+  const cupid_vtu_array fields[3] = {{"displacement", 3, prob->u}, {"force", 3, prob->f_int},
+                                     {"damage", 1, prob->damage}};
+  return cupid_problem_frame_write(prob, &g->verts, step, lambda, prob->u, fields, 3, &g->zones, 1);
 }
 
 /* The reaction of each constraint k into g->react[3 k ..]: the work of (f_int - f_ext) on its
@@ -330,6 +348,7 @@ static cupid_status write_row(growth_run *g, int step, double lambda, int iterat
     row[k++] = prob->max_damage, row[k++] = (double)nodes_broken, row[k++] = (double)g->released;
   }
   if (m->has_peridynamics && m->pd.fracture.has_fracture) row[k++] = next_break(g, lambda);
+  if (prob->adaptive) row[k++] = (double)prob->n_pd;
   for (int j = 0; j < 3 * m->n_constraints; j++) row[k++] = g->react[j];
   for (int j = 0; j < 3 * m->output.n_points; j++) row[k++] = g->points[j];
   const cupid_frame frame = {.step = step, .time = lambda, .row = row};
@@ -740,6 +759,14 @@ static cupid_status check_blocked(growth_run *g, int k, double lambda, int *stop
   if (prob->slab) /* the owned bonds of every rank: the count summed, the worst one's place */
     CUPID_CALL(blocked_over_ranks(prob, &count, &ratio, x));
   if (count == 0) return CUPID_SUCCESS;
+  if (prob->adaptive) { /* the zone grows there instead, where `within` lets it */
+    cupid_int marked = 0;
+    CUPID_CALL(cupid_problem_adaptive_blocked(prob, x, &marked));
+    if (marked > 0) {
+      g->convert = 1;
+      return CUPID_SUCCESS;
+    }
+  }
   char zone[480];
   snprintf(zone, sizeof zone, "the coupling zone of method %s", prob->method->name);
   if (prob->method->protected_zone) prob->method->protected_zone(prob, x, zone, sizeof zone);
@@ -929,6 +956,7 @@ static cupid_status load_step(growth_run *g, int k, double lambda, int *iteratio
       }
     }
     CUPID_CALL(check_blocked(g, k, mu, stop));
+    if (g->convert) return CUPID_SUCCESS; /* an adaptive zone grows first (convert_zone) */
     if (*stop) { /* a loose part swung round into a coupling zone: a collapse, if held nodes
                     carry it (an Arlequin bar cut through under an end traction: weakly held
                     nodes among them, the pivots it swung round) */
@@ -982,7 +1010,9 @@ static int step_line_due(growth_run *g, int k, int N) {
   return 0;
 }
 
-static cupid_status setup_run(growth_run *g) {
+/* What the run keeps per DOF and per PD node of the problem's layout (growth_release frees
+ * it, for an adaptive zone's new layout). */
+static cupid_status setup_layout(growth_run *g) {
   cupid_problem_state *prob = g->prob;
   const size_t n = (size_t)prob->ndof;
   CUPID_CALL(cupid_malloc(n, sizeof *g->f_full, "full load", &g->f_full));
@@ -1005,11 +1035,97 @@ static cupid_status setup_run(growth_run *g) {
   CUPID_CALL(constraint_masks(g));
   for (int k = 0; k < 4; k++)
     CUPID_CALL(cupid_calloc(n + 1, sizeof(double), "growth work vectors", &g->w[k]));
+  return CUPID_SUCCESS;
+}
+
+/* An adaptive zone grows (adaptive.c): before the conversion, what the run keeps of the
+ * layout is freed (the factor, the kept solvers, whose operators borrow the old problem's
+ * objects), the held nodes' flags kept for the map; the counters stay. */
+static void growth_release(growth_run *g, unsigned char **held, unsigned char **weak) {
+  *held = g->release, *weak = g->weak;
+  g->release = g->weak = NULL;
+  cupid_free(&g->f_full);
+  cupid_free(&g->g_full);
+  cupid_free(&g->fixed0);
+  cupid_free(&g->anchored);
+  cupid_free(&g->weak_scan);
+  cupid_free(&g->masks);
+  cupid_free(&g->T);
+  for (int k = 0; k < 4; k++) cupid_free(&g->w[k]);
+  cupid_direct_factor_destroy(&g->F);
+  cupid_growth_downdate_free(&g->dd);
+  const cupid_growth_lu lu = g->lu;
+  cupid_growth_lu_free(&g->lu);
+  g->lu = (cupid_growth_lu){.factorisations = lu.factorisations, .resolves = lu.resolves,
+                            .iterations = lu.iterations, .t_factor = lu.t_factor,
+                            .t_resolve = lu.t_resolve, .updates = lu.updates,
+                            .update_columns = lu.update_columns, .t_update = lu.t_update,
+                            .whole = lu.whole};
+  const cupid_growth_mf mf = g->mf;
+  cupid_growth_mf_free(&g->mf);
+  g->mf = (cupid_growth_mf){.iterations = mf.iterations, .setup_s = mf.setup_s,
+                            .solve_s = mf.solve_s};
+  g->prob->crack_copy = NULL, g->prob->crack_map = NULL;
+  growth_journal_free(&g->journal);
+  cupid_problem_vertices_free(&g->verts);
+}
+
+static cupid_status frame_vertices(growth_run *g);
+
+/* After a conversion: the layout's state again, the nodes held before held again where they
+ * are now (at their displacement, carried over), and the load of factor lambda. */
+static cupid_status growth_rezone(growth_run *g, double lambda, unsigned char *held,
+                                  unsigned char *weak) {
+  cupid_problem_state *prob = g->prob;
+  CUPID_CALL(setup_layout(g));
+  cupid_int n_old = 0;
+  const cupid_int *map = cupid_problem_adaptive_map(prob, &n_old);
+  for (cupid_int i = 0; i < n_old && held; i++) {
+    if (!held[i]) continue;
+    const cupid_int j = map[i];
+    g->release[j] = 1, g->weak[j] = weak[i];
+    for (int c = 0; c < 3; c++) CUPID_CALL(cupid_dirichlet_fix(prob->bc, 3 * j + c, prob->u[3 * j + c]));
+  }
+  CUPID_CALL(cupid_dirichlet_finalize(prob->bc));
+  for (size_t d = 0; d < (size_t)prob->ndof; d++) {
+    prob->f_ext[d] = lambda * g->f_full[d];
+    if (g->fixed0[d]) prob->bc->value[d] = lambda * g->g_full[d];
+  }
+  g->bonds_at_factor = -1;
+  g->matrix_free = matrix_free(prob); /* a zone that started empty: the beam's path until now */
+  return frame_vertices(g);
+}
+
+/* After load step k settled: the zone grows while the trigger fires (or a crack asked into an
+ * overlap: g->convert), the step solved again at its load each time (*stop: max_nodes). */
+static cupid_status convert_zone(growth_run *g, int k, double lambda, int *again, int *stop) {
+  cupid_problem_state *prob = g->prob;
+  cupid_int n = 0;
+  *again = 0;
+  if (!g->convert) CUPID_CALL(cupid_problem_adaptive_trigger(prob, &n));
+  if (!g->convert && n == 0) return CUPID_SUCCESS;
+  g->convert = 0;
+  CUPID_CALL(cupid_problem_fracture_damage(prob));
+  CUPID_CALL(zone_frame(g, k, lambda));
+  unsigned char *held = NULL, *weak = NULL;
+  growth_release(g, &held, &weak);
+  cupid_status st = cupid_problem_adaptive_convert(prob, k, lambda, stop);
+  if (st == CUPID_SUCCESS) st = growth_rezone(g, lambda, held, weak);
+  cupid_free(&held);
+  cupid_free(&weak);
+  CUPID_CALL(st);
+  *again = !*stop;
+  return CUPID_SUCCESS;
+}
+
+static cupid_status setup_run(growth_run *g) {
+  cupid_problem_state *prob = g->prob;
+  CUPID_CALL(setup_layout(g));
   CUPID_CALL(cupid_calloc(3 * (size_t)prob->model->n_constraints + 1, sizeof(double), "reactions",
                           &g->react));
   CUPID_CALL(cupid_calloc(3 * (size_t)prob->model->output.n_points + 1, sizeof(double),
                           "output points", &g->points));
-  CUPID_CALL(cupid_calloc(10 + 3 * (size_t)(prob->model->n_constraints + prob->model->output.n_points),
+  CUPID_CALL(cupid_calloc(12 + 3 * (size_t)(prob->model->n_constraints + prob->model->output.n_points),
                           sizeof(double), "a row of the steps' file", &g->row));
   /* bench/growth.sh: factor | krylov | downdate (the default) */
   const char *how = getenv("CUPID_GROWTH_RESOLVE");
@@ -1031,7 +1147,9 @@ static cupid_status begin_growth(growth_run *g) {
   CUPID_CALL(cupid_calloc(6 * (size_t)(m->n_constraints ? m->n_constraints : 1), sizeof(double),
                           "peak reactions", &prob->growth.peak));
   /* the estimate: a solve of the chosen engine per load step, at least */
-  CUPID_CALL(cupid_problem_checkpoint_begin(prob, prob->estimate.seconds * N));
+  /* an adaptive zone's layout changes: no checkpoint can hold it yet (adaptive.c refuses
+   * --resume and output.checkpoint) */
+  if (!prob->adaptive) CUPID_CALL(cupid_problem_checkpoint_begin(prob, prob->estimate.seconds * N));
   if (prob->opts->resume) CUPID_CALL(growth_resume(g));
   return open_writers(g);
 }
@@ -1080,8 +1198,18 @@ cupid_status cupid_problem_run_growth(cupid_problem_state *prob) {
     }
     const cupid_int before = prob->broken_bonds;
     int it = 0, stop = 0;
-    CUPID_TRY(load_step(&g, k, lambda, &it, &stop));
+    for (int again = 1, conversions = 0; again; conversions++) { /* adaptive: the step again
+                                                                    after each conversion */
+      int solves = 0;
+      CUPID_TRY(load_step(&g, k, lambda, &solves, &stop));
+      it += solves;
+      if (stop || !prob->adaptive) break;
+      CUPID_TRY_CHECK(conversions < 10000, CUPID_ERR_NUMERIC,
+                      "adaptive: load step %d converted 10^4 times without settling", k);
+      CUPID_TRY(convert_zone(&g, k, lambda, &again, &stop));
+    }
     if (stop) break; /* the message: cupid_problem_get_info's stopped (the CLI prints it) */
+    g.last_step = k, g.last_load = lambda;
     CUPID_TRY(write_row(&g, k, lambda, it));
     CUPID_TRY(write_frame(&g, k, lambda));
     if (step_line_due(&g, k, N))
@@ -1150,6 +1278,11 @@ cupid_status cupid_problem_run_growth(cupid_problem_state *prob) {
   }
   CUPID_TRY(cupid_writer_end(&g.csv));
   CUPID_TRY(cupid_writer_end(&g.exodus));
+  if (g.zones) { /* the zone at the end */
+    CUPID_TRY(cupid_problem_fracture_damage(prob));
+    CUPID_TRY(zone_frame(&g, g.last_step, g.last_load));
+    CUPID_TRY(cupid_writer_end(&g.zones));
+  }
   CUPID_TRY(plots(&g));
   if (prob->method->report) CUPID_TRY(prob->method->report(prob));
 cleanup:

@@ -76,6 +76,11 @@ typedef struct {
   cupid_growth_mf mf;           /* ... (growth_matrix_free.c) */
   growth_journal journal;       /* how g->F came to be (growth_resume.c) */
   int first_step;               /* 1, or a resumption's step after its checkpoint */
+  int convert;                  /* adaptive: a crack asked into an overlap; the zone grows
+                                   before the step goes on (convert_zone) */
+  cupid_writer zones;           /* adaptive.pvd: the zone at each conversion (output.vtu) */
+  int last_step;                /* the last step written, and its load factor */
+  double last_load;
   cupid_checkpoint resume;      /* a resumption's checkpoint, open until the writers read it */
 } growth_run;
 

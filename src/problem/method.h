@@ -26,6 +26,8 @@ enum {
                                                  (Lagrange's tie): `cupid check` skips them */
   CUPID_METHOD_FRACTURE = 1 << 5,   /**< pre-cracks and bond breaking on prob->op (the PD
                                          operator its explicit operator applies) */
+  CUPID_METHOD_ADAPTIVE = 1 << 6,   /**< adaptive PD zones (adaptive.c): its layout follows the
+                                         model's regions and overlaps, built again as they grow */
 };
 
 /** A matrix-free operator of a whole system for explicit dynamics: y = K x. */

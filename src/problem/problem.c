@@ -18,99 +18,9 @@ cupid_run_options cupid_run_options_default(void) { return (cupid_run_options){.
 
 /* ----------------------------------------------------------------------- the set-up */
 
-/* PD regions need isotropic materials (the LPS and bond-based models take E and nu). */
-static cupid_status check_isotropic(const cupid_model_t *m) {
-  for (int r = 0; r < m->pd.n_regions; r++) {
-    const cupid_material *mat = &m->materials[m->pd.regions[r].material];
-    if (mat->orthotropic)
-      return cupid_model_error(m, &m->pd.regions[r].mark,
-                               "material '%s' is orthotropic; peridynamics needs an isotropic "
-                               "material {E, nu}",
-                               mat->name);
-  }
-  return CUPID_SUCCESS;
-}
-
-cupid_status cupid_problem_pd_options(cupid_problem_state *prob) {
-  const cupid_model_t *m = prob->model;
-  CUPID_CALL(check_isotropic(m));
-  CUPID_CALL(cupid_calloc((size_t)m->n_materials, sizeof *prob->pd_materials, "PD materials",
-                          &prob->pd_materials));
-  for (int i = 0; i < m->n_materials; i++)
-    prob->pd_materials[i] = (cupid_pd_material){.E = m->materials[i].E, .nu = m->materials[i].nu};
-  prob->pd_options = (cupid_pd_operator_options){.horizon = m->pd.horizon,
-                                                 .model = m->pd.model,
-                                                 .influence = m->pd.influence,
-                                                 .partial_volume = m->pd.partial_volume,
-                                                 .surface_correction = m->pd.surface_correction,
-                                                 .materials = prob->pd_materials,
-                                                 .n_materials = m->n_materials};
-  return CUPID_SUCCESS;
-}
-
-/* The body's volume as the nodes carry it (cut cells: their parts), over the owned nodes of
- * every rank (collective on slabs). */
-static void pd_body_volume(cupid_problem_state *prob) {
-  const double *phi = cupid_pd_grid_volume_fractions(prob->grid);
-  double v[2] = {0.0, 0.0};
-  for (cupid_int i = 0; i < prob->n_pd; i++) {
-    if (!cupid_problem_pd_owned(prob, i)) continue;
-    v[0] += cupid_pd_grid_node_volume(prob->grid, i);
-    v[1] += phi && phi[i] != 1.0;
-  }
-  if (prob->slab) cupid_petsc_sum_doubles(v, 2);
-  prob->pd_volume = v[0];
-  prob->n_cut_nodes = (cupid_int)v[1];
-}
-
-static cupid_status build_pd(cupid_problem_state *prob) {
-  const cupid_model_t *m = prob->model;
-  double t0 = cupid_wtime();
-  CUPID_CALL(cupid_problem_pd_options(prob));
-  if (prob->slab) { /* this rank's z layers and the halo its rows read (slab.c) */
-    int halo = 0;
-    CUPID_CALL(cupid_pd_operator_halo_layers(&prob->pd_options, m->pd.spacing, &halo));
-    CUPID_CALL(cupid_pd_grid_create_part_from_model(m, cupid_petsc_size(), cupid_petsc_rank(),
-                                                    halo, &prob->grid));
-  } else {
-    CUPID_CALL(cupid_pd_grid_create_from_model(m, &prob->grid));
-  }
-  cupid_pd_grid_get_partition(prob->grid, &prob->part);
-  prob->n_pd = cupid_pd_grid_num_nodes(prob->grid);
-  CUPID_CALL(cupid_pd_operator_create(prob->grid, &prob->pd_options, &prob->op));
-  prob->n_bonds = cupid_pd_operator_num_bonds(prob->op);
-  pd_body_volume(prob);
-  cupid_problem_phase_end(prob, CUPID_PHASE_GRID, t0);
-  if (prob->slab)
-    cupid_problem_progress(prob, "grid: %lld PD nodes in %d z slabs; rank 0 holds %lld (%lld owned)",
-                           (long long)prob->part.global_nodes, prob->part.parts,
-                           (long long)prob->n_pd,
-                           (long long)(prob->part.owned_last - prob->part.owned_first));
-  else
-    cupid_problem_progress(prob, "grid: %lld PD nodes, %lld bonds", (long long)prob->n_pd,
-                           (long long)prob->n_bonds);
-  return CUPID_SUCCESS;
-}
-
-static cupid_status allocate_fields(cupid_problem_state *prob) {
-  size_t n = (size_t)prob->ndof;
-  CUPID_CALL(cupid_calloc(n, sizeof(double), "displacements", &prob->u));
-  CUPID_CALL(cupid_calloc(n, sizeof(double), "applied loads", &prob->f_ext));
-  CUPID_CALL(cupid_calloc(n, sizeof(double), "internal forces", &prob->f_int));
-  CUPID_CALL(cupid_dirichlet_create(prob->ndof, &prob->bc));
-  return CUPID_SUCCESS;
-}
-
 /* A slab run agrees on every rank's status before the next collective call (slab.c). */
 static cupid_status agreed(const cupid_problem_state *prob, cupid_status st) {
   return prob->slab ? cupid_problem_slab_agree(st) : st;
-}
-
-/* Constraints (finalized) and loads of a static or dynamic analysis, through the method. */
-static cupid_status apply_conditions(cupid_problem_state *prob) {
-  CUPID_CALL(prob->method->constraints(prob));
-  CUPID_CALL(cupid_dirichlet_finalize(prob->bc));
-  return agreed(prob, prob->method->loads(prob));
 }
 
 static cupid_status require_constraints(const cupid_problem_state *prob);
@@ -133,6 +43,7 @@ cupid_status cupid_problem_setup(cupid_problem_state *prob) {
   CUPID_CHECK(prob->stage == CUPID_STAGE_CREATED, CUPID_ERR_ARGUMENT,
               "cupid_problem_setup: the problem is already set up");
   CUPID_CALL(prob->method->check(prob));
+  CUPID_CALL(cupid_problem_adaptive_check(prob));
   CUPID_CHECK(!prob->opts->resume || model->analysis.type == CUPID_ANALYSIS_DYNAMIC ||
                   (model->analysis.type == CUPID_ANALYSIS_STATIC && model->has_peridynamics &&
                    model->pd.fracture.has_fracture),
@@ -144,10 +55,12 @@ cupid_status cupid_problem_setup(cupid_problem_state *prob) {
   CUPID_CALL(cupid_problem_check_engine_request(prob));
   CUPID_CALL(cupid_problem_guard_size(prob)); /* before anything that scales with the model */
   prob->slab = cupid_problem_slab_wanted(prob);
-  if (model->has_peridynamics) CUPID_CALL(agreed(prob, build_pd(prob)));
+  /* an adaptive zone that starts empty (regions: []) has no grid until it grows */
+  if (model->has_peridynamics && model->pd.n_regions > 0) CUPID_CALL(agreed(prob, cupid_problem_build_pd(prob)));
   if (model->has_beam) CUPID_CALL(cupid_problem_fe_build(prob));
   if (prob->method->prepare) CUPID_CALL(prob->method->prepare(prob));
   if (model->has_peridynamics) CUPID_CALL(agreed(prob, cupid_problem_fracture_setup(prob)));
+  if (prob->adaptive) CUPID_CALL(cupid_problem_adaptive_begin(prob));
   prob->fe_offset = 3 * prob->n_pd;
   prob->ndof = prob->fe_offset + prob->n_fe_dofs;
   CUPID_CALL(prob->slab ? cupid_problem_slab_check_points(prob) : cupid_problem_check_points(prob));
@@ -155,10 +68,10 @@ cupid_status cupid_problem_setup(cupid_problem_state *prob) {
     /* `cupid check`: the constraints and loads resolved on the built grid and beam by the
      * run's own code, so that check refuses what run would (no solver started) */
     prob->engine = cupid_solver_type_at(0);
-    CUPID_CALL(allocate_fields(prob));
+    CUPID_CALL(cupid_problem_allocate_fields(prob));
     if (model->analysis.type != CUPID_ANALYSIS_EVALUATE &&
         !(prob->method->caps & CUPID_METHOD_CONDITIONS_ASSEMBLE)) {
-      CUPID_CALL(apply_conditions(prob));
+      CUPID_CALL(cupid_problem_apply_conditions(prob));
       CUPID_CALL(check_before_solving(prob));
     }
     prob->stage = CUPID_STAGE_SET_UP;
@@ -167,8 +80,8 @@ cupid_status cupid_problem_setup(cupid_problem_state *prob) {
   CUPID_CALL(cupid_problem_choose_solver(prob));
   cupid_problem_progress(prob, "solver: %s (%s)", prob->engine->name, prob->solver_reason);
   CUPID_CALL(cupid_problem_guard_run(prob));
-  CUPID_CALL(allocate_fields(prob));
-  if (model->analysis.type != CUPID_ANALYSIS_EVALUATE) CUPID_CALL(apply_conditions(prob));
+  CUPID_CALL(cupid_problem_allocate_fields(prob));
+  if (model->analysis.type != CUPID_ANALYSIS_EVALUATE) CUPID_CALL(cupid_problem_apply_conditions(prob));
   prob->stage = CUPID_STAGE_SET_UP;
   return CUPID_SUCCESS;
 }
@@ -389,6 +302,7 @@ void cupid_problem_state_free(cupid_problem_state *prob) {
   cupid_free(&prob->damage);
   cupid_free(&prob->growth.peak);
   cupid_free(&prob->growth.held);
+  cupid_problem_adaptive_free(&prob->adaptive);
 }
 
 cupid_status cupid_problem_create(const cupid_model_t *model, const cupid_run_options *opts,
@@ -398,10 +312,17 @@ cupid_status cupid_problem_create(const cupid_model_t *model, const cupid_run_op
   CUPID_CHECK(model, CUPID_ERR_ARGUMENT, "cupid_problem_create: NULL model");
   cupid_problem_state *prob = NULL;
   CUPID_CALL(cupid_calloc(1, sizeof *prob, "problem", &prob));
-  prob->model = model;
+  /* an adaptive zone changes the model's regions: the run works on its own copy */
+  prob->model = cupid_problem_adaptive_model(model, &prob->adaptive);
+  if (!prob->model) {
+    cupid_free(&prob);
+    return CUPID_ERR_MEMORY;
+  }
   prob->options = opts ? *opts : cupid_run_options_default();
   prob->opts = &prob->options;
   prob->method = cupid_problem_method_of(model);
+  /* an adaptive zone that starts empty: the beam alone until it grows (cupid_problem_rebuild) */
+  if (prob->adaptive && model->pd.n_regions == 0) prob->method = &cupid_method_none;
   /* Under MPI every rank runs the stages, on the replicated model or on its slab of the PD
    * grid (slab.c); rank 0 speaks and writes. Progress goes to stderr in batch runs too (a
    * log under nohup or a batch system), unless quiet. */

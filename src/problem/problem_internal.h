@@ -66,8 +66,21 @@ typedef struct {
 /** The stages a problem has passed (cupid_problem_info.stage). */
 enum { CUPID_STAGE_CREATED = 0, CUPID_STAGE_SET_UP = 1, CUPID_STAGE_SOLVED = 2 };
 
+/** Adaptive PD zones (adaptive.c; issue 37): the run's zone, its conversions. */
+typedef struct cupid_problem_adaptive_private cupid_problem_adaptive;
+/** One conversion: when, and what it added. */
+typedef struct {
+  int step;            /**< the load step it happened at */
+  double load_factor;
+  cupid_int added_nodes, pd_nodes;
+  double y_lo, y_hi;   /**< the span of the elements it turned to PD */
+  int elements;
+  const char *why;     /**< "strain", "crack near the overlap" or "crack reached the overlap" */
+} cupid_problem_conversion;
+
 typedef struct cupid_problem_private {
-  const cupid_model_t *model;
+  const cupid_model_t *model; /**< the model read, or an adaptive run's copy (adaptive.c) */
+  cupid_problem_adaptive *adaptive; /**< peridynamics.adaptive: the zone (NULL: fixed) */
   cupid_model owned_model;  /**< created from a file or string: the problem's to free */
   cupid_run_options options;
   const cupid_run_options *opts; /**< = &options */
@@ -441,10 +454,55 @@ cupid_status cupid_problem_fracture_damage(cupid_problem_state *prob);
 cupid_int cupid_problem_fracture_nodes_broken(const cupid_problem_state *prob);
 /** 1 when the model has pre-cracks or fracture (damage is an output). */
 int cupid_problem_has_damage(const cupid_problem_state *prob);
+/** The critical stretch of @p material: given, or from G0 by the continuum formula (before
+ *  any grid exists: an adaptive zone that starts empty). */
+double cupid_problem_fracture_s0_of(const cupid_problem_state *prob, int material);
+/** A pre-crack that reaches a node whose bonds never break (the coupling zone): a model error
+ *  naming the pre-crack and the zone. */
+cupid_status cupid_problem_fracture_check_protected(cupid_problem_state *prob);
 /** `cupid check`: the pre-cracks' bonds and the breaking rule, on stdout. */
 void cupid_problem_fracture_print(const cupid_problem_state *prob);
 /** The "fracture" block of summary.json. */
 void cupid_problem_fracture_json(cupid_json js, const cupid_problem_state *prob);
+
+/* adaptive.c: adaptive PD zones (issue 37). */
+/** The model a run works on: @p model, or with peridynamics.adaptive a copy whose regions the
+ *  run changes (*a its state, freed by cupid_problem_adaptive_free). NULL: out of memory. */
+const cupid_model_t *cupid_problem_adaptive_model(const cupid_model_t *model,
+                                                  cupid_problem_adaptive **a);
+void cupid_problem_adaptive_free(cupid_problem_adaptive **a);
+/** What this version runs with adaptive (model errors, before anything is built). */
+cupid_status cupid_problem_adaptive_check(const cupid_problem_state *prob);
+/** After the grid, the beam and the layout are built: the initial zone, its lattice. */
+cupid_status cupid_problem_adaptive_begin(cupid_problem_state *prob);
+/** After a settled load step: mark the beam elements the trigger turns to PD (the strain
+ *  against threshold s0; broken bonds within margin horizons of an overlap); *count of them. */
+cupid_status cupid_problem_adaptive_trigger(cupid_problem_state *prob, cupid_int *count);
+/** A crack asks to enter the overlap at @p x: mark the elements around it; *count 0 when none
+ *  may turn (outside `within`): the run stops as a fixed zone's does. */
+cupid_status cupid_problem_adaptive_blocked(cupid_problem_state *prob, const double x[3],
+                                            cupid_int *count);
+/** Turn the marked elements to PD and rebuild the problem around the new zone; *stopped = 1
+ *  (prob->growth.stopped says why) when the zone would pass max_nodes. */
+cupid_status cupid_problem_adaptive_convert(cupid_problem_state *prob, int step, double load_factor,
+                                            int *stopped);
+/** The last conversion's map: old PD node -> new (*n old nodes). */
+const cupid_int *cupid_problem_adaptive_map(const cupid_problem_state *prob, cupid_int *n);
+/** `cupid check`: the settings and the largest zone `within` allows (its memory scaled from
+ *  the model's estimated peak @p bytes by the PD nodes), on stdout. */
+void cupid_problem_adaptive_print(const cupid_problem_state *prob, double bytes);
+/** The "adaptive" block of summary.json. */
+void cupid_problem_adaptive_json(cupid_json js, const cupid_problem_state *prob);
+/* build.c: the set-up's building stages. */
+/** The PD grid (or this rank's slab) and its operator, from the model's regions. */
+cupid_status cupid_problem_build_pd(cupid_problem_state *prob);
+/** u, f_ext, f_int and the conditions, for prob->ndof DOFs. */
+cupid_status cupid_problem_allocate_fields(cupid_problem_state *prob);
+/** Constraints (finalized) and loads of a static or dynamic analysis, through the method. */
+cupid_status cupid_problem_apply_conditions(cupid_problem_state *prob);
+/** An adaptive zone's model changed: build everything from it again; with @p fields also the
+ *  fields and the conditions (during the set-up: not yet). */
+cupid_status cupid_problem_rebuild(cupid_problem_state *prob, int fields);
 
 /* support.c: below the stages. */
 void cupid_problem_progress(const cupid_problem_state *prob, const char *fmt, ...)

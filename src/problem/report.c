@@ -388,6 +388,7 @@ static cupid_status write_summary(cupid_problem_state *prob) {
   cupid_problem_quality_json(js, prob);
   if (prob->dyn.done) cupid_problem_dynamic_json(js, prob);
   cupid_problem_fracture_json(js, prob);
+  cupid_problem_adaptive_json(js, prob);
   cupid_json_number(js, "total_time_s", cupid_wtime() - prob->t_start);
   cupid_json_integer(js, "peak_memory_bytes", cupid_peak_memory());
   CUPID_TRY(json_points(js, prob));

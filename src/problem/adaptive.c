@@ -1,0 +1,792 @@
+/* Adaptive PD zones (issue 37; model-format.md peridynamics.adaptive; docs/theory.md
+ * "Adaptive PD zones"). The zone is a set of beam elements whose beam gave way to PD (the
+ * cores); each run of them is one PD region over the whole section with the model's Arlequin
+ * overlaps, as many beam elements wide as the initial ones, on its faces that meet the beam. A
+ * conversion adds elements to the cores, lays the regions out again on the initial lattice
+ * (cupid_pd_grid_options.anchor) and rebuilds the problem around them (cupid_problem_rebuild):
+ * the nodes already there keep their place, their displacement and their broken bonds
+ * (cupid_pd_grid_map_nodes, cupid_pd_operator_copy_broken_mapped); a new node starts from the
+ * beam's displacement at its place. The run works on its own copy of the model (prob->model),
+ * whose regions and overlaps change; everything else is the model read. */
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+
+#include "method.h"
+#include "problem_internal.h"
+
+#define ADAPTIVE_TOL 1e-9 /* of the beam's length: element ends, boxes */
+
+struct cupid_problem_adaptive_private {
+  cupid_model_t work;              /* prob->model: the model read, with this run's zone */
+  const cupid_model_t *given;      /* the model read */
+  cupid_pd_region *regions;        /* work.pd.regions once the zone changed (owned) */
+  cupid_int ne;                    /* beam elements, in order along y */
+  double *ends;                    /* ne + 1 element ends */
+  unsigned char *core;             /* per element: the beam gave way to PD */
+  unsigned char *mark;             /* per element: to convert */
+  int ov_lo, ov_hi;                /* overlap widths in elements: below and above a core */
+  cupid_box across;                /* the zone's extent over the section (x, z) */
+  int material;
+  double s0;                       /* the trigger's critical stretch */
+  double tol;
+  cupid_problem_conversion *conv;  /* the conversions so far */
+  int n_conv, cap_conv;
+  cupid_int *map;                  /* the last conversion: old node -> new node */
+  cupid_int map_n;
+  cupid_int initial_nodes;
+  cupid_int layer_nodes;           /* PD nodes in one lattice layer across the section */
+  const char *why;                 /* what marked the elements */
+};
+
+const cupid_model_t *cupid_problem_adaptive_model(const cupid_model_t *model,
+                                                  cupid_problem_adaptive **out) {
+  *out = NULL;
+  if (!model->has_peridynamics || !model->pd.adaptive.has_adaptive || !model->has_beam) return model;
+  cupid_problem_adaptive *a = NULL;
+  if (cupid_calloc(1, sizeof *a, "adaptive zone", &a) != CUPID_SUCCESS) return NULL;
+  a->work = *model;
+  a->given = model;
+  *out = a;
+  return &a->work;
+}
+
+void cupid_problem_adaptive_free(cupid_problem_adaptive **a) {
+  if (!*a) return;
+  cupid_free(&(*a)->regions);
+  cupid_free(&(*a)->ends);
+  cupid_free(&(*a)->core);
+  cupid_free(&(*a)->mark);
+  cupid_free(&(*a)->conv);
+  cupid_free(&(*a)->map);
+  cupid_free(a);
+}
+
+/* ------------------------------------------------------------------ what this version runs */
+
+cupid_status cupid_problem_adaptive_check(const cupid_problem_state *prob) {
+  const cupid_model_t *m = prob->model;
+  if (!prob->adaptive) return CUPID_SUCCESS;
+  const cupid_adaptive *ad = &m->pd.adaptive;
+  const cupid_method_ops *method = cupid_problem_method_of(m); /* prob's: none if it starts empty */
+  if (!(method->caps & CUPID_METHOD_ADAPTIVE))
+    return cupid_model_error(m, &ad->mark,
+                             "adaptive zones grow with the coupling method arlequin in cupid %s "
+                             "(the overlaps move with the zone); method %s is not supported yet",
+                             cupid_version(), method->name);
+  if (m->analysis.type != CUPID_ANALYSIS_STATIC)
+    return cupid_model_error(m, &ad->mark,
+                             "adaptive zones grow in quasi-static crack growth (type: static "
+                             "with steps) in cupid %s; explicit dynamics keeps its zone",
+                             cupid_version());
+  if (m->pd.fracture.criterion != CUPID_FRACTURE_STRETCH)
+    return cupid_model_error(m, &ad->mark,
+                             "the trigger compares the beam's strain with the critical stretch: "
+                             "it needs fracture.criterion: stretch");
+  if (cupid_petsc_size() > 1)
+    return cupid_model_error(m, &ad->mark,
+                             "adaptive zones grow on one process in cupid %s (a grown zone would "
+                             "need the slabs balanced again): run it without mpirun",
+                             cupid_version());
+  if (m->output.exodus)
+    return cupid_model_error(m, &ad->mark,
+                             "model.exo (output.exodus) keeps one node set for the whole run, and "
+                             "an adaptive zone adds nodes: use the VTU output (adaptive.pvd "
+                             "holds the zone at each conversion)");
+  if (prob->opts->resume || m->output.checkpoint > 0)
+    return cupid_model_error(m, &ad->mark,
+                             "adaptive runs write no checkpoints in cupid %s (the zone's layout "
+                             "changes as the run goes): run it without --resume and "
+                             "output.checkpoint",
+                             cupid_version());
+  for (int r = 0; r < m->pd.n_regions; r++)
+    if (m->pd.regions[r].shape.kind != CUPID_SHAPE_BOX)
+      return cupid_model_error(m, &m->pd.regions[r].mark,
+                               "adaptive zones grow from box regions (a grown zone is a run of "
+                               "beam elements over the whole section)");
+  if (m->pd.n_holes > 0)
+    return cupid_model_error(m, &m->pd.holes[0].mark,
+                             "adaptive zones grow over whole sections: holes are not supported "
+                             "with adaptive yet");
+  for (int s = 0; s < m->coupling.n_overlaps; s++)
+    if (!m->coupling.overlaps[s].has[1] || m->coupling.overlaps[s].has[0] ||
+        m->coupling.overlaps[s].has[2])
+      return cupid_model_error(m, &m->coupling.overlap_marks[s],
+                               "with adaptive the overlaps are slabs along y ({y: [..]}): the "
+                               "zone grows by whole beam elements over the whole section in "
+                               "cupid %s (zones over part of the section are not supported yet)",
+                               cupid_version());
+  return CUPID_SUCCESS;
+}
+
+/* --------------------------------------------------------------------------- the layout */
+
+static int elements_in(const cupid_problem_adaptive *a, double lo, double hi, cupid_int *e0,
+                       cupid_int *e1) {
+  *e0 = -1, *e1 = -2;
+  for (cupid_int e = 0; e < a->ne; e++)
+    if (a->ends[e] >= lo - a->tol && a->ends[e + 1] <= hi + a->tol) {
+      if (*e0 < 0) *e0 = e;
+      *e1 = e;
+    }
+  return *e0 >= 0;
+}
+
+/* Element e may turn to PD: its region (the element and the overlaps it would bring) lies in
+ * `within`. */
+static int convertible(const cupid_problem_adaptive *a, const cupid_adaptive *ad, cupid_int e) {
+  if (!ad->has_within || !ad->within.has[1]) return 1;
+  const cupid_int lo = e - a->ov_lo > 0 ? e - a->ov_lo : 0;
+  const cupid_int hi = e + a->ov_hi < a->ne - 1 ? e + a->ov_hi : a->ne - 1;
+  return a->ends[lo] >= ad->within.lo[1] - a->tol && a->ends[hi + 1] <= ad->within.hi[1] + a->tol;
+}
+
+/* The trigger's s0: the critical stretch, or the smallest of the nodes' (from G0). */
+static double trigger_stretch(const cupid_problem_state *prob) {
+  const cupid_pd_fracture_options *o = &prob->fracture;
+  if (!o->node_stretch) return o->critical_stretch;
+  double s = INFINITY;
+  for (cupid_int i = 0; i < prob->n_pd; i++) s = fmin(s, o->node_stretch[i]);
+  return s;
+}
+
+/* The elements of the beam in order along y (each starts where the one before ends). */
+static cupid_status element_ends(cupid_problem_adaptive *a, const cupid_problem_state *prob) {
+  a->ne = prob->fe_info.n_beam_elements;
+  CUPID_CALL(cupid_malloc((size_t)a->ne + 1, sizeof *a->ends, "element ends", &a->ends));
+  CUPID_CALL(cupid_calloc((size_t)a->ne + 1, 1, "zone elements", &a->core));
+  CUPID_CALL(cupid_calloc((size_t)a->ne + 1, 1, "elements to convert", &a->mark));
+  for (cupid_int e = 0; e < a->ne; e++) {
+    cupid_int first;
+    double y0, y1;
+    cupid_cuf_beam_element(prob->beam, e, &first, &y0, &y1);
+    CUPID_CHECK(e == 0 || fabs(y0 - a->ends[e]) <= a->tol, CUPID_ERR_INTERNAL,
+                "adaptive: beam element %lld does not start where the one before ends",
+                (long long)e);
+    a->ends[e] = y0, a->ends[e + 1] = y1;
+  }
+  return CUPID_SUCCESS;
+}
+
+/* An empty start (regions: []): the lattice on the beam's bounding box (nodes at cell centres
+ * from its lowest corner), the zone over the whole section, which must be the box its
+ * components fill; overlaps of one beam element. */
+static cupid_status empty_zone(cupid_problem_adaptive *a, cupid_problem_state *prob) {
+  const cupid_model_t *m = prob->model;
+  const cupid_adaptive *ad = &m->pd.adaptive;
+  const cupid_beam *b = &m->beam;
+  if (b->n_components == 0)
+    return cupid_model_error(m, &ad->mark,
+                             "with peridynamics.regions: [] the zone is a box over the section: "
+                             "give the section by components (rectangles) in cupid %s",
+                             cupid_version());
+  double lo[2] = {INFINITY, INFINITY}, hi[2] = {-INFINITY, -INFINITY}, area = 0.0;
+  for (int k = 0; k < b->n_components; k++) {
+    const cupid_section_component *c = &b->components[k];
+    lo[0] = fmin(lo[0], c->x[0]), hi[0] = fmax(hi[0], c->x[c->nx - 1]);
+    lo[1] = fmin(lo[1], c->z[0]), hi[1] = fmax(hi[1], c->z[c->nz - 1]);
+    area += (c->x[c->nx - 1] - c->x[0]) * (c->z[c->nz - 1] - c->z[0]);
+  }
+  const double box = (hi[0] - lo[0]) * (hi[1] - lo[1]);
+  if (fabs(area - box) > 1e-9 * box)
+    return cupid_model_error(m, &ad->mark,
+                             "with peridynamics.regions: [] the zone is one box over the section, "
+                             "and this section fills %.4g of its bounding box x [%g, %g], z [%g, "
+                             "%g] (a C, I or hollow section): give the initial zone as regions "
+                             "in cupid %s",
+                             area / box, lo[0], hi[0], lo[1], hi[1], cupid_version());
+  const int mat = m->pd.material >= 0 ? m->pd.material : m->n_materials == 1 ? 0 : -1;
+  if (mat < 0)
+    return cupid_model_error(m, &m->pd.mark,
+                             "with regions: [] the zone's material is peridynamics.material: "
+                             "give it (the model has %d materials)",
+                             m->n_materials);
+  if (m->pd.fracture.calibration_grid)
+    return cupid_model_error(m, &m->pd.fracture.mark,
+                             "calibration: grid needs the lattice's families, and a zone that "
+                             "starts empty has none before the trigger (the strain against s0) "
+                             "first runs: use calibration: continuum with regions: []");
+  memset(&a->across, 0, sizeof a->across);
+  a->across.lo[0] = lo[0], a->across.hi[0] = hi[0], a->across.has[0] = 1;
+  a->across.lo[2] = lo[1], a->across.hi[2] = hi[1], a->across.has[2] = 1;
+  a->material = mat;
+  a->ov_lo = a->ov_hi = 1;
+  a->work.pd.anchor[0] = lo[0], a->work.pd.anchor[1] = a->ends[0], a->work.pd.anchor[2] = lo[1];
+  a->work.pd.has_anchor = 1;
+  a->s0 = cupid_problem_fracture_s0_of(prob, mat);
+  /* the nodes of one lattice layer: the cells whose centres lie in the section's box */
+  const double h = m->pd.spacing;
+  a->layer_nodes = (cupid_int)(floor((hi[0] - lo[0]) / h - 0.5 + 1e-9) + 1) *
+                   (cupid_int)(floor((hi[1] - lo[1]) / h - 0.5 + 1e-9) + 1);
+  return CUPID_SUCCESS;
+}
+
+/* The initial zone from the Arlequin layout: each region's core (less its overlaps) is a run
+ * of elements; the overlaps' widths in elements are kept for every zone to come. */
+static cupid_status initial_zone(cupid_problem_adaptive *a, cupid_problem_state *prob) {
+  const cupid_model_t *m = prob->model;
+  const cupid_adaptive *ad = &m->pd.adaptive;
+  a->ov_lo = a->ov_hi = -1;
+  for (int r = 0; r < prob->n_arlequin_regions; r++) {
+    const cupid_arlequin_region *R = &prob->arlequin_regions[r];
+    if (!cupid_coupling_region_spans_section(prob->beam, &R->box))
+      return cupid_model_error(m, &m->pd.regions[r].mark,
+                               "adaptive zones grow over whole sections in cupid %s: this region "
+                               "covers part of the section (zones over part of it, the C-beam's "
+                               "web, are not supported yet)",
+                               cupid_version());
+    double lo = fmax(R->box.lo[1], a->ends[0]), hi = fmin(R->box.hi[1], a->ends[a->ne]);
+    for (int q = 0; q < R->n_ramps; q++) {
+      const cupid_arlequin_weight *w = &R->ramps[q].weight;
+      cupid_int e0, e1;
+      const int n = elements_in(a, w->lo, w->hi, &e0, &e1) ? (int)(e1 - e0 + 1) : 0;
+      if (w->fe_below) lo = w->hi, a->ov_lo = a->ov_lo < 0 ? n : a->ov_lo;
+      else hi = w->lo, a->ov_hi = a->ov_hi < 0 ? n : a->ov_hi;
+    }
+    cupid_int e0, e1;
+    if (!elements_in(a, lo, hi, &e0, &e1))
+      return cupid_model_error(m, &m->pd.regions[r].mark,
+                               "with adaptive the PD zone is made of whole beam elements: this "
+                               "region, less its overlaps (y in [%g, %g]), holds none",
+                               lo, hi);
+    for (cupid_int e = e0; e <= e1; e++) a->core[e] = 1;
+    if (r == 0) {
+      a->across = R->box;
+      a->material = m->pd.regions[r].material;
+    }
+  }
+  if (a->ov_lo < 0) a->ov_lo = a->ov_hi;
+  if (a->ov_hi < 0) a->ov_hi = a->ov_lo;
+  if (a->ov_lo <= 0)
+    return cupid_model_error(m, &ad->mark,
+                             "the PD zone has no overlap with the beam: there is no beam left "
+                             "for it to grow into");
+  cupid_int can = 0;
+  for (cupid_int e = 0; e < a->ne; e++) can += !a->core[e] && convertible(a, ad, e);
+  if (can == 0)
+    return cupid_model_error(m, ad->has_within ? &ad->within_mark : &ad->mark,
+                             "no beam element can turn to PD: each lies outside `within` or its "
+                             "overlaps would (%d element%s below a zone, %d above): the zone "
+                             "could never grow",
+                             a->ov_lo, a->ov_lo == 1 ? "" : "s", a->ov_hi);
+  return CUPID_SUCCESS;
+}
+
+/* Lattice layers along y whose cell centres lie in [lo, hi] (the grid's rule with an
+ * anchor: cupid_pd_grid_options.has_anchor). */
+static cupid_int layers(const cupid_model_t *m, double lo, double hi) {
+  const double h = m->pd.spacing, o = m->pd.anchor[1];
+  const double j0 = ceil((lo - o) / h - 0.5 - 1e-9), j1 = floor((hi - o) / h - 0.5 + 1e-9);
+  return j1 >= j0 ? (cupid_int)(j1 - j0 + 1) : 0;
+}
+
+static cupid_int layer_nodes_of(const cupid_problem_state *prob) {
+  const double *x = cupid_pd_grid_coords(prob->grid), h = cupid_pd_grid_spacing(prob->grid);
+  double y = INFINITY;
+  for (cupid_int i = 0; i < prob->n_pd; i++) y = fmin(y, x[3 * i + 1]);
+  cupid_int n = 0;
+  for (cupid_int i = 0; i < prob->n_pd; i++) n += fabs(x[3 * i + 1] - y) < 0.5 * h;
+  return n;
+}
+
+/* ------------------------------------------------------------------------- the triggers */
+
+/* Mark the elements that meet (y - r, y + r) (r = 0: the one holding y) and may turn. */
+static cupid_int mark_around(cupid_problem_adaptive *a, const cupid_adaptive *ad, double y,
+                             double r) {
+  cupid_int n = 0;
+  for (cupid_int e = 0; e < a->ne; e++) {
+    const int meets = r > 0.0 ? a->ends[e] < y + r && a->ends[e + 1] > y - r
+                              : a->ends[e] <= y && y <= a->ends[e + 1];
+    if (!meets || a->core[e] || a->mark[e] || !convertible(a, ad, e)) continue;
+    a->mark[e] = 1;
+    n++;
+  }
+  return n;
+}
+
+/* A crack near an overlap: the elements that hold a damaged node (a broken bond's end) or lie
+ * within margin horizons of one. */
+static cupid_int mark_damage(cupid_problem_adaptive *a, const cupid_problem_state *prob) {
+  const cupid_adaptive *ad = &prob->model->pd.adaptive;
+  if (!prob->grid || !prob->damage) return 0;
+  const double *x = cupid_pd_grid_coords(prob->grid), r = ad->margin * prob->model->pd.horizon;
+  cupid_int n = 0;
+  for (cupid_int i = 0; i < prob->n_pd && prob->damage; i++)
+    if (prob->damage[i] > 0.0)
+      n += mark_around(a, ad, x[3 * i + 1], 0.0) + mark_around(a, ad, x[3 * i + 1], r);
+  return n;
+}
+
+cupid_status cupid_problem_adaptive_trigger(cupid_problem_state *prob, cupid_int *count) {
+  cupid_problem_adaptive *a = prob->adaptive;
+  const cupid_adaptive *ad = &prob->model->pd.adaptive;
+  const int nse = prob->fe_info.n_section_elements;
+  double *peak = NULL;
+  *count = 0;
+  CUPID_CALL(cupid_malloc((size_t)a->ne * (size_t)nse, sizeof *peak, "strain peaks", &peak));
+  cupid_status st = cupid_cuf_strain_peaks(prob->beam, prob->u, peak);
+  const double limit = ad->threshold * a->s0;
+  for (cupid_int e = 0; e < a->ne && st == CUPID_SUCCESS; e++) {
+    if (a->core[e] || !convertible(a, ad, e)) continue;
+    double top = -INFINITY;
+    for (int s = 0; s < nse; s++) top = fmax(top, peak[e * nse + s]);
+    if (top >= limit && !a->mark[e]) a->mark[e] = 1, (*count)++;
+  }
+  cupid_free(&peak);
+  CUPID_CALL(st);
+  if (*count) a->why = "strain";
+  const cupid_int near = mark_damage(a, prob);
+  if (near && !*count) a->why = "crack near an overlap";
+  *count += near;
+  return CUPID_SUCCESS;
+}
+
+cupid_status cupid_problem_adaptive_blocked(cupid_problem_state *prob, const double x[3],
+                                            cupid_int *count) {
+  cupid_problem_adaptive *a = prob->adaptive;
+  const cupid_adaptive *ad = &prob->model->pd.adaptive;
+  *count = mark_around(a, ad, x[1], 0.0) + mark_around(a, ad, x[1], ad->margin * prob->model->pd.horizon);
+  a->why = "crack reached an overlap";
+  return CUPID_SUCCESS;
+}
+
+/* ------------------------------------------------------------------------ the conversion */
+
+/* The zone after the marks: the cores and the marked elements, with the gaps between two
+ * zones that their overlaps would fill (Arlequin's regions may not share a volume, nor an
+ * overlap end on another region) and the ends of the beam that an overlap would not fit
+ * before (an overlap needs the beam beyond it) turned to PD too. */
+static void settle_zone(const cupid_problem_adaptive *a, unsigned char *z) {
+  for (int changed = 1; changed;) {
+    changed = 0;
+    cupid_int last_end = -1; /* the last element of the run before */
+    for (cupid_int e = 0; e < a->ne; e++) {
+      if (!z[e] || (e > 0 && z[e - 1])) continue;
+      cupid_int f = e;
+      while (f + 1 < a->ne && z[f + 1]) f++;
+      cupid_int fill_lo = -1, fill_hi = -2;
+      if (e > 0 && e <= a->ov_lo) fill_lo = 0, fill_hi = e - 1;
+      else if (last_end >= 0 && e - last_end - 1 <= a->ov_lo + a->ov_hi)
+        fill_lo = last_end + 1, fill_hi = e - 1;
+      if (f < a->ne - 1 && f + a->ov_hi >= a->ne - 1) {
+        for (cupid_int q = f + 1; q < a->ne; q++) z[q] = 1;
+        changed = 1;
+      }
+      for (cupid_int q = fill_lo; q <= fill_hi; q++) z[q] = 1, changed = 1;
+      last_end = f;
+      e = f;
+    }
+  }
+}
+
+/* The runs of z: first and last element of each, at most cap. */
+static int zone_runs(const cupid_problem_adaptive *a, const unsigned char *z, cupid_int *runs, int cap) {
+  int n = 0;
+  for (cupid_int e = 0; e < a->ne; e++) {
+    if (!z[e] || (e > 0 && z[e - 1])) continue;
+    cupid_int f = e;
+    while (f + 1 < a->ne && z[f + 1]) f++;
+    if (n < cap) runs[2 * n] = e, runs[2 * n + 1] = f;
+    n++;
+    e = f;
+  }
+  return n;
+}
+
+/* The region of run [e0, e1]: the core and its overlaps along y. */
+static void run_region(const cupid_problem_adaptive *a, cupid_int e0, cupid_int e1, double *lo,
+                       double *hi) {
+  *lo = e0 > 0 ? a->ends[e0 - a->ov_lo] : a->ends[0];
+  *hi = e1 < a->ne - 1 ? a->ends[e1 + 1 + a->ov_hi] : a->ends[a->ne];
+}
+
+#define MAX_ZONES (CUPID_MAX_OVERLAPS / 2)
+
+/* The working model's regions and overlaps: one region and up to two overlaps per run. */
+static cupid_status lay_out(cupid_problem_adaptive *a, const cupid_int *runs, int n) {
+  cupid_model_t *w = &a->work;
+  const cupid_adaptive *ad = &w->pd.adaptive;
+  cupid_pd_region *regions = NULL;
+  CUPID_CALL(cupid_calloc((size_t)n, sizeof *regions, "PD regions", &regions));
+  w->coupling.n_overlaps = 0;
+  for (int r = 0; r < n; r++) {
+    const cupid_int e0 = runs[2 * r], e1 = runs[2 * r + 1];
+    cupid_box b = a->across;
+    run_region(a, e0, e1, &b.lo[1], &b.hi[1]);
+    b.has[1] = 1;
+    regions[r] = (cupid_pd_region){.box = b, .material = a->material, .mark = ad->mark};
+    regions[r].shape.kind = CUPID_SHAPE_BOX;
+    regions[r].shape.box = b;
+    cupid_box o;
+    memset(&o, 0, sizeof o);
+    o.has[1] = 1;
+    if (e0 > 0) {
+      o.lo[1] = a->ends[e0 - a->ov_lo], o.hi[1] = a->ends[e0];
+      w->coupling.overlap_marks[w->coupling.n_overlaps] = ad->mark;
+      w->coupling.overlaps[w->coupling.n_overlaps++] = o;
+    }
+    if (e1 < a->ne - 1) {
+      o.lo[1] = a->ends[e1 + 1], o.hi[1] = a->ends[e1 + 1 + a->ov_hi];
+      w->coupling.overlap_marks[w->coupling.n_overlaps] = ad->mark;
+      w->coupling.overlaps[w->coupling.n_overlaps++] = o;
+    }
+  }
+  cupid_free(&a->regions);
+  a->regions = regions;
+  w->pd.regions = regions;
+  w->pd.n_regions = n;
+  return CUPID_SUCCESS;
+}
+
+/* What the old problem leaves the new one: the nodes' places, displacements, broken bonds. */
+typedef struct {
+  cupid_pd_grid grid;
+  cupid_pd_operator op;
+  cupid_cuf_beam beam;
+  double *u;
+  cupid_int n_pd, fe_offset, n_fe_dofs;
+} old_zone;
+
+static void old_free(old_zone *o) {
+  cupid_pd_grid_destroy(&o->grid);
+  cupid_pd_operator_destroy(&o->op);
+  cupid_cuf_beam_destroy(&o->beam);
+  cupid_free(&o->u);
+}
+
+/* The new problem's u: the old nodes' displacements where they were; a new node's the old
+ * beam's at its place (issue 37: "the new nodes start from the beam's CUF displacement
+ * field"); the beam's DOFs as they were (one mesh). */
+static cupid_status carry_over(cupid_problem_state *prob, cupid_problem_adaptive *a,
+                               const old_zone *o) {
+  const double *x = cupid_pd_grid_coords(prob->grid);
+  unsigned char *seen = NULL;
+  CUPID_CALL(cupid_calloc((size_t)prob->n_pd + 1, 1, "mapped nodes", &seen));
+  for (cupid_int i = 0; i < o->n_pd; i++) {
+    const cupid_int j = a->map[i];
+    if (j < 0) continue;
+    seen[j] = 1;
+    memcpy(prob->u + 3 * j, o->u + 3 * i, 3 * sizeof *prob->u);
+  }
+  cupid_status st = CUPID_SUCCESS;
+  for (cupid_int j = 0; j < prob->n_pd && st == CUPID_SUCCESS; j++) {
+    if (seen[j]) continue;
+    st = cupid_cuf_displacement_at(o->beam, o->u, x[3 * j], x[3 * j + 1], x[3 * j + 2],
+                                   prob->u + 3 * j);
+  }
+  cupid_free(&seen);
+  CUPID_CALL(st);
+  memcpy(prob->u + prob->fe_offset, o->u + o->fe_offset, (size_t)o->n_fe_dofs * sizeof *prob->u);
+  return CUPID_SUCCESS;
+}
+
+static cupid_status record(cupid_problem_adaptive *a, const cupid_problem_conversion *c) {
+  if (a->n_conv == a->cap_conv) {
+    const int cap = a->cap_conv ? 2 * a->cap_conv : 8;
+    CUPID_CALL(cupid_realloc((size_t)cap, sizeof *a->conv, "conversions", &a->conv));
+    a->cap_conv = cap;
+  }
+  a->conv[a->n_conv++] = *c;
+  return CUPID_SUCCESS;
+}
+
+/* The zone would pass max_nodes: the run stops there (exit 2) with its results so far. */
+static void stop_at_cap(cupid_problem_state *prob, int step, double load, cupid_int nodes) {
+  snprintf(prob->growth.stopped, sizeof prob->growth.stopped,
+           "crack growth stopped at load step %d (load factor %.6g): the adaptive zone would "
+           "grow to %lld PD nodes, over peridynamics.adaptive.max_nodes = %lld; raise it (cupid "
+           "check prints what `within` allows) or bound the zone; the steps before are in the "
+           "steps' file",
+           step, load, (long long)nodes, (long long)prob->model->pd.adaptive.max_nodes);
+  prob->growth.stopped_step = step;
+}
+
+/* The zone of the cores and the marks, settled, as the working model's regions: *runs of them
+ * (at most MAX_ZONES), *nodes its PD nodes, *first / *last / *count the elements it adds.
+ * *capped when it would pass max_nodes (then nothing changed). */
+static cupid_status plan_zone(cupid_problem_state *prob, cupid_problem_adaptive *a, unsigned char *z,
+                              int step, double load_factor, int *capped, cupid_problem_conversion *c) {
+  const cupid_adaptive *ad = &prob->model->pd.adaptive;
+  cupid_int runs[2 * MAX_ZONES];
+  *capped = 0;
+  for (cupid_int e = 0; e < a->ne; e++) z[e] = a->core[e] | a->mark[e];
+  settle_zone(a, z);
+  const int n = zone_runs(a, z, runs, MAX_ZONES);
+  CUPID_CHECK(n <= MAX_ZONES, CUPID_ERR_UNSUPPORTED,
+              "adaptive: the zone would split into %d parts along the beam, over the %d that "
+              "Arlequin's %d overlaps allow; bound it with `within`",
+              n, MAX_ZONES, CUPID_MAX_OVERLAPS);
+  cupid_int nodes = 0, first = -1, last = -1, count = 0;
+  for (int r = 0; r < n; r++) {
+    double lo, hi;
+    run_region(a, runs[2 * r], runs[2 * r + 1], &lo, &hi);
+    nodes += layers(&a->work, lo, hi) * a->layer_nodes;
+  }
+  for (cupid_int e = 0; e < a->ne; e++)
+    if (z[e] && !a->core[e]) {
+      if (first < 0) first = e;
+      last = e, count++;
+    }
+  if (ad->max_nodes > 0 && nodes > ad->max_nodes) {
+    stop_at_cap(prob, step, load_factor, nodes);
+    *capped = 1;
+    return CUPID_SUCCESS;
+  }
+  CUPID_CALL(lay_out(a, runs, n));
+  *c = (cupid_problem_conversion){.step = step, .load_factor = load_factor,
+                                  .y_lo = a->ends[first], .y_hi = a->ends[last + 1],
+                                  .elements = (int)count, .why = a->why};
+  return CUPID_SUCCESS;
+}
+
+/* After a conversion: the zone's new cores, the marks cleared, the conversion recorded and
+ * told. */
+static cupid_status converted(cupid_problem_state *prob, cupid_problem_adaptive *a,
+                              const unsigned char *z, cupid_problem_conversion *c, cupid_int before) {
+  memcpy(a->core, z, (size_t)a->ne);
+  memset(a->mark, 0, (size_t)a->ne);
+  c->added_nodes = prob->n_pd - before, c->pd_nodes = prob->n_pd;
+  CUPID_CALL(record(a, c));
+  cupid_int zones = 0;
+  for (cupid_int e = 0; e < a->ne; e++) zones += z[e] && (e == 0 || !z[e - 1]);
+  cupid_problem_progress(prob, "adaptive: step %d, load factor %.4g: %d beam element%s on y in "
+                         "[%g, %g] turned to PD (%s): +%lld nodes, %lld in all, %lld zone%s",
+                         c->step, c->load_factor, c->elements, c->elements == 1 ? "" : "s",
+                         c->y_lo, c->y_hi, c->why ? c->why : "", (long long)c->added_nodes,
+                         (long long)c->pd_nodes, (long long)zones, zones == 1 ? "" : "s");
+  return CUPID_SUCCESS;
+}
+
+/* A crack that reached a node whose bonds never break after all (margin below a horizon: a
+ * broken bond's far end in a new overlap): the run stops there, as a fixed zone's does. */
+static int stop_if_protected_damaged(cupid_problem_state *prob, int step, double load) {
+  const double *x = cupid_pd_grid_coords(prob->grid);
+  for (cupid_int i = 0; i < prob->n_pd && prob->protect && prob->damage; i++) {
+    if (!prob->protect[i] || prob->damage[i] <= 0.0) continue;
+    snprintf(prob->growth.stopped, sizeof prob->growth.stopped,
+             "crack growth stopped at load step %d (load factor %.6g): the grown adaptive zone "
+             "has a broken bond at its overlap's PD node (%g, %g, %g), whose bonds never break; "
+             "give peridynamics.adaptive.margin of a horizon or more",
+             step, load, x[3 * i], x[3 * i + 1], x[3 * i + 2]);
+    prob->growth.stopped_step = step;
+    return 1;
+  }
+  return 0;
+}
+
+cupid_status cupid_problem_adaptive_convert(cupid_problem_state *prob, int step, double load_factor,
+                                            int *stopped) {
+  cupid_problem_adaptive *a = prob->adaptive;
+  unsigned char *z = NULL;
+  old_zone o = {0};
+  cupid_problem_conversion c = {0};
+  cupid_status st = CUPID_SUCCESS;
+  *stopped = 0;
+  CUPID_TRY(cupid_malloc((size_t)a->ne + 1, 1, "the new zone", &z));
+  CUPID_TRY(plan_zone(prob, a, z, step, load_factor, stopped, &c));
+  if (*stopped) goto cleanup;
+  /* the old problem's grid, operator, beam and u stay for the carry-over */
+  o = (old_zone){prob->grid, prob->op, prob->beam, prob->u, prob->n_pd, prob->fe_offset,
+                 prob->n_fe_dofs};
+  prob->grid = NULL, prob->op = NULL, prob->beam = NULL, prob->u = NULL;
+  st = cupid_problem_rebuild(prob, 1);
+  if (st != CUPID_SUCCESS) { /* e.g. a support's box that holds no PD node of the zone now */
+    char msg[768];
+    snprintf(msg, sizeof msg, "%s", cupid_error_message());
+    st = CUPID_ERROR(st, "adaptive: at load step %d the PD zone grew over y in [%g, %g] (%s): %s; "
+                     "keep it away from there with peridynamics.adaptive.within",
+                     step, c.y_lo, c.y_hi, c.why ? c.why : "", msg);
+    goto cleanup;
+  }
+  cupid_free(&a->map);
+  CUPID_TRY(cupid_malloc((size_t)o.n_pd + 1, sizeof *a->map, "node map", &a->map));
+  a->map_n = o.n_pd;
+  if (o.grid) { /* (a zone that started empty had none) */
+    CUPID_TRY(cupid_pd_grid_map_nodes(o.grid, prob->grid, a->map));
+    for (cupid_int i = 0; i < o.n_pd; i++)
+      CUPID_TRY_CHECK(a->map[i] >= 0, CUPID_ERR_INTERNAL,
+                      "adaptive: PD node %lld of the old zone is not in the new one", (long long)i);
+    CUPID_TRY(cupid_pd_operator_copy_broken_mapped(prob->op, o.op, a->map));
+  }
+  CUPID_TRY(cupid_problem_fracture_damage(prob));
+  CUPID_TRY(carry_over(prob, a, &o));
+  CUPID_TRY(converted(prob, a, z, &c, o.n_pd));
+  *stopped = stop_if_protected_damaged(prob, step, load_factor);
+cleanup:
+  old_free(&o);
+  cupid_free(&z);
+  return st;
+}
+
+/* During the set-up: the zone grows away from the pre-cracks first (the elements within
+ * margin horizons of their cut bonds), as it would from any broken bond: "step 0". Then no
+ * pre-crack may reach an overlap. */
+static cupid_status grow_from_precracks(cupid_problem_state *prob, cupid_problem_adaptive *a) {
+  const cupid_model_t *m = prob->model;
+  const cupid_adaptive *ad = &m->pd.adaptive;
+  CUPID_CALL(cupid_problem_fracture_damage(prob));
+  cupid_int n = mark_damage(a, prob);
+  /* a zone that starts empty: the elements a pre-crack spans, and those within margin
+   * horizons and a horizon (its cut bonds' reach) of it (else the pre-cracks lie in the
+   * regions, and their cut bonds are the damage above) */
+  const double r = (ad->margin + 1.0) * m->pd.horizon;
+  for (int k = 0; k < m->pd.n_precracks && !prob->grid; k++) {
+    const cupid_precrack *pc = &m->pd.precracks[k];
+    const double y0 = pc->normal == 1 ? pc->at : pc->rect.lo[1];
+    const double y1 = pc->normal == 1 ? pc->at : pc->rect.hi[1];
+    for (cupid_int e = 0; e < a->ne; e++)
+      if (a->ends[e] < y1 + r && a->ends[e + 1] > y0 - r && !a->core[e] && !a->mark[e] &&
+          convertible(a, ad, e))
+        a->mark[e] = 1, n++;
+  }
+  if (n > 0) {
+    a->why = "pre-crack near an overlap";
+    unsigned char *z = NULL;
+    cupid_problem_conversion c = {0};
+    int capped = 0;
+    const cupid_int before = prob->n_pd;
+    CUPID_CALL(cupid_malloc((size_t)a->ne + 1, 1, "the new zone", &z));
+    cupid_status st = plan_zone(prob, a, z, 0, 0.0, &capped, &c);
+    if (st == CUPID_SUCCESS && capped)
+      st = cupid_model_error(prob->model, &prob->model->pd.adaptive.mark, "%s",
+                             prob->growth.stopped);
+    if (st == CUPID_SUCCESS) st = cupid_problem_rebuild(prob, 0);
+    if (st == CUPID_SUCCESS) st = cupid_problem_fracture_damage(prob);
+    if (st == CUPID_SUCCESS) st = converted(prob, a, z, &c, before);
+    cupid_free(&z);
+    CUPID_CALL(st);
+  }
+  return cupid_problem_fracture_check_protected(prob);
+}
+
+cupid_status cupid_problem_adaptive_begin(cupid_problem_state *prob) {
+  cupid_problem_adaptive *a = prob->adaptive;
+  a->tol = ADAPTIVE_TOL * (prob->fe_info.y_max - prob->fe_info.y_min);
+  CUPID_CALL(element_ends(a, prob));
+  if (!prob->grid) {
+    CUPID_CALL(empty_zone(a, prob));
+  } else {
+    /* the lattice of the first grid, kept by every grid to come */
+    cupid_pd_grid_origin(prob->grid, a->work.pd.anchor);
+    a->work.pd.has_anchor = 1;
+    CUPID_CALL(initial_zone(a, prob));
+    a->s0 = trigger_stretch(prob);
+    a->layer_nodes = layer_nodes_of(prob);
+  }
+  a->initial_nodes = prob->n_pd;
+  const cupid_adaptive *ad = &prob->model->pd.adaptive;
+  if (ad->max_nodes > 0 && prob->n_pd > ad->max_nodes)
+    return cupid_model_error(prob->model, &ad->mark,
+                             "the initial PD zone has %lld nodes, over max_nodes = %lld",
+                             (long long)prob->n_pd, (long long)ad->max_nodes);
+  CUPID_CALL(grow_from_precracks(prob, a));
+  cupid_problem_progress(prob, "adaptive: the zone grows by beam elements where the strain "
+                         "reaches %g x s0 = %.4g, or a crack comes within %g horizons of an "
+                         "overlap (%d element%s wide below a zone, %d above)",
+                         ad->threshold, ad->threshold * a->s0, ad->margin, a->ov_lo,
+                         a->ov_lo == 1 ? "" : "s", a->ov_hi);
+  return CUPID_SUCCESS;
+}
+
+const cupid_int *cupid_problem_adaptive_map(const cupid_problem_state *prob, cupid_int *n) {
+  *n = prob->adaptive ? prob->adaptive->map_n : 0;
+  return prob->adaptive ? prob->adaptive->map : NULL;
+}
+
+/* ------------------------------------------------------------------------------ reports */
+
+/* The largest zone `within` allows: every element that may turn, with the zone now. */
+static cupid_int largest_zone(const cupid_problem_adaptive *a, const cupid_adaptive *ad) {
+  unsigned char *z = NULL;
+  cupid_int runs[2 * MAX_ZONES], nodes = 0;
+  if (cupid_malloc((size_t)a->ne + 1, 1, "the largest zone", &z) != CUPID_SUCCESS) {
+    cupid_error_clear();
+    return -1;
+  }
+  for (cupid_int e = 0; e < a->ne; e++) z[e] = a->core[e] || convertible(a, ad, e);
+  settle_zone(a, z);
+  const int n = zone_runs(a, z, runs, MAX_ZONES);
+  for (int r = 0; r < n && r < MAX_ZONES; r++) {
+    double lo, hi;
+    run_region(a, runs[2 * r], runs[2 * r + 1], &lo, &hi);
+    nodes += layers(&a->work, lo, hi) * a->layer_nodes;
+  }
+  cupid_free(&z);
+  return nodes;
+}
+
+void cupid_problem_adaptive_print(const cupid_problem_state *prob, double bytes) {
+  const cupid_problem_adaptive *a = prob->adaptive;
+  if (!a || !a->ends) return;
+  const cupid_adaptive *ad = &prob->model->pd.adaptive;
+  printf("adaptive: threshold %g x s0 = %.6g (strain), margin %g horizons = %g; overlaps %d / %d "
+         "beam elements below / above a zone\n",
+         ad->threshold, ad->threshold * a->s0, ad->margin, ad->margin * prob->model->pd.horizon,
+         a->ov_lo, a->ov_hi);
+  if (ad->has_within && ad->within.has[1])
+    printf("adaptive: within y in [%g, %g]\n", ad->within.lo[1], ad->within.hi[1]);
+  const cupid_int big = largest_zone(a, ad);
+  /* the memory of a zone that size: this model's estimate per PD node */
+  const double per_node = prob->n_pd > 0 && bytes > 0 ? bytes / (double)prob->n_pd : 0.0;
+  printf("adaptive: zone now %lld PD nodes; the largest `within` allows: %lld PD nodes",
+         (long long)prob->n_pd, (long long)big);
+  if (per_node > 0.0) printf(" (about %.3g GB at this model's %.3g kB a node)", big * per_node / 1e9,
+                             per_node / 1e3);
+  printf("%s\n", ad->max_nodes > 0 && big > ad->max_nodes ? ", over max_nodes: a run may stop there"
+                                                          : "");
+}
+
+void cupid_problem_adaptive_json(cupid_json js, const cupid_problem_state *prob) {
+  const cupid_problem_adaptive *a = prob->adaptive;
+  if (!a) return;
+  const cupid_adaptive *ad = &prob->model->pd.adaptive;
+  cupid_json_begin_object(js, "adaptive");
+  cupid_json_number(js, "threshold", ad->threshold);
+  cupid_json_number(js, "trigger_strain", ad->threshold * a->s0);
+  cupid_json_number(js, "margin", ad->margin);
+  if (ad->max_nodes > 0) cupid_json_integer(js, "max_nodes", ad->max_nodes);
+  cupid_json_integer(js, "initial_pd_nodes", a->initial_nodes);
+  cupid_json_integer(js, "pd_nodes", prob->n_pd);
+  /* the zone at the end: the boxes and overlaps of a model that has it from the start */
+  const cupid_model_t *w = &a->work;
+  cupid_json_begin_array(js, "regions");
+  for (int r = 0; r < w->pd.n_regions; r++) {
+    const cupid_box *b = &w->pd.regions[r].box;
+    cupid_json_begin_object(js, NULL);
+    for (int k = 0; k < 3; k++) {
+      if (!b->has[k]) continue;
+      const char key[2] = {"xyz"[k], 0};
+      cupid_json_begin_array(js, key);
+      cupid_json_number(js, NULL, b->lo[k]);
+      cupid_json_number(js, NULL, b->hi[k]);
+      cupid_json_end_array(js);
+    }
+    cupid_json_end_object(js);
+  }
+  cupid_json_end_array(js);
+  cupid_json_begin_array(js, "overlaps");
+  for (int q = 0; q < w->coupling.n_overlaps; q++) {
+    cupid_json_begin_array(js, NULL);
+    cupid_json_number(js, NULL, w->coupling.overlaps[q].lo[1]);
+    cupid_json_number(js, NULL, w->coupling.overlaps[q].hi[1]);
+    cupid_json_end_array(js);
+  }
+  cupid_json_end_array(js);
+  cupid_json_begin_array(js, "conversions");
+  for (int k = 0; k < a->n_conv; k++) {
+    const cupid_problem_conversion *c = &a->conv[k];
+    cupid_json_begin_object(js, NULL);
+    cupid_json_integer(js, "step", c->step);
+    cupid_json_number(js, "load_factor", c->load_factor);
+    cupid_json_integer(js, "added_nodes", c->added_nodes);
+    cupid_json_integer(js, "pd_nodes", c->pd_nodes);
+    cupid_json_integer(js, "elements", c->elements);
+    cupid_json_number(js, "y_from", c->y_lo);
+    cupid_json_number(js, "y_to", c->y_hi);
+    cupid_json_string(js, "trigger", c->why);
+    cupid_json_end_object(js);
+  }
+  cupid_json_end_array(js);
+  cupid_json_end_object(js);
+}
