@@ -212,70 +212,92 @@ cleanup:
   return st;
 }
 
-static int cmp_key(const void *a, const void *b) {
-  int64_t x = *(const int64_t *)a, y = *(const int64_t *)b;
+static int cmp_col(const void *a, const void *b) {
+  cupid_int x = *(const cupid_int *)a, y = *(const cupid_int *)b;
   return (x > y) - (x < y);
+}
+
+/* The entries (r, c) of the union pattern, row by row: added once to count (col NULL: rows[r]
+ * counts them), then again into each row's slot (rows[r] its next place). */
+typedef struct {
+  cupid_int *rows, *col;
+} pattern_fill;
+
+static void put(pattern_fill *f, cupid_int r, cupid_int c) {
+  if (f->col) f->col[f->rows[r]] = c;
+  f->rows[r]++;
+}
+
+static void put_all(pattern_fill *f, const cupid_csr_t *Kpd, const cupid_int *frp,
+                    const cupid_int *fcol, const tied_t *t, cupid_int n_pd, cupid_int n_fe) {
+  for (cupid_int r = 0; r < (Kpd ? n_pd : 0); r++)
+    for (cupid_int q = Kpd->rowptr[r]; q < Kpd->rowptr[r + 1]; q++) put(f, r, Kpd->col[q]);
+  for (cupid_int r = 0; r < n_fe; r++)
+    for (cupid_int q = frp[r]; q < frp[r + 1]; q++) put(f, n_pd + r, n_pd + fcol[q]);
+  for (cupid_int k = 0; k < t->n; k++) {
+    put(f, t->node[k], t->node[k]); /* the penalty's own diagonal */
+    for (cupid_int a = t->ptr[k]; a < t->ptr[k + 1]; a++) {
+      put(f, t->node[k], n_pd + t->fe[a]);
+      put(f, n_pd + t->fe[a], t->node[k]);
+    }
+  }
 }
 
 /* The union pattern: PD K, the beam's (shifted to block n_pd), and the penalty couplings. The
  * penalty's FE-FE blocks N^T N couple the FE nodes of the one (beam element, section element)
  * pair that holds the tied node (cupid_cuf_shape_at()), which the beam's pattern already
- * couples: only the PD-FE blocks and the tied node's diagonal are added. */
+ * couples: only the PD-FE blocks and the tied node's diagonal are added. Built row by row (a
+ * count, a fill, each row sorted and its repeats dropped): crack growth builds it again after
+ * every round of broken bonds, and one sort of every entry's (row, column) key cost 13% of the
+ * coupled SENB's run. */
 static cupid_status build_pattern(cupid_cuf_beam beam, const cupid_csr_t *Kpd, const tied_t *t,
                                   cupid_int n_pd, cupid_int n_fe, cupid_csr *K) {
   cupid_status st = CUPID_SUCCESS;
-  cupid_int *frp = NULL, *fcol = NULL, *rowptr = NULL, *col = NULL, nb = n_pd + n_fe;
-  int64_t *key = NULL;
+  cupid_int *frp = NULL, *fcol = NULL, *start = NULL, *next = NULL, *col = NULL, nb = n_pd + n_fe;
   CUPID_TRY(cupid_cuf_pattern(beam, &frp, &fcol));
-  size_t cap = (Kpd ? (size_t)Kpd->rowptr[n_pd] : 0) + (size_t)frp[n_fe], n = 0;
-  for (cupid_int k = 0; k < t->n; k++) {
-    size_t c = (size_t)(t->ptr[k + 1] - t->ptr[k]);
-    cap += 1 + 2 * c;
+  CUPID_TRY(cupid_calloc((size_t)nb + 1, sizeof *start, "Arlequin rows", &start));
+  CUPID_TRY(cupid_calloc((size_t)nb + 1, sizeof *next, "Arlequin rows", &next));
+  pattern_fill f = {next, NULL};
+  put_all(&f, Kpd, frp, fcol, t, n_pd, n_fe);
+  for (cupid_int r = 0; r < nb; r++) start[r + 1] = start[r] + next[r];
+  CUPID_TRY(cupid_malloc((size_t)start[nb] + 1, sizeof *col, "Arlequin columns", &col));
+  memcpy(next, start, (size_t)nb * sizeof *next);
+  f = (pattern_fill){next, col};
+  put_all(&f, Kpd, frp, fcol, t, n_pd, n_fe);
+  /* each row sorted, its repeats dropped, packed to the front: start[] becomes rowptr */
+  cupid_int m = 0;
+  for (cupid_int r = 0; r < nb; r++) {
+    const cupid_int a = start[r], b = start[r + 1];
+    qsort(col + a, (size_t)(b - a), sizeof *col, cmp_col);
+    start[r] = m;
+    for (cupid_int q = a; q < b; q++)
+      if (q == a || col[q] != col[q - 1]) col[m++] = col[q];
   }
-  CUPID_TRY(cupid_malloc(cap + 1, sizeof *key, "Arlequin pattern", &key));
-  for (cupid_int r = 0; r < (Kpd ? n_pd : 0); r++)
-    for (cupid_int q = Kpd->rowptr[r]; q < Kpd->rowptr[r + 1]; q++)
-      key[n++] = (int64_t)r * nb + Kpd->col[q];
-  for (cupid_int r = 0; r < n_fe; r++)
-    for (cupid_int q = frp[r]; q < frp[r + 1]; q++)
-      key[n++] = (int64_t)(n_pd + r) * nb + n_pd + fcol[q];
-  for (cupid_int k = 0; k < t->n; k++) {
-    key[n++] = (int64_t)t->node[k] * nb + t->node[k]; /* the penalty's own diagonal */
-    for (cupid_int a = t->ptr[k]; a < t->ptr[k + 1]; a++) {
-      cupid_int fa = n_pd + t->fe[a];
-      key[n++] = (int64_t)t->node[k] * nb + fa;
-      key[n++] = (int64_t)fa * nb + t->node[k];
-    }
-  }
-  qsort(key, n, sizeof *key, cmp_key);
-  CUPID_TRY(cupid_calloc((size_t)nb + 1, sizeof *rowptr, "Arlequin rows", &rowptr));
-  CUPID_TRY(cupid_malloc(n + 1, sizeof *col, "Arlequin columns", &col));
-  size_t m = 0;
-  for (size_t q = 0; q < n; q++) {
-    if (q > 0 && key[q] == key[q - 1]) continue;
-    cupid_int r = (cupid_int)(key[q] / nb);
-    col[m++] = (cupid_int)(key[q] % nb);
-    rowptr[r + 1]++;
-  }
-  for (cupid_int r = 0; r < nb; r++) rowptr[r + 1] += rowptr[r];
-  CUPID_TRY(cupid_csr_create(nb, nb, 3, rowptr, col, K));
+  start[nb] = m;
+  CUPID_TRY(cupid_csr_create(nb, nb, 3, start, col, K));
 cleanup:
   cupid_free(&frp);
   cupid_free(&fcol);
-  cupid_free(&rowptr);
+  cupid_free(&start);
+  cupid_free(&next);
   cupid_free(&col);
-  cupid_free(&key);
   return st;
 }
 
-/* Add the (weighted) PD matrix into the coupled pattern. */
+/* Add the (weighted) PD matrix into the coupled pattern: row r of Kpd is a subset of row r of
+ * K, both sorted, walked together (a search per block cost 14% of a coupled growth run). */
 static cupid_status add_pd(const cupid_csr_t *Kpd, cupid_csr K) {
-  for (cupid_int r = 0; r < Kpd->nrows; r++)
+  for (cupid_int r = 0; r < Kpd->nrows; r++) {
+    cupid_int p = K->rowptr[r];
+    const cupid_int end = K->rowptr[r + 1];
     for (cupid_int q = Kpd->rowptr[r]; q < Kpd->rowptr[r + 1]; q++) {
-      double *dst = cupid_csr_find(K, r, Kpd->col[q]);
-      CUPID_CHECK(dst, CUPID_ERR_INTERNAL, "Arlequin pattern lacks a PD block");
+      while (p < end && K->col[p] < Kpd->col[q]) p++;
+      CUPID_CHECK(p < end && K->col[p] == Kpd->col[q], CUPID_ERR_INTERNAL,
+                  "Arlequin pattern lacks a PD block");
+      double *dst = K->val + 9 * p;
       for (int e = 0; e < 9; e++) dst[e] += Kpd->val[9 * q + e];
     }
+  }
   return CUPID_SUCCESS;
 }
 
