@@ -1,4 +1,5 @@
 /* The VTU series writer (io.h, cupid_writer_vtu): PART_<step>.vtu for each part of a frame
+ * (model.pvd's; another series, e.g. adaptive.pvd, names them STEM_PART_<step>.vtu)
  * (each written atomically, in the frame's part order) and, at the end, the .pvd collection
  * that lists them with their times (ParaView shows the parts of one time as blocks). A
  * checkpoint records the files written; a resumption lists them again. */
@@ -13,6 +14,7 @@ typedef struct {
   char (*files)[NAME];
   double *times;
   int n, cap;
+  char prefix[24]; /* "" for model.pvd, else the .pvd's stem and "_" */
 } vtu_writer;
 
 static cupid_status record(vtu_writer *v, const char *name, double t) {
@@ -54,6 +56,12 @@ static cupid_status vtu_create(cupid_writer w, const cupid_writer_spec *spec) {
   vtu_writer *v = NULL;
   CUPID_CALL(cupid_calloc(1, sizeof *v, "VTU writer", &v));
   w->data = v;
+  const char *dot = spec->file ? strrchr(spec->file, '.') : NULL;
+  const size_t stem = dot ? (size_t)(dot - spec->file) : 0;
+  CUPID_CHECK(stem < sizeof v->prefix - 1, CUPID_ERR_ARGUMENT, "VTU series name too long: %s",
+              spec->file);
+  if (stem > 0 && strncmp(spec->file, "model", stem) != 0)
+    snprintf(v->prefix, sizeof v->prefix, "%.*s_", (int)stem, spec->file);
   return spec->resume ? vtu_resume(w, v, spec->resume) : CUPID_SUCCESS;
 }
 
@@ -62,7 +70,8 @@ static cupid_status vtu_step(cupid_writer w, const cupid_frame *frame) {
   for (int k = 0; k < frame->n_parts; k++) {
     const cupid_frame_part *part = &frame->parts[k];
     char name[NAME], path[4096];
-    int len = snprintf(name, sizeof name, "%s_%06lld.vtu", part->name, (long long)frame->step);
+    int len = snprintf(name, sizeof name, "%s%s_%06lld.vtu", v->prefix, part->name,
+                       (long long)frame->step);
     CUPID_CHECK(len > 0 && len < NAME, CUPID_ERR_ARGUMENT, "VTU part name too long: %s", part->name);
     CUPID_CALL(cupid_writer_path(w, name, path, sizeof path));
     CUPID_CALL(cupid_vtu_write(path, part->mesh));

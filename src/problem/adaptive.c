@@ -347,7 +347,7 @@ cupid_status cupid_problem_adaptive_blocked(cupid_problem_state *prob, const dou
   cupid_problem_adaptive *a = prob->adaptive;
   const cupid_adaptive *ad = &prob->model->pd.adaptive;
   *count = mark_around(a, ad, x[1], 0.0) + mark_around(a, ad, x[1], ad->margin * prob->model->pd.horizon);
-  a->why = "crack reached an overlap";
+  a->why = "an overlap's bond reached its limit";
   return CUPID_SUCCESS;
 }
 

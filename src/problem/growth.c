@@ -180,14 +180,16 @@ static cupid_status write_frame(growth_run *g, int step, double lambda) {
 }
 
 /* adaptive.pvd (adaptive zones with output.vtu): the zone and its fields at the settled
- * solution before each conversion, and at the end of the run; frame k's time is its load
- * factor, its step number the load step. */
-static cupid_status zone_frame(growth_run *g, int step, double lambda) {
+ * solution before each conversion, and at the end of the run; frame k (its files'
+ * number) has the load factor as its time (two conversions of one step: two frames at one
+ * time, the later the zone it grew to first). */
+static cupid_status zone_frame(growth_run *g, double lambda) {
   cupid_problem_state *prob = g->prob;
   if (!g->zones) return CUPID_SUCCESS;
   const cupid_vtu_array fields[3] = {{"displacement", 3, prob->u}, {"force", 3, prob->f_int},
                                      {"damage", 1, prob->damage}};
-  return cupid_problem_frame_write(prob, &g->verts, step, lambda, prob->u, fields, 3, &g->zones, 1);
+  return cupid_problem_frame_write(prob, &g->verts, ++g->zone_frames, lambda, prob->u, fields, 3,
+                                   &g->zones, 1);
 }
 
 /* The reaction of each constraint k into g->react[3 k ..]: the work of (f_int - f_ext) on its
@@ -1106,7 +1108,7 @@ static cupid_status convert_zone(growth_run *g, int k, double lambda, int *again
   if (!g->convert && n == 0) return CUPID_SUCCESS;
   g->convert = 0;
   CUPID_CALL(cupid_problem_fracture_damage(prob));
-  CUPID_CALL(zone_frame(g, k, lambda));
+  CUPID_CALL(zone_frame(g, lambda));
   unsigned char *held = NULL, *weak = NULL;
   growth_release(g, &held, &weak);
   cupid_status st = cupid_problem_adaptive_convert(prob, k, lambda, stop);
@@ -1209,7 +1211,7 @@ cupid_status cupid_problem_run_growth(cupid_problem_state *prob) {
       CUPID_TRY(convert_zone(&g, k, lambda, &again, &stop));
     }
     if (stop) break; /* the message: cupid_problem_get_info's stopped (the CLI prints it) */
-    g.last_step = k, g.last_load = lambda;
+    g.last_load = lambda;
     CUPID_TRY(write_row(&g, k, lambda, it));
     CUPID_TRY(write_frame(&g, k, lambda));
     if (step_line_due(&g, k, N))
@@ -1280,7 +1282,7 @@ cupid_status cupid_problem_run_growth(cupid_problem_state *prob) {
   CUPID_TRY(cupid_writer_end(&g.exodus));
   if (g.zones) { /* the zone at the end */
     CUPID_TRY(cupid_problem_fracture_damage(prob));
-    CUPID_TRY(zone_frame(&g, g.last_step, g.last_load));
+    CUPID_TRY(zone_frame(&g, g.last_load));
     CUPID_TRY(cupid_writer_end(&g.zones));
   }
   CUPID_TRY(plots(&g));

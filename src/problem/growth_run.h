@@ -79,8 +79,8 @@ typedef struct {
   int convert;                  /* adaptive: a crack asked into an overlap; the zone grows
                                    before the step goes on (convert_zone) */
   cupid_writer zones;           /* adaptive.pvd: the zone at each conversion (output.vtu) */
-  int last_step;                /* the last step written, and its load factor */
-  double last_load;
+  int zone_frames;              /* its frames so far */
+  double last_load;             /* the load factor of the last step written */
   cupid_checkpoint resume;      /* a resumption's checkpoint, open until the writers read it */
 } growth_run;
 

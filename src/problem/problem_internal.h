@@ -75,7 +75,8 @@ typedef struct {
   cupid_int added_nodes, pd_nodes;
   double y_lo, y_hi;   /**< the span of the elements it turned to PD */
   int elements;
-  const char *why;     /**< "strain", "crack near the overlap" or "crack reached the overlap" */
+  const char *why;     /**< "strain", "crack near an overlap", "an overlap's bond reached its
+                            limit" or "pre-crack near an overlap" */
 } cupid_problem_conversion;
 
 typedef struct cupid_problem_private {

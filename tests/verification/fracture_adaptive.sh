@@ -121,6 +121,13 @@ cols = [k for k in rows("lin")[0] if k.startswith("reaction") or k.startswith("l
 same("lin", "lin_fixed", 1e-9, cols, set(range(1, 7)), "3. linear, steps 1-6 against the initial zone")
 same("lin", "lin_fixed30", 1e-9, cols, {8, 9, 10}, "3. linear, steps 8-10 against the final zone")
 assert [int(r["pd_nodes"]) for r in rows("lin")] == [432] * 6 + [540, 648, 648, 648]
+# adaptive.pvd: the zone before each conversion and at the end
+import re
+pvd = open("lin/adaptive.pvd").read()
+frames = re.findall(r'timestep="([^"]+)"[^>]*file="(adaptive_pd_\d+\.vtu)"', pvd)
+points = [(float(t), int(re.search(r'NumberOfPoints="(\d+)"', open("lin/" + f).read()).group(1)))
+          for t, f in frames]
+assert points == [(0.7, 432), (0.8, 540), (1.0, 648)], points
 # 4: threads
 assert conv("lin_t1") == c, (conv("lin_t1"), c)
 same("lin_t1", "lin", 1e-9, cols, what="4. one thread against two")
