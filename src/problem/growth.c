@@ -1191,7 +1191,8 @@ cupid_status cupid_problem_run_growth(cupid_problem_state *prob) {
   }
   for (int k = g.first_step; k <= N && fracture && !prob->growth.stopped_step; k++) {
     const double lambda = (double)k / N;
-    for (size_t d = 0; d < n; d++) {
+    /* every DOF of the layout now (an adaptive zone adds DOFs: issue 37) */
+    for (size_t d = 0; d < (size_t)prob->ndof; d++) {
       prob->f_ext[d] = lambda * g.f_full[d];
       if (g.fixed0[d]) prob->bc->value[d] = lambda * g.g_full[d];
       /* CG's first guess on the matrix-free path: the last step's solution scaled to this
