@@ -69,6 +69,18 @@ def gnuplot(script):
     subprocess.run(["gnuplot"], input=script.encode(), check=True)
 
 
+# the side view of the beam, y across and x up, damage coloured (both pictures)
+SIDE = """set size ratio -1
+set xrange [-2:92]
+set yrange [-3:22]
+set xlabel "y [mm]"
+set ylabel "x [mm]"
+set cbrange [0:0.6]
+set palette rgbformulae 22,13,-31
+set object 2 rect from 0, 0 to 90, 20 fs empty border lc rgb 'gray'
+"""
+
+
 def side(points, path):
     """The side face (z nearest 0) of (x, y, z, damage) points into a gnuplot data file."""
     zmin = min(p[2] for p in points)
@@ -107,17 +119,9 @@ unset object 1
     gnuplot("""set terminal pngcairo size 1000,%d font ",10" noenhanced
 set output "%s"
 set multiplot layout %d,1 title "Beam without a notch (beam_adaptive.yaml, h = 1): the PD zone (dashed) over the damage (side face), at each conversion and at the end"
-set size ratio -1
-set xrange [-2:92]
-set yrange [-3:22]
-set xlabel "y [mm]"
-set ylabel "x [mm]"
-set cbrange [0:0.6]
-set palette rgbformulae 22,13,-31
-set object 2 rect from 0, 0 to 90, 20 fs empty border lc rgb 'gray'
-%s
+%s%s
 unset multiplot
-""" % (190 * rows + 40, os.path.join(HERE, "adaptive_zones.png"), rows, "".join(plots)))
+""" % (190 * rows + 40, os.path.join(HERE, "adaptive_zones.png"), rows, SIDE, "".join(plots)))
 
 
 def picture_senb(infos, out):
@@ -132,17 +136,9 @@ def picture_senb(infos, out):
     gnuplot("""set terminal pngcairo size 1000,430 font ",10" noenhanced
 set output "%s"
 set multiplot layout 2,1 title "SENB (h = 1): damage on the side face at the end"
-set size ratio -1
-set xrange [-2:92]
-set yrange [-3:22]
-set xlabel "y [mm]"
-set ylabel "x [mm]"
-set cbrange [0:0.6]
-set palette rgbformulae 22,13,-31
-set object 2 rect from 0, 0 to 90, 20 fs empty border lc rgb 'gray'
-%s
+%s%s
 unset multiplot
-""" % (os.path.join(HERE, "adaptive_senb.png"), "".join(plots)))
+""" % (os.path.join(HERE, "adaptive_senb.png"), SIDE, "".join(plots)))
 
 
 def main():

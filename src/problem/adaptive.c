@@ -19,7 +19,6 @@
 
 struct cupid_problem_adaptive_private {
   cupid_model_t work;              /* prob->model: the model read, with this run's zone */
-  const cupid_model_t *given;      /* the model read */
   cupid_pd_region *regions;        /* work.pd.regions once the zone changed (owned) */
   cupid_int ne;                    /* beam elements, in order along y */
   double *ends;                    /* ne + 1 element ends */
@@ -45,8 +44,7 @@ const cupid_model_t *cupid_problem_adaptive_model(const cupid_model_t *model,
   if (!model->has_peridynamics || !model->pd.adaptive.has_adaptive || !model->has_beam) return model;
   cupid_problem_adaptive *a = NULL;
   if (cupid_calloc(1, sizeof *a, "adaptive zone", &a) != CUPID_SUCCESS) return NULL;
-  a->work = *model;
-  a->given = model;
+  a->work = *model; /* its arrays are the model's, but for the regions once the zone grows */
   *out = a;
   return &a->work;
 }

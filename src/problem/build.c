@@ -106,11 +106,8 @@ cupid_status cupid_problem_apply_conditions(cupid_problem_state *prob) {
  * breaking rule, fields, constraints and loads at load factor 1). The caller took what it
  * keeps of the old (grid, operator, beam, u: set to NULL here). The run's counters, outputs
  * and checkpoints stay. */
-cupid_status cupid_problem_rebuild(cupid_problem_state *prob, int fields) {
+void cupid_problem_free_layout(cupid_problem_state *prob) {
   if (prob->method->free_state) prob->method->free_state(prob);
-  /* a zone that started empty ran as the beam alone (cupid_method_none) until now */
-  prob->method = cupid_problem_method_of(prob->model);
-  CUPID_CALL(prob->method->check(prob));
   cupid_coupling_destroy(&prob->coupling);
   cupid_pd_operator_destroy(&prob->op);
   cupid_pd_grid_destroy(&prob->grid);
@@ -127,6 +124,13 @@ cupid_status cupid_problem_rebuild(cupid_problem_state *prob, int fields) {
   cupid_free(&prob->region_materials);
   cupid_free(&prob->protect);
   cupid_free(&prob->no_fail);
+}
+
+cupid_status cupid_problem_rebuild(cupid_problem_state *prob, int fields) {
+  cupid_problem_free_layout(prob);
+  /* a zone that started empty ran as the beam alone (cupid_method_none) until now */
+  prob->method = cupid_problem_method_of(prob->model);
+  CUPID_CALL(prob->method->check(prob));
   prob->n_arlequin_regions = prob->n_traction_scales = 0;
   prob->n_beam_points = 0;
   prob->precrack_bonds = 0;

@@ -270,36 +270,15 @@ cupid_status cupid_problem_solve(cupid_problem_state *prob) {
 /* -------------------------------------------------------------------- the life cycle */
 
 void cupid_problem_state_free(cupid_problem_state *prob) {
-  if (prob->method && prob->method->free_state) prob->method->free_state(prob);
-  cupid_coupling_destroy(&prob->coupling);
-  cupid_pd_operator_destroy(&prob->op);
-  cupid_pd_grid_destroy(&prob->grid);
-  cupid_cuf_beam_destroy(&prob->beam);
-  cupid_csr_destroy(&prob->K);
-  cupid_dirichlet_destroy(&prob->bc);
-  cupid_free(&prob->u);
-  cupid_free(&prob->f_ext);
-  cupid_free(&prob->f_int);
-  cupid_free(&prob->pd_stress);
-  cupid_free(&prob->pd_materials);
-  cupid_free(&prob->arlequin_regions);
-  cupid_free(&prob->beam_points);
-  cupid_free(&prob->beam_u);
+  if (prob->method) cupid_problem_free_layout(prob);
   cupid_free(&prob->history);
   /* kept for --resume: an interrupted run's checkpoint, and a failed resumption's (refused, or
    * stopped again: the checkpoint it started from stays for another try) */
   if (prob->ckpt.interrupted || prob->opts->resume) cupid_output_set_suspend(&prob->outputs);
   cupid_output_set_abort(&prob->outputs); /* not published: the previous results stay */
   cupid_problem_checkpoint_end(prob);
-  cupid_free(&prob->region_boxes);
-  cupid_free(&prob->traction_scales);
-  cupid_free(&prob->region_materials);
-  cupid_free(&prob->protect);
-  cupid_free(&prob->no_fail);
-  cupid_free(&prob->node_stretch);
   cupid_petsc_halo_destroy(&prob->break_halo);
   cupid_free(&prob->break_words);
-  cupid_free(&prob->damage);
   cupid_free(&prob->growth.peak);
   cupid_free(&prob->growth.held);
   cupid_problem_adaptive_free(&prob->adaptive);

@@ -501,6 +501,9 @@ cupid_status cupid_problem_build_pd(cupid_problem_state *prob);
 cupid_status cupid_problem_allocate_fields(cupid_problem_state *prob);
 /** Constraints (finalized) and loads of a static or dynamic analysis, through the method. */
 cupid_status cupid_problem_apply_conditions(cupid_problem_state *prob);
+/** Free what the set-up built from the model (the method's state, grid, operator, beam,
+ *  coupling, K, conditions, fields, the layout's arrays); the run's own state stays. */
+void cupid_problem_free_layout(cupid_problem_state *prob);
 /** An adaptive zone's model changed: build everything from it again; with @p fields also the
  *  fields and the conditions (during the set-up: not yet). */
 cupid_status cupid_problem_rebuild(cupid_problem_state *prob, int fields);

@@ -4,6 +4,7 @@
 #   . "$(dirname "$0")/../tools/checks.sh"
 #   ... ok / bad "what failed" ...
 #   finish NAME   # prints "NAME: P passed, F failed"; exit status 0 only without failures
+#   expect CODE PATTERN -- CMD...   # one check: CMD's exit status and a pattern in its output
 set -u
 CUPID=$(realpath "${CUPID:-build/cupid}")
 SRC=$(realpath "${CUPID_SOURCE_DIR:-.}")
@@ -16,4 +17,13 @@ bad() { echo "FAIL: $*"; fail=$((fail+1)); }
 finish() {
   echo "$1: $pass passed, $fail failed"
   [ "$fail" -eq 0 ]
+}
+# expect CODE PATTERN -- CMD...: CMD exits with CODE and prints PATTERN (grep -E)
+expect() {
+  local code=$1 pattern=$2; shift 3
+  local out rc
+  out=$("$@" 2>&1); rc=$?
+  if [ "$rc" -ne "$code" ]; then bad "$* -> exit $rc, expected $code"; echo "$out" | head -5; return; fi
+  if ! grep -qE -- "$pattern" <<<"$out"; then bad "$* -> output does not match '$pattern'"; echo "$out" | head -5; return; fi
+  ok
 }

@@ -7,15 +7,7 @@
 # keep its energy balance (kinetic + strain + dissipated = the traction's work) to 1e-3. Also
 # the refusals of what fracture cannot run with (evaluate, Newmark, Lagrange, surface correction,
 # a pre-crack cutting no bond or reaching an overlap).
-. "$(dirname "$0")/../tools/checks.sh"  # CUPID, SRC, $work (cwd), ok, bad, finish
-expect() { # expect CODE PATTERN -- CMD...: CMD exits with CODE and prints PATTERN (grep -E)
-  local code=$1 pattern=$2; shift 3
-  local out rc
-  out=$("$@" 2>&1); rc=$?
-  if [ "$rc" -ne "$code" ]; then bad "$* -> exit $rc, expected $code"; echo "$out" | head -5; return; fi
-  if ! grep -qE -- "$pattern" <<<"$out"; then bad "$* -> output does not match '$pattern'"; echo "$out" | head -5; return; fi
-  ok
-}
+. "$(dirname "$0")/../tools/checks.sh"  # CUPID, SRC, $work (cwd), ok, bad, expect, finish
 PY=${CUPID_SYSTEM_PYTHON:-/usr/bin/python3}
 E=$SRC/examples/notched_bar/notched_bar_arlequin.yaml
 
