@@ -2,17 +2,8 @@
 # `cupid run` with type: dynamic (issue 5) on small trusses (paper 004 material): the output
 # files, the energy balance, the tip history against the exact triangle wave, and the model
 # errors (unstable central step, consistent mass with central, missing density).
-. "$(dirname "$0")/../tools/checks.sh"  # CUPID, SRC, $work (cwd), ok, bad, finish
+. "$(dirname "$0")/../tools/checks.sh"  # CUPID, SRC, $work (cwd), ok, bad, expect, finish
 M=$SRC/tests/models/dynamics
-
-expect() {
-  local code=$1 pattern=$2; shift 3
-  local out rc
-  out=$("$@" 2>&1); rc=$?
-  if [ "$rc" -ne "$code" ]; then bad "$* -> exit $rc, expected $code"; echo "$out" | head -5; return; fi
-  if ! grep -qE -- "$pattern" <<<"$out"; then bad "$* -> output does not match '$pattern'"; echo "$out" | head -5; return; fi
-  ok
-}
 
 for m in fe_truss pd_truss; do
   expect 0 '' -- "$CUPID" run "$M/$m.yaml" -o "$m" --quiet
