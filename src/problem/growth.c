@@ -22,32 +22,38 @@
 #include "method.h"
 
 
-static void growth_free(growth_run *g) {
+/* What the run keeps per DOF and per PD node of the problem's layout (setup_layout makes it;
+ * an adaptive zone's conversion frees it for the new layout: growth_release). */
+static void free_layout(growth_run *g) {
   cupid_free(&g->f_full);
   cupid_free(&g->g_full);
   cupid_free(&g->fixed0);
   cupid_free(&g->anchored);
-  cupid_free(&g->release);
-  cupid_free(&g->weak);
   cupid_free(&g->weak_scan);
   cupid_free(&g->masks);
   cupid_free(&g->T);
+  for (int k = 0; k < 4; k++) cupid_free(&g->w[k]);
+  cupid_direct_factor_destroy(&g->F);
+  cupid_growth_downdate_free(&g->dd);
+  growth_journal_free(&g->journal);
+  cupid_problem_vertices_free(&g->verts);
+}
+
+static void growth_free(growth_run *g) {
+  free_layout(g);
+  cupid_free(&g->release);
+  cupid_free(&g->weak);
   cupid_free(&g->u1);
   cupid_writer_drop(&g->csv, 0);
   cupid_writer_drop(&g->exodus, 0);
   cupid_writer_drop(&g->zones, 0);
-  cupid_problem_vertices_free(&g->verts);
   cupid_pd_grid_destroy(&g->whole);
   cupid_checkpoint_close(&g->resume);
-  cupid_direct_factor_destroy(&g->F);
-  cupid_growth_downdate_free(&g->dd);
-  for (int k = 0; k < 4; k++) cupid_free(&g->w[k]);
   cupid_free(&g->react);
   cupid_free(&g->points);
   cupid_free(&g->row);
   cupid_growth_mf_free(&g->mf);
   cupid_growth_lu_free(&g->lu);
-  growth_journal_free(&g->journal);
 }
 
 /* The DOFs each constraint fixes (one byte a DOF and constraint), and the unit translations:
@@ -1012,8 +1018,7 @@ static int step_line_due(growth_run *g, int k, int N) {
   return 0;
 }
 
-/* What the run keeps per DOF and per PD node of the problem's layout (growth_release frees
- * it, for an adaptive zone's new layout). */
+/* What the run keeps per DOF and per PD node of the problem's layout (free_layout). */
 static cupid_status setup_layout(growth_run *g) {
   cupid_problem_state *prob = g->prob;
   const size_t n = (size_t)prob->ndof;
@@ -1046,16 +1051,7 @@ static cupid_status setup_layout(growth_run *g) {
 static void growth_release(growth_run *g, unsigned char **held, unsigned char **weak) {
   *held = g->release, *weak = g->weak;
   g->release = g->weak = NULL;
-  cupid_free(&g->f_full);
-  cupid_free(&g->g_full);
-  cupid_free(&g->fixed0);
-  cupid_free(&g->anchored);
-  cupid_free(&g->weak_scan);
-  cupid_free(&g->masks);
-  cupid_free(&g->T);
-  for (int k = 0; k < 4; k++) cupid_free(&g->w[k]);
-  cupid_direct_factor_destroy(&g->F);
-  cupid_growth_downdate_free(&g->dd);
+  free_layout(g);
   const cupid_growth_lu lu = g->lu;
   cupid_growth_lu_free(&g->lu);
   g->lu = (cupid_growth_lu){.factorisations = lu.factorisations, .resolves = lu.resolves,
@@ -1068,8 +1064,6 @@ static void growth_release(growth_run *g, unsigned char **held, unsigned char **
   g->mf = (cupid_growth_mf){.iterations = mf.iterations, .setup_s = mf.setup_s,
                             .solve_s = mf.solve_s};
   g->prob->crack_copy = NULL, g->prob->crack_map = NULL;
-  growth_journal_free(&g->journal);
-  cupid_problem_vertices_free(&g->verts);
 }
 
 static cupid_status frame_vertices(growth_run *g);
@@ -1104,10 +1098,12 @@ static cupid_status convert_zone(growth_run *g, int k, double lambda, int *again
   cupid_problem_state *prob = g->prob;
   cupid_int n = 0;
   *again = 0;
+  /* the damage now: the step's breaks (the margin test and the frame read it; write_row made
+   * it last at the step before) */
+  CUPID_CALL(cupid_problem_fracture_damage(prob));
   if (!g->convert) CUPID_CALL(cupid_problem_adaptive_trigger(prob, &n));
   if (!g->convert && n == 0) return CUPID_SUCCESS;
   g->convert = 0;
-  CUPID_CALL(cupid_problem_fracture_damage(prob));
   CUPID_CALL(zone_frame(g, lambda));
   unsigned char *held = NULL, *weak = NULL;
   growth_release(g, &held, &weak);
