@@ -154,6 +154,29 @@ cleanup:
   return st;
 }
 
+/* 1 when some curve's CSV has a data row after its header lines (a run that stopped at its
+ * first step has none: gnuplot would fail on the empty range, and the run with it). */
+static int plot_has_rows(const char *dir, int n_curves, const cupid_plot_curve *curves,
+                         const cupid_plot_options *o) {
+  int found = 0;
+  for (int i = 0; i < n_curves && !found; i++) {
+    char *path = NULL, *line = NULL;
+    size_t cap = 0;
+    FILE *in = NULL;
+    if (csv_open(dir, curves[i].csv, &path, &in) != CUPID_SUCCESS) {
+      cupid_error_clear();
+      return 1; /* unknown: gnuplot says what is wrong with the file */
+    }
+    if (!in) found = 1;
+    for (int row = 0; in && !found && getline(&line, &cap, in) >= 0; row++)
+      found = row >= o->header_lines && strspn(line, " \t\r\n") < strlen(line);
+    if (in) fclose(in);
+    free(line);
+    cupid_free(&path);
+  }
+  return found;
+}
+
 /* Curves that are zero everywhere (to 1e-12 of the largest curve: round-off of a symmetric
  * model) say nothing and crowd the key: they are left out (all kept if every one is). */
 static cupid_status plot_keep(const char *dir, int n_curves, const cupid_plot_curve *curves,
@@ -371,6 +394,7 @@ cupid_status cupid_plot_ex(const char *dir, const char *stem, const char *title,
   snprintf(script, size, "%s/%s.gp", dir, stem);
   snprintf(png, size, "%s/%s.png", dir, stem);
   CUPID_TRY(plot_script(dir, script, stem, title, xlabel, ylabel, n_curves, curves, &o));
+  if (!plot_has_rows(dir, n_curves, curves, &o)) goto cleanup; /* the script, no picture */
   CUPID_TRY(find_gnuplot(&gnuplot));
   if (gnuplot) CUPID_TRY(run_gnuplot(gnuplot, dir, stem, png, made));
 cleanup:

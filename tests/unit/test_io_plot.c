@@ -163,6 +163,31 @@ static void test_plot_gnuplot_fails(void **state) {
     fail_msg("unexpected message: %s", msg);
 }
 
+/* A CSV with its header and no row (a run stopped at its first step): the script, no picture,
+ * and no gnuplot run (the fake one here would fail; the real one fails on the empty range). */
+static void test_plot_no_rows(void **state) {
+  (void)state;
+  FILE *f = fopen(in_dir("empty.csv"), "w");
+  assert_non_null(f);
+  fputs("t,u,v\n", f);
+  assert_int_equal(fclose(f), 0);
+  char fake[1024];
+  snprintf(fake, sizeof fake, "%s/gnuplot", root);
+  f = fopen(fake, "w");
+  assert_non_null(f);
+  fputs("#!/bin/sh\nexit 3\n", f);
+  assert_int_equal(fclose(f), 0);
+  assert_int_equal(chmod(fake, 0755), 0);
+  setenv("PATH", root, 1);
+  cupid_plot_curve c = {.csv = "empty.csv", .xname = "t", .yname = "u"};
+  int made = -1;
+  CUPID_ASSERT_OK(cupid_plot(dir, "norows", "t", "x", "y", 1, &c, &made));
+  assert_int_equal(made, 0);
+  struct stat sb;
+  assert_int_equal(stat(in_dir("norows.gp"), &sb), 0);
+  assert_int_not_equal(stat(in_dir("norows.png"), &sb), 0);
+}
+
 /* The real gnuplot on a missing CSV fails ("No data in plot"). */
 static void test_plot_real_gnuplot_error(void **state) {
   (void)state;
@@ -182,6 +207,7 @@ int main(void) {
       cmocka_unit_test_setup_teardown(test_plot_without_gnuplot, setup, teardown),
       cmocka_unit_test_setup_teardown(test_plot_gnuplot_fails, setup, teardown),
       cmocka_unit_test_setup_teardown(test_plot_real_gnuplot_error, setup, teardown),
+      cmocka_unit_test_setup_teardown(test_plot_no_rows, setup, teardown),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }
