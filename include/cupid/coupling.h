@@ -321,6 +321,22 @@ cupid_status cupid_arlequin_assemble(cupid_cuf_beam beam, cupid_pd_grid grid,
                                      cupid_pd_operator op, const cupid_arlequin_options *o,
                                      cupid_csr *K, cupid_arlequin_info *info);
 
+/** The coupled K kept for assembling again (crack growth): its pattern and the weighted beam's
+ *  and penalty's blocks, built once; each later K adds the PD block of the operator then (its
+ *  bonds a subset of the first's). Every K, the first included, is the kept blocks plus the
+ *  PD block in that order: the same bonds give the same K to the bit. */
+typedef struct cupid_arlequin_assembly_private *cupid_arlequin_assembly;
+/** As cupid_arlequin_assemble(), keeping what does not change when bonds break in @p out. */
+cupid_status cupid_arlequin_assembly_create(cupid_cuf_beam beam, cupid_pd_grid grid,
+                                            cupid_pd_operator op, const cupid_arlequin_options *o,
+                                            cupid_arlequin_assembly *out, cupid_csr *K,
+                                            cupid_arlequin_info *info);
+/** A new K (the caller's): the kept blocks and the PD block of @p op (the operator of create,
+ *  or one on its grid with a subset of its bonds; NULL: no PD block). */
+cupid_status cupid_arlequin_assembly_matrix(const cupid_arlequin_assembly A, cupid_pd_operator op,
+                                            cupid_csr *K);
+void cupid_arlequin_assembly_destroy(cupid_arlequin_assembly *A);
+
 /**
  * The weighted mass (Eq. 14): into @p M (consistent FE mass; K's pattern, zeroed by the
  * caller) or into the diagonal @p lumped (HRZ FE mass); exactly one is non-NULL. @p pd_mass

@@ -392,34 +392,128 @@ cupid_status cpl_arlequin_pd_weights(cupid_pd_grid grid, const cupid_arlequin_op
   return CUPID_SUCCESS;
 }
 
-cupid_status cupid_arlequin_assemble(cupid_cuf_beam beam, cupid_pd_grid grid, cupid_pd_operator op,
-                                     const cupid_arlequin_options *o, cupid_csr *K,
-                                     cupid_arlequin_info *info) {
+/* What the coupled K keeps between assemblies: its pattern and the blocks of the weighted beam
+ * and the penalty (nonzero blocks only: most of the PD rows hold PD terms alone). Broken
+ * bonds change the PD block and nothing else; the pattern is the first PD block's (a superset
+ * of every later one's: bonds only break). */
+struct cupid_arlequin_assembly_private {
+  cupid_int nb, nnzb;
+  cupid_int *rowptr, *col; /* the union pattern (blocks) */
+  cupid_int n_fixed;
+  cupid_int *at;           /* the blocks that hold a beam or penalty term: their positions */
+  double *val;             /* and their 9 values each */
+  double *wn;              /* the PD nodes' weights (Eq. 12) */
+  cupid_arlequin_info info;
+};
+
+void cupid_arlequin_assembly_destroy(cupid_arlequin_assembly *A) {
+  if (!A || !*A) return;
+  cupid_free(&(*A)->rowptr);
+  cupid_free(&(*A)->col);
+  cupid_free(&(*A)->at);
+  cupid_free(&(*A)->val);
+  cupid_free(&(*A)->wn);
+  cupid_free(A);
+}
+
+/* Keep K's pattern and its nonzero blocks (K without its PD block). */
+static cupid_status keep_fixed(const cupid_csr_t *K, cupid_arlequin_assembly A) {
+  A->nb = K->nrows, A->nnzb = K->rowptr[K->nrows];
+  CUPID_CALL(cupid_malloc((size_t)A->nb + 1, sizeof *A->rowptr, "Arlequin rows", &A->rowptr));
+  CUPID_CALL(cupid_malloc((size_t)A->nnzb + 1, sizeof *A->col, "Arlequin columns", &A->col));
+  memcpy(A->rowptr, K->rowptr, ((size_t)A->nb + 1) * sizeof *A->rowptr);
+  memcpy(A->col, K->col, (size_t)A->nnzb * sizeof *A->col);
+  cupid_int n = 0;
+  for (cupid_int p = 0; p < A->nnzb; p++)
+    for (int e = 0; e < 9; e++)
+      if (K->val[9 * p + e] != 0.0) {
+        n++;
+        break;
+      }
+  CUPID_CALL(cupid_malloc((size_t)n + 1, sizeof *A->at, "Arlequin fixed blocks", &A->at));
+  CUPID_CALL(cupid_malloc(9 * (size_t)n + 1, sizeof *A->val, "Arlequin fixed values", &A->val));
+  A->n_fixed = 0;
+  for (cupid_int p = 0; p < A->nnzb; p++)
+    for (int e = 0; e < 9; e++)
+      if (K->val[9 * p + e] != 0.0) {
+        A->at[A->n_fixed] = p;
+        memcpy(A->val + 9 * A->n_fixed++, K->val + 9 * p, 9 * sizeof *A->val);
+        break;
+      }
+  return CUPID_SUCCESS;
+}
+
+/* K: the kept pattern and blocks, then the PD block of op (the first K and every later one
+ * add in this order: a K assembled again at the same bonds is the same to the bit). */
+static cupid_status fill(const cupid_arlequin_assembly A, cupid_pd_operator op, cupid_csr *K) {
   cupid_status st = CUPID_SUCCESS;
   cupid_csr Kpd = NULL;
-  double *wn = NULL;
+  *K = NULL;
+  CUPID_TRY(cupid_csr_create(A->nb, A->nb, 3, A->rowptr, A->col, K));
+  cupid_csr_zero(*K);
+  for (cupid_int k = 0; k < A->n_fixed; k++)
+    memcpy((*K)->val + 9 * A->at[k], A->val + 9 * k, 9 * sizeof *A->val);
+  if (op) {
+    CUPID_TRY(cupid_pd_operator_assemble_weighted(op, A->wn, &Kpd)); /* Eq. 12, node by node */
+    CUPID_TRY(add_pd(Kpd, *K));
+  }
+cleanup:
+  if (st != CUPID_SUCCESS) cupid_csr_destroy(K);
+  cupid_csr_destroy(&Kpd);
+  return st;
+}
+
+cupid_status cupid_arlequin_assembly_create(cupid_cuf_beam beam, cupid_pd_grid grid,
+                                            cupid_pd_operator op, const cupid_arlequin_options *o,
+                                            cupid_arlequin_assembly *out, cupid_csr *K,
+                                            cupid_arlequin_info *info) {
+  cupid_status st = CUPID_SUCCESS;
+  cupid_csr Kpd = NULL, Kf = NULL;
+  cupid_arlequin_assembly A = NULL;
   tied_t t = {0};
   CUPID_CALL(check_options(beam, grid, o));
-  *K = NULL;
+  *out = NULL, *K = NULL;
   cupid_int n_pd = cupid_pd_grid_num_nodes(grid), n_fe = cupid_cuf_num_dofs(beam) / 3;
   double wmin;
-  CUPID_TRY(cpl_arlequin_pd_weights(grid, o, &wn, &wmin));
-  if (op) CUPID_TRY(cupid_pd_operator_assemble_weighted(op, wn, &Kpd)); /* Eq. 12, node by node */
+  CUPID_TRY(cupid_calloc(1, sizeof *A, "Arlequin assembly", &A));
+  CUPID_TRY(cpl_arlequin_pd_weights(grid, o, &A->wn, &wmin));
+  /* the PD block's pattern: of the bonds there are now (later ones only lose bonds) */
+  if (op) CUPID_TRY(cupid_pd_operator_assemble_weighted(op, A->wn, &Kpd));
   CUPID_TRY(tied_build(beam, grid, o, &t));
-  CUPID_TRY(build_pattern(beam, Kpd, &t, n_pd, n_fe, K));
-  if (Kpd) CUPID_TRY(add_pd(Kpd, *K));
+  CUPID_TRY(build_pattern(beam, Kpd, &t, n_pd, n_fe, &Kf));
+  cupid_csr_destroy(&Kpd);
   layout_t L;
   cupid_cuf_weight_term terms[ARL_MAX_TERMS];
   cupid_cuf_weight wfe;
   CUPID_TRY(beam_weight(o, &L, terms, &wfe));
-  if (owns_beam(grid)) CUPID_TRY(cupid_cuf_assemble_weight_add(beam, &wfe, *K));
-  CUPID_TRY(add_penalty(&t, o->penalty, n_pd, *K));
-  if (info) *info = (cupid_arlequin_info){.n_tied = t.n, .components = t.comps, .pd_weight_min = wmin};
+  if (owns_beam(grid)) CUPID_TRY(cupid_cuf_assemble_weight_add(beam, &wfe, Kf));
+  CUPID_TRY(add_penalty(&t, o->penalty, n_pd, Kf));
+  CUPID_TRY(keep_fixed(Kf, A));
+  A->info = (cupid_arlequin_info){.n_tied = t.n, .components = t.comps, .pd_weight_min = wmin};
+  CUPID_TRY(fill(A, op, K));
+  if (info) *info = A->info;
+  *out = A;
+  A = NULL;
 cleanup:
-  if (st != CUPID_SUCCESS) cupid_csr_destroy(K);
+  cupid_arlequin_assembly_destroy(&A);
   cupid_csr_destroy(&Kpd);
-  cupid_free(&wn);
+  cupid_csr_destroy(&Kf);
   tied_free(&t);
+  return st;
+}
+
+cupid_status cupid_arlequin_assembly_matrix(const cupid_arlequin_assembly A, cupid_pd_operator op,
+                                            cupid_csr *K) {
+  CUPID_CHECK(A && K, CUPID_ERR_ARGUMENT, "cupid_arlequin_assembly_matrix needs its arguments");
+  return fill(A, op, K);
+}
+
+cupid_status cupid_arlequin_assemble(cupid_cuf_beam beam, cupid_pd_grid grid, cupid_pd_operator op,
+                                     const cupid_arlequin_options *o, cupid_csr *K,
+                                     cupid_arlequin_info *info) {
+  cupid_arlequin_assembly A = NULL;
+  cupid_status st = cupid_arlequin_assembly_create(beam, grid, op, o, &A, K, info);
+  cupid_arlequin_assembly_destroy(&A);
   return st;
 }
 

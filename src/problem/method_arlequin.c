@@ -553,12 +553,27 @@ cleanup:
 
 /* ------------------------------------------------------------------------ the runs */
 
+/* The method's state (prob->method_state): what the coupled K keeps between assemblies (crack
+ * growth assembles K again after every round of broken bonds, and only its PD block changes). */
+static void free_state(cupid_problem_state *prob) {
+  cupid_arlequin_assembly A = prob->method_state;
+  cupid_arlequin_assembly_destroy(&A);
+  prob->method_state = NULL;
+}
+
 static cupid_status assemble(cupid_problem_state *prob) {
   if (prob->K) return CUPID_SUCCESS;
   double t0 = cupid_wtime();
+  if (prob->method_state) { /* bonds broke: the kept blocks and the PD block now */
+    CUPID_CALL(cupid_arlequin_assembly_matrix(prob->method_state, prob->op, &prob->K));
+    cupid_problem_phase_end(prob, CUPID_PHASE_COUPLING, t0);
+    return CUPID_SUCCESS;
+  }
   cupid_arlequin_options o = options(prob);
   cupid_arlequin_info info;
-  CUPID_CALL(cupid_arlequin_assemble(prob->beam, prob->grid, prob->op, &o, &prob->K, &info));
+  cupid_arlequin_assembly A = NULL;
+  CUPID_CALL(cupid_arlequin_assembly_create(prob->beam, prob->grid, prob->op, &o, &A, &prob->K, &info));
+  prob->method_state = A;
   cupid_problem_phase_end(prob, CUPID_PHASE_COUPLING, t0);
   static const char *wn[] = {"linear", "constant", "smooth"};
   char slabs[512] = "";
@@ -765,4 +780,5 @@ const cupid_method_ops cupid_method_arlequin = {
     .protected_zone = protected_zone,
     .growth_operator = growth_operator,
     .patch_tie = patch_tie,
+    .free_state = free_state,
 };
