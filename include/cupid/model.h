@@ -213,6 +213,10 @@ typedef struct {
                            reaches threshold * s0 */
   double margin;      /**< horizons: a crack this close to a coupling zone grows the zone
                            (default 2) */
+  double overlap;     /**< horizons: a zone that starts empty (regions: []) has overlaps of
+                           the fewest beam elements that span this (default 1) */
+  int has_overlap;
+  cupid_mark overlap_mark;
   cupid_box within;   /**< the zone never grows outside it (has[] 0: no bound on that axis) */
   int has_within;
   int64_t max_nodes;  /**< the zone's largest node count (0: no cap) */

@@ -456,6 +456,13 @@ cupid_status cupid_pd_operator_blocked(const cupid_pd_operator op, const double 
                                        const cupid_pd_fracture_options *opts, cupid_int *count,
                                        cupid_int *node, double *ratio);
 
+/** Per node, the largest ratio (stretch criterion) over its intact bonds that only the
+ *  protection keeps from breaking (as cupid_pd_operator_blocked() reads them): 0 for a node
+ *  that opts->protect does not protect or that has no such bond. One entry per node of op. */
+cupid_status cupid_pd_operator_protected_ratios(const cupid_pd_operator op, const double *u,
+                                                const cupid_pd_fracture_options *opts,
+                                                double *ratio);
+
 /**
  * Nodes that lost their support: those with at most 2 intact bonds (a mechanism; Peridigm's
  * rule) and those that no @p anchored node (a node with a constrained DOF, or tied to a beam)

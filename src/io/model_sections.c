@@ -1051,7 +1051,7 @@ static cupid_status read_fracture(model_reader *rd, yaml_node_t *node, cupid_per
 /* peridynamics.adaptive (issue 37): after fracture, which it needs (the trigger is a fraction
  * of the critical stretch, and the zone follows cracks). */
 static cupid_status read_adaptive(model_reader *rd, yaml_node_t *node, cupid_peridynamics *pd) {
-  static const char *const keys[] = {"threshold", "margin", "within", "max_nodes"};
+  static const char *const keys[] = {"threshold", "margin", "within", "max_nodes", "overlap"};
   cupid_adaptive *a = &pd->adaptive;
   mr_map map;
   yaml_node_t *v;
@@ -1063,6 +1063,7 @@ static cupid_status read_adaptive(model_reader *rd, yaml_node_t *node, cupid_per
   a->has_adaptive = 1;
   a->threshold = 0.5;
   a->margin = 2.0;
+  a->overlap = 1.0;
   CUPID_CALL(mr_map_open(rd, node, "peridynamics.adaptive", keys, COUNT(keys), &map));
   if ((v = mr_get(&map, "threshold"))) {
     CUPID_CALL(mr_number(rd, v, "peridynamics.adaptive.threshold", &a->threshold));
@@ -1074,6 +1075,15 @@ static cupid_status read_adaptive(model_reader *rd, yaml_node_t *node, cupid_per
   }
   if ((v = mr_get(&map, "margin")))
     CUPID_CALL(mr_nonnegative(rd, v, "peridynamics.adaptive.margin", &a->margin));
+  if ((v = mr_get(&map, "overlap"))) {
+    CUPID_CALL(mr_number(rd, v, "peridynamics.adaptive.overlap", &a->overlap));
+    mr_mark(v, "peridynamics.adaptive.overlap", &a->overlap_mark);
+    a->has_overlap = 1;
+    if (!(a->overlap > 0.0))
+      return mr_error(rd, v, "peridynamics.adaptive.overlap",
+                      "must be positive (horizons: the overlaps of a zone that starts empty "
+                      "span at least this), got %g", a->overlap);
+  }
   if ((v = mr_get(&map, "within"))) {
     CUPID_CALL(mr_box(rd, v, "peridynamics.adaptive.within", &a->within));
     mr_mark(v, "peridynamics.adaptive.within", &a->within_mark);

@@ -62,7 +62,13 @@ static cupid_status check_adaptive(const cupid_model_t *m) {
   if (c->has_arlequin && m->pd.n_regions == 0 && c->n_overlaps > 0)
     return cupid_model_error(m, &c->overlap_marks[0],
                              "with peridynamics.regions: [] the zone starts empty and its "
-                             "overlaps are one beam element each: give overlap: []");
+                             "overlaps span peridynamics.adaptive.overlap horizons each: give "
+                             "overlap: []");
+  if (a->has_overlap && m->pd.n_regions > 0)
+    return cupid_model_error(m, &a->overlap_mark,
+                             "is the overlap width of a zone that starts empty (regions: []); "
+                             "a zone that starts with regions keeps the widths of "
+                             "coupling.arlequin.overlap");
   const double y0 = m->beam.axis_y[0], y1 = m->beam.axis_y[m->beam.n_axis - 1];
   if (a->has_within && a->within.has[1] && (a->within.hi[1] <= y0 || a->within.lo[1] >= y1))
     return cupid_model_error(m, &a->within_mark,

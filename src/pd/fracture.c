@@ -702,6 +702,31 @@ cupid_status cupid_pd_operator_blocked(const cupid_pd_operator op, const double 
   return CUPID_SUCCESS;
 }
 
+cupid_status cupid_pd_operator_protected_ratios(const cupid_pd_operator op, const double *u,
+                                                const cupid_pd_fracture_options *o, double *ratio) {
+  CUPID_CHECK(op && u && o && ratio, CUPID_ERR_ARGUMENT, "protected_ratios needs its arguments");
+  CUPID_CHECK(o->criterion == CUPID_PD_BREAK_STRETCH, CUPID_ERR_ARGUMENT,
+              "protected_ratios reads the stretch criterion");
+  /* each node over its whole family (both directions of a bond): no two threads write one
+   * entry, and the result does not depend on the thread count */
+#pragma omp parallel for schedule(static) if (op->nnodes > PD_OMP_MIN_NODES)
+  for (cupid_int i = 0; i < op->nnodes; i++) {
+    double r = 0.0;
+    if (o->protect && o->protect[i]) {
+      const pd_family F = pd_family_of(op, i);
+      for (int q = 0; q < F.n; q++) {
+        const int s = pd_family_entry(&F, q);
+        if (pd_bond_broken(op, i, s)) continue;
+        const cupid_int j = pd_family_node(op, &F, s);
+        if (!scanned(o, 1, i, j)) continue;
+        r = fmax(r, bond_ratio(op, NULL, o, u, i, j, s));
+      }
+    }
+    ratio[i] = r;
+  }
+  return CUPID_SUCCESS;
+}
+
 /* The smallest eigenvalue of a symmetric 3x3 matrix (xx yy zz yz xz xy), closed form. */
 static double min_eigenvalue(const double a[6]) {
   const double p1 = a[3] * a[3] + a[4] * a[4] + a[5] * a[5];

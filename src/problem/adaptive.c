@@ -24,7 +24,10 @@ struct cupid_problem_adaptive_private {
   double *ends;                    /* ne + 1 element ends */
   unsigned char *core;             /* per element: the beam gave way to PD */
   unsigned char *mark;             /* per element: to convert */
-  int ov_lo, ov_hi;                /* overlap widths in elements: below and above a core */
+  int ov_lo, ov_hi;                /* overlap widths in elements: below and above a core (the
+                                      model's overlaps) */
+  double ov_width;                 /* > 0: each overlap the fewest elements that span it (a zone
+                                      that starts empty), instead of ov_lo / ov_hi */
   cupid_box across;                /* the zone's extent over the section (x, z) */
   int material;
   double s0;                       /* the trigger's critical stretch */
@@ -130,12 +133,28 @@ static int elements_in(const cupid_problem_adaptive *a, double lo, double hi, cu
   return *e0 >= 0;
 }
 
+/* The elements of the overlap below a core that starts at element e0 (> e0: it does not fit
+ * on the beam) and above one that ends at e1 (> ne - 1 - e1: it does not fit). */
+static cupid_int ov_below(const cupid_problem_adaptive *a, cupid_int e0) {
+  if (a->ov_width <= 0.0) return a->ov_lo;
+  cupid_int k = 1;
+  while (k <= e0 && a->ends[e0] - a->ends[e0 - k] < a->ov_width - a->tol) k++;
+  return k;
+}
+
+static cupid_int ov_above(const cupid_problem_adaptive *a, cupid_int e1) {
+  if (a->ov_width <= 0.0) return a->ov_hi;
+  cupid_int k = 1;
+  while (e1 + k <= a->ne - 1 && a->ends[e1 + 1 + k] - a->ends[e1 + 1] < a->ov_width - a->tol) k++;
+  return k;
+}
+
 /* Element e may turn to PD: its region (the element and the overlaps it would bring) lies in
  * `within`. */
 static int convertible(const cupid_problem_adaptive *a, const cupid_adaptive *ad, cupid_int e) {
   if (!ad->has_within || !ad->within.has[1]) return 1;
-  const cupid_int lo = e - a->ov_lo > 0 ? e - a->ov_lo : 0;
-  const cupid_int hi = e + a->ov_hi < a->ne - 1 ? e + a->ov_hi : a->ne - 1;
+  const cupid_int lo = e - ov_below(a, e) > 0 ? e - ov_below(a, e) : 0;
+  const cupid_int hi = e + ov_above(a, e) < a->ne - 1 ? e + ov_above(a, e) : a->ne - 1;
   return a->ends[lo] >= ad->within.lo[1] - a->tol && a->ends[hi + 1] <= ad->within.hi[1] + a->tol;
 }
 
@@ -168,7 +187,7 @@ static cupid_status element_ends(cupid_problem_adaptive *a, const cupid_problem_
 
 /* An empty start (regions: []): the lattice on the beam's bounding box (nodes at cell centres
  * from its lowest corner), the zone over the whole section, which must be the box its
- * components fill; overlaps of one beam element. */
+ * components fill; each overlap the fewest beam elements that span `overlap` horizons. */
 static cupid_status empty_zone(cupid_problem_adaptive *a, cupid_problem_state *prob) {
   const cupid_model_t *m = prob->model;
   const cupid_adaptive *ad = &m->pd.adaptive;
@@ -208,7 +227,7 @@ static cupid_status empty_zone(cupid_problem_adaptive *a, cupid_problem_state *p
   a->across.lo[0] = lo[0], a->across.hi[0] = hi[0], a->across.has[0] = 1;
   a->across.lo[2] = lo[1], a->across.hi[2] = hi[1], a->across.has[2] = 1;
   a->material = mat;
-  a->ov_lo = a->ov_hi = 1;
+  a->ov_width = ad->overlap * m->pd.horizon;
   a->work.pd.anchor[0] = lo[0], a->work.pd.anchor[1] = a->ends[0], a->work.pd.anchor[2] = lo[1];
   a->work.pd.has_anchor = 1;
   a->s0 = cupid_problem_fracture_s0_of(prob, mat);
@@ -316,24 +335,78 @@ static cupid_int mark_damage(cupid_problem_adaptive *a, const cupid_problem_stat
   return n;
 }
 
+/* The element holding y (the first of two when y is an end): binary search of the ends. */
+static cupid_int element_at(const cupid_problem_adaptive *a, double y) {
+  cupid_int lo = 0, hi = a->ne - 1;
+  while (lo < hi) {
+    const cupid_int mid = lo + (hi - lo) / 2;
+    if (y <= a->ends[mid + 1]) hi = mid;
+    else lo = mid + 1;
+  }
+  return lo;
+}
+
+/* An overlap's elements: the largest stretch of their PD nodes' protected bonds over its limit
+ * (peak[e], -1 where no PD node lies). The beam under an overlap follows the PD nodes it is
+ * tied to, whose lattice (its free surfaces) the beam's expansion cannot follow: its strain
+ * there is no measure of the material's (1.5 times the beam's alone next to the core of
+ * beam_adaptive.yaml), and the bonds' stretch is. */
+static cupid_status overlap_stretch(const cupid_problem_state *prob, const cupid_problem_adaptive *a,
+                                    double *peak) {
+  for (cupid_int e = 0; e < a->ne; e++) peak[e] = -1.0;
+  if (!prob->op || prob->n_pd == 0) return CUPID_SUCCESS;
+  double *ratio = NULL;
+  CUPID_CALL(cupid_malloc((size_t)prob->n_pd, sizeof *ratio, "bond ratios", &ratio));
+  cupid_status st = cupid_pd_operator_protected_ratios(prob->op, prob->u, &prob->fracture, ratio);
+  const double *x = cupid_pd_grid_coords(prob->grid);
+  for (cupid_int i = 0; i < prob->n_pd && st == CUPID_SUCCESS; i++) {
+    /* a node on an element's end belongs to both elements (a mirror image of the zone has
+     * its mirror node on the mirror end: the marks stay symmetric) */
+    const double y = x[3 * i + 1];
+    const cupid_int e = element_at(a, y);
+    if (!a->core[e]) peak[e] = fmax(peak[e], ratio[i]);
+    if (e + 1 < a->ne && fabs(y - a->ends[e + 1]) <= a->tol && !a->core[e + 1])
+      peak[e + 1] = fmax(peak[e + 1], ratio[i]);
+  }
+  cupid_free(&ratio);
+  return st;
+}
+
+/* The beam's largest principal strain over each element's quadrature points, over s0. */
+static cupid_status beam_strain(const cupid_problem_state *prob, const cupid_problem_adaptive *a,
+                                double *top) {
+  const int nse = prob->fe_info.n_section_elements;
+  double *peak = NULL;
+  CUPID_CALL(cupid_malloc((size_t)a->ne * (size_t)nse, sizeof *peak, "strain peaks", &peak));
+  cupid_status st = cupid_cuf_strain_peaks(prob->beam, prob->u, peak);
+  for (cupid_int e = 0; e < a->ne; e++) {
+    top[e] = -INFINITY;
+    for (int s = 0; s < nse; s++) top[e] = fmax(top[e], peak[e * nse + s] / a->s0);
+  }
+  cupid_free(&peak);
+  return st;
+}
+
 cupid_status cupid_problem_adaptive_trigger(cupid_problem_state *prob, cupid_int *count) {
   cupid_problem_adaptive *a = prob->adaptive;
   const cupid_adaptive *ad = &prob->model->pd.adaptive;
-  const int nse = prob->fe_info.n_section_elements;
-  double *peak = NULL;
+  double *bonds = NULL, *strain = NULL;
   *count = 0;
-  CUPID_CALL(cupid_malloc((size_t)a->ne * (size_t)nse, sizeof *peak, "strain peaks", &peak));
-  cupid_status st = cupid_cuf_strain_peaks(prob->beam, prob->u, peak);
-  const double limit = ad->threshold * a->s0;
+  cupid_int in_overlap = 0;
+  CUPID_CALL(cupid_malloc((size_t)a->ne, sizeof *bonds, "overlap stretch", &bonds));
+  cupid_status st = cupid_malloc((size_t)a->ne, sizeof *strain, "beam strain", &strain);
+  if (st == CUPID_SUCCESS) st = overlap_stretch(prob, a, bonds);
+  if (st == CUPID_SUCCESS) st = beam_strain(prob, a, strain);
   for (cupid_int e = 0; e < a->ne && st == CUPID_SUCCESS; e++) {
-    if (a->core[e] || !convertible(a, ad, e)) continue;
-    double top = -INFINITY;
-    for (int s = 0; s < nse; s++) top = fmax(top, peak[e * nse + s]);
-    if (top >= limit && !a->mark[e]) a->mark[e] = 1, (*count)++;
+    if (a->core[e] || a->mark[e] || !convertible(a, ad, e)) continue;
+    /* an overlap's element by its bonds, the beam's own by its strain */
+    const double r = bonds[e] >= 0.0 ? bonds[e] : strain[e];
+    if (r >= ad->threshold) a->mark[e] = 1, (*count)++, in_overlap += bonds[e] >= 0.0;
   }
-  cupid_free(&peak);
+  cupid_free(&bonds);
+  cupid_free(&strain);
   CUPID_CALL(st);
-  if (*count) a->why = "strain";
+  if (*count) a->why = in_overlap == *count ? "stretch in an overlap" : "strain";
   const cupid_int near = mark_damage(a, prob);
   if (near && !*count) a->why = "crack near an overlap";
   *count += near;
@@ -364,10 +437,10 @@ static void settle_zone(const cupid_problem_adaptive *a, unsigned char *z) {
       cupid_int f = e;
       while (f + 1 < a->ne && z[f + 1]) f++;
       cupid_int fill_lo = -1, fill_hi = -2;
-      if (e > 0 && e <= a->ov_lo) fill_lo = 0, fill_hi = e - 1;
-      else if (last_end >= 0 && e - last_end - 1 <= a->ov_lo + a->ov_hi)
+      if (e > 0 && e <= ov_below(a, e)) fill_lo = 0, fill_hi = e - 1;
+      else if (last_end >= 0 && e - last_end - 1 <= ov_above(a, last_end) + ov_below(a, e))
         fill_lo = last_end + 1, fill_hi = e - 1;
-      if (f < a->ne - 1 && f + a->ov_hi >= a->ne - 1) {
+      if (f < a->ne - 1 && f + ov_above(a, f) >= a->ne - 1) {
         for (cupid_int q = f + 1; q < a->ne; q++) z[q] = 1;
         changed = 1;
       }
@@ -395,8 +468,8 @@ static int zone_runs(const cupid_problem_adaptive *a, const unsigned char *z, cu
 /* The region of run [e0, e1]: the core and its overlaps along y. */
 static void run_region(const cupid_problem_adaptive *a, cupid_int e0, cupid_int e1, double *lo,
                        double *hi) {
-  *lo = e0 > 0 ? a->ends[e0 - a->ov_lo] : a->ends[0];
-  *hi = e1 < a->ne - 1 ? a->ends[e1 + 1 + a->ov_hi] : a->ends[a->ne];
+  *lo = e0 > 0 ? a->ends[e0 - ov_below(a, e0)] : a->ends[0];
+  *hi = e1 < a->ne - 1 ? a->ends[e1 + 1 + ov_above(a, e1)] : a->ends[a->ne];
 }
 
 #define MAX_ZONES (CUPID_MAX_OVERLAPS / 2)
@@ -420,12 +493,12 @@ static cupid_status lay_out(cupid_problem_adaptive *a, const cupid_int *runs, in
     memset(&o, 0, sizeof o);
     o.has[1] = 1;
     if (e0 > 0) {
-      o.lo[1] = a->ends[e0 - a->ov_lo], o.hi[1] = a->ends[e0];
+      o.lo[1] = a->ends[e0 - ov_below(a, e0)], o.hi[1] = a->ends[e0];
       w->coupling.overlap_marks[w->coupling.n_overlaps] = ad->mark;
       w->coupling.overlaps[w->coupling.n_overlaps++] = o;
     }
     if (e1 < a->ne - 1) {
-      o.lo[1] = a->ends[e1 + 1], o.hi[1] = a->ends[e1 + 1 + a->ov_hi];
+      o.lo[1] = a->ends[e1 + 1], o.hi[1] = a->ends[e1 + 1 + ov_above(a, e1)];
       w->coupling.overlap_marks[w->coupling.n_overlaps] = ad->mark;
       w->coupling.overlaps[w->coupling.n_overlaps++] = o;
     }
@@ -658,6 +731,16 @@ static cupid_status grow_from_precracks(cupid_problem_state *prob, cupid_problem
   return cupid_problem_fracture_check_protected(prob);
 }
 
+/* The overlaps' widths in words: the fewest elements over a length, or element counts. */
+static void overlap_words(const cupid_problem_adaptive *a, const cupid_model_t *m, char *buf,
+                          size_t n) {
+  if (a->ov_width > 0.0)
+    snprintf(buf, n, "each the fewest beam elements that span %g horizons = %g",
+             m->pd.adaptive.overlap, a->ov_width);
+  else
+    snprintf(buf, n, "%d / %d beam elements below / above a zone", a->ov_lo, a->ov_hi);
+}
+
 cupid_status cupid_problem_adaptive_begin(cupid_problem_state *prob) {
   cupid_problem_adaptive *a = prob->adaptive;
   a->tol = ADAPTIVE_TOL * (prob->fe_info.y_max - prob->fe_info.y_min);
@@ -679,11 +762,12 @@ cupid_status cupid_problem_adaptive_begin(cupid_problem_state *prob) {
                              "the initial PD zone has %lld nodes, over max_nodes = %lld",
                              (long long)prob->n_pd, (long long)ad->max_nodes);
   CUPID_CALL(grow_from_precracks(prob, a));
+  char ov[96];
+  overlap_words(a, prob->model, ov, sizeof ov);
   cupid_problem_progress(prob, "adaptive: the zone grows by beam elements where the strain "
                          "reaches %g x s0 = %.4g, or a crack comes within %g horizons of an "
-                         "overlap (%d element%s wide below a zone, %d above)",
-                         ad->threshold, ad->threshold * a->s0, ad->margin, a->ov_lo,
-                         a->ov_lo == 1 ? "" : "s", a->ov_hi);
+                         "overlap (%s)",
+                         ad->threshold, ad->threshold * a->s0, ad->margin, ov);
   return CUPID_SUCCESS;
 }
 
@@ -718,10 +802,11 @@ void cupid_problem_adaptive_print(const cupid_problem_state *prob, double bytes)
   const cupid_problem_adaptive *a = prob->adaptive;
   if (!a || !a->ends) return;
   const cupid_adaptive *ad = &prob->model->pd.adaptive;
-  printf("adaptive: threshold %g x s0 = %.6g (strain), margin %g horizons = %g; overlaps %d / %d "
-         "beam elements below / above a zone\n",
+  char ov[96];
+  overlap_words(a, prob->model, ov, sizeof ov);
+  printf("adaptive: threshold %g x s0 = %.6g (strain), margin %g horizons = %g; overlaps: %s\n",
          ad->threshold, ad->threshold * a->s0, ad->margin, ad->margin * prob->model->pd.horizon,
-         a->ov_lo, a->ov_hi);
+         ov);
   if (ad->has_within && ad->within.has[1])
     printf("adaptive: within y in [%g, %g]\n", ad->within.lo[1], ad->within.hi[1]);
   const cupid_int big = largest_zone(a, ad);
@@ -743,6 +828,7 @@ void cupid_problem_adaptive_json(cupid_json js, const cupid_problem_state *prob)
   cupid_json_number(js, "threshold", ad->threshold);
   cupid_json_number(js, "trigger_strain", ad->threshold * a->s0);
   cupid_json_number(js, "margin", ad->margin);
+  if (a->ov_width > 0.0) cupid_json_number(js, "overlap", ad->overlap);
   if (ad->max_nodes > 0) cupid_json_integer(js, "max_nodes", ad->max_nodes);
   cupid_json_integer(js, "initial_pd_nodes", a->initial_nodes);
   cupid_json_integer(js, "pd_nodes", prob->n_pd);

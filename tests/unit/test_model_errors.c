@@ -244,7 +244,16 @@ static const bad_case cases[] = {
      NULL},
     {"adaptive_empty_overlaps.yaml",
      "15:39: coupling.arlequin.overlap[0]: with peridynamics.regions: [] the zone starts empty "
-     "and its overlaps are one beam element each: give overlap: []",
+     "and its overlaps span peridynamics.adaptive.overlap horizons each: give overlap: []",
+     NULL},
+    {"adaptive_overlap_with_regions.yaml",
+     "12:62: peridynamics.adaptive.overlap: is the overlap width of a zone that starts empty "
+     "(regions: []); a zone that starts with regions keeps the widths of "
+     "coupling.arlequin.overlap",
+     NULL},
+    {"adaptive_overlap_zero.yaml",
+     "12:62: peridynamics.adaptive.overlap: must be positive (horizons: the overlaps of a zone "
+     "that starts empty span at least this), got 0",
      NULL},
     {"fracture_both_limits.yaml",
      "10:26: peridynamics.fracture.energy_release_rate: give critical_stretch (s0) or "

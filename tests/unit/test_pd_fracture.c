@@ -338,6 +338,48 @@ static void test_protect_damage_energy(void **state) {
   }
 }
 
+/* Per node, the largest ratio of the bonds only the protection keeps (the adaptive zone's
+ * overlap trigger): a uniform strain e along y stretches a bond along y by e, every node has
+ * one, so a protected node reads e / s0 and the others 0; cut bonds and no-fail pairs are
+ * not read. */
+static void test_protected_ratios(void **state) {
+  (void)state;
+  cupid_box bx = box3(0, 6, 0, 6, 0, 4);
+  for (int model = 0; model < 2; model++) {
+    body b = make(1, &bx, (cupid_pd_model_kind)model, CUPID_PARTIAL_PDLAMMPS, 2.5);
+    const double *x = cupid_pd_grid_coords(b.grid);
+    double *u = calloc(3 * (size_t)b.n, sizeof *u), *r = calloc((size_t)b.n, sizeof *r);
+    uint32_t *nf = calloc((size_t)b.n, sizeof *nf);
+    unsigned char *prot = calloc((size_t)b.n, 1);
+    const double e = 0.002, s0 = 0.01;
+    for (cupid_int i = 0; i < b.n; i++) {
+      u[3 * i + 1] = e * x[3 * i + 1];
+      prot[i] = x[3 * i] > 5 ? 1 : 0;
+    }
+    cupid_pd_fracture_options fo = {.criterion = CUPID_PD_BREAK_STRETCH, .critical_stretch = s0,
+                                    .protect = prot, .no_fail = nf};
+    CUPID_ASSERT_OK(cupid_pd_operator_protected_ratios(b.op, u, &fo, r));
+    for (cupid_int i = 0; i < b.n; i++) ASSERT_NEAR(r[i], prot[i] ? e / s0 : 0.0, 1e-12);
+    cupid_pd_precrack crack = {.normal = 1, .at = 3.0, .lo = {-1, 0, -1}, .hi = {7, 0, 5}};
+    cupid_int removed = 0;
+    CUPID_ASSERT_OK(cupid_pd_operator_precrack(b.op, &crack, &removed));
+    assert_true(removed > 0);
+    CUPID_ASSERT_OK(cupid_pd_operator_protected_ratios(b.op, u, &fo, r));
+    for (cupid_int i = 0; i < b.n; i++) ASSERT_NEAR(r[i], prot[i] ? e / s0 : 0.0, 1e-12);
+    /* the bonds across the cut: a jump there is read by no node */
+    for (cupid_int i = 0; i < b.n; i++) u[3 * i + 1] = x[3 * i + 1] > 3 ? 0.5 : 0.0;
+    CUPID_ASSERT_OK(cupid_pd_operator_protected_ratios(b.op, u, &fo, r));
+    for (cupid_int i = 0; i < b.n; i++) assert_true(r[i] == 0.0);
+    for (cupid_int i = 0; i < b.n; i++) u[3 * i + 1] = e * x[3 * i + 1], nf[i] = 1u;
+    CUPID_ASSERT_OK(cupid_pd_operator_protected_ratios(b.op, u, &fo, r)); /* all no-fail */
+    for (cupid_int i = 0; i < b.n; i++) assert_true(r[i] == 0.0);
+    fo.criterion = CUPID_PD_BREAK_ENERGY;
+    assert_int_equal(cupid_pd_operator_protected_ratios(b.op, u, &fo, r), CUPID_ERR_ARGUMENT);
+    free(u), free(r), free(nf), free(prot);
+    destroy(&b);
+  }
+}
+
 /* The vectorised stretch scan of the stencil path and the plain bond-by-bond scan break the
  * same bonds: a padded box and a sparse union, random fields over several rounds (bonds already
  * broken must be skipped), the stretch given and per node. */
@@ -622,7 +664,7 @@ int main(void) {
       cmocka_unit_test(test_stretch_threshold),  cmocka_unit_test(test_protect_damage_energy),
       cmocka_unit_test(test_threads),            cmocka_unit_test(test_isolated_node),
       cmocka_unit_test(test_copy_broken),        cmocka_unit_test(test_scan_paths),
-      cmocka_unit_test(test_support),
+      cmocka_unit_test(test_support),            cmocka_unit_test(test_protected_ratios),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }
