@@ -210,6 +210,14 @@ static void add_reaction(const growth_run *g, const unsigned char *fixed, size_t
       for (int c = 0; c < 3; c++) r[c] += (prob->f_int[d] - prob->f_ext[d]) * g->T[(size_t)c * n + d];
 }
 
+/* The held nodes carry more than COLLAPSE_SHARE of the forces on the body (held_forces): the
+ * crack has cut the load path of a load the supports can no longer take (a traction on a part
+ * cut loose, an Arlequin beam end whose PD piece broke through), and what the held nodes hold
+ * is a support the model never had. 1e-6: a fragment without load, or a body cut through under
+ * a grip, leaves its held nodes round-off (1e-20 of the run's forces on the growth test's
+ * plate); a collapse puts nearly all of the load on them (0.997 on a plate pulled apart). */
+#define COLLAPSE_SHARE 1e-6
+
 /* The share of the forces on the body that the held nodes carry: H / (H + S), H the sum over
  * held nodes of |f_int - f_ext| at the node, S the applied load's magnitude |P| plus the
  * magnitudes of the constraints' reactions |R_k| (g->react, just computed), the largest of the
@@ -316,7 +324,10 @@ static int carries_load(const growth_run *g, double lambda, double ratio) {
  * keeps its displacement as the load scales). */
 static void track_peaks(growth_run *g, int step, double lambda, double ratio) {
   cupid_problem_state *prob = g->prob;
-  if (!prob->growth.peak || lambda <= 0.0) return;
+  /* held nodes that carry load (check_collapse's stop): the reactions are the holding's, not
+   * the body's (a solve on the way to the collapse read 200 N on the beam without a notch of
+   * examples/fracture, whose peak is 126 N) */
+  if (!prob->growth.peak || lambda <= 0.0 || g->held_share > COLLAPSE_SHARE) return;
   const double mu = ratio > 1.0 ? lambda / ratio : lambda;
   for (int k = 0; k < prob->model->n_constraints; k++) {
     double r[3];
@@ -789,14 +800,6 @@ static cupid_status check_blocked(growth_run *g, int k, double lambda, int *stop
   *stop = 1;
   return CUPID_SUCCESS;
 }
-
-/* The held nodes carry more than COLLAPSE_SHARE of the forces on the body (held_forces): the
- * crack has cut the load path of a load the supports can no longer take (a traction on a part
- * cut loose, an Arlequin beam end whose PD piece broke through), and what the held nodes hold
- * is a support the model never had. 1e-6: a fragment without load, or a body cut through under
- * a grip, leaves its held nodes round-off (1e-20 of the run's forces on the growth test's
- * plate); a collapse puts nearly all of the load on them (0.997 on a plate pulled apart). */
-#define COLLAPSE_SHARE 1e-6
 
 /* A collapse stops the run at this step (*stop = 1), reported as such: the message, the
  * fracture block's `collapse`, exit status 2; the step's row is not written (no equilibrium),
