@@ -110,12 +110,12 @@ def picture_zones(info, out):
         dat = os.path.join(out, "zone_%d.dat" % k)
         side(pts, dat)
         ys = [p[1] for p in pts]
-        lo, hi = min(ys) - H / 2, max(ys) + H / 2
-        plots.append("""set title "load factor %.3f: %d PD nodes, zone y in [%g, %g]"
+        lo, hi = min(ys) - H / 2, max(ys) + H / 2  # the outline: the nodes' cells
+        plots.append("""set title "load factor %.3f: %d PD nodes, on y in [%g, %g]"
 set object 1 rect from %g, 0 to %g, 20 fs empty border lc rgb 'black' dt 2 lw 1.5
 plot "%s" u 1:2:3 w p pt 5 ps 0.55 lc palette notitle
 unset object 1
-""" % (t, len(pts), lo, hi, lo, hi, dat))
+""" % (t, len(pts), min(ys), max(ys), lo, hi, dat))
     gnuplot("""set terminal pngcairo size 1000,%d font ",10" noenhanced
 set output "%s"
 set multiplot layout %d,1 title "Beam without a notch (beam_adaptive.yaml, h = 1): the PD zone (dashed) over the damage (side face), at each conversion and at the end"
