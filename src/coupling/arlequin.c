@@ -284,8 +284,9 @@ cleanup:
   return st;
 }
 
-/* Add the (weighted) PD matrix into the coupled pattern: row r of Kpd is a subset of row r of
- * K, both sorted, walked together (a search per block cost 14% of a coupled growth run). */
+/* Add a part of the coupled matrix (the weighted PD block, or the beam's and the ties') into
+ * K: row r of Kpd is a subset of row r of K, both sorted, walked together (a search per block
+ * cost 14% of a coupled growth run). */
 static cupid_status add_pd(const cupid_csr_t *Kpd, cupid_csr K) {
   for (cupid_int r = 0; r < Kpd->nrows; r++) {
     cupid_int p = K->rowptr[r];
@@ -293,7 +294,7 @@ static cupid_status add_pd(const cupid_csr_t *Kpd, cupid_csr K) {
     for (cupid_int q = Kpd->rowptr[r]; q < Kpd->rowptr[r + 1]; q++) {
       while (p < end && K->col[p] < Kpd->col[q]) p++;
       CUPID_CHECK(p < end && K->col[p] == Kpd->col[q], CUPID_ERR_INTERNAL,
-                  "Arlequin pattern lacks a PD block");
+                  "Arlequin pattern lacks a block of a part");
       double *dst = K->val + 9 * p;
       for (int e = 0; e < 9; e++) dst[e] += Kpd->val[9 * q + e];
     }
@@ -392,71 +393,65 @@ cupid_status cpl_arlequin_pd_weights(cupid_pd_grid grid, const cupid_arlequin_op
   return CUPID_SUCCESS;
 }
 
-/* What the coupled K keeps between assemblies: its pattern and the blocks of the weighted beam
- * and the penalty (nonzero blocks only: most of the PD rows hold PD terms alone). Broken
- * bonds change the PD block and nothing else; the pattern is the first PD block's (a superset
- * of every later one's: bonds only break). */
+/* What the coupled K keeps between assemblies: the weighted beam and the penalty (F, on the
+ * union of their patterns) and the PD nodes' weights. Broken bonds change the PD block and
+ * nothing else. Every K, the first included, is the union of F's pattern and the PD block's,
+ * F added, then the PD block: K depends on the bonds intact now and not on those broken
+ * before (a run resumed from a checkpoint assembles the K of a run never interrupted). */
 struct cupid_arlequin_assembly_private {
-  cupid_int nb, nnzb;
-  cupid_int *rowptr, *col; /* the union pattern (blocks) */
-  cupid_int n_fixed;
-  cupid_int *at;           /* the blocks that hold a beam or penalty term: their positions */
-  double *val;             /* and their 9 values each */
-  double *wn;              /* the PD nodes' weights (Eq. 12) */
-  cupid_arlequin_info info;
+  cupid_csr F;
+  double *wn; /* the PD nodes' weights (Eq. 12) */
 };
 
 void cupid_arlequin_assembly_destroy(cupid_arlequin_assembly *A) {
   if (!A || !*A) return;
-  cupid_free(&(*A)->rowptr);
-  cupid_free(&(*A)->col);
-  cupid_free(&(*A)->at);
-  cupid_free(&(*A)->val);
+  cupid_csr_destroy(&(*A)->F);
   cupid_free(&(*A)->wn);
   cupid_free(A);
 }
 
-/* Keep K's pattern and its nonzero blocks (K without its PD block). */
-static cupid_status keep_fixed(const cupid_csr_t *K, cupid_arlequin_assembly A) {
-  A->nb = K->nrows, A->nnzb = K->rowptr[K->nrows];
-  CUPID_CALL(cupid_malloc((size_t)A->nb + 1, sizeof *A->rowptr, "Arlequin rows", &A->rowptr));
-  CUPID_CALL(cupid_malloc((size_t)A->nnzb + 1, sizeof *A->col, "Arlequin columns", &A->col));
-  memcpy(A->rowptr, K->rowptr, ((size_t)A->nb + 1) * sizeof *A->rowptr);
-  memcpy(A->col, K->col, (size_t)A->nnzb * sizeof *A->col);
-  cupid_int n = 0;
-  for (cupid_int p = 0; p < A->nnzb; p++)
-    for (int e = 0; e < 9; e++)
-      if (K->val[9 * p + e] != 0.0) {
+/* The union of the patterns of F and (rows below its own count) P, row by row: both rows are
+ * sorted, so a merge (a count, then a fill). */
+static cupid_status union_pattern(const cupid_csr_t *F, const cupid_csr_t *P, cupid_csr *K) {
+  cupid_status st = CUPID_SUCCESS;
+  const cupid_int nb = F->nrows;
+  cupid_int *rowptr = NULL, *col = NULL;
+  CUPID_TRY(cupid_calloc((size_t)nb + 1, sizeof *rowptr, "Arlequin rows", &rowptr));
+  for (int pass = 0; pass < 2; pass++) {
+    for (cupid_int r = 0; r < nb; r++) {
+      cupid_int a = F->rowptr[r], b = P && r < P->nrows ? P->rowptr[r] : 0;
+      cupid_int n = pass ? rowptr[r] : 0;
+      const cupid_int ae = F->rowptr[r + 1], be = P && r < P->nrows ? P->rowptr[r + 1] : 0;
+      while (a < ae || b < be) {
+        const cupid_int c = b >= be || (a < ae && F->col[a] <= P->col[b]) ? F->col[a] : P->col[b];
+        if (a < ae && F->col[a] == c) a++;
+        if (b < be && P->col[b] == c) b++;
+        if (pass) col[n] = c;
         n++;
-        break;
       }
-  CUPID_CALL(cupid_malloc((size_t)n + 1, sizeof *A->at, "Arlequin fixed blocks", &A->at));
-  CUPID_CALL(cupid_malloc(9 * (size_t)n + 1, sizeof *A->val, "Arlequin fixed values", &A->val));
-  A->n_fixed = 0;
-  for (cupid_int p = 0; p < A->nnzb; p++)
-    for (int e = 0; e < 9; e++)
-      if (K->val[9 * p + e] != 0.0) {
-        A->at[A->n_fixed] = p;
-        memcpy(A->val + 9 * A->n_fixed++, K->val + 9 * p, 9 * sizeof *A->val);
-        break;
-      }
-  return CUPID_SUCCESS;
+      if (!pass) rowptr[r + 1] = n; /* the row's count, summed below */
+    }
+    if (pass) break;
+    for (cupid_int r = 0; r < nb; r++) rowptr[r + 1] += rowptr[r];
+    CUPID_TRY(cupid_malloc((size_t)rowptr[nb] + 1, sizeof *col, "Arlequin columns", &col));
+  }
+  CUPID_TRY(cupid_csr_create(nb, nb, 3, rowptr, col, K));
+cleanup:
+  cupid_free(&rowptr);
+  cupid_free(&col);
+  return st;
 }
 
-/* K: the kept pattern and blocks, then the PD block of op (the first K and every later one
- * add in this order: a K assembled again at the same bonds is the same to the bit). */
+/* K: F's pattern and the PD block's, F added, then the PD block of op. */
 static cupid_status fill(const cupid_arlequin_assembly A, cupid_pd_operator op, cupid_csr *K) {
   cupid_status st = CUPID_SUCCESS;
   cupid_csr Kpd = NULL;
   *K = NULL;
-  CUPID_TRY(cupid_csr_create(A->nb, A->nb, 3, A->rowptr, A->col, K));
+  if (op) CUPID_TRY(cupid_pd_operator_assemble_weighted(op, A->wn, &Kpd)); /* Eq. 12 */
+  CUPID_TRY(union_pattern(A->F, Kpd, K));
   cupid_csr_zero(*K);
-  for (cupid_int k = 0; k < A->n_fixed; k++)
-    memcpy((*K)->val + 9 * A->at[k], A->val + 9 * k, 9 * sizeof *A->val);
-  if (op) {
-    CUPID_TRY(cupid_pd_operator_assemble_weighted(op, A->wn, &Kpd)); /* Eq. 12, node by node */
-    CUPID_TRY(add_pd(Kpd, *K));
-  }
+  CUPID_TRY(add_pd(A->F, *K));
+  if (Kpd) CUPID_TRY(add_pd(Kpd, *K));
 cleanup:
   if (st != CUPID_SUCCESS) cupid_csr_destroy(K);
   cupid_csr_destroy(&Kpd);
@@ -468,7 +463,6 @@ cupid_status cupid_arlequin_assembly_create(cupid_cuf_beam beam, cupid_pd_grid g
                                             cupid_arlequin_assembly *out, cupid_csr *K,
                                             cupid_arlequin_info *info) {
   cupid_status st = CUPID_SUCCESS;
-  cupid_csr Kpd = NULL, Kf = NULL;
   cupid_arlequin_assembly A = NULL;
   tied_t t = {0};
   CUPID_CALL(check_options(beam, grid, o));
@@ -477,27 +471,20 @@ cupid_status cupid_arlequin_assembly_create(cupid_cuf_beam beam, cupid_pd_grid g
   double wmin;
   CUPID_TRY(cupid_calloc(1, sizeof *A, "Arlequin assembly", &A));
   CUPID_TRY(cpl_arlequin_pd_weights(grid, o, &A->wn, &wmin));
-  /* the PD block's pattern: of the bonds there are now (later ones only lose bonds) */
-  if (op) CUPID_TRY(cupid_pd_operator_assemble_weighted(op, A->wn, &Kpd));
   CUPID_TRY(tied_build(beam, grid, o, &t));
-  CUPID_TRY(build_pattern(beam, Kpd, &t, n_pd, n_fe, &Kf));
-  cupid_csr_destroy(&Kpd);
+  CUPID_TRY(build_pattern(beam, NULL, &t, n_pd, n_fe, &A->F)); /* the beam's and the ties' */
   layout_t L;
   cupid_cuf_weight_term terms[ARL_MAX_TERMS];
   cupid_cuf_weight wfe;
   CUPID_TRY(beam_weight(o, &L, terms, &wfe));
-  if (owns_beam(grid)) CUPID_TRY(cupid_cuf_assemble_weight_add(beam, &wfe, Kf));
-  CUPID_TRY(add_penalty(&t, o->penalty, n_pd, Kf));
-  CUPID_TRY(keep_fixed(Kf, A));
-  A->info = (cupid_arlequin_info){.n_tied = t.n, .components = t.comps, .pd_weight_min = wmin};
+  if (owns_beam(grid)) CUPID_TRY(cupid_cuf_assemble_weight_add(beam, &wfe, A->F));
+  CUPID_TRY(add_penalty(&t, o->penalty, n_pd, A->F));
   CUPID_TRY(fill(A, op, K));
-  if (info) *info = A->info;
+  if (info) *info = (cupid_arlequin_info){.n_tied = t.n, .components = t.comps, .pd_weight_min = wmin};
   *out = A;
   A = NULL;
 cleanup:
   cupid_arlequin_assembly_destroy(&A);
-  cupid_csr_destroy(&Kpd);
-  cupid_csr_destroy(&Kf);
   tied_free(&t);
   return st;
 }
