@@ -321,18 +321,19 @@ cupid_status cupid_arlequin_assemble(cupid_cuf_beam beam, cupid_pd_grid grid,
                                      cupid_pd_operator op, const cupid_arlequin_options *o,
                                      cupid_csr *K, cupid_arlequin_info *info);
 
-/** The coupled K kept for assembling again (crack growth): its pattern and the weighted beam's
- *  and penalty's blocks, built once; each later K adds the PD block of the operator then (its
- *  bonds a subset of the first's). Every K, the first included, is the kept blocks plus the
- *  PD block in that order: the same bonds give the same K to the bit. */
+/** What the coupled K keeps for assembling again (crack growth): the weighted beam and the
+ *  penalty (the part that breaks do not change), built once; each K is the union of its
+ *  pattern and the PD block's, that part added, then the PD block of the operator then. A K
+ *  depends on the bonds intact when it is made alone: it equals cupid_arlequin_assemble()'s
+ *  on the same bonds to the bit (a run resumed from a checkpoint meets the same K). */
 typedef struct cupid_arlequin_assembly_private *cupid_arlequin_assembly;
 /** As cupid_arlequin_assemble(), keeping what does not change when bonds break in @p out. */
 cupid_status cupid_arlequin_assembly_create(cupid_cuf_beam beam, cupid_pd_grid grid,
                                             cupid_pd_operator op, const cupid_arlequin_options *o,
                                             cupid_arlequin_assembly *out, cupid_csr *K,
                                             cupid_arlequin_info *info);
-/** A new K (the caller's): the kept blocks and the PD block of @p op (the operator of create,
- *  or one on its grid with a subset of its bonds; NULL: no PD block). */
+/** A new K (the caller's): the kept part and the PD block of @p op (an operator on the grid of
+ *  create, e.g. the same one after breaks; NULL: no PD block). */
 cupid_status cupid_arlequin_assembly_matrix(const cupid_arlequin_assembly A, cupid_pd_operator op,
                                             cupid_csr *K);
 void cupid_arlequin_assembly_destroy(cupid_arlequin_assembly *A);
