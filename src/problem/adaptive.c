@@ -735,8 +735,8 @@ static cupid_status grow_from_precracks(cupid_problem_state *prob, cupid_problem
 static void overlap_words(const cupid_problem_adaptive *a, const cupid_model_t *m, char *buf,
                           size_t n) {
   if (a->ov_width > 0.0)
-    snprintf(buf, n, "each the fewest beam elements that span %g horizons = %g",
-             m->pd.adaptive.overlap, a->ov_width);
+    snprintf(buf, n, "each the fewest beam elements that span %g horizon%s = %g",
+             m->pd.adaptive.overlap, m->pd.adaptive.overlap == 1.0 ? "" : "s", a->ov_width);
   else
     snprintf(buf, n, "%d / %d beam elements below / above a zone", a->ov_lo, a->ov_hi);
 }
@@ -765,8 +765,8 @@ cupid_status cupid_problem_adaptive_begin(cupid_problem_state *prob) {
   char ov[96];
   overlap_words(a, prob->model, ov, sizeof ov);
   cupid_problem_progress(prob, "adaptive: the zone grows by beam elements where the strain "
-                         "reaches %g x s0 = %.4g, or a crack comes within %g horizons of an "
-                         "overlap (%s)",
+                         "(under an overlap: the bonds' stretch) reaches %g x s0 = %.4g, or a "
+                         "crack comes within %g horizons of an overlap (%s)",
                          ad->threshold, ad->threshold * a->s0, ad->margin, ov);
   return CUPID_SUCCESS;
 }
