@@ -217,7 +217,7 @@ static int cmp_col(const void *a, const void *b) {
   return (x > y) - (x < y);
 }
 
-/* The entries (r, c) of the union pattern, row by row: added once to count (col NULL: rows[r]
+/* The entries (r, c) of the beam's and the ties' pattern, row by row: added once to count (col NULL: rows[r]
  * counts them), then again into each row's slot (rows[r] its next place). */
 typedef struct {
   cupid_int *rows, *col;
@@ -228,10 +228,8 @@ static void put(pattern_fill *f, cupid_int r, cupid_int c) {
   f->rows[r]++;
 }
 
-static void put_all(pattern_fill *f, const cupid_csr_t *Kpd, const cupid_int *frp,
-                    const cupid_int *fcol, const tied_t *t, cupid_int n_pd, cupid_int n_fe) {
-  for (cupid_int r = 0; r < (Kpd ? n_pd : 0); r++)
-    for (cupid_int q = Kpd->rowptr[r]; q < Kpd->rowptr[r + 1]; q++) put(f, r, Kpd->col[q]);
+static void put_all(pattern_fill *f, const cupid_int *frp, const cupid_int *fcol, const tied_t *t,
+                    cupid_int n_pd, cupid_int n_fe) {
   for (cupid_int r = 0; r < n_fe; r++)
     for (cupid_int q = frp[r]; q < frp[r + 1]; q++) put(f, n_pd + r, n_pd + fcol[q]);
   for (cupid_int k = 0; k < t->n; k++) {
@@ -243,27 +241,26 @@ static void put_all(pattern_fill *f, const cupid_csr_t *Kpd, const cupid_int *fr
   }
 }
 
-/* The union pattern: PD K, the beam's (shifted to block n_pd), and the penalty couplings. The
- * penalty's FE-FE blocks N^T N couple the FE nodes of the one (beam element, section element)
- * pair that holds the tied node (cupid_cuf_shape_at()), which the beam's pattern already
- * couples: only the PD-FE blocks and the tied node's diagonal are added. Built row by row (a
- * count, a fill, each row sorted and its repeats dropped): crack growth builds it again after
- * every round of broken bonds, and one sort of every entry's (row, column) key cost 13% of the
- * coupled SENB's run. */
-static cupid_status build_pattern(cupid_cuf_beam beam, const cupid_csr_t *Kpd, const tied_t *t,
-                                  cupid_int n_pd, cupid_int n_fe, cupid_csr *K) {
+/* The pattern of the beam (shifted to block n_pd) and the penalty couplings; the PD block's
+ * joins it at each assembly (union_pattern). The penalty's FE-FE blocks N^T N couple the FE
+ * nodes of the one (beam element, section element) pair that holds the tied node
+ * (cupid_cuf_shape_at()), which the beam's pattern already couples: only the PD-FE blocks and
+ * the tied node's diagonal are added. Built row by row (a count, a fill, each row sorted and
+ * its repeats dropped). */
+static cupid_status build_pattern(cupid_cuf_beam beam, const tied_t *t, cupid_int n_pd,
+                                  cupid_int n_fe, cupid_csr *K) {
   cupid_status st = CUPID_SUCCESS;
   cupid_int *frp = NULL, *fcol = NULL, *start = NULL, *next = NULL, *col = NULL, nb = n_pd + n_fe;
   CUPID_TRY(cupid_cuf_pattern(beam, &frp, &fcol));
   CUPID_TRY(cupid_calloc((size_t)nb + 1, sizeof *start, "Arlequin rows", &start));
   CUPID_TRY(cupid_calloc((size_t)nb + 1, sizeof *next, "Arlequin rows", &next));
   pattern_fill f = {next, NULL};
-  put_all(&f, Kpd, frp, fcol, t, n_pd, n_fe);
+  put_all(&f, frp, fcol, t, n_pd, n_fe);
   for (cupid_int r = 0; r < nb; r++) start[r + 1] = start[r] + next[r];
   CUPID_TRY(cupid_malloc((size_t)start[nb] + 1, sizeof *col, "Arlequin columns", &col));
   memcpy(next, start, (size_t)nb * sizeof *next);
   f = (pattern_fill){next, col};
-  put_all(&f, Kpd, frp, fcol, t, n_pd, n_fe);
+  put_all(&f, frp, fcol, t, n_pd, n_fe);
   /* each row sorted, its repeats dropped, packed to the front: start[] becomes rowptr */
   cupid_int m = 0;
   for (cupid_int r = 0; r < nb; r++) {
@@ -285,18 +282,18 @@ cleanup:
 }
 
 /* Add a part of the coupled matrix (the weighted PD block, or the beam's and the ties') into
- * K: row r of Kpd is a subset of row r of K, both sorted, walked together (a search per block
- * cost 14% of a coupled growth run). */
-static cupid_status add_pd(const cupid_csr_t *Kpd, cupid_csr K) {
-  for (cupid_int r = 0; r < Kpd->nrows; r++) {
+ * K: row r of the part is a subset of row r of K, both sorted, walked together (a search per
+ * block cost 14% of a coupled growth run). */
+static cupid_status add_part(const cupid_csr_t *P, cupid_csr K) {
+  for (cupid_int r = 0; r < P->nrows; r++) {
     cupid_int p = K->rowptr[r];
     const cupid_int end = K->rowptr[r + 1];
-    for (cupid_int q = Kpd->rowptr[r]; q < Kpd->rowptr[r + 1]; q++) {
-      while (p < end && K->col[p] < Kpd->col[q]) p++;
-      CUPID_CHECK(p < end && K->col[p] == Kpd->col[q], CUPID_ERR_INTERNAL,
+    for (cupid_int q = P->rowptr[r]; q < P->rowptr[r + 1]; q++) {
+      while (p < end && K->col[p] < P->col[q]) p++;
+      CUPID_CHECK(p < end && K->col[p] == P->col[q], CUPID_ERR_INTERNAL,
                   "Arlequin pattern lacks a block of a part");
       double *dst = K->val + 9 * p;
-      for (int e = 0; e < 9; e++) dst[e] += Kpd->val[9 * q + e];
+      for (int e = 0; e < 9; e++) dst[e] += P->val[9 * q + e];
     }
   }
   return CUPID_SUCCESS;
@@ -450,8 +447,8 @@ static cupid_status fill(const cupid_arlequin_assembly A, cupid_pd_operator op, 
   if (op) CUPID_TRY(cupid_pd_operator_assemble_weighted(op, A->wn, &Kpd)); /* Eq. 12 */
   CUPID_TRY(union_pattern(A->F, Kpd, K));
   cupid_csr_zero(*K);
-  CUPID_TRY(add_pd(A->F, *K));
-  if (Kpd) CUPID_TRY(add_pd(Kpd, *K));
+  CUPID_TRY(add_part(A->F, *K));
+  if (Kpd) CUPID_TRY(add_part(Kpd, *K));
 cleanup:
   if (st != CUPID_SUCCESS) cupid_csr_destroy(K);
   cupid_csr_destroy(&Kpd);
@@ -472,7 +469,7 @@ cupid_status cupid_arlequin_assembly_create(cupid_cuf_beam beam, cupid_pd_grid g
   CUPID_TRY(cupid_calloc(1, sizeof *A, "Arlequin assembly", &A));
   CUPID_TRY(cpl_arlequin_pd_weights(grid, o, &A->wn, &wmin));
   CUPID_TRY(tied_build(beam, grid, o, &t));
-  CUPID_TRY(build_pattern(beam, NULL, &t, n_pd, n_fe, &A->F)); /* the beam's and the ties' */
+  CUPID_TRY(build_pattern(beam, &t, n_pd, n_fe, &A->F));
   layout_t L;
   cupid_cuf_weight_term terms[ARL_MAX_TERMS];
   cupid_cuf_weight wfe;
