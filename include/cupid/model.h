@@ -265,6 +265,9 @@ typedef struct {
    *  inside a PD region next to one of its faces (`overlap:` a box or a list of them) */
   cupid_box overlaps[CUPID_MAX_OVERLAPS];
   cupid_mark overlap_marks[CUPID_MAX_OVERLAPS];
+  /** the axis each overlap's weight ramps along (0 x, 1 y, 2 z): its one axis, or `along:`
+   *  for a slab bounded on more axes, which serves only the regions inside those bounds */
+  int overlap_along[CUPID_MAX_OVERLAPS];
   int n_overlaps;        /**< 0 (`overlap: []`) only with an adaptive zone that starts empty */
   cupid_mark overlap_list_mark; /**< the `overlap:` list (messages about it as a whole) */
   cupid_weight weight;   /**< arlequin */

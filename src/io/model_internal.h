@@ -121,6 +121,9 @@ cupid_status mr_range(const model_reader *rd, yaml_node_t *node, const char *pat
                       double out[2]);
 /** A box {x: [..], y: [..], z: [..]} with at least one axis. */
 cupid_status mr_box(const model_reader *rd, yaml_node_t *node, const char *path, cupid_box *box);
+/** mr_box with one more key allowed (@p extra): its value in *extra_value (NULL if absent). */
+cupid_status mr_box_extra(const model_reader *rd, yaml_node_t *node, const char *path,
+                          const char *extra, cupid_box *box, yaml_node_t **extra_value);
 /** A number, an expression string (x y z t density) or, when allow_null, null (free). */
 cupid_status mr_value(const model_reader *rd, const yaml_node_t *node, const char *path,
                       int allow_null, cupid_value *out);

@@ -464,9 +464,15 @@ cupid_status mr_range(const model_reader *rd, yaml_node_t *node, const char *pat
 }
 
 cupid_status mr_box(const model_reader *rd, yaml_node_t *node, const char *path, cupid_box *box) {
-  static const char *const axes[] = {"x", "y", "z"};
+  return mr_box_extra(rd, node, path, NULL, box, NULL);
+}
+
+cupid_status mr_box_extra(const model_reader *rd, yaml_node_t *node, const char *path,
+                          const char *extra, cupid_box *box, yaml_node_t **extra_value) {
+  const char *const axes[] = {"x", "y", "z", extra};
   mr_map map;
-  CUPID_CALL(mr_map_open(rd, node, path, axes, 3, &map));
+  CUPID_CALL(mr_map_open(rd, node, path, axes, extra ? 4 : 3, &map));
+  if (extra_value) *extra_value = mr_get(&map, extra);
   int any = 0;
   for (int a = 0; a < 3; a++) {
     box->lo[a] = -INFINITY;

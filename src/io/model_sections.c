@@ -1156,6 +1156,37 @@ static cupid_status read_peridynamics(model_reader *rd, yaml_node_t *node) {
 
 /* ------------------------------------------------------------------------------- coupling */
 
+/* coupling.arlequin.overlap[i]: a slab along one axis ({y: [30, 35]}), or one bounded on
+ * more axes with `along` naming the axis its weight ramps along (it serves only the regions
+ * inside its other bounds: an adaptive zone's overlap next to one section element). */
+static cupid_status read_overlap(model_reader *rd, yaml_node_t *item, const char *p,
+                                 cupid_coupling *c, int i) {
+  static const char *const axes[] = {"x", "y", "z"};
+  yaml_node_t *along = NULL;
+  CUPID_CALL(mr_box_extra(rd, item, p, "along", &c->overlaps[i], &along));
+  mr_mark(item, p, &c->overlap_marks[i]);
+  const cupid_box *bx = &c->overlaps[i];
+  const int n = bx->has[0] + bx->has[1] + bx->has[2];
+  if (!along) {
+    if (n != 1)
+      return mr_error(rd, item, p,
+                      "an overlap is a slab along one axis next to a PD region's face: give "
+                      "exactly one of x, y, z (e.g. {y: [30, 35]}), or name the axis its "
+                      "weight ramps along with `along` (e.g. {x: [5, 20], z: [45, 50], along: x})");
+    c->overlap_along[i] = bx->has[0] ? 0 : bx->has[1] ? 1 : 2;
+    return CUPID_SUCCESS;
+  }
+  char ap[PATH_SIZE];
+  mr_path(ap, p, "along");
+  int k;
+  CUPID_CALL(mr_enum(rd, along, ap, axes, 3, &k));
+  if (!bx->has[k])
+    return mr_error(rd, along, ap, "the overlap ramps along %s, and gives no %s range: give "
+                    "%s: [min, max]", axes[k], axes[k], axes[k]);
+  c->overlap_along[i] = k;
+  return CUPID_SUCCESS;
+}
+
 static cupid_status read_arlequin(model_reader *rd, yaml_node_t *node, cupid_coupling *c) {
   static const char *const keys[] = {"penalty", "overlap", "weight"};
   static const char *const weights[] = {"linear", "constant", "smooth"};
@@ -1182,13 +1213,7 @@ static cupid_status read_arlequin(model_reader *rd, yaml_node_t *node, cupid_cou
     yaml_node_t *item = overlap->type == YAML_SEQUENCE_NODE ? mr_item(rd, overlap, i) : overlap;
     if (overlap->type == YAML_SEQUENCE_NODE) mr_path_index(p, "coupling.arlequin.overlap", i);
     else snprintf(p, sizeof p, "coupling.arlequin.overlap");
-    CUPID_CALL(mr_box(rd, item, p, &c->overlaps[i]));
-    mr_mark(item, p, &c->overlap_marks[i]);
-    const cupid_box *bx = &c->overlaps[i];
-    if (bx->has[0] + bx->has[1] + bx->has[2] != 1)
-      return mr_error(rd, item, p,
-                      "an overlap is a slab along one axis next to a PD region's face: give "
-                      "exactly one of x, y, z (e.g. {y: [30, 35]})");
+    CUPID_CALL(read_overlap(rd, item, p, c, i));
   }
   c->n_overlaps = n;
   c->weight = CUPID_WEIGHT_LINEAR;

@@ -111,16 +111,23 @@ static int section_edge_ok(const cupid_problem_state *prob, int k, double v, dou
   return 1;
 }
 
-/* Overlap slab s (its one axis k and [lo, hi]) attached to a face of region box b: 0 (lo face),
- * 1 (hi face) or -1. The slab starts on the face and ends inside the region. */
-static int slab_face(const cupid_box *slab, const cupid_box *b, double tol, int *axis) {
-  int k = slab->has[0] ? 0 : slab->has[1] ? 1 : 2;
+/* Overlap slab s (its axis k: coupling.overlap_along) attached to a face of region box b: 0
+ * (lo face), 1 (hi face), 2 (it spans b along k: either face; the one the beam meets) or -1.
+ * The slab starts on the face and ends inside the region; a slab bounded on other axes too
+ * serves only the boxes inside those bounds. */
+static int slab_face(const cupid_coupling *c, int s, const cupid_box *b, double tol, int *axis) {
+  const cupid_box *slab = &c->overlaps[s];
+  int k = c->overlap_along[s];
   *axis = k;
   if (!b->has[k]) return -1;
+  for (int a = 0; a < 3; a++)
+    if (a != k && slab->has[a] &&
+        (!b->has[a] || b->lo[a] < slab->lo[a] - tol || b->hi[a] > slab->hi[a] + tol))
+      return -1;
   double lo = slab->lo[k], hi = slab->hi[k];
-  if (fabs(b->lo[k] - lo) <= tol && hi <= b->hi[k] + tol) return 0;
-  if (fabs(b->hi[k] - hi) <= tol && lo >= b->lo[k] - tol) return 1;
-  return -1;
+  const int at_lo = fabs(b->lo[k] - lo) <= tol && hi <= b->hi[k] + tol;
+  const int at_hi = fabs(b->hi[k] - hi) <= tol && lo >= b->lo[k] - tol;
+  return at_lo && at_hi ? 2 : at_lo ? 0 : at_hi ? 1 : -1;
 }
 
 /* 1 if y is the end of a beam element. */
@@ -163,6 +170,13 @@ static cupid_status slab_bounds_ok(const cupid_problem_state *prob, const cupid_
   return CUPID_SUCCESS;
 }
 
+/* 1 if region R has a ramp along k already (a slab spanning a region serves one face). */
+static int slab_used(const cupid_arlequin_region *R, int k) {
+  for (int q = 0; q < R->n_ramps; q++)
+    if (R->ramps[q].axis == k) return 1;
+  return 0;
+}
+
 /* The layout of region r: a ramp on every interface face, from the slab that starts there. */
 static cupid_status build_region(cupid_problem_state *prob, int r, cupid_arlequin_region *out) {
   const cupid_model_t *m = prob->model;
@@ -186,8 +200,9 @@ static cupid_status build_region(cupid_problem_state *prob, int r, cupid_arlequi
                                  "the PD zone must not face the beam)",
                                  AXIS[k], f);
       for (int s = 0; s < c->n_overlaps; s++) {
-        int axis, on = slab_face(&c->overlaps[s], b, tol, &axis);
-        if (axis != k || on != side) continue;
+        int axis, on = slab_face(c, s, b, tol, &axis);
+        if (axis != k || (on == 2 ? !interface || (side == 1 && slab_used(out, k)) : on != side))
+          continue;
         if (slab >= 0)
           return cupid_model_error(m, &c->overlap_marks[s],
                                    "two overlaps on the face %c = %g of the PD region %d",
@@ -350,9 +365,9 @@ static cupid_status prepare(cupid_problem_state *prob) {
   CUPID_CALL(regions_disjoint(prob));
   double tol = ARL_TOL * model_scale(prob);
   for (int s = 0; s < c->n_overlaps; s++) { /* every slab starts on a face of some region */
-    int axis = 1, on_face = 0;
+    int axis = c->overlap_along[s], on_face = 0;
     for (int r = 0; r < m->pd.n_regions && !on_face; r++)
-      on_face = slab_face(&c->overlaps[s], &m->pd.regions[r].box, tol, &axis) >= 0;
+      on_face = slab_face(c, s, &m->pd.regions[r].box, tol, &axis) >= 0;
     if (!on_face) {
       const cupid_box *o = &c->overlaps[s];
       return cupid_model_error(m, &c->overlap_marks[s],
@@ -581,9 +596,10 @@ static cupid_status assemble(cupid_problem_state *prob) {
   const cupid_coupling *c = &prob->model->coupling;
   for (int s = 0; s < c->n_overlaps && len + 48 < sizeof slabs; s++) {
     const cupid_box *b = &c->overlaps[s];
-    int k = b->has[0] ? 0 : b->has[1] ? 1 : 2;
-    len += (size_t)snprintf(slabs + len, sizeof slabs - len, "%s%c in [%g, %g]", s ? ", " : "",
-                            AXIS[k], b->lo[k], b->hi[k]);
+    int k = c->overlap_along[s];
+    len += (size_t)snprintf(slabs + len, sizeof slabs - len, "%s%c in [%g, %g]%s", s ? ", " : "",
+                            AXIS[k], b->lo[k], b->hi[k],
+                            b->has[0] + b->has[1] + b->has[2] > 1 ? " (bounded)" : "");
   }
   cupid_problem_progress(prob,
                      "coupling (Arlequin, penalty): %d region(s), overlaps %s, %s weight, kappa "
@@ -716,9 +732,7 @@ static void protected_zone(const cupid_problem_state *prob, const double x[3], c
   for (int s = 0; s < c->n_overlaps; s++) {
     if (!cupid_box_contains(&c->overlaps[s], x, 1e-9 * h)) continue;
     const cupid_box *b = &c->overlaps[s];
-    int a = 0; /* the overlap's axis: the one it bounds (a slab along one axis) */
-    for (int k = 0; k < 3; k++)
-      if (b->has[k]) a = k;
+    const int a = c->overlap_along[s];
     snprintf(buf, len, "the Arlequin overlap {%c: [%g, %g]} (%s, line %d)", "xyz"[a], b->lo[a],
              b->hi[a], c->overlap_marks[s].key, c->overlap_marks[s].line);
     return;

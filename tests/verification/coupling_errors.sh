@@ -4,7 +4,7 @@
 # section that cuts section elements or removes part of a TE expansion, Arlequin layouts it does not
 # cannot take (an overlap that starts on no region face; two overlaps on one face; an
 # interface face without an overlap; an overlap on a free surface; an overlap bound that cuts a
-# section element; a slab along two axes).
+# section element; a slab along two axes, or bounded on two with `along` naming neither).
 # Each case must fail (non-zero exit) with the expected phrase in the message.
 set -u
 CUPID=$(realpath "${CUPID:-build/cupid}")
@@ -55,9 +55,12 @@ check arlequin_two "two overlaps on the face y = 10" < <(model "{x: [0, 8], y: [
 check arlequin_face "the face y = 20 of this PD region meets the beam: give it an overlap" < <(model "{x: [0, 8], y: [10, 20], z: [0, 8]}" "$(arl "{y: [10, 15]}")" | fine)
 half="{x: [0, 4], y: [10, 20], z: [0, 8]}"
 check arlequin_parallel "the face x = 4 of this PD region meets the beam" < <(model "$half" "$(arl "[{y: [10, 15]}, {y: [15, 20]}]")" | fine)
-check arlequin_free "where the beam does not continue (a free surface)" < <(model "$half" "$(arl "[{y: [10, 15]}, {y: [15, 20]}, {x: [0, 4]}]")" | fine)
+# (a slab spanning the region along x would serve its face x = 4, the one the beam meets)
+halves() { fine | sed 's/x: \[0, 4, 8\]/x: [0, 2, 4, 8]/'; }
+check arlequin_free "where the beam does not continue (a free surface)" < <(model "$half" "$(arl "[{y: [10, 15]}, {y: [15, 20]}, {x: [0, 2]}]")" | halves)
 check arlequin_cut "the overlap bound x = 2 cuts a section element" < <(model "$half" "$(arl "[{y: [10, 15]}, {y: [15, 20]}, {x: [2, 4]}]")" | fine)
 check arlequin_axes "give exactly one of x, y, z" < <(model "{x: [0, 8], y: [10, 20], z: [0, 8]}" "$(arl "{x: [0, 8], y: [10, 12]}")")
+check arlequin_along "the overlap ramps along z, and gives no z range" < <(model "{x: [0, 8], y: [10, 20], z: [0, 8]}" "$(arl "{x: [0, 8], y: [10, 12], along: z}")")
 
 echo "coupling_errors: $pass passed, $fail failed"
 [ "$fail" -eq 0 ]
