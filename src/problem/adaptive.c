@@ -12,6 +12,7 @@
 #include <stdio.h>
 #include <string.h>
 
+#include "adaptive_section.h"
 #include "method.h"
 #include "problem_internal.h"
 
@@ -39,6 +40,15 @@ struct cupid_problem_adaptive_private {
   cupid_int initial_nodes;
   cupid_int layer_nodes;           /* PD nodes in one lattice layer across the section */
   const char *why;                 /* what marked the elements */
+  /* zones over part of the section (initial regions over part of it): the unit of conversion
+   * is a beam element times a section element; each run of beam elements has one footprint
+   * on the section (adaptive_section.c) */
+  int partial;
+  int nse;                         /* section elements */
+  cupid_section_map sec;           /* partial: the section's elements and their faces */
+  unsigned char *foot;             /* partial: ne x nse, the cores' section elements */
+  unsigned char *mark_s;           /* partial: ne x nse, the units to convert */
+  unsigned char *next;             /* partial: ne x nse, the footprints a conversion plans */
 };
 
 const cupid_model_t *cupid_problem_adaptive_model(const cupid_model_t *model,
@@ -60,6 +70,10 @@ void cupid_problem_adaptive_free(cupid_problem_adaptive **a) {
   cupid_free(&(*a)->mark);
   cupid_free(&(*a)->conv);
   cupid_free(&(*a)->map);
+  cupid_free(&(*a)->foot);
+  cupid_free(&(*a)->mark_s);
+  cupid_free(&(*a)->next);
+  cupid_section_map_free(&(*a)->sec);
   cupid_free(a);
 }
 
@@ -103,20 +117,12 @@ cupid_status cupid_problem_adaptive_check(const cupid_problem_state *prob) {
   for (int r = 0; r < m->pd.n_regions; r++)
     if (m->pd.regions[r].shape.kind != CUPID_SHAPE_BOX)
       return cupid_model_error(m, &m->pd.regions[r].mark,
-                               "adaptive zones grow from box regions (a grown zone is a run of "
-                               "beam elements over the whole section)");
+                               "adaptive zones grow from box regions (a grown zone is made of "
+                               "boxes of beam elements and section elements)");
   if (m->pd.n_holes > 0)
     return cupid_model_error(m, &m->pd.holes[0].mark,
-                             "adaptive zones grow over whole sections: holes are not supported "
-                             "with adaptive yet");
-  for (int s = 0; s < m->coupling.n_overlaps; s++)
-    if (!m->coupling.overlaps[s].has[1] || m->coupling.overlaps[s].has[0] ||
-        m->coupling.overlaps[s].has[2])
-      return cupid_model_error(m, &m->coupling.overlap_marks[s],
-                               "with adaptive the overlaps are slabs along y ({y: [..]}): the "
-                               "zone grows by whole beam elements over the whole section in "
-                               "cupid %s (zones over part of the section are not supported yet)",
-                               cupid_version());
+                             "adaptive zones are boxes of beam elements and section elements: "
+                             "holes are not supported with adaptive yet");
   return CUPID_SUCCESS;
 }
 
@@ -238,23 +244,79 @@ static cupid_status empty_zone(cupid_problem_adaptive *a, cupid_problem_state *p
   return CUPID_SUCCESS;
 }
 
+/* A region over part of the section: its core's section elements in the footprint of its
+ * core's beam elements [e0, e1]; each of its overlaps across the section one section element
+ * wide (as every overlap of a grown zone: adaptive_section.c). */
+static cupid_status partial_region(cupid_problem_adaptive *a, const cupid_problem_state *prob,
+                                   int r, cupid_int e0, cupid_int e1) {
+  const cupid_model_t *m = prob->model;
+  const cupid_arlequin_region *R = &prob->arlequin_regions[r];
+  cupid_box core = R->box;
+  for (int q = 0; q < R->n_ramps; q++) {
+    const cupid_arlequin_ramp *w = &R->ramps[q];
+    if (w->weight.fe_below) core.lo[w->axis] = w->weight.hi;
+    else core.hi[w->axis] = w->weight.lo;
+    if (w->axis == 1) continue;
+    for (int s = 0; s < a->nse; s++) { /* the section elements across the overlap */
+      const double *b = a->sec.box + 4 * s, *o = b + 2 * (1 - w->axis / 2);
+      const double *own = b + w->axis; /* x: b[0..1], z: b[2..3] */
+      const int ko = w->axis == 0 ? 2 : 0;
+      if (own[1] <= w->weight.lo + a->tol || own[0] >= w->weight.hi - a->tol) continue;
+      if (R->box.has[ko] && (o[1] <= R->box.lo[ko] + a->tol || o[0] >= R->box.hi[ko] - a->tol)) continue;
+      if (fabs(own[0] - w->weight.lo) > a->tol || fabs(own[1] - w->weight.hi) > a->tol)
+        return cupid_model_error(m, &m->pd.regions[r].mark,
+                                 "with adaptive an overlap across the section is one section "
+                                 "element wide (as each overlap of the grown zone): the overlap "
+                                 "%c in [%g, %g] of this region covers the section element %c in "
+                                 "[%g, %g]",
+                                 "xyz"[w->axis], w->weight.lo, w->weight.hi, "xyz"[w->axis],
+                                 own[0], own[1]);
+    }
+  }
+  int any = 0;
+  for (int s = 0; s < a->nse; s++) {
+    const double *b = a->sec.box + 4 * s;
+    if (b[0] < core.lo[0] - a->tol || b[1] > core.hi[0] + a->tol || b[2] < core.lo[2] - a->tol ||
+        b[3] > core.hi[2] + a->tol)
+      continue;
+    any = 1;
+    for (cupid_int e = e0; e <= e1; e++) a->foot[e * a->nse + s] = 1;
+  }
+  if (!any)
+    return cupid_model_error(m, &m->pd.regions[r].mark,
+                             "with adaptive the PD zone is made of whole section elements: this "
+                             "region, less its overlaps (x in [%g, %g], z in [%g, %g]), holds "
+                             "none",
+                             core.lo[0], core.hi[0], core.lo[2], core.hi[2]);
+  return CUPID_SUCCESS;
+}
+
+/* Zones over part of the section: the section's map and the footprints. */
+static cupid_status partial_begin(cupid_problem_adaptive *a, const cupid_problem_state *prob) {
+  a->partial = 1;
+  CUPID_CALL(cupid_section_map_create(prob->beam, a->nse, &a->sec));
+  CUPID_CALL(cupid_calloc((size_t)a->ne * (size_t)a->nse, 1, "zone units", &a->foot));
+  CUPID_CALL(cupid_calloc((size_t)a->ne * (size_t)a->nse, 1, "units to convert", &a->mark_s));
+  CUPID_CALL(cupid_calloc((size_t)a->ne * (size_t)a->nse, 1, "the planned zone", &a->next));
+  return CUPID_SUCCESS;
+}
+
 /* The initial zone from the Arlequin layout: each region's core (less its overlaps) is a run
- * of elements; the overlaps' widths in elements are kept for every zone to come. */
+ * of elements (over part of the section: of units); the overlaps' widths along y in elements
+ * are kept for every zone to come. */
 static cupid_status initial_zone(cupid_problem_adaptive *a, cupid_problem_state *prob) {
   const cupid_model_t *m = prob->model;
   const cupid_adaptive *ad = &m->pd.adaptive;
   a->ov_lo = a->ov_hi = -1;
+  for (int r = 0; r < prob->n_arlequin_regions && !a->partial; r++)
+    if (!cupid_coupling_region_spans_section(prob->beam, &prob->arlequin_regions[r].box))
+      CUPID_CALL(partial_begin(a, prob));
   for (int r = 0; r < prob->n_arlequin_regions; r++) {
     const cupid_arlequin_region *R = &prob->arlequin_regions[r];
-    if (!cupid_coupling_region_spans_section(prob->beam, &R->box))
-      return cupid_model_error(m, &m->pd.regions[r].mark,
-                               "adaptive zones grow over whole sections in cupid %s: this region "
-                               "covers part of the section (zones over part of it, the C-beam's "
-                               "web, are not supported yet)",
-                               cupid_version());
     double lo = fmax(R->box.lo[1], a->ends[0]), hi = fmin(R->box.hi[1], a->ends[a->ne]);
     for (int q = 0; q < R->n_ramps; q++) {
       const cupid_arlequin_weight *w = &R->ramps[q].weight;
+      if (R->ramps[q].axis != 1) continue;
       cupid_int e0, e1;
       const int n = elements_in(a, w->lo, w->hi, &e0, &e1) ? (int)(e1 - e0 + 1) : 0;
       if (w->fe_below) lo = w->hi, a->ov_lo = a->ov_lo < 0 ? n : a->ov_lo;
@@ -267,6 +329,7 @@ static cupid_status initial_zone(cupid_problem_adaptive *a, cupid_problem_state 
                                "region, less its overlaps (y in [%g, %g]), holds none",
                                lo, hi);
     for (cupid_int e = e0; e <= e1; e++) a->core[e] = 1;
+    if (a->partial) CUPID_CALL(partial_region(a, prob, r, e0, e1));
     if (r == 0) {
       a->across = R->box;
       a->material = m->pd.regions[r].material;
@@ -289,12 +352,32 @@ static cupid_status initial_zone(cupid_problem_adaptive *a, cupid_problem_state 
   return CUPID_SUCCESS;
 }
 
-/* Lattice layers along y whose cell centres lie in [lo, hi] (the grid's rule with an
- * anchor: cupid_pd_grid_options.has_anchor). */
-static cupid_int layers(const cupid_model_t *m, double lo, double hi) {
-  const double h = m->pd.spacing, o = m->pd.anchor[1];
+/* Lattice cells along axis k whose centres lie in [lo, hi] (the grid's rule with an anchor:
+ * cupid_pd_grid_options.has_anchor). */
+static cupid_int cells(const cupid_model_t *m, int k, double lo, double hi) {
+  const double h = m->pd.spacing, o = m->pd.anchor[k];
   const double j0 = ceil((lo - o) / h - 0.5 - 1e-9), j1 = floor((hi - o) / h - 0.5 + 1e-9);
   return j1 >= j0 ? (cupid_int)(j1 - j0 + 1) : 0;
+}
+
+/* Lattice layers along y in [lo, hi]. */
+static cupid_int layers(const cupid_model_t *m, double lo, double hi) { return cells(m, 1, lo, hi); }
+
+/* The PD nodes of one lattice layer over footprint F and its ring (zones over part of the
+ * section). */
+static cupid_int footprint_nodes(const cupid_problem_adaptive *a, const unsigned char *F) {
+  cupid_int n = 0;
+  for (int s = 0; s < a->nse; s++) {
+    const double *b = a->sec.box + 4 * s;
+    int in = F[s]; /* or next to it: the ring */
+    for (int f = 0; f < 4 && !in; f++)
+      for (int i = 0; i < CUPID_SECTION_SAMPLES && !in; i++) {
+        const int o = a->sec.beyond[(4 * s + f) * CUPID_SECTION_SAMPLES + i];
+        in = o >= 0 && F[o];
+      }
+    if (in) n += cells(&a->work, 0, b[0], b[1]) * cells(&a->work, 2, b[2], b[3]);
+  }
+  return n;
 }
 
 static cupid_int layer_nodes_of(const cupid_problem_state *prob) {
@@ -322,6 +405,52 @@ static cupid_int mark_around(cupid_problem_adaptive *a, const cupid_adaptive *ad
   return n;
 }
 
+/* Zones over part of the section: unit (e, s) may turn (its element may, and its section
+ * element lies in `within`'s x and z bounds). */
+static int unit_convertible(const cupid_problem_adaptive *a, const cupid_adaptive *ad, cupid_int e,
+                            int s) {
+  if (!convertible(a, ad, e)) return 0;
+  const double *b = a->sec.box + 4 * s;
+  for (int k = 0; k < 3 && ad->has_within; k += 2)
+    if (ad->within.has[k] && (b[k] < ad->within.lo[k] - a->tol || b[k + 1] > ad->within.hi[k] + a->tol))
+      return 0;
+  return 1;
+}
+
+static cupid_int mark_unit(cupid_problem_adaptive *a, const cupid_adaptive *ad, cupid_int e, int s) {
+  const cupid_int u = e * a->nse + s;
+  if (a->foot[u] || a->mark_s[u] || !unit_convertible(a, ad, e, s)) return 0;
+  a->mark_s[u] = 1, a->mark[e] = 1;
+  return 1;
+}
+
+/* Zones over part of the section: mark the units whose box lies within r of p (r = 0: those
+ * holding p). */
+static cupid_int mark_units_around(cupid_problem_adaptive *a, const cupid_adaptive *ad,
+                                   const double p[3], double r) {
+  cupid_int n = 0;
+  for (cupid_int e = 0; e < a->ne; e++) {
+    const double dy = fmax(fmax(a->ends[e] - p[1], p[1] - a->ends[e + 1]), 0.0);
+    if (r > 0.0 ? dy >= r : dy > 0.0) continue;
+    for (int s = 0; s < a->nse; s++) {
+      const double *b = a->sec.box + 4 * s;
+      const double dx = fmax(fmax(b[0] - p[0], p[0] - b[1]), 0.0);
+      const double dz = fmax(fmax(b[2] - p[2], p[2] - b[3]), 0.0);
+      const double d = sqrt(dx * dx + dy * dy + dz * dz);
+      if (r > 0.0 ? d < r : d <= a->tol) n += mark_unit(a, ad, e, s);
+    }
+  }
+  return n;
+}
+
+/* Mark what lies within r of p (and holds it): units over part of the section, elements over
+ * the whole of it. */
+static cupid_int mark_near(cupid_problem_adaptive *a, const cupid_adaptive *ad, const double p[3],
+                           double r) {
+  if (a->partial) return mark_units_around(a, ad, p, 0.0) + mark_units_around(a, ad, p, r);
+  return mark_around(a, ad, p[1], 0.0) + mark_around(a, ad, p[1], r);
+}
+
 /* A crack near an overlap: the elements that hold a damaged node (a broken bond's end) or lie
  * within margin horizons of one. */
 static cupid_int mark_damage(cupid_problem_adaptive *a, const cupid_problem_state *prob) {
@@ -330,8 +459,7 @@ static cupid_int mark_damage(cupid_problem_adaptive *a, const cupid_problem_stat
   const double *x = cupid_pd_grid_coords(prob->grid), r = ad->margin * prob->model->pd.horizon;
   cupid_int n = 0;
   for (cupid_int i = 0; i < prob->n_pd && prob->damage; i++)
-    if (prob->damage[i] > 0.0)
-      n += mark_around(a, ad, x[3 * i + 1], 0.0) + mark_around(a, ad, x[3 * i + 1], r);
+    if (prob->damage[i] > 0.0) n += mark_near(a, ad, x + 3 * i, r);
   return n;
 }
 
@@ -387,9 +515,67 @@ static cupid_status beam_strain(const cupid_problem_state *prob, const cupid_pro
   return st;
 }
 
+/* Zones over part of the section: overlap_stretch per unit (peak[e * nse + s]); a node on an
+ * element's end or a section element's edge belongs to each element there. */
+static cupid_status overlap_stretch_units(const cupid_problem_state *prob,
+                                          const cupid_problem_adaptive *a, double *peak) {
+  const cupid_int nu = a->ne * a->nse;
+  for (cupid_int u = 0; u < nu; u++) peak[u] = -1.0;
+  if (!prob->op || prob->n_pd == 0) return CUPID_SUCCESS;
+  double *ratio = NULL;
+  CUPID_CALL(cupid_malloc((size_t)prob->n_pd, sizeof *ratio, "bond ratios", &ratio));
+  cupid_status st = cupid_pd_operator_protected_ratios(prob->op, prob->u, &prob->fracture, ratio);
+  const double *x = cupid_pd_grid_coords(prob->grid);
+  for (cupid_int i = 0; i < prob->n_pd && st == CUPID_SUCCESS; i++) {
+    const double *p = x + 3 * i;
+    const cupid_int e = element_at(a, p[1]);
+    const int two_e = e + 1 < a->ne && fabs(p[1] - a->ends[e + 1]) <= a->tol;
+    int se[2];
+    const int ns = cupid_section_elements_at(&a->sec, p[0], p[2], se);
+    for (int q = 0; q <= two_e; q++)
+      for (int k = 0; k < ns; k++) {
+        const cupid_int u = (e + q) * a->nse + se[k];
+        if (!a->foot[u]) peak[u] = fmax(peak[u], ratio[i]);
+      }
+  }
+  cupid_free(&ratio);
+  return st;
+}
+
+/* Zones over part of the section: each unit off the cores by its PD bonds (where it holds PD
+ * nodes) or the beam's strain. */
+static cupid_status trigger_units(cupid_problem_state *prob, cupid_problem_adaptive *a,
+                                  cupid_int *count, cupid_int *in_overlap) {
+  const cupid_adaptive *ad = &prob->model->pd.adaptive;
+  const cupid_int nu = a->ne * a->nse;
+  double *bonds = NULL, *strain = NULL;
+  CUPID_CALL(cupid_malloc((size_t)nu, sizeof *bonds, "overlap stretch", &bonds));
+  cupid_status st = cupid_malloc((size_t)nu, sizeof *strain, "beam strain", &strain);
+  if (st == CUPID_SUCCESS) st = overlap_stretch_units(prob, a, bonds);
+  if (st == CUPID_SUCCESS) st = cupid_cuf_strain_peaks(prob->beam, prob->u, strain);
+  for (cupid_int u = 0; u < nu && st == CUPID_SUCCESS; u++) {
+    const double r = bonds[u] >= 0.0 ? bonds[u] : strain[u] / a->s0;
+    if (r >= ad->threshold && mark_unit(a, ad, u / a->nse, (int)(u % a->nse)))
+      (*count)++, *in_overlap += bonds[u] >= 0.0;
+  }
+  cupid_free(&bonds);
+  cupid_free(&strain);
+  return st;
+}
+
 cupid_status cupid_problem_adaptive_trigger(cupid_problem_state *prob, cupid_int *count) {
   cupid_problem_adaptive *a = prob->adaptive;
   const cupid_adaptive *ad = &prob->model->pd.adaptive;
+  if (a->partial) {
+    cupid_int in_overlap = 0;
+    *count = 0;
+    CUPID_CALL(trigger_units(prob, a, count, &in_overlap));
+    if (*count) a->why = in_overlap == *count ? "stretch in an overlap" : "strain";
+    const cupid_int near = mark_damage(a, prob);
+    if (near && !*count) a->why = "crack near an overlap";
+    *count += near;
+    return CUPID_SUCCESS;
+  }
   double *bonds = NULL, *strain = NULL;
   *count = 0;
   cupid_int in_overlap = 0;
@@ -417,7 +603,7 @@ cupid_status cupid_problem_adaptive_blocked(cupid_problem_state *prob, const dou
                                             cupid_int *count) {
   cupid_problem_adaptive *a = prob->adaptive;
   const cupid_adaptive *ad = &prob->model->pd.adaptive;
-  *count = mark_around(a, ad, x[1], 0.0) + mark_around(a, ad, x[1], ad->margin * prob->model->pd.horizon);
+  *count = mark_near(a, ad, x, ad->margin * prob->model->pd.horizon);
   a->why = "an overlap's bond reached its limit";
   return CUPID_SUCCESS;
 }
@@ -495,11 +681,13 @@ static cupid_status lay_out(cupid_problem_adaptive *a, const cupid_int *runs, in
     if (e0 > 0) {
       o.lo[1] = a->ends[e0 - ov_below(a, e0)], o.hi[1] = a->ends[e0];
       w->coupling.overlap_marks[w->coupling.n_overlaps] = ad->mark;
+      w->coupling.overlap_along[w->coupling.n_overlaps] = 1;
       w->coupling.overlaps[w->coupling.n_overlaps++] = o;
     }
     if (e1 < a->ne - 1) {
       o.lo[1] = a->ends[e1 + 1], o.hi[1] = a->ends[e1 + 1 + ov_above(a, e1)];
       w->coupling.overlap_marks[w->coupling.n_overlaps] = ad->mark;
+      w->coupling.overlap_along[w->coupling.n_overlaps] = 1;
       w->coupling.overlaps[w->coupling.n_overlaps++] = o;
     }
   }
@@ -508,6 +696,129 @@ static cupid_status lay_out(cupid_problem_adaptive *a, const cupid_int *runs, in
   w->pd.regions = regions;
   w->pd.n_regions = n;
   return CUPID_SUCCESS;
+}
+
+/* ------------------------------------------------- zones over part of the section: layout */
+
+typedef struct {
+  double r[4]; /* x lo, x hi, z lo, z hi */
+  int tag;     /* 0: core; f + 1: a ring element meeting the core on its face f */
+} section_rect;
+
+/* Merge rectangles with the same tag whose union is a rectangle (one shared whole face). */
+static int merge_rects(section_rect *q, int n, double tol) {
+  for (int again = 1; again;) {
+    again = 0;
+    for (int i = 0; i < n && !again; i++)
+      for (int j = i + 1; j < n && !again; j++) {
+        double *a = q[i].r, *b = q[j].r;
+        if (q[i].tag != q[j].tag) continue;
+        for (int k = 0; k < 2 && !again; k++) { /* k: the axis they touch along (0 x, 1 z) */
+          const int o = 1 - k;
+          if (fabs(a[2 * o] - b[2 * o]) > tol || fabs(a[2 * o + 1] - b[2 * o + 1]) > tol) continue;
+          if (fabs(a[2 * k + 1] - b[2 * k]) > tol && fabs(b[2 * k + 1] - a[2 * k]) > tol) continue;
+          a[2 * k] = fmin(a[2 * k], b[2 * k]), a[2 * k + 1] = fmax(a[2 * k + 1], b[2 * k + 1]);
+          q[j] = q[n - 1];
+          n--;
+          again = 1;
+        }
+      }
+  }
+  return n;
+}
+
+/* The rectangles of footprint F (its core merged, its ring elements merged by face): n at most
+ * 2 * nse. */
+static int footprint_rects(const cupid_problem_adaptive *a, const unsigned char *F, section_rect *q,
+                           cupid_section_ring *ring) {
+  int n = 0;
+  for (int s = 0; s < a->nse; s++)
+    if (F[s]) memcpy(q[n].r, a->sec.box + 4 * s, sizeof q[n].r), q[n++].tag = 0;
+  const int nr = cupid_section_ring_of(&a->sec, F, ring);
+  for (int i = 0; i < nr; i++) {
+    memcpy(q[n].r, a->sec.box + 4 * ring[i].element, sizeof q[n].r);
+    q[n++].tag = ring[i].face + 1;
+  }
+  return merge_rects(q, n, a->tol);
+}
+
+/* The working model's regions and overlaps of zones over part of the section: per run, a box
+ * per rectangle of its footprint, the y overlaps at its ends and an overlap along x or z
+ * (bounded to it: `along`) over each ring rectangle. */
+static cupid_status lay_out_partial(cupid_problem_adaptive *a, const cupid_int *runs, int n) {
+  cupid_model_t *w = &a->work;
+  const cupid_adaptive *ad = &w->pd.adaptive;
+  cupid_pd_region *regions = NULL;
+  section_rect *q = NULL;
+  cupid_section_ring *ring = NULL;
+  cupid_status st = CUPID_SUCCESS;
+  int nreg = 0;
+  CUPID_TRY(cupid_malloc(2 * (size_t)a->nse + 1, sizeof *q, "footprint boxes", &q));
+  CUPID_TRY(cupid_malloc((size_t)a->nse + 1, sizeof *ring, "footprint ring", &ring));
+  CUPID_TRY(cupid_calloc((size_t)n * (2 * (size_t)a->nse + 1), sizeof *regions, "PD regions", &regions));
+  w->coupling.n_overlaps = 0;
+  for (int r = 0; r < n; r++) {
+    const cupid_int e0 = runs[2 * r], e1 = runs[2 * r + 1];
+    const int nq = footprint_rects(a, a->next + e0 * a->nse, q, ring);
+    cupid_box b;
+    memset(&b, 0, sizeof b);
+    run_region(a, e0, e1, &b.lo[1], &b.hi[1]);
+    b.has[0] = b.has[1] = b.has[2] = 1;
+    for (int i = 0; i < nq; i++) {
+      b.lo[0] = q[i].r[0], b.hi[0] = q[i].r[1], b.lo[2] = q[i].r[2], b.hi[2] = q[i].r[3];
+      regions[nreg] = (cupid_pd_region){.box = b, .material = a->material, .mark = ad->mark};
+      regions[nreg].shape.kind = CUPID_SHAPE_BOX;
+      regions[nreg++].shape.box = b;
+      if (q[i].tag == 0) continue;
+      CUPID_TRY_CHECK(w->coupling.n_overlaps < CUPID_MAX_OVERLAPS, CUPID_ERR_UNSUPPORTED,
+                      "adaptive: the zone would need more than %d Arlequin overlaps; bound it "
+                      "with `within`",
+                      CUPID_MAX_OVERLAPS);
+      const int s = w->coupling.n_overlaps++;
+      w->coupling.overlaps[s] = b;
+      w->coupling.overlap_along[s] = (q[i].tag - 1) / 2 == 0 ? 0 : 2;
+      w->coupling.overlap_marks[s] = ad->mark;
+    }
+    cupid_box o;
+    memset(&o, 0, sizeof o);
+    o.has[1] = 1;
+    for (int side = 0; side < 2; side++) {
+      if (side == 0 ? e0 == 0 : e1 == a->ne - 1) continue;
+      CUPID_TRY_CHECK(w->coupling.n_overlaps < CUPID_MAX_OVERLAPS, CUPID_ERR_UNSUPPORTED,
+                      "adaptive: the zone would need more than %d Arlequin overlaps; bound it "
+                      "with `within`",
+                      CUPID_MAX_OVERLAPS);
+      o.lo[1] = side == 0 ? a->ends[e0 - ov_below(a, e0)] : a->ends[e1 + 1];
+      o.hi[1] = side == 0 ? a->ends[e0] : a->ends[e1 + 1 + ov_above(a, e1)];
+      const int s = w->coupling.n_overlaps++;
+      w->coupling.overlaps[s] = o;
+      w->coupling.overlap_along[s] = 1;
+      w->coupling.overlap_marks[s] = ad->mark;
+    }
+  }
+  cupid_free(&a->regions);
+  a->regions = regions, regions = NULL;
+  w->pd.regions = a->regions;
+  w->pd.n_regions = nreg;
+cleanup:
+  cupid_free(&regions);
+  cupid_free(&q);
+  cupid_free(&ring);
+  return st;
+}
+
+/* Zones over part of the section: the footprints the marks ask for (a->next), run by run of
+ * the settled rows z: the union of the run's cores and marks, settled on the section. */
+static void plan_footprints(cupid_problem_adaptive *a, const cupid_int *runs, int n) {
+  const int nse = a->nse;
+  memset(a->next, 0, (size_t)a->ne * (size_t)nse);
+  for (int r = 0; r < n; r++) {
+    unsigned char *F = a->next + runs[2 * r] * nse;
+    for (cupid_int e = runs[2 * r]; e <= runs[2 * r + 1]; e++)
+      for (int s = 0; s < nse; s++) F[s] |= a->foot[e * nse + s] | a->mark_s[e * nse + s];
+    cupid_section_settle(&a->sec, F);
+    for (cupid_int e = runs[2 * r] + 1; e <= runs[2 * r + 1]; e++) memcpy(a->next + e * nse, F, (size_t)nse);
+  }
 }
 
 /* What the old problem leaves the new one: the nodes' places, displacements, broken bonds. */
@@ -588,26 +899,40 @@ static cupid_status plan_zone(cupid_problem_state *prob, cupid_problem_adaptive 
               "adaptive: the zone would split into %d parts along the beam, over the %d that "
               "Arlequin's %d overlaps allow; bound it with `within`",
               n, MAX_ZONES, CUPID_MAX_OVERLAPS);
+  if (a->partial) plan_footprints(a, runs, n);
   cupid_int nodes = 0, first = -1, last = -1, count = 0;
   for (int r = 0; r < n; r++) {
     double lo, hi;
     run_region(a, runs[2 * r], runs[2 * r + 1], &lo, &hi);
-    nodes += layers(&a->work, lo, hi) * a->layer_nodes;
+    nodes += layers(&a->work, lo, hi) *
+             (a->partial ? footprint_nodes(a, a->next + runs[2 * r] * a->nse) : a->layer_nodes);
   }
-  for (cupid_int e = 0; e < a->ne; e++)
-    if (z[e] && !a->core[e]) {
-      if (first < 0) first = e;
-      last = e, count++;
+  double box[4] = {INFINITY, -INFINITY, INFINITY, -INFINITY}; /* the units added, x and z */
+  for (cupid_int e = 0; e < a->ne; e++) {
+    cupid_int added = z[e] && !a->core[e];
+    for (int s = 0; s < a->nse && a->partial; s++) {
+      const cupid_int u = e * a->nse + s;
+      if (!a->next[u] || a->foot[u]) continue;
+      added++;
+      const double *b = a->sec.box + 4 * s;
+      box[0] = fmin(box[0], b[0]), box[1] = fmax(box[1], b[1]);
+      box[2] = fmin(box[2], b[2]), box[3] = fmax(box[3], b[3]);
     }
+    if (a->partial) added -= z[e] && !a->core[e]; /* (units, not rows) */
+    if (!added) continue;
+    if (first < 0) first = e;
+    last = e, count += added;
+  }
   if (ad->max_nodes > 0 && nodes > ad->max_nodes) {
     stop_at_cap(prob, step, load_factor, nodes);
     *capped = 1;
     return CUPID_SUCCESS;
   }
-  CUPID_CALL(lay_out(a, runs, n));
+  CUPID_CALL(a->partial ? lay_out_partial(a, runs, n) : lay_out(a, runs, n));
   *c = (cupid_problem_conversion){.step = step, .load_factor = load_factor,
                                   .y_lo = a->ends[first], .y_hi = a->ends[last + 1],
-                                  .elements = (int)count, .why = a->why};
+                                  .elements = (int)count, .why = a->why, .partial = a->partial,
+                                  .x_lo = box[0], .x_hi = box[1], .z_lo = box[2], .z_hi = box[3]};
   return CUPID_SUCCESS;
 }
 
@@ -617,14 +942,22 @@ static cupid_status converted(cupid_problem_state *prob, cupid_problem_adaptive 
                               const unsigned char *z, cupid_problem_conversion *c, cupid_int before) {
   memcpy(a->core, z, (size_t)a->ne);
   memset(a->mark, 0, (size_t)a->ne);
+  if (a->partial) {
+    memcpy(a->foot, a->next, (size_t)a->ne * (size_t)a->nse);
+    memset(a->mark_s, 0, (size_t)a->ne * (size_t)a->nse);
+  }
   c->added_nodes = prob->n_pd - before, c->pd_nodes = prob->n_pd;
   CUPID_CALL(record(a, c));
   cupid_int zones = 0;
   for (cupid_int e = 0; e < a->ne; e++) zones += z[e] && (e == 0 || !z[e - 1]);
-  cupid_problem_progress(prob, "adaptive: step %d, load factor %.4g: %d beam element%s on y in "
-                         "[%g, %g] turned to PD (%s): +%lld nodes, %lld in all, %lld zone%s",
-                         c->step, c->load_factor, c->elements, c->elements == 1 ? "" : "s",
-                         c->y_lo, c->y_hi, c->why ? c->why : "", (long long)c->added_nodes,
+  char part[128] = "";
+  if (c->partial)
+    snprintf(part, sizeof part, ", x in [%g, %g], z in [%g, %g]", c->x_lo, c->x_hi, c->z_lo, c->z_hi);
+  cupid_problem_progress(prob, "adaptive: step %d, load factor %.4g: %d %s%s on y in [%g, %g]%s "
+                         "turned to PD (%s): +%lld nodes, %lld in all, %lld zone%s",
+                         c->step, c->load_factor, c->elements,
+                         c->partial ? "unit" : "beam element", c->elements == 1 ? "" : "s",
+                         c->y_lo, c->y_hi, part, c->why ? c->why : "", (long long)c->added_nodes,
                          (long long)c->pd_nodes, (long long)zones, zones == 1 ? "" : "s");
   return CUPID_SUCCESS;
 }
@@ -738,12 +1071,14 @@ static void overlap_words(const cupid_problem_adaptive *a, const cupid_model_t *
     snprintf(buf, n, "each the fewest beam elements that span %g horizon%s = %g",
              m->pd.adaptive.overlap, m->pd.adaptive.overlap == 1.0 ? "" : "s", a->ov_width);
   else
-    snprintf(buf, n, "%d / %d beam elements below / above a zone", a->ov_lo, a->ov_hi);
+    snprintf(buf, n, "%d / %d beam elements below / above a zone%s", a->ov_lo, a->ov_hi,
+             a->partial ? ", one section element across the section" : "");
 }
 
 cupid_status cupid_problem_adaptive_begin(cupid_problem_state *prob) {
   cupid_problem_adaptive *a = prob->adaptive;
   a->tol = ADAPTIVE_TOL * (prob->fe_info.y_max - prob->fe_info.y_min);
+  a->nse = (int)prob->fe_info.n_section_elements;
   CUPID_CALL(element_ends(a, prob));
   if (!prob->grid) {
     CUPID_CALL(empty_zone(a, prob));
@@ -764,9 +1099,10 @@ cupid_status cupid_problem_adaptive_begin(cupid_problem_state *prob) {
   CUPID_CALL(grow_from_precracks(prob, a));
   char ov[96];
   overlap_words(a, prob->model, ov, sizeof ov);
-  cupid_problem_progress(prob, "adaptive: the zone grows by beam elements where the strain "
-                         "(under an overlap: the bonds' stretch) reaches %g x s0 = %.4g, or a "
-                         "crack comes within %g horizons of an overlap (%s)",
+  cupid_problem_progress(prob, "adaptive: the zone grows by %s where the strain (under an "
+                         "overlap: the bonds' stretch) reaches %g x s0 = %.4g, or a crack comes "
+                         "within %g horizons of an overlap (%s)",
+                         a->partial ? "beam element x section element" : "beam elements",
                          ad->threshold, ad->threshold * a->s0, ad->margin, ov);
   return CUPID_SUCCESS;
 }
@@ -789,11 +1125,19 @@ static cupid_int largest_zone(const cupid_problem_adaptive *a, const cupid_adapt
   for (cupid_int e = 0; e < a->ne; e++) z[e] = a->core[e] || convertible(a, ad, e);
   settle_zone(a, z);
   const int n = zone_runs(a, z, runs, MAX_ZONES);
+  unsigned char *all = NULL; /* over part of the section: the largest footprint, all of it */
+  if (a->partial && cupid_malloc((size_t)a->nse, 1, "the largest footprint", &all) != CUPID_SUCCESS) {
+    cupid_error_clear();
+    cupid_free(&z);
+    return -1;
+  }
+  if (all) memset(all, 1, (size_t)a->nse);
   for (int r = 0; r < n && r < MAX_ZONES; r++) {
     double lo, hi;
     run_region(a, runs[2 * r], runs[2 * r + 1], &lo, &hi);
-    nodes += layers(&a->work, lo, hi) * a->layer_nodes;
+    nodes += layers(&a->work, lo, hi) * (all ? footprint_nodes(a, all) : a->layer_nodes);
   }
+  cupid_free(&all);
   cupid_free(&z);
   return nodes;
 }
@@ -820,6 +1164,24 @@ void cupid_problem_adaptive_print(const cupid_problem_state *prob, double bytes)
                                                           : "");
 }
 
+/* A box as a model's keys ({x: [..], y: [..], z: [..]}, with `along` when along >= 0). */
+static void json_box(cupid_json js, const cupid_box *b, int along) {
+  cupid_json_begin_object(js, NULL);
+  for (int k = 0; k < 3; k++) {
+    if (!b->has[k]) continue;
+    const char key[2] = {"xyz"[k], 0};
+    cupid_json_begin_array(js, key);
+    cupid_json_number(js, NULL, b->lo[k]);
+    cupid_json_number(js, NULL, b->hi[k]);
+    cupid_json_end_array(js);
+  }
+  if (along >= 0) {
+    const char axis[2] = {"xyz"[along], 0};
+    cupid_json_string(js, "along", axis);
+  }
+  cupid_json_end_object(js);
+}
+
 void cupid_problem_adaptive_json(cupid_json js, const cupid_problem_state *prob) {
   const cupid_problem_adaptive *a = prob->adaptive;
   if (!a) return;
@@ -835,26 +1197,12 @@ void cupid_problem_adaptive_json(cupid_json js, const cupid_problem_state *prob)
   /* the zone at the end: the boxes and overlaps of a model that has it from the start */
   const cupid_model_t *w = &a->work;
   cupid_json_begin_array(js, "regions");
-  for (int r = 0; r < w->pd.n_regions; r++) {
-    const cupid_box *b = &w->pd.regions[r].box;
-    cupid_json_begin_object(js, NULL);
-    for (int k = 0; k < 3; k++) {
-      if (!b->has[k]) continue;
-      const char key[2] = {"xyz"[k], 0};
-      cupid_json_begin_array(js, key);
-      cupid_json_number(js, NULL, b->lo[k]);
-      cupid_json_number(js, NULL, b->hi[k]);
-      cupid_json_end_array(js);
-    }
-    cupid_json_end_object(js);
-  }
+  for (int r = 0; r < w->pd.n_regions; r++) json_box(js, &w->pd.regions[r].box, -1);
   cupid_json_end_array(js);
   cupid_json_begin_array(js, "overlaps");
   for (int q = 0; q < w->coupling.n_overlaps; q++) {
-    cupid_json_begin_array(js, NULL);
-    cupid_json_number(js, NULL, w->coupling.overlaps[q].lo[1]);
-    cupid_json_number(js, NULL, w->coupling.overlaps[q].hi[1]);
-    cupid_json_end_array(js);
+    const cupid_box *b = &w->coupling.overlaps[q];
+    json_box(js, b, b->has[0] + b->has[1] + b->has[2] > 1 ? w->coupling.overlap_along[q] : -1);
   }
   cupid_json_end_array(js);
   cupid_json_begin_array(js, "conversions");
@@ -868,6 +1216,12 @@ void cupid_problem_adaptive_json(cupid_json js, const cupid_problem_state *prob)
     cupid_json_integer(js, "elements", c->elements);
     cupid_json_number(js, "y_from", c->y_lo);
     cupid_json_number(js, "y_to", c->y_hi);
+    if (c->partial) {
+      cupid_json_number(js, "x_from", c->x_lo);
+      cupid_json_number(js, "x_to", c->x_hi);
+      cupid_json_number(js, "z_from", c->z_lo);
+      cupid_json_number(js, "z_to", c->z_hi);
+    }
     cupid_json_string(js, "trigger", c->why);
     cupid_json_end_object(js);
   }

@@ -74,7 +74,9 @@ typedef struct {
   double load_factor;
   cupid_int added_nodes, pd_nodes;
   double y_lo, y_hi;   /**< the span of the elements it turned to PD */
-  int elements;
+  int elements;        /**< beam elements (partial: units, beam element x section element) */
+  int partial;         /**< a zone over part of the section: */
+  double x_lo, x_hi, z_lo, z_hi; /**< the span of the section elements it added */
   const char *why;     /**< "strain", "crack near an overlap", "an overlap's bond reached its
                             limit" or "pre-crack near an overlap" */
 } cupid_problem_conversion;

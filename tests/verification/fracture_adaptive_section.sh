@@ -1,0 +1,90 @@
+#!/usr/bin/env bash
+# Adaptive PD zones over part of the section (issue 37) on the thin wall of
+# tests/models/adaptive/wall.yaml (PD on z [4, 16] of its 20 mm, bent in its plane; linear):
+#  1. a trigger that never fires gives the fixed zone's results to the bit;
+#  2. the zone grows at step 6 by the beam's strain at the tension edge (z [0, 4] near the
+#     clamp: the element between it and the core joins too, an overlap cannot sit between two
+#     parts of the core) and at step 10 by its overlap's bonds along y; the rows of each step
+#     equal those of the model that had the zone of that step from the start (written from
+#     summary.json's regions and overlaps, bounded overlaps with `along` included), to 1e-9;
+#  3. 1 and 2 threads convert the same units at the same steps; PETSc's matrix-free path
+#     where the build has it;
+#  4. an overlap across the section two section elements wide is refused, naming its line.
+. "$(dirname "$0")/../tools/checks.sh"  # CUPID, SRC, $work (cwd), ok, bad, expect, finish
+PY=${CUPID_SYSTEM_PYTHON:-/usr/bin/python3}
+M=$SRC/tests/models/adaptive/wall.yaml
+grep -v "^  adaptive:" "$M" > fixed.yaml
+
+"$CUPID" run "$M" -o never --quiet --set 'peridynamics.adaptive.threshold=1' && ok || bad "run: never fires"
+"$CUPID" run fixed.yaml -o fixed --quiet && ok || bad "run: fixed zone"
+"$CUPID" run "$M" -o grown --quiet && ok || bad "run: grown"
+"$CUPID" run "$M" -o grown9 --quiet --set analysis.steps=9 --set 'loads=[{traction: {y: 60, value: [0, 0, 0.009]}}]' \
+  && ok || bad "run: grown, 9 steps (the zone after the first conversion)"
+OMP_NUM_THREADS=1 "$CUPID" run "$M" -o grown_t1 --quiet --threads 1 && ok || bad "run: one thread"
+petsc=0
+if "$CUPID" --version 2>&1 | grep -q petsc; then
+  petsc=1
+  "$CUPID" run "$M" -o grown_petsc --quiet --solver petsc && ok || bad "run: petsc"
+fi
+# the models that had each zone from the start
+"$PY" - <<'PY' && ok || bad "write the fixed models of the grown zones"
+import json
+def keys(box):
+    return "{" + ", ".join("%s: %s" % (k, json.dumps(v)) for k, v in box.items()) + "}"
+for d in ("grown9", "grown"):
+    a = json.load(open(d + "/summary.json"))["adaptive"]
+    regions = "[" + ", ".join(keys(b) for b in a["regions"]) + "]"
+    overlaps = "[" + ", ".join(keys(b) for b in a["overlaps"]) + "]"
+    with open(d + ".args", "w") as f:
+        f.write("peridynamics.regions=%s\ncoupling.arlequin.overlap=%s\n" % (regions, overlaps))
+PY
+for d in grown9 grown; do
+  mapfile -t z < "$d.args"
+  "$CUPID" run fixed.yaml -o "fixed_$d" --quiet --set "${z[0]}" --set "${z[1]}" && ok || bad "run: the zone of $d from the start"
+done
+
+"$PY" - "$petsc" <<'PY' && ok || bad "adaptive results over part of the section against the fixed zones"
+import csv, json, sys
+petsc = sys.argv[1] == "1"
+rows = lambda d: list(csv.DictReader(open(d + "/damage.csv")))
+summary = lambda d: json.load(open(d + "/summary.json"))
+def same(a, b, tol, steps=None, what=""):
+    ra, rb = rows(a), rows(b)
+    assert len(ra) == len(rb), (what, len(ra), len(rb))
+    cols = [c for c in rb[0] if c.startswith("reaction") or c.startswith("load_u")]
+    scale = max(abs(float(y[c])) for y in rb for c in cols)
+    worst = max(abs(float(x[c]) - float(y[c])) / scale
+                for x, y in zip(ra, rb) if not steps or int(x["step"]) in steps for c in cols)
+    print("%s: worst relative difference %.2e (bound %.0e)" % (what, worst, tol))
+    assert worst <= tol, what
+conv = lambda d: [(c["step"], c["y_from"], c["y_to"], c["z_from"], c["z_to"], c["pd_nodes"])
+                  for c in summary(d)["adaptive"]["conversions"]]
+# 1: to the bit
+assert conv("never") == []
+strip = lambda d: [{k: v for k, v in r.items() if k != "pd_nodes"} for r in rows(d)]
+assert strip("never") == strip("fixed")
+print("1. never fires: the fixed zone's rows to the bit")
+# 2: two conversions
+c = conv("grown")
+assert c == [(6, 20, 35, 0, 12, 800), (10, 35, 40, 0, 12, 960)], c
+a = summary("grown")["adaptive"]
+assert a["regions"] == [{"x": [0, 2], "y": [15, 45], "z": [0, 12]}, {"x": [0, 2], "y": [15, 45], "z": [12, 16]}], a["regions"]
+assert a["overlaps"] == [{"x": [0, 2], "y": [15, 45], "z": [12, 16], "along": "z"}, {"y": [15, 20]}, {"y": [40, 45]}], a["overlaps"]
+assert [int(r["pd_nodes"]) for r in rows("grown")] == [480] * 5 + [800] * 4 + [960]
+same("grown", "fixed", 1e-9, set(range(1, 6)), "2. steps 1-5 against the initial zone")
+assert conv("grown9") == c[:1], conv("grown9")
+same("grown", "fixed_grown9", 1e-9, set(range(6, 10)), "2. steps 6-9 against the zone of step 6")
+same("grown", "fixed_grown", 1e-9, {10}, "2. step 10 against the final zone")
+# 3: threads, PETSc
+assert conv("grown_t1") == c
+same("grown_t1", "grown", 1e-9, what="3. one thread against two")
+if petsc:
+    assert conv("grown_petsc") == c, conv("grown_petsc")
+    same("grown_petsc", "grown", 1e-5, what="3. PETSc matrix-free against direct")
+PY
+
+# 4. refusals
+expect 1 "peridynamics.regions\[0\]: with adaptive an overlap across the section is one section element wide" -- \
+  "$CUPID" check "$M" --set 'peridynamics.regions=[{x: [0, 2], y: [20, 40], z: [0, 16]}]' \
+  --set 'coupling.arlequin.overlap=[{y: [20, 25]}, {y: [35, 40]}, {z: [8, 16]}]'
+finish verification.fracture_adaptive_section
