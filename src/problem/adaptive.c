@@ -40,6 +40,7 @@ struct cupid_problem_adaptive_private {
   cupid_int initial_nodes;
   cupid_int layer_nodes;           /* PD nodes in one lattice layer across the section */
   const char *why;                 /* what marked the elements */
+  int blocked;                     /* the marks began with a crack blocked at an overlap */
   /* zones over part of the section (initial regions over part of it): the unit of conversion
    * is a beam element times a section element; each run of beam elements has one footprint
    * on the section (adaptive_section.c) */
@@ -570,9 +571,9 @@ cupid_status cupid_problem_adaptive_trigger(cupid_problem_state *prob, cupid_int
     cupid_int in_overlap = 0;
     *count = 0;
     CUPID_CALL(trigger_units(prob, a, count, &in_overlap));
-    if (*count) a->why = in_overlap == *count ? "stretch in an overlap" : "strain";
+    if (*count && !a->blocked) a->why = in_overlap == *count ? "stretch in an overlap" : "strain";
     const cupid_int near = mark_damage(a, prob);
-    if (near && !*count) a->why = "crack near an overlap";
+    if (near && !*count && !a->blocked) a->why = "crack near an overlap";
     *count += near;
     return CUPID_SUCCESS;
   }
@@ -592,9 +593,9 @@ cupid_status cupid_problem_adaptive_trigger(cupid_problem_state *prob, cupid_int
   cupid_free(&bonds);
   cupid_free(&strain);
   CUPID_CALL(st);
-  if (*count) a->why = in_overlap == *count ? "stretch in an overlap" : "strain";
+  if (*count && !a->blocked) a->why = in_overlap == *count ? "stretch in an overlap" : "strain";
   const cupid_int near = mark_damage(a, prob);
-  if (near && !*count) a->why = "crack near an overlap";
+  if (near && !*count && !a->blocked) a->why = "crack near an overlap";
   *count += near;
   return CUPID_SUCCESS;
 }
@@ -605,6 +606,7 @@ cupid_status cupid_problem_adaptive_blocked(cupid_problem_state *prob, const dou
   const cupid_adaptive *ad = &prob->model->pd.adaptive;
   *count = mark_near(a, ad, x, ad->margin * prob->model->pd.horizon);
   a->why = "an overlap's bond reached its limit";
+  a->blocked = *count > 0;
   return CUPID_SUCCESS;
 }
 
@@ -942,6 +944,7 @@ static cupid_status converted(cupid_problem_state *prob, cupid_problem_adaptive 
                               const unsigned char *z, cupid_problem_conversion *c, cupid_int before) {
   memcpy(a->core, z, (size_t)a->ne);
   memset(a->mark, 0, (size_t)a->ne);
+  a->blocked = 0;
   if (a->partial) {
     memcpy(a->foot, a->next, (size_t)a->ne * (size_t)a->nse);
     memset(a->mark_s, 0, (size_t)a->ne * (size_t)a->nse);

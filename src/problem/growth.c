@@ -1104,7 +1104,9 @@ static cupid_status convert_zone(growth_run *g, int k, double lambda, int *again
   /* the damage now: the step's breaks (the margin test and the frame read it; write_row made
    * it last at the step before) */
   CUPID_CALL(cupid_problem_fracture_damage(prob));
-  if (!g->convert) CUPID_CALL(cupid_problem_adaptive_trigger(prob, &n));
+  /* (after a crack blocked at an overlap too: the overlaps' other bonds near their limit
+   * turn with it, one conversion instead of one per side) */
+  CUPID_CALL(cupid_problem_adaptive_trigger(prob, &n));
   if (!g->convert && n == 0) return CUPID_SUCCESS;
   g->convert = 0;
   CUPID_CALL(zone_frame(g, lambda));

@@ -478,9 +478,9 @@ void cupid_problem_adaptive_free(cupid_problem_adaptive **a);
 cupid_status cupid_problem_adaptive_check(const cupid_problem_state *prob);
 /** After the grid, the beam and the layout are built: the initial zone, its lattice. */
 cupid_status cupid_problem_adaptive_begin(cupid_problem_state *prob);
-/** After a settled load step, prob->damage up to date: mark the beam elements the trigger
- *  turns to PD (the strain against threshold s0; broken bonds within margin horizons of an
- *  overlap); *count of them. */
+/** After a settled load step (or a crack blocked at an overlap), prob->damage up to date:
+ *  mark the beam elements (or units) the trigger turns to PD (the strain against threshold
+ *  s0; broken bonds within margin horizons of an overlap); *count of them. */
 cupid_status cupid_problem_adaptive_trigger(cupid_problem_state *prob, cupid_int *count);
 /** A crack asks to enter the overlap at @p x: mark the elements around it; *count 0 when none
  *  may turn (outside `within`): the run stops as a fixed zone's does. */
