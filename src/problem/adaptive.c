@@ -41,6 +41,9 @@ struct cupid_problem_adaptive_private {
   cupid_int layer_nodes;           /* PD nodes in one lattice layer across the section */
   const char *why;                 /* what marked the elements */
   int blocked;                     /* the marks began with a crack blocked at an overlap */
+  int overlaps;                    /* the method's regions carry overlaps (Arlequin); without
+                                      (fictitious nodes) a zone's region is its core, and
+                                      ov_lo / ov_hi only keep zones apart (settle_zone) */
   /* zones over part of the section (initial regions over part of it): the unit of conversion
    * is a beam element times a section element; each run of beam elements has one footprint
    * on the section (adaptive_section.c) */
@@ -87,8 +90,9 @@ cupid_status cupid_problem_adaptive_check(const cupid_problem_state *prob) {
   const cupid_method_ops *method = cupid_problem_method_of(m); /* prob's: none if it starts empty */
   if (!(method->caps & CUPID_METHOD_ADAPTIVE))
     return cupid_model_error(m, &ad->mark,
-                             "adaptive zones grow with the coupling method arlequin in cupid %s "
-                             "(the overlaps move with the zone); method %s is not supported yet",
+                             "adaptive zones grow with the coupling methods arlequin and "
+                             "fictitious in cupid %s (the coupling is built again around the "
+                             "zone); method %s is not supported yet",
                              cupid_version(), method->name);
   if (m->analysis.type != CUPID_ANALYSIS_STATIC)
     return cupid_model_error(m, &ad->mark,
@@ -156,13 +160,26 @@ static cupid_int ov_above(const cupid_problem_adaptive *a, cupid_int e1) {
   return k;
 }
 
-/* Element e may turn to PD: its region (the element and the overlaps it would bring) lies in
- * `within`. */
+/* Element e may turn to PD: its region (the element and the overlaps it would bring; with
+ * fictitious nodes the element) lies in `within`. */
 static int convertible(const cupid_problem_adaptive *a, const cupid_adaptive *ad, cupid_int e) {
   if (!ad->has_within || !ad->within.has[1]) return 1;
-  const cupid_int lo = e - ov_below(a, e) > 0 ? e - ov_below(a, e) : 0;
-  const cupid_int hi = e + ov_above(a, e) < a->ne - 1 ? e + ov_above(a, e) : a->ne - 1;
+  const cupid_int below = a->overlaps ? ov_below(a, e) : 0, above = a->overlaps ? ov_above(a, e) : 0;
+  const cupid_int lo = e - below > 0 ? e - below : 0;
+  const cupid_int hi = e + above < a->ne - 1 ? e + above : a->ne - 1;
   return a->ends[lo] >= ad->within.lo[1] - a->tol && a->ends[hi + 1] <= ad->within.hi[1] + a->tol;
+}
+
+/* Zones over part of the section: unit (e, s) may turn (its element may, and its section
+ * element lies in `within`'s x and z bounds). */
+static int unit_convertible(const cupid_problem_adaptive *a, const cupid_adaptive *ad, cupid_int e,
+                            int s) {
+  if (!convertible(a, ad, e)) return 0;
+  const double *b = a->sec.box + 4 * s;
+  for (int k = 0; k < 3 && ad->has_within; k += 2)
+    if (ad->within.has[k] && (b[k] < ad->within.lo[k] - a->tol || b[k + 1] > ad->within.hi[k] + a->tol))
+      return 0;
+  return 1;
 }
 
 /* The trigger's s0: the critical stretch, or the smallest of the nodes' (from G0). */
@@ -309,11 +326,25 @@ static cupid_status initial_zone(cupid_problem_adaptive *a, cupid_problem_state 
   const cupid_model_t *m = prob->model;
   const cupid_adaptive *ad = &m->pd.adaptive;
   a->ov_lo = a->ov_hi = -1;
-  for (int r = 0; r < prob->n_arlequin_regions && !a->partial; r++)
-    if (!cupid_coupling_region_spans_section(prob->beam, &prob->arlequin_regions[r].box))
-      CUPID_CALL(partial_begin(a, prob));
-  for (int r = 0; r < prob->n_arlequin_regions; r++) {
-    const cupid_arlequin_region *R = &prob->arlequin_regions[r];
+  /* Arlequin: its regions with their ramps; fictitious nodes: the model's boxes, no ramps */
+  const int nr = a->overlaps ? prob->n_arlequin_regions : m->pd.n_regions;
+  for (int r = 0; r < nr && !a->partial; r++) {
+    const cupid_box *b = a->overlaps ? &prob->arlequin_regions[r].box : &m->pd.regions[r].box;
+    if (cupid_coupling_region_spans_section(prob->beam, b)) continue;
+    if (!a->overlaps)
+      return cupid_model_error(m, &m->pd.regions[r].mark,
+                               "adaptive zones over part of the section grow with Arlequin's "
+                               "overlaps around them (coupling.method: arlequin) in cupid %s; "
+                               "with fictitious nodes a zone is whole beam elements over the "
+                               "whole section",
+                               cupid_version());
+    CUPID_CALL(partial_begin(a, prob));
+  }
+  for (int r = 0; r < nr; r++) {
+    cupid_arlequin_region none;
+    memset(&none, 0, sizeof none);
+    none.box = m->pd.regions[r].box;
+    const cupid_arlequin_region *R = a->overlaps ? &prob->arlequin_regions[r] : &none;
     double lo = fmax(R->box.lo[1], a->ends[0]), hi = fmin(R->box.hi[1], a->ends[a->ne]);
     for (int q = 0; q < R->n_ramps; q++) {
       const cupid_arlequin_weight *w = &R->ramps[q].weight;
@@ -336,6 +367,7 @@ static cupid_status initial_zone(cupid_problem_adaptive *a, cupid_problem_state 
       a->material = m->pd.regions[r].material;
     }
   }
+  if (!a->overlaps) a->ov_lo = a->ov_hi = 1; /* zones a beam element apart at least */
   if (a->ov_lo < 0) a->ov_lo = a->ov_hi;
   if (a->ov_hi < 0) a->ov_hi = a->ov_lo;
   if (a->ov_lo <= 0)
@@ -344,6 +376,8 @@ static cupid_status initial_zone(cupid_problem_adaptive *a, cupid_problem_state 
                              "for it to grow into");
   cupid_int can = 0;
   for (cupid_int e = 0; e < a->ne; e++) can += !a->core[e] && convertible(a, ad, e);
+  for (cupid_int u = 0; a->partial && u < a->ne * a->nse; u++) /* units of the core's rows too */
+    can += !a->foot[u] && unit_convertible(a, ad, u / a->nse, (int)(u % a->nse));
   if (can == 0)
     return cupid_model_error(m, ad->has_within ? &ad->within_mark : &ad->mark,
                              "no beam element can turn to PD: each lies outside `within` or its "
@@ -406,18 +440,6 @@ static cupid_int mark_around(cupid_problem_adaptive *a, const cupid_adaptive *ad
   return n;
 }
 
-/* Zones over part of the section: unit (e, s) may turn (its element may, and its section
- * element lies in `within`'s x and z bounds). */
-static int unit_convertible(const cupid_problem_adaptive *a, const cupid_adaptive *ad, cupid_int e,
-                            int s) {
-  if (!convertible(a, ad, e)) return 0;
-  const double *b = a->sec.box + 4 * s;
-  for (int k = 0; k < 3 && ad->has_within; k += 2)
-    if (ad->within.has[k] && (b[k] < ad->within.lo[k] - a->tol || b[k + 1] > ad->within.hi[k] + a->tol))
-      return 0;
-  return 1;
-}
-
 static cupid_int mark_unit(cupid_problem_adaptive *a, const cupid_adaptive *ad, cupid_int e, int s) {
   const cupid_int u = e * a->nse + s;
   if (a->foot[u] || a->mark_s[u] || !unit_convertible(a, ad, e, s)) return 0;
@@ -475,8 +497,18 @@ static cupid_int element_at(const cupid_problem_adaptive *a, double y) {
   return lo;
 }
 
+/* Fictitious nodes: the beam element beyond the end of e's run nearest to y (-1: a beam end). */
+static cupid_int element_beyond(const cupid_problem_adaptive *a, cupid_int e, double y) {
+  cupid_int r0 = e, r1 = e;
+  while (r0 > 0 && a->core[r0 - 1]) r0--;
+  while (r1 < a->ne - 1 && a->core[r1 + 1]) r1++;
+  const cupid_int next = y - a->ends[r0] <= a->ends[r1 + 1] - y ? r0 - 1 : r1 + 1;
+  return next >= 0 && next < a->ne ? next : -1;
+}
+
 /* An overlap's elements: the largest stretch of their PD nodes' protected bonds over its limit
- * (peak[e], -1 where no PD node lies). The beam under an overlap follows the PD nodes it is
+ * (peak[e], -1 where no PD node lies; with fictitious nodes, whose coupling zone lies inside
+ * the core, the element beyond the nearest interface takes it). The beam under an overlap follows the PD nodes it is
  * tied to, whose lattice (its free surfaces) the beam's expansion cannot follow: its strain
  * there is no measure of the material's (1.5 times the beam's alone next to the core of
  * beam_adaptive.yaml), and the bonds' stretch is. */
@@ -493,6 +525,11 @@ static cupid_status overlap_stretch(const cupid_problem_state *prob, const cupid
      * its mirror node on the mirror end: the marks stay symmetric) */
     const double y = x[3 * i + 1];
     const cupid_int e = element_at(a, y);
+    if (a->core[e] && !a->overlaps) { /* fictitious nodes: the coupling zone lies in the core */
+      const cupid_int next = element_beyond(a, e, y);
+      if (next >= 0) peak[next] = fmax(peak[next], ratio[i]);
+      continue;
+    }
     if (!a->core[e]) peak[e] = fmax(peak[e], ratio[i]);
     if (e + 1 < a->ne && fabs(y - a->ends[e + 1]) <= a->tol && !a->core[e + 1])
       peak[e + 1] = fmax(peak[e + 1], ratio[i]);
@@ -586,14 +623,19 @@ cupid_status cupid_problem_adaptive_trigger(cupid_problem_state *prob, cupid_int
   if (st == CUPID_SUCCESS) st = beam_strain(prob, a, strain);
   for (cupid_int e = 0; e < a->ne && st == CUPID_SUCCESS; e++) {
     if (a->core[e] || a->mark[e] || !convertible(a, ad, e)) continue;
-    /* an overlap's element by its bonds, the beam's own by its strain */
-    const double r = bonds[e] >= 0.0 ? bonds[e] : strain[e];
-    if (r >= ad->threshold) a->mark[e] = 1, (*count)++, in_overlap += bonds[e] >= 0.0;
+    /* an overlap's element by its bonds, the beam's own by its strain; with fictitious nodes
+     * the beam next to a zone also by the coupling zone's bonds across its interface */
+    const double r = !a->overlaps ? fmax(bonds[e], strain[e]) : bonds[e] >= 0.0 ? bonds[e] : strain[e];
+    if (r >= ad->threshold)
+      a->mark[e] = 1, (*count)++, in_overlap += bonds[e] >= 0.0 && bonds[e] >= strain[e];
   }
   cupid_free(&bonds);
   cupid_free(&strain);
   CUPID_CALL(st);
-  if (*count && !a->blocked) a->why = in_overlap == *count ? "stretch in an overlap" : "strain";
+  if (*count && !a->blocked)
+    a->why = in_overlap < *count ? "strain"
+             : a->overlaps       ? "stretch in an overlap"
+                                 : "stretch in the coupling zone";
   const cupid_int near = mark_damage(a, prob);
   if (near && !*count && !a->blocked) a->why = "crack near an overlap";
   *count += near;
@@ -656,8 +698,9 @@ static int zone_runs(const cupid_problem_adaptive *a, const unsigned char *z, cu
 /* The region of run [e0, e1]: the core and its overlaps along y. */
 static void run_region(const cupid_problem_adaptive *a, cupid_int e0, cupid_int e1, double *lo,
                        double *hi) {
-  *lo = e0 > 0 ? a->ends[e0 - ov_below(a, e0)] : a->ends[0];
-  *hi = e1 < a->ne - 1 ? a->ends[e1 + 1 + ov_above(a, e1)] : a->ends[a->ne];
+  const int ov = a->overlaps; /* (fictitious nodes: the region is the core) */
+  *lo = e0 > 0 ? a->ends[e0 - ov * ov_below(a, e0)] : a->ends[0];
+  *hi = e1 < a->ne - 1 ? a->ends[e1 + 1 + ov * ov_above(a, e1)] : a->ends[a->ne];
 }
 
 #define MAX_ZONES (CUPID_MAX_OVERLAPS / 2)
@@ -680,6 +723,7 @@ static cupid_status lay_out(cupid_problem_adaptive *a, const cupid_int *runs, in
     cupid_box o;
     memset(&o, 0, sizeof o);
     o.has[1] = 1;
+    if (!a->overlaps) continue; /* fictitious nodes: the interfaces are the region's faces */
     if (e0 > 0) {
       o.lo[1] = a->ends[e0 - ov_below(a, e0)], o.hi[1] = a->ends[e0];
       w->coupling.overlap_marks[w->coupling.n_overlaps] = ad->mark;
@@ -1078,10 +1122,36 @@ static void overlap_words(const cupid_problem_adaptive *a, const cupid_model_t *
              a->partial ? ", one section element across the section" : "");
 }
 
+#define ADAPTIVE_MAX_ELEMENT 10.0 /* horizons: the longest beam element a zone may take */
+
+/* A zone grows by whole beam elements: one much longer than the horizon would turn a slab of
+ * beam far from the crack to PD at once (the C-beam's 121 mm elements next to its zone: 40
+ * horizons, 10^5 PD nodes) and put its next overlap as far away. Each element that may turn
+ * must be at most ADAPTIVE_MAX_ELEMENT horizons long. */
+static cupid_status long_elements(const cupid_problem_adaptive *a, const cupid_problem_state *prob) {
+  const cupid_model_t *m = prob->model;
+  const cupid_adaptive *ad = &m->pd.adaptive;
+  const double limit = ADAPTIVE_MAX_ELEMENT * m->pd.horizon;
+  for (cupid_int e = 0; e < a->ne; e++) {
+    const double len = a->ends[e + 1] - a->ends[e];
+    if (a->core[e] || !convertible(a, ad, e) || len <= limit + a->tol) continue;
+    return cupid_model_error(m, ad->has_within ? &ad->within_mark : &ad->mark,
+                             "the beam element on y in [%g, %g] may turn to PD and is %g long, "
+                             "%.3g horizons: a zone grows by whole beam elements and could not "
+                             "follow a crack by one this long (at most %g horizons = %g): refine "
+                             "beam.axis where the zone may grow, or keep the zone off it with "
+                             "peridynamics.adaptive.within",
+                             a->ends[e], a->ends[e + 1], len, len / m->pd.horizon,
+                             ADAPTIVE_MAX_ELEMENT, limit);
+  }
+  return CUPID_SUCCESS;
+}
+
 cupid_status cupid_problem_adaptive_begin(cupid_problem_state *prob) {
   cupid_problem_adaptive *a = prob->adaptive;
   a->tol = ADAPTIVE_TOL * (prob->fe_info.y_max - prob->fe_info.y_min);
   a->nse = (int)prob->fe_info.n_section_elements;
+  a->overlaps = (cupid_problem_method_of(prob->model)->caps & CUPID_METHOD_OVERLAPS) != 0;
   CUPID_CALL(element_ends(a, prob));
   if (!prob->grid) {
     CUPID_CALL(empty_zone(a, prob));
@@ -1093,6 +1163,7 @@ cupid_status cupid_problem_adaptive_begin(cupid_problem_state *prob) {
     a->s0 = trigger_stretch(prob);
     a->layer_nodes = layer_nodes_of(prob);
   }
+  CUPID_CALL(long_elements(a, prob));
   a->initial_nodes = prob->n_pd;
   const cupid_adaptive *ad = &prob->model->pd.adaptive;
   if (ad->max_nodes > 0 && prob->n_pd > ad->max_nodes)

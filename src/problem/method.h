@@ -28,6 +28,9 @@ enum {
                                          operator its explicit operator applies) */
   CUPID_METHOD_ADAPTIVE = 1 << 6,   /**< adaptive PD zones (adaptive.c): its layout follows the
                                          model's regions and overlaps, built again as they grow */
+  CUPID_METHOD_OVERLAPS = 1 << 7,   /**< its PD regions carry overlaps with the beam
+                                         (coupling.arlequin.overlap) that an adaptive zone lays
+                                         out with them; without: a zone's region is its core */
 };
 
 /** A matrix-free operator of a whole system for explicit dynamics: y = K x. */

@@ -777,7 +777,8 @@ static int estimate_matrix_free(const cupid_problem_state *prob, double *bytes, 
 const cupid_method_ops cupid_method_arlequin = {
     .name = "arlequin",
     .caps = CUPID_METHOD_DYNAMIC | CUPID_METHOD_GRID_1D | CUPID_METHOD_SLABS |
-            CUPID_METHOD_GUARD_MATRIX_FREE | CUPID_METHOD_FRACTURE | CUPID_METHOD_ADAPTIVE,
+            CUPID_METHOD_GUARD_MATRIX_FREE | CUPID_METHOD_FRACTURE | CUPID_METHOD_ADAPTIVE |
+            CUPID_METHOD_OVERLAPS,
     .matrix = CUPID_MATRIX_SPD, /* symmetric positive definite once held: CHOLMOD, CG */
     .check = check,
     .prepare = prepare,

@@ -324,7 +324,8 @@ static int estimate_matrix_free(const cupid_problem_state *prob, double *bytes, 
 
 const cupid_method_ops cupid_method_fictitious = {
     .name = "fictitious",
-    .caps = CUPID_METHOD_SLABS | CUPID_METHOD_GUARD_MATRIX_FREE | CUPID_METHOD_FRACTURE,
+    .caps = CUPID_METHOD_SLABS | CUPID_METHOD_GUARD_MATRIX_FREE | CUPID_METHOD_FRACTURE |
+            CUPID_METHOD_ADAPTIVE,
     .matrix = CUPID_MATRIX_GENERAL, /* Eq. 38 is not symmetric: UMFPACK, GMRES */
     .check = check,
     .prepare = cupid_method_deactivate_regions,

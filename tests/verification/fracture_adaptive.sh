@@ -162,7 +162,7 @@ out=$("$CUPID" check "$M" --set 'peridynamics.adaptive={threshold: 0.5, within: 
 grep -q "adaptive: threshold 0.5 x s0" <<<"$out" && grep -q "the largest \`within\` allows: 1080 PD nodes" <<<"$out" \
   && ok || { bad "cupid check's adaptive lines"; echo "$out" | grep adaptive; }
 # refusals
-expect 1 "adaptive zones grow with the coupling method arlequin.*method fictitious" -- "$CUPID" check "$M" --set 'coupling={method: fictitious}'
+expect 1 "adaptive zones grow with the coupling methods arlequin and fictitious.*method lagrange" -- "$CUPID" check "$M" --set 'coupling={method: lagrange}'
 expect 1 "no beam element can turn to PD" -- "$CUPID" check "$M" --set 'peridynamics.adaptive={within: {y: [35, 55]}}'
 expect 1 "senb.yaml:33:13: peridynamics.adaptive: model.exo" -- "$CUPID" check "$M" --set output.exodus=true
 expect 1 "adaptive runs write no checkpoints" -- "$CUPID" check "$M" --set output.checkpoint=60

@@ -9,7 +9,8 @@
 #     summary.json's regions and overlaps, bounded overlaps with `along` included), to 1e-9;
 #  3. 1 and 2 threads convert the same units at the same steps; PETSc's matrix-free path
 #     where the build has it;
-#  4. an overlap across the section two section elements wide is refused, naming its line.
+#  4. an overlap across the section two section elements wide is refused, naming its line, and
+#     so is a beam element that may turn and is longer than 10 horizons.
 . "$(dirname "$0")/../tools/checks.sh"  # CUPID, SRC, $work (cwd), ok, bad, expect, finish
 PY=${CUPID_SYSTEM_PYTHON:-/usr/bin/python3}
 M=$SRC/tests/models/adaptive/wall.yaml
@@ -87,4 +88,8 @@ PY
 expect 1 "peridynamics.regions\[0\]: with adaptive an overlap across the section is one section element wide" -- \
   "$CUPID" check "$M" --set 'peridynamics.regions=[{x: [0, 2], y: [20, 40], z: [0, 16]}]' \
   --set 'coupling.arlequin.overlap=[{y: [20, 25]}, {y: [35, 40]}, {z: [8, 16]}]'
+# a beam element that may turn and is longer than 10 horizons (20 mm, 13.3 horizons)
+expect 1 "the beam element on y in \[0, 20\] may turn to PD and is 20 long, 13.3 horizons" -- \
+  "$CUPID" check "$M" --set 'beam.axis={y: [0, 20, 40, 60], elements: [1, 4, 1], type: B2}' \
+  --set 'peridynamics.adaptive={threshold: 1e-4}'
 finish verification.fracture_adaptive_section
