@@ -334,7 +334,7 @@ static cupid_status initial_zone(cupid_problem_adaptive *a, cupid_problem_state 
     if (!a->overlaps)
       return cupid_model_error(m, &m->pd.regions[r].mark,
                                "adaptive zones over part of the section grow with Arlequin's "
-                               "overlaps around them (coupling.method: arlequin) in cupid %s; "
+                               "overlaps around them (the coupling method arlequin) in cupid %s; "
                                "with fictitious nodes a zone is whole beam elements over the "
                                "whole section",
                                cupid_version());
