@@ -9,7 +9,8 @@
 #     turn [20, 25] and [65, 70] at step 7 and then [15, 20] and [70, 75] (within [15, 75]):
 #     steps 1-6 equal the initial zone's rows, steps 7-10 those of the model that had [15, 75]
 #     from the start, to 1e-9 (each solve is linear);
-#  3. 1 and 2 threads convert the same elements at the same steps;
+#  3. 1 and 2 threads convert the same elements at the same steps; so does PETSc's matrix-free
+#     path where the build has it (its rows to the solver's tolerance);
 #  4. a zone over part of the section is refused with fictitious nodes, naming its line.
 . "$(dirname "$0")/../tools/checks.sh"  # CUPID, SRC, $work (cwd), ok, bad, expect, finish
 PY=${CUPID_SYSTEM_PYTHON:-/usr/bin/python3}
@@ -27,11 +28,18 @@ lin_at=(--set 'peridynamics.adaptive={threshold: 5e-5, margin: 0, within: {y: [1
 "$CUPID" run "$M" -o lin --quiet "${fict[@]}" "${linear[@]}" "${lin_at[@]}" && ok || bad "run: linear, grown"
 OMP_NUM_THREADS=1 "$CUPID" run "$M" -o lin_t1 --quiet --threads 1 "${fict[@]}" "${linear[@]}" "${lin_at[@]}" \
   && ok || bad "run: linear, one thread"
+petsc=0
+if "$CUPID" --version 2>&1 | grep -q petsc; then
+  petsc=1
+  "$CUPID" run "$M" -o lin_petsc --quiet --solver petsc "${fict[@]}" "${linear[@]}" "${lin_at[@]}" \
+    && ok || bad "run: linear, petsc"
+fi
 "$CUPID" run fixed.yaml -o lin_fixed --quiet "${fict[@]}" "${linear[@]}" && ok || bad "run: linear, [25, 65]"
 "$CUPID" run fixed.yaml -o lin_wide --quiet "${fict[@]}" "${wide[@]}" "${linear[@]}" && ok || bad "run: linear, [15, 75]"
 
-"$PY" - <<'PY' && ok || bad "adaptive results with fictitious nodes against the fixed zones"
-import csv, json
+"$PY" - "$petsc" <<'PY' && ok || bad "adaptive results with fictitious nodes against the fixed zones"
+import csv, json, sys
+petsc = sys.argv[1] == "1"
 rows = lambda d: list(csv.DictReader(open(d + "/damage.csv")))
 summary = lambda d: json.load(open(d + "/summary.json"))
 conv = lambda d: [(c["step"], c["y_from"], c["y_to"], c["pd_nodes"], c["trigger"])
@@ -63,6 +71,9 @@ same("lin", "lin_wide", 1e-9, set(range(7, 11)), "2. steps 7-10 against [15, 75]
 # 3
 assert conv("lin_t1") == c
 same("lin_t1", "lin", 1e-9, what="3. one thread against two")
+if petsc:  # GMRES on the LU of a bond-based twin, to its tolerance
+    assert conv("lin_petsc") == c, conv("lin_petsc")
+    same("lin_petsc", "lin", 1e-5, what="3. PETSc matrix-free against direct")
 PY
 
 expect 1 "adaptive zones over part of the section grow with Arlequin's overlaps" -- "$CUPID" check "$M" \
