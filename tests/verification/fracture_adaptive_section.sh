@@ -10,7 +10,12 @@
 #  3. 1 and 2 threads convert the same units at the same steps; PETSc's matrix-free path
 #     where the build has it;
 #  4. an overlap across the section two section elements wide is refused, naming its line, and
-#     so is a beam element that may turn and is longer than 10 horizons.
+#     so is a beam element that may turn and is longer than 10 horizons;
+#  5. a small C-beam (tests/models/adaptive/cbeam.yaml) bent about x: the zone runs down its
+#     web, takes the web's corner element (its far face is free) and steps into the flange
+#     beyond, whose first element is the next overlap (along x, a bounded slab); four
+#     conversions, each step's rows those of the model that had that step's zone from the
+#     start, to 1e-9.
 . "$(dirname "$0")/../tools/checks.sh"  # CUPID, SRC, $work (cwd), ok, bad, expect, finish
 PY=${CUPID_SYSTEM_PYTHON:-/usr/bin/python3}
 M=$SRC/tests/models/adaptive/wall.yaml
@@ -82,6 +87,51 @@ same("grown_t1", "grown", 1e-9, what="3. one thread against two")
 if petsc:
     assert conv("grown_petsc") == c, conv("grown_petsc")
     same("grown_petsc", "grown", 1e-5, what="3. PETSc matrix-free against direct")
+PY
+
+# 5. the small C-beam: the zone runs down the web, takes its corner and steps into each
+# flange; the runs stopped after each conversion give each zone, run again from the start
+C=$SRC/tests/models/adaptive/cbeam.yaml
+grep -v "^  adaptive:" "$C" > cfixed.yaml
+"$CUPID" run "$C" -o c10 --quiet && ok || bad "run: C-beam, grown"
+for k in 6 7 9; do
+  "$CUPID" run "$C" -o "c$k" --quiet --set analysis.steps=$k \
+    --set "loads=[{traction: {y: 40, value: [0, 0, 0.00$k]}}]" && ok || bad "run: C-beam, $k steps"
+done
+"$CUPID" run cfixed.yaml -o cfixed --quiet && ok || bad "run: C-beam, fixed zone"
+"$PY" - <<'PY' && ok || bad "write the C-beam's fixed models"
+import json
+keys = lambda b: "{" + ", ".join("%s: %s" % (k, json.dumps(v)) for k, v in b.items()) + "}"
+for k in (6, 7, 9, 10):
+    a = json.load(open("c%d/summary.json" % k))["adaptive"]
+    with open("c%d.args" % k, "w") as f:
+        f.write("peridynamics.regions=[%s]\n" % ", ".join(keys(b) for b in a["regions"]))
+        f.write("coupling.arlequin.overlap=[%s]\n" % ", ".join(keys(b) for b in a["overlaps"]))
+PY
+for k in 6 7 9 10; do
+  mapfile -t z < "c$k.args"
+  "$CUPID" run cfixed.yaml -o "cfixed$k" --quiet --set "${z[0]}" --set "${z[1]}" && ok || bad "run: the C-beam's zone of c$k from the start"
+done
+"$PY" - <<'PY' && ok || bad "the C-beam's rows against its fixed zones"
+import csv, json
+rows = lambda d: list(csv.DictReader(open(d + "/damage.csv")))
+conv = lambda d: [(c["step"], c["x_from"], c["x_to"], c["z_from"], c["z_to"], c["pd_nodes"])
+                  for c in json.load(open(d + "/summary.json"))["adaptive"]["conversions"]]
+c = conv("c10")
+assert c == [(5, 0, 2, -10, -4, 880), (7, 2, 10, -10, -8, 1040), (8, 0, 2, 4, 10, 1280),
+             (10, 2, 10, 8, 10, 1440)], c
+a = json.load(open("c10/summary.json"))["adaptive"]
+# the final zone: the whole section over y [15, 25], no ring left
+assert a["overlaps"] == [{"y": [10, 15]}, {"y": [25, 30]}], a["overlaps"]
+ra = rows("c10")
+cols = [k for k in ra[0] if k.startswith("reaction") or k.startswith("load_u")]
+for ref, steps in (("cfixed", range(1, 5)), ("cfixed6", range(5, 7)), ("cfixed7", [7]),
+                   ("cfixed9", [8, 9]), ("cfixed10", [10])):
+    rb = rows(ref)
+    scale = max(abs(float(y[k])) for y in rb for k in cols)
+    worst = max(abs(float(ra[s - 1][k]) - float(rb[s - 1][k])) / scale for s in steps for k in cols)
+    print("5. C-beam steps %s against %s: worst relative difference %.2e (bound 1e-09)" % (list(steps), ref, worst))
+    assert worst <= 1e-9, ref
 PY
 
 # 4. refusals
