@@ -647,7 +647,11 @@ cupid_status cupid_problem_adaptive_blocked(cupid_problem_state *prob, const dou
   cupid_problem_adaptive *a = prob->adaptive;
   const cupid_adaptive *ad = &prob->model->pd.adaptive;
   *count = mark_near(a, ad, x, ad->margin * prob->model->pd.horizon);
-  a->why = "an overlap's bond reached its limit";
+  if (!a->overlaps) { /* fictitious nodes: the coupling zone lies in the core; the beam beyond */
+    const cupid_int e = element_beyond(a, element_at(a, x[1]), x[1]);
+    if (e >= 0 && !a->core[e] && !a->mark[e] && convertible(a, ad, e)) a->mark[e] = 1, (*count)++;
+  }
+  a->why = a->overlaps ? "an overlap's bond reached its limit" : "a coupling zone's bond reached its limit";
   a->blocked = *count > 0;
   return CUPID_SUCCESS;
 }

@@ -793,9 +793,12 @@ static cupid_status check_blocked(growth_run *g, int k, double lambda, int *stop
            "crack growth stopped at load step %d (load factor %.6g): %lld bond%s of %s reached "
            "the breaking limit (up to %.3g times) near (%g, %g, %g), where a crack cannot go: "
            "the bonds of a coupling zone never break (its PD nodes share their load with the "
-           "beam). Extend the PD region, or move the coupling zone, away from where the crack runs; "
-           "the steps before are in the steps' file, the fields written are this solve's",
-           k, lambda, (long long)count, count == 1 ? "" : "s", zone, ratio, x[0], x[1], x[2]);
+           "beam). %s; the steps before are in the steps' file, the fields written are this solve's",
+           k, lambda, (long long)count, count == 1 ? "" : "s", zone, ratio, x[0], x[1], x[2],
+           prob->adaptive ? "The adaptive zone may not grow there: widen "
+                            "peridynamics.adaptive.within (and refine the beam there)"
+                          : "Extend the PD region, or move the coupling zone, away from where "
+                            "the crack runs");
   prob->growth.stopped_step = k;
   *stop = 1;
   return CUPID_SUCCESS;

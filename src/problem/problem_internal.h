@@ -77,8 +77,9 @@ typedef struct {
   int elements;        /**< beam elements (partial: units, beam element x section element) */
   int partial;         /**< a zone over part of the section: */
   double x_lo, x_hi, z_lo, z_hi; /**< the span of the section elements it added */
-  const char *why;     /**< "strain", "crack near an overlap", "an overlap's bond reached its
-                            limit" or "pre-crack near an overlap" */
+  const char *why;     /**< "strain", "stretch in an overlap" (fictitious nodes: "in the
+                            coupling zone"), "crack near an overlap", "an overlap's (a coupling
+                            zone's) bond reached its limit" or "pre-crack near an overlap" */
 } cupid_problem_conversion;
 
 typedef struct cupid_problem_private {
