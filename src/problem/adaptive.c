@@ -497,6 +497,17 @@ static cupid_int element_at(const cupid_problem_adaptive *a, double y) {
   return lo;
 }
 
+/* Each PD node's largest protected bond stretch over its limit (*ratio allocated; NULL when
+ * the zone has no PD node yet). */
+static cupid_status node_ratios(const cupid_problem_state *prob, double **ratio) {
+  *ratio = NULL;
+  if (!prob->op || prob->n_pd == 0) return CUPID_SUCCESS;
+  CUPID_CALL(cupid_malloc((size_t)prob->n_pd, sizeof **ratio, "bond ratios", ratio));
+  cupid_status st = cupid_pd_operator_protected_ratios(prob->op, prob->u, &prob->fracture, *ratio);
+  if (st != CUPID_SUCCESS) cupid_free(ratio);
+  return st;
+}
+
 /* Fictitious nodes: the beam element beyond the end of e's run nearest to y (-1: a beam end). */
 static cupid_int element_beyond(const cupid_problem_adaptive *a, cupid_int e, double y) {
   cupid_int r0 = e, r1 = e;
@@ -508,19 +519,17 @@ static cupid_int element_beyond(const cupid_problem_adaptive *a, cupid_int e, do
 
 /* An overlap's elements: the largest stretch of their PD nodes' protected bonds over its limit
  * (peak[e], -1 where no PD node lies; with fictitious nodes, whose coupling zone lies inside
- * the core, the element beyond the nearest interface takes it). The beam under an overlap follows the PD nodes it is
- * tied to, whose lattice (its free surfaces) the beam's expansion cannot follow: its strain
- * there is no measure of the material's (1.5 times the beam's alone next to the core of
- * beam_adaptive.yaml), and the bonds' stretch is. */
+ * the core, the element beyond the nearest interface takes it). The beam under an overlap
+ * follows the PD nodes it is tied to, whose lattice (its free surfaces) the beam's expansion
+ * cannot follow: its strain there is no measure of the material's (1.5 times the beam's alone
+ * next to the core of beam_adaptive.yaml), and the bonds' stretch is. */
 static cupid_status overlap_stretch(const cupid_problem_state *prob, const cupid_problem_adaptive *a,
                                     double *peak) {
   for (cupid_int e = 0; e < a->ne; e++) peak[e] = -1.0;
-  if (!prob->op || prob->n_pd == 0) return CUPID_SUCCESS;
   double *ratio = NULL;
-  CUPID_CALL(cupid_malloc((size_t)prob->n_pd, sizeof *ratio, "bond ratios", &ratio));
-  cupid_status st = cupid_pd_operator_protected_ratios(prob->op, prob->u, &prob->fracture, ratio);
-  const double *x = cupid_pd_grid_coords(prob->grid);
-  for (cupid_int i = 0; i < prob->n_pd && st == CUPID_SUCCESS; i++) {
+  cupid_status st = node_ratios(prob, &ratio);
+  const double *x = ratio ? cupid_pd_grid_coords(prob->grid) : NULL;
+  for (cupid_int i = 0; ratio && i < prob->n_pd && st == CUPID_SUCCESS; i++) {
     /* a node on an element's end belongs to both elements (a mirror image of the zone has
      * its mirror node on the mirror end: the marks stay symmetric) */
     const double y = x[3 * i + 1];
@@ -559,12 +568,10 @@ static cupid_status overlap_stretch_units(const cupid_problem_state *prob,
                                           const cupid_problem_adaptive *a, double *peak) {
   const cupid_int nu = a->ne * a->nse;
   for (cupid_int u = 0; u < nu; u++) peak[u] = -1.0;
-  if (!prob->op || prob->n_pd == 0) return CUPID_SUCCESS;
   double *ratio = NULL;
-  CUPID_CALL(cupid_malloc((size_t)prob->n_pd, sizeof *ratio, "bond ratios", &ratio));
-  cupid_status st = cupid_pd_operator_protected_ratios(prob->op, prob->u, &prob->fracture, ratio);
-  const double *x = cupid_pd_grid_coords(prob->grid);
-  for (cupid_int i = 0; i < prob->n_pd && st == CUPID_SUCCESS; i++) {
+  cupid_status st = node_ratios(prob, &ratio);
+  const double *x = ratio ? cupid_pd_grid_coords(prob->grid) : NULL;
+  for (cupid_int i = 0; ratio && i < prob->n_pd && st == CUPID_SUCCESS; i++) {
     const double *p = x + 3 * i;
     const cupid_int e = element_at(a, p[1]);
     const int two_e = e + 1 < a->ne && fabs(p[1] - a->ends[e + 1]) <= a->tol;
