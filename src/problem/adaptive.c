@@ -398,21 +398,22 @@ static cupid_int cells(const cupid_model_t *m, int k, double lo, double hi) {
 /* Lattice layers along y in [lo, hi]. */
 static cupid_int layers(const cupid_model_t *m, double lo, double hi) { return cells(m, 1, lo, hi); }
 
-/* The PD nodes of one lattice layer over footprint F and its ring (zones over part of the
+/* *n: the PD nodes of one lattice layer over footprint F and its ring (zones over part of the
  * section). */
-static cupid_int footprint_nodes(const cupid_problem_adaptive *a, const unsigned char *F) {
-  cupid_int n = 0;
-  for (int s = 0; s < a->nse; s++) {
-    const double *b = a->sec.box + 4 * s;
-    int in = F[s]; /* or next to it: the ring */
-    for (int f = 0; f < 4 && !in; f++)
-      for (int i = 0; i < CUPID_SECTION_SAMPLES && !in; i++) {
-        const int o = a->sec.beyond[(4 * s + f) * CUPID_SECTION_SAMPLES + i];
-        in = o >= 0 && F[o];
-      }
-    if (in) n += cells(&a->work, 0, b[0], b[1]) * cells(&a->work, 2, b[2], b[3]);
+static cupid_status footprint_nodes(const cupid_problem_adaptive *a, const unsigned char *F,
+                                    cupid_int *n) {
+  cupid_section_ring *ring = NULL;
+  CUPID_CALL(cupid_malloc((size_t)a->nse + 1, sizeof *ring, "footprint ring", &ring));
+  const int nr = cupid_section_ring_of(&a->sec, F, ring);
+  *n = 0;
+  for (int s = 0; s < a->nse + nr; s++) {
+    const int e = s < a->nse ? s : ring[s - a->nse].element;
+    if (s < a->nse && !F[s]) continue;
+    const double *b = a->sec.box + 4 * e;
+    *n += cells(&a->work, 0, b[0], b[1]) * cells(&a->work, 2, b[2], b[3]);
   }
-  return n;
+  cupid_free(&ring);
+  return CUPID_SUCCESS;
 }
 
 static cupid_int layer_nodes_of(const cupid_problem_state *prob) {
@@ -447,20 +448,20 @@ static cupid_int mark_unit(cupid_problem_adaptive *a, const cupid_adaptive *ad, 
   return 1;
 }
 
-/* Zones over part of the section: mark the units whose box lies within r of p (r = 0: those
- * holding p). */
+/* Zones over part of the section: mark the units that hold p or whose box lies within r of
+ * it, in one pass. */
 static cupid_int mark_units_around(cupid_problem_adaptive *a, const cupid_adaptive *ad,
                                    const double p[3], double r) {
   cupid_int n = 0;
   for (cupid_int e = 0; e < a->ne; e++) {
     const double dy = fmax(fmax(a->ends[e] - p[1], p[1] - a->ends[e + 1]), 0.0);
-    if (r > 0.0 ? dy >= r : dy > 0.0) continue;
+    if (dy > a->tol && dy >= r) continue;
     for (int s = 0; s < a->nse; s++) {
       const double *b = a->sec.box + 4 * s;
       const double dx = fmax(fmax(b[0] - p[0], p[0] - b[1]), 0.0);
       const double dz = fmax(fmax(b[2] - p[2], p[2] - b[3]), 0.0);
       const double d = sqrt(dx * dx + dy * dy + dz * dz);
-      if (r > 0.0 ? d < r : d <= a->tol) n += mark_unit(a, ad, e, s);
+      if (d <= a->tol || d < r) n += mark_unit(a, ad, e, s);
     }
   }
   return n;
@@ -470,7 +471,7 @@ static cupid_int mark_units_around(cupid_problem_adaptive *a, const cupid_adapti
  * the whole of it. */
 static cupid_int mark_near(cupid_problem_adaptive *a, const cupid_adaptive *ad, const double p[3],
                            double r) {
-  if (a->partial) return mark_units_around(a, ad, p, 0.0) + mark_units_around(a, ad, p, r);
+  if (a->partial) return mark_units_around(a, ad, p, r);
   return mark_around(a, ad, p[1], 0.0) + mark_around(a, ad, p[1], r);
 }
 
@@ -608,6 +609,20 @@ static cupid_status trigger_units(cupid_problem_state *prob, cupid_problem_adapt
   return st;
 }
 
+/* After the strain and stretch marks (*count, in_overlap of them by bonds): what marked them
+ * (a crack blocked at an overlap keeps its name), then the crack's margin test. */
+static cupid_status trigger_done(cupid_problem_state *prob, cupid_problem_adaptive *a,
+                                 cupid_int *count, cupid_int in_overlap) {
+  if (*count && !a->blocked)
+    a->why = in_overlap < *count ? "strain"
+             : a->overlaps       ? "stretch in an overlap"
+                                 : "stretch in the coupling zone";
+  const cupid_int near = mark_damage(a, prob);
+  if (near && !*count && !a->blocked) a->why = "crack near an overlap";
+  *count += near;
+  return CUPID_SUCCESS;
+}
+
 cupid_status cupid_problem_adaptive_trigger(cupid_problem_state *prob, cupid_int *count) {
   cupid_problem_adaptive *a = prob->adaptive;
   const cupid_adaptive *ad = &prob->model->pd.adaptive;
@@ -615,11 +630,7 @@ cupid_status cupid_problem_adaptive_trigger(cupid_problem_state *prob, cupid_int
     cupid_int in_overlap = 0;
     *count = 0;
     CUPID_CALL(trigger_units(prob, a, count, &in_overlap));
-    if (*count && !a->blocked) a->why = in_overlap == *count ? "stretch in an overlap" : "strain";
-    const cupid_int near = mark_damage(a, prob);
-    if (near && !*count && !a->blocked) a->why = "crack near an overlap";
-    *count += near;
-    return CUPID_SUCCESS;
+    return trigger_done(prob, a, count, in_overlap);
   }
   double *bonds = NULL, *strain = NULL;
   *count = 0;
@@ -634,19 +645,12 @@ cupid_status cupid_problem_adaptive_trigger(cupid_problem_state *prob, cupid_int
      * the beam next to a zone also by the coupling zone's bonds across its interface */
     const double r = !a->overlaps ? fmax(bonds[e], strain[e]) : bonds[e] >= 0.0 ? bonds[e] : strain[e];
     if (r >= ad->threshold)
-      a->mark[e] = 1, (*count)++, in_overlap += bonds[e] >= 0.0 && bonds[e] >= strain[e];
+      a->mark[e] = 1, (*count)++, in_overlap += bonds[e] >= 0.0 && (a->overlaps || bonds[e] >= strain[e]);
   }
   cupid_free(&bonds);
   cupid_free(&strain);
   CUPID_CALL(st);
-  if (*count && !a->blocked)
-    a->why = in_overlap < *count ? "strain"
-             : a->overlaps       ? "stretch in an overlap"
-                                 : "stretch in the coupling zone";
-  const cupid_int near = mark_damage(a, prob);
-  if (near && !*count && !a->blocked) a->why = "crack near an overlap";
-  *count += near;
-  return CUPID_SUCCESS;
+  return trigger_done(prob, a, count, in_overlap);
 }
 
 cupid_status cupid_problem_adaptive_blocked(cupid_problem_state *prob, const double x[3],
@@ -716,43 +720,70 @@ static void run_region(const cupid_problem_adaptive *a, cupid_int e0, cupid_int 
 
 #define MAX_ZONES (CUPID_MAX_OVERLAPS / 2)
 
+/* Append overlap slab o (its weight ramping along axis `along`) to the working model. */
+static cupid_status push_overlap(cupid_problem_adaptive *a, const cupid_box *o, int along) {
+  cupid_coupling *c = &a->work.coupling;
+  CUPID_CHECK(c->n_overlaps < CUPID_MAX_OVERLAPS, CUPID_ERR_UNSUPPORTED,
+              "adaptive: the zone would need more than %d Arlequin overlaps; bound it with "
+              "`within`",
+              CUPID_MAX_OVERLAPS);
+  c->overlaps[c->n_overlaps] = *o;
+  c->overlap_along[c->n_overlaps] = along;
+  c->overlap_marks[c->n_overlaps++] = a->work.pd.adaptive.mark;
+  return CUPID_SUCCESS;
+}
+
+/* The overlaps along y of run [e0, e1], below and above it where the beam goes on (none with
+ * fictitious nodes: the interfaces are the region's faces). */
+static cupid_status run_overlaps(cupid_problem_adaptive *a, cupid_int e0, cupid_int e1) {
+  cupid_box o;
+  memset(&o, 0, sizeof o);
+  o.has[1] = 1;
+  if (!a->overlaps) return CUPID_SUCCESS;
+  if (e0 > 0) {
+    o.lo[1] = a->ends[e0 - ov_below(a, e0)], o.hi[1] = a->ends[e0];
+    CUPID_CALL(push_overlap(a, &o, 1));
+  }
+  if (e1 < a->ne - 1) {
+    o.lo[1] = a->ends[e1 + 1], o.hi[1] = a->ends[e1 + 1 + ov_above(a, e1)];
+    CUPID_CALL(push_overlap(a, &o, 1));
+  }
+  return CUPID_SUCCESS;
+}
+
+/* A region of the zone: box b, the zone's material. */
+static cupid_pd_region zone_region(const cupid_problem_adaptive *a, const cupid_box *b) {
+  cupid_pd_region r = {.box = *b, .material = a->material, .mark = a->work.pd.adaptive.mark};
+  r.shape.kind = CUPID_SHAPE_BOX;
+  r.shape.box = *b;
+  return r;
+}
+
+/* The working model's regions (taking over *regions, n of them) and the overlaps laid out. */
+static void set_regions(cupid_problem_adaptive *a, cupid_pd_region **regions, int n) {
+  cupid_free(&a->regions);
+  a->regions = *regions, *regions = NULL;
+  a->work.pd.regions = a->regions;
+  a->work.pd.n_regions = n;
+}
+
 /* The working model's regions and overlaps: one region and up to two overlaps per run. */
 static cupid_status lay_out(cupid_problem_adaptive *a, const cupid_int *runs, int n) {
-  cupid_model_t *w = &a->work;
-  const cupid_adaptive *ad = &w->pd.adaptive;
   cupid_pd_region *regions = NULL;
+  cupid_status st = CUPID_SUCCESS;
   CUPID_CALL(cupid_calloc((size_t)n, sizeof *regions, "PD regions", &regions));
-  w->coupling.n_overlaps = 0;
+  a->work.coupling.n_overlaps = 0;
   for (int r = 0; r < n; r++) {
-    const cupid_int e0 = runs[2 * r], e1 = runs[2 * r + 1];
     cupid_box b = a->across;
-    run_region(a, e0, e1, &b.lo[1], &b.hi[1]);
+    run_region(a, runs[2 * r], runs[2 * r + 1], &b.lo[1], &b.hi[1]);
     b.has[1] = 1;
-    regions[r] = (cupid_pd_region){.box = b, .material = a->material, .mark = ad->mark};
-    regions[r].shape.kind = CUPID_SHAPE_BOX;
-    regions[r].shape.box = b;
-    cupid_box o;
-    memset(&o, 0, sizeof o);
-    o.has[1] = 1;
-    if (!a->overlaps) continue; /* fictitious nodes: the interfaces are the region's faces */
-    if (e0 > 0) {
-      o.lo[1] = a->ends[e0 - ov_below(a, e0)], o.hi[1] = a->ends[e0];
-      w->coupling.overlap_marks[w->coupling.n_overlaps] = ad->mark;
-      w->coupling.overlap_along[w->coupling.n_overlaps] = 1;
-      w->coupling.overlaps[w->coupling.n_overlaps++] = o;
-    }
-    if (e1 < a->ne - 1) {
-      o.lo[1] = a->ends[e1 + 1], o.hi[1] = a->ends[e1 + 1 + ov_above(a, e1)];
-      w->coupling.overlap_marks[w->coupling.n_overlaps] = ad->mark;
-      w->coupling.overlap_along[w->coupling.n_overlaps] = 1;
-      w->coupling.overlaps[w->coupling.n_overlaps++] = o;
-    }
+    regions[r] = zone_region(a, &b);
+    CUPID_TRY(run_overlaps(a, runs[2 * r], runs[2 * r + 1]));
   }
-  cupid_free(&a->regions);
-  a->regions = regions;
-  w->pd.regions = regions;
-  w->pd.n_regions = n;
-  return CUPID_SUCCESS;
+  set_regions(a, &regions, n);
+cleanup:
+  cupid_free(&regions);
+  return st;
 }
 
 /* ------------------------------------------------- zones over part of the section: layout */
@@ -803,8 +834,6 @@ static int footprint_rects(const cupid_problem_adaptive *a, const unsigned char 
  * per rectangle of its footprint, the y overlaps at its ends and an overlap along x or z
  * (bounded to it: `along`) over each ring rectangle. */
 static cupid_status lay_out_partial(cupid_problem_adaptive *a, const cupid_int *runs, int n) {
-  cupid_model_t *w = &a->work;
-  const cupid_adaptive *ad = &w->pd.adaptive;
   cupid_pd_region *regions = NULL;
   section_rect *q = NULL;
   cupid_section_ring *ring = NULL;
@@ -813,7 +842,7 @@ static cupid_status lay_out_partial(cupid_problem_adaptive *a, const cupid_int *
   CUPID_TRY(cupid_malloc(2 * (size_t)a->nse + 1, sizeof *q, "footprint boxes", &q));
   CUPID_TRY(cupid_malloc((size_t)a->nse + 1, sizeof *ring, "footprint ring", &ring));
   CUPID_TRY(cupid_calloc((size_t)n * (2 * (size_t)a->nse + 1), sizeof *regions, "PD regions", &regions));
-  w->coupling.n_overlaps = 0;
+  a->work.coupling.n_overlaps = 0;
   for (int r = 0; r < n; r++) {
     const cupid_int e0 = runs[2 * r], e1 = runs[2 * r + 1];
     const int nq = footprint_rects(a, a->next + e0 * a->nse, q, ring);
@@ -823,40 +852,12 @@ static cupid_status lay_out_partial(cupid_problem_adaptive *a, const cupid_int *
     b.has[0] = b.has[1] = b.has[2] = 1;
     for (int i = 0; i < nq; i++) {
       b.lo[0] = q[i].r[0], b.hi[0] = q[i].r[1], b.lo[2] = q[i].r[2], b.hi[2] = q[i].r[3];
-      regions[nreg] = (cupid_pd_region){.box = b, .material = a->material, .mark = ad->mark};
-      regions[nreg].shape.kind = CUPID_SHAPE_BOX;
-      regions[nreg++].shape.box = b;
-      if (q[i].tag == 0) continue;
-      CUPID_TRY_CHECK(w->coupling.n_overlaps < CUPID_MAX_OVERLAPS, CUPID_ERR_UNSUPPORTED,
-                      "adaptive: the zone would need more than %d Arlequin overlaps; bound it "
-                      "with `within`",
-                      CUPID_MAX_OVERLAPS);
-      const int s = w->coupling.n_overlaps++;
-      w->coupling.overlaps[s] = b;
-      w->coupling.overlap_along[s] = (q[i].tag - 1) / 2 == 0 ? 0 : 2;
-      w->coupling.overlap_marks[s] = ad->mark;
+      regions[nreg++] = zone_region(a, &b);
+      if (q[i].tag > 0) CUPID_TRY(push_overlap(a, &b, (q[i].tag - 1) / 2 == 0 ? 0 : 2));
     }
-    cupid_box o;
-    memset(&o, 0, sizeof o);
-    o.has[1] = 1;
-    for (int side = 0; side < 2; side++) {
-      if (side == 0 ? e0 == 0 : e1 == a->ne - 1) continue;
-      CUPID_TRY_CHECK(w->coupling.n_overlaps < CUPID_MAX_OVERLAPS, CUPID_ERR_UNSUPPORTED,
-                      "adaptive: the zone would need more than %d Arlequin overlaps; bound it "
-                      "with `within`",
-                      CUPID_MAX_OVERLAPS);
-      o.lo[1] = side == 0 ? a->ends[e0 - ov_below(a, e0)] : a->ends[e1 + 1];
-      o.hi[1] = side == 0 ? a->ends[e0] : a->ends[e1 + 1 + ov_above(a, e1)];
-      const int s = w->coupling.n_overlaps++;
-      w->coupling.overlaps[s] = o;
-      w->coupling.overlap_along[s] = 1;
-      w->coupling.overlap_marks[s] = ad->mark;
-    }
+    CUPID_TRY(run_overlaps(a, e0, e1));
   }
-  cupid_free(&a->regions);
-  a->regions = regions, regions = NULL;
-  w->pd.regions = a->regions;
-  w->pd.n_regions = nreg;
+  set_regions(a, &regions, nreg);
 cleanup:
   cupid_free(&regions);
   cupid_free(&q);
@@ -960,13 +961,14 @@ static cupid_status plan_zone(cupid_problem_state *prob, cupid_problem_adaptive 
   cupid_int nodes = 0, first = -1, last = -1, count = 0;
   for (int r = 0; r < n; r++) {
     double lo, hi;
+    cupid_int layer = a->layer_nodes;
     run_region(a, runs[2 * r], runs[2 * r + 1], &lo, &hi);
-    nodes += layers(&a->work, lo, hi) *
-             (a->partial ? footprint_nodes(a, a->next + runs[2 * r] * a->nse) : a->layer_nodes);
+    if (a->partial) CUPID_CALL(footprint_nodes(a, a->next + runs[2 * r] * a->nse, &layer));
+    nodes += layers(&a->work, lo, hi) * layer;
   }
   double box[4] = {INFINITY, -INFINITY, INFINITY, -INFINITY}; /* the units added, x and z */
-  for (cupid_int e = 0; e < a->ne; e++) {
-    cupid_int added = z[e] && !a->core[e];
+  for (cupid_int e = 0; e < a->ne; e++) { /* elements, or over part of the section units */
+    cupid_int added = !a->partial && z[e] && !a->core[e];
     for (int s = 0; s < a->nse && a->partial; s++) {
       const cupid_int u = e * a->nse + s;
       if (!a->next[u] || a->foot[u]) continue;
@@ -975,7 +977,6 @@ static cupid_status plan_zone(cupid_problem_state *prob, cupid_problem_adaptive 
       box[0] = fmin(box[0], b[0]), box[1] = fmax(box[1], b[1]);
       box[2] = fmin(box[2], b[2]), box[3] = fmax(box[3], b[3]);
     }
-    if (a->partial) added -= z[e] && !a->core[e]; /* (units, not rows) */
     if (!added) continue;
     if (first < 0) first = e;
     last = e, count += added;
@@ -1217,11 +1218,14 @@ static cupid_int largest_zone(const cupid_problem_adaptive *a, const cupid_adapt
     return -1;
   }
   if (all) memset(all, 1, (size_t)a->nse);
-  for (int r = 0; r < n && r < MAX_ZONES; r++) {
+  cupid_int layer = a->layer_nodes;
+  if (all && footprint_nodes(a, all, &layer) != CUPID_SUCCESS) cupid_error_clear(), layer = -1;
+  for (int r = 0; r < n && r < MAX_ZONES && layer >= 0; r++) {
     double lo, hi;
     run_region(a, runs[2 * r], runs[2 * r + 1], &lo, &hi);
-    nodes += layers(&a->work, lo, hi) * (all ? footprint_nodes(a, all) : a->layer_nodes);
+    nodes += layers(&a->work, lo, hi) * layer;
   }
+  if (layer < 0) nodes = -1;
   cupid_free(&all);
   cupid_free(&z);
   return nodes;
