@@ -14,6 +14,7 @@
 #  4. a zone over part of the section is refused with fictitious nodes, naming its line.
 . "$(dirname "$0")/../tools/checks.sh"  # CUPID, SRC, $work (cwd), ok, bad, expect, finish
 PY=${CUPID_SYSTEM_PYTHON:-/usr/bin/python3}
+export PYTHONPATH=$SRC/tests/tools  # adaptive_rows.py
 M=$SRC/tests/models/adaptive/senb.yaml
 grep -v "^  adaptive:" "$M" > fixed.yaml
 fict=(--set 'coupling={method: fictitious}' --set 'peridynamics.regions=[{x: [0, 20], y: [25, 65], z: [0, 5]}]')
@@ -38,25 +39,13 @@ fi
 "$CUPID" run fixed.yaml -o lin_wide --quiet "${fict[@]}" "${wide[@]}" "${linear[@]}" && ok || bad "run: linear, [15, 75]"
 
 "$PY" - "$petsc" <<'PY' && ok || bad "adaptive results with fictitious nodes against the fixed zones"
-import csv, json, sys
+import sys
+from adaptive_rows import rows, summary, same, without_nodes, conversions
 petsc = sys.argv[1] == "1"
-rows = lambda d: list(csv.DictReader(open(d + "/damage.csv")))
-summary = lambda d: json.load(open(d + "/summary.json"))
-conv = lambda d: [(c["step"], c["y_from"], c["y_to"], c["pd_nodes"], c["trigger"])
-                  for c in summary(d)["adaptive"]["conversions"]]
-def same(a, b, tol, steps=None, what=""):
-    ra, rb = rows(a), rows(b)
-    assert len(ra) == len(rb), (what, len(ra), len(rb))
-    cols = [c for c in rb[0] if c.startswith("reaction") or c.startswith("load_u")]
-    scale = max(abs(float(y[c])) for y in rb for c in cols)
-    worst = max(abs(float(x[c]) - float(y[c])) / scale
-                for x, y in zip(ra, rb) if not steps or int(x["step"]) in steps for c in cols)
-    print("%s: worst relative difference %.2e (bound %.0e)" % (what, worst, tol))
-    assert worst <= tol, what
+conv = lambda d: conversions(d, "step", "y_from", "y_to", "pd_nodes", "trigger")
 # 1
-strip = lambda d: [{k: v for k, v in r.items() if k != "pd_nodes"} for r in rows(d)]
 assert conv("never") == []
-assert strip("never") == strip("fixed")
+assert without_nodes("never") == without_nodes("fixed")
 assert summary("never")["fracture"]["peak_reactions"] == summary("fixed")["fracture"]["peak_reactions"]
 print("1. never fires: the fixed zone's rows and peak to the bit")
 # 2

@@ -18,6 +18,7 @@
 #     start, to 1e-9.
 . "$(dirname "$0")/../tools/checks.sh"  # CUPID, SRC, $work (cwd), ok, bad, expect, finish
 PY=${CUPID_SYSTEM_PYTHON:-/usr/bin/python3}
+export PYTHONPATH=$SRC/tests/tools  # adaptive_rows.py
 M=$SRC/tests/models/adaptive/wall.yaml
 grep -v "^  adaptive:" "$M" > fixed.yaml
 
@@ -33,42 +34,19 @@ if "$CUPID" --version 2>&1 | grep -q petsc; then
   "$CUPID" run "$M" -o grown_petsc --quiet --solver petsc && ok || bad "run: petsc"
 fi
 # the models that had each zone from the start
-"$PY" - <<'PY' && ok || bad "write the fixed models of the grown zones"
-import json
-def keys(box):
-    return "{" + ", ".join("%s: %s" % (k, json.dumps(v)) for k, v in box.items()) + "}"
-for d in ("grown9", "grown"):
-    a = json.load(open(d + "/summary.json"))["adaptive"]
-    regions = "[" + ", ".join(keys(b) for b in a["regions"]) + "]"
-    overlaps = "[" + ", ".join(keys(b) for b in a["overlaps"]) + "]"
-    with open(d + ".args", "w") as f:
-        f.write("peridynamics.regions=%s\ncoupling.arlequin.overlap=%s\n" % (regions, overlaps))
-PY
 for d in grown9 grown; do
-  mapfile -t z < "$d.args"
+  mapfile -t z < <("$PY" "$SRC/tests/tools/adaptive_rows.py" zone "$d")
   "$CUPID" run fixed.yaml -o "fixed_$d" --quiet --set "${z[0]}" --set "${z[1]}" && ok || bad "run: the zone of $d from the start"
 done
 
 "$PY" - "$petsc" <<'PY' && ok || bad "adaptive results over part of the section against the fixed zones"
-import csv, json, sys
+import sys
+from adaptive_rows import rows, summary, same, without_nodes, conversions
 petsc = sys.argv[1] == "1"
-rows = lambda d: list(csv.DictReader(open(d + "/damage.csv")))
-summary = lambda d: json.load(open(d + "/summary.json"))
-def same(a, b, tol, steps=None, what=""):
-    ra, rb = rows(a), rows(b)
-    assert len(ra) == len(rb), (what, len(ra), len(rb))
-    cols = [c for c in rb[0] if c.startswith("reaction") or c.startswith("load_u")]
-    scale = max(abs(float(y[c])) for y in rb for c in cols)
-    worst = max(abs(float(x[c]) - float(y[c])) / scale
-                for x, y in zip(ra, rb) if not steps or int(x["step"]) in steps for c in cols)
-    print("%s: worst relative difference %.2e (bound %.0e)" % (what, worst, tol))
-    assert worst <= tol, what
-conv = lambda d: [(c["step"], c["y_from"], c["y_to"], c["z_from"], c["z_to"], c["pd_nodes"])
-                  for c in summary(d)["adaptive"]["conversions"]]
+conv = lambda d: conversions(d, "step", "y_from", "y_to", "z_from", "z_to", "pd_nodes")
 # 1: to the bit
 assert conv("never") == []
-strip = lambda d: [{k: v for k, v in r.items() if k != "pd_nodes"} for r in rows(d)]
-assert strip("never") == strip("fixed")
+assert without_nodes("never") == without_nodes("fixed")
 print("1. never fires: the fixed zone's rows to the bit")
 # 2: two conversions
 c = conv("grown")
@@ -99,39 +77,21 @@ for k in 6 7 9; do
     --set "loads=[{traction: {y: 40, value: [0, 0, 0.00$k]}}]" && ok || bad "run: C-beam, $k steps"
 done
 "$CUPID" run cfixed.yaml -o cfixed --quiet && ok || bad "run: C-beam, fixed zone"
-"$PY" - <<'PY' && ok || bad "write the C-beam's fixed models"
-import json
-keys = lambda b: "{" + ", ".join("%s: %s" % (k, json.dumps(v)) for k, v in b.items()) + "}"
-for k in (6, 7, 9, 10):
-    a = json.load(open("c%d/summary.json" % k))["adaptive"]
-    with open("c%d.args" % k, "w") as f:
-        f.write("peridynamics.regions=[%s]\n" % ", ".join(keys(b) for b in a["regions"]))
-        f.write("coupling.arlequin.overlap=[%s]\n" % ", ".join(keys(b) for b in a["overlaps"]))
-PY
 for k in 6 7 9 10; do
-  mapfile -t z < "c$k.args"
+  mapfile -t z < <("$PY" "$SRC/tests/tools/adaptive_rows.py" zone "c$k")
   "$CUPID" run cfixed.yaml -o "cfixed$k" --quiet --set "${z[0]}" --set "${z[1]}" && ok || bad "run: the C-beam's zone of c$k from the start"
 done
 "$PY" - <<'PY' && ok || bad "the C-beam's rows against its fixed zones"
-import csv, json
-rows = lambda d: list(csv.DictReader(open(d + "/damage.csv")))
-conv = lambda d: [(c["step"], c["x_from"], c["x_to"], c["z_from"], c["z_to"], c["pd_nodes"])
-                  for c in json.load(open(d + "/summary.json"))["adaptive"]["conversions"]]
-c = conv("c10")
+from adaptive_rows import summary, same, conversions
+c = conversions("c10", "step", "x_from", "x_to", "z_from", "z_to", "pd_nodes")
 assert c == [(5, 0, 2, -10, -4, 880), (7, 2, 10, -10, -8, 1040), (8, 0, 2, 4, 10, 1280),
              (10, 2, 10, 8, 10, 1440)], c
-a = json.load(open("c10/summary.json"))["adaptive"]
 # the final zone: the whole section over y [15, 25], no ring left
+a = summary("c10")["adaptive"]
 assert a["overlaps"] == [{"y": [10, 15]}, {"y": [25, 30]}], a["overlaps"]
-ra = rows("c10")
-cols = [k for k in ra[0] if k.startswith("reaction") or k.startswith("load_u")]
 for ref, steps in (("cfixed", range(1, 5)), ("cfixed6", range(5, 7)), ("cfixed7", [7]),
                    ("cfixed9", [8, 9]), ("cfixed10", [10])):
-    rb = rows(ref)
-    scale = max(abs(float(y[k])) for y in rb for k in cols)
-    worst = max(abs(float(ra[s - 1][k]) - float(rb[s - 1][k])) / scale for s in steps for k in cols)
-    print("5. C-beam steps %s against %s: worst relative difference %.2e (bound 1e-09)" % (list(steps), ref, worst))
-    assert worst <= 1e-9, ref
+    same("c10", ref, 1e-9, set(steps), "5. C-beam steps %s against %s" % (list(steps), ref))
 PY
 
 # 4. refusals
