@@ -35,14 +35,18 @@ typedef struct {
 } cupid_dynamics_system;
 
 /** Energies at one instant. With E0 the initial kinetic + strain energy, the balance is
- *  kinetic + strain + damping + fracture - external = E0 (drift reported as its residual). */
+ *  kinetic + strain + damping + fracture - external - conversion = E0 (drift reported as its
+ *  residual). */
 typedef struct {
   double kinetic;   /**< v.M v / 2 */
   double strain;    /**< u.K u / 2 */
   double damping;   /**< energy dissipated by C since t = 0 (midpoint rule) */
   double external;  /**< work of f (and of moving supports) since t = 0 */
   double fracture;  /**< strain energy removed by hooks->after_forces (broken bonds) */
-  double balance;   /**< kinetic + strain + damping + fracture - external - E0 */
+  double conversion; /**< energy the system's changes added (a resumption of a changed
+                          system, cupid_dynamics_restart.changed: its kinetic + strain energy
+                          after the change less before; issue 37's adaptive zones) */
+  double balance;   /**< kinetic + strain + damping + fracture - external - conversion - E0 */
 } cupid_dynamics_energy;
 
 /**
@@ -64,6 +68,14 @@ typedef struct {
   double e0, scale, max_balance; /**< E0, the largest energy, the largest |balance| so far */
   double omega_max, dt_critical, dt_bound; /**< the stable-step check of step 0 */
   int lanczos_steps;
+  /** 1: the system changed after this state (issue 37: an adaptive zone grew; central
+   *  differences only). u and v are given on the new system's DOFs (n its size); a, react and
+   *  load are not read (may be NULL): the run makes them again from the new K, mass and
+   *  conditions at the state's time, holds the fixed DOFs at their values (zero velocity),
+   *  checks the stable step again, and books the energy the change added (the new system's
+   *  kinetic + strain energy at u, v less whole's, which must be this step's: hooks->stopped
+   *  gives it so) in cupid_dynamics_energy.conversion and info->changed_energy. */
+  int changed;
 } cupid_dynamics_restart;
 
 /** Optional hooks of a run (cupid_dynamics_options.hooks). */
@@ -90,6 +102,14 @@ typedef struct {
    *  resumption (e.g. write a checkpoint). A non-success return stops the run with it. NULL:
    *  none. */
   cupid_status (*safe_point)(void *ctx, const cupid_dynamics_restart *state);
+  /** After every step of central differences (after the monitor and the safe point): *stop =
+   *  1 ends the run at this step (issue 37: an adaptive zone's trigger fired). The run then
+   *  evaluates the energies at this step, gives its whole state to `stopped` (needed with
+   *  pause; pointers valid during the call) and returns CUPID_SUCCESS with info->stopped_at =
+   *  the step; the caller continues it through cupid_dynamics_options.resume, on the same
+   *  system or (restart.changed) a changed one. NULL: none. */
+  cupid_status (*pause)(void *ctx, cupid_int step, const double *u, const double *v, int *stop);
+  cupid_status (*stopped)(void *ctx, const cupid_dynamics_restart *state);
   void *ctx;
 } cupid_dynamics_hooks;
 
@@ -129,6 +149,8 @@ typedef struct {
   cupid_solve_info factor; /**< the factorisation of K + a0 M + a1 C (Newmark) */
   double time_step_s;    /**< wall time in the time loop */
   double max_balance;    /**< max |balance| / max(E0, max energy) over the output steps */
+  cupid_int stopped_at;  /**< the step hooks->pause stopped the run at, or 0: it ran to the end */
+  double changed_energy; /**< a resumption of a changed system: the energy the change added */
 } cupid_dynamics_info;
 
 /**

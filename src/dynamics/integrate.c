@@ -178,19 +178,20 @@ static void damping_apply(dyn_state *s, const double *x, double *y, double *t) {
 static void energies(dyn_state *s, const double *u, const double *v) {
   const cupid_int lo = s->lo, len = s->hi - s->lo;
   dyn_mass_apply(s->sys, s->n, v, s->t1);
-  double sums[5] = {0.5 * dyn_dot(len, v + lo, s->t1 + lo), 0.0, s->e.damping, s->e.external,
-                    s->e.fracture};
+  double sums[6] = {0.5 * dyn_dot(len, v + lo, s->t1 + lo), 0.0, s->e.damping, s->e.external,
+                    s->e.fracture, s->e.conversion};
   const double *ku = s->g; /* the step's own product when it holds (an apply saved) */
   if (!s->ku_ok) {
     dyn_stiffness(s, u, s->t1);
     ku = s->t1;
   }
   sums[1] = 0.5 * dyn_dot(len, u + lo, ku + lo);
-  reduce(s, sums, 5);
+  reduce(s, sums, 6);
   cupid_dynamics_energy *g = &s->eg;
   g->kinetic = sums[0], g->strain = sums[1], g->damping = sums[2], g->external = sums[3];
-  g->fracture = sums[4];
-  g->balance = g->kinetic + g->strain + g->damping + g->fracture - g->external - s->e0;
+  g->fracture = sums[4], g->conversion = sums[5];
+  g->balance = g->kinetic + g->strain + g->damping + g->fracture - g->external - g->conversion -
+               s->e0;
   double level = fmax(g->kinetic + g->strain, fmax(fmax(g->damping, g->fracture), fabs(g->external)));
   if (level > s->scale) s->scale = level;
   if (fabs(g->balance) > s->max_balance) s->max_balance = fabs(g->balance);
@@ -283,35 +284,51 @@ static cupid_status notify(dyn_state *s, cupid_dynamics_monitor fn, void *ctx, c
 /* hooks->safe_point at the end of an output step (after the monitor): the state a resumption
  * continues from. K u, the work vectors and the previous load are not in it: every step makes
  * them before it reads them. */
-static cupid_status safe_point(dyn_state *s, const cupid_dynamics_info *info, cupid_int step,
-                               const double *u, const double *v) {
-  if (!s->hooks || !s->hooks->safe_point || !output_step(s, step)) return CUPID_SUCCESS;
-  const cupid_dynamics_restart r = {
+static cupid_dynamics_restart state_at(const dyn_state *s, const cupid_dynamics_info *info,
+                                       cupid_int step, const double *u, const double *v) {
+  return (cupid_dynamics_restart){
       .step = step, .n = s->n, .u = u, .v = v, .a = s->a, .react = s->react,
       .load = s->react ? s->fcur : NULL, .shares = s->e, .whole = s->eg, .e0 = s->e0,
       .scale = s->scale, .max_balance = s->max_balance, .omega_max = info->omega_max,
       .dt_critical = info->dt_critical, .dt_bound = info->dt_bound,
       .lanczos_steps = info->lanczos_steps};
+}
+
+static cupid_status safe_point(dyn_state *s, const cupid_dynamics_info *info, cupid_int step,
+                               const double *u, const double *v) {
+  if (!s->hooks || !s->hooks->safe_point || !output_step(s, step)) return CUPID_SUCCESS;
+  const cupid_dynamics_restart r = state_at(s, info, step, u, v);
   return s->hooks->safe_point(s->hooks->ctx, &r);
+}
+
+/* A resumption of a changed system (restart.changed): the conditions at the state's time on
+ * the new DOFs (the load into fcur, the fixed DOFs at their values, at rest). The acceleration,
+ * reactions, stable step and the change's energy follow in run_central (changed_system). */
+static cupid_status changed_conditions(dyn_state *s, const cupid_dynamics_restart *r, double *u,
+                                       double *v) {
+  CUPID_CHECK(s->opt->integrator == CUPID_INTEGRATOR_CENTRAL, CUPID_ERR_ARGUMENT,
+              "cupid_dynamics_run: a changed system resumes with central differences only "
+              "(Newmark's factor is of the old one)");
+  if (s->react) CUPID_CALL(conditions_at(s, (double)r->step * s->opt->dt));
+  const cupid_dirichlet_t *bc = s->sys->bc;
+  for (cupid_int d = 0; d < s->n; d++)
+    if (dyn_fixed(bc, d)) u[d] = s->react ? s->ufix[d] : bc->value[d], v[d] = 0.0;
+  CUPID_CALL(refresh(s, u));
+  return refresh(s, v);
 }
 
 /* A resumption (opts->resume): the state of its safe point copied in, in place of the start
  * at t = 0 (E0, the conditions at 0, the fixed DOFs' values: all in it). */
 static cupid_status resume_state(dyn_state *s, const cupid_dynamics_restart *r, double *u,
                                  double *v, cupid_dynamics_info *info) {
-  CUPID_CHECK(r->n == s->n && r->step >= 0 && r->step <= s->opt->steps && r->u && r->v && r->a &&
-                  !r->react == !s->react && !r->load == !s->react,
+  CUPID_CHECK(r->n == s->n && r->step >= 0 && r->step <= s->opt->steps && r->u && r->v &&
+                  (r->changed || (r->a && !r->react == !s->react && !r->load == !s->react)),
               CUPID_ERR_ARGUMENT, "cupid_dynamics_run: the state to resume (step %lld of %lld "
               "DOFs) is not one of this run's (%lld steps of %lld DOFs)",
               (long long)r->step, (long long)r->n, (long long)s->opt->steps, (long long)s->n);
   const size_t bytes = sizeof(double) * (size_t)s->n;
   memcpy(u, r->u, bytes);
   memcpy(v, r->v, bytes);
-  memcpy(s->a, r->a, bytes);
-  if (s->react) {
-    memcpy(s->react, r->react, bytes);
-    memcpy(s->fcur, r->load, bytes);
-  }
   s->e = r->shares;
   s->eg = r->whole;
   s->e0 = r->e0;
@@ -321,6 +338,12 @@ static cupid_status resume_state(dyn_state *s, const cupid_dynamics_restart *r, 
   info->dt_critical = r->dt_critical;
   info->dt_bound = r->dt_bound;
   info->lanczos_steps = r->lanczos_steps;
+  if (r->changed) return changed_conditions(s, r, u, v);
+  memcpy(s->a, r->a, bytes);
+  if (s->react) {
+    memcpy(s->react, r->react, bytes);
+    memcpy(s->fcur, r->load, bytes);
+  }
   return CUPID_SUCCESS;
 }
 
@@ -530,7 +553,7 @@ static int merge_kicks(const dyn_state *s) {
   const cupid_dynamics_options *o = s->opt;
   /* a safe point (checkpoints) is at output steps, where the kick is whole: it does not stop
    * the merge */
-  const int hooked = s->hooks && (s->hooks->conditions || s->hooks->after_forces);
+  const int hooked = s->hooks && (s->hooks->conditions || s->hooks->after_forces || s->hooks->pause);
   return o->velocity_at_outputs && !hooked && !s->f && !s->du && !s->react &&
          !dyn_any_fixed(s->sys->bc) && o->rayleigh_mass == 0.0 && o->rayleigh_stiffness == 0.0;
 }
@@ -629,6 +652,33 @@ static cupid_status after_break(dyn_state *s, cupid_int step, const double *u, c
   return s->kst;
 }
 
+/* A resumption of a changed system, its acceleration made (K u in g): the energy the change
+ * added, the new kinetic + strain energy at (u, v) less the state's, booked as conversion
+ * (one process's share holds it) before the balance is sampled with it. */
+static void book_change(dyn_state *s, const cupid_dynamics_restart *r, const double *u,
+                        const double *v, cupid_dynamics_info *info) {
+  const double scale = s->scale, worst = s->max_balance;
+  energies(s, u, v);
+  const double added = s->eg.kinetic + s->eg.strain - (r->whole.kinetic + r->whole.strain);
+  if (!s->part || s->part->global_first == 0) s->e.conversion += added;
+  s->scale = scale, s->max_balance = worst;
+  energies(s, u, v); /* the balance with it (g still holds K u: no new product) */
+  info->changed_energy = added;
+}
+
+/* hooks->pause asked the run to stop at this step: the energies at it, and the whole state to
+ * hooks->stopped, as a safe point's. */
+static cupid_status stopped(dyn_state *s, cupid_dynamics_info *info, cupid_int step,
+                            const double *u, const double *v) {
+  CUPID_CHECK(s->hooks->stopped, CUPID_ERR_ARGUMENT,
+              "cupid_dynamics_run: hooks->pause needs hooks->stopped to take the state");
+  if (!output_step(s, step)) energies(s, u, v);
+  CUPID_CALL(s->kst);
+  const cupid_dynamics_restart r = state_at(s, info, step, u, v);
+  info->stopped_at = step;
+  return s->hooks->stopped(s->hooks->ctx, &r);
+}
+
 static cupid_status run_central(dyn_state *s, double *u, double *v, cupid_dynamics_monitor fn,
                                 void *ctx, cupid_dynamics_info *info) {
   const cupid_dynamics_options *o = s->opt;
@@ -647,14 +697,19 @@ static cupid_status run_central(dyn_state *s, double *u, double *v, cupid_dynami
   }
   CUPID_CALL(cupid_calloc((size_t)s->n + 1, sizeof *s->minv, "inverse masses", &s->minv));
   for (cupid_int d = 0; d < s->n; d++) s->minv[d] = dyn_fixed(bc, d) ? 0.0 : 1.0 / s->sys->m_lumped[d];
-  if (!o->resume) { /* a resumption has all of this in its state */
+  if (!o->resume || o->resume->changed) { /* a resumption has all of this in its state */
     CUPID_CALL(check_stable(s, info));
     CUPID_CALL(initial_acceleration(s, u, v));
     s->ku_ok = 1;
     if (s->react) initial_reactions(s);
     CUPID_CALL(s->kst);
-    CUPID_CALL(after_break(s, 0, u, v));
-    CUPID_CALL(notify(s, fn, ctx, 0, u, v));
+    if (o->resume) {
+      book_change(s, o->resume, u, v, info);
+      CUPID_CALL(s->kst);
+    } else {
+      CUPID_CALL(after_break(s, 0, u, v));
+      CUPID_CALL(notify(s, fn, ctx, 0, u, v));
+    }
   }
   double t0 = cupid_wtime();
   const int stiff_damping = o->rayleigh_stiffness != 0.0;
@@ -691,6 +746,12 @@ static cupid_status run_central(dyn_state *s, double *u, double *v, cupid_dynami
     CUPID_CALL(notify(s, fn, ctx, step, u, v));
     CUPID_CALL(s->kst);
     CUPID_CALL(safe_point(s, info, step, u, v));
+    int stop = 0;
+    if (s->hooks && s->hooks->pause) CUPID_CALL(s->hooks->pause(s->hooks->ctx, step, u, v, &stop));
+    if (stop) {
+      info->time_step_s = cupid_wtime() - t0;
+      return stopped(s, info, step, u, v);
+    }
   }
   info->time_step_s = cupid_wtime() - t0;
   return CUPID_SUCCESS;
@@ -717,6 +778,8 @@ static cupid_status run(dyn_state *s, double *u, double *v, cupid_dynamics_monit
   CUPID_CHECK(!(s->hooks && s->hooks->after_forces) || opts->integrator == CUPID_INTEGRATOR_CENTRAL,
               CUPID_ERR_ARGUMENT, "an after-forces hook (bond breaking) needs central differences "
               "(Newmark factors K once)");
+  CUPID_CHECK(!(s->hooks && s->hooks->pause) || opts->integrator == CUPID_INTEGRATOR_CENTRAL,
+              CUPID_ERR_ARGUMENT, "a pause hook (a system that changes) needs central differences");
   CUPID_TRY(state_alloc(s));
   const cupid_dirichlet_t *bc = sys->bc;
   if (opts->resume) {

@@ -132,7 +132,113 @@ static void test_newmark(void **state) {
   run_case(CUPID_INTEGRATOR_NEWMARK, 1, 0.05);
 }
 
+/* ---- A changed system (restart.changed; issue 37's adaptive zones) ---- */
+
+/* hooks->pause stops the run at step STOP; hooks->stopped copies the state out. */
+static cupid_status pause_at(void *ctx, cupid_int step, const double *u, const double *v, int *stop) {
+  (void)ctx, (void)u, (void)v;
+  *stop = step == STOP;
+  return CUPID_SUCCESS;
+}
+
+static cupid_status keep(void *ctx, const cupid_dynamics_restart *r) {
+  saved *s = ctx;
+  s->r = *r;
+  memcpy(s->u, r->u, sizeof s->u);
+  memcpy(s->v, r->v, sizeof s->v);
+  s->r.u = s->u, s->r.v = s->v, s->r.a = NULL, s->r.react = NULL, s->r.load = NULL;
+  return CUPID_SUCCESS;
+}
+
+/* Records the energies of the output steps (the last one's balance). */
+static cupid_status last_energy(void *ctx, cupid_int step, double t, int output, const double *u,
+                                const double *v, const double *a, const cupid_dynamics_energy *e) {
+  (void)step, (void)t, (void)u, (void)v, (void)a;
+  if (output) *(cupid_dynamics_energy *)ctx = *e;
+  return CUPID_SUCCESS;
+}
+
+/* Stopped by pause at step STOP and resumed as a changed system: (1) the same K: the run that
+ * never stopped, to round-off (the acceleration made again from K u equals the kick's), and a
+ * change of no energy; (2) K stiffer by 30%: the change's energy is u.(K2 - K1) u / 2 at the
+ * step, booked as conversion, and the balance with it stays at the run's own level (without
+ * it the balance would miss by that energy). */
+static void test_changed(void **state) {
+  (void)state;
+  cupid_csr K = chain(), K2 = chain();
+  for (cupid_int k = 0; k < K2->rowptr[N]; k++) K2->val[k] *= 1.3;
+  cupid_dirichlet bc = NULL;
+  CUPID_ASSERT_OK(cupid_dirichlet_create(N, &bc));
+  CUPID_ASSERT_OK(cupid_dirichlet_fix(bc, 0, 0.0));
+  CUPID_ASSERT_OK(cupid_dirichlet_finalize(bc));
+  double mass[N], u0[N], v0[N];
+  for (int i = 0; i < N; i++) mass[i] = 1.0 + 0.05 * i, u0[i] = 1e-3 * sin(i), v0[i] = 1e-3 * cos(2.0 * i);
+  cupid_dynamics_hooks plain = {.conditions = conditions};
+  cupid_dynamics_options o = cupid_dynamics_defaults();
+  o.integrator = CUPID_INTEGRATOR_CENTRAL;
+  o.dt = 0.02;
+  o.steps = 700;
+  o.every = 50;
+  o.hooks = &plain;
+  cupid_dynamics_system sys = {.K = K, .m_lumped = mass, .bc = bc};
+  double u[N], v[N];
+  memcpy(u, u0, sizeof u), memcpy(v, v0, sizeof v);
+  cupid_dynamics_info whole;
+  CUPID_ASSERT_OK(cupid_dynamics_run(&sys, &o, u, v, NULL, NULL, &whole));
+
+  saved s;
+  memset(&s, 0, sizeof s);
+  cupid_dynamics_hooks hooks = plain;
+  hooks.pause = pause_at, hooks.stopped = keep, hooks.ctx = &s;
+  o.hooks = &hooks;
+  double u2[N], v2[N];
+  memcpy(u2, u0, sizeof u2), memcpy(v2, v0, sizeof v2);
+  cupid_dynamics_info first, second;
+  CUPID_ASSERT_OK(cupid_dynamics_run(&sys, &o, u2, v2, NULL, NULL, &first));
+  assert_int_equal(first.stopped_at, STOP);
+  assert_int_equal(s.r.step, STOP);
+  const saved at = s; /* the state at the step, for the second case */
+  s.r.changed = 1;
+  o.resume = &s.r;
+  hooks.pause = NULL;
+  cupid_dynamics_energy e = {0};
+  CUPID_ASSERT_OK(cupid_dynamics_run(&sys, &o, u2, v2, last_energy, &e, &second));
+  assert_int_equal(second.stopped_at, 0);
+  for (int i = 0; i < N; i++) {
+    assert_true(fabs(u2[i] - u[i]) <= 1e-12 * fabs(u[N - 1]) + 1e-300);
+    assert_true(fabs(v2[i] - v[i]) <= 1e-12 * fabs(v[N - 1]) + 1e-300);
+  }
+  const double level = e.kinetic + e.strain;
+  assert_true(fabs(second.changed_energy) <= 1e-14 * level);
+  print_message("changed, the same K: u[N-1] %.12g against %.12g, change energy %.2e of %.2e\n",
+                u2[N - 1], u[N - 1], second.changed_energy, level);
+
+  /* the stiffer K from STOP on */
+  s = at;
+  s.r.changed = 1;
+  sys.K = K2;
+  double ku1[N], ku2[N], expect = 0.0;
+  cupid_csr_matvec(K, s.u, ku1);
+  cupid_csr_matvec(K2, s.u, ku2);
+  for (int i = 0; i < N; i++) expect += 0.5 * s.u[i] * (ku2[i] - ku1[i]);
+  CUPID_ASSERT_OK(cupid_dynamics_run(&sys, &o, u2, v2, last_energy, &e, &second));
+  print_message("changed, K x 1.3: change energy %.6e (u.dK u / 2 = %.6e), conversion %.6e, "
+                "balance %.2e of %.2e (the unchanged run's %.2e)\n",
+                second.changed_energy, expect, e.conversion, e.balance, e.kinetic + e.strain,
+                whole.max_balance);
+  assert_true(fabs(second.changed_energy - expect) <= 1e-12 * fabs(expect));
+  assert_true(fabs(e.conversion - expect) <= 1e-12 * fabs(expect));
+  /* the balance's bound: the unchanged run's own worst (relative) times 10, far below the
+   * change's energy it would miss by if the change were not booked */
+  assert_true(second.max_balance <= 10.0 * whole.max_balance + 1e-12);
+  assert_true(fabs(expect) > 100.0 * second.max_balance * (e.kinetic + e.strain));
+  cupid_dirichlet_destroy(&bc);
+  cupid_csr_destroy(&K);
+  cupid_csr_destroy(&K2);
+}
+
 int main(void) {
-  const struct CMUnitTest tests[] = {cmocka_unit_test(test_central), cmocka_unit_test(test_newmark)};
+  const struct CMUnitTest tests[] = {cmocka_unit_test(test_central), cmocka_unit_test(test_newmark),
+                                     cmocka_unit_test(test_changed)};
   return cmocka_run_group_tests(tests, NULL, NULL);
 }
