@@ -220,6 +220,9 @@ typedef struct {
   cupid_box within;   /**< the zone never grows outside it (has[] 0: no bound on that axis) */
   int has_within;
   int64_t max_nodes;  /**< the zone's largest node count (0: no cap) */
+  int every;          /**< dynamics: time steps between two tests of the trigger (0: given
+                           none, analysis.dynamic.every) */
+  cupid_mark every_mark;
   cupid_mark within_mark;
   cupid_mark mark;
 } cupid_adaptive;

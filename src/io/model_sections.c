@@ -1051,7 +1051,8 @@ static cupid_status read_fracture(model_reader *rd, yaml_node_t *node, cupid_per
 /* peridynamics.adaptive (issue 37): after fracture, which it needs (the trigger is a fraction
  * of the critical stretch, and the zone follows cracks). */
 static cupid_status read_adaptive(model_reader *rd, yaml_node_t *node, cupid_peridynamics *pd) {
-  static const char *const keys[] = {"threshold", "margin", "within", "max_nodes", "overlap"};
+  static const char *const keys[] = {"threshold", "margin", "within", "max_nodes", "overlap",
+                                     "every"};
   cupid_adaptive *a = &pd->adaptive;
   mr_map map;
   yaml_node_t *v;
@@ -1098,6 +1099,10 @@ static cupid_status read_adaptive(model_reader *rd, yaml_node_t *node, cupid_per
     int n = 0;
     CUPID_CALL(mr_integer(rd, v, "peridynamics.adaptive.max_nodes", 1, 2147483647L, &n));
     a->max_nodes = n;
+  }
+  if ((v = mr_get(&map, "every"))) { /* dynamics: the trigger's steps (adaptive.c checks the type) */
+    CUPID_CALL(mr_integer(rd, v, "peridynamics.adaptive.every", 1, 2147483647L, &a->every));
+    mr_mark(v, "peridynamics.adaptive.every", &a->every_mark);
   }
   return CUPID_SUCCESS;
 }

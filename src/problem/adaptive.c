@@ -94,10 +94,21 @@ cupid_status cupid_problem_adaptive_check(const cupid_problem_state *prob) {
                              "fictitious in cupid %s (the coupling is built again around the "
                              "zone); method %s is not supported yet",
                              cupid_version(), method->name);
-  if (m->analysis.type != CUPID_ANALYSIS_STATIC)
+  if (m->analysis.type == CUPID_ANALYSIS_EVALUATE)
     return cupid_model_error(m, &ad->mark,
                              "adaptive zones grow in quasi-static crack growth (type: static "
-                             "with steps) in cupid %s; explicit dynamics keeps its zone",
+                             "with steps) and in explicit dynamics (type: dynamic); type "
+                             "evaluate breaks nothing");
+  if (m->analysis.type == CUPID_ANALYSIS_STATIC && ad->every > 0)
+    return cupid_model_error(m, &ad->every_mark,
+                             "`every` is the time steps between two tests of the trigger in "
+                             "dynamics; quasi-static growth tests it after every load step: "
+                             "remove it");
+  if (m->analysis.type == CUPID_ANALYSIS_DYNAMIC && m->pd.n_regions == 0)
+    return cupid_model_error(m, &ad->mark,
+                             "in dynamics an adaptive zone grows from initial regions in cupid "
+                             "%s (regions: [] would run the beam alone, whose assembled K breaks "
+                             "no bond, until the first conversion): give the first zone",
                              cupid_version());
   if (m->pd.fracture.criterion != CUPID_FRACTURE_STRETCH)
     return cupid_model_error(m, &ad->mark,
@@ -895,11 +906,12 @@ static void old_free(old_zone *o) {
   cupid_free(&o->u);
 }
 
-/* The new problem's u: the old nodes' displacements where they were; a new node's the old
- * beam's at its place (issue 37: "the new nodes start from the beam's CUF displacement
- * field"); the beam's DOFs as they were (one mesh). */
-static cupid_status carry_over(cupid_problem_state *prob, cupid_problem_adaptive *a,
-                               const old_zone *o) {
+/* A field of the old problem (old, its DOFs) on the new one's DOFs (out): the old nodes'
+ * values where they were; a new node's the old beam's field at its place (issue 37: "the new
+ * nodes start from the beam's CUF displacement field", and in dynamics its velocity: the
+ * beam's interpolation is linear in its DOFs); the beam's DOFs as they were (one mesh). */
+static cupid_status carry_over(const cupid_problem_state *prob, const cupid_problem_adaptive *a,
+                               const old_zone *o, const double *old, double *out) {
   const double *x = cupid_pd_grid_coords(prob->grid);
   unsigned char *seen = NULL;
   CUPID_CALL(cupid_calloc((size_t)prob->n_pd + 1, 1, "mapped nodes", &seen));
@@ -907,17 +919,34 @@ static cupid_status carry_over(cupid_problem_state *prob, cupid_problem_adaptive
     const cupid_int j = a->map[i];
     if (j < 0) continue;
     seen[j] = 1;
-    memcpy(prob->u + 3 * j, o->u + 3 * i, 3 * sizeof *prob->u);
+    memcpy(out + 3 * j, old + 3 * i, 3 * sizeof *out);
   }
   cupid_status st = CUPID_SUCCESS;
   for (cupid_int j = 0; j < prob->n_pd && st == CUPID_SUCCESS; j++) {
     if (seen[j]) continue;
-    st = cupid_cuf_displacement_at(o->beam, o->u, x[3 * j], x[3 * j + 1], x[3 * j + 2],
-                                   prob->u + 3 * j);
+    st = cupid_cuf_displacement_at(o->beam, old, x[3 * j], x[3 * j + 1], x[3 * j + 2], out + 3 * j);
   }
   cupid_free(&seen);
   CUPID_CALL(st);
-  memcpy(prob->u + prob->fe_offset, o->u + o->fe_offset, (size_t)o->n_fe_dofs * sizeof *prob->u);
+  memcpy(out + prob->fe_offset, old + o->fe_offset, (size_t)o->n_fe_dofs * sizeof *out);
+  return CUPID_SUCCESS;
+}
+
+/* The caller's fields of the old layout (carry[k], old ndof each), each replaced by its
+ * carried copy on the new one. */
+static cupid_status carry_fields(const cupid_problem_state *prob, const cupid_problem_adaptive *a,
+                                 const old_zone *o, double **carry, int n_carry) {
+  for (int k = 0; k < n_carry; k++) {
+    double *out = NULL;
+    CUPID_CALL(cupid_calloc((size_t)prob->ndof + 1, sizeof *out, "a carried field", &out));
+    const cupid_status st = carry_over(prob, a, o, carry[k], out);
+    if (st != CUPID_SUCCESS) {
+      cupid_free(&out);
+      return st;
+    }
+    cupid_free(&carry[k]);
+    carry[k] = out;
+  }
   return CUPID_SUCCESS;
 }
 
@@ -931,14 +960,25 @@ static cupid_status record(cupid_problem_adaptive *a, const cupid_problem_conver
   return CUPID_SUCCESS;
 }
 
+/* Where a run stopped: "crack growth stopped at load step k (load factor x)", in dynamics
+ * "the dynamic run stopped at step k (t = x)". */
+static void stopped_at(const cupid_problem_state *prob, int step, double load, char *buf, size_t n) {
+  if (prob->model->analysis.type == CUPID_ANALYSIS_DYNAMIC)
+    snprintf(buf, n, "the dynamic run stopped at step %d (t = %.6g)", step, load);
+  else
+    snprintf(buf, n, "crack growth stopped at load step %d (load factor %.6g)", step, load);
+}
+
 /* The zone would pass max_nodes: the run stops there (exit 2) with its results so far. */
 static void stop_at_cap(cupid_problem_state *prob, int step, double load, cupid_int nodes) {
+  char where[96];
+  stopped_at(prob, step, load, where, sizeof where);
   snprintf(prob->growth.stopped, sizeof prob->growth.stopped,
-           "crack growth stopped at load step %d (load factor %.6g): the adaptive zone would "
-           "grow to %lld PD nodes, over peridynamics.adaptive.max_nodes = %lld; raise it (cupid "
-           "check prints what `within` allows) or bound the zone; the steps before are in the "
-           "steps' file",
-           step, load, (long long)nodes, (long long)prob->model->pd.adaptive.max_nodes);
+           "%s: the adaptive zone would grow to %lld PD nodes, over "
+           "peridynamics.adaptive.max_nodes = %lld; raise it (cupid check prints what `within` "
+           "allows) or bound the zone; the steps before are in the %s",
+           where, (long long)nodes, (long long)prob->model->pd.adaptive.max_nodes,
+           prob->model->analysis.type == CUPID_ANALYSIS_DYNAMIC ? "time series" : "steps' file");
   prob->growth.stopped_step = step;
 }
 
@@ -1012,9 +1052,10 @@ static cupid_status converted(cupid_problem_state *prob, cupid_problem_adaptive 
   char part[128] = "";
   if (c->partial)
     snprintf(part, sizeof part, ", x in [%g, %g], z in [%g, %g]", c->x_lo, c->x_hi, c->z_lo, c->z_hi);
-  cupid_problem_progress(prob, "adaptive: step %d, load factor %.4g: %d %s%s on y in [%g, %g]%s "
+  const int timed = prob->model->analysis.type == CUPID_ANALYSIS_DYNAMIC;
+  cupid_problem_progress(prob, "adaptive: step %d, %s %.4g: %d %s%s on y in [%g, %g]%s "
                          "turned to PD (%s): +%lld nodes, %lld in all, %lld zone%s",
-                         c->step, c->load_factor, c->elements,
+                         c->step, timed ? "t =" : "load factor", c->load_factor, c->elements,
                          c->partial ? "unit" : "beam element", c->elements == 1 ? "" : "s",
                          c->y_lo, c->y_hi, part, c->why ? c->why : "", (long long)c->added_nodes,
                          (long long)c->pd_nodes, (long long)zones, zones == 1 ? "" : "s");
@@ -1027,11 +1068,12 @@ static int stop_if_protected_damaged(cupid_problem_state *prob, int step, double
   const double *x = cupid_pd_grid_coords(prob->grid);
   for (cupid_int i = 0; i < prob->n_pd && prob->protect && prob->damage; i++) {
     if (!prob->protect[i] || prob->damage[i] <= 0.0) continue;
+    char where[96];
+    stopped_at(prob, step, load, where, sizeof where);
     snprintf(prob->growth.stopped, sizeof prob->growth.stopped,
-             "crack growth stopped at load step %d (load factor %.6g): the grown adaptive zone "
-             "has a broken bond at its overlap's PD node (%g, %g, %g), whose bonds never break; "
-             "give peridynamics.adaptive.margin of a horizon or more",
-             step, load, x[3 * i], x[3 * i + 1], x[3 * i + 2]);
+             "%s: the grown adaptive zone has a broken bond at its overlap's PD node (%g, %g, "
+             "%g), whose bonds never break; give peridynamics.adaptive.margin of a horizon or "
+             "more", where, x[3 * i], x[3 * i + 1], x[3 * i + 2]);
     prob->growth.stopped_step = step;
     return 1;
   }
@@ -1039,7 +1081,7 @@ static int stop_if_protected_damaged(cupid_problem_state *prob, int step, double
 }
 
 cupid_status cupid_problem_adaptive_convert(cupid_problem_state *prob, int step, double load_factor,
-                                            int *stopped) {
+                                            double **carry, int n_carry, int *stopped) {
   cupid_problem_adaptive *a = prob->adaptive;
   unsigned char *z = NULL;
   old_zone o = {0};
@@ -1073,7 +1115,8 @@ cupid_status cupid_problem_adaptive_convert(cupid_problem_state *prob, int step,
     CUPID_TRY(cupid_pd_operator_copy_broken_mapped(prob->op, o.op, a->map));
   }
   CUPID_TRY(cupid_problem_fracture_damage(prob));
-  CUPID_TRY(carry_over(prob, a, &o));
+  CUPID_TRY(carry_over(prob, a, &o, o.u, prob->u));
+  CUPID_TRY(carry_fields(prob, a, &o, carry, n_carry));
   CUPID_TRY(converted(prob, a, z, &c, o.n_pd));
   *stopped = stop_if_protected_damaged(prob, step, load_factor);
 cleanup:
@@ -1193,6 +1236,18 @@ cupid_status cupid_problem_adaptive_begin(cupid_problem_state *prob) {
   return CUPID_SUCCESS;
 }
 
+void cupid_problem_adaptive_energy(cupid_problem_state *prob, double energy) {
+  cupid_problem_adaptive *a = prob->adaptive;
+  if (!a || a->n_conv == 0) return;
+  a->conv[a->n_conv - 1].energy = energy;
+  a->conv[a->n_conv - 1].has_energy = 1;
+}
+
+int cupid_problem_adaptive_every(const cupid_problem_state *prob) {
+  const int every = prob->model->pd.adaptive.every;
+  return every > 0 ? every : prob->model->analysis.dynamic.every;
+}
+
 const cupid_int *cupid_problem_adaptive_map(const cupid_problem_state *prob, cupid_int *n) {
   *n = prob->adaptive ? prob->adaptive->map_n : 0;
   return prob->adaptive ? prob->adaptive->map : NULL;
@@ -1242,6 +1297,8 @@ void cupid_problem_adaptive_print(const cupid_problem_state *prob, double bytes)
          ov);
   if (ad->has_within && ad->within.has[1])
     printf("adaptive: within y in [%g, %g]\n", ad->within.lo[1], ad->within.hi[1]);
+  if (prob->model->analysis.type == CUPID_ANALYSIS_DYNAMIC)
+    printf("adaptive: the trigger is tested every %d time steps\n", cupid_problem_adaptive_every(prob));
   const cupid_int big = largest_zone(a, ad);
   /* the memory of a zone that size: this model's estimate per PD node */
   const double per_node = prob->n_pd > 0 && bytes > 0 ? bytes / (double)prob->n_pd : 0.0;
@@ -1299,7 +1356,9 @@ void cupid_problem_adaptive_json(cupid_json js, const cupid_problem_state *prob)
     const cupid_problem_conversion *c = &a->conv[k];
     cupid_json_begin_object(js, NULL);
     cupid_json_integer(js, "step", c->step);
-    cupid_json_number(js, "load_factor", c->load_factor);
+    cupid_json_number(js, prob->model->analysis.type == CUPID_ANALYSIS_DYNAMIC ? "t" : "load_factor",
+                      c->load_factor);
+    if (c->has_energy) cupid_json_number(js, "energy", c->energy);
     cupid_json_integer(js, "added_nodes", c->added_nodes);
     cupid_json_integer(js, "pd_nodes", c->pd_nodes);
     cupid_json_integer(js, "elements", c->elements);

@@ -38,6 +38,13 @@ typedef struct {
   cupid_dynamics_restart restart;
   double *restart_vectors;  /* a, react, load, and two scratch vectors (n each) */
   cupid_checkpoint resume;
+  /* an adaptive zone (issue 37): the trigger's steps, the state where it fired, and
+   * adaptive.pvd (the zone before each conversion and at the end) */
+  int adapt_every;
+  cupid_dynamics_restart paused;
+  cupid_writer zones;
+  cupid_int zone_frames;
+  cupid_int converted_at; /* the last conversion's step */
 } dyn_output;
 
 /* Every material used by the model needs a density. */
@@ -223,19 +230,23 @@ static cupid_status monitor_outputs(dyn_output *o, cupid_int step, double t, int
   if (!output) return CUPID_SUCCESS;
   o->out_count++;
   cupid_problem_state *prob = o->prob;
-  /* energies.csv's columns (open_outputs) */
-  const double total = e->kinetic + e->strain + e->damping + e->fracture - e->external;
-  const double erow[9] = {t, (double)step, e->kinetic, e->strain, e->damping, e->fracture,
-                          e->external, total, e->balance};
-  double erow_plain[8] = {t, (double)step, e->kinetic, e->strain, e->damping, e->external, total,
-                          e->balance}; /* without the fracture column */
-  const cupid_frame ef = {.step = step, .time = t, .row = prob->damage ? erow : erow_plain};
+  /* energies.csv's columns (open_outputs): fracture with it, conversion with an adaptive zone */
+  const double total =
+      e->kinetic + e->strain + e->damping + e->fracture - e->external - e->conversion;
+  double erow[10];
+  int k = 0;
+  erow[k++] = t, erow[k++] = (double)step, erow[k++] = e->kinetic, erow[k++] = e->strain;
+  erow[k++] = e->damping;
+  if (prob->damage) erow[k++] = e->fracture;
+  if (prob->adaptive) erow[k++] = e->conversion;
+  erow[k++] = e->external, erow[k++] = total, erow[k++] = e->balance;
+  const cupid_frame ef = {.step = step, .time = t, .row = erow};
   CUPID_CALL(cupid_writer_step(o->energies, &ef));
   if (prob->damage) { /* collective on a slab run: every rank counts, rank 0 writes */
     CUPID_CALL(cupid_problem_fracture_damage(prob));
-    const double drow[6] = {(double)step, t, (double)prob->broken_bonds,
+    const double drow[7] = {(double)step, t, (double)prob->broken_bonds,
                             (double)prob->damaged_nodes, prob->max_damage,
-                            (double)cupid_problem_fracture_nodes_broken(prob)};
+                            (double)cupid_problem_fracture_nodes_broken(prob), (double)prob->n_pd};
     const cupid_frame df = {.step = step, .time = t, .row = drow};
     CUPID_CALL(cupid_writer_step(o->damage, &df));
   }
@@ -264,20 +275,26 @@ static cupid_status open_outputs(dyn_output *o) {
   cupid_problem_state *prob = o->prob;
   const cupid_output *out = &prob->model->output;
   if (!prob->writedir) return CUPID_SUCCESS; /* an MPI rank other than 0: no files */
-  if (prob->damage) { /* damage.csv (model-format.md, fracture outputs) */
-    static const cupid_column dc[6] = {{"step", 1}, {"t", 0}, {"broken_bonds", 1},
+  if (prob->damage) { /* damage.csv (model-format.md, fracture outputs); pd_nodes: adaptive */
+    static const cupid_column dc[7] = {{"step", 1}, {"t", 0}, {"broken_bonds", 1},
                                        {"damaged_nodes", 1}, {"max_damage", 0},
-                                       {"nodes_broken", 1}};
-    CUPID_CALL(open_writer(o, &cupid_writer_csv, "damage.csv", dc, 6, &o->damage));
+                                       {"nodes_broken", 1}, {"pd_nodes", 1}};
+    CUPID_CALL(open_writer(o, &cupid_writer_csv, "damage.csv", dc, prob->adaptive ? 7 : 6,
+                           &o->damage));
   }
-  static const cupid_column ec[9] = {{"t", 0}, {"step", 1}, {"kinetic", 0}, {"strain", 0},
-                                     {"damping_dissipated", 0}, {"fracture_dissipated", 0},
-                                     {"external_work", 0}, {"total", 0}, {"balance", 0}};
-  static const cupid_column ec_plain[8] = {{"t", 0}, {"step", 1}, {"kinetic", 0}, {"strain", 0},
-                                           {"damping_dissipated", 0}, {"external_work", 0},
-                                           {"total", 0}, {"balance", 0}};
-  CUPID_CALL(open_writer(o, &cupid_writer_csv, "energies.csv", prob->damage ? ec : ec_plain,
-                         prob->damage ? 9 : 8, &o->energies));
+  /* fracture_dissipated with fracture, conversion_added with an adaptive zone (monitor_outputs) */
+  cupid_column ec[10];
+  int ne = 0;
+  ec[ne++] = (cupid_column){"t", 0}, ec[ne++] = (cupid_column){"step", 1};
+  ec[ne++] = (cupid_column){"kinetic", 0}, ec[ne++] = (cupid_column){"strain", 0};
+  ec[ne++] = (cupid_column){"damping_dissipated", 0};
+  if (prob->damage) ec[ne++] = (cupid_column){"fracture_dissipated", 0};
+  if (prob->adaptive) ec[ne++] = (cupid_column){"conversion_added", 0};
+  ec[ne++] = (cupid_column){"external_work", 0}, ec[ne++] = (cupid_column){"total", 0};
+  ec[ne++] = (cupid_column){"balance", 0};
+  CUPID_CALL(open_writer(o, &cupid_writer_csv, "energies.csv", ec, ne, &o->energies));
+  if (prob->adaptive && out->vtu) /* the zone before each conversion and at the end */
+    CUPID_CALL(open_writer(o, &cupid_writer_vtu, "adaptive.pvd", NULL, 0, &o->zones));
   if (out->vtu) CUPID_CALL(open_writer(o, &cupid_writer_vtu, "model.pvd", NULL, 0, &o->vtu));
   if (out->exodus)
     CUPID_CALL(open_writer(o, &cupid_writer_exodus, "model.exo", NULL, 0, &o->exodus));
@@ -356,6 +373,7 @@ static cupid_status finish_outputs(dyn_output *o) {
   CUPID_CALL(cupid_writer_end(&o->damage));
   CUPID_CALL(cupid_writer_end(&o->energies));
   CUPID_CALL(cupid_writer_end(&o->vtu)); /* model.pvd */
+  CUPID_CALL(cupid_writer_end(&o->zones)); /* adaptive.pvd */
   CUPID_CALL(cupid_writer_end(&o->exodus));
   if (prob->model->output.plots) CUPID_CALL(plots(prob, damage));
   return CUPID_SUCCESS;
@@ -554,6 +572,116 @@ static cupid_status resume_from_checkpoint(dyn_output *o, double *v) {
   return read_state(o, o->resume, v);
 }
 
+/* ---- Adaptive zones (issue 37; adaptive.c): the run pauses where the trigger fires, the zone
+ * grows, and the run goes on from that step on the new layout ---- */
+
+/* hooks->pause: every adapt_every steps (not the last), the trigger on u (prob->u: the
+ * integrator's) and the damage now; the run stops at the step when it marked something. */
+static cupid_status adaptive_pause(void *ctx, cupid_int step, const double *u, const double *v,
+                                   int *stop) {
+  (void)u, (void)v;
+  dyn_output *o = ctx;
+  *stop = 0;
+  if (step % o->adapt_every != 0 || step == o->prob->dyn.steps) return CUPID_SUCCESS;
+  cupid_int marked = 0;
+  CUPID_CALL(cupid_problem_fracture_damage(o->prob));
+  CUPID_CALL(cupid_problem_adaptive_trigger(o->prob, &marked));
+  *stop = marked > 0;
+  return CUPID_SUCCESS;
+}
+
+/* hooks->stopped: the state where the trigger fired. Its u and v are the run's own vectors
+ * (prob->u and v), which outlive the call; the integrator's acceleration, reactions and load
+ * are not kept: the changed system makes them again. */
+static cupid_status adaptive_stopped(void *ctx, const cupid_dynamics_restart *r) {
+  dyn_output *o = ctx;
+  o->paused = *r;
+  o->paused.a = o->paused.react = o->paused.load = NULL;
+  return CUPID_SUCCESS;
+}
+
+/* adaptive.pvd: the zone and its fields (displacement, velocity, damage) at time t. */
+static cupid_status zone_frame(dyn_output *o, double t, const double *v) {
+  if (!o->zones) return CUPID_SUCCESS;
+  cupid_problem_state *prob = o->prob;
+  CUPID_CALL(cupid_problem_fracture_damage(prob));
+  const cupid_vtu_array fields[3] = {{"displacement", 3, prob->u}, {"velocity", 3, v},
+                                     {"damage", 1, prob->damage}};
+  return cupid_problem_frame_write(prob, &o->verts, ++o->zone_frames, t, prob->u, fields, 3,
+                                   &o->zones, 1);
+}
+
+/* A segment that went on from a conversion ended: the energy the conversion added, as the
+ * integrator booked it. */
+static void converted_energy(dyn_output *o) {
+  cupid_problem_state *prob = o->prob;
+  const double e = prob->dyn.info.changed_energy;
+  cupid_problem_adaptive_energy(prob, e);
+  cupid_problem_progress(prob, "adaptive: the conversion at step %lld changed the kinetic + "
+                         "strain energy by %.4g (conversion_added in energies.csv)",
+                         (long long)o->converted_at, e);
+}
+
+static void free_constraint_nodes(dyn_output *o) {
+  for (int k = 0; o->cnodes && k < o->prob->model->n_constraints; k++) cupid_free(&o->cnodes[k]);
+  cupid_free(&o->cnodes);
+  cupid_free(&o->n_cnodes);
+}
+
+/* What a run needs of a layout: the mass and, for central differences on an operator with
+ * one, the rows' bound of K (the guaranteed stable step). */
+typedef struct {
+  cupid_csr M;
+  double *m_lumped, *row_bound;
+} dyn_layout;
+
+static void layout_free(dyn_layout *l) {
+  cupid_csr_destroy(&l->M);
+  cupid_free(&l->m_lumped);
+  cupid_free(&l->row_bound);
+}
+
+static cupid_status row_bounds(const cupid_problem_state *prob, const cupid_method_operator *op,
+                               dyn_layout *l) {
+  if (!op || !op->row_bound || prob->model->analysis.dynamic.integrator != CUPID_INTEGRATOR_CENTRAL)
+    return CUPID_SUCCESS;
+  /* a slab's operator gives its owned rows exactly (cupid_pd_operator_halo_layers) */
+  CUPID_CALL(cupid_malloc((size_t)prob->ndof + 1, sizeof *l->row_bound, "row bounds of K",
+                          &l->row_bound));
+  return op->row_bound(op->ctx, l->row_bound);
+}
+
+/* The trigger fired at o->paused.step: the zone grows (adaptive.c: the new nodes take u and
+ * v from the beam's field there), and the operator, mass, row bounds and frames' nodes are
+ * made again for the new layout; o->paused becomes the changed system's state to go on
+ * from. *capped: the zone would pass max_nodes (the layout as it was; the run stops). */
+static cupid_status convert_zone(dyn_output *o, cupid_method_operator *op, double **v,
+                                 dyn_layout *l, int *capped) {
+  cupid_problem_state *prob = o->prob;
+  const cupid_int step = o->paused.step;
+  const double t = (double)step * prob->model->analysis.dynamic.dt;
+  CUPID_CALL(zone_frame(o, t, *v));
+  /* what borrows the old layout */
+  if (op->destroy) op->destroy(&op->ctx);
+  *op = (cupid_method_operator){0};
+  prob->crack_copy = NULL, prob->crack_map = NULL;
+  layout_free(l);
+  free_constraint_nodes(o);
+  cupid_problem_vertices_free(&o->verts);
+  CUPID_CALL(cupid_problem_adaptive_convert(prob, (int)step, t, v, 1, capped));
+  /* (capped: the old layout still, its operator again for the run's end) */
+  CUPID_CALL(prob->method->explicit_operator(prob, op));
+  CUPID_CALL(prob->method->mass(prob, &l->M, &l->m_lumped));
+  CUPID_CALL(row_bounds(prob, op, l));
+  if (prob->model->output.vtu) CUPID_CALL(cupid_problem_vertices_build(prob->grid, &o->verts));
+  o->converted_at = step;
+  o->paused.n = prob->ndof;
+  o->paused.u = prob->u;
+  o->paused.v = *v;
+  o->paused.changed = 1;
+  return CUPID_SUCCESS;
+}
+
 /* A slab's stiffness product: its owned rows (the halo's rows are not needed, and not
  * right: their families reach beyond the slab). */
 static cupid_status slab_apply(void *ctx, const double *x, double *y) {
@@ -567,17 +695,17 @@ static cupid_status agreed(const cupid_problem_state *prob, cupid_status st) {
   return prob->slab ? cupid_problem_slab_agree(st) : st;
 }
 
-cupid_status cupid_problem_run_dynamic(cupid_problem_state *prob, const cupid_method_operator *op) {
+cupid_status cupid_problem_run_dynamic(cupid_problem_state *prob, cupid_method_operator *op) {
   const cupid_model_t *m = prob->model;
   const cupid_dynamic *d = &m->analysis.dynamic;
   cupid_status st = CUPID_SUCCESS;
-  cupid_csr M = NULL;
-  double *m_lumped = NULL, *v = NULL, *rbound = NULL, t0 = cupid_wtime();
+  dyn_layout l = {0};
+  double *v = NULL, t0 = cupid_wtime();
   dyn_output o = {.prob = prob};
   const int mf = op != NULL;
   cupid_petsc_halo halo = NULL;
   cupid_dynamics_partition part;
-  CUPID_TRY(agreed(prob, prob->method->mass(prob, &M, &m_lumped)));
+  CUPID_TRY(agreed(prob, prob->method->mass(prob, &l.M, &l.m_lumped)));
   cupid_problem_phase_end(prob, CUPID_PHASE_ASSEMBLY, t0);
   CUPID_TRY(agreed(prob, cupid_calloc((size_t)prob->ndof + 1, sizeof *v, "velocities", &v)));
   CUPID_TRY(agreed(prob, initial_state(prob, v)));
@@ -608,16 +736,18 @@ cupid_status cupid_problem_run_dynamic(cupid_problem_state *prob, const cupid_me
   if (prob->opts->check_only) opt.steps = 0; /* `cupid check`: the checks before step 1 only */
   cupid_dynamics_hooks hooks = {.ctx = &o};
   for (int k = 0; k < m->n_constraints; k++) o.timed_constraints |= constraint_depends_on_time(&m->constraints[k]);
-  CUPID_TRY(agreed(prob, check_beam_motion(prob, m_lumped != NULL)));
+  CUPID_TRY(agreed(prob, check_beam_motion(prob, l.m_lumped != NULL)));
   for (int k = 0; k < m->n_loads; k++) o.timed_loads |= load_depends_on_time(&m->loads[k]);
   if (o.timed_constraints || o.timed_loads) hooks.conditions = conditions_now;
   if (m->has_peridynamics && m->pd.fracture.has_fracture) hooks.after_forces = break_bonds;
-  if (hooks.conditions || hooks.after_forces) opt.hooks = &hooks;
+  if (prob->adaptive) { /* the zone grows where the trigger fires (issue 37) */
+    o.adapt_every = cupid_problem_adaptive_every(prob);
+    hooks.pause = adaptive_pause, hooks.stopped = adaptive_stopped;
+  }
+  if (hooks.conditions || hooks.after_forces || hooks.pause) opt.hooks = &hooks;
   prob->dyn.steps = opt.steps;
-  prob->dyn.lumped = m_lumped != NULL;
+  prob->dyn.lumped = l.m_lumped != NULL;
   prob->dyn.matrix_free = mf;
-  cupid_dynamics_system sys = {.K = prob->K, .M = M, .m_lumped = m_lumped, .bc = prob->bc,
-                               .f = prob->f_ext};
   if (prob->method->recover)
     CUPID_TRY(cupid_malloc((size_t)prob->ndof, sizeof *o.u_view, "recovered displacements",
                            &o.u_view));
@@ -648,26 +778,33 @@ cupid_status cupid_problem_run_dynamic(cupid_problem_state *prob, const cupid_me
   else
     cupid_problem_progress(prob, "dynamics: %s, %lld steps of %g, %s mass",
                            d->integrator == CUPID_INTEGRATOR_NEWMARK ? "newmark" : "central",
-                           (long long)opt.steps, opt.dt, m_lumped ? "lumped" : "consistent");
+                           (long long)opt.steps, opt.dt, l.m_lumped ? "lumped" : "consistent");
   t0 = cupid_wtime();
-  cupid_dynamics_explicit_system esys = {.n = prob->ndof,
-                                         .apply = mf ? op->apply : NULL,
-                                         .ctx = mf ? op->ctx : NULL,
-                                         .m_lumped = m_lumped, .bc = prob->bc, .f = prob->f_ext};
-  if (prob->slab) esys.apply = slab_apply, esys.ctx = prob, esys.part = &part;
-  if (mf && op->row_bound && d->integrator == CUPID_INTEGRATOR_CENTRAL) {
-    /* a slab's operator gives its owned rows exactly (cupid_pd_operator_halo_layers) */
-    CUPID_TRY(agreed(prob, cupid_malloc((size_t)prob->ndof + 1, sizeof *rbound, "row bounds of K",
-                                        &rbound)));
-    CUPID_TRY(agreed(prob, op->row_bound(op->ctx, rbound)));
-    esys.row_bound = rbound;
+  CUPID_TRY(agreed(prob, row_bounds(prob, op, &l)));
+  double stepping = 0.0; /* the time loops' seconds, over the segments of an adaptive run */
+  for (;;) { /* one segment, unless an adaptive zone grows (then a segment per zone) */
+    cupid_dynamics_system sys = {.K = prob->K, .M = l.M, .m_lumped = l.m_lumped, .bc = prob->bc,
+                                 .f = prob->f_ext};
+    cupid_dynamics_explicit_system esys = {.n = prob->ndof, .apply = mf ? op->apply : NULL,
+                                           .ctx = mf ? op->ctx : NULL, .m_lumped = l.m_lumped,
+                                           .bc = prob->bc, .f = prob->f_ext, .row_bound = l.row_bound};
+    if (prob->slab) esys.apply = slab_apply, esys.ctx = prob, esys.part = &part;
+    st = mf ? cupid_dynamics_run_explicit(&esys, &opt, prob->u, v, monitor, &o, &prob->dyn.info)
+            : cupid_dynamics_run(&sys, &opt, prob->u, v, monitor, &o, &prob->dyn.info);
+    stepping += prob->dyn.info.time_step_s;
+    if (opt.resume == &o.paused) converted_energy(&o);
+    if (st == CUPID_ERR_ARGUMENT && d->integrator == CUPID_INTEGRATOR_CENTRAL &&
+        prob->dyn.info.dt_critical > 0 && d->dt > prob->dyn.info.dt_critical)
+      st = cupid_model_error(m, &d->mark, "%s%s", opt.resume == &o.paused ?
+                             "after the adaptive zone grew: " : "", cupid_error_message());
+    CUPID_TRY(st);
+    if (!prob->dyn.info.stopped_at) break;
+    int capped = 0;
+    CUPID_TRY(convert_zone(&o, op, &v, &l, &capped));
+    if (capped) break;
+    opt.resume = &o.paused;
   }
-  st = mf ? cupid_dynamics_run_explicit(&esys, &opt, prob->u, v, monitor, &o, &prob->dyn.info)
-          : cupid_dynamics_run(&sys, &opt, prob->u, v, monitor, &o, &prob->dyn.info);
-  if (st == CUPID_ERR_ARGUMENT && d->integrator == CUPID_INTEGRATOR_CENTRAL &&
-      prob->dyn.info.dt_critical > 0 && d->dt > prob->dyn.info.dt_critical)
-    st = cupid_model_error(m, &d->mark, "%s", cupid_error_message());
-  CUPID_TRY(st);
+  prob->dyn.info.time_step_s = stepping;
   if (prob->opts->check_only) goto cleanup; /* no step was taken, nothing to write */
   prob->phases[CUPID_PHASE_FACTORISATION] =
       (cupid_phase_record){prob->dyn.info.factor.time_factor, cupid_peak_memory(), 1};
@@ -676,10 +813,12 @@ cupid_status cupid_problem_run_dynamic(cupid_problem_state *prob, const cupid_me
     prob->solve = prob->dyn.info.factor;
     prob->solved = 1;
   }
-  if (mf) CUPID_TRY(agreed(prob, esys.apply(esys.ctx, prob->u, prob->f_int)));
+  if (mf) CUPID_TRY(agreed(prob, prob->slab ? slab_apply(prob, prob->u, prob->f_int)
+                                            : op->apply(op->ctx, prob->u, prob->f_int)));
   else cupid_csr_matvec(prob->K, prob->u, prob->f_int);
   if (prob->slab) CUPID_TRY(cupid_problem_slab_collect(prob)); /* rank 0: the whole model */
   t0 = cupid_wtime();
+  CUPID_TRY(zone_frame(&o, (double)prob->dyn.steps * d->dt, v)); /* the zone at the end */
   CUPID_TRY(finish_outputs(&o));
   cupid_problem_phase_end(prob, CUPID_PHASE_OUTPUT, t0);
   prob->dyn.done = 1;
@@ -699,21 +838,17 @@ cleanup:
    * after a resumption that failed) */
   {
     const int keep = prob->ckpt.interrupted || prob->opts->resume;
-    cupid_writer *writers[5] = {&o.history, &o.damage, &o.energies, &o.vtu, &o.exodus};
-    for (int k = 0; k < 5; k++) cupid_writer_drop(writers[k], keep);
+    cupid_writer *writers[6] = {&o.history, &o.damage, &o.energies, &o.vtu, &o.exodus, &o.zones};
+    for (int k = 0; k < 6; k++) cupid_writer_drop(writers[k], keep);
   }
   cupid_checkpoint_close(&o.resume);
   cupid_problem_vertices_free(&o.verts);
   cupid_problem_checkpoint_end(prob);
   cupid_free(&o.restart_vectors);
-  for (int k = 0; o.cnodes && k < m->n_constraints; k++) cupid_free(&o.cnodes[k]);
-  cupid_free(&o.cnodes);
-  cupid_free(&o.n_cnodes);
+  free_constraint_nodes(&o);
   cupid_free(&o.u_view);
-  cupid_csr_destroy(&M);
-  cupid_free(&m_lumped);
+  layout_free(&l);
   cupid_free(&v);
-  cupid_free(&rbound);
   cupid_petsc_halo_destroy(&halo);
   cupid_pd_grid_destroy(&o.whole);
   return st;
@@ -748,6 +883,8 @@ void cupid_problem_dynamic_json(cupid_json js, const cupid_problem_state *prob) 
   cupid_json_number(js, "kinetic", prob->dyn.energy.kinetic);
   cupid_json_number(js, "strain", prob->dyn.energy.strain);
   cupid_json_number(js, "damping_dissipated", prob->dyn.energy.damping);
+  if (prob->damage) cupid_json_number(js, "fracture_dissipated", prob->dyn.energy.fracture);
+  if (prob->adaptive) cupid_json_number(js, "conversion_added", prob->dyn.energy.conversion);
   cupid_json_number(js, "external_work", prob->dyn.energy.external);
   cupid_json_end_object(js);
   cupid_json_number(js, "max_energy_balance_relative", in->max_balance);

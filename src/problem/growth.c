@@ -1115,7 +1115,7 @@ static cupid_status convert_zone(growth_run *g, int k, double lambda, int *again
   CUPID_CALL(zone_frame(g, lambda));
   unsigned char *held = NULL, *weak = NULL;
   growth_release(g, &held, &weak);
-  cupid_status st = cupid_problem_adaptive_convert(prob, k, lambda, stop);
+  cupid_status st = cupid_problem_adaptive_convert(prob, k, lambda, NULL, 0, stop);
   if (st == CUPID_SUCCESS) st = growth_rezone(g, lambda, held, weak);
   cupid_free(&held);
   cupid_free(&weak);

@@ -70,13 +70,15 @@ enum { CUPID_STAGE_CREATED = 0, CUPID_STAGE_SET_UP = 1, CUPID_STAGE_SOLVED = 2 }
 typedef struct cupid_problem_adaptive_private cupid_problem_adaptive;
 /** One conversion: when, and what it added. */
 typedef struct {
-  int step;            /**< the load step it happened at */
-  double load_factor;
+  int step;            /**< the load step (dynamics: time step) it happened at */
+  double load_factor;  /**< (dynamics: the time) */
   cupid_int added_nodes, pd_nodes;
   double y_lo, y_hi;   /**< the span of the elements it turned to PD */
   int elements;        /**< beam elements (partial: units, beam element x section element) */
   int partial;         /**< a zone over part of the section: */
   double x_lo, x_hi, z_lo, z_hi; /**< the span of the section elements it added */
+  double energy;       /**< dynamics: the energy it added (kinetic + strain after less before) */
+  int has_energy;
   const char *why;     /**< "strain", "stretch in an overlap" (fictitious nodes: "in the
                             coupling zone"), "crack near an overlap", "an overlap's (a coupling
                             zone's) bond reached its limit" or "pre-crack near an overlap" */
@@ -488,9 +490,15 @@ cupid_status cupid_problem_adaptive_trigger(cupid_problem_state *prob, cupid_int
 cupid_status cupid_problem_adaptive_blocked(cupid_problem_state *prob, const double x[3],
                                             cupid_int *count);
 /** Turn the marked elements to PD and rebuild the problem around the new zone; *stopped = 1
- *  (prob->growth.stopped says why) when the zone would pass max_nodes. */
+ *  (prob->growth.stopped says why) when the zone would pass max_nodes. @p load_factor: in
+ *  dynamics the time. carry[0..n_carry): fields of the old layout (its DOFs) that the new one
+ *  keeps, as u (dynamics: the velocity), each replaced by its new copy. */
 cupid_status cupid_problem_adaptive_convert(cupid_problem_state *prob, int step, double load_factor,
-                                            int *stopped);
+                                            double **carry, int n_carry, int *stopped);
+/** Dynamics: the energy the last conversion added (the integrator's book of it). */
+void cupid_problem_adaptive_energy(cupid_problem_state *prob, double energy);
+/** Dynamics: the steps between two tests of the trigger. */
+int cupid_problem_adaptive_every(const cupid_problem_state *prob);
 /** The last conversion's map: old PD node -> new (*n old nodes). */
 const cupid_int *cupid_problem_adaptive_map(const cupid_problem_state *prob, cupid_int *n);
 /** `cupid check`: the settings and the largest zone `within` allows (its memory scaled from
