@@ -248,6 +248,11 @@ typedef struct {
    *  adaptive run's grown zone keeps its initial lattice: cupid_pd_grid_options.anchor). */
   int has_anchor;
   double anchor[3];
+  /** Set by a run, never read from a file: on PD slabs under mpirun, this process owns the z
+   *  layers between these planes (an adaptive run's grown zone keeps each rank's first slab:
+   *  cupid_pd_grid_options.own_z). */
+  int has_slab_window;
+  double slab_window[2];
   cupid_mark mark;
 } cupid_peridynamics;
 

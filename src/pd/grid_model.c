@@ -48,6 +48,8 @@ cupid_status cupid_pd_grid_create_part_from_model(const cupid_model_t *model, in
                                 .cut_volumes = pd->partial_volume == CUPID_PARTIAL_EXACT,
                                 .has_anchor = pd->has_anchor,
                                 .anchor = {pd->anchor[0], pd->anchor[1], pd->anchor[2]}};
+  if (pd->has_slab_window && parts > 1)
+    for (int e = 0; e < 2; e++) opts.own_z[e] = pd->slab_window[e];
   char msg[512];
   int bad = -1;
   st = pd_grid_build(&opts, pd->n_regions, boxes, mats, &bad, msg, sizeof msg, grid);

@@ -114,11 +114,13 @@ cupid_status cupid_problem_adaptive_check(const cupid_problem_state *prob) {
     return cupid_model_error(m, &ad->mark,
                              "the trigger compares the beam's strain with the critical stretch: "
                              "it needs fracture.criterion: stretch");
-  if (cupid_petsc_size() > 1)
+  if (cupid_petsc_size() > 1 && !prob->opts->check_only &&
+      (m->pd.n_regions == 0 || !cupid_problem_slab_wanted(prob)))
     return cupid_model_error(m, &ad->mark,
-                             "adaptive zones grow on one process in cupid %s (a grown zone would "
-                             "need the slabs balanced again): run it without mpirun",
-                             cupid_version());
+                             "under mpirun an adaptive zone grows on PD slabs: quasi-static "
+                             "growth from initial regions on the PETSc engine's matrix-free path "
+                             "(`--solver petsc`, not --assembled or --replicate); this model "
+                             "would keep the whole model on every rank: run it on one process");
   if (m->output.exodus)
     return cupid_model_error(m, &ad->mark,
                              "model.exo (output.exodus) keeps one node set for the whole run, and "
@@ -139,6 +141,40 @@ cupid_status cupid_problem_adaptive_check(const cupid_problem_state *prob) {
     return cupid_model_error(m, &m->pd.holes[0].mark,
                              "adaptive zones are boxes of beam elements and section elements: "
                              "holes are not supported with adaptive yet");
+  return CUPID_SUCCESS;
+}
+
+/* ---- On PD slabs under mpirun (issue 37: "grow inside the slabs"): each rank holds the z
+ * layers of its first slab, with the beam whole; a full-section zone grows along y, so the
+ * grown grid keeps every rank's layers (cupid_model_t pd.slab_window) and each old node,
+ * its halo's too, is on the same rank in the new grid: the carry-over stays on the rank. What
+ * the trigger reads of the PD nodes (their bonds, their damage) each rank reads on the nodes
+ * it owns, and the ranks agree on the marks. ---- */
+
+/* The zone's PD nodes: a slab run's over every rank. */
+static cupid_int zone_nodes(const cupid_problem_state *prob) {
+  return prob->slab ? prob->part.global_nodes : prob->n_pd;
+}
+
+/* Whether this rank decides for PD node i (a slab run: the nodes it owns, not its halo). */
+static int decides(const cupid_problem_state *prob, cupid_int i) {
+  return !prob->slab || cupid_problem_pd_owned(prob, i);
+}
+
+/* The largest of v[0..n) over the ranks of a slab run. */
+static void max_over_ranks(const cupid_problem_state *prob, double *v, cupid_int n) {
+  if (prob->slab) cupid_petsc_max_doubles(v, (int)n);
+}
+
+/* The marks of every rank on every rank (a slab run): an element marked on one is marked. */
+static cupid_status agree_marks(const cupid_problem_state *prob, cupid_problem_adaptive *a) {
+  if (!prob->slab) return CUPID_SUCCESS;
+  double *m = NULL;
+  CUPID_CALL(cupid_malloc((size_t)a->ne + 1, sizeof *m, "marks over the ranks", &m));
+  for (cupid_int e = 0; e < a->ne; e++) m[e] = a->mark[e];
+  max_over_ranks(prob, m, a->ne);
+  for (cupid_int e = 0; e < a->ne; e++) a->mark[e] = m[e] > 0.0;
+  cupid_free(&m);
   return CUPID_SUCCESS;
 }
 
@@ -199,7 +235,9 @@ static double trigger_stretch(const cupid_problem_state *prob) {
   if (!o->node_stretch) return o->critical_stretch;
   double s = INFINITY;
   for (cupid_int i = 0; i < prob->n_pd; i++) s = fmin(s, o->node_stretch[i]);
-  return s;
+  double neg = -s;
+  max_over_ranks(prob, &neg, 1);
+  return -neg;
 }
 
 /* The elements of the beam in order along y (each starts where the one before ends). */
@@ -431,9 +469,13 @@ static cupid_int layer_nodes_of(const cupid_problem_state *prob) {
   const double *x = cupid_pd_grid_coords(prob->grid), h = cupid_pd_grid_spacing(prob->grid);
   double y = INFINITY;
   for (cupid_int i = 0; i < prob->n_pd; i++) y = fmin(y, x[3 * i + 1]);
-  cupid_int n = 0;
-  for (cupid_int i = 0; i < prob->n_pd; i++) n += fabs(x[3 * i + 1] - y) < 0.5 * h;
-  return n;
+  double low = -y; /* (every rank's lowest layer) */
+  max_over_ranks(prob, &low, 1);
+  y = -low;
+  double n = 0.0;
+  for (cupid_int i = 0; i < prob->n_pd; i++) n += decides(prob, i) && fabs(x[3 * i + 1] - y) < 0.5 * h;
+  if (prob->slab) cupid_petsc_sum_doubles(&n, 1);
+  return (cupid_int)n;
 }
 
 /* ------------------------------------------------------------------------- the triggers */
@@ -494,7 +536,7 @@ static cupid_int mark_damage(cupid_problem_adaptive *a, const cupid_problem_stat
   const double *x = cupid_pd_grid_coords(prob->grid), r = ad->margin * prob->model->pd.horizon;
   cupid_int n = 0;
   for (cupid_int i = 0; i < prob->n_pd && prob->damage; i++)
-    if (prob->damage[i] > 0.0) n += mark_near(a, ad, x + 3 * i, r);
+    if (prob->damage[i] > 0.0 && decides(prob, i)) n += mark_near(a, ad, x + 3 * i, r);
   return n;
 }
 
@@ -542,6 +584,7 @@ static cupid_status overlap_stretch(const cupid_problem_state *prob, const cupid
   cupid_status st = node_ratios(prob, &ratio);
   const double *x = ratio ? cupid_pd_grid_coords(prob->grid) : NULL;
   for (cupid_int i = 0; ratio && i < prob->n_pd && st == CUPID_SUCCESS; i++) {
+    if (!decides(prob, i)) continue;
     /* a node on an element's end belongs to both elements (a mirror image of the zone has
      * its mirror node on the mirror end: the marks stay symmetric) */
     const double y = x[3 * i + 1];
@@ -556,6 +599,7 @@ static cupid_status overlap_stretch(const cupid_problem_state *prob, const cupid
       peak[e + 1] = fmax(peak[e + 1], ratio[i]);
   }
   cupid_free(&ratio);
+  max_over_ranks(prob, peak, a->ne);
   return st;
 }
 
@@ -628,7 +672,14 @@ static cupid_status trigger_done(cupid_problem_state *prob, cupid_problem_adapti
     a->why = in_overlap < *count ? "strain"
              : a->overlaps       ? "stretch in an overlap"
                                  : "stretch in the coupling zone";
-  const cupid_int near = mark_damage(a, prob);
+  cupid_int near = mark_damage(a, prob);
+  if (prob->slab) { /* the strain and stretch marks agree already (the beam is whole, the
+                       stretch taken over the ranks); the cracks' are each rank's */
+    double n = (double)near;
+    cupid_petsc_sum_doubles(&n, 1);
+    near = (cupid_int)n;
+    CUPID_CALL(agree_marks(prob, a));
+  }
   if (near && !*count && !a->blocked) a->why = "crack near an overlap";
   *count += near;
   return CUPID_SUCCESS;
@@ -1045,7 +1096,7 @@ static cupid_status converted(cupid_problem_state *prob, cupid_problem_adaptive 
     memcpy(a->foot, a->next, (size_t)a->ne * (size_t)a->nse);
     memset(a->mark_s, 0, (size_t)a->ne * (size_t)a->nse);
   }
-  c->added_nodes = prob->n_pd - before, c->pd_nodes = prob->n_pd;
+  c->added_nodes = zone_nodes(prob) - before, c->pd_nodes = zone_nodes(prob);
   CUPID_CALL(record(a, c));
   cupid_int zones = 0;
   for (cupid_int e = 0; e < a->ne; e++) zones += z[e] && (e == 0 || !z[e - 1]);
@@ -1066,14 +1117,26 @@ static cupid_status converted(cupid_problem_state *prob, cupid_problem_adaptive 
  * broken bond's far end in a new overlap): the run stops there, as a fixed zone's does. */
 static int stop_if_protected_damaged(cupid_problem_state *prob, int step, double load) {
   const double *x = cupid_pd_grid_coords(prob->grid);
-  for (cupid_int i = 0; i < prob->n_pd && prob->protect && prob->damage; i++) {
-    if (!prob->protect[i] || prob->damage[i] <= 0.0) continue;
+  cupid_int found = -1;
+  for (cupid_int i = 0; i < prob->n_pd && prob->protect && prob->damage && found < 0; i++)
+    if (prob->protect[i] && prob->damage[i] > 0.0 && decides(prob, i)) found = i;
+  double p[3] = {0.0, 0.0, 0.0};
+  if (found >= 0) memcpy(p, x + 3 * found, sizeof p);
+  if (prob->slab) { /* the place the lowest rank that found one found */
+    double who = found >= 0 ? -(double)cupid_petsc_rank() : -INFINITY;
+    cupid_petsc_max_doubles(&who, 1);
+    if (who == -INFINITY) return 0;
+    if (-who != (double)cupid_petsc_rank()) p[0] = p[1] = p[2] = 0.0;
+    cupid_petsc_sum_doubles(p, 3);
+    found = 0;
+  }
+  if (found >= 0) {
     char where[96];
     stopped_at(prob, step, load, where, sizeof where);
     snprintf(prob->growth.stopped, sizeof prob->growth.stopped,
              "%s: the grown adaptive zone has a broken bond at its overlap's PD node (%g, %g, "
              "%g), whose bonds never break; give peridynamics.adaptive.margin of a horizon or "
-             "more", where, x[3 * i], x[3 * i + 1], x[3 * i + 2]);
+             "more", where, p[0], p[1], p[2]);
     prob->growth.stopped_step = step;
     return 1;
   }
@@ -1092,6 +1155,7 @@ cupid_status cupid_problem_adaptive_convert(cupid_problem_state *prob, int step,
   CUPID_TRY(plan_zone(prob, a, z, step, load_factor, stopped, &c));
   if (*stopped) goto cleanup;
   /* the old problem's grid, operator, beam and u stay for the carry-over */
+  const cupid_int before = zone_nodes(prob);
   o = (old_zone){prob->grid, prob->op, prob->beam, prob->u, prob->n_pd, prob->fe_offset,
                  prob->n_fe_dofs};
   prob->grid = NULL, prob->op = NULL, prob->beam = NULL, prob->u = NULL;
@@ -1117,7 +1181,7 @@ cupid_status cupid_problem_adaptive_convert(cupid_problem_state *prob, int step,
   CUPID_TRY(cupid_problem_fracture_damage(prob));
   CUPID_TRY(carry_over(prob, a, &o, o.u, prob->u));
   CUPID_TRY(carry_fields(prob, a, &o, carry, n_carry));
-  CUPID_TRY(converted(prob, a, z, &c, o.n_pd));
+  CUPID_TRY(converted(prob, a, z, &c, before));
   *stopped = stop_if_protected_damaged(prob, step, load_factor);
 cleanup:
   old_free(&o);
@@ -1146,12 +1210,18 @@ static cupid_status grow_from_precracks(cupid_problem_state *prob, cupid_problem
           convertible(a, ad, e))
         a->mark[e] = 1, n++;
   }
+  if (prob->slab) { /* the cut bonds of every rank */
+    double d = (double)n;
+    cupid_petsc_sum_doubles(&d, 1);
+    n = (cupid_int)d;
+    CUPID_CALL(agree_marks(prob, a));
+  }
   if (n > 0) {
     a->why = "pre-crack near an overlap";
     unsigned char *z = NULL;
     cupid_problem_conversion c = {0};
     int capped = 0;
-    const cupid_int before = prob->n_pd;
+    const cupid_int before = zone_nodes(prob);
     CUPID_CALL(cupid_malloc((size_t)a->ne + 1, 1, "the new zone", &z));
     cupid_status st = plan_zone(prob, a, z, 0, 0.0, &capped, &c);
     if (st == CUPID_SUCCESS && capped)
@@ -1217,14 +1287,24 @@ cupid_status cupid_problem_adaptive_begin(cupid_problem_state *prob) {
     CUPID_CALL(initial_zone(a, prob));
     a->s0 = trigger_stretch(prob);
     a->layer_nodes = layer_nodes_of(prob);
+    if (prob->slab && a->partial)
+      return cupid_model_error(prob->model, &prob->model->pd.adaptive.mark,
+                               "under mpirun an adaptive zone grows over the whole section "
+                               "(its z slabs keep their layers); a zone over part of the "
+                               "section changes its z extent: run it on one process");
+    if (prob->slab) { /* each rank keeps its layers (zone_nodes, above) */
+      a->work.pd.has_slab_window = 1;
+      a->work.pd.slab_window[0] = prob->part.own_z[0];
+      a->work.pd.slab_window[1] = prob->part.own_z[1];
+    }
   }
   CUPID_CALL(long_elements(a, prob));
-  a->initial_nodes = prob->n_pd;
+  a->initial_nodes = zone_nodes(prob);
   const cupid_adaptive *ad = &prob->model->pd.adaptive;
-  if (ad->max_nodes > 0 && prob->n_pd > ad->max_nodes)
+  if (ad->max_nodes > 0 && a->initial_nodes > ad->max_nodes)
     return cupid_model_error(prob->model, &ad->mark,
                              "the initial PD zone has %lld nodes, over max_nodes = %lld",
-                             (long long)prob->n_pd, (long long)ad->max_nodes);
+                             (long long)a->initial_nodes, (long long)ad->max_nodes);
   CUPID_CALL(grow_from_precracks(prob, a));
   char ov[96];
   overlap_words(a, prob->model, ov, sizeof ov);
@@ -1339,7 +1419,7 @@ void cupid_problem_adaptive_json(cupid_json js, const cupid_problem_state *prob)
   if (a->ov_width > 0.0) cupid_json_number(js, "overlap", ad->overlap);
   if (ad->max_nodes > 0) cupid_json_integer(js, "max_nodes", ad->max_nodes);
   cupid_json_integer(js, "initial_pd_nodes", a->initial_nodes);
-  cupid_json_integer(js, "pd_nodes", prob->n_pd);
+  cupid_json_integer(js, "pd_nodes", zone_nodes(prob));
   /* the zone at the end: the boxes and overlaps of a model that has it from the start */
   const cupid_model_t *w = &a->work;
   cupid_json_begin_array(js, "regions");

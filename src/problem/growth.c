@@ -191,7 +191,8 @@ static cupid_status write_frame(growth_run *g, int step, double lambda) {
  * time, the later the zone it grew to first). */
 static cupid_status zone_frame(growth_run *g, double lambda) {
   cupid_problem_state *prob = g->prob;
-  if (!g->zones) return CUPID_SUCCESS;
+  /* collective on slabs: every rank gathers, rank 0 (which holds the writer) writes */
+  if (!(prob->adaptive && prob->model->output.vtu)) return CUPID_SUCCESS;
   const cupid_vtu_array fields[3] = {{"displacement", 3, prob->u}, {"force", 3, prob->f_int},
                                      {"damage", 1, prob->damage}};
   return cupid_problem_frame_write(prob, &g->verts, ++g->zone_frames, lambda, prob->u, fields, 3,
