@@ -126,12 +126,6 @@ cupid_status cupid_problem_adaptive_check(const cupid_problem_state *prob) {
                              "model.exo (output.exodus) keeps one node set for the whole run, and "
                              "an adaptive zone adds nodes: use the VTU output (adaptive.pvd "
                              "holds the zone at each conversion)");
-  if (prob->opts->resume || m->output.checkpoint > 0)
-    return cupid_model_error(m, &ad->mark,
-                             "adaptive runs write no checkpoints in cupid %s (the zone's layout "
-                             "changes as the run goes): run it without --resume and "
-                             "output.checkpoint",
-                             cupid_version());
   for (int r = 0; r < m->pd.n_regions; r++)
     if (m->pd.regions[r].shape.kind != CUPID_SHAPE_BOX)
       return cupid_model_error(m, &m->pd.regions[r].mark,
@@ -1313,6 +1307,129 @@ cupid_status cupid_problem_adaptive_begin(cupid_problem_state *prob) {
                          "within %g horizons of an overlap (%s)",
                          a->partial ? "beam element x section element" : "beam elements",
                          ad->threshold, ad->threshold * a->s0, ad->margin, ov);
+  return CUPID_SUCCESS;
+}
+
+/* ---- Checkpoints (resume.c; issue 36): the zone is part of the run's state ---- */
+
+/* The triggers' names, by number in a checkpoint (a conversion's `why` points at one). */
+static const char *const WHY[] = {"strain", "stretch in an overlap", "stretch in the coupling zone",
+                                  "crack near an overlap", "an overlap's bond reached its limit",
+                                  "a coupling zone's bond reached its limit",
+                                  "pre-crack near an overlap"};
+#define N_WHY ((int)(sizeof WHY / sizeof *WHY))
+
+/* The section's head; then core (ne bytes), foot (ne x nse bytes, partial), the conversions
+ * (why: its number in WHY), the regions' boxes, the overlaps' boxes and their `along`. */
+typedef struct {
+  cupid_int ne;
+  int nse, partial, n_conv, n_regions, n_overlaps;
+} zone_head;
+
+typedef struct {
+  cupid_problem_conversion c;
+  int why;
+} zone_conversion;
+
+static size_t zone_bytes(const zone_head *h) {
+  return sizeof *h + (size_t)h->ne + (h->partial ? (size_t)h->ne * (size_t)h->nse : 0) +
+         (size_t)h->n_conv * sizeof(zone_conversion) +
+         (size_t)(h->n_regions + h->n_overlaps) * sizeof(cupid_box) +
+         (size_t)h->n_overlaps * sizeof(int);
+}
+
+cupid_status cupid_problem_adaptive_save(const cupid_problem_state *prob, cupid_checkpoint_writer w) {
+  const cupid_problem_adaptive *a = prob->adaptive;
+  if (!a) return CUPID_SUCCESS;
+  const cupid_model_t *m = &a->work;
+  const zone_head h = {.ne = a->ne, .nse = a->nse, .partial = a->partial, .n_conv = a->n_conv,
+                       .n_regions = m->pd.n_regions, .n_overlaps = m->coupling.n_overlaps};
+  unsigned char *buf = NULL;
+  CUPID_CALL(cupid_malloc(zone_bytes(&h), 1, "the zone's checkpoint", &buf));
+  unsigned char *at = buf;
+#define PUT(src, n) (memcpy(at, (src), (n)), at += (n))
+  PUT(&h, sizeof h);
+  PUT(a->core, (size_t)a->ne);
+  if (a->partial) PUT(a->foot, (size_t)a->ne * (size_t)a->nse);
+  for (int k = 0; k < a->n_conv; k++) {
+    zone_conversion z = {.c = a->conv[k], .why = -1};
+    for (int q = 0; q < N_WHY; q++)
+      if (a->conv[k].why && !strcmp(a->conv[k].why, WHY[q])) z.why = q;
+    z.c.why = NULL;
+    PUT(&z, sizeof z);
+  }
+  for (int r = 0; r < h.n_regions; r++) PUT(&m->pd.regions[r].box, sizeof(cupid_box));
+  for (int q = 0; q < h.n_overlaps; q++) PUT(&m->coupling.overlaps[q], sizeof(cupid_box));
+  for (int q = 0; q < h.n_overlaps; q++) PUT(&m->coupling.overlap_along[q], sizeof(int));
+#undef PUT
+  const cupid_status st = cupid_checkpoint_write(w, "adaptive", buf, zone_bytes(&h));
+  cupid_free(&buf);
+  return st;
+}
+
+/* The zone of a checkpoint's section (data, bytes) into a (regions, overlaps, cores,
+ * conversions); *grew: it differs from the zone the set-up laid (conversions since). */
+static cupid_status zone_restore(cupid_problem_adaptive *a, const unsigned char *data, size_t bytes,
+                                 int *grew) {
+  zone_head h;
+  *grew = 0;
+  CUPID_CHECK(bytes >= sizeof h, CUPID_ERR_IO, "the checkpoint's adaptive zone is cut short");
+  memcpy(&h, data, sizeof h);
+  CUPID_CHECK(h.ne == a->ne && h.nse == a->nse && h.partial == a->partial && h.n_conv >= 0 &&
+                  h.n_regions > 0 && h.n_overlaps >= 0 && h.n_overlaps <= CUPID_MAX_OVERLAPS &&
+                  bytes == zone_bytes(&h),
+              CUPID_ERR_IO, "the checkpoint's adaptive zone is not of this model's beam");
+  if (h.n_conv == a->n_conv) return CUPID_SUCCESS; /* no conversion after the set-up's */
+  const unsigned char *at = data + sizeof h;
+  memcpy(a->core, at, (size_t)a->ne), at += a->ne;
+  if (a->partial) {
+    memcpy(a->foot, at, (size_t)a->ne * (size_t)a->nse);
+    at += (size_t)a->ne * (size_t)a->nse;
+  }
+  a->n_conv = 0;
+  for (int k = 0; k < h.n_conv; k++, at += sizeof(zone_conversion)) {
+    zone_conversion z;
+    memcpy(&z, at, sizeof z);
+    z.c.why = z.why >= 0 && z.why < N_WHY ? WHY[z.why] : NULL;
+    CUPID_CALL(record(a, &z.c));
+  }
+  cupid_pd_region *regions = NULL;
+  CUPID_CALL(cupid_calloc((size_t)h.n_regions, sizeof *regions, "PD regions", &regions));
+  for (int r = 0; r < h.n_regions; r++, at += sizeof(cupid_box)) {
+    cupid_box b;
+    memcpy(&b, at, sizeof b);
+    regions[r] = zone_region(a, &b);
+  }
+  set_regions(a, &regions, h.n_regions);
+  a->work.coupling.n_overlaps = 0;
+  const unsigned char *along = at + (size_t)h.n_overlaps * sizeof(cupid_box);
+  for (int q = 0; q < h.n_overlaps; q++) {
+    cupid_box b;
+    int ax;
+    memcpy(&b, at + (size_t)q * sizeof b, sizeof b);
+    memcpy(&ax, along + (size_t)q * sizeof ax, sizeof ax);
+    CUPID_CALL(push_overlap(a, &b, ax));
+  }
+  memset(a->mark, 0, (size_t)a->ne);
+  if (a->partial) memset(a->mark_s, 0, (size_t)a->ne * (size_t)a->nse);
+  *grew = 1;
+  return CUPID_SUCCESS;
+}
+
+cupid_status cupid_problem_adaptive_resume(cupid_problem_state *prob) {
+  cupid_problem_adaptive *a = prob->adaptive;
+  if (!a || !prob->opts->resume) return CUPID_SUCCESS;
+  void *data = NULL;
+  size_t bytes = 0;
+  int grew = 0;
+  CUPID_CALL(cupid_problem_checkpoint_peek(prob, "adaptive", &data, &bytes));
+  const cupid_status st = zone_restore(a, data, bytes, &grew);
+  cupid_free(&data);
+  CUPID_CALL(st);
+  if (!grew) return CUPID_SUCCESS;
+  CUPID_CALL(cupid_problem_rebuild(prob, 1));
+  cupid_problem_progress(prob, "resume: the adaptive zone of the checkpoint: %lld PD nodes after "
+                         "%d conversions", (long long)zone_nodes(prob), a->n_conv);
   return CUPID_SUCCESS;
 }
 

@@ -45,6 +45,8 @@ typedef struct {
   cupid_writer zones;
   cupid_int zone_frames;
   cupid_int converted_at; /* the last conversion's step */
+  int energy_pending;     /* its energy is read at the next output step (monitor_outputs) */
+  double conversion_before; /* the conversions' energy before it */
 } dyn_output;
 
 /* Every material used by the model needs a density. */
@@ -242,6 +244,14 @@ static cupid_status monitor_outputs(dyn_output *o, cupid_int step, double t, int
   erow[k++] = e->external, erow[k++] = total, erow[k++] = e->balance;
   const cupid_frame ef = {.step = step, .time = t, .row = erow};
   CUPID_CALL(cupid_writer_step(o->energies, &ef));
+  if (o->energy_pending) { /* the first output after a conversion: its energy, as booked */
+    const double added = e->conversion - o->conversion_before;
+    cupid_problem_adaptive_energy(prob, added);
+    cupid_problem_progress(prob, "adaptive: the conversion at step %lld changed the kinetic + "
+                           "strain energy by %.4g (conversion_added in energies.csv)",
+                           (long long)o->converted_at, added);
+    o->energy_pending = 0;
+  }
   if (prob->damage) { /* collective on a slab run: every rank counts, rank 0 writes */
     CUPID_CALL(cupid_problem_fracture_damage(prob));
     const double drow[7] = {(double)step, t, (double)prob->broken_bonds,
@@ -484,6 +494,9 @@ typedef struct {
   double e0, scale, max_balance, omega_max, dt_critical, dt_bound;
   int lanczos_steps;
   cupid_int out_count, broken_reported;
+  cupid_int zone_frames, converted_at; /* an adaptive zone's */
+  int energy_pending;
+  double conversion_before;
 } dyn_scalars;
 
 /* A safe point's state, for cupid_problem_checkpoint_save. */
@@ -501,9 +514,14 @@ static cupid_status write_state(void *ctx, cupid_checkpoint_writer w) {
                    .scale = r->scale, .max_balance = r->max_balance, .omega_max = r->omega_max,
                    .dt_critical = r->dt_critical, .dt_bound = r->dt_bound,
                    .lanczos_steps = r->lanczos_steps,
-                   .out_count = o->out_count, .broken_reported = o->broken_reported};
-  cupid_writer writers[5] = {o->history, o->energies, o->damage, o->vtu, o->exodus};
-  for (int k = 0; k < 5; k++) CUPID_CALL(cupid_writer_save(writers[k], w));
+                   .out_count = o->out_count, .broken_reported = o->broken_reported,
+                   .zone_frames = o->zone_frames, .converted_at = o->converted_at,
+                   .energy_pending = o->energy_pending, .conversion_before = o->conversion_before};
+  cupid_writer writers[6] = {o->history, o->energies, o->damage, o->vtu, o->exodus, o->zones};
+  for (int k = 0; k < 6; k++) CUPID_CALL(cupid_writer_save(writers[k], w));
+  CUPID_CALL(cupid_problem_adaptive_save(prob, w)); /* the zone (nothing without one) */
+  /* the patch test of the run's first layout (a resumed adaptive run starts on a grown one) */
+  CUPID_CALL(cupid_checkpoint_write(w, "quality", &prob->quality, sizeof prob->quality));
   const size_t bytes = sizeof(double) * (size_t)r->n;
   CUPID_CALL(cupid_checkpoint_write(w, "step", &r->step, sizeof r->step));
   CUPID_CALL(cupid_checkpoint_write(w, "dynamics", &c, sizeof c));
@@ -555,9 +573,14 @@ static cupid_status read_state(dyn_output *o, const cupid_checkpoint ck, double 
                                 .scale = c.scale, .max_balance = c.max_balance,
                                 .omega_max = c.omega_max, .dt_critical = c.dt_critical,
                                 .dt_bound = c.dt_bound, .lanczos_steps = c.lanczos_steps};
+  const char *patch_skipped = prob->quality.patch_skipped; /* this process's pointer */
+  CUPID_CALL(cupid_checkpoint_read(ck, "quality", &prob->quality, sizeof prob->quality));
+  prob->quality.patch_skipped = patch_skipped;
   prob->dyn.energy = c.last;
   o->out_count = c.out_count;
   o->broken_reported = c.broken_reported;
+  o->zone_frames = c.zone_frames, o->converted_at = c.converted_at;
+  o->energy_pending = c.energy_pending, o->conversion_before = c.conversion_before;
   cupid_problem_progress(prob, "resume: from step %lld of %lld (t = %g), %lld broken bonds",
                          (long long)r->step, (long long)prob->dyn.steps,
                          (double)r->step * prob->model->analysis.dynamic.dt,
@@ -609,17 +632,6 @@ static cupid_status zone_frame(dyn_output *o, double t, const double *v) {
                                      {"damage", 1, prob->damage}};
   return cupid_problem_frame_write(prob, &o->verts, ++o->zone_frames, t, prob->u, fields, 3,
                                    &o->zones, 1);
-}
-
-/* A segment that went on from a conversion ended: the energy the conversion added, as the
- * integrator booked it. */
-static void converted_energy(dyn_output *o) {
-  cupid_problem_state *prob = o->prob;
-  const double e = prob->dyn.info.changed_energy;
-  cupid_problem_adaptive_energy(prob, e);
-  cupid_problem_progress(prob, "adaptive: the conversion at step %lld changed the kinetic + "
-                         "strain energy by %.4g (conversion_added in energies.csv)",
-                         (long long)o->converted_at, e);
 }
 
 static void free_constraint_nodes(dyn_output *o) {
@@ -675,6 +687,8 @@ static cupid_status convert_zone(dyn_output *o, cupid_method_operator *op, doubl
   CUPID_CALL(row_bounds(prob, op, l));
   if (prob->model->output.vtu) CUPID_CALL(cupid_problem_vertices_build(prob->grid, &o->verts));
   o->converted_at = step;
+  o->energy_pending = 1;
+  o->conversion_before = o->paused.whole.conversion;
   o->paused.n = prob->ndof;
   o->paused.u = prob->u;
   o->paused.v = *v;
@@ -782,6 +796,19 @@ cupid_status cupid_problem_run_dynamic(cupid_problem_state *prob, cupid_method_o
   t0 = cupid_wtime();
   CUPID_TRY(agreed(prob, row_bounds(prob, op, &l)));
   double stepping = 0.0; /* the time loops' seconds, over the segments of an adaptive run */
+  if (prob->adaptive && opt.resume && !prob->opts->check_only) {
+    /* the checkpoint was written at its step before the trigger's test there (the safe point
+     * comes first): the test now, as the run that went on did it */
+    int stop = 0, capped = 0;
+    CUPID_TRY(adaptive_pause(&o, o.restart.step, prob->u, v, &stop));
+    if (stop) {
+      o.paused = o.restart;
+      o.paused.a = o.paused.react = o.paused.load = NULL;
+      CUPID_TRY(convert_zone(&o, op, &v, &l, &capped));
+      if (!capped) opt.resume = &o.paused;
+    }
+    if (capped) opt.steps = o.restart.step; /* nothing more to step */
+  }
   for (;;) { /* one segment, unless an adaptive zone grows (then a segment per zone) */
     cupid_dynamics_system sys = {.K = prob->K, .M = l.M, .m_lumped = l.m_lumped, .bc = prob->bc,
                                  .f = prob->f_ext};
@@ -792,7 +819,6 @@ cupid_status cupid_problem_run_dynamic(cupid_problem_state *prob, cupid_method_o
     st = mf ? cupid_dynamics_run_explicit(&esys, &opt, prob->u, v, monitor, &o, &prob->dyn.info)
             : cupid_dynamics_run(&sys, &opt, prob->u, v, monitor, &o, &prob->dyn.info);
     stepping += prob->dyn.info.time_step_s;
-    if (opt.resume == &o.paused) converted_energy(&o);
     if (st == CUPID_ERR_ARGUMENT && d->integrator == CUPID_INTEGRATOR_CENTRAL &&
         prob->dyn.info.dt_critical > 0 && d->dt > prob->dyn.info.dt_critical)
       st = cupid_model_error(m, &d->mark, "%s%s", opt.resume == &o.paused ?

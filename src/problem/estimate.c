@@ -164,10 +164,6 @@ cupid_status cupid_problem_costs(const cupid_problem_state *prob, cupid_solver_c
 
 /* When a run estimated to take @p seconds writes checkpoints (resume.c; issue 36). */
 static void print_checkpoints(const cupid_problem_state *prob, double seconds) {
-  if (prob->adaptive) { /* its layout changes as it runs (adaptive.c) */
-    printf("checkpoints: none (an adaptive zone's run writes none yet; an interrupt loses it)\n");
-    return;
-  }
   const double period = cupid_problem_checkpoint_period(prob, seconds);
   if (period > 0) printf("checkpoints: every %g s (output.checkpoint), and on SIGINT or SIGTERM\n", period);
   else printf("checkpoints: on SIGINT or SIGTERM only (output.checkpoint: 0, or a run estimated "

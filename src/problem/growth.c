@@ -165,7 +165,7 @@ static cupid_status open_writers(growth_run *g) {
   }
   if (prob->adaptive && m->output.vtu) { /* the zone at each conversion (zone_frame) */
     spec = (cupid_writer_spec){.dir = prob->writedir, .file = "adaptive.pvd", .title = m->title,
-                               .key = "writer adaptive.pvd"};
+                               .resume = g->resume, .key = "writer adaptive.pvd"};
     CUPID_TRY(cupid_writer_create(&cupid_writer_vtu, &spec, &g->zones));
   }
 cleanup:
@@ -1154,9 +1154,7 @@ static cupid_status begin_growth(growth_run *g) {
   CUPID_CALL(cupid_calloc(6 * (size_t)(m->n_constraints ? m->n_constraints : 1), sizeof(double),
                           "peak reactions", &prob->growth.peak));
   /* the estimate: a solve of the chosen engine per load step, at least */
-  /* an adaptive zone's layout changes: no checkpoint can hold it yet (adaptive.c refuses
-   * --resume and output.checkpoint) */
-  if (!prob->adaptive) CUPID_CALL(cupid_problem_checkpoint_begin(prob, prob->estimate.seconds * N));
+  CUPID_CALL(cupid_problem_checkpoint_begin(prob, prob->estimate.seconds * N));
   if (prob->opts->resume) CUPID_CALL(growth_resume(g));
   return open_writers(g);
 }

@@ -119,6 +119,7 @@ typedef struct {
   double lu_t_resolve;
   cupid_solve_info lu_factor_info;
   char solve_method[24], lu_method[24];
+  int zone_frames; /* adaptive.pvd's frames so far (an adaptive zone) */
 } growth_scalars;
 
 /* The non-symmetric path (growth_lu.c), known before K is assembled (cupid_growth_lu_applies
@@ -171,6 +172,7 @@ static void fill_scalars(const growth_run *g, int k, growth_scalars *c) {
       .lu_since_factor = g->lu.since_factor, .lu_t_update = g->lu.t_update,
       .lu_t_factor = g->lu.t_factor, .lu_t_resolve = g->lu.t_resolve,
       .lu_factor_info = g->lu.factor_info};
+  c->zone_frames = g->zone_frames;
   if (prob->solve.method) snprintf(c->solve_method, sizeof c->solve_method, "%s", prob->solve.method);
   if (g->lu.factor_info.method)
     snprintf(c->lu_method, sizeof c->lu_method, "%s", g->lu.factor_info.method);
@@ -193,6 +195,8 @@ static cupid_status write_growth(void *ctx, cupid_checkpoint_writer w) {
   fill_scalars(g, k, &c);
   CUPID_CALL(cupid_writer_save(g->csv, w)); /* NULL writers (the ranks that write no files): nothing */
   CUPID_CALL(cupid_writer_save(g->exodus, w));
+  CUPID_CALL(cupid_writer_save(g->zones, w));
+  CUPID_CALL(cupid_problem_adaptive_save(prob, w)); /* the zone (nothing without one) */
   const cupid_int step = k;
   CUPID_CALL(cupid_checkpoint_write(w, "step", &step, sizeof step));
   CUPID_CALL(cupid_checkpoint_write(w, "growth", &c, sizeof c));
@@ -406,6 +410,7 @@ static cupid_status read_growth(growth_run *g, const cupid_checkpoint ck, const 
   lu->factor_info = c->lu_factor_info;
   lu->factor_info.method = method_named(c->lu_method, NULL);
   lu->patch_tested = 1; /* the first K's, whose report the checkpoint's quality holds */
+  g->zone_frames = c->zone_frames;
   return CUPID_SUCCESS;
 }
 

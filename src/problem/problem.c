@@ -82,6 +82,8 @@ cupid_status cupid_problem_setup(cupid_problem_state *prob) {
   CUPID_CALL(cupid_problem_guard_run(prob));
   CUPID_CALL(cupid_problem_allocate_fields(prob));
   if (model->analysis.type != CUPID_ANALYSIS_EVALUATE) CUPID_CALL(cupid_problem_apply_conditions(prob));
+  /* --resume: an adaptive zone as its checkpoint has it (the stage reads its state on it) */
+  if (prob->adaptive) CUPID_CALL(agreed(prob, cupid_problem_adaptive_resume(prob)));
   prob->stage = CUPID_STAGE_SET_UP;
   return CUPID_SUCCESS;
 }

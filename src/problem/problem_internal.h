@@ -495,6 +495,12 @@ cupid_status cupid_problem_adaptive_blocked(cupid_problem_state *prob, const dou
  *  keeps, as u (dynamics: the velocity), each replaced by its new copy. */
 cupid_status cupid_problem_adaptive_convert(cupid_problem_state *prob, int step, double load_factor,
                                             double **carry, int n_carry, int *stopped);
+/** A checkpoint's "adaptive" section: the zone (cores, footprints, regions, overlaps) and its
+ *  conversions. */
+cupid_status cupid_problem_adaptive_save(const cupid_problem_state *prob, cupid_checkpoint_writer w);
+/** --resume, at the end of the set-up: the zone of the checkpoint, the problem built again
+ *  around it when it grew since the start (the stage then reads its state on that layout). */
+cupid_status cupid_problem_adaptive_resume(cupid_problem_state *prob);
 /** Dynamics: the energy the last conversion added (the integrator's book of it). */
 void cupid_problem_adaptive_energy(cupid_problem_state *prob, double energy);
 /** Dynamics: the steps between two tests of the trigger. */
@@ -700,6 +706,11 @@ cupid_status cupid_problem_checkpoint_save(cupid_problem_state *prob, cupid_int 
  *  cupid_int, else CUPID_ERR_IO); the counts and history restored into prob. */
 cupid_status cupid_problem_checkpoint_open(cupid_problem_state *prob, const char *step_section,
                                            cupid_checkpoint *ck);
+/** Before a stage opens its checkpoint (--resume): a copy of this rank's checkpoint's @p
+ *  section (*data allocated, *bytes long), its identity checked (an adaptive zone's layout,
+ *  which the set-up builds again before the stage reads its state). */
+cupid_status cupid_problem_checkpoint_peek(cupid_problem_state *prob, const char *section,
+                                           void **data, size_t *bytes);
 /** The checkpoint's broken bonds into prob->op (and a method's copy of it) and the damage. */
 cupid_status cupid_problem_checkpoint_fracture(cupid_problem_state *prob, const cupid_checkpoint ck);
 /** 1 for a run of load steps that grows cracks (PD with fracture): it writes checkpoints and

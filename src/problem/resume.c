@@ -215,6 +215,36 @@ cupid_status cupid_problem_checkpoint_fracture(cupid_problem_state *prob, const 
   return restore_fracture(prob, ck);
 }
 
+cupid_status cupid_problem_checkpoint_peek(cupid_problem_state *prob, const char *section,
+                                           void **data, size_t *bytes) {
+  char id[8192], *dir = NULL, *path = NULL;
+  cupid_checkpoint ck = NULL;
+  const void *at = NULL;
+  *data = NULL, *bytes = 0;
+  CUPID_CALL(identity(prob, id, sizeof id));
+  CUPID_CALL(cupid_output_set_partial_dir(prob->outdir, &dir));
+  const size_t n = strlen(dir) + 40;
+  cupid_status st = cupid_malloc(n, 1, "checkpoint path", &path);
+  if (st == CUPID_SUCCESS) {
+    const int rank = cupid_petsc_rank();
+    if (rank == 0) snprintf(path, n, "%s/.checkpoint", dir);
+    else snprintf(path, n, "%s/.checkpoint-rank-%d", dir, rank);
+    st = cupid_checkpoint_open(path, id, &ck);
+  }
+  if (st == CUPID_ERR_MODEL) { /* another run's: the model file this run read, named */
+    char why[2048];
+    snprintf(why, sizeof why, "%s", cupid_error_message());
+    st = CUPID_ERROR(CUPID_ERR_MODEL, "%s: --resume: %s", prob->model->file, why);
+  }
+  if (st == CUPID_SUCCESS) st = cupid_checkpoint_section(ck, section, &at, bytes);
+  if (st == CUPID_SUCCESS) st = cupid_malloc(*bytes + 1, 1, "a checkpoint's section", data);
+  if (st == CUPID_SUCCESS) memcpy(*data, at, *bytes);
+  cupid_checkpoint_close(&ck);
+  cupid_free(&path);
+  cupid_free(&dir);
+  return st;
+}
+
 cupid_status cupid_problem_checkpoint_open(cupid_problem_state *prob, const char *step_section,
                                            cupid_checkpoint *ck) {
   char id[8192];

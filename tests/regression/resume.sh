@@ -10,7 +10,8 @@
 # model.exo), Newmark with Rayleigh damping, Newmark with a moving grip and a load in t, a
 # Lagrange tie, the plots; and crack growth over load steps (the factor rebuilt from its
 # journal: downdates, a held node; LPS; the Arlequin SENB with model.exo; the SENB with
-# fictitious nodes by block elimination, balanced). And the refusals: a changed model or option (exit 1, naming the line that differs),
+# fictitious nodes by block elimination, balanced); adaptive PD zones in dynamics and in
+# growth, interrupted anywhere and at a conversion's step. And the refusals: a changed model or option (exit 1, naming the line that differs),
 # nothing to resume and no intact checkpoint (exit 3), a damaged checkpoint (its previous one is
 # used, the results unchanged), a disk that fills while checkpointing (a warning; the run goes
 # on), a second signal (stops at once; the last periodic checkpoint resumes).
@@ -149,6 +150,29 @@ interrupt_and_resume senb senb.yaml --set peridynamics.spacing=1.666666666666666
   --set peridynamics.horizon=5.025 "${P[@]}" "${EXO[@]}"
 interrupt_and_resume senb_fictitious senb.yaml --set "coupling={method: fictitious}" \
   --set peridynamics.spacing=1.6666666666666667 --set peridynamics.horizon=5.025 "${P[@]}"
+
+# adaptive PD zones (issue 37): the checkpoint holds the zone, and --resume lays it out again
+# before the run reads its state; the notched bar whose zone grows in explicit dynamics
+# (conversions at steps 320, 500 and 560), the SENB whose zone grows under load (steps 6, 7)
+cp "$SRC/examples/notched_bar/notched_bar_adaptive.yaml" bar_adaptive.yaml
+cp "$SRC/tests/models/adaptive/senb.yaml" senb_adaptive.yaml
+AD=(--set 'peridynamics.adaptive={threshold: 0.1, margin: 1, within: {y: [20, 70]}}' --set output.vtu=true
+    --set output.checkpoint=0.05)
+interrupt_and_resume adaptive_dynamic bar_adaptive.yaml "${P[@]}" --set analysis.dynamic.duration=2.0e-5
+interrupt_and_resume adaptive_growth senb_adaptive.yaml "${AD[@]}"
+# and at the step of a conversion: the dynamic run's checkpoint at step 320 comes before the
+# trigger's test there (which grows the zone), the growth's at step 6 after the conversions
+stop_at() { # stop_at NAME STEP MODEL OPTIONS...: stopped there, resumed, against ref_NAME
+  local name=$1 step=$2 model=$3; shift 3
+  rm -rf "at_$name" ".at_$name.cupid-partial"
+  CUPID_TEST_INTERRUPT_STEP=$step "$CUPID" run "$model" -o "at_$name" -q "$@" 2>/dev/null; local rc=$?
+  "$CUPID" run "$model" -o "at_$name" -q "$@" --resume 2>err.txt; local rc2=$?
+  local msg=""
+  [ $rc -eq 5 ] && [ $rc2 -eq 0 ] && msg=$(same "ref_$name" "at_$name" 2>&1) && ok ||
+    bad "$name stopped at step $step: exit $rc, then $rc2: $msg $(head -2 err.txt)"
+}
+stop_at adaptive_dynamic 320 bar_adaptive.yaml "${P[@]}" --set analysis.dynamic.duration=2.0e-5
+stop_at adaptive_growth 6 senb_adaptive.yaml "${AD[@]}"
 
 # stopped at the last step (CUPID_TEST_INTERRUPT_STEP: a signal during that step, made
 # deterministic): the resumption takes no step, and its report still reads the conditions of
