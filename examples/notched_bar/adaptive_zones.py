@@ -12,22 +12,14 @@ examples/notched_bar/adaptive_zones.png) with gnuplot; needs python3-meshio (Deb
 """
 import argparse
 import os
-import re
 import subprocess
-
-import meshio
+import sys
 
 HERE = os.path.dirname(os.path.abspath(__file__))
+sys.path.insert(0, os.path.join(HERE, "..", "fracture"))
+from cbeam_zones import frames  # noqa: E402  (adaptive.pvd's frames: time, points, damage)
+
 OUTLINE = [(0, 0), (100, 0), (100, 10), (0, 10), (0, 0)]  # the bar: y [0, 100], x [0, 10]
-
-
-def frames(run):
-    pvd = open(os.path.join(run, "adaptive.pvd")).read()
-    out = []
-    for t, f in re.findall(r'timestep="([^"]+)"[^>]*file="(adaptive_pd_\d+\.vtu)"', pvd):
-        m = meshio.read(os.path.join(run, f))
-        out.append((float(t), m.points, m.point_data["damage"]))
-    return out
 
 
 def main():

@@ -62,15 +62,13 @@ static cupid_csr chain(void) {
   return K;
 }
 
-static void run_case(cupid_integrator integ, int moving, double damping) {
-  cupid_csr K = chain();
-  cupid_dirichlet bc = NULL;
-  CUPID_ASSERT_OK(cupid_dirichlet_create(N, &bc));
-  if (moving) CUPID_ASSERT_OK(cupid_dirichlet_fix(bc, 0, 0.0));
-  CUPID_ASSERT_OK(cupid_dirichlet_finalize(bc));
-  double mass[N], u0[N], v0[N];
+/* The chain's masses and initial state, and the runs' options (700 steps of 0.02, an output
+ * every 50). */
+static void chain_state(double *mass, double *u0, double *v0) {
   for (int i = 0; i < N; i++) mass[i] = 1.0 + 0.05 * i, u0[i] = 1e-3 * sin(i), v0[i] = 1e-3 * cos(2.0 * i);
-  cupid_dynamics_hooks plain = {.conditions = moving ? conditions : NULL};
+}
+
+static cupid_dynamics_options chain_options(cupid_integrator integ, double damping) {
   cupid_dynamics_options o = cupid_dynamics_defaults();
   o.integrator = integ;
   o.dt = 0.02;
@@ -78,6 +76,19 @@ static void run_case(cupid_integrator integ, int moving, double damping) {
   o.every = 50;
   o.rayleigh_mass = damping;
   o.rayleigh_stiffness = damping * 0.01;
+  return o;
+}
+
+static void run_case(cupid_integrator integ, int moving, double damping) {
+  cupid_csr K = chain();
+  cupid_dirichlet bc = NULL;
+  CUPID_ASSERT_OK(cupid_dirichlet_create(N, &bc));
+  if (moving) CUPID_ASSERT_OK(cupid_dirichlet_fix(bc, 0, 0.0));
+  CUPID_ASSERT_OK(cupid_dirichlet_finalize(bc));
+  double mass[N], u0[N], v0[N];
+  chain_state(mass, u0, v0);
+  cupid_dynamics_hooks plain = {.conditions = moving ? conditions : NULL};
+  cupid_dynamics_options o = chain_options(integ, damping);
   o.velocity_at_outputs = 1;
   o.hooks = moving ? &plain : NULL;
   cupid_dynamics_system sys = {.K = K, .m_lumped = mass, .bc = bc};
@@ -172,13 +183,9 @@ static void test_changed(void **state) {
   CUPID_ASSERT_OK(cupid_dirichlet_fix(bc, 0, 0.0));
   CUPID_ASSERT_OK(cupid_dirichlet_finalize(bc));
   double mass[N], u0[N], v0[N];
-  for (int i = 0; i < N; i++) mass[i] = 1.0 + 0.05 * i, u0[i] = 1e-3 * sin(i), v0[i] = 1e-3 * cos(2.0 * i);
+  chain_state(mass, u0, v0);
   cupid_dynamics_hooks plain = {.conditions = conditions};
-  cupid_dynamics_options o = cupid_dynamics_defaults();
-  o.integrator = CUPID_INTEGRATOR_CENTRAL;
-  o.dt = 0.02;
-  o.steps = 700;
-  o.every = 50;
+  cupid_dynamics_options o = chain_options(CUPID_INTEGRATOR_CENTRAL, 0.0);
   o.hooks = &plain;
   cupid_dynamics_system sys = {.K = K, .m_lumped = mass, .bc = bc};
   double u[N], v[N];
