@@ -303,7 +303,7 @@ static cupid_status safe_point(dyn_state *s, const cupid_dynamics_info *info, cu
 
 /* A resumption of a changed system (restart.changed): the conditions at the state's time on
  * the new DOFs (the load into fcur, the fixed DOFs at their values, at rest). The acceleration,
- * reactions, stable step and the change's energy follow in run_central (changed_system). */
+ * reactions, stable step and the change's energy follow in run_central (book_change). */
 static cupid_status changed_conditions(dyn_state *s, const cupid_dynamics_restart *r, double *u,
                                        double *v) {
   CUPID_CHECK(s->opt->integrator == CUPID_INTEGRATOR_CENTRAL, CUPID_ERR_ARGUMENT,
@@ -697,7 +697,8 @@ static cupid_status run_central(dyn_state *s, double *u, double *v, cupid_dynami
   }
   CUPID_CALL(cupid_calloc((size_t)s->n + 1, sizeof *s->minv, "inverse masses", &s->minv));
   for (cupid_int d = 0; d < s->n; d++) s->minv[d] = dyn_fixed(bc, d) ? 0.0 : 1.0 / s->sys->m_lumped[d];
-  if (!o->resume || o->resume->changed) { /* a resumption has all of this in its state */
+  if (!o->resume || o->resume->changed) { /* a resumption has all of this in its state (of
+                                             the system it was written on) */
     CUPID_CALL(check_stable(s, info));
     CUPID_CALL(initial_acceleration(s, u, v));
     s->ku_ok = 1;

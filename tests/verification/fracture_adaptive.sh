@@ -165,5 +165,4 @@ grep -q "adaptive: threshold 0.5 x s0" <<<"$out" && grep -q "the largest \`withi
 expect 1 "adaptive zones grow with the coupling methods arlequin and fictitious.*method lagrange" -- "$CUPID" check "$M" --set 'coupling={method: lagrange}'
 expect 1 "no beam element can turn to PD" -- "$CUPID" check "$M" --set 'peridynamics.adaptive={within: {y: [35, 55]}}'
 expect 1 "senb.yaml:33:13: peridynamics.adaptive: model.exo" -- "$CUPID" check "$M" --set output.exodus=true
-expect 1 "adaptive runs write no checkpoints" -- "$CUPID" check "$M" --set output.checkpoint=60
 finish verification.fracture_adaptive
