@@ -104,12 +104,6 @@ cupid_status cupid_problem_adaptive_check(const cupid_problem_state *prob) {
                              "`every` is the time steps between two tests of the trigger in "
                              "dynamics; quasi-static growth tests it after every load step: "
                              "remove it");
-  if (m->analysis.type == CUPID_ANALYSIS_DYNAMIC && m->pd.n_regions == 0)
-    return cupid_model_error(m, &ad->mark,
-                             "in dynamics an adaptive zone grows from initial regions in cupid "
-                             "%s (regions: [] would run the beam alone, whose assembled K breaks "
-                             "no bond, until the first conversion): give the first zone",
-                             cupid_version());
   if (m->pd.fracture.criterion != CUPID_FRACTURE_STRETCH)
     return cupid_model_error(m, &ad->mark,
                              "the trigger compares the beam's strain with the critical stretch: "

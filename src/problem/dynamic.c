@@ -226,6 +226,18 @@ static cupid_status monitor(void *ctx, cupid_int step, double t, int output, con
   return st;
 }
 
+/* The last conversion's energy, once the integrator has booked it (its sum of conversions'
+ * energies now @p booked: at the next output step, or at the next conversion's step). */
+static void conversion_energy(dyn_output *o, double booked) {
+  if (!o->energy_pending) return;
+  const double added = booked - o->conversion_before;
+  cupid_problem_adaptive_energy(o->prob, added);
+  cupid_problem_progress(o->prob, "adaptive: the conversion at step %lld changed the kinetic + "
+                         "strain energy by %.4g (conversion_added in energies.csv)",
+                         (long long)o->converted_at, added);
+  o->energy_pending = 0;
+}
+
 static cupid_status monitor_outputs(dyn_output *o, cupid_int step, double t, int output,
                                     const double *v, const cupid_dynamics_energy *e) {
   if (o->prob->model->output.n_points) CUPID_CALL(history_row(o, t));
@@ -239,21 +251,15 @@ static cupid_status monitor_outputs(dyn_output *o, cupid_int step, double t, int
   int k = 0;
   erow[k++] = t, erow[k++] = (double)step, erow[k++] = e->kinetic, erow[k++] = e->strain;
   erow[k++] = e->damping;
-  if (prob->damage) erow[k++] = e->fracture;
+  if (prob->damage || prob->adaptive) erow[k++] = e->fracture;
   if (prob->adaptive) erow[k++] = e->conversion;
   erow[k++] = e->external, erow[k++] = total, erow[k++] = e->balance;
   const cupid_frame ef = {.step = step, .time = t, .row = erow};
   CUPID_CALL(cupid_writer_step(o->energies, &ef));
-  if (o->energy_pending) { /* the first output after a conversion: its energy, as booked */
-    const double added = e->conversion - o->conversion_before;
-    cupid_problem_adaptive_energy(prob, added);
-    cupid_problem_progress(prob, "adaptive: the conversion at step %lld changed the kinetic + "
-                           "strain energy by %.4g (conversion_added in energies.csv)",
-                           (long long)o->converted_at, added);
-    o->energy_pending = 0;
-  }
-  if (prob->damage) { /* collective on a slab run: every rank counts, rank 0 writes */
-    CUPID_CALL(cupid_problem_fracture_damage(prob));
+  conversion_energy(o, e->conversion); /* the first output after a conversion */
+  if (prob->damage || prob->adaptive) { /* collective on a slab run: every rank counts, rank 0
+                                           writes (a zone that starts empty: no PD node yet) */
+    if (prob->damage) CUPID_CALL(cupid_problem_fracture_damage(prob));
     const double drow[7] = {(double)step, t, (double)prob->broken_bonds,
                             (double)prob->damaged_nodes, prob->max_damage,
                             (double)cupid_problem_fracture_nodes_broken(prob), (double)prob->n_pd};
@@ -285,7 +291,8 @@ static cupid_status open_outputs(dyn_output *o) {
   cupid_problem_state *prob = o->prob;
   const cupid_output *out = &prob->model->output;
   if (!prob->writedir) return CUPID_SUCCESS; /* an MPI rank other than 0: no files */
-  if (prob->damage) { /* damage.csv (model-format.md, fracture outputs); pd_nodes: adaptive */
+  if (prob->damage || prob->adaptive) { /* damage.csv (model-format.md, fracture outputs);
+                                           pd_nodes: adaptive */
     static const cupid_column dc[7] = {{"step", 1}, {"t", 0}, {"broken_bonds", 1},
                                        {"damaged_nodes", 1}, {"max_damage", 0},
                                        {"nodes_broken", 1}, {"pd_nodes", 1}};
@@ -298,7 +305,7 @@ static cupid_status open_outputs(dyn_output *o) {
   ec[ne++] = (cupid_column){"t", 0}, ec[ne++] = (cupid_column){"step", 1};
   ec[ne++] = (cupid_column){"kinetic", 0}, ec[ne++] = (cupid_column){"strain", 0};
   ec[ne++] = (cupid_column){"damping_dissipated", 0};
-  if (prob->damage) ec[ne++] = (cupid_column){"fracture_dissipated", 0};
+  if (prob->damage || prob->adaptive) ec[ne++] = (cupid_column){"fracture_dissipated", 0};
   if (prob->adaptive) ec[ne++] = (cupid_column){"conversion_added", 0};
   ec[ne++] = (cupid_column){"external_work", 0}, ec[ne++] = (cupid_column){"total", 0};
   ec[ne++] = (cupid_column){"balance", 0};
@@ -477,6 +484,8 @@ static cupid_status break_bonds(void *ctx, cupid_int step, double t, const doubl
                                 double *dissipated, int *changed) {
   dyn_output *o = ctx;
   cupid_problem_state *prob = o->prob;
+  *changed = 0;
+  if (!prob->op) return CUPID_SUCCESS; /* an adaptive zone that has not grown yet */
   const cupid_int before = cupid_pd_operator_num_broken(prob->op); /* this rank's bonds */
   prob->fracture.ku = prob->model->pd.model == CUPID_PD_BOND ? ku : NULL;
   cupid_status st = cupid_problem_fracture_step(prob, step, t, u, 0, NULL, dissipated);
@@ -672,6 +681,7 @@ static cupid_status convert_zone(dyn_output *o, cupid_method_operator *op, doubl
   cupid_problem_state *prob = o->prob;
   const cupid_int step = o->paused.step;
   const double t = (double)step * prob->model->analysis.dynamic.dt;
+  conversion_energy(o, o->paused.whole.conversion); /* one since the last output step */
   CUPID_CALL(zone_frame(o, t, *v));
   /* what borrows the old layout */
   if (op->destroy) op->destroy(&op->ctx);
@@ -716,7 +726,7 @@ cupid_status cupid_problem_run_dynamic(cupid_problem_state *prob, cupid_method_o
   dyn_layout l = {0};
   double *v = NULL, t0 = cupid_wtime();
   dyn_output o = {.prob = prob};
-  const int mf = op != NULL;
+  int mf = op && op->apply; /* (an adaptive zone that starts empty: not until it grows) */
   cupid_petsc_halo halo = NULL;
   cupid_dynamics_partition part;
   CUPID_TRY(agreed(prob, prob->method->mass(prob, &l.M, &l.m_lumped)));
@@ -812,6 +822,8 @@ cupid_status cupid_problem_run_dynamic(cupid_problem_state *prob, cupid_method_o
   for (;;) { /* one segment, unless an adaptive zone grows (then a segment per zone) */
     cupid_dynamics_system sys = {.K = prob->K, .M = l.M, .m_lumped = l.m_lumped, .bc = prob->bc,
                                  .f = prob->f_ext};
+    mf = op && op->apply;
+    prob->dyn.matrix_free = mf;
     cupid_dynamics_explicit_system esys = {.n = prob->ndof, .apply = mf ? op->apply : NULL,
                                            .ctx = mf ? op->ctx : NULL, .m_lumped = l.m_lumped,
                                            .bc = prob->bc, .f = prob->f_ext, .row_bound = l.row_bound};

@@ -102,8 +102,9 @@ struct cupid_method_ops {
   void (*free_state)(cupid_problem_state *prob);
 };
 
-/** dynamic.c: the method's mass, integrate (central differences on @p op when not NULL, else
- *  on prob->K), write history.csv, energies.csv, the VTU series and plots. */
+/** dynamic.c: the method's mass, integrate (central differences on @p op when it has an apply,
+ *  else on prob->K; an adaptive zone that grows replaces @p op), write history.csv,
+ *  energies.csv, the VTU series and plots. */
 cupid_status cupid_problem_run_dynamic(cupid_problem_state *prob, cupid_method_operator *op);
 
 extern const cupid_method_ops cupid_method_none, cupid_method_fictitious, cupid_method_lagrange,

@@ -220,8 +220,10 @@ static cupid_status run_dynamic(cupid_problem_state *prob) {
   }
   CUPID_TRY(op.apply ? cupid_problem_patch_test(prob, op.apply, op.ctx)
                      : cupid_problem_patch_test_assembled(prob));
-  /* breaking changes the operator as the run goes: an assembled K could not follow */
-  if (prob->model->has_peridynamics && prob->model->pd.fracture.has_fracture && !op.apply) {
+  /* breaking changes the operator as the run goes: an assembled K could not follow (an
+   * adaptive zone that starts empty: the beam alone has no bond until the zone grows) */
+  if (prob->model->has_peridynamics && prob->model->pd.fracture.has_fracture && !op.apply &&
+      prob->grid) {
     st = CUPID_ERROR(CUPID_ERR_UNSUPPORTED, "bond breaking needs the method's matrix-free "
                      "explicit operator (coupling method %s has none for this model)",
                      prob->method->name);
@@ -232,7 +234,7 @@ static cupid_status run_dynamic(cupid_problem_state *prob) {
     st = begin_outputs(prob);
     CUPID_TRY(cupid_petsc_size() > 1 ? cupid_problem_slab_agree(st) : st);
   }
-  CUPID_TRY(cupid_problem_run_dynamic(prob, op.apply ? &op : NULL));
+  CUPID_TRY(cupid_problem_run_dynamic(prob, &op));
   if (prob->opts->check_only) goto cleanup; /* cupid check: no step, nothing to report */
   if (prob->method->recover) { /* the eliminated unknowns, and K u with them */
     prob->method->recover(prob, prob->u);
