@@ -706,6 +706,23 @@ static cupid_status convert_zone(dyn_output *o, cupid_method_operator *op, doubl
   return CUPID_SUCCESS;
 }
 
+/* --resume of an adaptive run: the checkpoint was written at its step before the trigger's
+ * test there (the safe point comes first), so the test runs now, as the run that went on ran
+ * it; a conversion makes the changed system the run resumes from (opt->resume), a cap ends
+ * the run there (no step left). */
+static cupid_status trigger_at_resume(dyn_output *o, cupid_method_operator *op, double **v,
+                                      dyn_layout *l, cupid_dynamics_options *opt) {
+  int stop = 0, capped = 0;
+  CUPID_CALL(adaptive_pause(o, o->restart.step, o->prob->u, *v, &stop));
+  if (!stop) return CUPID_SUCCESS;
+  o->paused = o->restart;
+  o->paused.a = o->paused.react = o->paused.load = NULL;
+  CUPID_CALL(convert_zone(o, op, v, l, &capped));
+  if (capped) opt->steps = o->restart.step;
+  else opt->resume = &o->paused;
+  return CUPID_SUCCESS;
+}
+
 /* A slab's stiffness product: its owned rows (the halo's rows are not needed, and not
  * right: their families reach beyond the slab). */
 static cupid_status slab_apply(void *ctx, const double *x, double *y) {
@@ -806,19 +823,8 @@ cupid_status cupid_problem_run_dynamic(cupid_problem_state *prob, cupid_method_o
   t0 = cupid_wtime();
   CUPID_TRY(agreed(prob, row_bounds(prob, op, &l)));
   double stepping = 0.0; /* the time loops' seconds, over the segments of an adaptive run */
-  if (prob->adaptive && opt.resume && !prob->opts->check_only) {
-    /* the checkpoint was written at its step before the trigger's test there (the safe point
-     * comes first): the test now, as the run that went on did it */
-    int stop = 0, capped = 0;
-    CUPID_TRY(adaptive_pause(&o, o.restart.step, prob->u, v, &stop));
-    if (stop) {
-      o.paused = o.restart;
-      o.paused.a = o.paused.react = o.paused.load = NULL;
-      CUPID_TRY(convert_zone(&o, op, &v, &l, &capped));
-      if (!capped) opt.resume = &o.paused;
-    }
-    if (capped) opt.steps = o.restart.step; /* nothing more to step */
-  }
+  if (prob->adaptive && opt.resume && !prob->opts->check_only)
+    CUPID_TRY(trigger_at_resume(&o, op, &v, &l, &opt));
   for (;;) { /* one segment, unless an adaptive zone grows (then a segment per zone) */
     cupid_dynamics_system sys = {.K = prob->K, .M = l.M, .m_lumped = l.m_lumped, .bc = prob->bc,
                                  .f = prob->f_ext};

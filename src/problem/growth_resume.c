@@ -119,7 +119,8 @@ typedef struct {
   double lu_t_resolve;
   cupid_solve_info lu_factor_info;
   char solve_method[24], lu_method[24];
-  int zone_frames; /* adaptive.pvd's frames so far (an adaptive zone) */
+  int zone_frames;  /* adaptive.pvd's frames so far (an adaptive zone) */
+  double last_load; /* the last row's load factor (the end's zone frame is at it) */
 } growth_scalars;
 
 /* The non-symmetric path (growth_lu.c), known before K is assembled (cupid_growth_lu_applies
@@ -172,7 +173,7 @@ static void fill_scalars(const growth_run *g, int k, growth_scalars *c) {
       .lu_since_factor = g->lu.since_factor, .lu_t_update = g->lu.t_update,
       .lu_t_factor = g->lu.t_factor, .lu_t_resolve = g->lu.t_resolve,
       .lu_factor_info = g->lu.factor_info};
-  c->zone_frames = g->zone_frames;
+  c->zone_frames = g->zone_frames, c->last_load = g->last_load;
   if (prob->solve.method) snprintf(c->solve_method, sizeof c->solve_method, "%s", prob->solve.method);
   if (g->lu.factor_info.method)
     snprintf(c->lu_method, sizeof c->lu_method, "%s", g->lu.factor_info.method);
@@ -410,7 +411,7 @@ static cupid_status read_growth(growth_run *g, const cupid_checkpoint ck, const 
   lu->factor_info = c->lu_factor_info;
   lu->factor_info.method = method_named(c->lu_method, NULL);
   lu->patch_tested = 1; /* the first K's, whose report the checkpoint's quality holds */
-  g->zone_frames = c->zone_frames;
+  g->zone_frames = c->zone_frames, g->last_load = c->last_load;
   return CUPID_SUCCESS;
 }
 

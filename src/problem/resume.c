@@ -55,20 +55,40 @@ double cupid_problem_checkpoint_period(const cupid_problem_state *prob, double e
                                                       : 0.0;
 }
 
-cupid_status cupid_problem_checkpoint_begin(cupid_problem_state *prob, double estimated_seconds) {
-  prob->ckpt.period = cupid_problem_checkpoint_period(prob, estimated_seconds);
-  prob->ckpt.last = cupid_wtime();
+/* This rank's checkpoint file in the resumable staging folder (*path allocated). */
+static cupid_status checkpoint_path(const cupid_problem_state *prob, char **path) {
   char *dir = NULL;
   CUPID_CALL(cupid_output_set_partial_dir(prob->outdir, &dir));
   const size_t n = strlen(dir) + 40;
-  cupid_status st = cupid_malloc(n, 1, "checkpoint path", &prob->ckpt.path);
+  cupid_status st = cupid_malloc(n, 1, "checkpoint path", path);
   if (st == CUPID_SUCCESS) {
     const int rank = cupid_petsc_rank();
-    if (rank == 0) snprintf(prob->ckpt.path, n, "%s/.checkpoint", dir);
-    else snprintf(prob->ckpt.path, n, "%s/.checkpoint-rank-%d", dir, rank);
+    if (rank == 0) snprintf(*path, n, "%s/.checkpoint", dir);
+    else snprintf(*path, n, "%s/.checkpoint-rank-%d", dir, rank);
   }
   cupid_free(&dir);
-  CUPID_CALL(st);
+  return st;
+}
+
+/* The checkpoint at path, if it is this run's (another run's: a model error naming the model
+ * file this run read). */
+static cupid_status open_identified(const cupid_problem_state *prob, const char *path,
+                                    cupid_checkpoint *ck) {
+  char id[8192];
+  CUPID_CALL(identity(prob, id, sizeof id));
+  cupid_status st = cupid_checkpoint_open(path, id, ck);
+  if (st == CUPID_ERR_MODEL) {
+    char why[2048];
+    snprintf(why, sizeof why, "%s", cupid_error_message());
+    st = CUPID_ERROR(CUPID_ERR_MODEL, "%s: --resume: %s", prob->model->file, why);
+  }
+  return st;
+}
+
+cupid_status cupid_problem_checkpoint_begin(cupid_problem_state *prob, double estimated_seconds) {
+  prob->ckpt.period = cupid_problem_checkpoint_period(prob, estimated_seconds);
+  prob->ckpt.last = cupid_wtime();
+  CUPID_CALL(checkpoint_path(prob, &prob->ckpt.path));
   cupid_interrupt_arm(1);
   prob->ckpt.armed = 1;
   if (prob->ckpt.period > 0)
@@ -217,45 +237,24 @@ cupid_status cupid_problem_checkpoint_fracture(cupid_problem_state *prob, const 
 
 cupid_status cupid_problem_checkpoint_peek(cupid_problem_state *prob, const char *section,
                                            void **data, size_t *bytes) {
-  char id[8192], *dir = NULL, *path = NULL;
+  char *path = NULL;
   cupid_checkpoint ck = NULL;
   const void *at = NULL;
   *data = NULL, *bytes = 0;
-  CUPID_CALL(identity(prob, id, sizeof id));
-  CUPID_CALL(cupid_output_set_partial_dir(prob->outdir, &dir));
-  const size_t n = strlen(dir) + 40;
-  cupid_status st = cupid_malloc(n, 1, "checkpoint path", &path);
-  if (st == CUPID_SUCCESS) {
-    const int rank = cupid_petsc_rank();
-    if (rank == 0) snprintf(path, n, "%s/.checkpoint", dir);
-    else snprintf(path, n, "%s/.checkpoint-rank-%d", dir, rank);
-    st = cupid_checkpoint_open(path, id, &ck);
-  }
-  if (st == CUPID_ERR_MODEL) { /* another run's: the model file this run read, named */
-    char why[2048];
-    snprintf(why, sizeof why, "%s", cupid_error_message());
-    st = CUPID_ERROR(CUPID_ERR_MODEL, "%s: --resume: %s", prob->model->file, why);
-  }
+  cupid_status st = checkpoint_path(prob, &path);
+  if (st == CUPID_SUCCESS) st = open_identified(prob, path, &ck);
   if (st == CUPID_SUCCESS) st = cupid_checkpoint_section(ck, section, &at, bytes);
   if (st == CUPID_SUCCESS) st = cupid_malloc(*bytes + 1, 1, "a checkpoint's section", data);
   if (st == CUPID_SUCCESS) memcpy(*data, at, *bytes);
   cupid_checkpoint_close(&ck);
   cupid_free(&path);
-  cupid_free(&dir);
   return st;
 }
 
 cupid_status cupid_problem_checkpoint_open(cupid_problem_state *prob, const char *step_section,
                                            cupid_checkpoint *ck) {
-  char id[8192];
   *ck = NULL;
-  CUPID_CALL(identity(prob, id, sizeof id));
-  cupid_status st = cupid_checkpoint_open(prob->ckpt.path, id, ck);
-  if (st == CUPID_ERR_MODEL) { /* another run's: the model file this run read, named */
-    char why[2048];
-    snprintf(why, sizeof why, "%s", cupid_error_message());
-    st = CUPID_ERROR(CUPID_ERR_MODEL, "%s: --resume: %s", prob->model->file, why);
-  }
+  cupid_status st = open_identified(prob, prob->ckpt.path, ck);
   cupid_int step = -1;
   if (st == CUPID_SUCCESS) st = cupid_checkpoint_read(*ck, step_section, &step, sizeof step);
   if (cupid_petsc_size() > 1) { /* every rank at the same step, or none resumes */

@@ -230,6 +230,8 @@ static const bad_case cases[] = {
      "10:25: peridynamics.adaptive.threshold: must lie in (0, 1] (a fraction of the critical "
      "stretch s0",
      "got 1.5"},
+    {"adaptive_every.yaml", "10:37: peridynamics.adaptive.every: must be an integer >= 1",
+     "got 0"},
     {"adaptive_no_beam.yaml",
      "10:13: peridynamics.adaptive: needs a beam: the PD zone grows by turning beam elements into "
      "PD",
