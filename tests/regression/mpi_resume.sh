@@ -32,6 +32,13 @@ t0=$(date +%s%N)
 timeout 300 "$MPIEXEC" -n 2 "$CUPID" run plate.yaml -o ref -q "${P[@]}" || bad "the reference run"
 half=$(awk -v ms=$(( ($(date +%s%N) - t0) / 1000000 )) 'BEGIN { printf "%.3f", 0.45 * ms / 1000 }')
 
+# settle PATTERN: until no process of the stopped run is left (mpiexec can exit before a rank
+# it signalled has, whose lock on the output folder then refuses the resumption: exit 3, seen
+# once under load)
+settle() {
+  for _ in $(seq 100); do pgrep -f "$1" >/dev/null || return 0; sleep 0.1; done
+}
+
 for sig in TERM KILL; do
   out=$work/run_$sig
   timeout 300 "$MPIEXEC" -n 2 "$CUPID" run plate.yaml -o "$out" -q "${P[@]}" 2>err.txt &
@@ -39,6 +46,7 @@ for sig in TERM KILL; do
   sleep "$half"
   if [ $sig = TERM ]; then kill -TERM $pid; else pkill -KILL -f "cupid run plate.yaml -o $out"; fi
   wait $pid 2>/dev/null
+  settle "cupid run plate.yaml -o $out"
   [ -f "$work/.run_$sig.cupid-partial/.checkpoint-rank-1" ] && ok ||
     bad "$sig: no checkpoint of rank 1 ($(tail -2 err.txt))"
   timeout 300 "$MPIEXEC" -n 2 "$CUPID" run plate.yaml -o "$out" -q "${P[@]}" --resume 2>err.txt; rc=$?
@@ -72,6 +80,7 @@ for ranks in 2 1; do
       if [ $sig = TERM ]; then kill -TERM $pid 2>/dev/null
       else pkill -KILL -f "cupid run growth.yaml -o $out" 2>/dev/null; fi
       wait $pid 2>/dev/null
+      settle "cupid run growth.yaml -o $out"
       [ -f "$work/.g${ranks}_$sig.cupid-partial/.checkpoint" ] || continue
       timeout 300 "${launch[@]}" "$CUPID" run growth.yaml -o "$out" -q "${GP[@]}" --solver petsc \
         --resume 2>err.txt; rc=$?
