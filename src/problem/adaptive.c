@@ -1370,7 +1370,7 @@ static cupid_status zone_restore(cupid_problem_adaptive *a, const unsigned char 
   CUPID_CHECK(bytes >= sizeof h, CUPID_ERR_IO, "the checkpoint's adaptive zone is cut short");
   memcpy(&h, data, sizeof h);
   CUPID_CHECK(h.ne == a->ne && h.nse == a->nse && h.partial == a->partial && h.n_conv >= 0 &&
-                  h.n_regions > 0 && h.n_overlaps >= 0 && h.n_overlaps <= CUPID_MAX_OVERLAPS &&
+                  h.n_regions >= 0 && h.n_overlaps >= 0 && h.n_overlaps <= CUPID_MAX_OVERLAPS &&
                   bytes == zone_bytes(&h),
               CUPID_ERR_IO, "the checkpoint's adaptive zone is not of this model's beam");
   if (h.n_conv == a->n_conv) return CUPID_SUCCESS; /* no conversion after the set-up's */

@@ -176,6 +176,13 @@ stop_at adaptive_growth 6 senb_adaptive.yaml "${AD[@]}"
 # (and at its last step: the end's zone frame is at the last row's load factor, which the
 # checkpoint keeps; a random interrupt found it at 0)
 stop_at adaptive_growth 20 senb_adaptive.yaml "${AD[@]}"
+# a dynamic zone that starts empty: stopped while the beam runs alone (a checkpoint of no PD
+# region) and at the step its first conversion comes
+EMPTY=("${P[@]}" --set analysis.dynamic.duration=2.0e-5 --set 'peridynamics.regions=[]'
+       --set 'coupling.arlequin.overlap=[]' --set 'peridynamics.precracks=[]')
+"$CUPID" run bar_adaptive.yaml -o ref_adaptive_empty -q "${EMPTY[@]}" || bad "adaptive_empty: the reference run failed"
+stop_at adaptive_empty 280 bar_adaptive.yaml "${EMPTY[@]}"
+stop_at adaptive_empty 320 bar_adaptive.yaml "${EMPTY[@]}"
 
 # stopped at the last step (CUPID_TEST_INTERRUPT_STEP: a signal during that step, made
 # deterministic): the resumption takes no step, and its report still reads the conditions of
