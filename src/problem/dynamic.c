@@ -695,7 +695,9 @@ static cupid_status convert_zone(dyn_output *o, cupid_method_operator *op, doubl
   CUPID_CALL(prob->method->explicit_operator(prob, op));
   CUPID_CALL(prob->method->mass(prob, &l->M, &l->m_lumped));
   CUPID_CALL(row_bounds(prob, op, l));
-  if (prob->model->output.vtu) CUPID_CALL(cupid_problem_vertices_build(prob->grid, &o->verts));
+  if (prob->model->output.vtu && prob->grid)
+    CUPID_CALL(cupid_problem_vertices_build(prob->grid, &o->verts));
+  if (*capped) return CUPID_SUCCESS; /* nothing converted: the run ends here */
   o->converted_at = step;
   o->energy_pending = 1;
   o->conversion_before = o->paused.whole.conversion;

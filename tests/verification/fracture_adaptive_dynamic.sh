@@ -15,8 +15,8 @@
 #  3. with the bar moving sideways at 10 m/s from t = 0 a conversion's energy stays below a
 #     tenth of the kinetic energy its new nodes carry (a new node at rest would lose all of it);
 #  4. 1 and 2 threads convert the same elements at the same steps;
-#  5. max_nodes stops the run at the conversion (exit 2) with the time series so far; `every`
-#     with a static analysis is a model error;
+#  5. max_nodes stops the run at the conversion (exit 2) with the time series so far (also the
+#     beam alone of a zone that starts empty); `every` with a static analysis is a model error;
 #  6. a zone that starts empty (`regions: []`): with the pre-crack, the set-up lays [40, 60]
 #     around it and, the trigger never firing in 540 steps, the run is the fixed zone
 #     [40, 60]'s to the bit; without it, the beam alone runs (its assembled K, no bond) until
@@ -109,6 +109,9 @@ expect 2 "the dynamic run stopped at step 320 \(t = 8e-06\): the adaptive zone w
   "$CUPID" run "$M" -o capped --set 'peridynamics.adaptive.max_nodes=3800'
 [ -f capped/energies.csv ] && [ "$(tail -1 capped/energies.csv | cut -d, -f2)" = 320 ] && ok \
   || bad "capped: the time series up to step 320"
+expect 2 "the dynamic run stopped at step 320 \(t = 8e-06\): the adaptive zone would grow to 1500 PD nodes" -- \
+  "$CUPID" run "$M" -o capped_empty --set 'peridynamics.regions=[]' --set 'coupling.arlequin.overlap=[]' \
+  --set 'peridynamics.precracks=[]' --set output.vtu=true --set 'peridynamics.adaptive.max_nodes=1000'
 expect 1 "peridynamics.adaptive.every: .every. is the time steps between two tests of the trigger in dynamics" -- \
   "$CUPID" check "$SRC/tests/models/adaptive/senb.yaml" --set 'peridynamics.adaptive={every: 10}'
 finish fracture_adaptive_dynamic
