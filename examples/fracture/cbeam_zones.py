@@ -32,6 +32,25 @@ def frames(run):
     return out
 
 
+def write_outline(run, name, points):
+    """A polyline (x, y pairs) as a gnuplot data file in run; its path."""
+    path = os.path.join(run, name)
+    with open(path, "w") as f:
+        f.write("".join("%g %g\n" % p for p in points))
+    return path
+
+
+def draw(output, width, height, layout, title, axes, plots):
+    """The frames' panels in one PNG: plots holds each panel's gnuplot commands, axes the ranges
+    and labels they share, damage coloured from 0 to 0.6."""
+    script = ('set terminal pngcairo size %d,%d font ",9" noenhanced\nset output "%s"\n'
+              'set multiplot layout %s title "%s"\nset size ratio -1\n%s'
+              'set cbrange [0:0.6]\nset palette rgbformulae 22,13,-31\n%s\nunset multiplot\n'
+              % (width, height, output, layout, title, axes, "".join(plots)))
+    subprocess.run(["gnuplot"], check=True, input=script.encode())
+    print("wrote", output)
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("run", nargs="?", default="out/fracture/cbeam_adaptive")
@@ -41,9 +60,7 @@ def main():
     fs = frames(a.run)
     if not fs:
         raise SystemExit("%s: no frames in adaptive.pvd (run with output.vtu: true)" % a.run)
-    outline = os.path.join(a.run, "cbeam_outline.dat")
-    with open(outline, "w") as f:
-        f.write("".join("%g %g\n" % p for p in OUTLINE))
+    outline = write_outline(a.run, "cbeam_outline.dat", OUTLINE)
     plots = []
     for k, (t, pts, dmg) in enumerate(fs):
         layer = min({round(float(p[1]), 6) for p in pts}, key=lambda y: abs(y - a.at))
@@ -62,20 +79,11 @@ def main():
                      % (when, len(pts), n, outline, dat))
     cols = 4
     rows = (len(fs) + cols - 1) // cols
-    subprocess.run(["gnuplot"], check=True, input=("""set terminal pngcairo size %d,%d font ",9" noenhanced
-set output "%s"
-set multiplot layout %d,%d title "Notched C-beam in tension (cbeam_adaptive.yaml): the adaptive PD zone on the layer y = %g, coloured by damage"
-set size ratio -1
-set xrange [-3:53]
-set yrange [-53:53]
-set xlabel "x [mm]"
-set ylabel "z [mm]"
-set cbrange [0:0.6]
-set palette rgbformulae 22,13,-31
-%s
-unset multiplot
-""" % (300 * cols, 430 * rows + 40, a.output, rows, cols, layer, "".join(plots))).encode())
-    print("wrote", a.output)
+    draw(a.output, 300 * cols, 430 * rows + 40, "%d,%d" % (rows, cols),
+         "Notched C-beam in tension (cbeam_adaptive.yaml): the adaptive PD zone on the layer "
+         "y = %g, coloured by damage" % layer,
+         'set xrange [-3:53]\nset yrange [-53:53]\nset xlabel "x [mm]"\nset ylabel "z [mm]"\n',
+         plots)
 
 
 if __name__ == "__main__":

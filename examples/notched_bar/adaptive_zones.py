@@ -12,12 +12,12 @@ examples/notched_bar/adaptive_zones.png) with gnuplot; needs python3-meshio (Deb
 """
 import argparse
 import os
-import subprocess
 import sys
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, os.path.join(HERE, "..", "fracture"))
-from cbeam_zones import frames  # noqa: E402  (adaptive.pvd's frames: time, points, damage)
+# adaptive.pvd's frames (time, points, damage), the outline's file and the panels' picture
+from cbeam_zones import draw, frames, write_outline  # noqa: E402
 
 OUTLINE = [(0, 0), (100, 0), (100, 10), (0, 10), (0, 0)]  # the bar: y [0, 100], x [0, 10]
 
@@ -30,9 +30,7 @@ def main():
     fs = frames(a.run)
     if not fs:
         raise SystemExit("%s: no frames in adaptive.pvd (run with output.vtu: true)" % a.run)
-    outline = os.path.join(a.run, "bar_outline.dat")
-    with open(outline, "w") as f:
-        f.write("".join("%g %g\n" % p for p in OUTLINE))
+    outline = write_outline(a.run, "bar_outline.dat", OUTLINE)
     plots = []
     for k, (t, pts, dmg) in enumerate(fs):
         layer = min({round(float(p[2]), 6) for p in pts}, key=lambda z: abs(z - 5.0))
@@ -47,19 +45,10 @@ def main():
         plots.append('set title "%s: %d PD nodes on y in [%g, %g]"\n'
                      'plot "%s" w l lc rgb "gray" lw 1.5 notitle, "%s" u 1:2:3 w p pt 5 ps 0.6 lc palette notitle\n'
                      % (when, len(pts), min(ys) - 0.5, max(ys) + 0.5, outline, dat))
-    subprocess.run(["gnuplot"], check=True, input=("""set terminal pngcairo size 1000,%d font ",9" noenhanced
-set output "%s"
-set multiplot layout %d,1 title "Notched bar under a 30 MPa step (notched_bar_adaptive.yaml): the PD zone on the layer z = %g, coloured by damage; the rest is CUF beam"
-set size ratio -1
-set xrange [-1:101]
-set yrange [-1:11]
-set ylabel "x [mm]"
-set cbrange [0:0.6]
-set palette rgbformulae 22,13,-31
-%s
-unset multiplot
-""" % (170 * len(fs) + 50, a.output, len(fs), layer, "".join(plots))).encode())
-    print("wrote", a.output)
+    draw(a.output, 1000, 170 * len(fs) + 50, "%d,1" % len(fs),
+         "Notched bar under a 30 MPa step (notched_bar_adaptive.yaml): the PD zone on the layer "
+         "z = %g, coloured by damage; the rest is CUF beam" % layer,
+         'set xrange [-1:101]\nset yrange [-1:11]\nset ylabel "x [mm]"\n', plots)
 
 
 if __name__ == "__main__":

@@ -460,10 +460,9 @@ static cupid_int layer_nodes_of(const cupid_problem_state *prob) {
   double low = -y; /* (every rank's lowest layer) */
   max_over_ranks(prob, &low, 1);
   y = -low;
-  double n = 0.0;
+  cupid_int n = 0;
   for (cupid_int i = 0; i < prob->n_pd; i++) n += decides(prob, i) && fabs(x[3 * i + 1] - y) < 0.5 * h;
-  if (prob->slab) cupid_petsc_sum_doubles(&n, 1);
-  return (cupid_int)n;
+  return cupid_problem_global_count(prob, n);
 }
 
 /* ------------------------------------------------------------------------- the triggers */
@@ -660,14 +659,10 @@ static cupid_status trigger_done(cupid_problem_state *prob, cupid_problem_adapti
     a->why = in_overlap < *count ? "strain"
              : a->overlaps       ? "stretch in an overlap"
                                  : "stretch in the coupling zone";
-  cupid_int near = mark_damage(a, prob);
-  if (prob->slab) { /* the strain and stretch marks agree already (the beam is whole, the
-                       stretch taken over the ranks); the cracks' are each rank's */
-    double n = (double)near;
-    cupid_petsc_sum_doubles(&n, 1);
-    near = (cupid_int)n;
-    CUPID_CALL(agree_marks(prob, a));
-  }
+  /* the strain and stretch marks agree over the ranks of a slab run already (the beam is
+   * whole, the stretch taken over the ranks); the cracks' are each rank's */
+  const cupid_int near = cupid_problem_global_count(prob, mark_damage(a, prob));
+  CUPID_CALL(agree_marks(prob, a));
   if (near && !*count && !a->blocked) a->why = "crack near an overlap";
   *count += near;
   return CUPID_SUCCESS;
@@ -1198,12 +1193,8 @@ static cupid_status grow_from_precracks(cupid_problem_state *prob, cupid_problem
           convertible(a, ad, e))
         a->mark[e] = 1, n++;
   }
-  if (prob->slab) { /* the cut bonds of every rank */
-    double d = (double)n;
-    cupid_petsc_sum_doubles(&d, 1);
-    n = (cupid_int)d;
-    CUPID_CALL(agree_marks(prob, a));
-  }
+  n = cupid_problem_global_count(prob, n); /* the cut bonds of every rank */
+  CUPID_CALL(agree_marks(prob, a));
   if (n > 0) {
     a->why = "pre-crack near an overlap";
     unsigned char *z = NULL;

@@ -79,6 +79,14 @@ static cupid_dynamics_options chain_options(cupid_integrator integ, double dampi
   return o;
 }
 
+/* The run that never stops, from (u0, v0): its final u, v and info. */
+static void run_whole(const cupid_dynamics_system *sys, const cupid_dynamics_options *o,
+                      const double *u0, const double *v0, double *u, double *v,
+                      cupid_dynamics_info *info) {
+  memcpy(u, u0, sizeof(double) * N), memcpy(v, v0, sizeof(double) * N);
+  CUPID_ASSERT_OK(cupid_dynamics_run(sys, o, u, v, NULL, NULL, info));
+}
+
 static void run_case(cupid_integrator integ, int moving, double damping) {
   cupid_csr K = chain();
   cupid_dirichlet bc = NULL;
@@ -92,11 +100,9 @@ static void run_case(cupid_integrator integ, int moving, double damping) {
   o.velocity_at_outputs = 1;
   o.hooks = moving ? &plain : NULL;
   cupid_dynamics_system sys = {.K = K, .m_lumped = mass, .bc = bc};
-  /* the run that never stops */
   double u[N], v[N];
-  memcpy(u, u0, sizeof u), memcpy(v, v0, sizeof v);
   cupid_dynamics_info whole;
-  CUPID_ASSERT_OK(cupid_dynamics_run(&sys, &o, u, v, NULL, NULL, &whole));
+  run_whole(&sys, &o, u0, v0, u, v, &whole);
   /* stopped at step STOP by its safe point, then resumed from the saved state */
   saved s;
   memset(&s, 0, sizeof s);
@@ -189,9 +195,8 @@ static void test_changed(void **state) {
   o.hooks = &plain;
   cupid_dynamics_system sys = {.K = K, .m_lumped = mass, .bc = bc};
   double u[N], v[N];
-  memcpy(u, u0, sizeof u), memcpy(v, v0, sizeof v);
   cupid_dynamics_info whole;
-  CUPID_ASSERT_OK(cupid_dynamics_run(&sys, &o, u, v, NULL, NULL, &whole));
+  run_whole(&sys, &o, u0, v0, u, v, &whole);
 
   saved s;
   memset(&s, 0, sizeof s);
