@@ -217,6 +217,19 @@ cupid_status cupid_direct_factor_solve(cupid_direct_factor F, const double *b, d
 cupid_status cupid_direct_factor_downdate(cupid_direct_factor F, cupid_int r, const cupid_int *colptr,
                                           const cupid_int *rows, const double *vals);
 
+/**
+ * Hold DOFs in an SPD factor: the rows of the DOFs that @p bc fixes and the factor still solves
+ * for are deleted (CHOLMOD's cholmod_rowdel: their row and column become the identity's), so
+ * that F factors the K_ff of @p bc's free DOFs (the identity on the held rows) without a
+ * factorisation: crack growth holds a node that breaking left loose before it downdates the
+ * bonds, where the downdate alone would leave the matrix singular. Later downdates drop the
+ * held rows, as fixed ones; cupid_direct_factor_solve() neither reads nor writes them (the free
+ * numbering's solves see the identity there). *held: the DOFs held by this call. The first
+ * call that holds converts the factor to simplicial LDL'. CUPID_ERR_ARGUMENT for an LU factor.
+ */
+cupid_status cupid_direct_factor_hold(cupid_direct_factor F, const cupid_dirichlet_t *bc,
+                                      cupid_int *held);
+
 /** Destroy and set *F to NULL (NULL-safe). */
 void cupid_direct_factor_destroy(cupid_direct_factor *F);
 /* ---- end of the reusable factorisation block ---- */

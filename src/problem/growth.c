@@ -462,6 +462,12 @@ static cupid_status release_unsupported(growth_run *g, int step) {
  * it is held too. The matrix-free path has no factorisation: CG on a mechanism diverges or
  * stalls, and the node its iterate moved furthest is held (growth_matrix_free.c). *held = 0
  * when the failure names no such node (the solve's error then stands). */
+/* A PD DOF whose node is not held yet: what hold_singular_node can hold. */
+static int loose_node(const growth_run *g, cupid_int dof) {
+  const cupid_problem_state *prob = g->prob;
+  return prob->grid && dof >= 0 && dof < 3 * prob->n_pd && !g->release[dof / 3];
+}
+
 static cupid_status hold_singular_node(growth_run *g, int step, int *held) {
   cupid_problem_state *prob = g->prob;
   const cupid_int dof = prob->solve.failed_dof;
@@ -476,7 +482,7 @@ static cupid_status hold_singular_node(growth_run *g, int step, int *held) {
                            "(a mechanism): held", step, x[0], x[1], x[2]);
     return CUPID_SUCCESS;
   }
-  if (!prob->grid || dof < 0 || dof >= 3 * prob->n_pd || g->release[dof / 3]) return CUPID_SUCCESS;
+  if (!loose_node(g, dof)) return CUPID_SUCCESS;
   const cupid_int i = dof / 3;
   cupid_error_clear();
   g->release[i] = 1;
@@ -631,8 +637,12 @@ static cupid_status cg_solve(growth_run *g, int *done) {
 /* Bring the factor to the K that broken bonds left (Kold: the K it factors): downdated by the
  * bonds' rank-one terms, it is that K's factor again, and CG on it converges at once. A change
  * that is no sum of bond terms (LPS) turns downdating off for the run (CG on the stale factor
- * as before); a downdate that leaves it indefinite (a node or fragment lost its support)
- * drops the factor: the next factorisation finds and holds the node. */
+ * as before). The nodes held since the last round (release_unsupported) leave the factor first
+ * (cupid_direct_factor_hold: a few rank-two modifications, where the notched C-beam's zone of
+ * 47,500 nodes took 15 s a factorisation for each node its flanges' last ligaments left loose);
+ * a downdate that leaves it indefinite all the same (a mechanism of several nodes that
+ * release_unsupported does not see) drops the factor: the next factorisation finds and holds
+ * the node (hold_singular_node). */
 static cupid_status downdate_factor(growth_run *g, const cupid_csr_t *Kold) {
   cupid_problem_state *prob = g->prob;
   double t0 = cupid_wtime();
@@ -654,7 +664,12 @@ static cupid_status downdate_factor(growth_run *g, const cupid_csr_t *Kold) {
     g->t_downdate += cupid_wtime() - t0;
     return CUPID_SUCCESS;
   }
-  cupid_status st = cupid_direct_factor_downdate(g->F, g->dd.r, g->dd.colptr, g->dd.rows, g->dd.vals);
+  /* the nodes held since (release_unsupported: a node the breaks left loose) first, their rows
+   * deleted from the factor, so that the downdate leaves it definite */
+  cupid_int held = 0;
+  cupid_status st = cupid_direct_factor_hold(g->F, prob->bc, &held);
+  if (st == CUPID_SUCCESS)
+    st = cupid_direct_factor_downdate(g->F, g->dd.r, g->dd.colptr, g->dd.rows, g->dd.vals);
   if (st == CUPID_ERR_NUMERIC) {
     cupid_error_clear();
     cupid_direct_factor_destroy(&g->F);
@@ -926,6 +941,21 @@ static cupid_status runaway_collapse(growth_run *g, int k, double mu, int runawa
  * a time, at lower loads (the plate of issue 33: peaks of 1134 to 1284 N over 1 to 50 steps
  * before). Once a node is held the scaling is no longer exact, and the bonds over their limit
  * break at the step's load as they did (CUPID_GROWTH_SUBSTEP=0: always so, bench/growth.sh). */
+/* A line every STEP_HEARTBEAT_S within a load step whose crack runs: the notched C-beam's step
+ * 18 re-solves for minutes at one load (issue 37), and a user who sees nothing for that long
+ * cannot tell a running crack from a hung run. */
+#define STEP_HEARTBEAT_S 10.0
+
+static void heartbeat(growth_run *g, int k, double mu, int solves) {
+  const cupid_problem_state *prob = g->prob;
+  const double now = cupid_wtime();
+  if (now - g->t_line < STEP_HEARTBEAT_S) return;
+  g->t_line = now;
+  cupid_problem_progress(prob, "growth: step %d, load factor %.4g: %d solve%s so far, %lld bonds "
+                         "broken, %lld nodes held", k, mu, solves, solves == 1 ? "" : "s",
+                         (long long)prob->broken_bonds, (long long)g->released);
+}
+
 static cupid_status load_step(growth_run *g, int k, double lambda, int *iterations, int *stop) {
   cupid_problem_state *prob = g->prob;
   const cupid_model_t *m = prob->model;
@@ -1011,6 +1041,7 @@ static cupid_status load_step(growth_run *g, int k, double lambda, int *iteratio
       return CUPID_SUCCESS;
     }
     broke_here = 1;
+    heartbeat(g, k, mu, *iterations);
     CUPID_CALL(release_unsupported(g, k));
     reassemble = 1;
     CUPID_CHECK(*iterations < 1000000, CUPID_ERR_NUMERIC,
@@ -1183,6 +1214,7 @@ cupid_status cupid_problem_run_growth(cupid_problem_state *prob) {
   CUPID_TRY(frame_vertices(&g));
   const size_t n = (size_t)prob->ndof;
   double t0 = cupid_wtime();
+  g.t_line = t0; /* the heartbeat (heartbeat()) counts from the start */
   if (!fracture) { /* linear: one solve at load factor 1 (one factorisation), each step its
                       multiple: the last step's is the solution */
     CUPID_TRY(solve(&g, 0));

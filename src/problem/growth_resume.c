@@ -342,6 +342,8 @@ static cupid_status replay_factor(growth_run *g) {
       ok = g->lu.updates == updates + 1 && cupid_growth_lu_has_factor(&g->lu);
     } else {
       CUPID_TRY(cupid_growth_downdate_terms(Kold, prob->K, &g->dd, &ok));
+      cupid_int held = 0; /* the round's held nodes first, as growth.c's downdate_factor */
+      if (ok) CUPID_TRY(cupid_direct_factor_hold(g->F, bc, &held));
       if (ok)
         CUPID_TRY(cupid_direct_factor_downdate(g->F, g->dd.r, g->dd.colptr, g->dd.rows, g->dd.vals));
     }

@@ -31,6 +31,8 @@ struct cupid_direct_factor_private {
   double control[UMFPACK_CONTROL];
   double *work, *work2; /* n: right-hand side / solution in free numbering */
   cupid_int *pivot_of;  /* downdates: global DOF -> its row in the permuted factor, -1 fixed */
+  unsigned char *held;  /* per row of the permuted factor: deleted by cupid_direct_factor_hold
+                           (the identity's row), or NULL while none is */
 };
 
 /* The rows of K_ff in compressed form, in free numbering (free DOFs are numbered in increasing
@@ -185,8 +187,10 @@ static cupid_status factorise_lu(cupid_direct_factor F, cupid_solve_info *info) 
   return CUPID_SUCCESS;
 }
 
-/* min/max of the pivots L_kk^2 (supernodal or simplicial LL'). */
-static double pivot_ratio(const cholmod_factor *L, cupid_int *kmin) {
+/* min/max of the pivots L_kk^2 (supernodal or simplicial LL'), or |D_kk| (simplicial LDL'),
+ * the rows that cupid_direct_factor_hold deleted left out (their pivot is the identity's 1,
+ * which says nothing of the matrix). */
+static double pivot_ratio(const cholmod_factor *L, const unsigned char *held, cupid_int *kmin) {
   const double *x = L->x;
   double lo = INFINITY, hi = 0.0;
   *kmin = 0;
@@ -203,6 +207,7 @@ static double pivot_ratio(const cholmod_factor *L, cupid_int *kmin) {
   } else {
     const SuiteSparse_long *p = L->p;
     for (size_t j = 0; j < L->n; j++) {
+      if (held && held[j]) continue;
       double d = x[p[j]], piv = L->is_ll ? d * d : fabs(d);
       if (piv < lo) lo = piv, *kmin = (cupid_int)j;
       if (piv > hi) hi = piv;
@@ -246,7 +251,7 @@ static cupid_status factorise(cupid_direct_factor F, cupid_solve_info *info) {
   CUPID_CHECK(ok && c->status >= CHOLMOD_OK, CUPID_ERR_INTERNAL,
               "CHOLMOD factorisation failed (status %d)", c->status);
   cupid_int kmin;
-  double ratio = pivot_ratio(F->L, &kmin);
+  double ratio = pivot_ratio(F->L, NULL, &kmin);
   cupid_int weakest = F->global[perm ? perm[kmin] : kmin];
   if (info) {
     info->pivot_ratio = ratio;
@@ -321,9 +326,12 @@ cleanup:
 
 cupid_status cupid_direct_factor_solve(cupid_direct_factor F, const double *b, double *x) {
   CUPID_CHECK(F && b && x, CUPID_ERR_ARGUMENT, "cupid_direct_factor_solve: NULL argument");
-  for (cupid_int k = 0; k < F->n; k++) F->work[k] = b[F->global[k]];
+  const cupid_int *held_at = F->held ? F->pivot_of : NULL; /* a held DOF: no row of K_ff now */
+  for (cupid_int k = 0; k < F->n; k++)
+    F->work[k] = held_at && held_at[F->global[k]] < 0 ? 0.0 : b[F->global[k]];
   CUPID_CALL(cupid_direct_factor_solve_free(F, F->work, F->work2));
-  for (cupid_int k = 0; k < F->n; k++) x[F->global[k]] = F->work2[k];
+  for (cupid_int k = 0; k < F->n; k++)
+    if (!held_at || held_at[F->global[k]] >= 0) x[F->global[k]] = F->work2[k];
   return CUPID_SUCCESS;
 }
 
@@ -333,7 +341,7 @@ cupid_status cupid_direct_factor_weakest_dof(const cupid_direct_factor F, cupid_
   CUPID_CHECK(F && dof, CUPID_ERR_ARGUMENT, "cupid_direct_factor_weakest_dof: NULL argument");
   if (F->kind == CUPID_MATRIX_SPD) { /* the smallest L_kk^2 (or |D_kk| once downdated) */
     cupid_int kmin = 0;
-    (void)pivot_ratio(F->L, &kmin);
+    (void)pivot_ratio(F->L, F->held, &kmin);
     const SuiteSparse_long *perm = F->L->Perm;
     *dof = F->global[perm ? perm[kmin] : kmin];
     return CUPID_SUCCESS;
@@ -406,6 +414,58 @@ static void sort_column(SuiteSparse_long *i, double *x, SuiteSparse_long n) {
     }
 }
 
+/* F->pivot_of: CHOLMOD wants a modification's rows in the factor's permuted order. */
+static cupid_status row_map(cupid_direct_factor F) {
+  if (F->pivot_of) return CUPID_SUCCESS;
+  CUPID_CALL(cupid_malloc((size_t)F->n_full, sizeof *F->pivot_of, "factor row map", &F->pivot_of));
+  for (cupid_int d = 0; d < F->n_full; d++) F->pivot_of[d] = -1;
+  const SuiteSparse_long *perm = F->L->Perm;
+  for (cupid_int k = 0; k < F->n; k++) F->pivot_of[F->global[perm ? perm[k] : k]] = k;
+  return CUPID_SUCCESS;
+}
+
+/* A factor CHOLMOD modifies: simplicial LDL' (what cholmod_updown makes of it too). */
+static cupid_status simplicial_ldl(cupid_direct_factor F) {
+  if (!F->L->is_super && !F->L->is_ll) return CUPID_SUCCESS;
+  const int ok = cholmod_l_change_factor(CHOLMOD_REAL, 0, 0, 0, 0, F->L, &F->cc);
+  CUPID_CHECK(ok && F->cc.status >= CHOLMOD_OK,
+              F->cc.status == CHOLMOD_OUT_OF_MEMORY ? CUPID_ERR_MEMORY : CUPID_ERR_INTERNAL,
+              "CHOLMOD could not make the factor simplicial (status %d)", F->cc.status);
+  return CUPID_SUCCESS;
+}
+
+/* Each row deleted is a rank-two modification (cholmod_rowdel): about a downdate column's cost
+ * for a row of the factor's usual length, where a factorisation is thousands of them. */
+cupid_status cupid_direct_factor_hold(cupid_direct_factor F, const cupid_dirichlet_t *bc,
+                                      cupid_int *held) {
+  CUPID_CHECK(F && bc && held, CUPID_ERR_ARGUMENT, "cupid_direct_factor_hold: NULL argument");
+  CUPID_CHECK(F->kind == CUPID_MATRIX_SPD, CUPID_ERR_ARGUMENT,
+              "cupid_direct_factor_hold: only a Cholesky factor can hold DOFs");
+  CUPID_CHECK(bc->n == F->n_full, CUPID_ERR_ARGUMENT,
+              "cupid_direct_factor_hold: the conditions have %lld DOFs, the factor %lld",
+              (long long)bc->n, (long long)F->n_full);
+  *held = 0;
+  CUPID_CALL(row_map(F));
+  cupid_int fresh = 0;
+  for (cupid_int d = 0; d < F->n_full; d++) fresh += bc->fixed[d] && F->pivot_of[d] >= 0;
+  if (fresh == 0) return CUPID_SUCCESS;
+  CUPID_CALL(simplicial_ldl(F));
+  if (!F->held) CUPID_CALL(cupid_calloc((size_t)F->n + 1, 1, "held rows", &F->held));
+  for (cupid_int d = 0; d < F->n_full; d++) {
+    if (!bc->fixed[d] || F->pivot_of[d] < 0) continue;
+    const cupid_int k = F->pivot_of[d];
+    const int ok = cholmod_l_rowdel((size_t)k, NULL, F->L, &F->cc);
+    CUPID_CHECK(ok && F->cc.status >= CHOLMOD_OK,
+                F->cc.status == CHOLMOD_OUT_OF_MEMORY ? CUPID_ERR_MEMORY : CUPID_ERR_INTERNAL,
+                "CHOLMOD could not delete the factor's row of DOF %lld (status %d)", (long long)d,
+                F->cc.status);
+    F->held[k] = 1;
+    F->pivot_of[d] = -1; /* a later downdate drops the row, as a DOF fixed from the start */
+    (*held)++;
+  }
+  return CUPID_SUCCESS;
+}
+
 cupid_status cupid_direct_factor_downdate(cupid_direct_factor F, cupid_int r, const cupid_int *colptr,
                                           const cupid_int *rows, const double *vals) {
   CUPID_CHECK(F && (r == 0 || (colptr && rows && vals)), CUPID_ERR_ARGUMENT,
@@ -413,12 +473,7 @@ cupid_status cupid_direct_factor_downdate(cupid_direct_factor F, cupid_int r, co
   CUPID_CHECK(F->kind == CUPID_MATRIX_SPD, CUPID_ERR_ARGUMENT,
               "cupid_direct_factor_downdate: only a Cholesky factor can be downdated");
   if (r == 0) return CUPID_SUCCESS;
-  if (!F->pivot_of) { /* CHOLMOD wants C's rows in the factor's permuted order */
-    CUPID_CALL(cupid_malloc((size_t)F->n_full, sizeof *F->pivot_of, "factor row map", &F->pivot_of));
-    for (cupid_int d = 0; d < F->n_full; d++) F->pivot_of[d] = -1;
-    const SuiteSparse_long *perm = F->L->Perm;
-    for (cupid_int k = 0; k < F->n; k++) F->pivot_of[F->global[perm ? perm[k] : k]] = k;
-  }
+  CUPID_CALL(row_map(F));
   cholmod_common *c = &F->cc;
   cholmod_sparse *C = cholmod_l_allocate_sparse((size_t)F->n, (size_t)r, (size_t)colptr[r], 1, 1, 0,
                                                 CHOLMOD_REAL, c);
@@ -446,11 +501,11 @@ cupid_status cupid_direct_factor_downdate(cupid_direct_factor F, cupid_int r, co
   const SuiteSparse_long *perm = F->L->Perm, *lp = F->L->p;
   const double *lx = F->L->x;
   for (cupid_int k = 0; k < F->n && !F->L->is_ll; k++)
-    CUPID_CHECK(lx[lp[k]] > 0.0, CUPID_ERR_NUMERIC,
+    CUPID_CHECK(lx[lp[k]] > 0.0 || (F->held && F->held[k]), CUPID_ERR_NUMERIC,
                 "the downdated matrix is not positive definite (pivot %.3g at DOF %lld)", lx[lp[k]],
                 (long long)F->global[perm ? perm[k] : k]);
   cupid_int kmin;
-  const double ratio = pivot_ratio(F->L, &kmin);
+  const double ratio = pivot_ratio(F->L, F->held, &kmin);
   CUPID_CHECK(ratio >= CUPID_DIRECT_PIVOT_TOL * (double)(F->n > 64 ? F->n : 64), CUPID_ERR_NUMERIC,
               "the downdated matrix is singular to round-off (pivot ratio %.3g at DOF %lld)", ratio,
               (long long)F->global[perm ? perm[kmin] : kmin]);
@@ -468,6 +523,7 @@ void cupid_direct_factor_destroy(cupid_direct_factor *F) {
   if (f->symbolic) umfpack_dl_free_symbolic(&f->symbolic);
   cupid_free(&f->global);
   cupid_free(&f->pivot_of);
+  cupid_free(&f->held);
   cupid_free(&f->work);
   cupid_free(&f->work2);
   cupid_free(&f->p);

@@ -500,6 +500,97 @@ static void test_factor_downdate(void **state) {
   free(ue), free(f), free(u);
 }
 
+/*
+ * cupid_direct_factor_hold (crack growth holds a node that breaking left loose before it
+ * downdates): the factor of K under conditions bc, with node h's DOFs held and then downdated
+ * by bond terms (some touching h, whose entries there are dropped), solves A_ff u = f of the
+ * conditions bc + h, A = K less the terms: as a fresh factor of A under them, to 1e-10 (as
+ * test_factor_downdate: a rank-two modification per row is backward stable, cond(A_ff) < 1e3;
+ * a row left in, or a term entry on h kept, gives O(1)). The solve leaves h's entries as they
+ * were; a term that alone would leave the factor indefinite, on h's DOF only, is dropped once h
+ * is held; the weakest pivot is never a held row (their pivot is the identity's 1).
+ */
+static void test_factor_hold(void **state) {
+  (void)state;
+  const grid_spec g = {6, 5, 4, 3, B_SPD, 0.05, 0.0, 0};
+  cupid_csr A = grid_matrix(&g), K = grid_matrix(&g);
+  const cupid_int nn = (cupid_int)g.nx * g.ny * g.nz, n = 3 * nn;
+  const cupid_int h = node_of(&g, 2, 2, 2); /* the node held: interior */
+  enum { NB = 4 };
+  cupid_int colptr[NB + 1], rows[6 * NB];
+  double vals[6 * NB];
+  uint64_t seed = 11;
+  const int ends[NB][2][3] = {{{1, 2, 2}, {2, 2, 2}}, {{2, 2, 2}, {3, 2, 2}}, /* two on h */
+                              {{3, 1, 1}, {4, 1, 1}}, {{1, 3, 2}, {2, 3, 2}}};
+  for (int b = 0; b < NB; b++) {
+    const cupid_int i = node_of(&g, ends[b][0][0], ends[b][0][1], ends[b][0][2]);
+    const cupid_int j = node_of(&g, ends[b][1][0], ends[b][1][1], ends[b][1][2]);
+    double w[3], M[9];
+    for (int a = 0; a < 3; a++) w[a] = cupid_test_random(&seed);
+    for (int a = 0; a < 3; a++)
+      for (int c = 0; c < 3; c++) M[3 * a + c] = w[a] * w[c];
+    add_block(K, i, i, M, 1.0), add_block(K, j, j, M, 1.0);
+    add_block(K, i, j, M, -1.0), add_block(K, j, i, M, -1.0);
+    colptr[b] = 6 * b;
+    for (int a = 0; a < 3; a++) {
+      rows[6 * b + a] = 3 * i + a, vals[6 * b + a] = w[a];
+      rows[6 * b + 3 + a] = 3 * j + a, vals[6 * b + 3 + a] = -w[a];
+    }
+  }
+  colptr[NB] = 6 * NB;
+  double *ue = malloc((size_t)n * sizeof *ue), *f = malloc((size_t)n * sizeof *f);
+  double *u = malloc((size_t)n * sizeof *u), *ur = malloc((size_t)n * sizeof *ur);
+  assert_non_null(ue), assert_non_null(f), assert_non_null(u), assert_non_null(ur);
+  for (cupid_int k = 0; k < n; k++) ue[k] = cupid_test_random(&seed);
+  cupid_dirichlet bc = face_bc(&g, ue, 0);
+  cupid_direct_factor F = NULL, R = NULL;
+  CUPID_ASSERT_OK(cupid_direct_factor_create(K, bc, &F, NULL));
+  cupid_int held = -1;
+  CUPID_ASSERT_OK(cupid_direct_factor_hold(F, bc, &held)); /* nothing new: nothing held */
+  assert_int_equal(held, 0);
+  for (int c = 0; c < 3; c++) CUPID_ASSERT_OK(cupid_dirichlet_fix(bc, 3 * h + c, 0.0));
+  CUPID_ASSERT_OK(cupid_dirichlet_finalize(bc));
+  for (cupid_int k = 0; k < n; k++) ue[k] = bc->fixed[k] ? 0.0 : ue[k]; /* homogeneous */
+  cupid_csr_matvec(A, ue, f);
+  CUPID_ASSERT_OK(cupid_direct_factor_hold(F, bc, &held));
+  assert_int_equal(held, 3);
+  CUPID_ASSERT_OK(cupid_direct_factor_hold(F, bc, &held)); /* held once */
+  assert_int_equal(held, 0);
+  CUPID_ASSERT_OK(cupid_direct_factor_downdate(F, NB, colptr, rows, vals));
+  for (cupid_int k = 0; k < n; k++) u[k] = 7.0;
+  CUPID_ASSERT_OK(cupid_direct_factor_solve(F, f, u));
+  for (int c = 0; c < 3; c++) assert_true(u[3 * h + c] == 7.0); /* not written */
+  CUPID_ASSERT_OK(cupid_direct_factor_create(A, bc, &R, NULL));
+  CUPID_ASSERT_OK(cupid_direct_factor_solve(R, f, ur));
+  for (cupid_int k = 0; k < n; k++) u[k] = bc->fixed[k] ? 0.0 : u[k], ur[k] = bc->fixed[k] ? 0.0 : ur[k];
+  assert_true(rel_error(n, u, ue) < 1e-10);
+  assert_true(rel_error(n, u, ur) < 1e-10);
+  cupid_int weakest = -1;
+  CUPID_ASSERT_OK(cupid_direct_factor_weakest_dof(F, &weakest));
+  assert_true(weakest >= 0 && weakest / 3 != h && !bc->fixed[weakest]);
+  /* a term far larger than h's stiffness on h's DOF alone: dropped with the held row */
+  cupid_int one[2] = {0, 1}, row_h = 3 * h;
+  double big = 1e3;
+  CUPID_ASSERT_OK(cupid_direct_factor_downdate(F, 1, one, &row_h, &big));
+  cupid_direct_factor_destroy(&R);
+  cupid_dirichlet bc0 = face_bc(&g, ue, 0); /* h free: the same term leaves it indefinite */
+  CUPID_ASSERT_OK(cupid_direct_factor_create(K, bc0, &R, NULL));
+  assert_int_equal(cupid_direct_factor_downdate(R, 1, one, &row_h, &big), CUPID_ERR_NUMERIC);
+  cupid_error_clear();
+  cupid_direct_factor_destroy(&R);
+  cupid_dirichlet_destroy(&bc0);
+  /* an LU factor: refused */
+  CUPID_ASSERT_OK(cupid_direct_factor_create_kind(A, CUPID_MATRIX_GENERAL, bc, &R, NULL));
+  assert_int_equal(cupid_direct_factor_hold(R, bc, &held), CUPID_ERR_ARGUMENT);
+  cupid_error_clear();
+  cupid_direct_factor_destroy(&R);
+  cupid_direct_factor_destroy(&F);
+  cupid_dirichlet_destroy(&bc);
+  cupid_csr_destroy(&A);
+  cupid_csr_destroy(&K);
+  free(ue), free(f), free(u), free(ur);
+}
+
 /* Every DOF prescribed: u = prescribed values, nothing factored. Empty matrix: nothing to do. */
 static void test_all_fixed_and_empty(void **state) {
   (void)state;
@@ -727,6 +818,7 @@ int main(void) {
                                      cmocka_unit_test(test_non_finite),
                                      cmocka_unit_test(test_random_spd),
                                      cmocka_unit_test(test_factor_downdate),
+                                     cmocka_unit_test(test_factor_hold),
                                      cmocka_unit_test(test_all_fixed_and_empty),
                                      cmocka_unit_test(test_bad_arguments),
                                      cmocka_unit_test(test_reactions),
