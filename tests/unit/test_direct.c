@@ -427,6 +427,23 @@ static void add_block(cupid_csr K, cupid_int i, cupid_int j, const double *M, do
   fail_msg("block (%lld, %lld) is not in the pattern", (long long)i, (long long)j);
 }
 
+/* A bond-like term w w^T between nodes i and j (w random) added to K, and its downdate
+ * column b (w at i, -w at j) into colptr / rows / vals. */
+static void add_bond(cupid_csr K, cupid_int i, cupid_int j, int b, uint64_t *seed,
+                     cupid_int *colptr, cupid_int *rows, double *vals) {
+  double w[3], M[9];
+  for (int a = 0; a < 3; a++) w[a] = cupid_test_random(seed);
+  for (int a = 0; a < 3; a++)
+    for (int c = 0; c < 3; c++) M[3 * a + c] = w[a] * w[c];
+  add_block(K, i, i, M, 1.0), add_block(K, j, j, M, 1.0);
+  add_block(K, i, j, M, -1.0), add_block(K, j, i, M, -1.0);
+  colptr[b] = 6 * b;
+  for (int a = 0; a < 3; a++) {
+    rows[6 * b + a] = 3 * i + a, vals[6 * b + a] = w[a];
+    rows[6 * b + 3 + a] = 3 * j + a, vals[6 * b + 3 + a] = -w[a];
+  }
+}
+
 /*
  * cupid_direct_factor_downdate (growth's re-solves after broken bonds): the factor of
  * K = A + sum_b v_b v_b^T downdated by the v_b (bond terms: w at node i, -w at node j, some
@@ -446,18 +463,7 @@ static void test_factor_downdate(void **state) {
   uint64_t seed = 7;
   for (int b = 0; b < NB; b++) { /* a bond along +x from node i (ix 0 .. 4, some on the face) */
     const int ix = b % 5, iy = (b * 3) % g.ny, iz = (b * 7) % g.nz;
-    const cupid_int i = node_of(&g, ix, iy, iz), j = node_of(&g, ix + 1, iy, iz);
-    double w[3], M[9];
-    for (int a = 0; a < 3; a++) w[a] = cupid_test_random(&seed);
-    for (int a = 0; a < 3; a++)
-      for (int c = 0; c < 3; c++) M[3 * a + c] = w[a] * w[c];
-    add_block(K, i, i, M, 1.0), add_block(K, j, j, M, 1.0);
-    add_block(K, i, j, M, -1.0), add_block(K, j, i, M, -1.0);
-    colptr[b] = 6 * b;
-    for (int a = 0; a < 3; a++) {
-      rows[6 * b + a] = 3 * i + a, vals[6 * b + a] = w[a];
-      rows[6 * b + 3 + a] = 3 * j + a, vals[6 * b + 3 + a] = -w[a];
-    }
+    add_bond(K, node_of(&g, ix, iy, iz), node_of(&g, ix + 1, iy, iz), b, &seed, colptr, rows, vals);
   }
   colptr[NB] = 6 * NB;
   double *ue = malloc((size_t)n * sizeof *ue), *f = malloc((size_t)n * sizeof *f);
@@ -525,17 +531,7 @@ static void test_factor_hold(void **state) {
   for (int b = 0; b < NB; b++) {
     const cupid_int i = node_of(&g, ends[b][0][0], ends[b][0][1], ends[b][0][2]);
     const cupid_int j = node_of(&g, ends[b][1][0], ends[b][1][1], ends[b][1][2]);
-    double w[3], M[9];
-    for (int a = 0; a < 3; a++) w[a] = cupid_test_random(&seed);
-    for (int a = 0; a < 3; a++)
-      for (int c = 0; c < 3; c++) M[3 * a + c] = w[a] * w[c];
-    add_block(K, i, i, M, 1.0), add_block(K, j, j, M, 1.0);
-    add_block(K, i, j, M, -1.0), add_block(K, j, i, M, -1.0);
-    colptr[b] = 6 * b;
-    for (int a = 0; a < 3; a++) {
-      rows[6 * b + a] = 3 * i + a, vals[6 * b + a] = w[a];
-      rows[6 * b + 3 + a] = 3 * j + a, vals[6 * b + 3 + a] = -w[a];
-    }
+    add_bond(K, i, j, b, &seed, colptr, rows, vals);
   }
   colptr[NB] = 6 * NB;
   double *ue = malloc((size_t)n * sizeof *ue), *f = malloc((size_t)n * sizeof *f);
