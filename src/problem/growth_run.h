@@ -55,6 +55,8 @@ typedef struct {
   int downdate;                 /* 1: downdate F by the broken bonds (bond-based), so that it
                                    stays the factor of the current K; 0 after a K change that
                                    is no sum of bond terms (LPS), or CUPID_GROWTH_RESOLVE */
+  int singular;                 /* the last downdate left F indefinite: the next solve goes to
+                                   the engine at once (solve) */
   cupid_growth_downdate dd;
   cupid_int downdates, downdate_columns;
   double t_downdate;
