@@ -457,17 +457,17 @@ static cupid_status release_unsupported(growth_run *g, int step) {
   return cupid_dirichlet_finalize(prob->bc);
 }
 
-/* A factorisation that broke down at a PD node after bonds broke: that node lost its support
- * in a way the checks of cupid_pd_operator_unsupported() miss (a mechanism of several nodes):
- * it is held too. The matrix-free path has no factorisation: CG on a mechanism diverges or
- * stalls, and the node its iterate moved furthest is held (growth_matrix_free.c). *held = 0
- * when the failure names no such node (the solve's error then stands). */
 /* A PD DOF whose node is not held yet: what hold_singular_node can hold. */
 static int loose_node(const growth_run *g, cupid_int dof) {
   const cupid_problem_state *prob = g->prob;
   return prob->grid && dof >= 0 && dof < 3 * prob->n_pd && !g->release[dof / 3];
 }
 
+/* A factorisation that broke down at a PD node after bonds broke: that node lost its support
+ * in a way the checks of cupid_pd_operator_unsupported() miss (a mechanism of several nodes):
+ * it is held too. The matrix-free path has no factorisation: CG on a mechanism diverges or
+ * stalls, and the node its iterate moved furthest is held (growth_matrix_free.c). *held = 0
+ * when the failure names no such node (the solve's error then stands). */
 static cupid_status hold_singular_node(growth_run *g, int step, int *held) {
   cupid_problem_state *prob = g->prob;
   const cupid_int dof = prob->solve.failed_dof;
@@ -641,8 +641,8 @@ static cupid_status cg_solve(growth_run *g, int *done) {
  * (cupid_direct_factor_hold: a few rank-two modifications, where the notched C-beam's zone of
  * 47,500 nodes took 15 s a factorisation for each node its flanges' last ligaments left loose);
  * a downdate that leaves it indefinite all the same (a mechanism of several nodes that
- * release_unsupported does not see) drops the factor: the next factorisation finds and holds
- * the node (hold_singular_node). */
+ * release_unsupported does not see) drops the factor, and the next solve is the engine's at
+ * once, whose breakdown names the node to hold (solve, hold_singular_node). */
 static cupid_status downdate_factor(growth_run *g, const cupid_csr_t *Kold) {
   cupid_problem_state *prob = g->prob;
   double t0 = cupid_wtime();
