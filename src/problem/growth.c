@@ -638,8 +638,8 @@ static cupid_status cg_solve(growth_run *g, int *done) {
  * bonds' rank-one terms, it is that K's factor again, and CG on it converges at once. A change
  * that is no sum of bond terms (LPS) turns downdating off for the run (CG on the stale factor
  * as before). The nodes held since the last round (release_unsupported) leave the factor first
- * (cupid_direct_factor_hold: a few rank-two modifications, where the notched C-beam's zone of
- * 47,500 nodes took 15 s a factorisation for each node its flanges' last ligaments left loose);
+ * (cupid_direct_factor_hold: a few rank-two modifications, where the run used to factorise
+ * the notched C-beam's grown zone again for each node its flanges' last ligaments left loose);
  * a downdate that leaves it indefinite all the same (a mechanism of several nodes that
  * release_unsupported does not see) drops the factor, and the next solve is the engine's at
  * once, whose breakdown names the node to hold (solve, hold_singular_node). */
@@ -745,9 +745,9 @@ static cupid_status solve(growth_run *g, int reassemble) {
   if (own && g->F && g->krylov) CUPID_CALL(cg_solve(g, &done));
   /* After a downdate that left the factor indefinite, K is singular but for round-off: a
    * factorisation here would break down as the engine's does, which then names the node to
-   * hold (hold_singular_node), a factorisation of the notched C-beam's grown zone (15 s) saved
-   * for each node its flanges' last ligaments leave loose in a way release_unsupported does
-   * not see. Where the engine's solve does not break down, its solve stands. */
+   * hold (hold_singular_node): a factorisation of the grown zone saved for each node the
+   * notched C-beam's flanges leave loose in a way release_unsupported does not see. Where the
+   * engine's solve does not break down, its solve stands. */
   const int singular = g->singular;
   g->singular = 0;
   if (own && !done && !singular) {
