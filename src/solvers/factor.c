@@ -446,13 +446,12 @@ cupid_status cupid_direct_factor_hold(cupid_direct_factor F, const cupid_dirichl
               (long long)bc->n, (long long)F->n_full);
   *held = 0;
   CUPID_CALL(row_map(F));
-  cupid_int fresh = 0;
-  for (cupid_int d = 0; d < F->n_full; d++) fresh += bc->fixed[d] && F->pivot_of[d] >= 0;
-  if (fresh == 0) return CUPID_SUCCESS;
-  CUPID_CALL(simplicial_ldl(F));
-  if (!F->held) CUPID_CALL(cupid_calloc((size_t)F->n + 1, 1, "held rows", &F->held));
   for (cupid_int d = 0; d < F->n_full; d++) {
     if (!bc->fixed[d] || F->pivot_of[d] < 0) continue;
+    if (!F->held) { /* the first row held: the factor CHOLMOD can modify, and the flags */
+      CUPID_CALL(simplicial_ldl(F));
+      CUPID_CALL(cupid_calloc((size_t)F->n + 1, 1, "held rows", &F->held));
+    }
     const cupid_int k = F->pivot_of[d];
     const int ok = cholmod_l_rowdel((size_t)k, NULL, F->L, &F->cc);
     CUPID_CHECK(ok && F->cc.status >= CHOLMOD_OK,
