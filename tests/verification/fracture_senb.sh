@@ -26,7 +26,13 @@ PY=${CUPID_SYSTEM_PYTHON:-/usr/bin/python3}
 EX=$SRC/examples/fracture
 short=(--set analysis.steps=20 --set "constraints[0].displacement.value=[-0.03, null, null]")
 
-for h in 5/3 1.25 1; do
+# A sanitizer build (CUPID_TEST_SANITIZED=1, the CI's ASan stage) runs every model kind once, at
+# h = 1.25, and leaves the numbers to the plain build: the finer horizons take the same code paths
+# (12 minutes of the ASan stage's 20 otherwise).
+sanitized=${CUPID_TEST_SANITIZED:-0}
+horizons="5/3 1.25 1"
+[ "$sanitized" = 1 ] && horizons=1.25
+for h in $horizons; do
   hv=$("$PY" -c "from fractions import Fraction as F; print(repr(float(F('$h'))))")
   dv=$("$PY" -c "print(repr(3.015 * $hv))")
   tag=${h//\//_}
@@ -51,6 +57,9 @@ done
 "$CUPID" run "$EX/senb_coupled.yaml" -o fn_1.25 --quiet "${short[@]}" --set 'coupling={method: fictitious, balance: none}' \
   --set peridynamics.spacing=1.25 --set peridynamics.horizon=3.76875 && ok || bad "fictitious run, balance: none"
 
+if [ "$sanitized" = 1 ]; then
+  echo "sanitizer build: the peaks, paths and envelopes are checked in the plain build"
+else
 "$PY" - <<'PY' && ok || bad "SENB: LEFM trend, coupled against PD-only, the envelope"
 import csv, json, math
 
@@ -157,6 +166,7 @@ print("h = 1.25: paper 000's operator as printed %.3f N (%+.1f%% against Arlequi
       (fn, 100 * (fn / peak(runs["cp", "1.25"][0]) - 1)))
 assert fn > 1.05 * peak(runs["cp", "1.25"][0]), fn
 PY
+fi
 
 # 4. a crack into an Arlequin overlap
 out=$("$CUPID" run "$SRC/tests/models/growth/senb_interface.yaml" -o stop --quiet 2>&1); rc=$?
