@@ -486,6 +486,21 @@ cupid_status cupid_pd_operator_weakly_held(const cupid_pd_operator op, cupid_int
 cupid_status cupid_pd_operator_reach(const cupid_pd_operator op, const unsigned char *release,
                                      unsigned char *seen, cupid_int *added);
 
+/**
+ * Mechanisms of a few nodes that cupid_pd_operator_weakly_held() does not see (each node held in
+ * every direction by its own bonds, the cluster free to move): the nodes in [first, last) that
+ * lost at least half of their bonds (by weight), grouped over intact bonds into clusters of at
+ * most 48 nodes, each tested with everything outside it fixed (Cholesky of its bond block);
+ * where a cluster is a mechanism, the node that completes it in the order of largest |u| first
+ * (@p u: the displacements, or NULL for the node order) gets release = 2 (*count: how many),
+ * and the rest is tested again. Released nodes count as fixed. Crack growth ties them by weak
+ * springs before a downdate or a factorisation breaks down on them (src/pd/fracture.c,
+ * "Mechanisms"; src/problem/growth.c, "Ties").
+ */
+cupid_status cupid_pd_operator_mechanisms(const cupid_pd_operator op, cupid_int first,
+                                          cupid_int last, const double *u,
+                                          unsigned char *release, cupid_int *count);
+
 /** out[j] = 1 for every node j in the family (the stencil's neighbours present, bonds intact
  *  or not) of a node i with mark[i] != 0; other entries of @p out are left as they are. The
  *  family is symmetric, so j is flagged exactly when a marked node is in j's family. */

@@ -218,6 +218,14 @@ cupid_status cupid_direct_factor_downdate(cupid_direct_factor F, cupid_int r, co
                                           const cupid_int *rows, const double *vals);
 
 /**
+ * Update an SPD factor: afterwards F factors K_ff + C_f C_f^T (C as for
+ * cupid_direct_factor_downdate, whose checks it makes too). Crack growth ties a node that
+ * completes a mechanism of a few nodes by a weak spring, sqrt(k) e_d per DOF d (growth.c).
+ */
+cupid_status cupid_direct_factor_update(cupid_direct_factor F, cupid_int r, const cupid_int *colptr,
+                                        const cupid_int *rows, const double *vals);
+
+/**
  * Hold DOFs in an SPD factor: the rows of the DOFs that @p bc fixes and the factor still solves
  * for are deleted (CHOLMOD's cholmod_rowdel: their row and column become the identity's), so
  * that F factors the K_ff of @p bc's free DOFs (the identity on the held rows) without a

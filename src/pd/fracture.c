@@ -764,6 +764,180 @@ static int weakly_held(const struct cupid_pd_operator_private *op, cupid_int i) 
   return intact <= 2 || min_eigenvalue(a) < 1e-3 * all / 3.0;
 }
 
+/* ---- Mechanisms of a few nodes ----
+ * A node whose own bonds hold it in every direction can still move with a few neighbours as a
+ * mechanism: two nodes bonded to each other, each with two more bonds to the body, have 6 DOFs
+ * and 5 bonds. weakly_held() fixes the neighbours and does not see it; the factorisation of K
+ * breaks down there (issue 37: the notched C-beam's flanges, whose last ligaments leave such
+ * clusters by the hundred, each a factorisation of the grown zone, 15 s). So the nodes that lost
+ * at least MECH_DAMAGE of their bonds (by weight) are grouped into clusters over their intact
+ * bonds, and each cluster of at most MECH_CLUSTER_MAX nodes is tested as a body of its own,
+ * everything outside it fixed: the block of sum w n n^T over its intact bonds (each bond's term
+ * at both of its ends inside the cluster, at its inside end for a bond that leaves it; w and n
+ * as weakly_held's) is factorised by Cholesky in the nodes' order, and a pivot under
+ * MECH_PIVOT times the block's largest diagonal entry is a mechanism there: that node is
+ * marked (crack growth ties it by a weak spring, src/problem/growth.c) and counts as fixed,
+ * and the rest of the cluster is tested again. A mechanism that takes in less damaged nodes, or a
+ * cluster larger than the bound (a crack face), is left to the factorisation, as before. */
+#define MECH_DAMAGE 0.5
+#define MECH_CLUSTER_MAX 48
+/* A mechanism's pivot is round-off of the block's entries (1e-16 of them); a node held by a
+ * bond a thousandth of the others' is no mechanism (weakly_held's bound for one node is 1e-3 of
+ * the family's mean). */
+#define MECH_PIVOT 1e-9
+
+/* The share of node i's bond weight that is broken. */
+static double lost_share(const struct cupid_pd_operator_private *op, cupid_int i) {
+  const pd_stencil *S = &op->st;
+  const pd_family F = pd_family_of(op, i);
+  double all = 0.0, lost = 0.0;
+  for (int q = 0; q < F.n; q++) {
+    const int s = pd_family_entry(&F, q);
+    all += S->wb[s];
+    if (pd_bond_broken(op, i, s)) lost += S->wb[s];
+  }
+  return all > 0.0 ? lost / all : 0.0;
+}
+
+/* The block of the cluster nodes[0 .. m) (local[j]: j's place in it, or -1) into K (3m x 3m,
+ * row-major). */
+static void cluster_block(const struct cupid_pd_operator_private *op, const cupid_int *nodes, int m,
+                          const int *local, double *K) {
+  const pd_stencil *S = &op->st;
+  const int N = 3 * m;
+  memset(K, 0, (size_t)N * (size_t)N * sizeof *K);
+  for (int a = 0; a < m; a++) {
+    const pd_family F = pd_family_of(op, nodes[a]);
+    for (int q = 0; q < F.n; q++) {
+      const int s = pd_family_entry(&F, q);
+      if (pd_bond_broken(op, nodes[a], s)) continue;
+      const int b = local[pd_family_node(op, &F, s)];
+      const double *n = S->nrm + 3 * s, w = S->wb[s];
+      for (int r = 0; r < 3; r++)
+        for (int c = 0; c < 3; c++) {
+          const double v = w * n[r] * n[c];
+          K[(3 * a + r) * N + 3 * a + c] += v;
+          if (b < 0) continue;
+          K[(3 * b + r) * N + 3 * b + c] += v;
+          K[(3 * a + r) * N + 3 * b + c] -= v;
+          K[(3 * b + r) * N + 3 * a + c] -= v;
+        }
+    }
+  }
+}
+
+/* Cholesky of K (N x N, row-major, lower triangle overwritten) over the rows not out[]: the
+ * first row whose pivot falls under MECH_PIVOT times the largest diagonal entry, or -1. */
+static int cluster_cholesky(double *K, int N, const unsigned char *out) {
+  double top = 0.0;
+  for (int k = 0; k < N; k++)
+    if (!out[k]) top = fmax(top, K[k * N + k]);
+  for (int k = 0; k < N; k++) {
+    if (out[k]) continue;
+    double d = K[k * N + k];
+    for (int p = 0; p < k; p++)
+      if (!out[p]) d -= K[k * N + p] * K[k * N + p];
+    if (!(d > MECH_PIVOT * top)) return k;
+    d = sqrt(d);
+    K[k * N + k] = d;
+    for (int r = k + 1; r < N; r++) {
+      if (out[r]) continue;
+      double v = K[r * N + k];
+      for (int p = 0; p < k; p++)
+        if (!out[p]) v -= K[r * N + p] * K[k * N + p];
+      K[r * N + k] = v / d;
+    }
+  }
+  return -1;
+}
+
+/* Mark (release = 2) the nodes of the cluster nodes[0 .. m) that complete a mechanism; *n
+ * counts them. K: 9 MECH_CLUSTER_MAX^2 doubles of scratch. */
+static void cluster_mechanisms(const struct cupid_pd_operator_private *op, const cupid_int *nodes,
+                               int m, const int *local, unsigned char *release, double *K,
+                               cupid_int *n) {
+  const int N = 3 * m;
+  unsigned char out[3 * MECH_CLUSTER_MAX];
+  memset(out, 0, sizeof out);
+  for (int held = 0; held < m; held++) {
+    cluster_block(op, nodes, m, local, K);
+    const int k = cluster_cholesky(K, N, out);
+    if (k < 0) return;
+    const int a = k / 3;
+    release[nodes[a]] = 2, (*n)++;
+    out[3 * a] = out[3 * a + 1] = out[3 * a + 2] = 1;
+  }
+}
+
+/* The order of a cluster's nodes in its Cholesky factorisation: i before j when it moved more
+ * (|u|, then the node index). A pivot vanishes at the node that completes a mechanism of the
+ * nodes before it (the later ones fixed), so the node marked is the one of the mechanism that
+ * moved least: the likeliest to sit on the part that stays (a notched plate cut through under
+ * a grip: its last ligament is four nodes across the crack). Without u, the node index alone. */
+static int cluster_first(const double *u, cupid_int i, cupid_int j) {
+  if (u) {
+    const double ui = u[3 * i] * u[3 * i] + u[3 * i + 1] * u[3 * i + 1] + u[3 * i + 2] * u[3 * i + 2];
+    const double uj = u[3 * j] * u[3 * j] + u[3 * j + 1] * u[3 * j + 1] + u[3 * j + 2] * u[3 * j + 2];
+    if (ui != uj) return ui > uj;
+  }
+  return i < j;
+}
+
+/* The mechanisms of clusters of nodes in [first, last) that lost at least MECH_DAMAGE of their
+ * bonds (above): the nodes that complete them get release = 2, *count more of them. */
+static cupid_status mechanisms(const struct cupid_pd_operator_private *op, cupid_int first,
+                               cupid_int last, const double *u, unsigned char *release,
+                               cupid_int *count) {
+  const cupid_int nn = op->nnodes;
+  unsigned char *cand = NULL;
+  cupid_int *queue = NULL, *nodes = NULL;
+  int *local = NULL;
+  double *K = NULL;
+  cupid_status st = CUPID_SUCCESS;
+  CUPID_TRY(cupid_calloc((size_t)nn + 1, 1, "mechanism flags", &cand));
+  cupid_int nc = 0;
+  for (cupid_int i = first; i < last; i++)
+    if (!release[i] && op->bslot[i] >= 0 && lost_share(op, i) >= MECH_DAMAGE) cand[i] = 1, nc++;
+  if (nc == 0) goto cleanup;
+  CUPID_TRY(cupid_malloc((size_t)nn + 1, sizeof *queue, "mechanism queue", &queue));
+  CUPID_TRY(cupid_malloc((size_t)nn + 1, sizeof *local, "mechanism map", &local));
+  CUPID_TRY(cupid_malloc(MECH_CLUSTER_MAX, sizeof *nodes, "mechanism cluster", &nodes));
+  CUPID_TRY(cupid_malloc(9 * MECH_CLUSTER_MAX * MECH_CLUSTER_MAX, sizeof *K, "mechanism block", &K));
+  for (cupid_int i = 0; i < nn; i++) local[i] = -1;
+  for (cupid_int i = first; i < last; i++) {
+    if (cand[i] != 1) continue;
+    cupid_int head = 0, tail = 0; /* the cluster over intact bonds between candidates */
+    queue[tail++] = i, cand[i] = 2;
+    while (head < tail) {
+      const cupid_int v = queue[head++];
+      const pd_family F = pd_family_of(op, v);
+      for (int q = 0; q < F.n; q++) {
+        const int s = pd_family_entry(&F, q);
+        const cupid_int j = pd_family_node(op, &F, s);
+        if (cand[j] == 1 && !pd_bond_broken(op, v, s)) cand[j] = 2, queue[tail++] = j;
+      }
+    }
+    if (tail > MECH_CLUSTER_MAX) continue; /* a crack face: left to the factorisation */
+    int m = 0; /* in the order of cluster_first (the node held: the mechanism's last) */
+    for (cupid_int t = 0; t < tail; t++) nodes[m++] = queue[t];
+    for (int a = 1; a < m; a++)
+      for (int b = a; b > 0 && cluster_first(u, nodes[b], nodes[b - 1]); b--) {
+        const cupid_int x = nodes[b];
+        nodes[b] = nodes[b - 1], nodes[b - 1] = x;
+      }
+    for (int a = 0; a < m; a++) local[nodes[a]] = a;
+    cluster_mechanisms(op, nodes, m, local, release, K, count);
+    for (int a = 0; a < m; a++) local[nodes[a]] = -1;
+  }
+cleanup:
+  cupid_free(&cand);
+  cupid_free(&queue);
+  cupid_free(&nodes);
+  cupid_free(&local);
+  cupid_free(&K);
+  return st;
+}
+
 cupid_status cupid_pd_operator_weakly_held(const cupid_pd_operator op, cupid_int first,
                                            cupid_int last, unsigned char *release,
                                            cupid_int *count) {
@@ -776,6 +950,16 @@ cupid_status cupid_pd_operator_weakly_held(const cupid_pd_operator op, cupid_int
     if (!release[i] && op->bslot && op->bslot[i] >= 0 && weakly_held(op, i)) release[i] = 2, n++;
   *count = n;
   return CUPID_SUCCESS;
+}
+
+cupid_status cupid_pd_operator_mechanisms(const cupid_pd_operator op, cupid_int first,
+                                          cupid_int last, const double *u,
+                                          unsigned char *release, cupid_int *count) {
+  CUPID_CHECK(op && release && count && first >= 0 && last <= op->nnodes, CUPID_ERR_ARGUMENT,
+              "mechanisms needs its arguments and a range of nodes");
+  *count = 0;
+  if (!op->bslot) return CUPID_SUCCESS;
+  return mechanisms(op, first, last, u, release, count);
 }
 
 cupid_status cupid_pd_operator_reach(const cupid_pd_operator op, const unsigned char *release,

@@ -431,6 +431,10 @@ void cupid_problem_fracture_json(cupid_json js, const cupid_problem_state *prob)
       cupid_json_integer(js, "held_nodes", prob->growth.held_count);
       cupid_json_number(js, "held_share", prob->growth.held_share);
     }
+    if (prob->growth.tied_nodes) { /* growth.c, tie_mechanisms */
+      cupid_json_integer(js, "tied_nodes", prob->growth.tied_nodes);
+      cupid_json_number(js, "tie_stiffness", prob->growth.tie_stiffness);
+    }
     if (prob->growth.collapse_step) { /* growth.c, check_collapse */
       cupid_json_begin_object(js, "collapse");
       cupid_json_integer(js, "step", prob->growth.collapse_step);
@@ -456,6 +460,7 @@ void cupid_problem_fracture_json(cupid_json js, const cupid_problem_state *prob)
       cupid_json_integer(js, "downdates", prob->growth.downdates);
       cupid_json_integer(js, "downdate_columns", prob->growth.downdate_columns);
       cupid_json_number(js, "downdate_s", prob->growth.downdate_s);
+      cupid_json_integer(js, "held_rows", prob->growth.held_rows);
       cupid_json_end_object(js);
     }
   }

@@ -43,6 +43,7 @@ static void growth_free(growth_run *g) {
   free_layout(g);
   cupid_free(&g->release);
   cupid_free(&g->weak);
+  cupid_free(&g->tie);
   cupid_free(&g->u1);
   cupid_writer_drop(&g->csv, 0);
   cupid_writer_drop(&g->exodus, 0);
@@ -253,6 +254,12 @@ static void held_forces(growth_run *g) {
     for (int c = 0; c < 3; c++) sums[c] += r[c];
     sums[g->weak[i] ? 4 : 3] += sqrt(r[0] * r[0] + r[1] * r[1] + r[2] * r[2]);
   }
+  for (cupid_int i = a; g->tie && i < b; i++) { /* a tie's spring (tie_mechanisms) */
+    if (!g->tie[i] || g->release[i]) continue;
+    const double *u = prob->u + 3 * i;
+    for (int c = 0; c < 3; c++) sums[c] += g->tie_k * u[c];
+    sums[3] += g->tie_k * sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]);
+  }
   for (size_t d = prob->slab ? 3 * (size_t)a : 0; d < (prob->slab ? 3 * (size_t)b : n); d++)
     for (int c = 0; c < 3; c++) load[c] += prob->f_ext[d] * g->T[(size_t)c * n + d];
   if (prob->slab && cupid_petsc_rank() == 0) /* the beam, which every rank holds whole */
@@ -424,6 +431,118 @@ static void anchor(growth_run *g) {
                                      g->fixed0[3 * i + 2] || (prob->protect && prob->protect[i]));
 }
 
+/* ---- Ties (issue 37) ----
+ * A few nodes that lost most of their bonds can move together as a mechanism although each is
+ * held in every direction by its own bonds (the notched C-beam's flanges leave such clusters by
+ * the hundred in their last ligaments): K is singular there, and the factorisation or downdate
+ * that finds it costs a factorisation of the zone per node (15-19 s on the C-beam's grown
+ * zone). cupid_pd_operator_mechanisms() finds them before the solve, cluster by cluster; the
+ * node that completes each mechanism is tied to its reference position by a weak spring of
+ * TIE_STIFFNESS times K's largest diagonal entry on each of its DOFs (added to K after every
+ * assembly, and to a live factor as a rank-three update), not held at its displacement: a held
+ * node stays where the last solve left it while the body relaxes or moves on, and pulls on its
+ * bonds (on the plate of verification.fracture_growth, held one round before its cut: 1% of
+ * the grip's peak afterwards), where a tied node follows the body (the mechanism's mode costs
+ * no bond energy: the spring alone fixes it) and carries k |u|. Its forces count with the held
+ * nodes' (held_forces), so that a tie that took load (a loaded cluster, not a mechanism) is a
+ * collapse. 1e-8: far above round-off
+ * in the factor (its pivot ratio must stay above CUPID_DIRECT_PIVOT_TOL times the order: 1e-8
+ * is that bound at 5 million equations) and far below the 1e-6 share of the forces that makes
+ * held nodes a collapse. The run's own factor only (SPD on a direct engine): elsewhere the
+ * engine's breakdown still names the node to hold. */
+#define TIE_STIFFNESS 1e-8
+
+cupid_status growth_tie_matrix(cupid_csr_t *K, cupid_int n, const cupid_int *dofs, double k) {
+  for (cupid_int t = 0; t < n; t++) {
+    const cupid_int d = dofs[t], b = K->bs;
+    double *a = cupid_csr_find(K, d / b, d / b);
+    CUPID_CHECK(a, CUPID_ERR_INTERNAL, "growth: no diagonal entry of K at DOF %lld", (long long)d);
+    a[(d % b) * b + d % b] += k;
+  }
+  return CUPID_SUCCESS;
+}
+
+cupid_status growth_tie_factor(cupid_direct_factor F, cupid_int n, const cupid_int *dofs, double k) {
+  cupid_int *colptr = NULL;
+  double *vals = NULL;
+  cupid_status st = CUPID_SUCCESS;
+  CUPID_TRY(cupid_malloc((size_t)n + 1, sizeof *colptr, "tie columns", &colptr));
+  CUPID_TRY(cupid_malloc((size_t)n + 1, sizeof *vals, "tie columns", &vals));
+  for (cupid_int t = 0; t <= n; t++) colptr[t] = t;
+  for (cupid_int t = 0; t < n; t++) vals[t] = sqrt(k);
+  CUPID_TRY(cupid_direct_factor_update(F, n, colptr, dofs, vals));
+cleanup:
+  cupid_free(&colptr);
+  cupid_free(&vals);
+  return st;
+}
+
+/* The DOFs of the nodes whose tie is in state @p state, into a new *dofs (*n of them). */
+static cupid_status tie_dofs(growth_run *g, unsigned char state, cupid_int **dofs, cupid_int *n) {
+  const cupid_problem_state *prob = g->prob;
+  *n = 0;
+  for (cupid_int i = 0; i < prob->n_pd; i++) *n += 3 * (g->tie[i] == state);
+  if (*n == 0) return CUPID_SUCCESS;
+  CUPID_CALL(cupid_malloc((size_t)*n, sizeof **dofs, "tied DOFs", dofs));
+  cupid_int t = 0;
+  for (cupid_int i = 0; i < prob->n_pd; i++)
+    for (int c = 0; c < 3 && g->tie[i] == state; c++) (*dofs)[t++] = 3 * i + c;
+  return CUPID_SUCCESS;
+}
+
+/* The springs of the ties in state @p state into K; their state becomes @p next. */
+static cupid_status tie_into(growth_run *g, cupid_csr_t *K, unsigned char state, unsigned char next) {
+  cupid_int *dofs = NULL, n = 0;
+  CUPID_CALL(tie_dofs(g, state, &dofs, &n));
+  cupid_status st = n ? growth_tie_matrix(K, n, dofs, g->tie_k) : CUPID_SUCCESS;
+  cupid_free(&dofs);
+  for (cupid_int i = 0; i < g->prob->n_pd && st == CUPID_SUCCESS; i++)
+    if (g->tie[i] == state) g->tie[i] = next;
+  return st;
+}
+
+/* A K just assembled (fresh: every tie's spring; otherwise K has them but the new ones). */
+static cupid_status tie_assembled(growth_run *g, int fresh) {
+  cupid_problem_state *prob = g->prob;
+  if (!g->tie || !g->tied) return CUPID_SUCCESS;
+  if (g->tie_k == 0.0) { /* the first tie: its stiffness from K's largest diagonal entry */
+    double top = 0.0, *d = g->w[3];
+    CUPID_CALL(cupid_csr_diagonal(prob->K, d));
+    for (cupid_int k = 0; k < prob->ndof; k++) top = fmax(top, fabs(d[k]));
+    g->tie_k = TIE_STIFFNESS * top;
+  }
+  if (fresh) {
+    CUPID_CALL(tie_into(g, prob->K, 1, 1));
+    CUPID_CALL(tie_into(g, prob->K, 3, 3));
+  }
+  return tie_into(g, prob->K, 2, 3);
+}
+
+/* The nodes that complete a mechanism of a few (cupid_pd_operator_mechanisms), tied: state 2
+ * (in neither K nor the factor yet). Held and tied nodes count as fixed. */
+static cupid_status tie_mechanisms(growth_run *g, int step) {
+  cupid_problem_state *prob = g->prob;
+  unsigned char *scan = g->weak_scan;
+  cupid_int count = 0;
+  for (cupid_int i = 0; i < prob->n_pd; i++) scan[i] = g->release[i] || g->tie[i];
+  CUPID_CALL(cupid_pd_operator_mechanisms(prob->op, 0, prob->n_pd, prob->u, scan, &count));
+  if (count == 0) return CUPID_SUCCESS;
+  const double *x = cupid_pd_grid_coords(prob->grid);
+  for (cupid_int i = 0; i < prob->n_pd; i++) {
+    if (scan[i] != 2 || g->release[i] || g->tie[i]) continue;
+    g->tie[i] = 2;
+    if (count <= 3)
+      cupid_problem_progress(prob, "growth: step %d: node (%g, %g, %g) completes a mechanism of a "
+                             "few nodes: tied by a weak spring", step, x[3 * i], x[3 * i + 1],
+                             x[3 * i + 2]);
+  }
+  g->tied += count;
+  if (count > 3)
+    cupid_problem_progress(prob, "growth: step %d: %lld nodes complete mechanisms of a few nodes: "
+                           "tied by weak springs", step, (long long)count);
+  return CUPID_SUCCESS;
+}
+
 /* Release the nodes that lost their support: held at their displacement now. */
 static cupid_status release_unsupported(growth_run *g, int step) {
   cupid_problem_state *prob = g->prob;
@@ -440,6 +559,7 @@ static cupid_status release_unsupported(growth_run *g, int step) {
     CUPID_CALL(cupid_growth_mf_unsupported(prob, &g->mf, g->anchored, g->release, &fresh));
   else
     CUPID_CALL(cupid_pd_operator_unsupported(prob->op, g->anchored, g->release, &fresh));
+  if (g->tie) CUPID_CALL(tie_mechanisms(g, step));
   if (fresh == 0) return CUPID_SUCCESS;
   const double *x = cupid_pd_grid_coords(prob->grid);
   for (cupid_int i = 0; i < prob->n_pd; i++) {
@@ -564,6 +684,8 @@ static cupid_status factor_solve(growth_run *g) {
   if (st != CUPID_SUCCESS) return st;
   g->factorisations++;
   g->bonds_at_factor = prob->broken_bonds;
+  for (cupid_int i = 0; g->tie && i < prob->n_pd; i++)
+    if (g->tie[i] == 3) g->tie[i] = 1; /* K's springs, now in F */
   CUPID_CALL(growth_journal_factored(g)); /* what a resumption replays (growth_resume.c) */
   g->factor_flops = info.flops_factor;
   const double nnz_k = (double)prob->K->rowptr[prob->K->nrows] * prob->K->bs * prob->K->bs;
@@ -640,13 +762,15 @@ static cupid_status cg_solve(growth_run *g, int *done) {
  * as before). The nodes held since the last round (release_unsupported) leave the factor first
  * (cupid_direct_factor_hold: a few rank-two modifications, where the run used to factorise
  * the notched C-beam's grown zone again for each node its flanges' last ligaments left loose);
- * a downdate that leaves it indefinite all the same (a mechanism of several nodes that
- * release_unsupported does not see) drops the factor, and the next solve is the engine's at
- * once, whose breakdown names the node to hold (solve, hold_singular_node). */
-static cupid_status downdate_factor(growth_run *g, const cupid_csr_t *Kold) {
+ * the nodes tied since (tie_mechanisms) go in next, as an update by their springs; a downdate
+ * that leaves it indefinite all the same (a mechanism larger than tie_mechanisms tests) drops
+ * the factor, and the next solve is the engine's at once, whose breakdown names the node to
+ * hold (solve, hold_singular_node). */
+static cupid_status downdate_tied(growth_run *g, cupid_csr_t *Kold, const cupid_int *tied,
+                                  cupid_int n_tied, double t0) {
   cupid_problem_state *prob = g->prob;
-  double t0 = cupid_wtime();
   int ok = 0;
+  if (n_tied) CUPID_CALL(growth_tie_matrix(Kold, n_tied, tied, g->tie_k)); /* K - Kold: bonds */
   CUPID_CALL(cupid_growth_downdate_terms(Kold, prob->K, &g->dd, &ok));
   if (!ok) {
     g->downdate = 0;
@@ -668,6 +792,13 @@ static cupid_status downdate_factor(growth_run *g, const cupid_csr_t *Kold) {
    * deleted from the factor, so that the downdate leaves it definite */
   cupid_int held = 0;
   cupid_status st = cupid_direct_factor_hold(g->F, prob->bc, &held);
+  g->held_rows += held;
+  /* then the new ties' springs (a mechanism the broken bonds complete: the downdate would leave
+   * it singular), then the bonds */
+  if (st == CUPID_SUCCESS && n_tied) st = growth_tie_factor(g->F, n_tied, tied, g->tie_k);
+  if (st == CUPID_SUCCESS)
+    for (cupid_int i = 0; i < prob->n_pd && n_tied; i++)
+      if (g->tie[i] == 3) g->tie[i] = 1;
   if (st == CUPID_SUCCESS)
     st = cupid_direct_factor_downdate(g->F, g->dd.r, g->dd.colptr, g->dd.rows, g->dd.vals);
   if (st == CUPID_ERR_NUMERIC) {
@@ -683,6 +814,15 @@ static cupid_status downdate_factor(growth_run *g, const cupid_csr_t *Kold) {
   g->downdate_columns += g->dd.r;
   g->t_downdate += cupid_wtime() - t0;
   return CUPID_SUCCESS;
+}
+
+static cupid_status downdate_factor(growth_run *g, cupid_csr_t *Kold) {
+  cupid_int *tied = NULL, n_tied = 0; /* the ties since: in K, neither in Kold nor in F */
+  const double t0 = cupid_wtime();
+  if (g->tie) CUPID_CALL(tie_dofs(g, 3, &tied, &n_tied));
+  cupid_status st = downdate_tied(g, Kold, tied, n_tied, t0);
+  cupid_free(&tied);
+  return st;
 }
 
 /* The growth solves with its own CHOLMOD factor (downdates, CG): an SPD method on a direct
@@ -719,7 +859,9 @@ static cupid_status solve(growth_run *g, int reassemble) {
   if (reassemble && ((g->F && g->downdate) || (lu && cupid_growth_lu_has_factor(&g->lu) && !g->lu.no_update)))
     Kold = prob->K, prob->K = NULL;
   if (reassemble) cupid_csr_destroy(&prob->K);
+  const int fresh = prob->K == NULL;
   cupid_status st0 = prob->method->assemble(prob);
+  if (st0 == CUPID_SUCCESS) st0 = tie_assembled(g, fresh);
   const cupid_int updates = g->lu.updates, factorisations = g->lu.factorisations;
   if (st0 == CUPID_SUCCESS && Kold)
     st0 = lu ? cupid_growth_lu_update(prob, &g->lu, Kold) : downdate_factor(g, Kold);
@@ -1091,6 +1233,8 @@ static cupid_status setup_layout(growth_run *g) {
     CUPID_CALL(cupid_calloc((size_t)prob->n_pd + 1, 1, "released nodes", &g->release));
     CUPID_CALL(cupid_calloc((size_t)prob->n_pd + 1, 1, "weakly held nodes", &g->weak));
     CUPID_CALL(cupid_calloc((size_t)prob->n_pd + 1, 1, "weakly held scan", &g->weak_scan));
+    if (own_factor(prob) && !matrix_free(prob) && !prob->slab)
+      CUPID_CALL(cupid_calloc((size_t)prob->n_pd + 1, 1, "tied nodes", &g->tie));
     anchor(g);
   }
   CUPID_CALL(constraint_masks(g));
@@ -1102,9 +1246,10 @@ static cupid_status setup_layout(growth_run *g) {
 /* An adaptive zone grows (adaptive.c): before the conversion, what the run keeps of the
  * layout is freed (the factor, the kept solvers, whose operators borrow the old problem's
  * objects), the held nodes' flags kept for the map; the counters stay. */
-static void growth_release(growth_run *g, unsigned char **held, unsigned char **weak) {
-  *held = g->release, *weak = g->weak;
-  g->release = g->weak = NULL;
+static void growth_release(growth_run *g, unsigned char **held, unsigned char **weak,
+                           unsigned char **tie) {
+  *held = g->release, *weak = g->weak, *tie = g->tie;
+  g->release = g->weak = g->tie = NULL;
   free_layout(g);
   const cupid_growth_lu lu = g->lu;
   cupid_growth_lu_free(&g->lu);
@@ -1125,11 +1270,13 @@ static cupid_status frame_vertices(growth_run *g);
 /* After a conversion: the layout's state again, the nodes held before held again where they
  * are now (at their displacement, carried over), and the load of factor lambda. */
 static cupid_status growth_rezone(growth_run *g, double lambda, unsigned char *held,
-                                  unsigned char *weak) {
+                                  unsigned char *weak, const unsigned char *tie) {
   cupid_problem_state *prob = g->prob;
   CUPID_CALL(setup_layout(g));
   cupid_int n_old = 0;
   const cupid_int *map = cupid_problem_adaptive_map(prob, &n_old);
+  for (cupid_int i = 0; i < n_old && tie && g->tie; i++) /* in the new K at its assembly */
+    if (tie[i]) g->tie[map[i]] = 2;
   for (cupid_int i = 0; i < n_old && held; i++) {
     if (!held[i]) continue;
     const cupid_int j = map[i];
@@ -1161,12 +1308,13 @@ static cupid_status convert_zone(growth_run *g, int k, double lambda, int *again
   if (!g->convert && n == 0) return CUPID_SUCCESS;
   g->convert = 0;
   CUPID_CALL(zone_frame(g, lambda));
-  unsigned char *held = NULL, *weak = NULL;
-  growth_release(g, &held, &weak);
+  unsigned char *held = NULL, *weak = NULL, *tie = NULL;
+  growth_release(g, &held, &weak, &tie);
   cupid_status st = cupid_problem_adaptive_convert(prob, k, lambda, NULL, 0, stop);
-  if (st == CUPID_SUCCESS) st = growth_rezone(g, lambda, held, weak);
+  if (st == CUPID_SUCCESS) st = growth_rezone(g, lambda, held, weak, tie);
   cupid_free(&held);
   cupid_free(&weak);
+  cupid_free(&tie);
   CUPID_CALL(st);
   *again = !*stop;
   return CUPID_SUCCESS;
@@ -1287,6 +1435,8 @@ cupid_status cupid_problem_run_growth(cupid_problem_state *prob) {
                                              : "factor";
   prob->growth.downdates = g.downdates;
   prob->growth.downdate_columns = g.downdate_columns;
+  prob->growth.held_rows = g.held_rows;
+  prob->growth.tied_nodes = g.tied, prob->growth.tie_stiffness = g.tie_k;
   prob->growth.downdate_s = g.t_downdate;
   prob->growth.factorisations = g.factorisations;
   prob->growth.cg_solves = g.cg_solves;

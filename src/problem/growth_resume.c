@@ -57,6 +57,8 @@ cupid_status growth_journal_factored(growth_run *g) {
   cupid_pd_operator_pack_broken(prob->op, 0, prob->n_pd, j->bits);
   memcpy(j->now, j->bits, sizeof *j->now * (size_t)j->words);
   memcpy(j->fixed, prob->bc->fixed, (size_t)prob->ndof);
+  for (cupid_int i = 0; g->tie && i < prob->n_pd; i++) /* K's springs, in the factor */
+    for (int c = 0; c < 3 && g->tie[i]; c++) j->fixed[3 * i + c] |= 2;
   memcpy(j->fixed_now, j->fixed, (size_t)prob->ndof);
   j->n_pairs = j->n_held = j->n_rounds = 0;
   return CUPID_SUCCESS;
@@ -80,7 +82,9 @@ cupid_status growth_journal_downdated(growth_run *g) {
   cupid_pd_operator_pack_broken(prob->op, 0, prob->n_pd, fresh);
   cupid_int changed = 0, held = 0;
   for (cupid_int k = 0; k < j->words; k++) changed += fresh[k] != j->now[k];
-  for (cupid_int d = 0; d < prob->ndof; d++) held += prob->bc->fixed[d] && !j->fixed_now[d];
+  for (cupid_int d = 0; d < prob->ndof; d++) held += prob->bc->fixed[d] && !(j->fixed_now[d] & 1);
+  for (cupid_int i = 0; g->tie && i < prob->n_pd; i++) /* the factor's new ties (state 1) */
+    held += 3 * (g->tie[i] == 1 && !(j->fixed_now[3 * i] & 2));
   cupid_status st = grow(&j->pairs, &j->cap_pairs, 2 * j->n_pairs, 2 * changed, sizeof *j->pairs);
   if (st == CUPID_SUCCESS) st = grow(&j->held, &j->cap_held, j->n_held, held, sizeof *j->held);
   if (st == CUPID_SUCCESS) st = grow(&j->ends, &j->cap_rounds, 2 * j->n_rounds, 2, sizeof *j->ends);
@@ -93,7 +97,9 @@ cupid_status growth_journal_downdated(growth_run *g) {
         j->now[k] = fresh[k];
       }
     for (cupid_int d = 0; d < prob->ndof; d++)
-      if (prob->bc->fixed[d] && !j->fixed_now[d]) j->held[j->n_held++] = d, j->fixed_now[d] = 1;
+      if (prob->bc->fixed[d] && !(j->fixed_now[d] & 1)) j->held[j->n_held++] = d, j->fixed_now[d] |= 1;
+    for (cupid_int d = 0; g->tie && d < 3 * prob->n_pd; d++)
+      if (g->tie[d / 3] == 1 && !(j->fixed_now[d] & 2)) j->held[j->n_held++] = -1 - d, j->fixed_now[d] |= 2;
     j->ends[2 * j->n_rounds] = j->n_pairs;
     j->ends[2 * j->n_rounds + 1] = j->n_held;
     j->n_rounds++;
@@ -114,7 +120,8 @@ typedef struct {
   cupid_int n_pairs, n_held, words;
   /* the LU of a non-symmetric coupling (growth_lu.c) */
   cupid_int lu_bonds_at_factor, lu_updates, lu_update_columns, lu_factorisations, lu_resolves;
-  cupid_int lu_iterations;
+  cupid_int lu_iterations, held_rows, tied;
+  double tie_k;
   double lu_factor_flops, lu_iteration_flops, lu_since_factor, lu_t_update, lu_t_factor;
   double lu_t_resolve;
   cupid_solve_info lu_factor_info;
@@ -150,7 +157,9 @@ static void fill_scalars(const growth_run *g, int k, growth_scalars *c) {
   *c = (growth_scalars){
       .step = k, .released = g->released, .bonds_at_factor = g->bonds_at_factor,
       .cg_since_factor = g->cg_since_factor, .downdates = g->downdates,
-      .downdate_columns = g->downdate_columns, .factorisations = g->factorisations,
+      .downdate_columns = g->downdate_columns, .held_rows = g->held_rows, .tied = g->tied,
+      .tie_k = g->tie_k,
+      .factorisations = g->factorisations,
       .cg_solves = g->cg_solves, .cg_iterations = g->cg_iterations,
       .solves = prob->growth.solves, .held_count = prob->growth.held_count,
       .mf_iterations = g->mf.iterations, .next_ratio = g->next_ratio,
@@ -214,6 +223,7 @@ static cupid_status write_growth(void *ctx, cupid_checkpoint_writer w) {
     CUPID_CALL(cupid_checkpoint_write(w, "released", g->release, np));
     CUPID_CALL(cupid_checkpoint_write(w, "weak", g->weak, np));
   }
+  if (g->tie) CUPID_CALL(cupid_checkpoint_write(w, "tied", g->tie, np));
   const growth_journal *j = &g->journal;
   if (c.has_factor) {
     CUPID_CHECK(j->bits, CUPID_ERR_INTERNAL, "growth: a factor without its journal");
@@ -291,7 +301,7 @@ static cupid_status replay_conditions(const growth_run *g, cupid_dirichlet *bc) 
   const growth_journal *j = &g->journal;
   CUPID_CALL(cupid_dirichlet_create(g->prob->ndof, bc));
   for (cupid_int d = 0; d < g->prob->ndof; d++)
-    if (j->fixed_now[d]) CUPID_CALL(cupid_dirichlet_fix(*bc, d, 0.0));
+    if (j->fixed_now[d] & 1) CUPID_CALL(cupid_dirichlet_fix(*bc, d, 0.0));
   return cupid_dirichlet_finalize(*bc);
 }
 
@@ -299,8 +309,30 @@ static cupid_status replay_conditions(const growth_run *g, cupid_dirichlet *bc) 
 static void replay_round(growth_journal *j, cupid_int r) {
   for (cupid_int at = r ? j->ends[2 * r - 2] : 0; at < j->ends[2 * r]; at++)
     j->now[(cupid_int)j->pairs[2 * at]] = j->pairs[2 * at + 1];
-  for (cupid_int at = r ? j->ends[2 * r - 1] : 0; at < j->ends[2 * r + 1]; at++)
-    j->fixed_now[j->held[at]] = 1;
+  for (cupid_int at = r ? j->ends[2 * r - 1] : 0; at < j->ends[2 * r + 1]; at++) {
+    const cupid_int d = j->held[at];
+    if (d >= 0) j->fixed_now[d] |= 1;
+    else j->fixed_now[-1 - d] |= 2 | 4; /* tied in this round */
+  }
+}
+
+/* The DOFs whose journal flags have @p bit: their springs (growth.c, tie_mechanisms) into K,
+ * and into F too where F is not NULL. */
+static cupid_status replay_ties(growth_run *g, unsigned char bit, cupid_csr_t *K, cupid_direct_factor F) {
+  const growth_journal *j = &g->journal;
+  cupid_int n = 0, *dofs = NULL;
+  for (cupid_int d = 0; d < g->prob->ndof; d++) n += (j->fixed_now[d] & bit) != 0;
+  if (n == 0) return CUPID_SUCCESS;
+  cupid_status st = CUPID_SUCCESS;
+  CUPID_TRY(cupid_malloc((size_t)n, sizeof *dofs, "tied DOFs", &dofs));
+  n = 0;
+  for (cupid_int d = 0; d < g->prob->ndof; d++)
+    if (j->fixed_now[d] & bit) dofs[n++] = d;
+  if (K) CUPID_TRY(growth_tie_matrix(K, n, dofs, g->tie_k));
+  if (F) CUPID_TRY(growth_tie_factor(F, n, dofs, g->tie_k));
+cleanup:
+  cupid_free(&dofs);
+  return st;
 }
 
 /* The factor as the run had it: the K of the journal's bonds factorised under its fixed DOFs,
@@ -319,6 +351,7 @@ static cupid_status replay_factor(growth_run *g) {
   prob->bc = bc;
   cupid_csr_destroy(&prob->K);
   CUPID_TRY(prob->method->assemble(prob));
+  CUPID_TRY(replay_ties(g, 2, prob->K, NULL));
   if (lu) {
     CUPID_TRY(cupid_growth_lu_factorise(prob, &g->lu));
   } else {
@@ -335,20 +368,26 @@ static cupid_status replay_factor(growth_run *g) {
     Kold = prob->K, prob->K = NULL;
     CUPID_TRY(break_as(prob, j->now));
     CUPID_TRY(prob->method->assemble(prob));
+    CUPID_TRY(replay_ties(g, 2, prob->K, NULL)); /* every tie so far, this round's too */
     const cupid_int updates = g->lu.updates;
     int ok = 1;
     if (lu) {
       CUPID_TRY(cupid_growth_lu_update(prob, &g->lu, Kold));
       ok = g->lu.updates == updates + 1 && cupid_growth_lu_has_factor(&g->lu);
     } else {
+      /* as growth.c's downdate_factor: the round's new ties into Kold; the held nodes, the
+       * ties, the bonds */
+      CUPID_TRY(replay_ties(g, 4, Kold, NULL));
       CUPID_TRY(cupid_growth_downdate_terms(Kold, prob->K, &g->dd, &ok));
-      cupid_int held = 0; /* the round's held nodes first, as growth.c's downdate_factor */
+      cupid_int held = 0;
       if (ok) CUPID_TRY(cupid_direct_factor_hold(g->F, bc, &held));
+      if (ok) CUPID_TRY(replay_ties(g, 4, NULL, g->F));
       if (ok)
         CUPID_TRY(cupid_direct_factor_downdate(g->F, g->dd.r, g->dd.colptr, g->dd.rows, g->dd.vals));
     }
     CUPID_TRY_CHECK(ok, CUPID_ERR_INTERNAL, "resume: round %lld of the factor's journal did not "
                     "replay as it ran", (long long)r);
+    for (cupid_int d = 0; d < prob->ndof; d++) j->fixed_now[d] &= (unsigned char)~4u;
     cupid_csr_destroy(&Kold);
   }
 cleanup:
@@ -388,9 +427,11 @@ static cupid_status read_growth(growth_run *g, const cupid_checkpoint ck, const 
     CUPID_CALL(cupid_checkpoint_read(ck, "released", g->release, np));
     CUPID_CALL(cupid_checkpoint_read(ck, "weak", g->weak, np));
   }
+  if (g->tie) CUPID_CALL(cupid_checkpoint_read(ck, "tied", g->tie, np));
   g->released = c->released, g->bonds_at_factor = c->bonds_at_factor;
   g->cg_since_factor = c->cg_since_factor, g->downdates = c->downdates;
   g->downdate_columns = c->downdate_columns, g->factorisations = c->factorisations;
+  g->held_rows = c->held_rows, g->tied = c->tied;
   g->cg_solves = c->cg_solves, g->cg_iterations = c->cg_iterations;
   prob->growth.solves = c->solves, prob->growth.held_count = c->held_count;
   g->mf.iterations = c->mf_iterations, g->next_ratio = c->next_ratio;
@@ -431,6 +472,7 @@ cupid_status growth_resume(growth_run *g) {
   }
   CUPID_CALL(cupid_problem_checkpoint_open(prob, "step", &ck)); /* restores no bonds yet ... */
   CUPID_TRY(cupid_checkpoint_read(ck, "growth", &c, sizeof c));
+  g->tie_k = c.tie_k; /* the replay's springs */
   if (c.has_factor) {
     CUPID_TRY(read_journal(g, ck, &c));
     CUPID_TRY(replay_factor(g));

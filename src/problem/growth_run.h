@@ -13,11 +13,12 @@ typedef struct {
   double *bits;         /* every node's words at the factorisation */
   double *now;          /* the words after the last round */
   double *fresh;        /* scratch: the words now, packed at each round */
-  unsigned char *fixed; /* bc->fixed at the factorisation */
-  unsigned char *fixed_now; /* ... after the last round */
+  unsigned char *fixed; /* per DOF at the factorisation: 1 fixed (bc->fixed), 2 tied (g->tie) */
+  unsigned char *fixed_now; /* ... after the last round (4: tied in the round replayed) */
   double *pairs;        /* (word index, word) of each round's changed words, in order */
   cupid_int n_pairs, cap_pairs;
-  cupid_int *held;      /* the DOFs each round found newly fixed (held nodes), in order */
+  cupid_int *held;      /* the DOFs each round found newly fixed (held nodes) or, as -1 - d,
+                           tied, in order */
   cupid_int n_held, cap_held;
   cupid_int *ends;      /* 2 per round: pairs and held DOFs at its end */
   cupid_int n_rounds, cap_rounds;
@@ -33,6 +34,11 @@ typedef struct {
   unsigned char *weak_scan;     /* a copy of release, scratch */
   unsigned char *weak;          /* per node: released as weakly held (at most 2 bonds, or all
                                    in one plane; held_forces) */
+  unsigned char *tie;           /* per node: tied by a weak spring (tie_mechanisms): 0 no, 1 in
+                                   K and in F, 2 in neither yet, 3 in K, not yet in F; NULL where
+                                   the run has no own factor (the engine finds mechanisms) */
+  double tie_k;                 /* the ties' spring stiffness (TIE_STIFFNESS of K's diagonal) */
+  cupid_int tied;               /* nodes tied */
   unsigned char *masks;         /* per constraint k: ndof flags, the DOFs it fixes */
   double *T;                    /* the unit translations, 3 ndof (cupid_problem_translations) */
   double *u1;                   /* without fracture: u and K u at load factor 1 */
@@ -59,6 +65,7 @@ typedef struct {
                                    the engine at once (solve) */
   cupid_growth_downdate dd;
   cupid_int downdates, downdate_columns;
+  cupid_int held_rows;           /* factor rows deleted for nodes held (cupid_direct_factor_hold) */
   double t_downdate;
   double *w[4];                 /* CG work vectors */
   cupid_int factorisations, cg_solves, cg_iterations;
@@ -85,6 +92,11 @@ typedef struct {
   double last_load;             /* the load factor of the last step written */
   cupid_checkpoint resume;      /* a resumption's checkpoint, open until the writers read it */
 } growth_run;
+
+/* growth.c: a weak spring of stiffness k on each DOF dofs[0 .. n) of K (its diagonal), and on
+ * the factor F (cupid_direct_factor_update; growth_resume.c replays ties with them) */
+cupid_status growth_tie_matrix(cupid_csr_t *K, cupid_int n, const cupid_int *dofs, double k);
+cupid_status growth_tie_factor(cupid_direct_factor F, cupid_int n, const cupid_int *dofs, double k);
 
 /* growth_resume.c */
 /** g->F was just factorised: the journal starts again from the operator and the conditions. */

@@ -227,6 +227,9 @@ typedef struct cupid_problem_private {
                                          downdate fields count them), "matrix-free",
                                          or "engine" (every solve by an iterative engine) */
     cupid_int solves, factorisations, cg_solves, cg_iterations, downdates, downdate_columns;
+    cupid_int held_rows; /* factor rows deleted for held nodes (no factorisation for them) */
+    cupid_int tied_nodes; /* nodes tied by a weak spring (growth.c, tie_mechanisms) */
+    double tie_stiffness; /* ... of this stiffness */
     double factor_s, cg_s, downdate_s;
     /* per constraint k, peak[6 k ..]: the largest reaction (by magnitude) of the sawtooth
      * envelope, its load factor, step, and x, y, z (growth.c, next_break) */

@@ -465,12 +465,14 @@ cupid_status cupid_direct_factor_hold(cupid_direct_factor F, const cupid_dirichl
   return CUPID_SUCCESS;
 }
 
-cupid_status cupid_direct_factor_downdate(cupid_direct_factor F, cupid_int r, const cupid_int *colptr,
-                                          const cupid_int *rows, const double *vals) {
+/* F += C_f C_f^T (update = 1) or F -= C_f C_f^T (0): cupid_direct_factor_update / _downdate. */
+static cupid_status updown(cupid_direct_factor F, int update, cupid_int r, const cupid_int *colptr,
+                           const cupid_int *rows, const double *vals) {
   CUPID_CHECK(F && (r == 0 || (colptr && rows && vals)), CUPID_ERR_ARGUMENT,
-              "cupid_direct_factor_downdate: NULL argument");
+              "cupid_direct_factor_%s: NULL argument", update ? "update" : "downdate");
   CUPID_CHECK(F->kind == CUPID_MATRIX_SPD, CUPID_ERR_ARGUMENT,
-              "cupid_direct_factor_downdate: only a Cholesky factor can be downdated");
+              "cupid_direct_factor_%s: only a Cholesky factor can be %sdated", update ? "update" : "downdate",
+              update ? "up" : "down");
   if (r == 0) return CUPID_SUCCESS;
   CUPID_CALL(row_map(F));
   cholmod_common *c = &F->cc;
@@ -491,10 +493,10 @@ cupid_status cupid_direct_factor_downdate(cupid_direct_factor F, cupid_int r, co
     sort_column(ci + cp[k], cx + cp[k], t - cp[k]);
   }
   cp[r] = t;
-  const int ok = cholmod_l_updown(0, C, F->L, c);
+  const int ok = cholmod_l_updown(update, C, F->L, c);
   cholmod_l_free_sparse(&C, c);
   CUPID_CHECK(ok && c->status >= CHOLMOD_OK, c->status == CHOLMOD_NOT_POSDEF ? CUPID_ERR_NUMERIC : CUPID_ERR_INTERNAL,
-              "CHOLMOD downdate failed (status %d)", c->status);
+              "CHOLMOD %s failed (status %d)", update ? "update" : "downdate", c->status);
   /* a downdate that removes all support of some DOF leaves a pivot of D at round-off, or
    * negative (which pivot_ratio's |d| would hide) */
   const SuiteSparse_long *perm = F->L->Perm, *lp = F->L->p;
@@ -509,6 +511,16 @@ cupid_status cupid_direct_factor_downdate(cupid_direct_factor F, cupid_int r, co
               "the downdated matrix is singular to round-off (pivot ratio %.3g at DOF %lld)", ratio,
               (long long)F->global[perm ? perm[kmin] : kmin]);
   return CUPID_SUCCESS;
+}
+
+cupid_status cupid_direct_factor_downdate(cupid_direct_factor F, cupid_int r, const cupid_int *colptr,
+                                          const cupid_int *rows, const double *vals) {
+  return updown(F, 0, r, colptr, rows, vals);
+}
+
+cupid_status cupid_direct_factor_update(cupid_direct_factor F, cupid_int r, const cupid_int *colptr,
+                                        const cupid_int *rows, const double *vals) {
+  return updown(F, 1, r, colptr, rows, vals);
 }
 
 void cupid_direct_factor_destroy(cupid_direct_factor *F) {

@@ -9,7 +9,7 @@
 # fracture with moving grips (PMB and LPS), the Arlequin beam with explicit fracture (and
 # model.exo), Newmark with Rayleigh damping, Newmark with a moving grip and a load in t, a
 # Lagrange tie, the plots; and crack growth over load steps (the factor rebuilt from its
-# journal: downdates, a held node; LPS; the Arlequin SENB with model.exo; the SENB with
+# journal: downdates, a held node, a tied one; LPS; the Arlequin SENB with model.exo; the SENB with
 # fictitious nodes by block elimination, balanced); adaptive PD zones in dynamics and in
 # growth, interrupted anywhere and at a conversion's step. And the refusals: a changed model or option (exit 1, naming the line that differs),
 # nothing to resume and no intact checkpoint (exit 3), a damaged checkpoint (its previous one is
@@ -185,6 +185,17 @@ EMPTY=("${P[@]}" --set analysis.dynamic.duration=2.0e-5 --set 'peridynamics.regi
 "$CUPID" run bar_adaptive.yaml -o ref_adaptive_empty -q "${EMPTY[@]}" || bad "adaptive_empty: the reference run failed"
 stop_at adaptive_empty 280 bar_adaptive.yaml "${EMPTY[@]}"
 stop_at adaptive_empty 320 bar_adaptive.yaml "${EMPTY[@]}"
+
+# a tie (growth.c, tie_mechanisms): the plate pulled twice as far is cut at step 9, whose last
+# ligament's node is tied by a weak spring in a downdated round; stopped there and after it, the
+# factor's journal replays the tie's rank-three update (the ties are the journal's DOFs -1 - d)
+TIE=("${GP[@]}" --set "constraints[1].displacement.value=[0, 0.04, 0]")
+"$CUPID" run growth.yaml -o ref_tie -q "${TIE[@]}" || bad "tie: the reference run failed"
+python3 -c "import json, sys; f = json.load(open('ref_tie/summary.json'))['fracture']; \
+sys.exit(not (f.get('tied_nodes') == 1 and f['solves']['factorisations'] == 1))" && ok ||
+  bad "tie: the reference run ties no node in a downdated round"
+stop_at tie 9 growth.yaml "${TIE[@]}"
+stop_at tie 12 growth.yaml "${TIE[@]}"
 
 # stopped at the last step (CUPID_TEST_INTERRUPT_STEP: a signal during that step, made
 # deterministic): the resumption takes no step, and its report still reads the conditions of

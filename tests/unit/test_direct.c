@@ -507,6 +507,87 @@ static void test_factor_downdate(void **state) {
 }
 
 /*
+ * cupid_direct_factor_update (crack growth ties a node that completes a mechanism by weak
+ * springs, src/problem/growth.c): the factor of A updated by bond terms and by springs of
+ * stiffness k on one node's DOFs (columns sqrt(k) e_d) solves K u = f, K = A + the terms + the
+ * springs, as a fresh factor of K would: to 1e-10 (test_factor_downdate's bound, for the same
+ * reasons). A spring of 1e-8 of the diagonal on a node whose every other term was downdated
+ * away (a mechanism) keeps the factor definite where the downdate alone is CUPID_ERR_NUMERIC.
+ */
+static void test_factor_update(void **state) {
+  (void)state;
+  const grid_spec g = {6, 5, 4, 3, B_SPD, 0.05, 0.0, 0};
+  cupid_csr A = grid_matrix(&g), K = grid_matrix(&g);
+  const cupid_int nn = (cupid_int)g.nx * g.ny * g.nz, n = 3 * nn;
+  enum { NB = 6 };
+  cupid_int colptr[NB + 4], rows[6 * NB + 3];
+  double vals[6 * NB + 3];
+  uint64_t seed = 11;
+  for (int b = 0; b < NB; b++) {
+    const int ix = b % 5, iy = (b * 2) % g.ny, iz = (b * 5) % g.nz;
+    add_bond(K, node_of(&g, ix, iy, iz), node_of(&g, ix + 1, iy, iz), b, &seed, colptr, rows, vals);
+  }
+  const cupid_int t = node_of(&g, 3, 2, 1); /* the tied node */
+  const double k = 0.37;
+  for (int c = 0; c < 3; c++) {
+    double *a = cupid_csr_find(K, t, t);
+    assert_non_null(a);
+    a[4 * c] += k;
+    colptr[NB + c] = 6 * NB + c, rows[6 * NB + c] = 3 * t + c, vals[6 * NB + c] = sqrt(k);
+  }
+  colptr[NB + 3] = 6 * NB + 3;
+  double *ue = malloc((size_t)n * sizeof *ue), *f = malloc((size_t)n * sizeof *f);
+  double *u = malloc((size_t)n * sizeof *u);
+  assert_non_null(ue), assert_non_null(f), assert_non_null(u);
+  for (cupid_int d = 0; d < n; d++) ue[d] = cupid_test_random(&seed);
+  cupid_dirichlet bc = face_bc(&g, ue, 0);
+  for (cupid_int d = 0; d < n; d++) ue[d] = bc->fixed[d] ? 0.0 : ue[d];
+  cupid_csr_matvec(K, ue, f);
+  cupid_direct_factor F = NULL;
+  CUPID_ASSERT_OK(cupid_direct_factor_create(A, bc, &F, NULL));
+  CUPID_ASSERT_OK(cupid_direct_factor_solve(F, f, u));
+  for (cupid_int d = 0; d < n; d++) u[d] = bc->fixed[d] ? 0.0 : u[d];
+  assert_true(rel_error(n, u, ue) > 1e-3); /* the terms matter */
+  CUPID_ASSERT_OK(cupid_direct_factor_update(F, NB + 3, colptr, rows, vals));
+  CUPID_ASSERT_OK(cupid_direct_factor_solve(F, f, u));
+  for (cupid_int d = 0; d < n; d++) u[d] = bc->fixed[d] ? 0.0 : u[d];
+  assert_true(rel_error(n, u, ue) < 1e-10);
+  cupid_direct_factor_destroy(&F);
+  /* a mechanism: diag(a) downdated by sqrt(a_0) e_0 is singular at DOF 0; a spring of 1e-8
+   * of the largest a there first keeps it definite (pivot ratio 1e-8, above the bound), and
+   * DOF 0 then moves as the spring alone lets it */
+  cupid_csr D = NULL;
+  enum { ND = 50 };
+  cupid_int di[ND], dj[ND];
+  double dv[ND];
+  for (int d = 0; d < ND; d++) di[d] = dj[d] = d, dv[d] = 2.0 + d;
+  CUPID_ASSERT_OK(cupid_csr_from_triplets(ND, ND, ND, di, dj, dv, &D));
+  cupid_dirichlet free_bc = NULL;
+  CUPID_ASSERT_OK(cupid_dirichlet_create(ND, &free_bc));
+  CUPID_ASSERT_OK(cupid_dirichlet_finalize(free_bc));
+  const cupid_int c01[2] = {0, 1}, r0[1] = {0};
+  const double all[1] = {sqrt(dv[0])}, spring[1] = {sqrt(1e-8 * dv[ND - 1])};
+  CUPID_ASSERT_OK(cupid_direct_factor_create(D, free_bc, &F, NULL));
+  assert_int_equal(cupid_direct_factor_downdate(F, 1, c01, r0, all), CUPID_ERR_NUMERIC);
+  cupid_error_clear();
+  cupid_direct_factor_destroy(&F);
+  CUPID_ASSERT_OK(cupid_direct_factor_create(D, free_bc, &F, NULL));
+  CUPID_ASSERT_OK(cupid_direct_factor_update(F, 1, c01, r0, spring));
+  CUPID_ASSERT_OK(cupid_direct_factor_downdate(F, 1, c01, r0, all));
+  double b[ND], x[ND];
+  for (int d = 0; d < ND; d++) b[d] = 1.0;
+  CUPID_ASSERT_OK(cupid_direct_factor_solve(F, b, x));
+  assert_true(fabs(x[0] * 1e-8 * dv[ND - 1] - 1.0) < 1e-6); /* the spring alone holds DOF 0 */
+  cupid_direct_factor_destroy(&F);
+  cupid_dirichlet_destroy(&free_bc);
+  cupid_csr_destroy(&D);
+  cupid_dirichlet_destroy(&bc);
+  cupid_csr_destroy(&A);
+  cupid_csr_destroy(&K);
+  free(ue), free(f), free(u);
+}
+
+/*
  * cupid_direct_factor_hold (crack growth holds a node that breaking left loose before it
  * downdates): the factor of K under conditions bc, with node h's DOFs held and then downdated
  * by bond terms (some touching h, whose entries there are dropped), solves A_ff u = f of the
@@ -815,6 +896,7 @@ int main(void) {
                                      cmocka_unit_test(test_random_spd),
                                      cmocka_unit_test(test_factor_downdate),
                                      cmocka_unit_test(test_factor_hold),
+                                     cmocka_unit_test(test_factor_update),
                                      cmocka_unit_test(test_all_fixed_and_empty),
                                      cmocka_unit_test(test_bad_arguments),
                                      cmocka_unit_test(test_reactions),

@@ -657,6 +657,104 @@ static void test_support(void **state) {
   destroy(&w);
 }
 
+/* ---- Mechanisms of a few nodes (cupid_pd_operator_mechanisms) ----
+ * A cube 6 x 6 x 6, spacing 1, horizon 1.5 (axis and face-diagonal bonds: a rigid lattice).
+ * Nodes A (2.5, 2.5, 2.5) and B (3.5, 2.5, 2.5) keep only the bond A-B, A's bonds along +y and
+ * +z and B's along -y and -z: each is held in every direction by its own bonds, its neighbours
+ * fixed (cupid_pd_operator_weakly_held passes them), but together they translate along x
+ * freely (6 DOFs, 5 bonds): cupid_pd_operator_mechanisms marks the one that moved least (|u|;
+ * crack growth ties it), then the other is held by its bonds. C (2.5, 2.5, 4.5) keeps three
+ * bonds along +x, +y and -z
+ * to the body: rigid, not held. */
+static void keep_only(body *w, const double *x, const double at[3], const double (*keep)[3], int nkeep,
+                      double *words) {
+  const int nw = cupid_pd_operator_broken_words(w->op);
+  cupid_int i = 0;
+  while (i < w->n && !(x[3 * i] == at[0] && x[3 * i + 1] == at[1] && x[3 * i + 2] == at[2])) i++;
+  assert_true(i < w->n);
+  const struct cupid_pd_operator_private *op = w->op;
+  const int half = op->st.n / 2;
+  const pd_family F = pd_family_of(op, i);
+  for (int q = 0; q < F.n; q++) {
+    const int s = pd_family_entry(&F, q);
+    const cupid_int j = pd_family_node(op, &F, s);
+    int kept = 0;
+    for (int k = 0; k < nkeep; k++)
+      kept |= x[3 * j] == keep[k][0] && x[3 * j + 1] == keep[k][1] && x[3 * j + 2] == keep[k][2];
+    if (kept) continue;
+    if (s >= half) { /* the packed words hold each bond at the end whose entry is in the upper half */
+      words[(size_t)i * nw + ((s - half) >> 5)] += (double)((uint32_t)1 << ((s - half) & 31));
+      continue;
+    }
+    const pd_family G = pd_family_of(op, j);
+    for (int r = 0; r < G.n; r++) {
+      const int t = pd_family_entry(&G, r);
+      if (t >= half && pd_family_node(op, &G, t) == i) {
+        const size_t at_w = (size_t)j * nw + ((t - half) >> 5);
+        const uint32_t bit = (uint32_t)1 << ((t - half) & 31), have = (uint32_t)words[at_w];
+        if (!(have & bit)) words[at_w] = (double)(have | bit);
+      }
+    }
+  }
+}
+
+static void test_mechanism(void **state) {
+  (void)state;
+  body w = {0};
+  const cupid_box box = {.lo = {0, 0, 0}, .hi = {6, 6, 6}, .has = {1, 1, 1}};
+  cupid_pd_grid_options go = {.spacing = 1.0, .dimension = 3};
+  int m = 0;
+  CUPID_ASSERT_OK(cupid_pd_grid_create(&go, 1, &box, &m, &w.grid));
+  cupid_pd_operator_options oo = {.horizon = 1.5, .model = CUPID_PD_BOND,
+                                  .influence = CUPID_INFLUENCE_CONSTANT,
+                                  .partial_volume = CUPID_PARTIAL_NONE, .materials = mats,
+                                  .n_materials = 1};
+  CUPID_ASSERT_OK(cupid_pd_operator_create(w.grid, &oo, &w.op));
+  w.n = cupid_pd_grid_num_nodes(w.grid);
+  const double *x = cupid_pd_grid_coords(w.grid);
+  const int nw = cupid_pd_operator_broken_words(w.op);
+  double *words = calloc((size_t)w.n * nw + 1, sizeof *words), *u = calloc(3 * (size_t)w.n, sizeof *u);
+  unsigned char *release = calloc((size_t)w.n, 1);
+  const double A[3] = {2.5, 2.5, 2.5}, B[3] = {3.5, 2.5, 2.5}, C[3] = {2.5, 2.5, 4.5};
+  const double keepA[3][3] = {{3.5, 2.5, 2.5}, {2.5, 3.5, 2.5}, {2.5, 2.5, 3.5}};
+  const double keepB[3][3] = {{2.5, 2.5, 2.5}, {3.5, 1.5, 2.5}, {3.5, 2.5, 1.5}};
+  const double keepC[3][3] = {{3.5, 2.5, 4.5}, {2.5, 3.5, 4.5}, {2.5, 2.5, 3.5}};
+  keep_only(&w, x, A, keepA, 3, words);
+  keep_only(&w, x, B, keepB, 3, words);
+  keep_only(&w, x, C, keepC, 3, words);
+  cupid_pd_fracture_options fo = {.criterion = CUPID_PD_BREAK_STRETCH, .critical_stretch = 1.0};
+  cupid_int added = 0;
+  double dissipated = 0.0;
+  CUPID_ASSERT_OK(cupid_pd_operator_unpack_broken(w.op, 0, w.n, words, u, &fo, &added, &dissipated));
+  assert_int_equal(added, 3 * (18 - 3)); /* A-B kept by both */
+  cupid_int count = -1;
+  CUPID_ASSERT_OK(cupid_pd_operator_weakly_held(w.op, 0, w.n, release, &count));
+  assert_int_equal(count, 0); /* each held by its own bonds */
+  cupid_int iA = -1, iB = -1;
+  for (cupid_int i = 0; i < w.n; i++) {
+    if (x[3 * i] == A[0] && x[3 * i + 1] == A[1] && x[3 * i + 2] == A[2]) iA = i;
+    if (x[3 * i] == B[0] && x[3 * i + 1] == B[1] && x[3 * i + 2] == B[2]) iB = i;
+  }
+  /* the node held is the one of the pair that moved least: B, then A */
+  for (int round = 0; round < 2; round++) {
+    memset(release, 0, (size_t)w.n);
+    for (cupid_int k = 0; k < 3 * w.n; k++) u[k] = 0.0;
+    u[3 * iA] = round ? 1.0 : 2.0, u[3 * iB] = round ? 2.0 : 1.0;
+    CUPID_ASSERT_OK(cupid_pd_operator_mechanisms(w.op, 0, w.n, u, release, &count));
+    assert_int_equal(count, 1);
+    for (cupid_int i = 0; i < w.n; i++) assert_int_equal(release[i], i == (round ? iA : iB) ? 2 : 0);
+    release[round ? iA : iB] = 1; /* the other is held by its bonds now */
+    CUPID_ASSERT_OK(cupid_pd_operator_mechanisms(w.op, 0, w.n, u, release, &count));
+    assert_int_equal(count, 0);
+  }
+  memset(release, 0, (size_t)w.n); /* without u: the node order (A before B), B held */
+  CUPID_ASSERT_OK(cupid_pd_operator_mechanisms(w.op, 0, w.n, NULL, release, &count));
+  assert_int_equal(count, 1);
+  assert_int_equal(release[iA < iB ? iB : iA], 2);
+  free(words), free(u), free(release);
+  destroy(&w);
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_precrack_count),     cmocka_unit_test(test_cracked_operator),
@@ -664,7 +762,7 @@ int main(void) {
       cmocka_unit_test(test_stretch_threshold),  cmocka_unit_test(test_protect_damage_energy),
       cmocka_unit_test(test_threads),            cmocka_unit_test(test_isolated_node),
       cmocka_unit_test(test_copy_broken),        cmocka_unit_test(test_scan_paths),
-      cmocka_unit_test(test_support),            cmocka_unit_test(test_protected_ratios),
+      cmocka_unit_test(test_support),            cmocka_unit_test(test_mechanism),            cmocka_unit_test(test_protected_ratios),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }
