@@ -48,6 +48,8 @@ typedef struct {
   int cut_through;              /* the crack has cut the load path (carries_load) */
   int loaded;                   /* the model applies a load (not prescribed values alone) */
   int substep;                  /* sub-steps to each break's load (load_step) */
+  int refactor_share;           /* a round of more than n / this broken bonds refactorises
+                                   (DOWNDATE_MAX_SHARE; 0: never, CUPID_GROWTH_DOWNDATE_ALL) */
   double t_line;                /* when the last step's progress line was printed */
   cupid_writer csv;             /* damage.csv or load_steps.csv (io.h's CSV writer) */
   cupid_writer exodus;          /* model.exo: a time step per load step (output.exodus) */

@@ -187,6 +187,36 @@ assert [r["step"] for r in rows] == ["1"], "a row past the collapse"
 assert abs(s["reaction_sum"][1] + s["applied_load_sum"][1]) > 0.5 * s["applied_load_sum"][1], s
 assert s["fracture"]["stopped_step"] == 2 and "collapsed" in s["fracture"]["stopped"]
 PY
+# ... and its nodes held while a downdated factor is live: CUPID_GROWTH_DOWNDATE_ALL=1 downdates
+# every round (the default refactorises the rounds of more than n / 50 bonds, which are all the
+# ones that hold nodes here), so the held nodes leave the factor by row deletion
+# (cupid_direct_factor_hold) before the bonds are downdated. The same bonds, the same collapse
+# at the same step with the same held nodes, the held share and every held node's force to
+# 1e-9 of the load (round-off of the factor's history; measured 1e-14), in fewer
+# factorisations (4 against 13).
+CUPID_GROWTH_DOWNDATE_ALL=1 "$CUPID" run "$SRC/tests/models/growth/pulled_apart.yaml" -o apart_dd --quiet \
+  --set output.pd_nodes=true 2>/dev/null; rc=$?
+"$CUPID" run "$SRC/tests/models/growth/pulled_apart.yaml" -o apart_pd --quiet --set output.pd_nodes=true 2>/dev/null
+[ $rc -eq 2 ] && ok || bad "a plate pulled apart, every round downdated: exit $rc"
+"$PY" - apart_pd apart_dd <<'PY' && ok || bad "held rows deleted from a live factor"
+import csv, json, sys
+a, b = (json.load(open(d + "/summary.json")) for d in sys.argv[1:3])
+fa, fb = a["fracture"], b["fracture"]
+print("held in a live factor: %d rows deleted, %d factorisations against %d; held share %.15f / %.15f"
+      % (fb["solves"]["held_rows"], fb["solves"]["factorisations"], fa["solves"]["factorisations"],
+         fa["collapse"]["held_share"], fb["collapse"]["held_share"]))
+assert fa["solves"]["held_rows"] == 0 and fb["solves"]["held_rows"] > 0, (fa["solves"], fb["solves"])
+assert fb["solves"]["factorisations"] < fa["solves"]["factorisations"]
+assert fa["broken_bonds"] == fb["broken_bonds"] and fa["held_nodes"] == fb["held_nodes"]
+assert fa["collapse"]["step"] == fb["collapse"]["step"]
+assert abs(fa["collapse"]["held_share"] - fb["collapse"]["held_share"]) < 1e-9
+P = abs(a["applied_load_sum"][1])
+for k in range(3):
+    assert abs(a["held_reaction_sum"][k] - b["held_reaction_sum"][k]) < 1e-9 * P, k
+na = list(csv.DictReader(open(sys.argv[1] + "/pd_nodes.csv")))
+nb = list(csv.DictReader(open(sys.argv[2] + "/pd_nodes.csv")))
+assert [r["damage"] for r in na] == [r["damage"] for r in nb], "other bonds broke"
+PY
 # the same on an Arlequin bar (examples/notched_bar, static): its PD piece breaks through under
 # the end traction. Before, the loose end swung round (u_y < 0 under a +y pull) into the far
 # overlap and the run blamed the overlap ("crack growth stopped ... of the Arlequin overlap").
