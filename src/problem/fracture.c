@@ -434,6 +434,7 @@ void cupid_problem_fracture_json(cupid_json js, const cupid_problem_state *prob)
     if (prob->growth.tied_nodes) { /* growth.c, tie_mechanisms */
       cupid_json_integer(js, "tied_nodes", prob->growth.tied_nodes);
       cupid_json_number(js, "tie_stiffness", prob->growth.tie_stiffness);
+      cupid_json_number(js, "tie_share", prob->growth.tie_share);
     }
     if (prob->growth.collapse_step) { /* growth.c, check_collapse */
       cupid_json_begin_object(js, "collapse");

@@ -225,6 +225,13 @@ static void add_reaction(const growth_run *g, const unsigned char *fixed, size_t
  * 37) went on after its crack cut the section, reloaded through its weakly held nodes to 0.35
  * of the forces, and its peak envelope read 141.7 N against the 124.2 N it carried. */
 #define WEAK_COLLAPSE_SHARE 0.1
+/* A tied node's spring (tie_mechanisms) pulls it to its reference position with k |u|, k 1e-8
+ * of K's largest diagonal entry: following the body, a tie carries 1e-8 of a stiff node's force
+ * at that displacement (on the notched C-beam, whose beam DOFs are stiffer than its PD nodes,
+ * some 4e-8 of the forces on the body a tie); a mechanism that takes load along its mode puts
+ * that load on its spring. Ties whose springs carry more than 1e-4 of the forces on the body are
+ * a collapse: thousands of ties that only follow it stay below. */
+#define TIE_COLLAPSE_SHARE 1e-4
 
 /* The share of the forces on the body that the held nodes carry: H / (H + S), H the sum over
  * held nodes of |f_int - f_ext| at the node, S the applied load's magnitude |P| plus the
@@ -243,7 +250,7 @@ static void add_reaction(const growth_run *g, const unsigned char *fixed, size_t
 static void held_forces(growth_run *g) {
   cupid_problem_state *prob = g->prob;
   const size_t n = (size_t)prob->ndof;
-  double sums[5] = {0.0, 0.0, 0.0, 0.0, 0.0}; /* the held vector sum, H, and |P|'s parts */
+  double sums[6] = {0.0, 0.0, 0.0, 0.0, 0.0, 0.0}; /* the held vector sum, H (held, weak, tied) */
   double load[3] = {0.0, 0.0, 0.0};
   cupid_int a = 0, b = prob->n_pd;
   if (prob->slab) a = prob->part.owned_first, b = prob->part.owned_last;
@@ -258,7 +265,7 @@ static void held_forces(growth_run *g) {
     if (!g->tie[i] || g->release[i]) continue;
     const double *u = prob->u + 3 * i;
     for (int c = 0; c < 3; c++) sums[c] += g->tie_k * u[c];
-    sums[3] += g->tie_k * sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]);
+    sums[5] += g->tie_k * sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]);
   }
   for (size_t d = prob->slab ? 3 * (size_t)a : 0; d < (prob->slab ? 3 * (size_t)b : n); d++)
     for (int c = 0; c < 3; c++) load[c] += prob->f_ext[d] * g->T[(size_t)c * n + d];
@@ -281,6 +288,7 @@ static void held_forces(growth_run *g) {
   memcpy(prob->growth.held_reaction, sums, 3 * sizeof *sums);
   g->held_share = sums[3] > 0.0 ? sums[3] / (sums[3] + S) : 0.0;
   g->weak_share = sums[4] > 0.0 ? sums[4] / (sums[4] + S) : 0.0;
+  g->tie_share = sums[5] > 0.0 ? sums[5] / (sums[5] + S) : 0.0;
 }
 
 static void reactions(growth_run *g) {
@@ -986,14 +994,17 @@ static cupid_status check_collapse(growth_run *g, int k, double lambda, int with
   cupid_problem_state *prob = g->prob;
   const int weak = g->weak_share > g->held_share &&
                    (with_weak || g->weak_share > WEAK_COLLAPSE_SHARE);
-  const double share = weak ? g->weak_share : g->held_share;
+  double share = weak ? g->weak_share : g->held_share;
+  const int tied = g->tie_share > TIE_COLLAPSE_SHARE && g->tie_share > share;
   *stop = 0;
-  if (share <= COLLAPSE_SHARE) return CUPID_SUCCESS;
+  if (tied) share = g->tie_share;
+  else if (share <= COLLAPSE_SHARE) return CUPID_SUCCESS;
   prob->growth.collapse_step = k;
   prob->growth.collapse_load = lambda;
   prob->growth.collapse_share = share;
-  prob->growth.collapse_cause = "held nodes carry load";
-  prob->growth.collapse_held = g->released;
+  prob->growth.collapse_cause = tied ? "tied nodes carry load" : "held nodes carry load";
+  const cupid_int n = tied ? g->tied : g->released; /* the nodes that carry it */
+  prob->growth.collapse_held = n;
   const double *h = prob->growth.held_reaction;
   /* Driven by prescribed displacements alone, a body cut through has an equilibrium: no
    * reaction. Its held nodes carry the grips' pull where a node left singular is still bonded
@@ -1002,14 +1013,14 @@ static cupid_status check_collapse(growth_run *g, int k, double lambda, int with
   const int grips = !g->loaded;
   if (grips) prob->growth.collapse_cause = "held nodes carry the grips' pull";
   snprintf(prob->growth.stopped, sizeof prob->growth.stopped,
-           "%s at load step %d (load factor %.6g)%s, and the %lld node%s held where breaking "
+           "%s at load step %d (load factor %.6g)%s, and the %lld node%s %s where breaking "
            "left %s loose%s carr%s %.3g of the forces on the body (a sum of (%.4g, %.4g, %.4g); "
            "more than %.0e is a support the model does not have)%s",
            grips ? "the crack cut the body" : "the body collapsed", k, lambda,
-           grips ? "" : ": the crack cut the load path", (long long)g->released,
-           g->released == 1 ? "" : "s", g->released == 1 ? "it" : "them",
-           grips ? " or singular" : "", g->released == 1 ? "ies" : "y", share, h[0], h[1], h[2],
-           COLLAPSE_SHARE,
+           grips ? "" : ": the crack cut the load path", (long long)n, n == 1 ? "" : "s",
+           tied ? "tied by weak springs" : "held", n == 1 ? "it" : "them",
+           tied ? "" : grips ? " or singular" : "", n == 1 ? "ies" : "y", share, h[0], h[1], h[2],
+           tied ? TIE_COLLAPSE_SHARE : COLLAPSE_SHARE,
            grips ? ": past this step the reactions would be the holding's, not the body's. "
                    "Results up to the last step written; the fields written are this solve's"
                  : ". The load is more than what is left of the body can carry: results past "
@@ -1159,7 +1170,14 @@ static cupid_status load_step(growth_run *g, int k, double lambda, int *iteratio
       }
     }
     CUPID_CALL(check_blocked(g, k, mu, stop));
-    if (g->convert) return CUPID_SUCCESS; /* an adaptive zone grows first (convert_zone) */
+    if (g->convert) { /* an adaptive zone grows first (convert_zone), unless the crack has cut
+                         the load path: a loose part whose held nodes carry load swung into the
+                         overlap, and the zone would grow after it, as a fixed zone's stop there
+                         is a collapse (below) */
+      CUPID_CALL(check_collapse(g, k, mu, 0, stop));
+      if (*stop) g->convert = 0;
+      return CUPID_SUCCESS;
+    }
     if (*stop) { /* a loose part swung round into a coupling zone: a collapse, if held nodes
                     carry it (an Arlequin bar cut through under an end traction: weakly held
                     nodes among them, the pivots it swung round) */
@@ -1441,6 +1459,7 @@ cupid_status cupid_problem_run_growth(cupid_problem_state *prob) {
   prob->growth.downdate_columns = g.downdate_columns;
   prob->growth.held_rows = g.held_rows;
   prob->growth.tied_nodes = g.tied, prob->growth.tie_stiffness = g.tie_k;
+  prob->growth.tie_share = g.tie_share;
   prob->growth.downdate_s = g.t_downdate;
   prob->growth.factorisations = g.factorisations;
   prob->growth.cg_solves = g.cg_solves;

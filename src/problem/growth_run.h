@@ -79,6 +79,7 @@ typedef struct {
   double *react;                /* 3 per constraint: the reactions of the last solution */
   double held_share;            /* the held nodes' share of the forces on the body (collapse) */
   double weak_share;            /* the weakly held nodes' share (held_forces) */
+  double tie_share;             /* the tied nodes' springs' share (held_forces) */
   double force_scale;           /* the largest |P| + sum |R_k| of the run (held_forces) */
   double *points;               /* 3 per output point */
   double *row;                  /* a row of the steps' file (write_row) */

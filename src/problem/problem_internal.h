@@ -230,6 +230,7 @@ typedef struct cupid_problem_private {
     cupid_int held_rows; /* factor rows deleted for held nodes (no factorisation for them) */
     cupid_int tied_nodes; /* nodes tied by a weak spring (growth.c, tie_mechanisms) */
     double tie_stiffness; /* ... of this stiffness */
+    double tie_share;     /* their springs' share of the forces on the body, at the end */
     double factor_s, cg_s, downdate_s;
     /* per constraint k, peak[6 k ..]: the largest reaction (by magnitude) of the sawtooth
      * envelope, its load factor, step, and x, y, z (growth.c, next_break) */

@@ -226,6 +226,15 @@ sed -e '/^analysis:/,/^output:/{/^output:/!d}' -e 's/^output:/analysis: {type: s
 out=$("$CUPID" run bar_static.yaml -o bar --quiet 2>&1); rc=$?
 [ $rc -eq 2 ] && grep -q "the body collapsed at load step 7" <<<"$out" && ! grep -q "Arlequin overlap" <<<"$out" \
   && ok || bad "an Arlequin bar pulled apart: exit $rc: $out"
+# ... and with an adaptive zone (issue 37), which may grow on [20, 80]: the loose end swung into
+# the overlap is the same collapse at the same load, not a conversion (before: the zone grew by
+# an element after it, and the collapse came at load factor 0.7 instead of 0.603147)
+out2=$("$CUPID" run bar_static.yaml -o bar_adaptive --quiet \
+  --set 'peridynamics.adaptive={threshold: 0.9, within: {y: [20, 80]}}' 2>&1); rc=$?
+lf=$(grep -o "the body collapsed at load step 7 (load factor [0-9.]*)" <<<"$out")
+[ $rc -eq 2 ] && [ -n "$lf" ] && grep -qF "$lf" <<<"$out2" && "$PY" -c "import json, sys; \
+a = json.load(open('bar_adaptive/summary.json'))['adaptive']; sys.exit(bool(a['conversions']))" \
+  && ok || bad "an adaptive Arlequin bar pulled apart: exit $rc: $out2"
 
 # ... and the load at which a growth stops at a coupling zone does not hang on the step count
 # either: the same bar intact at 100 MPa, whose overlap's bonds reach their limit before any
