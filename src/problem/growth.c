@@ -227,8 +227,9 @@ static void add_reaction(const growth_run *g, const unsigned char *fixed, size_t
 #define WEAK_COLLAPSE_SHARE 0.1
 /* A tied node's spring (tie_mechanisms) pulls it to its reference position with k |u|, k 1e-8
  * of K's largest diagonal entry: following the body, a tie carries 1e-8 of a stiff node's force
- * at that displacement (on the notched C-beam, whose beam DOFs are stiffer than its PD nodes,
- * some 4e-8 of the forces on the body a tie); a mechanism that takes load along its mode puts
+ * at that displacement (4e-17 of the forces on the plate of verification.fracture_growth; an
+ * estimate for the notched C-beam, whose beam DOFs are stiffer than its PD nodes: some 4e-8 of
+ * the forces on the body a tie); a mechanism that takes load along its mode puts
  * that load on its spring. Ties whose springs carry more than 1e-4 of the forces on the body are
  * a collapse: thousands of ties that only follow it stay below. */
 #define TIE_COLLAPSE_SHARE 1e-4
