@@ -225,6 +225,12 @@ cupid_status cupid_direct_factor_downdate(cupid_direct_factor F, cupid_int r, co
 cupid_status cupid_direct_factor_update(cupid_direct_factor F, cupid_int r, const cupid_int *colptr,
                                         const cupid_int *rows, const double *vals);
 
+/** The DOF (global numbering) whose pivot the last cupid_direct_factor_update() or _downdate()
+ *  of @p F left non-positive or below the pivot bound, where it returned CUPID_ERR_NUMERIC; -1
+ *  after one that passed. Crack growth ties that DOF's node before it factorises again
+ *  (growth.c): the downdate names the node a factorisation would break down at. */
+cupid_int cupid_direct_factor_failed_dof(const cupid_direct_factor F);
+
 /**
  * Hold DOFs in an SPD factor: the rows of the DOFs that @p bc fixes and the factor still solves
  * for are deleted (CHOLMOD's cholmod_rowdel: their row and column become the identity's), so

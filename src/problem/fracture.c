@@ -433,6 +433,7 @@ void cupid_problem_fracture_json(cupid_json js, const cupid_problem_state *prob)
     }
     if (prob->growth.tied_nodes) { /* growth.c, tie_mechanisms */
       cupid_json_integer(js, "tied_nodes", prob->growth.tied_nodes);
+      cupid_json_integer(js, "tied_singular", prob->growth.tied_singular);
       cupid_json_number(js, "tie_stiffness", prob->growth.tie_stiffness);
       cupid_json_number(js, "tie_share", prob->growth.tie_share);
     }
@@ -454,6 +455,7 @@ void cupid_problem_fracture_json(cupid_json js, const cupid_problem_state *prob)
       cupid_json_string(js, "resolve", prob->growth.resolve);
       cupid_json_integer(js, "solves", prob->growth.solves);
       cupid_json_integer(js, "factorisations", prob->growth.factorisations);
+      cupid_json_integer(js, "failed_factorisations", prob->growth.failed_factorisations);
       cupid_json_integer(js, "cg_solves", prob->growth.cg_solves);
       cupid_json_integer(js, "cg_iterations", prob->growth.cg_iterations);
       cupid_json_number(js, "factorisation_s", prob->growth.factor_s);

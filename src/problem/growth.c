@@ -33,6 +33,7 @@ static void free_layout(growth_run *g) {
   cupid_free(&g->masks);
   cupid_free(&g->T);
   for (int k = 0; k < 4; k++) cupid_free(&g->w[k]);
+  cupid_free(&g->u_before);
   cupid_direct_factor_destroy(&g->F);
   cupid_growth_downdate_free(&g->dd);
   growth_journal_free(&g->journal);
@@ -592,6 +593,59 @@ static int loose_node(const growth_run *g, cupid_int dof) {
   return prob->grid && dof >= 0 && dof < 3 * prob->n_pd && !g->release[dof / 3];
 }
 
+/* A DOF that a failed downdate or factorisation of the run's own factor names (its pivot
+ * vanished): its node completes a mechanism that the cluster check did not test (the notched
+ * C-beam's flanges leave such nodes in damaged bands of hundreds of nodes, beyond
+ * the cluster check's MECH_CLUSTER_MAX of 48, src/pd/fracture.c), tied as tie_mechanisms ties (state 2: K takes its spring at once,
+ * tie_assembled; the factor at its next factorisation). The downdate that names it saves the
+ * engine's factorisation that would have broken down to name it again: one factorisation a
+ * node instead of two. *tied = 0 where it is no PD node of such a run, or one held or tied
+ * already (the engine's breakdown then names a node to hold, hold_singular_node). */
+static cupid_status tie_singular(growth_run *g, cupid_int dof, int *tied) {
+  cupid_problem_state *prob = g->prob;
+  *tied = g->tie && loose_node(g, dof) && !g->tie[dof / 3];
+  if (!*tied) return CUPID_SUCCESS;
+  const cupid_int i = dof / 3;
+  g->tie[i] = 2;
+  g->tied++;
+  g->tied_singular++;
+  cupid_error_clear();
+  const double *x = cupid_pd_grid_coords(prob->grid) + 3 * i;
+  const int quiet = prob->quiet; /* a re-solve is quiet (load_step); this is news */
+  prob->quiet = g->quiet;
+  cupid_problem_progress(prob, "growth: step %d: node (%g, %g, %g) left singular: tied by a weak "
+                         "spring", g->step, x[0], x[1], x[2]);
+  prob->quiet = quiet;
+  return tie_assembled(g, 0);
+}
+
+/* The solve just made put load on ties (g->tie_share above TIE_COLLAPSE_SHARE): the mode a
+ * spring fixes is loaded, and the solve moved it by that load over 1e-8 of K. A tie whose spring
+ * carries more than its part of that bound (TIE_COLLAPSE_SHARE of the forces over the ties) is
+ * held where the last solve before this one left it, as a node left singular was held before
+ * ties (hold_singular_node), and the solve is dropped (u as it was): a held node that carries
+ * load is a collapse at the settled step (check_collapse), as it was. *held = 0 where none is
+ * (the ties' share is then spread over many: check_collapse stops at this solve). */
+static cupid_status hold_loaded_ties(growth_run *g, int step, int *held) {
+  cupid_problem_state *prob = g->prob;
+  const double bound = TIE_COLLAPSE_SHARE * g->force_scale / (double)(g->tied > 0 ? g->tied : 1);
+  *held = 0;
+  for (cupid_int i = 0; i < prob->n_pd; i++) {
+    if (!g->tie[i] || g->release[i]) continue;
+    const double *u = prob->u + 3 * i;
+    if (g->tie_k * sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]) <= bound) continue;
+    g->release[i] = 1;
+    g->released++;
+    (*held)++;
+    for (int c = 0; c < 3; c++) CUPID_CALL(cupid_dirichlet_fix(prob->bc, 3 * i + c, g->u_before[3 * i + c]));
+  }
+  if (*held == 0) return CUPID_SUCCESS;
+  memcpy(prob->u, g->u_before, (size_t)prob->ndof * sizeof *prob->u);
+  cupid_problem_progress(prob, "growth: step %d: %d tied node%s took load (a loaded mechanism): "
+                         "held", step, *held, *held == 1 ? "" : "s");
+  return cupid_dirichlet_finalize(prob->bc);
+}
+
 /* A factorisation that broke down at a PD node after bonds broke: that node lost its support
  * in a way the checks of cupid_pd_operator_unsupported() miss (a mechanism of several nodes):
  * it is held too. The matrix-free path has no factorisation: CG on a mechanism diverges or
@@ -690,6 +744,7 @@ static cupid_status factor_solve(growth_run *g) {
   memset(&info, 0, sizeof info);
   cupid_status st = cupid_direct_factor_create(prob->K, bc, &g->F, &info);
   prob->solve = info;
+  if (st == CUPID_ERR_NUMERIC) g->failed_factorisations++, g->t_factor += cupid_wtime() - t0;
   if (st != CUPID_SUCCESS) return st;
   g->factorisations++;
   g->bonds_at_factor = prob->broken_bonds;
@@ -810,10 +865,15 @@ static cupid_status downdate_tied(growth_run *g, cupid_csr_t *Kold, const cupid_
       if (g->tie[i] == 3) g->tie[i] = 1;
   if (st == CUPID_SUCCESS)
     st = cupid_direct_factor_downdate(g->F, g->dd.r, g->dd.colptr, g->dd.rows, g->dd.vals);
-  if (st == CUPID_ERR_NUMERIC) {
+  if (st == CUPID_ERR_NUMERIC) { /* the node it names tied, and a new factor (solve); else the
+                                    engine's breakdown names one to hold */
+    const cupid_int dof = cupid_direct_factor_failed_dof(g->F);
+    int named = 0;
     cupid_error_clear();
     cupid_direct_factor_destroy(&g->F);
-    g->singular = 1;
+    if (g->name_by_downdate) CUPID_CALL(tie_singular(g, dof, &named));
+    else named = g->tie != NULL; /* the factorisation names it (solve) */
+    g->singular = !named;
   } else {
     CUPID_CALL(st);
     g->bonds_at_factor = prob->broken_bonds;
@@ -903,7 +963,12 @@ static cupid_status solve(growth_run *g, int reassemble) {
   g->singular = 0;
   if (own && !done && !singular) {
     cupid_status st = factor_solve(g);
-    /* a singular K: the engine's solve again, for its message naming the node */
+    /* a singular K: the node it names tied and K factorised again (one factorisation a node
+     * of a mechanism); else the engine's solve again, for its message naming a node to hold */
+    for (int tied = 1; st == CUPID_ERR_NUMERIC && tied;) {
+      CUPID_CALL(tie_singular(g, prob->solve.failed_dof, &tied));
+      if (tied) st = factor_solve(g);
+    }
     if (st == CUPID_ERR_NUMERIC) cupid_error_clear();
     else CUPID_CALL(st);
     if (st == CUPID_SUCCESS) CUPID_CALL(cg_solve(g, &done)); /* checked, refined if need be */
@@ -1012,7 +1077,8 @@ static cupid_status check_collapse(growth_run *g, int k, double lambda, int with
    * to a part the grips move (0.08 of the forces on examples/geometry/plate_hole_crack.yaml
    * at spacing 1.5): past here the reactions would be the holding's, not the body's. */
   const int grips = !g->loaded;
-  if (grips) prob->growth.collapse_cause = "held nodes carry the grips' pull";
+  if (grips)
+    prob->growth.collapse_cause = tied ? "tied nodes carry the grips' pull" : "held nodes carry the grips' pull";
   snprintf(prob->growth.stopped, sizeof prob->growth.stopped,
            "%s at load step %d (load factor %.6g)%s, and the %lld node%s %s where breaking "
            "left %s loose%s carr%s %.3g of the forces on the body (a sum of (%.4g, %.4g, %.4g); "
@@ -1129,12 +1195,14 @@ static cupid_status load_step(growth_run *g, int k, double lambda, int *iteratio
   int scaled = 0;     /* the solution is the last solve's scaled to mu: no solve needed */
   int runaways = 0;   /* nodes held where the matrix-free solve ran away, this step */
   *iterations = 0;
+  g->step = k, g->quiet = prob->quiet;
   if (g->F && g->bonds_at_factor != prob->broken_bonds) cupid_direct_factor_destroy(&g->F);
   if (cupid_growth_lu_has_factor(&g->lu) && g->lu.bonds_at_factor != prob->broken_bonds) cupid_growth_lu_renew(&g->lu);
   for (;;) {
     const int quiet = prob->quiet; /* the first solve reports its assembly; the others would
                                       repeat it per broken bond */
     if (k > 1 || *iterations > 0) prob->quiet = 1;
+    if (g->u_before && !scaled) memcpy(g->u_before, prob->u, (size_t)prob->ndof * sizeof *prob->u);
     cupid_status st = scaled ? CUPID_SUCCESS : solve(g, reassemble);
     prob->quiet = quiet;
     if (st == CUPID_ERR_NUMERIC && prob->broken_bonds > 0) { /* what breaking left loose */
@@ -1152,6 +1220,18 @@ static cupid_status load_step(growth_run *g, int k, double lambda, int *iteratio
     scaled = 0;
     if (!fracture) return CUPID_SUCCESS;
     reactions(g);
+    if (g->tie_share > TIE_COLLAPSE_SHARE) { /* a tie took load: held, and solved again; or a
+                                                collapse at this solve, before any bond breaks
+                                                on it */
+      int held = 0;
+      CUPID_CALL(hold_loaded_ties(g, k, &held));
+      if (held) {
+        reassemble = 1;
+        continue;
+      }
+      CUPID_CALL(check_collapse(g, k, mu, 0, stop));
+      if (*stop) return CUPID_SUCCESS;
+    }
     double r = 0.0; /* the largest ratio of this solution's breakable bonds */
     CUPID_CALL(cupid_problem_max_ratio(prob, prob->u, &r));
     if (prob->first_break_step < 0) { /* the exact load of the first break, by scaling */
@@ -1259,6 +1339,7 @@ static cupid_status setup_layout(growth_run *g) {
   CUPID_CALL(constraint_masks(g));
   for (int k = 0; k < 4; k++)
     CUPID_CALL(cupid_calloc(n + 1, sizeof(double), "growth work vectors", &g->w[k]));
+  if (g->tie) CUPID_CALL(cupid_calloc(n + 1, sizeof(double), "growth work vectors", &g->u_before));
   return CUPID_SUCCESS;
 }
 
@@ -1357,6 +1438,10 @@ static cupid_status setup_run(growth_run *g) {
    * compares it with the default on a plate pulled apart, whose rounds hold nodes) */
   const char *all = getenv("CUPID_GROWTH_DOWNDATE_ALL");
   g->refactor_share = all && strcmp(all, "1") == 0 ? 0 : DOWNDATE_MAX_SHARE;
+  /* ... and CUPID_GROWTH_NAME_BY_FACTOR=1 has the factorisation after a failed downdate name
+   * the node to tie, as a run that refactorised that round would (the same nodes in both) */
+  const char *by_factor = getenv("CUPID_GROWTH_NAME_BY_FACTOR");
+  g->name_by_downdate = !(by_factor && strcmp(by_factor, "1") == 0);
   const char *sub = getenv("CUPID_GROWTH_SUBSTEP");
   g->substep = !(sub && strcmp(sub, "0") == 0);
   return CUPID_SUCCESS;
@@ -1460,6 +1545,8 @@ cupid_status cupid_problem_run_growth(cupid_problem_state *prob) {
   prob->growth.downdate_columns = g.downdate_columns;
   prob->growth.held_rows = g.held_rows;
   prob->growth.tied_nodes = g.tied, prob->growth.tie_stiffness = g.tie_k;
+  prob->growth.tied_singular = g.tied_singular;
+  prob->growth.failed_factorisations = g.failed_factorisations;
   prob->growth.tie_share = g.tie_share;
   prob->growth.downdate_s = g.t_downdate;
   prob->growth.factorisations = g.factorisations;

@@ -120,7 +120,7 @@ typedef struct {
   cupid_int n_pairs, n_held, words;
   /* the LU of a non-symmetric coupling (growth_lu.c) */
   cupid_int lu_bonds_at_factor, lu_updates, lu_update_columns, lu_factorisations, lu_resolves;
-  cupid_int lu_iterations, held_rows, tied;
+  cupid_int lu_iterations, held_rows, tied, tied_singular, failed_factorisations;
   double tie_k, tie_share;
   double lu_factor_flops, lu_iteration_flops, lu_since_factor, lu_t_update, lu_t_factor;
   double lu_t_resolve;
@@ -158,6 +158,7 @@ static void fill_scalars(const growth_run *g, int k, growth_scalars *c) {
       .step = k, .released = g->released, .bonds_at_factor = g->bonds_at_factor,
       .cg_since_factor = g->cg_since_factor, .downdates = g->downdates,
       .downdate_columns = g->downdate_columns, .held_rows = g->held_rows, .tied = g->tied,
+      .tied_singular = g->tied_singular, .failed_factorisations = g->failed_factorisations,
       .tie_k = g->tie_k, .tie_share = g->tie_share,
       .factorisations = g->factorisations,
       .cg_solves = g->cg_solves, .cg_iterations = g->cg_iterations,
@@ -432,6 +433,7 @@ static cupid_status read_growth(growth_run *g, const cupid_checkpoint ck, const 
   g->cg_since_factor = c->cg_since_factor, g->downdates = c->downdates;
   g->downdate_columns = c->downdate_columns, g->factorisations = c->factorisations;
   g->held_rows = c->held_rows, g->tied = c->tied, g->tie_share = c->tie_share;
+  g->tied_singular = c->tied_singular, g->failed_factorisations = c->failed_factorisations;
   g->cg_solves = c->cg_solves, g->cg_iterations = c->cg_iterations;
   prob->growth.solves = c->solves, prob->growth.held_count = c->held_count;
   g->mf.iterations = c->mf_iterations, g->next_ratio = c->next_ratio;

@@ -39,6 +39,12 @@ typedef struct {
                                    the run has no own factor (the engine finds mechanisms) */
   double tie_k;                 /* the ties' spring stiffness (TIE_STIFFNESS of K's diagonal) */
   cupid_int tied;               /* nodes tied */
+  cupid_int tied_singular;      /* of them, named by a failed downdate or factorisation
+                                   (tie_singular) */
+  int step;                     /* the load step being solved (its messages) ... */
+  int quiet;                    /* ... and the run's quiet flag (a re-solve is quiet) */
+  double *u_before;             /* u before the last solve (ndof; with ties): where a tie that
+                                   took load is held (hold_loaded_ties) */
   unsigned char *masks;         /* per constraint k: ndof flags, the DOFs it fixes */
   double *T;                    /* the unit translations, 3 ndof (cupid_problem_translations) */
   double *u1;                   /* without fracture: u and K u at load factor 1 */
@@ -48,6 +54,9 @@ typedef struct {
   int cut_through;              /* the crack has cut the load path (carries_load) */
   int loaded;                   /* the model applies a load (not prescribed values alone) */
   int substep;                  /* sub-steps to each break's load (load_step) */
+  int name_by_downdate;         /* a failed downdate names the node to tie (tie_singular); 0:
+                                   the factorisation after it does (CUPID_GROWTH_NAME_BY_FACTOR,
+                                   tests) */
   int refactor_share;           /* a round of more than n / this broken bonds refactorises
                                    (DOWNDATE_MAX_SHARE; 0: never, CUPID_GROWTH_DOWNDATE_ALL) */
   double t_line;                /* when the last step's progress line was printed */
@@ -71,6 +80,8 @@ typedef struct {
   double t_downdate;
   double *w[4];                 /* CG work vectors */
   cupid_int factorisations, cg_solves, cg_iterations;
+  cupid_int failed_factorisations; /* that broke down (a mechanism): each costs one, their time
+                                     in t_factor */
   cupid_int bonds_at_factor;    /* broken bonds when F was made */
   double factor_flops;          /* the last factorisation's operations, and those of one */
   double cg_iteration_flops;    /* CG iteration with its factor (two triangular solves, K x) */

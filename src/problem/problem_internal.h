@@ -229,6 +229,8 @@ typedef struct cupid_problem_private {
     cupid_int solves, factorisations, cg_solves, cg_iterations, downdates, downdate_columns;
     cupid_int held_rows; /* factor rows deleted for held nodes (no factorisation for them) */
     cupid_int tied_nodes; /* nodes tied by a weak spring (growth.c, tie_mechanisms) */
+    cupid_int tied_singular; /* of them, named by a failed downdate or factorisation */
+    cupid_int failed_factorisations; /* the run's own that broke down (growth.c) */
     double tie_stiffness; /* ... of this stiffness */
     double tie_share;     /* their springs' share of the forces on the body, at the end */
     double factor_s, cg_s, downdate_s;

@@ -33,6 +33,8 @@ struct cupid_direct_factor_private {
   cupid_int *pivot_of;  /* downdates: global DOF -> its row in the permuted factor, -1 fixed */
   unsigned char *held;  /* per row of the permuted factor: deleted by cupid_direct_factor_hold
                            (the identity's row), or NULL while none is */
+  cupid_int failed_dof; /* the DOF whose pivot the last update or downdate left non-positive or
+                           below the bound, -1 if none (cupid_direct_factor_failed_dof) */
 };
 
 /* The rows of K_ff in compressed form, in free numbering (free DOFs are numbered in increasing
@@ -296,6 +298,7 @@ cupid_status cupid_direct_factor_create_kind(const cupid_csr_t *K, cupid_matrix_
     info->failed_dof = -1;
   }
   CUPID_TRY(cupid_calloc(1, sizeof *F, "factorisation", &F));
+  F->failed_dof = -1;
   F->kind = kind;
   F->n_full = n_full;
   F->n = bc ? bc->n_free : n_full;
@@ -495,21 +498,26 @@ static cupid_status updown(cupid_direct_factor F, int update, cupid_int r, const
   cp[r] = t;
   const int ok = cholmod_l_updown(update, C, F->L, c);
   cholmod_l_free_sparse(&C, c);
+  F->failed_dof = -1;
   CUPID_CHECK(ok && c->status >= CHOLMOD_OK, c->status == CHOLMOD_NOT_POSDEF ? CUPID_ERR_NUMERIC : CUPID_ERR_INTERNAL,
               "CHOLMOD %s failed (status %d)", update ? "update" : "downdate", c->status);
   /* a downdate that removes all support of some DOF leaves a pivot of D at round-off, or
    * negative (which pivot_ratio's |d| would hide) */
   const SuiteSparse_long *perm = F->L->Perm, *lp = F->L->p;
   const double *lx = F->L->x;
-  for (cupid_int k = 0; k < F->n && !F->L->is_ll; k++)
-    CUPID_CHECK(lx[lp[k]] > 0.0 || (F->held && F->held[k]), CUPID_ERR_NUMERIC,
-                "the downdated matrix is not positive definite (pivot %.3g at DOF %lld)", lx[lp[k]],
-                (long long)F->global[perm ? perm[k] : k]);
+  for (cupid_int k = 0; k < F->n && !F->L->is_ll; k++) {
+    if (lx[lp[k]] > 0.0 || (F->held && F->held[k])) continue;
+    F->failed_dof = F->global[perm ? perm[k] : k];
+    return CUPID_ERROR(CUPID_ERR_NUMERIC, "the downdated matrix is not positive definite (pivot "
+                       "%.3g at DOF %lld)", lx[lp[k]], (long long)F->failed_dof);
+  }
   cupid_int kmin;
   const double ratio = pivot_ratio(F->L, F->held, &kmin);
-  CUPID_CHECK(ratio >= CUPID_DIRECT_PIVOT_TOL * (double)(F->n > 64 ? F->n : 64), CUPID_ERR_NUMERIC,
-              "the downdated matrix is singular to round-off (pivot ratio %.3g at DOF %lld)", ratio,
-              (long long)F->global[perm ? perm[kmin] : kmin]);
+  if (ratio < CUPID_DIRECT_PIVOT_TOL * (double)(F->n > 64 ? F->n : 64)) {
+    F->failed_dof = F->global[perm ? perm[kmin] : kmin];
+    return CUPID_ERROR(CUPID_ERR_NUMERIC, "the downdated matrix is singular to round-off (pivot "
+                       "ratio %.3g at DOF %lld)", ratio, (long long)F->failed_dof);
+  }
   return CUPID_SUCCESS;
 }
 
@@ -522,6 +530,8 @@ cupid_status cupid_direct_factor_update(cupid_direct_factor F, cupid_int r, cons
                                         const cupid_int *rows, const double *vals) {
   return updown(F, 1, r, colptr, rows, vals);
 }
+
+cupid_int cupid_direct_factor_failed_dof(const cupid_direct_factor F) { return F ? F->failed_dof : -1; }
 
 void cupid_direct_factor_destroy(cupid_direct_factor *F) {
   if (!F || !*F) return;

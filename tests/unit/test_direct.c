@@ -568,12 +568,24 @@ static void test_factor_update(void **state) {
   const cupid_int c01[2] = {0, 1}, r0[1] = {0};
   const double all[1] = {sqrt(dv[0])}, spring[1] = {sqrt(1e-8 * dv[ND - 1])};
   CUPID_ASSERT_OK(cupid_direct_factor_create(D, free_bc, &F, NULL));
+  assert_int_equal(cupid_direct_factor_failed_dof(F), -1);
   assert_int_equal(cupid_direct_factor_downdate(F, 1, c01, r0, all), CUPID_ERR_NUMERIC);
+  assert_int_equal(cupid_direct_factor_failed_dof(F), 0); /* the DOF growth.c ties */
+  cupid_error_clear();
+  cupid_direct_factor_destroy(&F);
+  /* ... as any DOF whose support a downdate removes: DOF 17, named, wherever the ordering
+   * put it */
+  const cupid_int r17[1] = {17};
+  const double all17[1] = {sqrt(dv[17])};
+  CUPID_ASSERT_OK(cupid_direct_factor_create(D, free_bc, &F, NULL));
+  assert_int_equal(cupid_direct_factor_downdate(F, 1, c01, r17, all17), CUPID_ERR_NUMERIC);
+  assert_int_equal(cupid_direct_factor_failed_dof(F), 17);
   cupid_error_clear();
   cupid_direct_factor_destroy(&F);
   CUPID_ASSERT_OK(cupid_direct_factor_create(D, free_bc, &F, NULL));
   CUPID_ASSERT_OK(cupid_direct_factor_update(F, 1, c01, r0, spring));
   CUPID_ASSERT_OK(cupid_direct_factor_downdate(F, 1, c01, r0, all));
+  assert_int_equal(cupid_direct_factor_failed_dof(F), -1);
   double b[ND], x[ND];
   for (int d = 0; d < ND; d++) b[d] = 1.0;
   CUPID_ASSERT_OK(cupid_direct_factor_solve(F, b, x));

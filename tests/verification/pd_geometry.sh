@@ -81,10 +81,12 @@ PY
 msg=$(same geohole analytic 2>&1); [ -z "$msg" ] && ok || bad "plate with a geometry hole: $msg"
 
 # ---- cracks from the hole (examples/geometry/plate_hole_crack.yaml, displacement-driven) at
-# spacing 1.5: the cracks run through both ligaments at step 5, where four nodes left singular
-# are held while bonded to the pulled top; the run stops there (exit 2) saying the reactions
-# past it would be the holding's (before: "the body collapsed ... the load is more than what is
-# left can carry", of a model without load), with steps 1 to 4 written
+# spacing 1.5: the cracks run through both ligaments at step 5, where nodes at the cracks' ends
+# are left singular (a failed downdate or factorisation names them) and tied by weak springs
+# (growth.c, tie_singular): they follow the body and carry round-off, so the run goes on as at
+# spacing 1, the plate carrying nothing from there (before the ties they were held where they
+# were while bonded to the pulled top, carried 0.08 of the forces, and the run stopped at step
+# 5 with exit 2)
 "$CUPID" run "$E/plate_hole_crack.yaml" -o crack -q --set peridynamics.spacing=1.5 \
   --set peridynamics.horizon=4.5225 --set output.vtu=false --set output.plots=false >out.txt 2>&1; rc=$?
 msg=$(python3 - <<'PY' 2>&1
@@ -93,13 +95,17 @@ s = json.load(open("crack/summary.json"))
 f = s["fracture"]
 rows = list(csv.DictReader(open("crack/damage.csv")))
 err = []
-if f.get("collapse", {}).get("cause") != "held nodes carry the grips' pull": err.append("cause %s" % f.get("collapse"))
-if [r["step"] for r in rows] != ["1", "2", "3", "4"]: err.append("rows %s" % [r["step"] for r in rows])
+if "collapse" in f or "stopped" in f: err.append("stopped: %s" % f.get("stopped"))
+if [r["step"] for r in rows] != [str(k) for k in range(1, 13)]: err.append("rows %s" % [r["step"] for r in rows])
 if not (f["first_break_step"] == 4 and f["peak_reactions"][0]["reaction"][1] > 400): err.append("first break / peak %s" % f["peak_reactions"][0])
+if not (f.get("tied_singular", 0) >= 1 and f["tie_share"] < 1e-6): err.append("ties %s" % {k: f.get(k) for k in ("tied_nodes", "tied_singular", "tie_share")})
+peak = f["peak_reactions"][0]["reaction"][1]
+after = [abs(float(r["reaction_0_y"])) for r in rows[4:]]
+if max(after) > 1e-6 * peak: err.append("the grip after the cut: %g N of %g" % (max(after), peak))
 print("; ".join(err))
 PY
 )
-if [ $rc -eq 2 ] && grep -q "the crack cut the body at load step 5" out.txt && [ -z "$msg" ]; then ok
+if [ $rc -eq 0 ] && [ -z "$msg" ]; then ok
 else bad "cracks from the hole: exit $rc, $msg: $(cat out.txt)"; fi
 
 # ---- refusals
