@@ -2,12 +2,13 @@
 """The single-edge-notched beam's horizon study: peak load against ASTM E399, PD-only and coupled.
 
     /usr/bin/python3 examples/fracture/senb_study.py [--h 5/3 1.25 1 5/6]
-        [--models pd coupled fictitious] [--cupid build/cupid] [--out out/fracture/study]
+        [--models pd coupled fictitious corrected] [--cupid build/cupid] [--out out/fracture/study]
         [--threads N] [--reuse]
 
 Runs examples/fracture/senb_pd.yaml (all PD) and senb_coupled.yaml (CUF beam + PD around the
 notch, Arlequin; `fictitious`: the same beam coupled by fictitious nodes, paper 000, with the
-default balance) at each grid spacing h with m = 3 (horizon 3.015 h), and writes into OUT:
+default balance; `corrected`: the Arlequin beam with peridynamics.surface_correction: energy,
+issue 38) at each grid spacing h with m = 3 (horizon 3.015 h), and writes into OUT:
   study.csv, study.md       per run: h, delta, nodes, the peak load P (constraint 0's reaction on
                             the sawtooth envelope, summary.json fracture.peak_reactions), the
                             load of the first break, P against E399, bonds broken, seconds;
@@ -32,10 +33,13 @@ from fractions import Fraction
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(os.path.dirname(HERE))
-MODELS = {"pd": "senb_pd.yaml", "coupled": "senb_coupled.yaml", "fictitious": "senb_coupled.yaml"}
-EXTRA = {"fictitious": ["--set", "coupling={method: fictitious}"]}
-LABEL = {"pd": "PD only", "coupled": "CUF + PD (Arlequin)", "fictitious": "CUF + PD (fictitious nodes)"}
-STYLE = {"pd": (7, 1), "coupled": (5, 2), "fictitious": (9, 4)}  # gnuplot point type, dash type
+MODELS = {"pd": "senb_pd.yaml", "coupled": "senb_coupled.yaml", "fictitious": "senb_coupled.yaml",
+          "corrected": "senb_coupled.yaml"}
+EXTRA = {"fictitious": ["--set", "coupling={method: fictitious}"],
+         "corrected": ["--set", "peridynamics.surface_correction=energy"]}
+LABEL = {"pd": "PD only", "coupled": "CUF + PD (Arlequin)", "fictitious": "CUF + PD (fictitious nodes)",
+         "corrected": "CUF + PD (Arlequin), surface-corrected"}
+STYLE = {"pd": (7, 1), "coupled": (5, 2), "fictitious": (9, 4), "corrected": (11, 1)}  # point, dash
 W, S, B, A, E, NU, G0 = 20.0, 80.0, 5.0, 10.0, 22350.0, 0.25, 0.01006
 M_RATIO = 3.015
 WARP = 30  # the side views' displacement scale
@@ -139,7 +143,7 @@ plot "%s" u 1:2:3 w p pt 5 ps %.2f lc palette notitle
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--h", nargs="+", default=["5/3", "1.25", "1", "5/6"])
-    ap.add_argument("--models", nargs="+", choices=sorted(MODELS), default=["pd", "coupled", "fictitious"])
+    ap.add_argument("--models", nargs="+", choices=sorted(MODELS), default=["pd", "coupled", "fictitious", "corrected"])
     ap.add_argument("--cupid", default=os.path.join(ROOT, "build", "cupid"))
     ap.add_argument("--out", default=os.path.join(ROOT, "out", "fracture", "study"))
     ap.add_argument("--threads", type=int, default=0)

@@ -32,9 +32,13 @@ void pd_fracture_free(struct cupid_pd_operator_private *op) {
 
 static cupid_status fracture_init(struct cupid_pd_operator_private *op) {
   if (op->bslot) return CUPID_SUCCESS;
-  CUPID_CHECK(op->surface == CUPID_SURFACE_NONE, CUPID_ERR_UNSUPPORTED,
-              "pre-cracks and bond breaking need surface_correction: none (the correction's "
-              "factors are fitted to the intact families)");
+  /* Bond-based: a bond's pair coefficient carries its surface factor (G_ij + G_ji) / 2, and a
+   * broken bond takes it out with its term. LPS: a broken bond's dilatation weight would leave
+   * the corrected self-weight (gself, rebuilt with the D factors) by its raw wxn (bgsum), and
+   * m is summed again over the intact family, against which the factors were not fitted. */
+  CUPID_CHECK(op->surface == CUPID_SURFACE_NONE || op->model == CUPID_PD_BOND, CUPID_ERR_UNSUPPORTED,
+              "pre-cracks and bond breaking with surface_correction: energy need model: bond (LPS: "
+              "the corrected dilatation is not kept as bonds break)");
   CUPID_CALL(cupid_malloc((size_t)op->nnodes, sizeof *op->bslot, "PD broken-bond slots", &op->bslot));
   for (cupid_int i = 0; i < op->nnodes; i++) op->bslot[i] = -1;
   op->bwords = (op->st.n + 63) / 64;

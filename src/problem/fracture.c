@@ -21,10 +21,11 @@ cupid_status cupid_problem_fracture_check(const cupid_problem_state *prob) {
   if (!cupid_problem_has_damage(prob)) return CUPID_SUCCESS;
   const cupid_fracture *fr = &m->pd.fracture;
   const cupid_mark *mk = fr->has_fracture ? &fr->mark : &m->pd.precracks[0].mark;
-  if (m->pd.surface_correction != CUPID_SURFACE_NONE)
+  if (m->pd.surface_correction != CUPID_SURFACE_NONE && m->pd.model != CUPID_PD_BOND)
     return cupid_model_error(m, mk,
-                             "pre-cracks and fracture need peridynamics.surface_correction: none "
-                             "(the correction's factors are fitted to the intact families)");
+                             "pre-cracks and fracture with peridynamics.surface_correction: energy "
+                             "need model: bond (LPS: the corrected dilatation is not kept as bonds "
+                             "break); or surface_correction: none");
   if (!(prob->method->caps & CUPID_METHOD_FRACTURE))
     return cupid_model_error(m, mk,
                              "pre-cracks and fracture are not supported with coupling method %s "

@@ -23,18 +23,25 @@ typedef struct {
   cupid_int n;
 } body;
 
-static body make(int n_boxes, const cupid_box *boxes, cupid_pd_model_kind model,
-                 cupid_partial_volume pv, double horizon) {
+/* ... with the surface correction @p surface */
+static body make_corrected(int n_boxes, const cupid_box *boxes, cupid_pd_model_kind model,
+                           cupid_partial_volume pv, double horizon, cupid_surface_correction surface) {
   body b = {0};
   cupid_pd_grid_options go = {.spacing = 1.0, .dimension = 3};
   int m[4] = {0, 1, 0, 1};
   CUPID_ASSERT_OK(cupid_pd_grid_create(&go, n_boxes, boxes, m, &b.grid));
   cupid_pd_operator_options oo = {.horizon = horizon, .model = model,
                                   .influence = CUPID_INFLUENCE_GAUSSIAN, .partial_volume = pv,
-                                  .materials = mats, .n_materials = 2};
+                                  .surface_correction = surface, .materials = mats,
+                                  .n_materials = 2};
   CUPID_ASSERT_OK(cupid_pd_operator_create(b.grid, &oo, &b.op));
   b.n = cupid_pd_grid_num_nodes(b.grid);
   return b;
+}
+
+static body make(int n_boxes, const cupid_box *boxes, cupid_pd_model_kind model,
+                 cupid_partial_volume pv, double horizon) {
+  return make_corrected(n_boxes, boxes, model, pv, horizon, CUPID_SURFACE_NONE);
 }
 
 static void destroy(body *b) {
@@ -125,8 +132,8 @@ static void crack_body(body *b, double s0) {
 
 /* Stencil path with masks = bond lists = assembled K = energy form = diagonal. */
 static void check_cracked(int n_boxes, const cupid_box *boxes, cupid_pd_model_kind model,
-                          cupid_partial_volume pv, int isa) {
-  body b = make(n_boxes, boxes, model, pv, 3.0);
+                          cupid_partial_volume pv, int isa, cupid_surface_correction surface) {
+  body b = make_corrected(n_boxes, boxes, model, pv, 3.0, surface);
   crack_body(&b, 0.3);
   const cupid_int n = b.n;
   double *u = malloc(3 * (size_t)n * sizeof *u), *f = malloc(3 * (size_t)n * sizeof *f);
@@ -160,9 +167,11 @@ static void check_cracked(int n_boxes, const cupid_box *boxes, cupid_pd_model_ki
   const cupid_int a = n / 4, e = n / 4 + n / 3;
   CUPID_ASSERT_OK(cupid_pd_operator_apply_range(b.op, a, e, u, g));
   for (cupid_int i = 0; i < 3 * (e - a); i++) ASSERT_NEAR(g[i], f[3 * a + i], 1e-12 * fm);
-  b.op->stencil_off = 0;
-  CUPID_ASSERT_OK(cupid_pd_operator_apply_range(b.op, a, e, u, g));
-  for (cupid_int i = 0; i < 3 * (e - a); i++) ASSERT_NEAR(g[i], f[3 * a + i], 1e-12 * fm);
+  if (surface == CUPID_SURFACE_NONE) { /* a corrected operator runs on its bond lists alone */
+    b.op->stencil_off = 0;
+    CUPID_ASSERT_OK(cupid_pd_operator_apply_range(b.op, a, e, u, g));
+    for (cupid_int i = 0; i < 3 * (e - a); i++) ASSERT_NEAR(g[i], f[3 * a + i], 1e-12 * fm);
+  }
   /* still no force from a rigid motion */
   for (cupid_int i = 0; i < n; i++) u[3 * i] = 2.0, u[3 * i + 1] = -1.0, u[3 * i + 2] = 0.5;
   CUPID_ASSERT_OK(cupid_pd_operator_apply(b.op, u, f));
@@ -180,9 +189,28 @@ static void test_cracked_operator(void **state) {
   const cupid_box sparse[2] = {box3(0, 9, 0, 8, 0, 5), box3(40, 46, 30, 36, 0, 5)};
   for (int model = 0; model < 2; model++)
     for (int isa = 1; isa <= 4; isa += (isa == 1 ? 2 : 1)) {
-      check_cracked(1, &box, (cupid_pd_model_kind)model, CUPID_PARTIAL_PDLAMMPS, isa);
-      check_cracked(2, sparse, (cupid_pd_model_kind)model, CUPID_PARTIAL_NONE, isa);
+      check_cracked(1, &box, (cupid_pd_model_kind)model, CUPID_PARTIAL_PDLAMMPS, isa, CUPID_SURFACE_NONE);
+      check_cracked(2, sparse, (cupid_pd_model_kind)model, CUPID_PARTIAL_NONE, isa, CUPID_SURFACE_NONE);
     }
+  /* bond-based with the surface correction (issue 38; its operator runs on bond lists): each
+   * pair coefficient carries its factor, and a broken bond leaves with it in the apply, K, the
+   * energy and the diagonal */
+  check_cracked(1, &box, CUPID_PD_BOND, CUPID_PARTIAL_PDLAMMPS, 1, CUPID_SURFACE_ENERGY);
+  check_cracked(2, sparse, CUPID_PD_BOND, CUPID_PARTIAL_NONE, 1, CUPID_SURFACE_ENERGY);
+}
+
+/* LPS with the surface correction: breaking refused with the reason (its corrected dilatation
+ * is not kept as bonds break), on the pre-crack as on a break */
+static void test_corrected_lps_refused(void **state) {
+  (void)state;
+  const cupid_box box = box3(0, 9, 0, 8, 0, 5);
+  body b = make_corrected(1, &box, CUPID_PD_LPS, CUPID_PARTIAL_PDLAMMPS, 3.0, CUPID_SURFACE_ENERGY);
+  cupid_pd_precrack c = {.normal = 1, .at = 4.0, .lo = {0, 0, -1}, .hi = {3, 0, 9}};
+  cupid_int removed = 0;
+  assert_int_equal(cupid_pd_operator_precrack(b.op, &c, &removed), CUPID_ERR_UNSUPPORTED);
+  assert_non_null(strstr(cupid_error_message(), "need model: bond"));
+  cupid_error_clear();
+  destroy(&b);
 }
 
 /* A body deep enough for the LPS first pass's uniform-b stretches (pd_run ub0, ub1: a node
@@ -758,7 +786,7 @@ static void test_mechanism(void **state) {
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_precrack_count),     cmocka_unit_test(test_cracked_operator),
-      cmocka_unit_test(test_cracked_uniform),
+      cmocka_unit_test(test_cracked_uniform),    cmocka_unit_test(test_corrected_lps_refused),
       cmocka_unit_test(test_stretch_threshold),  cmocka_unit_test(test_protect_damage_energy),
       cmocka_unit_test(test_threads),            cmocka_unit_test(test_isolated_node),
       cmocka_unit_test(test_copy_broken),        cmocka_unit_test(test_scan_paths),
