@@ -595,11 +595,11 @@ static int loose_node(const growth_run *g, cupid_int dof) {
 
 /* A DOF that a failed downdate or factorisation of the run's own factor names (its pivot
  * vanished): its node completes a mechanism that the cluster check did not test (the notched
- * C-beam's flanges leave such nodes in damaged bands of hundreds of nodes, beyond
- * the cluster check's MECH_CLUSTER_MAX of 48, src/pd/fracture.c), tied as tie_mechanisms ties (state 2: K takes its spring at once,
- * tie_assembled; the factor at its next factorisation). The downdate that names it saves the
- * engine's factorisation that would have broken down to name it again: one factorisation a
- * node instead of two. *tied = 0 where it is no PD node of such a run, or one held or tied
+ * C-beam's flanges leave such nodes in damaged bands of hundreds of nodes, beyond the cluster
+ * check's 48, MECH_CLUSTER_MAX in src/pd/fracture.c), tied as tie_mechanisms ties (state 2: K
+ * takes its spring at once, tie_assembled; the factor at its next factorisation). The
+ * downdate that names it saves the engine's factorisation that would have broken down to name
+ * it again: one factorisation a node instead of two. *tied = 0 where it is no PD node of such a run, or one held or tied
  * already (the engine's breakdown then names a node to hold, hold_singular_node). */
 static cupid_status tie_singular(growth_run *g, cupid_int dof, int *tied) {
   cupid_problem_state *prob = g->prob;
@@ -637,7 +637,8 @@ static cupid_status hold_loaded_ties(growth_run *g, int step, int *held) {
     g->release[i] = 1;
     g->released++;
     (*held)++;
-    for (int c = 0; c < 3; c++) CUPID_CALL(cupid_dirichlet_fix(prob->bc, 3 * i + c, g->u_before[3 * i + c]));
+    for (int c = 0; c < 3; c++)
+      CUPID_CALL(cupid_dirichlet_fix(prob->bc, 3 * i + c, g->u_before[3 * i + c]));
   }
   if (*held == 0) return CUPID_SUCCESS;
   memcpy(prob->u, g->u_before, (size_t)prob->ndof * sizeof *prob->u);
@@ -1078,7 +1079,8 @@ static cupid_status check_collapse(growth_run *g, int k, double lambda, int with
    * at spacing 1.5): past here the reactions would be the holding's, not the body's. */
   const int grips = !g->loaded;
   if (grips)
-    prob->growth.collapse_cause = tied ? "tied nodes carry the grips' pull" : "held nodes carry the grips' pull";
+    prob->growth.collapse_cause =
+        tied ? "tied nodes carry the grips' pull" : "held nodes carry the grips' pull";
   snprintf(prob->growth.stopped, sizeof prob->growth.stopped,
            "%s at load step %d (load factor %.6g)%s, and the %lld node%s %s where breaking "
            "left %s loose%s carr%s %.3g of the forces on the body (a sum of (%.4g, %.4g, %.4g); "
@@ -1202,7 +1204,8 @@ static cupid_status load_step(growth_run *g, int k, double lambda, int *iteratio
     const int quiet = prob->quiet; /* the first solve reports its assembly; the others would
                                       repeat it per broken bond */
     if (k > 1 || *iterations > 0) prob->quiet = 1;
-    if (g->u_before && !scaled) memcpy(g->u_before, prob->u, (size_t)prob->ndof * sizeof *prob->u);
+    if (g->u_before && !scaled) /* where a tie that takes load is held (hold_loaded_ties) */
+      memcpy(g->u_before, prob->u, (size_t)prob->ndof * sizeof *prob->u);
     cupid_status st = scaled ? CUPID_SUCCESS : solve(g, reassemble);
     prob->quiet = quiet;
     if (st == CUPID_ERR_NUMERIC && prob->broken_bonds > 0) { /* what breaking left loose */

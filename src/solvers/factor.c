@@ -531,7 +531,9 @@ cupid_status cupid_direct_factor_update(cupid_direct_factor F, cupid_int r, cons
   return updown(F, 1, r, colptr, rows, vals);
 }
 
-cupid_int cupid_direct_factor_failed_dof(const cupid_direct_factor F) { return F ? F->failed_dof : -1; }
+cupid_int cupid_direct_factor_failed_dof(const cupid_direct_factor F) {
+  return F ? F->failed_dof : -1;
+}
 
 void cupid_direct_factor_destroy(cupid_direct_factor *F) {
   if (!F || !*F) return;
