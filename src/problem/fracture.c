@@ -372,8 +372,12 @@ void cupid_problem_fracture_print(const cupid_problem_state *prob) {
            m->pd.fracture.calibration_grid ? "grid" : "continuum");
     if (prob->lattice_ratio > 0.0)
       printf("fracture: s0 continuum %.6g (the lattice's cut energy G_eff / G0 = %.4f), grid "
-             "%.6g (G_eff / G0 = 1)\n",
-             prob->s0_calibrations[0], lattice_energy_fraction(prob), prob->s0_calibrations[1]);
+             "%.6g (G_eff / G0 = 1)%s\n",
+             prob->s0_calibrations[0], lattice_energy_fraction(prob), prob->s0_calibrations[1],
+             m->pd.surface_correction != CUPID_SURFACE_NONE
+                 ? "; the bulk lattice's, before the surface correction's factors (which restore "
+                   "the faces' share)"
+                 : "");
   }
   else
     printf("fracture: critical stretch %.6g\n", o->critical_stretch);
