@@ -16,12 +16,12 @@ G = 12 P^2 (a + chi H)^2 / (E B^2 H^3), chi = 0.64, so P(a) = sqrt(G0 E B^2 H^3 
 Needs gnuplot (scripts/install-deps.sh).
 """
 import argparse
-import csv
-import json
 import math
 import os
 import subprocess
 import sys
+
+from senb_study import cupid_run  # this folder's
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(os.path.dirname(HERE))
@@ -37,23 +37,17 @@ def theory(a):
 def run(cupid, h, corrected, out, threads, reuse):
     """One run at spacing h; returns its row (dict) and its (a, P) points."""
     d = os.path.join(out, "h%g%s" % (h, "" if corrected else "_uncorrected"))
-    if not (reuse and os.path.exists(os.path.join(d, "summary.json"))):
-        # the pin lines (one node line at each arm's mid-height) and the clamp, a spacing wide
-        cmd = [cupid, "run", os.path.join(HERE, "dcb_pd.yaml"), "-o", d, "--quiet",
-               "--set", "peridynamics.spacing=%g" % h,
-               "--set", "peridynamics.horizon=%.17g" % (M_RATIO * h),
-               "--set", "constraints[0].displacement.box={x: [7, %g], y: [0, %g]}" % (7 + h, h),
-               "--set", "constraints[1].displacement.box={x: [%g, 3], y: [0, %g]}" % (3 - h, h),
-               "--set", "constraints[2].fix.box={y: [%g, 60]}" % (60 - h),
-               "--set", "output.vtu=false", "--set", "output.plots=false"]
-        if not corrected:
-            cmd += ["--set", "peridynamics.surface_correction=none"]
-        if threads:
-            cmd += ["--threads", str(threads)]
-        subprocess.run(cmd, check=True, cwd=ROOT)
-    s = json.load(open(os.path.join(d, "summary.json")))
+    # the pin lines (one node line at each arm's mid-height) and the clamp, a spacing wide
+    sets = ["--set", "peridynamics.spacing=%g" % h,
+            "--set", "peridynamics.horizon=%.17g" % (M_RATIO * h),
+            "--set", "constraints[0].displacement.box={x: [7, %g], y: [0, %g]}" % (7 + h, h),
+            "--set", "constraints[1].displacement.box={x: [%g, 3], y: [0, %g]}" % (3 - h, h),
+            "--set", "constraints[2].fix.box={y: [%g, 60]}" % (60 - h),
+            "--set", "output.vtu=false", "--set", "output.plots=false"]
+    if not corrected:
+        sets += ["--set", "peridynamics.surface_correction=none"]
+    s, rows = cupid_run(cupid, os.path.join(HERE, "dcb_pd.yaml"), d, sets, threads, reuse)
     fr = s["fracture"]
-    rows = list(csv.DictReader(open(os.path.join(d, "damage.csv"))))
     per_length = fr["precrack_bonds_removed"] / A0
     points = [(A0 + float(r["broken_bonds"]) / per_length, float(r["reaction_0_x"])) for r in rows]
     growing = [(a, p) for (a, p), r in zip(points, rows)

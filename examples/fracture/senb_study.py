@@ -69,20 +69,27 @@ def surface_fraction(h, B=B):
     return slab / bulk
 
 
+def cupid_run(cupid, model, d, sets, threads, reuse):
+    """cupid run MODEL -o D with the --set arguments SETS (skipped where reuse finds D's
+    summary.json); its summary.json and damage.csv rows. dcb_study.py runs its models so too."""
+    if not (reuse and os.path.exists(os.path.join(d, "summary.json"))):
+        cmd = [cupid, "run", model, "-o", d, "--quiet"] + list(sets)
+        if threads:
+            cmd += ["--threads", str(threads)]
+        subprocess.run(cmd, check=True, cwd=ROOT)
+    return (json.load(open(os.path.join(d, "summary.json"))),
+            list(csv.DictReader(open(os.path.join(d, "damage.csv")))))
+
+
 def run(cupid, model, h, out, threads, reuse):
     """One run; returns its row (dict) and the load-displacement curve [(d, P)]."""
     d = os.path.join(out, "%s_h%s" % (model, str(h).replace("/", "_")))
     hf = float(h)
-    if not (reuse and os.path.exists(os.path.join(d, "summary.json"))):
-        cmd = [cupid, "run", os.path.join(HERE, MODELS[model]), "-o", d, "--quiet",
-               "--set", "peridynamics.spacing=%.17g" % hf,
-               "--set", "peridynamics.horizon=%.17g" % (M_RATIO * hf)] + EXTRA.get(model, [])
-        if threads:
-            cmd += ["--threads", str(threads)]
-        subprocess.run(cmd, check=True, cwd=ROOT)
-    s = json.load(open(os.path.join(d, "summary.json")))
+    s, rows = cupid_run(cupid, os.path.join(HERE, MODELS[model]), d,
+                        ["--set", "peridynamics.spacing=%.17g" % hf,
+                         "--set", "peridynamics.horizon=%.17g" % (M_RATIO * hf)] + EXTRA.get(model, []),
+                        threads, reuse)
     fr = s["fracture"]
-    rows = list(csv.DictReader(open(os.path.join(d, "damage.csv"))))
     curve = [(-float(r["load_ux"]), -float(r["reaction_0_x"])) for r in rows]
     # the first break's load: the reaction of step 1 scaled to its load factor
     r1 = rows[0]
