@@ -260,6 +260,10 @@ static void held_forces(growth_run *g) {
     if (!g->release[i]) continue;
     double r[3];
     for (int c = 0; c < 3; c++) r[c] = prob->f_int[3 * i + c] - prob->f_ext[3 * i + c];
+    for (int c = 0; c < 3 && g->tie && g->tie[i]; c++) /* tied, then held (hold_loaded_ties):
+                                                           its spring is a support of its own,
+                                                           no force of the body's */
+      r[c] -= g->tie_k * prob->u[3 * i + c];
     for (int c = 0; c < 3; c++) sums[c] += r[c];
     sums[g->weak[i] ? 4 : 3] += sqrt(r[0] * r[0] + r[1] * r[1] + r[2] * r[2]);
   }
