@@ -142,7 +142,8 @@ set yrange [-3:22]
 %s
 plot "%s" u 1:2:3 w p pt 5 ps %.2f lc palette notitle
 """ % (png, {"pd": "peridynamics only", "coupled": "CUF beam + PD (Arlequin)",
-              "fictitious": "CUF beam + PD (fictitious nodes)"}[info["model"]],
+              "fictitious": "CUF beam + PD (fictitious nodes)",
+              "corrected": "CUF beam + PD (Arlequin), surface-corrected"}[info["model"]],
        info["h"], info["delta"], WARP, beam, dat, ps))
     return png
 
