@@ -36,8 +36,8 @@ static cupid_status fracture_init(struct cupid_pd_operator_private *op) {
    * broken bond takes it out with its term. LPS: a broken bond's dilatation weight would leave
    * the corrected self-weight (gself, rebuilt with the D factors) by its raw wxn (bgsum), and
    * m is summed again over the intact family, against which the factors were not fitted. */
-  CUPID_CHECK(op->surface == CUPID_SURFACE_NONE || op->model == CUPID_PD_BOND, CUPID_ERR_UNSUPPORTED,
-              "pre-cracks and bond breaking with surface_correction: energy need model: bond (LPS: "
+  CUPID_CHECK(op->surface == CUPID_SURFACE_NONE || op->model == CUPID_PD_BOND,
+              CUPID_ERR_UNSUPPORTED, "pre-cracks and bond breaking with surface_correction: energy need model: bond (LPS: "
               "the corrected dilatation is not kept as bonds break)");
   CUPID_CALL(cupid_malloc((size_t)op->nnodes, sizeof *op->bslot, "PD broken-bond slots", &op->bslot));
   for (cupid_int i = 0; i < op->nnodes; i++) op->bslot[i] = -1;

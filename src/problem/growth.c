@@ -603,8 +603,9 @@ static int loose_node(const growth_run *g, cupid_int dof) {
  * check's 48, MECH_CLUSTER_MAX in src/pd/fracture.c), tied as tie_mechanisms ties (state 2: K
  * takes its spring at once, tie_assembled; the factor at its next factorisation). The
  * downdate that names it saves the engine's factorisation that would have broken down to name
- * it again: one factorisation a node instead of two. *tied = 0 where it is no PD node of such a run, or one held or tied
- * already (the engine's breakdown then names a node to hold, hold_singular_node). */
+ * it again: one factorisation a node instead of two. *tied = 0 where it is no PD node of such a
+ * run, or one held or tied already (the engine's breakdown then names a node to hold,
+ * hold_singular_node). */
 static cupid_status tie_singular(growth_run *g, cupid_int dof, int *tied) {
   cupid_problem_state *prob = g->prob;
   *tied = g->tie && loose_node(g, dof) && !g->tie[dof / 3];
