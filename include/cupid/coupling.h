@@ -336,6 +336,12 @@ cupid_status cupid_arlequin_assembly_create(cupid_cuf_beam beam, cupid_pd_grid g
  *  create, e.g. the same one after breaks; NULL: no PD block). */
 cupid_status cupid_arlequin_assembly_matrix(const cupid_arlequin_assembly A, cupid_pd_operator op,
                                             cupid_csr *K);
+/** The rows of the PD nodes @p nodes (sorted) of a K from cupid_arlequin_assembly_matrix(),
+ *  assembled again in place from the kept part and the PD block of @p op, as a new K would
+ *  have them to the bit (the bonds of the other nodes unchanged; K keeps its pattern, where a
+ *  broken bond's blocks are now zero). */
+cupid_status cupid_arlequin_assembly_update_rows(const cupid_arlequin_assembly A, cupid_pd_operator op,
+                                                 const cupid_int *nodes, cupid_int n, cupid_csr K);
 void cupid_arlequin_assembly_destroy(cupid_arlequin_assembly *A);
 
 /**

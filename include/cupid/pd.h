@@ -263,6 +263,26 @@ cupid_status cupid_pd_operator_assemble_weighted(cupid_pd_operator op, const dou
                                                  cupid_csr *K);
 
 /**
+ * The rows of K of the given nodes only (row k of *K is node nodes[k]'s; ncols = nodes),
+ * weighted by @p w as cupid_pd_operator_assemble_weighted(), or not (w = NULL). Each row is
+ * the whole assembly's to the bit, so a caller that keeps K assembles again only the rows
+ * that broken bonds changed (cupid_pd_operator_take_changed()).
+ */
+cupid_status cupid_pd_operator_assemble_node_rows(cupid_pd_operator op, const double *w,
+                                                  const cupid_int *nodes, cupid_int n, cupid_csr *K);
+
+/**
+ * The nodes whose rows of K changed since the last call (bond-based: both ends of each bond
+ * removed since), sorted and without repeats, into a new *nodes (cupid_free; NULL when none);
+ * the record then starts again (the first call starts it: nothing is recorded before, so it
+ * says *all = 1). *all = 1 when any row may have changed (LPS, whose broken bond
+ * changes the rows of both its families' neighbours; moduli scaled; the record lost to a lack
+ * of memory): assemble K whole.
+ */
+cupid_status cupid_pd_operator_take_changed(cupid_pd_operator op, cupid_int **nodes, cupid_int *n,
+                                            int *all);
+
+/**
  * Weight node p's energy by w_p from now on (w >= 0, one per node): the operator's per-node
  * moduli are scaled in place, so every later apply, apply_range and assembly is that of the
  * node-weighted energy of cupid_pd_operator_assemble_weighted() (the matrix-free Arlequin

@@ -39,8 +39,21 @@ void cupid_csr_destroy(cupid_csr *A);
 /** Pointer to block (row, col) values, or NULL if not in the pattern (binary search). */
 double *cupid_csr_find(const cupid_csr_t *A, cupid_int row, cupid_int col);
 
+/** Row r's values set to zero (its pattern kept). */
+void cupid_csr_zero_row(cupid_csr A, cupid_int r);
+
+/** Row pr of P added into row r of A (one block size; A's row must hold every column of P's:
+ *  an error otherwise, A's row then part-added). */
+cupid_status cupid_csr_add_row(cupid_csr A, cupid_int r, const cupid_csr_t *P, cupid_int pr);
+
 /** y = A x (OpenMP over rows). x has ncols*bs entries, y nrows*bs. */
 void cupid_csr_matvec(const cupid_csr_t *A, const double *x, double *y);
+
+/** y = A x where the caller knows that the block rows not marked are zero (their columns meet
+ *  none of x's non-zeros: x a few prescribed values, the marked rows their neighbours). The
+ *  marked rows (mark[r] != 0) are computed to the bit as cupid_csr_matvec() computes them. */
+void cupid_csr_matvec_marked(const cupid_csr_t *A, const double *x, const unsigned char *mark,
+                             double *y);
 
 /** Only the scalar rows [d0, d1) of y = A x, where A's scalar row r is y[off + r] (a block
  *  of rows inside a longer vector, as a coupled operator's FE rows are); the other entries

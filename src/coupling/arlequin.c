@@ -285,17 +285,7 @@ cleanup:
  * K: row r of the part is a subset of row r of K, both sorted, walked together (a search per
  * block cost 14% of a coupled growth run). */
 static cupid_status add_part(const cupid_csr_t *P, cupid_csr K) {
-  for (cupid_int r = 0; r < P->nrows; r++) {
-    cupid_int p = K->rowptr[r];
-    const cupid_int end = K->rowptr[r + 1];
-    for (cupid_int q = P->rowptr[r]; q < P->rowptr[r + 1]; q++) {
-      while (p < end && K->col[p] < P->col[q]) p++;
-      CUPID_CHECK(p < end && K->col[p] == P->col[q], CUPID_ERR_INTERNAL,
-                  "Arlequin pattern lacks a block of a part");
-      double *dst = K->val + 9 * p;
-      for (int e = 0; e < 9; e++) dst[e] += P->val[9 * q + e];
-    }
-  }
+  for (cupid_int r = 0; r < P->nrows; r++) CUPID_CALL(cupid_csr_add_row(K, r, P, r));
   return CUPID_SUCCESS;
 }
 
@@ -490,6 +480,25 @@ cupid_status cupid_arlequin_assembly_matrix(const cupid_arlequin_assembly A, cup
                                             cupid_csr *K) {
   CUPID_CHECK(A && K, CUPID_ERR_ARGUMENT, "cupid_arlequin_assembly_matrix needs its arguments");
   return fill(A, op, K);
+}
+
+/* Row by row as fill() does the whole K: zero, the kept part, the PD block (the same sums in
+ * the same order, so the same values to the bit). */
+cupid_status cupid_arlequin_assembly_update_rows(const cupid_arlequin_assembly A, cupid_pd_operator op,
+                                                 const cupid_int *nodes, cupid_int n, cupid_csr K) {
+  CUPID_CHECK(A && op && K && K->nrows == A->F->nrows && K->bs == 3, CUPID_ERR_ARGUMENT,
+              "cupid_arlequin_assembly_update_rows needs the assembly, an operator and its K");
+  cupid_csr R = NULL;
+  CUPID_CALL(cupid_pd_operator_assemble_node_rows(op, A->wn, nodes, n, &R)); /* Eq. 12 */
+  cupid_status st = CUPID_SUCCESS;
+  for (cupid_int k = 0; k < n && st == CUPID_SUCCESS; k++) {
+    const cupid_int r = nodes[k];
+    cupid_csr_zero_row(K, r);
+    st = cupid_csr_add_row(K, r, A->F, r);
+    if (st == CUPID_SUCCESS) st = cupid_csr_add_row(K, r, R, k);
+  }
+  cupid_csr_destroy(&R);
+  return st;
 }
 
 cupid_status cupid_arlequin_assemble(cupid_cuf_beam beam, cupid_pd_grid grid, cupid_pd_operator op,

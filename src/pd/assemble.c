@@ -226,19 +226,16 @@ static int thread_id(void) {
 #endif
 }
 
-cupid_status pd_assemble_rows(const struct cupid_pd_operator_private *op, cupid_int first,
-                              cupid_int last, cupid_csr *Kout) {
+/* Rows of K: row k is node first + k, or nodes[k] with a list (each row as the whole
+ * assembly has it, to the bit: a row is gathered from its own families alone). */
+static cupid_status assemble_list(const struct cupid_pd_operator_private *op, cupid_int first,
+                                  const cupid_int *nodes, cupid_int nr, cupid_csr *Kout) {
   cupid_status st = CUPID_SUCCESS;
   cupid_csr_t *K = NULL;
   offset_table t = {0};
   double *acc = NULL;
   unsigned char *hit = NULL;
-  CUPID_CHECK(op && Kout, CUPID_ERR_ARGUMENT, "assemble needs an operator and an output");
-  CUPID_CHECK(first >= 0 && first <= last && last <= op->nnodes, CUPID_ERR_ARGUMENT,
-              "assemble: rows [%lld, %lld) outside the %lld nodes", (long long)first,
-              (long long)last, (long long)op->nnodes);
   *Kout = NULL;
-  const cupid_int nr = last - first;
   const int nt = nr > PD_OMP_MIN_NODES ? num_threads() : 1;
   CUPID_TRY(offset_table_build(op, &t));
   CUPID_TRY(cupid_calloc((size_t)nt * 9 * (size_t)t.nd, sizeof *acc, "assembly buffers", &acc));
@@ -253,9 +250,10 @@ cupid_status pd_assemble_rows(const struct cupid_pd_operator_private *op, cupid_
   {
     row_buffer buf = {acc + 9 * (size_t)thread_id() * (size_t)t.nd, hit + (size_t)thread_id() * (size_t)t.nd};
 #pragma omp for schedule(dynamic, 64)
-    for (cupid_int r = first; r < last; r++) {
+    for (cupid_int k = 0; k < nr; k++) {
+      const cupid_int r = nodes ? nodes[k] : first + k;
       gather_row(op, &t, r, &buf, 0);
-      K->rowptr[r - first + 1] = flush_row(op, &t, r, &buf, NULL, NULL);
+      K->rowptr[k + 1] = flush_row(op, &t, r, &buf, NULL, NULL);
     }
   }
   for (cupid_int r = 0; r < nr; r++) K->rowptr[r + 1] += K->rowptr[r];
@@ -266,10 +264,10 @@ cupid_status pd_assemble_rows(const struct cupid_pd_operator_private *op, cupid_
   {
     row_buffer buf = {acc + 9 * (size_t)thread_id() * (size_t)t.nd, hit + (size_t)thread_id() * (size_t)t.nd};
 #pragma omp for schedule(dynamic, 64)
-    for (cupid_int r = first; r < last; r++) {
-      const cupid_int k = K->rowptr[r - first];
+    for (cupid_int k = 0; k < nr; k++) {
+      const cupid_int r = nodes ? nodes[k] : first + k, q = K->rowptr[k];
       gather_row(op, &t, r, &buf, 1);
-      flush_row(op, &t, r, &buf, K->col + k, K->val + 9 * (size_t)k);
+      flush_row(op, &t, r, &buf, K->col + q, K->val + 9 * (size_t)q);
     }
   }
   *Kout = K;
@@ -285,6 +283,15 @@ cleanup:
   cupid_free(&acc);
   cupid_free(&hit);
   return st;
+}
+
+cupid_status pd_assemble_rows(const struct cupid_pd_operator_private *op, cupid_int first,
+                              cupid_int last, cupid_csr *K) {
+  CUPID_CHECK(op && K, CUPID_ERR_ARGUMENT, "assemble needs an operator and an output");
+  CUPID_CHECK(first >= 0 && first <= last && last <= op->nnodes, CUPID_ERR_ARGUMENT,
+              "assemble: rows [%lld, %lld) outside the %lld nodes", (long long)first,
+              (long long)last, (long long)op->nnodes);
+  return assemble_list(op, first, NULL, last - first, K);
 }
 
 cupid_status cupid_pd_operator_assemble(const cupid_pd_operator op, cupid_csr *K) {
@@ -319,15 +326,15 @@ cupid_status cupid_pd_operator_scale_energy(cupid_pd_operator op, const double *
   CUPID_CALL(check_weights(op, w));
   scale_moduli(op, w);
   op->gen++;
+  op->changed_all = 1; /* every row of an assembled K */
   return pd_uniform_build(op);
 }
 
 /* The moduli are scaled in place for the assembly and restored from copies (bit-exact: the
  * stencil path's copies of b and its uniform stretches hold again, and the assembly reads
  * neither). */
-cupid_status cupid_pd_operator_assemble_weighted(cupid_pd_operator op, const double *w,
-                                                 cupid_csr *K) {
-  CUPID_CHECK(op && w && K, CUPID_ERR_ARGUMENT, "weighted assembly needs operator, weights, output");
+static cupid_status assemble_weighted(cupid_pd_operator op, const double *w, const cupid_int *nodes,
+                                      cupid_int nr, cupid_csr *K) {
   CUPID_CALL(check_weights(op, w));
   const cupid_int n = op->nnodes;
   double *moduli[3] = {op->kappa, op->mu, op->c}, *saved[3] = {NULL, NULL, NULL};
@@ -338,12 +345,29 @@ cupid_status cupid_pd_operator_assemble_weighted(cupid_pd_operator op, const dou
     memcpy(saved[k], moduli[k], (size_t)n * sizeof *saved[k]);
   }
   scale_moduli(op, w);
-  st = cupid_pd_operator_assemble(op, K);
+  st = assemble_list(op, 0, nodes, nr, K);
 cleanup:
   for (int k = 0; k < 3; k++)
     if (saved[k]) memcpy(moduli[k], saved[k], (size_t)n * sizeof *saved[k]);
   for (int k = 0; k < 3; k++) cupid_free(&saved[k]);
   return st;
+}
+
+cupid_status cupid_pd_operator_assemble_weighted(cupid_pd_operator op, const double *w,
+                                                 cupid_csr *K) {
+  CUPID_CHECK(op && w && K, CUPID_ERR_ARGUMENT, "weighted assembly needs operator, weights, output");
+  return assemble_weighted(op, w, NULL, op->nnodes, K);
+}
+
+cupid_status cupid_pd_operator_assemble_node_rows(cupid_pd_operator op, const double *w,
+                                                  const cupid_int *nodes, cupid_int n, cupid_csr *K) {
+  CUPID_CHECK(op && (nodes || n == 0) && n >= 0 && K, CUPID_ERR_ARGUMENT,
+              "row assembly needs an operator, the nodes and an output");
+  for (cupid_int k = 0; k < n; k++)
+    CUPID_CHECK(nodes[k] >= 0 && nodes[k] < op->nnodes, CUPID_ERR_ARGUMENT,
+                "row assembly: node %lld outside the %lld nodes", (long long)nodes[k],
+                (long long)op->nnodes);
+  return w ? assemble_weighted(op, w, nodes, n, K) : assemble_list(op, 0, nodes, n, K);
 }
 
 cupid_status cupid_pd_operator_diagonal(const cupid_pd_operator op, double *blocks) {

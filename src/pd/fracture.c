@@ -28,6 +28,9 @@ void pd_fracture_free(struct cupid_pd_operator_private *op) {
   cupid_free(&op->bpre);
   op->nslots = op->slot_cap = 0;
   op->nbroken = 0;
+  cupid_free(&op->changed);
+  op->n_changed = op->changed_cap = 0;
+  op->changed_all = 0;
 }
 
 static cupid_status fracture_init(struct cupid_pd_operator_private *op) {
@@ -117,6 +120,45 @@ static void weighted_volume(struct cupid_pd_operator_private *op, cupid_int i) {
   op->m[i] = intact ? m : INFINITY;
 }
 
+static int cmp_int(const void *a, const void *b);
+
+void pd_record_changed(struct cupid_pd_operator_private *op, cupid_int i, cupid_int j) {
+  if (!op->changed_on || op->changed_all) return;
+  if (op->n_changed + 2 > op->changed_cap) {
+    const size_t cap = op->changed_cap ? 2 * op->changed_cap : 1024;
+    if (cupid_realloc(cap, sizeof *op->changed, "changed rows", &op->changed) != CUPID_SUCCESS) {
+      cupid_error_clear(); /* the record is lost, not the bond: every row counts as changed */
+      op->changed_all = 1;
+      return;
+    }
+    op->changed_cap = cap;
+  }
+  op->changed[op->n_changed++] = i;
+  op->changed[op->n_changed++] = j;
+}
+
+cupid_status cupid_pd_operator_take_changed(cupid_pd_operator op, cupid_int **nodes, cupid_int *n,
+                                            int *all) {
+  CUPID_CHECK(op && nodes && n && all, CUPID_ERR_ARGUMENT,
+              "take_changed needs an operator and three outputs");
+  *nodes = NULL, *n = 0;
+  /* LPS: a bond enters the dilatations of both its families, whose neighbours' rows change */
+  *all = op->changed_all || !op->changed_on || op->model != CUPID_PD_BOND;
+  cupid_status st = CUPID_SUCCESS;
+  if (!*all && op->n_changed) {
+    qsort(op->changed, op->n_changed, sizeof *op->changed, cmp_int);
+    size_t m = 0;
+    for (size_t k = 0; k < op->n_changed; k++)
+      if (m == 0 || op->changed[m - 1] != op->changed[k]) op->changed[m++] = op->changed[k];
+    st = cupid_malloc(m, sizeof **nodes, "changed rows", nodes);
+    if (st == CUPID_SUCCESS) memcpy(*nodes, op->changed, m * sizeof **nodes), *n = (cupid_int)m;
+  }
+  op->n_changed = 0;
+  op->changed_all = 0;
+  op->changed_on = 1;
+  return st;
+}
+
 /* Remove the bond of node i at stencil entry s (both directions). */
 static cupid_status remove_bond(struct cupid_pd_operator_private *op, cupid_int i, int s, int pre,
                                 int *removed) {
@@ -128,6 +170,7 @@ static cupid_status remove_bond(struct cupid_pd_operator_private *op, cupid_int 
   *removed = a;
   if (!a) return CUPID_SUCCESS;
   op->nbroken++;
+  pd_record_changed(op, i, j);
   weighted_volume(op, i);
   weighted_volume(op, j);
   pd_uniform_exclude(op, i); /* b = mu/m of i and j changed: no longer uniform around them */

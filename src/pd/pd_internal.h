@@ -205,6 +205,14 @@ struct cupid_pd_operator_private {
   int32_t nslots, slot_cap;
   cupid_int nbroken;      /* bonds (unordered pairs) removed: pre-cracks and breaking */
   cupid_int gen;          /* bumped when m changes (the stencil work arrays cache mu/m) */
+  /* The nodes whose bonds were removed since cupid_pd_operator_take_changed() last read them
+   * (both ends of each bond; repeats allowed), so that a caller that keeps an assembled K can
+   * assemble again only their rows (quasi-static growth). changed_all: the record is lost (out
+   * of memory) or every row changed (the moduli scaled). Kept from the first take on (an
+   * explicit run, which never reads it, does not grow it). */
+  cupid_int *changed;
+  size_t n_changed, changed_cap;
+  int changed_all, changed_on;
 };
 
 /* 1 if the bond of node i at stencil entry s is broken. */
@@ -334,6 +342,9 @@ void pd_uniform_exclude(struct cupid_pd_operator_private *op, cupid_int i);
  * the matrix-free products with it on grids whose whole K would not fit. */
 cupid_status pd_assemble_rows(const struct cupid_pd_operator_private *op, cupid_int first,
                               cupid_int last, cupid_csr *K);
+
+/* Record that the rows of nodes i and j changed (a bond between them removed). */
+void pd_record_changed(struct cupid_pd_operator_private *op, cupid_int i, cupid_int j);
 
 /* Build the explicit bond lists (if not there yet) and switch apply to the bond-list
  * kernels (stencil_off = 1). Not thread-safe: call before sharing the operator. */

@@ -33,6 +33,7 @@ static void free_layout(growth_run *g) {
   cupid_free(&g->masks);
   cupid_free(&g->T);
   for (int k = 0; k < 4; k++) cupid_free(&g->w[k]);
+  cupid_free(&g->near_fixed);
   cupid_free(&g->u_before);
   cupid_direct_factor_destroy(&g->F);
   cupid_growth_downdate_free(&g->dd);
@@ -685,6 +686,72 @@ static cupid_status hold_singular_node(growth_run *g, int step, int *held) {
   return CUPID_SUCCESS;
 }
 
+/* ---- K after breaks: assembled whole, or patched in the rows the breaks changed ----
+ * A round of breaks changes the rows of the broken bonds' nodes alone (bond-based), a few
+ * hundred of the grid's; assembling K whole again and comparing it with the last to find the
+ * bonds' terms cost a third of a coupled SENB's growth (h = 1: 7.9 s of 28.7 in the assembly,
+ * 3.3 s in the comparison). The method's update_rows assembles those rows again in place, to
+ * the bit as a whole assembly would, and the downdate's terms are read off those rows alone.
+ * K keeps its pattern, with zero blocks where bonds broke: a product or a downdate reads the
+ * same values, but a factorisation orders by the pattern, so K is assembled whole again
+ * before one (whole_k), and every solve is what it was (CUPID_GROWTH_WHOLE_K=1 assembles it
+ * whole every time, as before; verification.fracture_growth compares the two). */
+static int cmp_node(const void *a, const void *b) {
+  const cupid_int x = *(const cupid_int *)a, y = *(const cupid_int *)b;
+  return (x > y) - (x < y);
+}
+
+/* K assembled (whole, where it was NULL: the operator's record of changed rows starts again
+ * from it), and the ties' springs that it lacks. */
+static cupid_status assemble_k(growth_run *g) {
+  cupid_problem_state *prob = g->prob;
+  const int fresh = prob->K == NULL;
+  CUPID_CALL(prob->method->assemble(prob));
+  if (fresh && prob->op) {
+    cupid_int *rows = NULL, n = 0;
+    int all = 0;
+    CUPID_CALL(cupid_pd_operator_take_changed(prob->op, &rows, &n, &all)); /* all in K now */
+    cupid_free(&rows);
+    g->tracked_k = prob->K, g->tracked_op = prob->op, g->patched = 0;
+  }
+  return tie_assembled(g, fresh);
+}
+
+/* A patched K assembled whole again (before a factorisation reads its pattern). */
+static cupid_status whole_k(growth_run *g) {
+  if (!g->patched) return CUPID_SUCCESS;
+  cupid_csr_destroy(&g->prob->K);
+  return assemble_k(g);
+}
+
+/* The rows of @p rows (the nodes whose bonds broke) assembled again in place; *Kold (when
+ * asked): a copy of those rows as they were. The tied nodes among them take their springs
+ * again; then the new ties' (tie_assembled). */
+static cupid_status patch_rows(growth_run *g, const cupid_int *rows, cupid_int n, cupid_csr *Kold) {
+  cupid_problem_state *prob = g->prob;
+  if (Kold) CUPID_CALL(cupid_growth_rows_copy(prob->K, rows, n, Kold));
+  CUPID_CALL(prob->method->update_rows(prob, rows, n));
+  for (cupid_int t = 0; t < n && g->tie && g->tied; t++) {
+    const cupid_int i = rows[t];
+    if (i >= prob->n_pd || (g->tie[i] != 1 && g->tie[i] != 3)) continue;
+    const cupid_int dofs[3] = {3 * i, 3 * i + 1, 3 * i + 2};
+    CUPID_CALL(growth_tie_matrix(prob->K, 3, dofs, g->tie_k));
+  }
+  g->patched |= n > 0;
+  return tie_assembled(g, 0);
+}
+
+/* The rows that changed since K was assembled, when K can be patched there: *all = 1 when it
+ * is to be assembled whole (no update_rows, LPS, a K the record does not follow). */
+static cupid_status changed_rows(growth_run *g, cupid_int **rows, cupid_int *n, int *all) {
+  cupid_problem_state *prob = g->prob;
+  *rows = NULL, *n = 0, *all = 1;
+  if (!g->patch || !prob->method->update_rows || !prob->K || !prob->op || g->tracked_k != prob->K ||
+      g->tracked_op != prob->op)
+    return CUPID_SUCCESS;
+  return cupid_pd_operator_take_changed(prob->op, rows, n, all);
+}
+
 /* ---- Re-solves after bonds break (issue 17, item 3) ----
  * A break changes K by a few bonds (bond-based: a rank-one term each; LPS: the dilatation
  * terms of both families), so the factor of the K of the last factorisation stays a close
@@ -733,8 +800,19 @@ static double lifted_rhs(growth_run *g, double *t, double *b) {
   const cupid_problem_state *prob = g->prob;
   const cupid_dirichlet_t *bc = prob->bc;
   const cupid_int n = prob->ndof;
+  const cupid_csr_t *K = prob->K;
   for (cupid_int d = 0; d < n; d++) t[d] = bc->fixed[d] ? bc->value[d] : 0.0;
-  cupid_csr_matvec(prob->K, t, b);
+  /* K t is zero but in the rows next to the fixed DOFs (K's pattern is symmetric: SPD): only
+   * those computed, a product of a few rows where a whole one was a quarter of a round */
+  unsigned char *near = g->near_fixed;
+  memset(near, 0, (size_t)K->nrows);
+  for (cupid_int r = 0; r < K->nrows; r++) {
+    const int bs = K->bs;
+    int any = 0;
+    for (int c = 0; c < bs; c++) any |= bc->fixed[bs * r + c];
+    for (cupid_int p = K->rowptr[r]; any && p < K->rowptr[r + 1]; p++) near[K->col[p]] = 1;
+  }
+  cupid_csr_matvec_marked(K, t, near, b);
   for (cupid_int d = 0; d < n; d++) b[d] = bc->fixed[d] ? 0.0 : prob->f_ext[d] - b[d];
   return sqrt(dot_free(bc, n, b, b));
 }
@@ -744,6 +822,7 @@ static cupid_status factor_solve(growth_run *g) {
   cupid_problem_state *prob = g->prob;
   const cupid_dirichlet_t *bc = prob->bc;
   const cupid_int n = prob->ndof;
+  CUPID_CALL(whole_k(g)); /* the whole assembly's pattern, which orders the factor */
   double t0 = cupid_wtime(), *t = g->w[0], *r = g->w[1];
   cupid_direct_factor_destroy(&g->F);
   cupid_solve_info info;
@@ -837,11 +916,15 @@ static cupid_status cg_solve(growth_run *g, int *done) {
  * the factor, and the next solve is the engine's at once, whose breakdown names the node to
  * hold (solve, hold_singular_node). */
 static cupid_status downdate_tied(growth_run *g, cupid_csr_t *Kold, const cupid_int *tied,
-                                  cupid_int n_tied, double t0) {
+                                  cupid_int n_tied, int partial, const cupid_int *rows,
+                                  cupid_int n_rows, double t0) {
   cupid_problem_state *prob = g->prob;
   int ok = 0;
-  if (n_tied) CUPID_CALL(growth_tie_matrix(Kold, n_tied, tied, g->tie_k)); /* K - Kold: bonds */
-  CUPID_CALL(cupid_growth_downdate_terms(Kold, prob->K, &g->dd, &ok));
+  for (cupid_int t = 0; t < n_tied; t++) /* K - Kold: bonds (Kold of rows: those rows') */
+    if (!partial || (n_rows && bsearch(&(cupid_int){tied[t] / 3}, rows, (size_t)n_rows, sizeof *rows, cmp_node)))
+      CUPID_CALL(growth_tie_matrix(Kold, 1, tied + t, g->tie_k));
+  if (partial) CUPID_CALL(cupid_growth_downdate_rows(Kold, prob->K, rows, n_rows, &g->dd, &ok));
+  else CUPID_CALL(cupid_growth_downdate_terms(Kold, prob->K, &g->dd, &ok));
   if (!ok) {
     g->downdate = 0;
     cupid_problem_progress(prob, "growth: the broken bonds changed K by more than a rank-one term "
@@ -891,11 +974,14 @@ static cupid_status downdate_tied(growth_run *g, cupid_csr_t *Kold, const cupid_
   return CUPID_SUCCESS;
 }
 
-static cupid_status downdate_factor(growth_run *g, cupid_csr_t *Kold) {
+/* Kold: the last K, or (partial) its rows @p rows alone, none or some (K patched there:
+ * patch_rows). */
+static cupid_status downdate_factor(growth_run *g, cupid_csr_t *Kold, int partial,
+                                    const cupid_int *rows, cupid_int n_rows) {
   cupid_int *tied = NULL, n_tied = 0; /* the ties since: in K, neither in Kold nor in F */
   const double t0 = cupid_wtime();
   if (g->tie) CUPID_CALL(tie_dofs(g, 3, &tied, &n_tied));
-  cupid_status st = downdate_tied(g, Kold, tied, n_tied, t0);
+  cupid_status st = downdate_tied(g, Kold, tied, n_tied, partial, rows, n_rows, t0);
   cupid_free(&tied);
   return st;
 }
@@ -931,15 +1017,22 @@ static cupid_status solve(growth_run *g, int reassemble) {
   }
   cupid_csr Kold = NULL;
   const int lu = cupid_growth_lu_applies(prob);
-  if (reassemble && ((g->F && g->downdate) || (lu && cupid_growth_lu_has_factor(&g->lu) && !g->lu.no_update)))
-    Kold = prob->K, prob->K = NULL;
-  if (reassemble) cupid_csr_destroy(&prob->K);
-  const int fresh = prob->K == NULL;
-  cupid_status st0 = prob->method->assemble(prob);
-  if (st0 == CUPID_SUCCESS) st0 = tie_assembled(g, fresh);
+  const int keep_old = (g->F && g->downdate) || (lu && cupid_growth_lu_has_factor(&g->lu) && !g->lu.no_update);
+  cupid_int *rows = NULL, n_rows = 0;
+  int all = 1;
+  if (reassemble && !lu) CUPID_CALL(changed_rows(g, &rows, &n_rows, &all));
+  cupid_status st0 = CUPID_SUCCESS;
+  if (!all) st0 = patch_rows(g, rows, n_rows, keep_old ? &Kold : NULL);
+  else {
+    if (reassemble && keep_old) Kold = prob->K, prob->K = NULL;
+    if (reassemble) cupid_csr_destroy(&prob->K);
+    st0 = assemble_k(g);
+  }
   const cupid_int updates = g->lu.updates, factorisations = g->lu.factorisations;
   if (st0 == CUPID_SUCCESS && Kold)
-    st0 = lu ? cupid_growth_lu_update(prob, &g->lu, Kold) : downdate_factor(g, Kold);
+    st0 = lu ? cupid_growth_lu_update(prob, &g->lu, Kold)
+             : downdate_factor(g, Kold, !all, rows, n_rows);
+  cupid_free(&rows);
   cupid_csr_destroy(&Kold);
   CUPID_CALL(st0);
   if (lu && g->lu.updates > updates) CUPID_CALL(growth_journal_downdated(g)); /* issue 36 */
@@ -979,6 +1072,7 @@ static cupid_status solve(growth_run *g, int reassemble) {
     else CUPID_CALL(st);
     if (st == CUPID_SUCCESS) CUPID_CALL(cg_solve(g, &done)); /* checked, refined if need be */
   }
+  if (!done) CUPID_CALL(whole_k(g)); /* the engine's factorisation */
   if (!done) CUPID_CALL(cupid_problem_linear_solve(prob, prob->method->matrix));
   prob->growth.solves++;
   if (prob->method->recover) prob->method->recover(prob, prob->u);
@@ -1348,6 +1442,7 @@ static cupid_status setup_layout(growth_run *g) {
   for (int k = 0; k < 4; k++)
     CUPID_CALL(cupid_calloc(n + 1, sizeof(double), "growth work vectors", &g->w[k]));
   if (g->tie) CUPID_CALL(cupid_calloc(n + 1, sizeof(double), "growth work vectors", &g->u_before));
+  CUPID_CALL(cupid_calloc(n + 1, 1, "rows next to fixed DOFs", &g->near_fixed));
   return CUPID_SUCCESS;
 }
 
@@ -1397,6 +1492,7 @@ static cupid_status growth_rezone(growth_run *g, double lambda, unsigned char *h
     if (g->fixed0[d]) prob->bc->value[d] = lambda * g->g_full[d];
   }
   g->bonds_at_factor = -1;
+  g->tracked_k = g->tracked_op = NULL, g->patched = 0; /* a new K, a new operator */
   g->matrix_free = matrix_free(prob); /* a zone that started empty: the beam's path until now */
   return frame_vertices(g);
 }
@@ -1450,6 +1546,9 @@ static cupid_status setup_run(growth_run *g) {
    * the node to tie, as a run that refactorised that round would (the same nodes in both) */
   const char *by_factor = getenv("CUPID_GROWTH_NAME_BY_FACTOR");
   g->name_by_downdate = !(by_factor && strcmp(by_factor, "1") == 0);
+  /* ... and CUPID_GROWTH_WHOLE_K=1 assembles K whole after every round (patch_rows' twin) */
+  const char *whole = getenv("CUPID_GROWTH_WHOLE_K");
+  g->patch = !(whole && strcmp(whole, "1") == 0);
   const char *sub = getenv("CUPID_GROWTH_SUBSTEP");
   g->substep = !(sub && strcmp(sub, "0") == 0);
   return CUPID_SUCCESS;
@@ -1537,6 +1636,7 @@ cupid_status cupid_problem_run_growth(cupid_problem_state *prob) {
                            (long long)(prob->broken_bonds - before), (long long)g.released);
     CUPID_TRY(growth_safe_point(&g, k)); /* a checkpoint when one is due */
   }
+  CUPID_TRY(whole_k(&g)); /* K as assembled whole: what the summary and later stages read */
   if (prob->ckpt.written)
     cupid_problem_progress(prob, "checkpoints: %lld written, %.3g s in all",
                            (long long)prob->ckpt.written, prob->ckpt.seconds);

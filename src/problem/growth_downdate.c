@@ -97,6 +97,12 @@ static const double *block_at(const cupid_csr_t *A, cupid_int q) { return A->val
 
 cupid_status cupid_growth_downdate_terms(const cupid_csr_t *Kold, const cupid_csr_t *Knew,
                                          cupid_growth_downdate *u, int *ok) {
+  return cupid_growth_downdate_rows(Kold, Knew, NULL, Kold->nrows, u, ok);
+}
+
+cupid_status cupid_growth_downdate_rows(const cupid_csr_t *Kold, const cupid_csr_t *Knew,
+                                        const cupid_int *rows, cupid_int n_rows,
+                                        cupid_growth_downdate *u, int *ok) {
   u->r = 0;
   *ok = Kold->bs == 3 && Knew->bs == 3 && Kold->nrows == Knew->nrows;
   if (!*ok) return CUPID_SUCCESS;
@@ -105,7 +111,8 @@ cupid_status cupid_growth_downdate_terms(const cupid_csr_t *Kold, const cupid_cs
   double *diag = NULL; /* per node: the old - new change of its diagonal block, less the terms */
   cupid_status st = CUPID_SUCCESS;
   CUPID_TRY(cupid_calloc(9 * (size_t)nb + 1, sizeof *diag, "downdate check", &diag));
-  for (cupid_int i = 0; i < nb && *ok; i++) {
+  for (cupid_int k = 0; k < n_rows && *ok; k++) {
+    const cupid_int i = rows ? rows[k] : k;
     cupid_int p = Kold->rowptr[i], pe = Kold->rowptr[i + 1];
     cupid_int q = Knew->rowptr[i], qe = Knew->rowptr[i + 1];
     while ((p < pe || q < qe) && *ok) {
@@ -139,8 +146,10 @@ cupid_status cupid_growth_downdate_terms(const cupid_csr_t *Kold, const cupid_cs
     }
   }
   *ok = *ok && lower == u->r; /* every pair's lower block changed, by the same term */
-  /* every diagonal block changed by the removed terms alone */
-  for (cupid_int i = 0; i < nb && *ok; i++) {
+  /* every diagonal block changed by the removed terms alone (a pushed column's nodes are both
+     rows of the list: the blocks of a broken bond changed in both) */
+  for (cupid_int k = 0; k < n_rows && *ok; k++) {
+    const cupid_int i = rows ? rows[k] : k;
     const cupid_int q = Knew->rowptr[i];
     double scale = 0.0;
     for (cupid_int t = q; t < Knew->rowptr[i + 1]; t++)
@@ -152,6 +161,31 @@ cupid_status cupid_growth_downdate_terms(const cupid_csr_t *Kold, const cupid_cs
 cleanup:
   cupid_free(&diag);
   if (!*ok) u->r = 0;
+  return st;
+}
+
+cupid_status cupid_growth_rows_copy(const cupid_csr_t *K, const cupid_int *rows, cupid_int n_rows,
+                                    cupid_csr *out) {
+  cupid_status st = CUPID_SUCCESS;
+  cupid_int *rowptr = NULL, *col = NULL;
+  const size_t b2 = (size_t)K->bs * (size_t)K->bs;
+  *out = NULL;
+  CUPID_TRY(cupid_calloc((size_t)K->nrows + 1, sizeof *rowptr, "K rows", &rowptr));
+  for (cupid_int t = 0; t < n_rows; t++) rowptr[rows[t] + 1] = K->rowptr[rows[t] + 1] - K->rowptr[rows[t]];
+  for (cupid_int r = 0; r < K->nrows; r++) rowptr[r + 1] += rowptr[r];
+  CUPID_TRY(cupid_malloc((size_t)rowptr[K->nrows] + 1, sizeof *col, "K rows", &col));
+  for (cupid_int t = 0; t < n_rows; t++) {
+    const cupid_int r = rows[t], n = K->rowptr[r + 1] - K->rowptr[r];
+    memcpy(col + rowptr[r], K->col + K->rowptr[r], (size_t)n * sizeof *col);
+  }
+  CUPID_TRY(cupid_csr_create(K->nrows, K->ncols, K->bs, rowptr, col, out));
+  for (cupid_int t = 0; t < n_rows; t++) {
+    const cupid_int r = rows[t], n = K->rowptr[r + 1] - K->rowptr[r];
+    memcpy((*out)->val + b2 * (size_t)rowptr[r], K->val + b2 * (size_t)K->rowptr[r], b2 * (size_t)n * sizeof *K->val);
+  }
+cleanup:
+  cupid_free(&rowptr);
+  cupid_free(&col);
   return st;
 }
 

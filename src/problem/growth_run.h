@@ -75,10 +75,18 @@ typedef struct {
   int singular;                 /* the last downdate left F indefinite: the next solve goes to
                                    the engine at once (solve) */
   cupid_growth_downdate dd;
+  /* K patched row by row after breaks (the method's update_rows) since it was assembled
+   * whole: tracked_k / tracked_op are the K and operator whose changed rows the operator
+   * records (cupid_pd_operator_take_changed); patched: K holds the zero blocks of broken
+   * bonds, which a factorisation must not see (its ordering follows the pattern) */
+  const void *tracked_k, *tracked_op;
+  int patch;                    /* 1: patch K where it can (0: CUPID_GROWTH_WHOLE_K=1) */
+  int patched;
   cupid_int downdates, downdate_columns;
   cupid_int held_rows;           /* factor rows deleted for nodes held (cupid_direct_factor_hold) */
   double t_downdate;
   double *w[4];                 /* CG work vectors */
+  unsigned char *near_fixed;    /* per block row of K: next to a fixed DOF (lifted_rhs) */
   cupid_int factorisations, cg_solves, cg_iterations;
   cupid_int failed_factorisations; /* that broke down (a mechanism): each costs one, their time
                                      in t_factor */

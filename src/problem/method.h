@@ -60,6 +60,11 @@ struct cupid_method_ops {
   cupid_status (*loads)(cupid_problem_state *prob);
   /** prob->K: the whole system's stiffness with the coupling terms (unless already built). */
   cupid_status (*assemble)(cupid_problem_state *prob);
+  /** After bonds broke: the rows of prob->K of the PD nodes @p nodes (sorted; the nodes whose
+   *  bonds changed, cupid_pd_operator_take_changed()) assembled again in place, each as a new K
+   *  would have it to the bit (K keeps its pattern: a broken bond's blocks are zero). NULL: K
+   *  is assembled whole again (growth.c). */
+  cupid_status (*update_rows)(cupid_problem_state *prob, const cupid_int *nodes, cupid_int n);
   /** The static solve of the assembled K (prob->u, f_int, solve, solved). NULL: the engine's
    *  solve (cupid_problem_assembled_solve). */
   cupid_status (*solve_assembled)(cupid_problem_state *prob);

@@ -611,6 +611,15 @@ static cupid_status assemble(cupid_problem_state *prob) {
   return CUPID_SUCCESS;
 }
 
+/* After bonds broke: only the changed PD rows, from the kept blocks (growth.c). */
+static cupid_status update_rows(cupid_problem_state *prob, const cupid_int *nodes, cupid_int n) {
+  CUPID_CHECK(prob->K && prob->method_state, CUPID_ERR_INTERNAL, "update_rows: no Arlequin K to update");
+  const double t0 = cupid_wtime();
+  CUPID_CALL(cupid_arlequin_assembly_update_rows(prob->method_state, prob->op, nodes, n, prob->K));
+  cupid_problem_phase_end(prob, CUPID_PHASE_COUPLING, t0);
+  return CUPID_SUCCESS;
+}
+
 static cupid_status report_gap(const cupid_problem_state *prob) {
   cupid_arlequin_options o = options(prob);
   double gap, umax = 0.0;
@@ -785,6 +794,7 @@ const cupid_method_ops cupid_method_arlequin = {
     .constraints = constraints,
     .loads = loads,
     .assemble = assemble,
+    .update_rows = update_rows,
     .matrix_free = matrix_free,
     .solve_matrix_free = solve_matrix_free,
     .explicit_operator = explicit_operator,

@@ -41,6 +41,21 @@ static cupid_status assemble(cupid_problem_state *prob) {
   return CUPID_SUCCESS;
 }
 
+/* PD only: K is the operator's, so its rows are the operator's rows. */
+static cupid_status update_rows(cupid_problem_state *prob, const cupid_int *nodes, cupid_int n) {
+  CUPID_CHECK(prob->K && prob->grid && !prob->beam, CUPID_ERR_INTERNAL,
+              "update_rows: no PD-only K to update");
+  cupid_csr R = NULL;
+  CUPID_CALL(cupid_pd_operator_assemble_node_rows(prob->op, NULL, nodes, n, &R));
+  cupid_status st = CUPID_SUCCESS;
+  for (cupid_int k = 0; k < n && st == CUPID_SUCCESS; k++) {
+    cupid_csr_zero_row(prob->K, nodes[k]);
+    st = cupid_csr_add_row(prob->K, nodes[k], R, k);
+  }
+  cupid_csr_destroy(&R);
+  return st;
+}
+
 static int is_pd_3d(const cupid_problem_state *prob) {
   return prob->grid && !prob->beam && cupid_pd_grid_dimension(prob->grid) == 3;
 }
@@ -106,6 +121,7 @@ const cupid_method_ops cupid_method_none = {
     .constraints = constraints,
     .loads = loads,
     .assemble = assemble,
+    .update_rows = update_rows,
     .matrix_free = matrix_free,
     .solve_matrix_free = solve_matrix_free,
     .explicit_operator = explicit_operator,

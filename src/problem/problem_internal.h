@@ -303,6 +303,15 @@ typedef struct {
 } cupid_growth_downdate;
 cupid_status cupid_growth_downdate_terms(const cupid_csr_t *Kold, const cupid_csr_t *Knew,
                                          cupid_growth_downdate *u, int *ok);
+/* The same over the sorted block rows @p rows alone (where K changed: the ends of the broken
+ * bonds; Kold may hold only those rows, cupid_growth_rows_copy): the same columns in the same
+ * order as over all rows. */
+cupid_status cupid_growth_downdate_rows(const cupid_csr_t *Kold, const cupid_csr_t *Knew,
+                                        const cupid_int *rows, cupid_int n_rows,
+                                        cupid_growth_downdate *u, int *ok);
+/* A copy of K with only the block rows @p rows (sorted) filled, the others empty. */
+cupid_status cupid_growth_rows_copy(const cupid_csr_t *K, const cupid_int *rows, cupid_int n_rows,
+                                    cupid_csr *out);
 void cupid_growth_downdate_free(cupid_growth_downdate *u);
 
 /* growth_smw.c: the inverse of a factorised M brought to M - V V^T exactly by Sherman-Morrison-

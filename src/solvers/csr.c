@@ -180,22 +180,51 @@ double *cupid_csr_find(const cupid_csr_t *A, cupid_int row, cupid_int col) {
   return p < 0 ? NULL : A->val + (size_t)p * (size_t)(A->bs * A->bs);
 }
 
+void cupid_csr_zero_row(cupid_csr A, cupid_int r) {
+  const size_t b2 = (size_t)A->bs * (size_t)A->bs;
+  memset(A->val + b2 * (size_t)A->rowptr[r], 0, b2 * (size_t)(A->rowptr[r + 1] - A->rowptr[r]) * sizeof *A->val);
+}
+
+/* Both rows sorted: walked together. */
+cupid_status cupid_csr_add_row(cupid_csr A, cupid_int r, const cupid_csr_t *P, cupid_int pr) {
+  CUPID_CHECK(A && P && A->bs == P->bs && r >= 0 && r < A->nrows && pr >= 0 && pr < P->nrows,
+              CUPID_ERR_ARGUMENT, "cupid_csr_add_row: rows %lld and %lld of matrices of one block size",
+              (long long)r, (long long)pr);
+  const size_t b2 = (size_t)A->bs * (size_t)A->bs;
+  cupid_int p = A->rowptr[r];
+  const cupid_int end = A->rowptr[r + 1];
+  for (cupid_int q = P->rowptr[pr]; q < P->rowptr[pr + 1]; q++) {
+    while (p < end && A->col[p] < P->col[q]) p++;
+    CUPID_CHECK(p < end && A->col[p] == P->col[q], CUPID_ERR_ARGUMENT,
+                "cupid_csr_add_row: row %lld lacks column %lld of the row added", (long long)r,
+                (long long)P->col[q]);
+    double *dst = A->val + b2 * (size_t)p;
+    const double *src = P->val + b2 * (size_t)q;
+    for (size_t e = 0; e < b2; e++) dst[e] += src[e];
+  }
+  return CUPID_SUCCESS;
+}
+
+/* Row r of the 3x3-block product (one code for the whole product and the marked rows, so
+ * that both give the same bits). */
+static inline void row3(const cupid_csr_t *A, const double *x, cupid_int r, double *y) {
+  double y0 = 0.0, y1 = 0.0, y2 = 0.0;
+  for (cupid_int p = A->rowptr[r]; p < A->rowptr[r + 1]; p++) {
+    const double *a = A->val + 9 * p;
+    const double *xc = x + 3 * A->col[p];
+    y0 += a[0] * xc[0] + a[1] * xc[1] + a[2] * xc[2];
+    y1 += a[3] * xc[0] + a[4] * xc[1] + a[5] * xc[2];
+    y2 += a[6] * xc[0] + a[7] * xc[1] + a[8] * xc[2];
+  }
+  y[3 * r] = y0;
+  y[3 * r + 1] = y1;
+  y[3 * r + 2] = y2;
+}
+
 /* The 3x3-block product, the hot case (PD and beam stiffness). */
 static void matvec3(const cupid_csr_t *A, const double *x, double *y) {
 #pragma omp parallel for schedule(static) if (CUPID_CSR_PARALLEL(A))
-  for (cupid_int r = 0; r < A->nrows; r++) {
-    double y0 = 0.0, y1 = 0.0, y2 = 0.0;
-    for (cupid_int p = A->rowptr[r]; p < A->rowptr[r + 1]; p++) {
-      const double *a = A->val + 9 * p;
-      const double *xc = x + 3 * A->col[p];
-      y0 += a[0] * xc[0] + a[1] * xc[1] + a[2] * xc[2];
-      y1 += a[3] * xc[0] + a[4] * xc[1] + a[5] * xc[2];
-      y2 += a[6] * xc[0] + a[7] * xc[1] + a[8] * xc[2];
-    }
-    y[3 * r] = y0;
-    y[3 * r + 1] = y1;
-    y[3 * r + 2] = y2;
-  }
+  for (cupid_int r = 0; r < A->nrows; r++) row3(A, x, r, y);
 }
 
 static void matvec1(const cupid_csr_t *A, const double *x, double *y) {
@@ -229,6 +258,18 @@ void cupid_csr_matvec(const cupid_csr_t *A, const double *x, double *y) {
     matvec1(A, x, y);
   else
     matvec_general(A, x, y);
+}
+
+void cupid_csr_matvec_marked(const cupid_csr_t *A, const double *x, const unsigned char *mark,
+                             double *y) {
+  if (A->bs != 3) { /* the whole product: the unmarked rows are zero there too */
+    cupid_csr_matvec(A, x, y);
+    return;
+  }
+  for (cupid_int r = 0; r < A->nrows; r++) {
+    if (mark[r]) row3(A, x, r, y);
+    else y[3 * r] = y[3 * r + 1] = y[3 * r + 2] = 0.0;
+  }
 }
 
 void cupid_csr_matvec_rows(const cupid_csr_t *A, const double *x, cupid_int off, cupid_int d0,

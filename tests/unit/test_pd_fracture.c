@@ -4,7 +4,8 @@
  * assembled K, the energy and the diagonal; a body cracked through its uniform-b stretches; the stretch criterion at and just above s0;
  * irreversibility, protection and no-fail boxes; damage; the energy a break dissipates;
  * the same broken bonds for 1 and 2 threads; a node that loses every bond; the nodes that
- * lose their support, on a whole grid and on slabs. */
+ * lose their support, on a whole grid and on slabs; K's rows that breaks changed, assembled
+ * again in place, against K assembled whole. */
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -109,6 +110,11 @@ static void test_precrack_count(void **state) {
     }
 }
 
+static int cmp_node(const void *a, const void *b) {
+  const cupid_int x = *(const cupid_int *)a, y = *(const cupid_int *)b;
+  return (x > y) - (x < y);
+}
+
 static double max_abs(cupid_int n, const double *x) {
   double m = 0.0;
   for (cupid_int i = 0; i < n; i++) m = fmax(m, fabs(x[i]));
@@ -201,6 +207,85 @@ static void test_cracked_operator(void **state) {
 
 /* LPS with the surface correction: breaking refused with the reason (its corrected dilatation
  * is not kept as bonds break), on the pre-crack as on a break */
+/* K patched in the rows that breaks changed (quasi-static growth, growth.c patch_rows): the
+ * changed rows are both ends of every bond removed since the last take, and K assembled once,
+ * then its changed rows assembled again in place (weighted, with the surface correction, and
+ * plain), equals K assembled whole after the breaks to the bit, but for the zero blocks of the
+ * broken bonds it keeps; LPS, whose breaks change the rows of both families' neighbours,
+ * says so (all). */
+static void patch_and_compare(cupid_pd_model_kind model, cupid_surface_correction surface, int weighted) {
+  const cupid_box box = box3(0, 9, 0, 8, 0, 5);
+  body b = make_corrected(1, &box, model, CUPID_PARTIAL_PDLAMMPS, 3.0, surface);
+  double *w = malloc((size_t)b.n * sizeof *w);
+  for (cupid_int i = 0; i < b.n; i++) w[i] = 0.25 + 0.75 * (double)(i % 7) / 6.0;
+  const double *wk = weighted ? w : NULL;
+  cupid_csr K = NULL, Kw = NULL, R = NULL;
+  cupid_int *rows = NULL, n = 0;
+  int all = 1;
+  CUPID_ASSERT_OK(cupid_pd_operator_take_changed(b.op, &rows, &n, &all)); /* starts the record */
+  assert_int_equal(n, 0);
+  assert_true(all); /* nothing was recorded before */
+  CUPID_ASSERT_OK(cupid_pd_operator_take_changed(b.op, &rows, &n, &all)); /* nothing since */
+  assert_int_equal(n, 0);
+  assert_int_equal(all, model != CUPID_PD_BOND);
+  if (wk) CUPID_ASSERT_OK(cupid_pd_operator_assemble_weighted(b.op, w, &K));
+  else CUPID_ASSERT_OK(cupid_pd_operator_assemble(b.op, &K));
+  const cupid_int before = cupid_pd_operator_num_broken(b.op);
+  cupid_pd_precrack c = {.normal = 1, .at = 4.0, .lo = {0, 0, -1}, .hi = {3, 0, 9}};
+  cupid_int removed;
+  CUPID_ASSERT_OK(cupid_pd_operator_precrack(b.op, &c, &removed)); /* a few rows' bonds */
+  CUPID_ASSERT_OK(cupid_pd_operator_take_changed(b.op, &rows, &n, &all));
+  if (model != CUPID_PD_BOND) {
+    assert_true(all);
+    goto done;
+  }
+  assert_false(all);
+  assert_true(n > 0 && cupid_pd_operator_num_broken(b.op) > before);
+  for (cupid_int k = 1; k < n; k++) assert_true(rows[k] > rows[k - 1]); /* sorted, unique */
+  CUPID_ASSERT_OK(cupid_pd_operator_assemble_node_rows(b.op, wk, rows, n, &R));
+  for (cupid_int k = 0; k < n; k++) {
+    cupid_csr_zero_row(K, rows[k]);
+    CUPID_ASSERT_OK(cupid_csr_add_row(K, rows[k], R, k));
+  }
+  if (wk) CUPID_ASSERT_OK(cupid_pd_operator_assemble_weighted(b.op, w, &Kw));
+  else CUPID_ASSERT_OK(cupid_pd_operator_assemble(b.op, &Kw));
+  cupid_int zeros = 0, changed = 0;
+  for (cupid_int r = 0; r < b.n; r++) {
+    const int listed = bsearch(&r, rows, (size_t)n, sizeof *rows, cmp_node) != NULL;
+    for (cupid_int p = K->rowptr[r]; p < K->rowptr[r + 1]; p++) {
+      const double *a = K->val + 9 * p, *e = cupid_csr_find(Kw, r, K->col[p]);
+      if (!e) { /* a broken bond's block, zero */
+        for (int t = 0; t < 9; t++) assert_true(a[t] == 0.0);
+        zeros++;
+        assert_true(listed);
+        continue;
+      }
+      for (int t = 0; t < 9; t++) assert_true(a[t] == e[t]); /* to the bit */
+    }
+    changed += listed;
+  }
+  assert_int_equal(cupid_csr_nnz(K), cupid_csr_nnz(Kw) + 9 * zeros);
+  print_message("patched K (surface %d, weighted %d): %lld of %lld rows again, %lld zero blocks\n",
+                (int)surface, weighted, (long long)changed, (long long)b.n, (long long)zeros);
+  assert_true(zeros > 0 && changed < b.n);
+  /* a row that lacks a column of the row added: an error, not a write out of the pattern */
+  assert_int_equal(cupid_csr_add_row(Kw, rows[0], K, rows[0]), CUPID_ERR_ARGUMENT);
+  cupid_error_clear();
+done:
+  cupid_free(&rows);
+  cupid_csr_destroy(&K), cupid_csr_destroy(&Kw), cupid_csr_destroy(&R);
+  free(w);
+  destroy(&b);
+}
+
+static void test_patched_rows(void **state) {
+  (void)state;
+  patch_and_compare(CUPID_PD_BOND, CUPID_SURFACE_NONE, 0);
+  patch_and_compare(CUPID_PD_BOND, CUPID_SURFACE_NONE, 1);
+  patch_and_compare(CUPID_PD_BOND, CUPID_SURFACE_ENERGY, 1);
+  patch_and_compare(CUPID_PD_LPS, CUPID_SURFACE_NONE, 0);
+}
+
 static void test_corrected_lps_refused(void **state) {
   (void)state;
   const cupid_box box = box3(0, 9, 0, 8, 0, 5);
@@ -787,6 +872,7 @@ int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_precrack_count),     cmocka_unit_test(test_cracked_operator),
       cmocka_unit_test(test_cracked_uniform),    cmocka_unit_test(test_corrected_lps_refused),
+      cmocka_unit_test(test_patched_rows),
       cmocka_unit_test(test_stretch_threshold),  cmocka_unit_test(test_protect_damage_energy),
       cmocka_unit_test(test_threads),            cmocka_unit_test(test_isolated_node),
       cmocka_unit_test(test_copy_broken),        cmocka_unit_test(test_scan_paths),

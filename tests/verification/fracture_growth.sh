@@ -321,6 +321,23 @@ a, b = (json.load(open(d + "/summary.json"))["fracture"] for d in sys.argv[1:])
 assert a["precracks"] == 2 and a["precrack_bonds_removed"] == b["precrack_bonds_removed"] > 0, (a, b)
 PY
 
+# 3f. K patched in the rows the broken bonds changed (the method's update_rows, growth.c
+# patch_rows) against K assembled whole after every round (CUPID_GROWTH_WHOLE_K=1, as before):
+# the same run to the bit (every file byte for byte, summary.json but its timings), since each
+# patched row is the whole assembly's, the downdate's terms are read off the same blocks in the
+# same order, and K is assembled whole before each factorisation (whose ordering reads the
+# pattern). On the plate (PD only), the plate pulled apart with every round downdated (ties,
+# held rows, a collapse) and the Arlequin bar pulled apart (its PD block weighted, the beam's
+# rows kept).
+same() { "$PY" "$SRC/tests/tools/same_outputs.py" "$1" "$2"; }
+CUPID_GROWTH_WHOLE_K=1 "$CUPID" run "$M" -o grow2_whole --quiet --threads 2 && same grow2 grow2_whole \
+  && ok || bad "the plate: K patched against K whole"
+CUPID_GROWTH_WHOLE_K=1 CUPID_GROWTH_DOWNDATE_ALL=1 "$CUPID" run "$SRC/tests/models/growth/pulled_apart.yaml" \
+  -o apart_named_whole --quiet 2>/dev/null; rc=$?
+[ $rc -eq 2 ] && same apart_named apart_named_whole && ok || bad "the plate pulled apart: K patched against K whole"
+CUPID_GROWTH_WHOLE_K=1 "$CUPID" run bar_static.yaml -o bar_whole --quiet 2>/dev/null; rc=$?
+[ $rc -eq 2 ] && same bar bar_whole && ok || bad "the Arlequin bar: K patched against K whole"
+
 # 4. errors
 out=$("$CUPID" check "$M" --set analysis.type=dynamic 2>&1); rc=$?
 [ $rc -eq 1 ] && grep -q "analysis.steps: is only used with type: static" <<<"$out" && ok || bad "steps with type dynamic: $out"
