@@ -16,17 +16,17 @@
 #    broken bonds; the bonds must not depend on the thread count);
 #  - tests/models/growth/senb_interface.yaml on 3 slabs: the crack reaches the overlap x in [8,
 #    12], and the run stops at the same step with the same message (the count, the largest
-#    ratio and the place found over the ranks), exit status 2, the steps before written; and
-#    on 2 ranks with `--replicate`, which keeps the replicated model on PETSc's assembled
-#    solves (set up afresh for every re-solve: 35 s for the whole SENB above, so the short
-#    run here);
-#  - the SENB tied by Lagrange multipliers (issue 34) on 2 and 3 ranks of the PETSc engine's
-#    assembled solves (about 30 s each) against its direct path;
+#    ratio and the place found over the ranks), exit status 2, the steps before written;
+#  - the SENB tied by Lagrange multipliers (issue 34) on 2 ranks of the PETSc engine's
+#    assembled solves (about 100 s: the replicated model, whose solves are set up afresh for
+#    every re-solve) against its direct path. (The crack into the overlap on 2 replicated
+#    ranks took 200 s of the CI's serial MPI stage for that path again: dropped, as were the
+#    3-rank Lagrange and fictitious-node runs, 140 s.)
 #  - the SENB with fictitious nodes (issue 34, each interface balanced: the default) on one
-#    process and 2 and 3 slabs against its direct path (GMRES on the last LU; 510 bonds);
+#    process and 2 slabs against its direct path (GMRES on the last LU; 510 bonds);
 #  - the balance on slabs (C = K^T R of the whole model on each rank, its share): two bars on 2
 #    and 3 slabs against the direct path (1e-8 of the largest displacement).
-# Skipped (77) without PETSc. 200-280 s on 2 cores (the 3-rank runs oversubscribe them).
+# Skipped (77) without PETSc. About 6 minutes on 2 cores (the 3-rank runs oversubscribe them).
 . "$(dirname "$0")/../tools/mpi_checks.sh"
 E=$SRC/examples/fracture/senb_coupled.yaml
 I=$SRC/tests/models/growth/senb_interface.yaml
@@ -51,17 +51,15 @@ OMP_NUM_THREADS=2 "$MPIEXEC" -n 2 "$CUPID" run "$E" -o lpsslab2 "${coarse[@]}" "
 # no slab path), the same bonds in the same steps
 lag=(--set 'coupling={method: lagrange}')
 "$CUPID" run "$E" -o lgdirect "${coarse[@]}" "${lag[@]}" --solver direct && ok || bad "Lagrange, direct"
-for n in 2 3; do
-  "$MPIEXEC" -n $n "$CUPID" run "$E" -o lg$n "${coarse[@]}" "${lag[@]}" --solver petsc && ok || bad "Lagrange, $n ranks"
-done
+# (2 ranks: 3 took 104 s more of the CI's serial MPI stage for the same replicated path)
+"$MPIEXEC" -n 2 "$CUPID" run "$E" -o lg2 "${coarse[@]}" "${lag[@]}" --solver petsc && ok || bad "Lagrange, 2 ranks"
 # Fictitious nodes (issue 34; the default, each interface balanced): the same SENB on the direct
 # path (GMRES on the last LU), the kept matrix-free solve on one process and 2 and 3 PD slabs
 fic=(--set 'coupling={method: fictitious}' --set output.pd_nodes=true)
 "$CUPID" run "$E" -o fidirect "${coarse[@]}" "${fic[@]}" --solver direct && ok || bad "fictitious, direct"
 "$CUPID" run "$E" -o fipetsc1 "${coarse[@]}" "${fic[@]}" --solver petsc && ok || bad "fictitious, PETSc, one process"
-for n in 2 3; do
-  "$MPIEXEC" -n $n "$CUPID" run "$E" -o fislab$n "${coarse[@]}" "${fic[@]}" && ok || bad "fictitious, $n slabs"
-done
+# (2 slabs; the interior slab of 3 is the Arlequin SENB's slab3 above)
+"$MPIEXEC" -n 2 "$CUPID" run "$E" -o fislab2 "${coarse[@]}" "${fic[@]}" && ok || bad "fictitious, 2 slabs"
 # The balance on slabs (C = K^T R of the whole model, each rank its share): the pre-cracked bar
 # with a 5 mm fictitious element (each interface balanced) and the small bar of
 # verification.coupling_quality (one balance: its one B2 reaches across the region) on 2 and 3
@@ -91,8 +89,6 @@ for ref, runs in (("bbdirect", ("bb2", "bb3")), ("bqdirect", ("bq2", "bq3"))):
         print("%s against %s: %.1e, imbalance %.1e" % (d, ref, diff, imb))
         assert diff <= 1e-8 and imb <= 1e-8, (d, diff, imb)
 PY
-"$MPIEXEC" -n 2 "$CUPID" run "$I" -o stoprepl2 --quiet --solver petsc --replicate 2> stoprepl2.err
-[ $? -eq 2 ] && ok || bad "2 ranks replicated into an overlap: exit status 2"
 msg() { grep -o "cupid: crack growth stopped.*" "$1"; }
 [ -n "$(msg stopdirect.err)" ] && [ "$(msg stopdirect.err)" = "$(msg stopslab3.err)" ] &&
   [ "$(grep -c "crack growth stopped" stopslab3.err)" = 1 ] &&
@@ -118,26 +114,23 @@ for d in ("petsc1", "slab2", "slab3"):
     same("direct", d)
 same("lpsdirect", "lpsslab2")
 same("stopdirect", "stopslab3", nodes=False)
-same("stopdirect", "stoprepl2", nodes=False)
-for d in ("lg2", "lg3"):
-    same("lgdirect", d)
-for d in ("fipetsc1", "fislab2", "fislab3"):
+same("lgdirect", "lg2")
+for d in ("fipetsc1", "fislab2"):
     same("fidirect", d)
 assert int(rows("fidirect")[-1]["broken_bonds"]) > 400, rows("fidirect")[-1]
 assert int(rows("lgdirect")[-1]["broken_bonds"]) > 400, rows("lgdirect")[-1]
 assert int(rows("direct")[-1]["broken_bonds"]) > 400, rows("direct")[-1]
 assert int(rows("lpsdirect")[-1]["broken_bonds"]) > 400, rows("lpsdirect")[-1]
 s = {d: json.load(open(d + "/summary.json"))
-     for d in ("direct", "petsc1", "slab2", "slab3", "lpsslab2", "stopdirect", "stopslab3", "stoprepl2")}
+     for d in ("direct", "petsc1", "slab2", "slab3", "lpsslab2", "stopdirect", "stopslab3", "lg2")}
 assert s["direct"]["fracture"]["solves"]["resolve"] == "downdate", s["direct"]["fracture"]["solves"]
 for d, n in (("petsc1", 0), ("slab2", 2), ("slab3", 3), ("lpsslab2", 2), ("stopslab3", 3)):
     assert s[d]["fracture"]["solves"]["resolve"] == "matrix-free", (d, s[d]["fracture"]["solves"])
     assert s[d]["solver"]["operator"] == "matrix-free", (d, s[d]["solver"])
     assert n == 0 or s[d]["solver"]["pd_slabs"]["ranks"] == n, (d, s[d]["solver"])
-assert "pd_slabs" not in s["petsc1"]["solver"] and "pd_slabs" not in s["stoprepl2"]["solver"]
-assert s["stoprepl2"]["fracture"]["solves"]["resolve"] == "engine", s["stoprepl2"]["fracture"]["solves"]
+assert "pd_slabs" not in s["petsc1"]["solver"] and "pd_slabs" not in s["lg2"]["solver"]
+assert s["lg2"]["fracture"]["solves"]["resolve"] == "engine", s["lg2"]["fracture"]["solves"]
 assert s["stopdirect"]["fracture"]["stopped_step"] == s["stopslab3"]["fracture"]["stopped_step"] > 1
-assert s["stopdirect"]["fracture"]["stopped_step"] == s["stoprepl2"]["fracture"]["stopped_step"]
 for d in ("petsc1", "slab2", "slab3"):  # the gathered totals of summary.json
     for k in ("broken_bonds", "damaged_nodes"):
         assert s[d]["fracture"][k] == s["direct"]["fracture"][k], (d, k)
