@@ -92,7 +92,12 @@ void cupid_checkpoint_write_abort(cupid_checkpoint_writer *w);
  *  ("nothing to resume") or neither is intact (truncated, a flipped byte); CUPID_ERR_MODEL: it
  *  was written for another identity (the message quotes both). */
 cupid_status cupid_checkpoint_open(const char *path, const char *identity, cupid_checkpoint *ck);
-/** 1 when the checkpoint opened is PATH.prev (PATH was missing or damaged). */
+/** Open PATH.prev alone (the checkpoint PATH replaced): under mpirun, a rank whose latest is a
+ *  step ahead of another's (the ranks were killed between their commits) resumes from it. The
+ *  errors of cupid_checkpoint_open(); CUPID_ERR_IO when PATH.prev is missing or damaged. */
+cupid_status cupid_checkpoint_open_previous(const char *path, const char *identity,
+                                            cupid_checkpoint *ck);
+/** 1 when the checkpoint opened is PATH.prev (PATH was missing or damaged, or asked for). */
 int cupid_checkpoint_is_previous(const cupid_checkpoint ck);
 /** Section @p name: a pointer into the checkpoint (valid until close) and its size;
  *  CUPID_ERR_IO when it has none. */

@@ -218,7 +218,9 @@ static size_t first_difference(const char *a, size_t na, const char *b, int *la,
   return line;
 }
 
-cupid_status cupid_checkpoint_open(const char *path, const char *identity, cupid_checkpoint *out) {
+/* The intact one of PATH and PATH.prev, from paths[first] on (first = 1: PATH.prev only). */
+static cupid_status open_from(const char *path, const char *identity, int first,
+                              cupid_checkpoint *out) {
   CUPID_CHECK(path && identity && out, CUPID_ERR_ARGUMENT, "checkpoint: NULL argument");
   *out = NULL;
   struct cupid_checkpoint_private *ck = NULL;
@@ -228,7 +230,7 @@ cupid_status cupid_checkpoint_open(const char *path, const char *identity, cupid
   const char *paths[2] = {path, prev};
   int found = 0;
   CUPID_CALL(cupid_calloc(1, sizeof *ck, "checkpoint", &ck));
-  for (int k = 0; k < 2 && !ck->data; k++) {
+  for (int k = first; k < 2 && !ck->data; k++) {
     unsigned char *d = NULL;
     size_t n = 0;
     CUPID_TRY(slurp(paths[k], &d, &n));
@@ -236,9 +238,11 @@ cupid_status cupid_checkpoint_open(const char *path, const char *identity, cupid
     if (d && intact(d, n, &ck->count)) ck->data = d, ck->previous = k;
     else cupid_free(&d);
   }
-  CUPID_TRY_CHECK(found, CUPID_ERR_IO, "nothing to resume: no checkpoint '%s'", path);
-  CUPID_TRY_CHECK(ck->data, CUPID_ERR_IO,
+  CUPID_TRY_CHECK(found, CUPID_ERR_IO, "nothing to resume: no checkpoint '%s'", paths[first]);
+  CUPID_TRY_CHECK(ck->data || first, CUPID_ERR_IO,
                   "no intact checkpoint: '%s' and '%s' are truncated or corrupt", path, prev);
+  CUPID_TRY_CHECK(ck->data, CUPID_ERR_IO, "the previous checkpoint '%s' is truncated or corrupt",
+                  prev);
   const unsigned char *id = NULL;
   size_t idn = 0;
   find(ck, "identity", &id, &idn);
@@ -256,6 +260,15 @@ cupid_status cupid_checkpoint_open(const char *path, const char *identity, cupid
 cleanup:
   cupid_checkpoint_close(&ck);
   return st;
+}
+
+cupid_status cupid_checkpoint_open(const char *path, const char *identity, cupid_checkpoint *out) {
+  return open_from(path, identity, 0, out);
+}
+
+cupid_status cupid_checkpoint_open_previous(const char *path, const char *identity,
+                                            cupid_checkpoint *out) {
+  return open_from(path, identity, 1, out);
 }
 
 int cupid_checkpoint_is_previous(const cupid_checkpoint ck) { return ck ? ck->previous : 0; }

@@ -73,10 +73,11 @@ static cupid_status checkpoint_path(const cupid_problem_state *prob, char **path
 /* The checkpoint at path, if it is this run's (another run's: a model error naming the model
  * file this run read). */
 static cupid_status open_identified(const cupid_problem_state *prob, const char *path,
-                                    cupid_checkpoint *ck) {
+                                    int previous, cupid_checkpoint *ck) {
   char id[8192];
   CUPID_CALL(identity(prob, id, sizeof id));
-  cupid_status st = cupid_checkpoint_open(path, id, ck);
+  cupid_status st = previous ? cupid_checkpoint_open_previous(path, id, ck)
+                             : cupid_checkpoint_open(path, id, ck);
   if (st == CUPID_ERR_MODEL) {
     char why[2048];
     snprintf(why, sizeof why, "%s", cupid_error_message());
@@ -235,6 +236,58 @@ cupid_status cupid_problem_checkpoint_fracture(cupid_problem_state *prob, const 
   return restore_fracture(prob, ck);
 }
 
+/* The ranks' agreement on the step to resume from (a collective of every rank, whatever its
+ * own status): the largest failure's exit code, the lowest and highest step. */
+static void ranks_agree(cupid_status st, cupid_int step, int *worst, int *lo, int *hi) {
+  *worst = cupid_petsc_max_int(st == CUPID_SUCCESS ? 0 : cupid_status_exit_code(st));
+  *lo = -cupid_petsc_max_int(-(int)step);
+  *hi = cupid_petsc_max_int((int)step);
+}
+
+/* This rank's checkpoint at path (its "step" section in *step), the one every rank resumes
+ * from. The ranks commit their checkpoints each in its own time, so a SIGKILL between two
+ * commits leaves some ranks a checkpoint ahead; those go back to the one their latest replaced
+ * (PATH.prev), which is of the others' step. Collective under mpirun. */
+static cupid_status open_agreed(cupid_problem_state *prob, const char *path,
+                                const char *step_section, int say, cupid_checkpoint *ck) {
+  *ck = NULL;
+  cupid_int step = -1;
+  cupid_status st = open_identified(prob, path, 0, ck);
+  if (st == CUPID_SUCCESS && say && cupid_checkpoint_is_previous(*ck))
+    cupid_problem_progress(prob, "resume: '%s' was damaged or missing; its previous one is used",
+                           path);
+  if (st == CUPID_SUCCESS) st = cupid_checkpoint_read(*ck, step_section, &step, sizeof step);
+  if (cupid_petsc_size() == 1) return st;
+  int worst = 0, lo = 0, hi = 0;
+  ranks_agree(st, step, &worst, &lo, &hi);
+  if (!worst && lo != hi) {
+    if (step > lo) {
+      cupid_checkpoint_close(ck);
+      step = -1;
+      st = open_identified(prob, path, 1, ck);
+      if (st == CUPID_SUCCESS) st = cupid_checkpoint_read(*ck, step_section, &step, sizeof step);
+      if (st == CUPID_SUCCESS && step != lo)
+        st = CUPID_ERROR(CUPID_ERR_IO, "the ranks' checkpoints are of different steps (%d to %d) "
+                         "and this rank's previous one is of step %lld: run again without "
+                         "--resume", lo, hi, (long long)step);
+    }
+    const int was_hi = hi;
+    ranks_agree(st, step, &worst, &lo, &hi);
+    if (!worst && lo == hi && say)
+      cupid_problem_progress(prob, "resume: the ranks' latest checkpoints are of steps %d to %d "
+                             "(a rank stopped between their commits): those ahead go back to "
+                             "their previous one, step %d", lo, was_hi, lo);
+  }
+  if (st == CUPID_SUCCESS && worst)
+    st = CUPID_ERROR(worst == 1 ? CUPID_ERR_MODEL : CUPID_ERR_IO,
+                     "another rank cannot resume from its checkpoint");
+  if (st == CUPID_SUCCESS && lo != hi)
+    st = CUPID_ERROR(CUPID_ERR_IO, "the ranks' checkpoints are of different steps (%d to %d): "
+                     "run again without --resume", lo, hi);
+  if (st != CUPID_SUCCESS) cupid_checkpoint_close(ck);
+  return st;
+}
+
 cupid_status cupid_problem_checkpoint_peek(cupid_problem_state *prob, const char *section,
                                            void **data, size_t *bytes) {
   char *path = NULL;
@@ -242,7 +295,7 @@ cupid_status cupid_problem_checkpoint_peek(cupid_problem_state *prob, const char
   const void *at = NULL;
   *data = NULL, *bytes = 0;
   cupid_status st = checkpoint_path(prob, &path);
-  if (st == CUPID_SUCCESS) st = open_identified(prob, path, &ck);
+  if (st == CUPID_SUCCESS) st = open_agreed(prob, path, "step", 0, &ck);
   if (st == CUPID_SUCCESS) st = cupid_checkpoint_section(ck, section, &at, bytes);
   if (st == CUPID_SUCCESS) st = cupid_malloc(*bytes + 1, 1, "a checkpoint's section", data);
   if (st == CUPID_SUCCESS) memcpy(*data, at, *bytes);
@@ -253,23 +306,7 @@ cupid_status cupid_problem_checkpoint_peek(cupid_problem_state *prob, const char
 
 cupid_status cupid_problem_checkpoint_open(cupid_problem_state *prob, const char *step_section,
                                            cupid_checkpoint *ck) {
-  *ck = NULL;
-  cupid_status st = open_identified(prob, prob->ckpt.path, ck);
-  cupid_int step = -1;
-  if (st == CUPID_SUCCESS) st = cupid_checkpoint_read(*ck, step_section, &step, sizeof step);
-  if (cupid_petsc_size() > 1) { /* every rank at the same step, or none resumes */
-    const int worst = cupid_petsc_max_int(st == CUPID_SUCCESS ? 0 : cupid_status_exit_code(st));
-    if (st == CUPID_SUCCESS && worst)
-      st = CUPID_ERROR(worst == 1 ? CUPID_ERR_MODEL : CUPID_ERR_IO,
-                       "another rank cannot resume from its checkpoint");
-    const int lo = -cupid_petsc_max_int(-(int)step), hi = cupid_petsc_max_int((int)step);
-    if (st == CUPID_SUCCESS && lo != hi)
-      st = CUPID_ERROR(CUPID_ERR_IO, "the ranks' checkpoints are of different steps (%d to %d): "
-                       "one rank's latest was lost; run again without --resume", lo, hi);
-  }
-  if (st == CUPID_SUCCESS && cupid_checkpoint_is_previous(*ck))
-    cupid_problem_progress(prob, "resume: '%s' was damaged or missing; its previous one is used",
-                           prob->ckpt.path);
+  cupid_status st = open_agreed(prob, prob->ckpt.path, step_section, 1, ck);
   if (st == CUPID_SUCCESS) st = restore_common(prob, *ck);
   if (st != CUPID_SUCCESS) cupid_checkpoint_close(ck);
   return st;

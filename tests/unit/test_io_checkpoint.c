@@ -4,6 +4,8 @@
  *  - round trip: two checkpoints written in turn; the second reads back bit for bit, the first
  *    is kept as PATH.prev;
  *  - a flipped byte in PATH (anywhere: header, a section, the CRC): PATH.prev is used;
+ *  - PATH.prev asked for (a rank a checkpoint ahead of the others under mpirun): its data
+ *    though PATH is intact; another identity refused; damaged: CUPID_ERR_IO naming it;
  *  - PATH truncated and PATH.prev flipped: CUPID_ERR_IO, "no intact checkpoint";
  *  - no checkpoint: CUPID_ERR_IO, "nothing to resume";
  *  - another identity (the model or a result-changing option changed): CUPID_ERR_MODEL quoting
@@ -123,6 +125,25 @@ static void refusals(void **state) {
   assert_int_equal(cupid_checkpoint_read(ck, "u", v, sizeof v), CUPID_ERR_IO);
   cupid_error_clear();
   cupid_checkpoint_close(&ck);
+  /* PATH.prev asked for: the previous one though PATH is intact */
+  static double y[N];
+  long s = 0;
+  CUPID_ASSERT_OK(cupid_checkpoint_open_previous(path, "model A", &ck));
+  assert_int_equal(cupid_checkpoint_is_previous(ck), 1);
+  CUPID_ASSERT_OK(cupid_checkpoint_read(ck, "step", &s, sizeof s));
+  CUPID_ASSERT_OK(cupid_checkpoint_read(ck, "u", y, sizeof y));
+  assert_int_equal(s, 10);
+  assert_memory_equal(a, y, sizeof y);
+  cupid_checkpoint_close(&ck);
+  assert_int_equal(cupid_checkpoint_open_previous(path, "model B", &ck), CUPID_ERR_MODEL);
+  assert_null(ck);
+  cupid_error_clear();
+  flip(prev, 100);
+  assert_int_equal(cupid_checkpoint_open_previous(path, "model A", &ck), CUPID_ERR_IO);
+  assert_null(ck);
+  assert_non_null(strstr(cupid_error_message(), "previous checkpoint"));
+  cupid_error_clear();
+  flip(prev, 100);
   /* a flipped byte anywhere in PATH: the previous one */
   const long n = size_of(path), spots[4] = {3, 40, n / 2, n - 10};
   for (int k = 0; k < 4; k++) {
