@@ -576,6 +576,19 @@ cupid_status cupid_gmres_resolve(const cupid_linear_operator *A, const cupid_dir
                                  void *pc_ctx, const double *f, double *u, double rtol,
                                  int max_it, cupid_solve_info *info);
 
+/**
+ * As cupid_gmres_resolve(), by CG where @p A is symmetric (GMRES otherwise): the re-solves of
+ * crack growth on the built-in `krylov` engine, matrix-free, preconditioned by the kept factor
+ * of the intact twin (src/problem/growth_matrix_free.c). From u's free values to |b - A u| <=
+ * rtol |b|, as from zero. A CG breakdown (p'Ap <= 0: a mechanism) is CUPID_ERR_NUMERIC; u then
+ * holds the last iterate, where a part that lost its support ran away (non-finite: untouched).
+ * @p pc must be symmetric positive definite on the free DOFs for CG.
+ */
+cupid_status cupid_krylov_resolve(const cupid_linear_operator *A, const cupid_dirichlet_t *bc,
+                                  cupid_status (*pc)(void *ctx, const double *r, double *z),
+                                  void *pc_ctx, const double *f, double *u, double rtol,
+                                  int max_it, cupid_solve_info *info);
+
 /** The engine of a cupid_solver_kind (DIRECT or PETSC; NULL otherwise). */
 const cupid_solver_type *cupid_solver_type_get(int kind);
 /** The k-th engine of the table (0, 1, ...; NULL past the end): the factorisation first, then

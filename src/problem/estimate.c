@@ -523,6 +523,13 @@ const cupid_solver_cost *cupid_problem_path_cost(const cupid_problem_state *prob
  * least memory (the size guard then says what it needs). Analyses other than static take the
  * first engine (the integrators factor or need no solve). */
 #define AUTO_MEMORY_SHARE 0.25
+/* Load steps and crack growth: the factorisation up to half the limit. Its re-solves are a
+ * downdate and a triangular solve each, where the krylov engine's kept solve takes ~35-45 CG
+ * iterations (the twin's factor is the intact grid's): the coupled SENB at h = 1 grew its
+ * crack in 15 s on the direct path and 400-800 s on the matrix-free one (493 re-solves, 22,283
+ * iterations; verification.fracture_krylov, bench/README.md). The estimate is close for these
+ * models (h = 1/3: 8.99 GB estimated, 9.24 GB measured). */
+#define AUTO_GROWTH_MEMORY_SHARE 0.5
 cupid_status cupid_problem_auto_engine(const cupid_problem_state *prob,
                                        const cupid_solver_type **engine, char *why, size_t len) {
   const cupid_solver_type *first = cupid_solver_type_at(0), *pick = NULL, *lean = NULL;
@@ -538,9 +545,9 @@ cupid_status cupid_problem_auto_engine(const cupid_problem_state *prob,
   if (!first->iterative && (m->analysis.steps > 0 || (m->has_peridynamics && m->pd.fracture.has_fracture))) {
     /* load steps and crack growth solve many times with one K, changed by few bonds: one
      * factorisation serves them all (downdated as bonds break, growth.c), where an iterative
-     * engine would start every solve from nothing */
+     * engine iterates afresh at every re-solve */
     const cupid_solver_cost *c = cupid_problem_path_cost(prob, first, &factor, &krylov);
-    if (c->bytes <= AUTO_MEMORY_SHARE * limit) {
+    if (c->bytes <= AUTO_GROWTH_MEMORY_SHARE * limit) {
       snprintf(why, len, "auto: %s (%s; load steps reuse one factorisation), estimate %.3g s and "
                "%.3g GB", first->name, c->what, c->seconds, c->bytes / 1e9);
       *engine = first;

@@ -986,22 +986,25 @@ static cupid_status downdate_factor(growth_run *g, cupid_csr_t *Kold, int partia
   return st;
 }
 
-/* The growth solves with its own CHOLMOD factor (downdates, CG): an SPD method on a direct
- * engine; otherwise every solve is the engine's. */
+/* The growth solves with its own CHOLMOD factor (downdates, CG): an SPD method whose K is
+ * assembled on one process (the direct engine, or the built-in krylov one where the model is
+ * not solved matrix-free: its assembled solve is the same factorisation, which every re-solve
+ * repeated before); otherwise every solve is the engine's. */
 static int own_factor(const cupid_problem_state *prob) {
-  return prob->method->matrix == CUPID_MATRIX_SPD && !prob->engine->iterative;
+  return prob->method->matrix == CUPID_MATRIX_SPD && !prob->engine->distributed;
 }
 
-/* The kept matrix-free PETSc solve (growth_matrix_free.c): PD slabs, or a PD-only 3D or
- * Arlequin model whose method solves it matrix-free on this engine (--solver petsc), unless
- * --assembled asks for the engine's solves of the assembled K. A coupled model needs the
- * method's kept operator and PETSc's kept solve, on one process (a model replicated on
- * several ranks assembles K). */
+/* The kept matrix-free solve (growth_matrix_free.c): PD slabs, or a PD-only 3D or coupled
+ * model whose method solves it matrix-free on this engine (--solver petsc, or the built-in
+ * krylov: a coupled model), unless --assembled asks for the engine's solves of the assembled
+ * K. A coupled model needs the method's kept operator and a kept solve on one process
+ * (PETSc's, or the twin's factor on the built-in engine; a model replicated on several ranks
+ * assembles K). */
 static int matrix_free(const cupid_problem_state *prob) {
   if (prob->slab) return 1;
   if (!prob->grid || prob->opts->assembled || !prob->method->matrix_free(prob, prob->engine)) return 0;
-  return !prob->beam || (prob->method->growth_operator && prob->engine->distributed &&
-                         cupid_petsc_size() == 1);
+  return !prob->beam || (prob->method->growth_operator && cupid_petsc_size() == 1 &&
+                         (prob->engine->distributed || prob->engine->iterative));
 }
 
 /* Solve at the current load (K assembled again when bonds broke): CG preconditioned by the

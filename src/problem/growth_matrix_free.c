@@ -35,6 +35,10 @@
 
 #define RUNAWAY_FACTOR 10
 #define RUNAWAY_MIN 300
+/* The built-in engine's re-solves: the one-shot krylov solve's tolerance (iterative.c) and
+ * iteration bound before the first solve sets the runaway limit. */
+#define TWIN_RTOL 1e-10
+#define TWIN_MAX_IT 2000
 
 /* A status agreed over the ranks: a slab's, or a replicated model's (PETSc is collective). */
 static cupid_status agree(cupid_status st) {
@@ -44,6 +48,8 @@ static cupid_status agree(cupid_status st) {
 void cupid_growth_mf_free(cupid_growth_mf *gs) {
   cupid_petsc_nodes_solver_destroy(&gs->solver);
   cupid_krylov_solver_destroy(&gs->coupled);
+  cupid_direct_factor_destroy(&gs->twin);
+  cupid_free(&gs->twin_t);
   if (gs->owner_destroy) gs->owner_destroy(&gs->owner);
   gs->owner_destroy = NULL;
   cupid_petsc_halo_destroy(&gs->halo);
@@ -67,6 +73,57 @@ static cupid_status linear_apply(void *ctx, const double *x, double *y) {
   return cupid_krylov_apply(ctx, x, y);
 }
 
+/* The built-in krylov engine (one process, no PETSc): the twin's factor on the free DOFs of
+ * the first solve (CHOLMOD, or UMFPACK for a non-symmetric method), kept for the run as the
+ * PETSc path keeps MUMPS's. Nodes held later are fixed in bc but not in the factor: the
+ * preconditioner drops their rows and columns (precondition_twin), the principal part of the
+ * factor's inverse on the DOFs still free, as symmetric positive definite as the whole. */
+static cupid_status twin_factor(cupid_problem_state *prob, cupid_growth_mf *gs, const cupid_csr_t *P) {
+  cupid_solve_info info;
+  memset(&info, 0, sizeof info);
+  const cupid_matrix_kind kind = gs->L.symmetric ? CUPID_MATRIX_SPD : CUPID_MATRIX_GENERAL;
+  const double t0 = cupid_wtime();
+  CUPID_CALL(cupid_direct_factor_create_kind(P, kind, prob->bc, &gs->twin, &info));
+  gs->twin_setup_s = cupid_wtime() - t0;
+  gs->bc = prob->bc;
+  return cupid_calloc((size_t)prob->ndof + 1, sizeof *gs->twin_t, "twin work vector", &gs->twin_t);
+}
+
+/* z = M^-1 r for cupid_krylov_resolve: r's free entries through the twin's factor, z zero on
+ * the fixed DOFs (those fixed since the factorisation too). */
+static cupid_status precondition_twin(void *ctx, const double *r, double *z) {
+  cupid_growth_mf *gs = ctx;
+  const cupid_dirichlet_t *bc = gs->bc;
+  double *t = gs->twin_t;
+  for (cupid_int d = 0; d < bc->n; d++) t[d] = bc->fixed[d] ? 0.0 : r[d];
+  CUPID_CALL(cupid_direct_factor_solve(gs->twin, t, z));
+  for (cupid_int d = 0; d < bc->n; d++)
+    if (bc->fixed[d]) z[d] = 0.0;
+  return CUPID_SUCCESS;
+}
+
+/* The krylov engine's re-solve from prob->u (zero at the first): CUPID_ERR_NUMERIC when it
+ * breaks down or does not converge within the limit, u then its last iterate (where a
+ * mechanism ran away: cupid_growth_mf_hold_runaway), as the PETSc solve's. */
+static cupid_status twin_solve(cupid_problem_state *prob, cupid_growth_mf *gs, int guess) {
+  if (!guess) memset(prob->u, 0, (size_t)prob->ndof * sizeof *prob->u);
+  const int limit = gs->limit > 0 ? gs->limit : TWIN_MAX_IT;
+  cupid_status st = cupid_krylov_resolve(&gs->L, prob->bc, precondition_twin, gs, prob->f_ext,
+                                         prob->u, TWIN_RTOL, limit, &prob->solve);
+  prob->solve.method = "krylov";
+  prob->solve.matrix_free = 1;
+  snprintf(prob->solve.pc_type, sizeof prob->solve.pc_type, "%s",
+           gs->L.symmetric ? "cholmod" : "umfpack");
+  prob->solve.time_factor = gs->twin_setup_s; /* the factorisation: charged to the first solve */
+  gs->twin_setup_s = 0.0;
+  CUPID_CALL(st);
+  CUPID_CHECK(!strncmp(prob->solve.converged_reason, "CONVERGED", 9), CUPID_ERR_NUMERIC,
+              "the Krylov re-solve (%s + the twin's factor) did not converge in %d iterations: "
+              "relative residual %.2e (rtol %.0e)", prob->solve.ksp_type, prob->solve.iterations,
+              prob->solve.residual, TWIN_RTOL);
+  return CUPID_SUCCESS;
+}
+
 /* The kept solver at the first solve: CG + GAMG on the PD grid's node operator, or a coupled
  * model's operator (the method's growth_operator, patch-tested as the one-shot solve is) with
  * the Cholesky factor of its twin by MUMPS (method_coupled.c's choice). */
@@ -83,14 +140,15 @@ static cupid_status create_solver(cupid_problem_state *prob, cupid_growth_mf *gs
   gs->owner = owner.ctx, gs->owner_destroy = owner.destroy;
   cupid_status st = cupid_problem_patch_test(prob, linear_apply, &gs->L); /* collective */
   const cupid_krylov_options ko = {.factor_package = "mumps"};
-  if (st == CUPID_SUCCESS) st = agree(cupid_krylov_solver_create(&gs->L, P, prob->bc, &ko, &gs->coupled));
-  cupid_csr_destroy(&P); /* in PETSc's factor now */
+  if (st == CUPID_SUCCESS && !prob->engine->distributed) st = twin_factor(prob, gs, P);
+  else if (st == CUPID_SUCCESS) st = agree(cupid_krylov_solver_create(&gs->L, P, prob->bc, &ko, &gs->coupled));
+  cupid_csr_destroy(&P); /* in the factor now */
   return st;
 }
 
 cupid_status cupid_growth_mf_prepare(cupid_problem_state *prob, cupid_growth_mf *gs) {
   CUPID_CALL(setup(prob, gs));
-  if (!gs->solver && !gs->coupled) CUPID_CALL(create_solver(prob, gs));
+  if (!gs->solver && !gs->coupled && !gs->twin) CUPID_CALL(create_solver(prob, gs));
   return CUPID_SUCCESS;
 }
 
@@ -104,10 +162,11 @@ cupid_status cupid_growth_mf_set_limit(cupid_growth_mf *gs, int limit) {
 cupid_status cupid_growth_mf_solve(cupid_problem_state *prob, cupid_growth_mf *gs) {
   CUPID_CALL(setup(prob, gs));
   const double t0 = cupid_wtime();
-  if (!gs->solver && !gs->coupled) CUPID_CALL(create_solver(prob, gs));
+  if (!gs->solver && !gs->coupled && !gs->twin) CUPID_CALL(create_solver(prob, gs));
   const int guess = prob->growth.solves > 0;
   memcpy(gs->u_last, prob->u, (size_t)prob->ndof * sizeof *prob->u);
-  cupid_status st = gs->solver ? cupid_petsc_nodes_solver_solve(gs->solver, prob->f_ext, guess, prob->u, &prob->solve)
+  cupid_status st = gs->solver  ? cupid_petsc_nodes_solver_solve(gs->solver, prob->f_ext, guess, prob->u, &prob->solve)
+                    : gs->twin ? twin_solve(prob, gs, guess)
                                : cupid_krylov_solver_solve(gs->coupled, prob->f_ext, guess, prob->u, &prob->solve);
   cupid_problem_record_solve(prob);
   CUPID_CALL(agree(st));
@@ -122,7 +181,7 @@ cupid_status cupid_growth_mf_solve(cupid_problem_state *prob, cupid_growth_mf *g
   if (!guess) CUPID_CALL(cupid_growth_mf_set_limit(gs, limit));
   gs->setup_s += prob->solve.time_factor;
   gs->solve_s += cupid_wtime() - t0 - prob->solve.time_factor;
-  if (gs->coupled) /* u on every local DOF from the solve; the owned and the beam's rows */
+  if (gs->coupled || gs->twin) /* u on every local DOF from the solve; the owned and the beam's rows */
     return agree(cupid_krylov_apply(&gs->L, prob->u, prob->f_int));
   /* the whole slab's u: owned from the solve, the halo from its owners (a whole grid: every
    * node from the solve) */

@@ -416,11 +416,16 @@ void cupid_growth_lu_free(cupid_growth_lu *s);
  * solution after each round of breaks (a PD-only 3D model: CG + GAMG, the preconditioner built
  * once on the intact grid; a coupled one: the method's operator, CG + the Cholesky factor of
  * its bond-based twin, factored once), and on slabs the search for nodes that lost their
- * support over the ranks. */
+ * support over the ranks. A coupled model on the built-in krylov engine: the same, with the
+ * twin's SuiteSparse factor and cupid_krylov_resolve. */
 typedef struct {
   cupid_petsc_nodes_solver solver; /* PD only */
   cupid_node_operator op;
   cupid_krylov_solver coupled;     /* a coupled model: the method's operator (growth_operator) */
+  cupid_direct_factor twin;        /* ... on the built-in krylov engine: its twin's factor, kept */
+  const cupid_dirichlet_t *bc;     /* ... and the conditions its preconditioner reads */
+  double *twin_t;                  /* ... a DOF-sized work vector */
+  double twin_setup_s;             /* ... its factorisation's seconds, until the first solve */
   cupid_linear_operator L;
   void *owner;                     /* ... its owner, freed by owner_destroy */
   void (*owner_destroy)(void **ctx);

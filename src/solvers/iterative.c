@@ -59,8 +59,11 @@ static cupid_status apply_free(system_free *S, const double *x, double *y) {
 }
 
 /* Preconditioned CG on the free DOFs (x holds the initial guess, 0). */
-static cupid_status solve_cg(system_free *S, const double *b, double *x, double rtol, int max_it,
-                             cupid_solve_info *info) {
+/* CG from x (guess: x's values, else x = 0) to |b - A x| <= rtol |b|, as from zero: a guess
+ * does not change what "solved" means. A breakdown (p'Ap <= 0: not positive definite, e.g. a
+ * mechanism) is CUPID_ERR_NUMERIC with x the last iterate. */
+static cupid_status solve_cg(system_free *S, const double *b, double *x, int guess, double rtol,
+                             int max_it, cupid_solve_info *info) {
   const cupid_int n = S->nf;
   cupid_status st = CUPID_SUCCESS;
   double *r = NULL, *z = NULL, *p = NULL, *q = NULL;
@@ -69,8 +72,12 @@ static cupid_status solve_cg(system_free *S, const double *b, double *x, double 
   CUPID_TRY(cupid_calloc((size_t)n + 1, sizeof *p, "CG vectors", &p));
   CUPID_TRY(cupid_calloc((size_t)n + 1, sizeof *q, "CG vectors", &q));
   memcpy(r, b, (size_t)n * sizeof *r);
+  if (guess) { /* r = b - A x */
+    CUPID_TRY(apply_free(S, x, q));
+    axpy(n, -1.0, q, r);
+  }
   const double bnorm = sqrt(dot(n, b, b));
-  double rnorm = bnorm;
+  double rnorm = guess ? sqrt(dot(n, r, r)) : bnorm;
   CUPID_TRY(precondition(S, r, z));
   memcpy(p, z, (size_t)n * sizeof *p);
   double rz = dot(n, r, z);
@@ -323,7 +330,7 @@ cupid_status cupid_iterative_solve(const cupid_linear_operator *A, const cupid_c
                                             bc, &S.F, NULL));
   info->time_factor = cupid_wtime() - t0;
   t0 = cupid_wtime();
-  if (A->symmetric) CUPID_TRY(solve_cg(&S, b, x, rtol, max_it, info));
+  if (A->symmetric) CUPID_TRY(solve_cg(&S, b, x, 0, rtol, max_it, info));
   else CUPID_TRY(solve_gmres(&S, b, x, rtol, max_it, restart, info));
   /* u = [x_f ; u_c]; the true residual, recomputed */
   for (cupid_int k = 0; k < S.nf; k++) u[S.global[k]] = x[k];
@@ -351,21 +358,23 @@ cleanup:
   return st;
 }
 
-cupid_status cupid_gmres_resolve(const cupid_linear_operator *A, const cupid_dirichlet_t *bc,
-                                 cupid_status (*pc)(void *ctx, const double *r, double *z),
-                                 void *pc_ctx, const double *f, double *u, double rtol,
-                                 int max_it, cupid_solve_info *info) {
+/* A re-solve from u (cupid_gmres_resolve, cupid_krylov_resolve): CG or GMRES. */
+static cupid_status resolve(const cupid_linear_operator *A, const cupid_dirichlet_t *bc,
+                            cupid_status (*pc)(void *ctx, const double *r, double *z), void *pc_ctx,
+                            const double *f, double *u, double rtol, int max_it, int cg,
+                            cupid_solve_info *info) {
   CUPID_CHECK(A && A->apply && bc && pc && f && u && info && bc->n == A->n && rtol > 0 && max_it > 0,
-              CUPID_ERR_ARGUMENT, "cupid_gmres_resolve: bad arguments");
+              CUPID_ERR_ARGUMENT, "cupid_krylov_resolve: bad arguments");
   memset(info, 0, sizeof *info);
-  info->method = "gmres";
+  info->method = cg ? "cg" : "gmres";
   info->failed_dof = -1;
   info->ranks = 1;
-  snprintf(info->ksp_type, sizeof info->ksp_type, "gmres");
+  snprintf(info->ksp_type, sizeof info->ksp_type, "%s", cg ? "cg" : "gmres");
   snprintf(info->pc_type, sizeof info->pc_type, "given");
   system_free S = {.A = A, .n = A->n, .nf = bc->n_free, .pc = pc, .pc_ctx = pc_ctx};
   cupid_status st = CUPID_SUCCESS;
   double *b = NULL, *x = NULL, *ax = NULL, t0 = cupid_wtime();
+  int have_x = 0;
   info->n = S.nf;
   CUPID_TRY(cupid_calloc((size_t)S.n + 1, sizeof *S.pr, "work vector", &S.pr));
   CUPID_TRY(cupid_calloc((size_t)S.n + 1, sizeof *S.pz, "work vector", &S.pz));
@@ -374,14 +383,20 @@ cupid_status cupid_gmres_resolve(const cupid_linear_operator *A, const cupid_dir
   CUPID_TRY(cupid_calloc((size_t)S.nf + 1, sizeof *ax, "residual", &ax));
   CUPID_TRY(free_system(&S, bc, f, b));
   for (cupid_int k = 0; k < S.nf; k++) x[k] = u[S.global[k]]; /* the guess: u's free values */
+  have_x = 1;
   const int restart = max_it < DEFAULT_RESTART ? max_it : DEFAULT_RESTART;
-  CUPID_TRY(solve_gmres(&S, b, x, rtol, max_it, restart, info));
+  if (cg) CUPID_TRY(solve_cg(&S, b, x, 1, rtol, max_it, info));
+  else CUPID_TRY(solve_gmres(&S, b, x, rtol, max_it, restart, info));
   CUPID_TRY(true_residual(&S, b, x, ax, info));
   info->time_solve = cupid_wtime() - t0;
-  for (cupid_int d = 0; d < S.n; d++)
-    if (bc->fixed[d]) u[d] = bc->value[d];
-  for (cupid_int k = 0; k < S.nf; k++) u[S.global[k]] = x[k];
-cleanup:
+cleanup: /* u: the last iterate, converged or not (a CG breakdown's too), if finite */
+  for (cupid_int k = 0; have_x && st == CUPID_ERR_NUMERIC && k < S.nf; k++)
+    if (!isfinite(x[k])) have_x = 0;
+  if (have_x && (st == CUPID_SUCCESS || st == CUPID_ERR_NUMERIC)) {
+    for (cupid_int d = 0; d < S.n; d++)
+      if (bc->fixed[d]) u[d] = bc->value[d];
+    for (cupid_int k = 0; k < S.nf; k++) u[S.global[k]] = x[k];
+  }
   cupid_free(&S.global);
   cupid_free(&S.xw);
   cupid_free(&S.yw);
@@ -391,4 +406,18 @@ cleanup:
   cupid_free(&x);
   cupid_free(&ax);
   return st;
+}
+
+cupid_status cupid_gmres_resolve(const cupid_linear_operator *A, const cupid_dirichlet_t *bc,
+                                 cupid_status (*pc)(void *ctx, const double *r, double *z),
+                                 void *pc_ctx, const double *f, double *u, double rtol,
+                                 int max_it, cupid_solve_info *info) {
+  return resolve(A, bc, pc, pc_ctx, f, u, rtol, max_it, 0, info);
+}
+
+cupid_status cupid_krylov_resolve(const cupid_linear_operator *A, const cupid_dirichlet_t *bc,
+                                  cupid_status (*pc)(void *ctx, const double *r, double *z),
+                                  void *pc_ctx, const double *f, double *u, double rtol,
+                                  int max_it, cupid_solve_info *info) {
+  return resolve(A, bc, pc, pc_ctx, f, u, rtol, max_it, A && A->symmetric, info);
 }

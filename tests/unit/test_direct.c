@@ -834,6 +834,89 @@ static cupid_status csr_apply(void *ctx, const double *x, double *y) {
   return CUPID_SUCCESS;
 }
 
+static cupid_status neg_apply(void *ctx, const double *x, double *y) {
+  cupid_csr_matvec(ctx, x, y);
+  for (cupid_int k = 0; k < ((const cupid_csr_t *)ctx)->nrows * ((const cupid_csr_t *)ctx)->bs; k++)
+    y[k] = -y[k];
+  return CUPID_SUCCESS;
+}
+
+/* The kept twin factor of crack growth on the krylov engine (growth_matrix_free.c): M^-1 r
+ * through P's factor on the free DOFs it was made for, zero on every DOF fixed now. */
+typedef struct {
+  cupid_direct_factor F;
+  cupid_dirichlet_t *bc;
+  double *t;
+} twin_pc;
+
+static cupid_status twin_apply(void *ctx, const double *r, double *z) {
+  twin_pc *p = ctx;
+  for (cupid_int d = 0; d < p->bc->n; d++) p->t[d] = p->bc->fixed[d] ? 0.0 : r[d];
+  CUPID_CALL(cupid_direct_factor_solve(p->F, p->t, z));
+  for (cupid_int d = 0; d < p->bc->n; d++)
+    if (p->bc->fixed[d]) z[d] = 0.0;
+  return CUPID_SUCCESS;
+}
+
+/* cupid_krylov_resolve (CG where L is symmetric, GMRES otherwise) from a guess: from the
+ * solution (ud, the direct one) no iteration; from the solution perturbed by 1e-6 fewer than
+ * from zero (it0) to the same answer; with a DOF fixed after the factorisation (a node held in
+ * crack growth) the new system's answer through the masked factor; a CG on an indefinite
+ * operator breaks down (CUPID_ERR_NUMERIC) and leaves its last iterate in u. */
+static void check_resolve(const cupid_linear_operator *L, const cupid_csr_t *P, cupid_dirichlet bc,
+                          const double *f, const double *ud, int it0, int symmetric) {
+  const cupid_int n = L->n;
+  twin_pc pc = {.bc = bc};
+  double *u = malloc((size_t)n * sizeof *u), *uh = malloc((size_t)n * sizeof *uh);
+  pc.t = malloc((size_t)n * sizeof *pc.t);
+  CUPID_ASSERT_OK(cupid_direct_factor_create_kind(P, symmetric ? CUPID_MATRIX_SPD : CUPID_MATRIX_GENERAL,
+                                                  bc, &pc.F, NULL));
+  cupid_solve_info info;
+  memcpy(u, ud, (size_t)n * sizeof *u);
+  CUPID_ASSERT_OK(cupid_krylov_resolve(L, bc, twin_apply, &pc, f, u, 1e-10, 500, &info));
+  assert_int_equal(info.iterations, 0);
+  assert_string_equal(info.ksp_type, symmetric ? "cg" : "gmres");
+  uint64_t seed = 11;
+  for (cupid_int k = 0; k < n; k++) u[k] = ud[k] * (1.0 + 1e-6 * cupid_test_random(&seed));
+  CUPID_ASSERT_OK(cupid_krylov_resolve(L, bc, twin_apply, &pc, f, u, 1e-12, 500, &info));
+  print_message("  resolve (%s) from 1e-6 off: %d iterations (%d from zero), |u - u_direct| %.1e\n",
+                info.ksp_type, info.iterations, it0, rel_error(n, u, ud));
+  assert_string_equal(info.converged_reason, "CONVERGED_RTOL");
+  assert_true(info.iterations > 0 && info.iterations < it0);
+  assert_true(rel_error(n, u, ud) < 1e-7);
+  /* a free DOF fixed at its value in the direct solution of another load: u there */
+  cupid_int d = 0;
+  while (bc->fixed[d]) d++;
+  CUPID_ASSERT_OK(cupid_dirichlet_fix(bc, d, 0.5));
+  CUPID_ASSERT_OK(cupid_dirichlet_finalize(bc));
+  const cupid_csr_t *K = L->ctx;
+  CUPID_ASSERT_OK(cupid_direct_solve(K, symmetric ? CUPID_MATRIX_SPD : CUPID_MATRIX_GENERAL, f, bc,
+                                     uh, NULL));
+  memcpy(u, ud, (size_t)n * sizeof *u);
+  CUPID_ASSERT_OK(cupid_krylov_resolve(L, bc, twin_apply, &pc, f, u, 1e-12, 500, &info));
+  print_message("  resolve with a DOF held after the factorisation: %d iterations, error %.1e\n",
+                info.iterations, rel_error(n, u, uh));
+  assert_string_equal(info.converged_reason, "CONVERGED_RTOL");
+  assert_true(u[d] == 0.5 && rel_error(n, u, uh) < 1e-7);
+  if (symmetric) { /* -K: p'Ap < 0 at the first step */
+    cupid_linear_operator neg = *L;
+    neg.apply = neg_apply;
+    memcpy(u, ud, (size_t)n * sizeof *u);
+    u[d] = 0.5;
+    for (cupid_int k = 0; k < n; k++) uh[k] = u[k];
+    assert_int_equal(cupid_krylov_resolve(&neg, bc, twin_apply, &pc, f, u, 1e-12, 500, &info),
+                     CUPID_ERR_NUMERIC);
+    cupid_error_clear();
+    int moved = 0;
+    for (cupid_int k = 0; k < n; k++) moved |= u[k] != uh[k] && !bc->fixed[k];
+    assert_false(moved); /* the breakdown came before the first step: u is the guess */
+  }
+  cupid_direct_factor_destroy(&pc.F);
+  free(pc.t);
+  free(u);
+  free(uh);
+}
+
 static void check_iterative(const grid_spec *gk, const grid_spec *gp, int symmetric, int restart) {
   cupid_csr K = grid_matrix(gk), P = grid_matrix(gp);
   const cupid_int n = K->nrows * K->bs;
@@ -855,6 +938,7 @@ static void check_iterative(const grid_spec *gk, const grid_spec *gp, int symmet
   assert_true(err < 1e-7);
   assert_true(info.residual <= 1e-12);
   assert_true(info.iterations > 1); /* P differs from K: more than one step */
+  const int it_full = info.iterations;
   assert_string_equal(info.method, "krylov");
   assert_string_equal(info.ksp_type, symmetric ? "cg" : "gmres");
   assert_int_equal(info.n, bc->n_free);
@@ -864,6 +948,7 @@ static void check_iterative(const grid_spec *gk, const grid_spec *gp, int symmet
   cupid_krylov_options short_run = {.rtol = 1e-12, .max_it = 1, .restart = restart};
   assert_int_equal(cupid_iterative_solve(&L, P, bc, f, u, &short_run, &info), CUPID_ERR_NUMERIC);
   assert_string_equal(info.converged_reason, "DIVERGED_ITS");
+  check_resolve(&L, P, bc, f, ud, it_full, symmetric);
   cupid_dirichlet_destroy(&bc);
   cupid_csr_destroy(&K);
   cupid_csr_destroy(&P);
