@@ -580,8 +580,9 @@ cupid_status cupid_gmres_resolve(const cupid_linear_operator *A, const cupid_dir
  * As cupid_gmres_resolve(), by CG where @p A is symmetric (GMRES otherwise): the re-solves of
  * crack growth on the built-in `krylov` engine, matrix-free, preconditioned by the kept factor
  * of the intact twin (src/problem/growth_matrix_free.c). From u's free values to |b - A u| <=
- * rtol |b|, as from zero. A CG breakdown (p'Ap <= 0: a mechanism) is CUPID_ERR_NUMERIC; u then
- * holds the last iterate, where a part that lost its support ran away (non-finite: untouched).
+ * rtol |b|, as from zero, by the true residual (CG's recurrence checked, and CG run again
+ * from there while that at least halves it: a preconditioner far from A lets it drift). A CG
+ * breakdown (p'Ap <= 0: a mechanism) is CUPID_ERR_NUMERIC; u then holds the last iterate, where a part that lost its support ran away (non-finite: untouched).
  * @p pc must be symmetric positive definite on the free DOFs for CG.
  */
 cupid_status cupid_krylov_resolve(const cupid_linear_operator *A, const cupid_dirichlet_t *bc,

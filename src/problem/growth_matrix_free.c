@@ -118,9 +118,9 @@ static cupid_status twin_solve(cupid_problem_state *prob, cupid_growth_mf *gs, i
   gs->twin_setup_s = 0.0;
   CUPID_CALL(st);
   CUPID_CHECK(!strncmp(prob->solve.converged_reason, "CONVERGED", 9), CUPID_ERR_NUMERIC,
-              "the Krylov re-solve (%s + the twin's factor) did not converge in %d iterations: "
-              "relative residual %.2e (rtol %.0e)", prob->solve.ksp_type, prob->solve.iterations,
-              prob->solve.residual, TWIN_RTOL);
+              "the Krylov re-solve (%s + the twin's factor) did not converge in %d iterations "
+              "(%s): relative residual %.2e (rtol %.0e)", prob->solve.ksp_type,
+              prob->solve.iterations, prob->solve.converged_reason, prob->solve.residual, TWIN_RTOL);
   return CUPID_SUCCESS;
 }
 
