@@ -26,20 +26,26 @@ coarse=(--quiet --set output.pd_nodes=true --set analysis.steps=20 --set "constr
         --set output.vtu=false --set output.plots=false)
 fic=(--set 'coupling={method: fictitious}' --set output.pd_nodes=true)
 
+# Under the sanitizers (CUPID_TEST_SANITIZED=1: 5-15 times slower) the CG and GMRES paths and
+# the assembled one only: LPS and the stop take the same code (docs/hardening.md).
+full=1
+[ "${CUPID_TEST_SANITIZED:-0}" = 1 ] && full=0
 for s in direct krylov; do
   "$CUPID" run "$E" -o senb_$s "${coarse[@]}" --solver $s && ok || bad "SENB, $s"
-  "$CUPID" run "$E" -o lps_$s "${coarse[@]}" --set peridynamics.model=lps --solver $s && ok || bad "SENB, LPS, $s"
   "$CUPID" run "$E" -o fic_$s "${coarse[@]}" "${fic[@]}" --solver $s && ok || bad "SENB, fictitious nodes, $s"
   "$CUPID" run "$P" -o plate_$s --quiet --set output.pd_nodes=true --solver $s && ok || bad "PD plate, $s"
+  [ $full = 1 ] || continue
+  "$CUPID" run "$E" -o lps_$s "${coarse[@]}" --set peridynamics.model=lps --solver $s && ok || bad "SENB, LPS, $s"
   "$CUPID" run "$I" -o stop_$s --quiet --solver $s 2> stop_$s.err
   [ $? -eq 2 ] && ok || bad "SENB into an overlap, $s: exit status 2 ($(tail -1 stop_$s.err))"
 done
 msg() { grep -o "cupid: crack growth stopped.*" "$1"; }
-[ -n "$(msg stop_direct.err)" ] && [ "$(msg stop_direct.err)" = "$(msg stop_krylov.err)" ] &&
+[ $full = 0 ] || { [ -n "$(msg stop_direct.err)" ] && [ "$(msg stop_direct.err)" = "$(msg stop_krylov.err)" ]; } &&
   ok || bad "the same stop message: $(msg stop_krylov.err)"
 
-"$PY" - <<'PY' && ok || bad "the same bonds on the direct and krylov engines"
-import csv, json
+"$PY" - $full <<'PY' && ok || bad "the same bonds on the direct and krylov engines"
+import csv, json, sys
+full = sys.argv[1] == "1"
 def rows(d): return list(csv.DictReader(open(d + "/damage.csv")))
 def damage(d): return [r["damage"] for r in csv.DictReader(open(d + "/pd_nodes.csv"))]
 def same(ref, other, nodes=True):
@@ -54,13 +60,15 @@ def same(ref, other, nodes=True):
             assert abs(float(r[c]) - float(s[c])) <= 1e-8 * peak, (other, r["step"], c, r[c], s[c])
     if nodes:
         assert damage(other) == damage(ref), other
-for k in ("senb", "lps", "fic", "plate"):
+kinds = ("senb", "fic", "plate") + (("lps",) if full else ())
+for k in kinds:
     same(k + "_direct", k + "_krylov")
     assert int(rows(k + "_direct")[-1]["broken_bonds"]) > 100, (k, rows(k + "_direct")[-1])
-same("stop_direct", "stop_krylov", nodes=False)
-s = {d: json.load(open(d + "/summary.json")) for d in
-     ("senb_direct", "senb_krylov", "lps_krylov", "fic_krylov", "plate_krylov", "stop_krylov")}
-for d in ("senb_krylov", "lps_krylov", "fic_krylov", "stop_krylov"):
+if full:
+    same("stop_direct", "stop_krylov", nodes=False)
+coupled = ("senb_krylov", "fic_krylov") + (("lps_krylov", "stop_krylov") if full else ())
+s = {d: json.load(open(d + "/summary.json")) for d in coupled + ("plate_krylov",)}
+for d in coupled:
     sv = s[d]["fracture"]["solves"]
     assert sv["resolve"] == "matrix-free" and s[d]["solver"]["operator"] == "matrix-free", (d, sv)
     assert s[d]["solver"]["engine"] == "krylov", (d, s[d]["solver"])
