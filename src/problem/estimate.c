@@ -162,6 +162,29 @@ cupid_status cupid_problem_costs(const cupid_problem_state *prob, cupid_solver_c
   return CUPID_SUCCESS;
 }
 
+/* How crack growth would re-solve after each round of breaks on @p e (growth.c chooses so:
+ * the kept matrix-free solve where the method solves the model matrix-free on that engine,
+ * the run's own downdated factor on an assembled SPD K, the engine's solve otherwise), with
+ * what it cost on the coupled SENB (bench/README.md). */
+static void print_growth_path(const cupid_problem_state *prob, const cupid_solver_type *e) {
+  const cupid_model_t *m = prob->model;
+  if (!(m->has_peridynamics && m->pd.fracture.has_fracture)) return;
+  const int kept = prob->method->matrix_free(prob, e) && e->iterative &&
+                   (!prob->beam || prob->method->growth_operator);
+  if (kept)
+    printf("crack growth on %s: each re-solve iterates from the last solution on the kept "
+           "preconditioner of the intact grid (the coupled SENB: 35-45 CG iterations a "
+           "re-solve, some 25 times the direct path's growth where both fit)\n", e->name);
+  else if (prob->method->matrix == CUPID_MATRIX_SPD && !e->distributed)
+    printf("crack growth on %s: one factorisation, downdated by each round's broken bonds "
+           "(the coupled SENB: its whole growth 20-21 static solves)\n", e->name);
+  else if (!e->iterative)
+    printf("crack growth on %s: the LU of the last factorised K, updated by the broken bonds, "
+           "and GMRES\n", e->name);
+  else
+    printf("crack growth on %s: the engine's solve at every re-solve\n", e->name);
+}
+
 /* When a run estimated to take @p seconds writes checkpoints (resume.c; issue 36). */
 static void print_checkpoints(const cupid_problem_state *prob, double seconds) {
   const double period = cupid_problem_checkpoint_period(prob, seconds);
@@ -251,6 +274,10 @@ cupid_status cupid_problem_estimate(const cupid_problem_state *prob, int print) 
       print_checkpoints(prob, rs);
     } else if (m->analysis.type == CUPID_ANALYSIS_STATIC && cupid_problem_growth_resumable(prob)) {
       /* crack growth: at least a solve of the chosen engine per load step */
+      const cupid_solver_kind req = prob->opts->solver >= 0 ? (cupid_solver_kind)prob->opts->solver
+                                                            : m->analysis.solver;
+      const cupid_solver_type *asked = req != CUPID_SOLVER_AUTO ? cupid_solver_type_get(req) : NULL;
+      print_growth_path(prob, asked ? asked : pick);
       print_checkpoints(prob, prob->estimate.seconds * (m->analysis.steps > 0 ? m->analysis.steps : 1));
     }
     printf("the model is valid%s\n", limit > 0 && e.total_bytes > limit

@@ -15,7 +15,8 @@
 #    at the same step with the same message (exit 2);
 #  - the PD-only plate of tests/models/growth (assembled: the krylov engine's assembled solve is
 #    the factorisation, so growth keeps its own factor and downdates it, as on the direct
-#    engine; before, every re-solve factorised K afresh).
+#    engine; before, every re-solve factorised K afresh);
+#  - `cupid check` names the way each engine re-solves.
 . "$(dirname "$0")/../tools/checks.sh"
 PY=${CUPID_SYSTEM_PYTHON:-/usr/bin/python3}
 E=$SRC/examples/fracture/senb_coupled.yaml
@@ -39,6 +40,10 @@ for s in direct krylov; do
   "$CUPID" run "$I" -o stop_$s --quiet --solver $s 2> stop_$s.err
   [ $? -eq 2 ] && ok || bad "SENB into an overlap, $s: exit status 2 ($(tail -1 stop_$s.err))"
 done
+# cupid check says how each would re-solve
+expect 0 "crack growth on krylov: each re-solve iterates from the last solution" -- "$CUPID" check "$E" --solver krylov
+expect 0 "crack growth on direct: one factorisation, downdated" -- "$CUPID" check "$E" --solver direct
+expect 0 "crack growth on krylov: one factorisation, downdated" -- "$CUPID" check "$P" --solver krylov
 msg() { grep -o "cupid: crack growth stopped.*" "$1"; }
 [ $full = 0 ] || { [ -n "$(msg stop_direct.err)" ] && [ "$(msg stop_direct.err)" = "$(msg stop_krylov.err)" ]; } &&
   ok || bad "the same stop message: $(msg stop_krylov.err)"
