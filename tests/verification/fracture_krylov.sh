@@ -48,23 +48,11 @@ msg() { grep -o "cupid: crack growth stopped.*" "$1"; }
 [ $full = 0 ] || { [ -n "$(msg stop_direct.err)" ] && [ "$(msg stop_direct.err)" = "$(msg stop_krylov.err)" ]; } &&
   ok || bad "the same stop message: $(msg stop_krylov.err)"
 
-"$PY" - $full <<'PY' && ok || bad "the same bonds on the direct and krylov engines"
-import csv, json, sys
+"$PY" - $full "$SRC/tests/tools" <<'PY' && ok || bad "the same bonds on the direct and krylov engines"
+import json, sys
 full = sys.argv[1] == "1"
-def rows(d): return list(csv.DictReader(open(d + "/damage.csv")))
-def damage(d): return [r["damage"] for r in csv.DictReader(open(d + "/pd_nodes.csv"))]
-def same(ref, other, nodes=True):
-    a, b = rows(ref), rows(other)
-    assert len(a) == len(b) and len(a) > 0, (other, len(a), len(b))
-    cols = [c for c in a[0] if c.startswith("reaction_") or c.startswith("load_u")]
-    peak = max(abs(float(r[c])) for r in a for c in cols)
-    for r, s in zip(a, b):
-        for c in ("iterations", "broken_bonds", "damaged_nodes", "nodes_broken", "released_nodes"):
-            assert r[c] == s[c], (other, r["step"], c, r[c], s[c])
-        for c in cols:
-            assert abs(float(r[c]) - float(s[c])) <= 1e-8 * peak, (other, r["step"], c, r[c], s[c])
-    if nodes:
-        assert damage(other) == damage(ref), other
+sys.path.insert(0, sys.argv[2])
+from same_growth import rows, same
 kinds = ("senb", "fic", "plate") + (("lps",) if full else ())
 for k in kinds:
     same(k + "_direct", k + "_krylov")

@@ -94,22 +94,10 @@ msg() { grep -o "cupid: crack growth stopped.*" "$1"; }
   [ "$(grep -c "crack growth stopped" stopslab3.err)" = 1 ] &&
   ok || bad "the same stop message, printed once: $(msg stopslab3.err)"
 
-"$PY" - <<'PY' && ok || bad "the same bonds on the direct, PETSc and slab paths"
-import csv, json
-def rows(d): return list(csv.DictReader(open(d + "/damage.csv")))
-def damage(d): return [r["damage"] for r in csv.DictReader(open(d + "/pd_nodes.csv"))]
-def same(ref, other, nodes=True):
-    a, b = rows(ref), rows(other)
-    assert len(a) == len(b) and len(a) > 0, (other, len(a), len(b))
-    cols = [c for c in a[0] if c.startswith("reaction_") or c.startswith("load_u")]
-    peak = max(abs(float(r[c])) for r in a for c in cols)
-    for r, s in zip(a, b):
-        for c in ("iterations", "broken_bonds", "damaged_nodes", "nodes_broken", "released_nodes"):
-            assert r[c] == s[c], (other, r["step"], c, r[c], s[c])
-        for c in cols:
-            assert abs(float(r[c]) - float(s[c])) <= 1e-8 * peak, (other, r["step"], c, r[c], s[c])
-    if nodes:
-        assert damage(other) == damage(ref), other
+"$PY" - "$SRC/tests/tools" <<'PY' && ok || bad "the same bonds on the direct, PETSc and slab paths"
+import json, sys
+sys.path.insert(0, sys.argv[1])
+from same_growth import rows, same
 for d in ("petsc1", "slab2", "slab3"):
     same("direct", d)
 same("lpsdirect", "lpsslab2")
