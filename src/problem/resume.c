@@ -257,8 +257,8 @@ static cupid_status open_agreed(cupid_problem_state *prob, const char *path,
     cupid_problem_progress(prob, "resume: '%s' was damaged or missing; its previous one is used",
                            path);
   if (st == CUPID_SUCCESS) st = cupid_checkpoint_read(*ck, step_section, &step, sizeof step);
-  if (cupid_petsc_size() == 1) return st;
   int worst = 0, lo = 0, hi = 0;
+  if (cupid_petsc_size() == 1) goto done;
   ranks_agree(st, step, &worst, &lo, &hi);
   if (!worst && lo != hi) {
     if (step > lo) {
@@ -284,6 +284,7 @@ static cupid_status open_agreed(cupid_problem_state *prob, const char *path,
   if (st == CUPID_SUCCESS && lo != hi)
     st = CUPID_ERROR(CUPID_ERR_IO, "the ranks' checkpoints are of different steps (%d to %d): "
                      "run again without --resume", lo, hi);
+done:
   if (st != CUPID_SUCCESS) cupid_checkpoint_close(ck);
   return st;
 }
