@@ -213,13 +213,13 @@ CUPID_TEST_INTERRUPT_STEP=20 "$CUPID" run growth.yaml -o glast -q "${GP[@]}" 2>/
   bad "growth stopped at its last step: exit $rc, then $rc2: ${msg:-} $(head -2 err.txt)"
 
 # ---- refusals, on the PMB plate stopped half-way
-# half-way through the plate's run, as measured (a slower machine, or ASan, stops it as late)
-half=$(awk -v ms=$ms_pmb 'BEGIN { printf "%.3f", 0.5 * ms / 1000 }')
-stop_half() { # stop_half DIR: a run of the plate stopped by SIGTERM (exit 5), periodic checkpoints
+# half-way through the plate's 2500 steps: at step 1250 by the tests' deterministic signal
+# (CUPID_TEST_INTERRUPT_STEP: exit 5 with a checkpoint there, the periodic ones of every
+# 0.05 s before it). A sleep of half the run measured at the start stopped none once, under
+# the load of other tests that came and went since (the run had ended: exit 0).
+stop_half() { # stop_half DIR: a run of the plate stopped half-way (exit 5), periodic checkpoints
   rm -rf "$1"
-  "$CUPID" run plate.yaml -o "$1" -q "${P[@]}" 2>/dev/null &
-  local pid=$!
-  sleep "$half"; kill -TERM $pid; wait $pid
+  CUPID_TEST_INTERRUPT_STEP=1250 "$CUPID" run plate.yaml -o "$1" -q "${P[@]}" 2>/dev/null
 }
 stop_half h; rc=$?
 [ $rc -eq 5 ] && [ -f .h.cupid-partial/.checkpoint ] && ok || bad "SIGTERM: exit $rc, no checkpoint"
@@ -257,7 +257,11 @@ done
 [ $rc -eq 0 ] && grep -q "could not be written" err.txt && same ref_pmb full && ok ||
   bad "a full disk: exit $rc: $(head -3 err.txt)"
 
-# a second signal stops at once (no checkpoint at the next step); the periodic one resumes
+# a second signal stops at once (no checkpoint at the next step); the periodic one resumes.
+# Half of the plate's run measured now (the load of the other tests changes over this script)
+t0=$(date +%s%N)
+"$CUPID" run plate.yaml -o again -q "${P[@]}" 2>/dev/null
+half=$(awk -v ms=$(( ($(date +%s%N) - t0) / 1000000 )) 'BEGIN { printf "%.3f", 0.5 * ms / 1000 }')
 rm -rf twice
 "$CUPID" run plate.yaml -o twice -q "${P[@]}" 2>/dev/null &
 pid=$!
