@@ -218,6 +218,16 @@ cupid_status cupid_direct_factor_solve_free_many(cupid_direct_factor F, cupid_in
 cupid_status cupid_direct_factor_solve(cupid_direct_factor F, const double *b, double *x);
 
 /**
+ * z = M^-1 r through the factor, restricted to the DOFs @p bc leaves free (a preconditioner:
+ * crack growth's CG on its own factor, and on the kept twin's, whose nodes held since the
+ * factorisation are fixed in @p bc but not in F): r read on those DOFs only, z written on
+ * every DOF of bc, zero on the fixed ones. The principal part of an SPD factor's inverse, so
+ * still SPD on the free DOFs. F's DOFs must be free in bc or fixed since (bc->n = F's rows).
+ */
+cupid_status cupid_direct_factor_solve_masked(cupid_direct_factor F, const cupid_dirichlet_t *bc,
+                                            const double *r, double *z);
+
+/**
  * Downdate an SPD factor (CHOLMOD's cholmod_updown): afterwards F factors K_ff - C_f C_f^T,
  * where C is n_full x r, given by columns (colptr[r + 1], rows: global DOFs, vals) and C_f its
  * free rows (rows on fixed DOFs are dropped). Each downdate costs about the length of the

@@ -784,14 +784,7 @@ static double dot_free(const cupid_dirichlet_t *bc, cupid_int n, const double *a
 
 /* z = P F^-1 P^T r: r's free entries through the factor, z zero on the fixed DOFs. */
 static cupid_status precondition(growth_run *g, const double *r, double *z) {
-  const cupid_dirichlet_t *bc = g->prob->bc;
-  const cupid_int n = g->prob->ndof;
-  double *t = g->w[3];
-  for (cupid_int d = 0; d < n; d++) t[d] = bc->fixed[d] ? 0.0 : r[d];
-  CUPID_CALL(cupid_direct_factor_solve(g->F, t, z));
-  for (cupid_int d = 0; d < n; d++)
-    if (bc->fixed[d]) z[d] = 0.0;
-  return CUPID_SUCCESS;
+  return cupid_direct_factor_solve_masked(g->F, g->prob->bc, r, z);
 }
 
 /* b = f - K u_c on the free DOFs (u_c: the prescribed values), 0 on the fixed ones, into b

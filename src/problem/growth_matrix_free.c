@@ -49,7 +49,6 @@ void cupid_growth_mf_free(cupid_growth_mf *gs) {
   cupid_petsc_nodes_solver_destroy(&gs->solver);
   cupid_krylov_solver_destroy(&gs->coupled);
   cupid_direct_factor_destroy(&gs->twin);
-  cupid_free(&gs->twin_t);
   if (gs->owner_destroy) gs->owner_destroy(&gs->owner);
   gs->owner_destroy = NULL;
   cupid_petsc_halo_destroy(&gs->halo);
@@ -86,20 +85,14 @@ static cupid_status twin_factor(cupid_problem_state *prob, cupid_growth_mf *gs, 
   CUPID_CALL(cupid_direct_factor_create_kind(P, kind, prob->bc, &gs->twin, &info));
   gs->twin_setup_s = cupid_wtime() - t0;
   gs->bc = prob->bc;
-  return cupid_calloc((size_t)prob->ndof + 1, sizeof *gs->twin_t, "twin work vector", &gs->twin_t);
+  return CUPID_SUCCESS;
 }
 
 /* z = M^-1 r for cupid_krylov_resolve: r's free entries through the twin's factor, z zero on
  * the fixed DOFs (those fixed since the factorisation too). */
 static cupid_status precondition_twin(void *ctx, const double *r, double *z) {
-  cupid_growth_mf *gs = ctx;
-  const cupid_dirichlet_t *bc = gs->bc;
-  double *t = gs->twin_t;
-  for (cupid_int d = 0; d < bc->n; d++) t[d] = bc->fixed[d] ? 0.0 : r[d];
-  CUPID_CALL(cupid_direct_factor_solve(gs->twin, t, z));
-  for (cupid_int d = 0; d < bc->n; d++)
-    if (bc->fixed[d]) z[d] = 0.0;
-  return CUPID_SUCCESS;
+  const cupid_growth_mf *gs = ctx;
+  return cupid_direct_factor_solve_masked(gs->twin, gs->bc, r, z);
 }
 
 /* The krylov engine's re-solve from prob->u (zero at the first): CUPID_ERR_NUMERIC when it

@@ -424,7 +424,6 @@ typedef struct {
   cupid_krylov_solver coupled;     /* a coupled model: the method's operator (growth_operator) */
   cupid_direct_factor twin;        /* ... on the built-in krylov engine: its twin's factor, kept */
   const cupid_dirichlet_t *bc;     /* ... and the conditions its preconditioner reads */
-  double *twin_t;                  /* ... a DOF-sized work vector */
   double twin_setup_s;             /* ... its factorisation's seconds, until the first solve */
   cupid_linear_operator L;
   void *owner;                     /* ... its owner, freed by owner_destroy */

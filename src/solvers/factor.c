@@ -338,6 +338,24 @@ cupid_status cupid_direct_factor_solve(cupid_direct_factor F, const double *b, d
   return CUPID_SUCCESS;
 }
 
+cupid_status cupid_direct_factor_solve_masked(cupid_direct_factor F, const cupid_dirichlet_t *bc,
+                                            const double *r, double *z) {
+  CUPID_CHECK(F && bc && r && z, CUPID_ERR_ARGUMENT, "cupid_direct_factor_solve_masked: NULL argument");
+  const cupid_int *held_at = F->held ? F->pivot_of : NULL;
+  for (cupid_int k = 0; k < F->n; k++) {
+    const cupid_int d = F->global[k];
+    F->work[k] = bc->fixed[d] || (held_at && held_at[d] < 0) ? 0.0 : r[d];
+  }
+  CUPID_CALL(cupid_direct_factor_solve_free(F, F->work, F->work2));
+  for (cupid_int d = 0; d < bc->n; d++)
+    if (bc->fixed[d]) z[d] = 0.0;
+  for (cupid_int k = 0; k < F->n; k++) {
+    const cupid_int d = F->global[k];
+    if (!bc->fixed[d] && (!held_at || held_at[d] >= 0)) z[d] = F->work2[k];
+  }
+  return CUPID_SUCCESS;
+}
+
 cupid_int cupid_direct_factor_size(const cupid_direct_factor F) { return F ? F->n : 0; }
 
 cupid_status cupid_direct_factor_weakest_dof(const cupid_direct_factor F, cupid_int *dof) {

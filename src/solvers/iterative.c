@@ -358,7 +358,7 @@ cleanup:
   return st;
 }
 
-/* CG from x, then checked by the true residual: CG's own residual is a recurrence, which a
+/* CG from x, then checked by the true residual (left in info->residual): CG's own residual is a recurrence, which a
  * preconditioner far from A (the intact twin of a cracked K) lets drift from b - A x. While the
  * true one is above rtol and its CG run converged, CG again from x (a refinement: at most
  * KRYLOV_REFINEMENTS, each while it at least halves the true residual; info->iterations counts
@@ -372,9 +372,9 @@ static cupid_status cg_refined(system_free *S, const double *b, double *x, doubl
     CUPID_CALL(solve_cg(S, b, x, 1, rtol, max_it - total, info));
     total += info->iterations;
     info->iterations = total;
-    if (strncmp(info->converged_reason, "CONVERGED", 9)) return CUPID_SUCCESS;
     CUPID_CALL(true_residual(S, b, x, ax, info));
-    if (info->residual <= rtol) return CUPID_SUCCESS;
+    if (strncmp(info->converged_reason, "CONVERGED", 9) || info->residual <= rtol)
+      return CUPID_SUCCESS;
     if (info->refinements == KRYLOV_REFINEMENTS || info->residual > 0.5 * prev || total >= max_it)
       break;
     prev = info->residual;
@@ -412,9 +412,11 @@ static cupid_status resolve(const cupid_linear_operator *A, const cupid_dirichle
   for (cupid_int k = 0; k < S.nf; k++) x[k] = u[S.global[k]]; /* the guess: u's free values */
   have_x = 1;
   const int restart = max_it < DEFAULT_RESTART ? max_it : DEFAULT_RESTART;
-  if (cg) CUPID_TRY(cg_refined(&S, b, x, ax, rtol, max_it, info));
-  else CUPID_TRY(solve_gmres(&S, b, x, rtol, max_it, restart, info));
-  CUPID_TRY(true_residual(&S, b, x, ax, info));
+  if (cg) CUPID_TRY(cg_refined(&S, b, x, ax, rtol, max_it, info)); /* its true residual */
+  else {
+    CUPID_TRY(solve_gmres(&S, b, x, rtol, max_it, restart, info));
+    CUPID_TRY(true_residual(&S, b, x, ax, info));
+  }
   info->time_solve = cupid_wtime() - t0;
 cleanup: /* u: the last iterate, converged or not (a CG breakdown's too), if finite */
   for (cupid_int k = 0; have_x && st == CUPID_ERR_NUMERIC && k < S.nf; k++)

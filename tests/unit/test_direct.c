@@ -846,16 +846,11 @@ static cupid_status neg_apply(void *ctx, const double *x, double *y) {
 typedef struct {
   cupid_direct_factor F;
   cupid_dirichlet_t *bc;
-  double *t;
 } twin_pc;
 
 static cupid_status twin_apply(void *ctx, const double *r, double *z) {
   twin_pc *p = ctx;
-  for (cupid_int d = 0; d < p->bc->n; d++) p->t[d] = p->bc->fixed[d] ? 0.0 : r[d];
-  CUPID_CALL(cupid_direct_factor_solve(p->F, p->t, z));
-  for (cupid_int d = 0; d < p->bc->n; d++)
-    if (p->bc->fixed[d]) z[d] = 0.0;
-  return CUPID_SUCCESS;
+  return cupid_direct_factor_solve_masked(p->F, p->bc, r, z);
 }
 
 /* cupid_krylov_resolve (CG where L is symmetric, GMRES otherwise) from a guess: from the
@@ -868,7 +863,6 @@ static void check_resolve(const cupid_linear_operator *L, const cupid_csr_t *P, 
   const cupid_int n = L->n;
   twin_pc pc = {.bc = bc};
   double *u = malloc((size_t)n * sizeof *u), *uh = malloc((size_t)n * sizeof *uh);
-  pc.t = malloc((size_t)n * sizeof *pc.t);
   CUPID_ASSERT_OK(cupid_direct_factor_create_kind(P, symmetric ? CUPID_MATRIX_SPD : CUPID_MATRIX_GENERAL,
                                                   bc, &pc.F, NULL));
   cupid_solve_info info;
@@ -912,7 +906,6 @@ static void check_resolve(const cupid_linear_operator *L, const cupid_csr_t *P, 
     assert_false(moved); /* the breakdown came before the first step: u is the guess */
   }
   cupid_direct_factor_destroy(&pc.F);
-  free(pc.t);
   free(u);
   free(uh);
 }
