@@ -26,6 +26,7 @@ typedef struct {
   double matrix_blocks, matrix_bytes;
   double factor_nnz, factor_bytes, factor_seconds;
   double total_bytes;
+  double growth_bytes; /* crack growth's peak on this path (the downdated factor's copy), or 0 */
   /* The PETSc path (docs/scale.md): bytes per rank with one rank, seconds of setup + solve. */
   int iterative_matrix_free;
   double iterative_bytes, iterative_seconds;
@@ -41,6 +42,15 @@ typedef struct {
  * side. */
 #define CUPID_UMFPACK_FILL_FACTOR 2.0
 #define CUPID_UMFPACK_TIME_FACTOR 1.0
+
+/* Crack growth on the direct path downdates CHOLMOD's factor, which cholmod_updown needs as a
+ * simplicial LDL' (a value and a 64-bit row index per entry): the supernodal factor is copied
+ * into that form at the first round of breaks, both alive while it is (factor.c
+ * simplicial_ldl). Measured on the coupled SENB (Arlequin, corrected; bench/
+ * fracture_senb_scale.sh, senb_study.py): the growth's peak over the static estimate, per entry
+ * of the estimated factor, 5.7, 5.8, 5.4, 6.9 and 7.8 bytes at h = 1, 5/6, 1/2, 5/12 and 1/3
+ * (0.315, 0.622, 2.6, 5.7 and 14.3 GB against 0.227, 0.442, 1.86, 3.77 and 8.99 GB). */
+#define GROWTH_COPY_BYTES_PER_ENTRY 8.0
 
 /* Matrix and factor sizes for n PD nodes and the given number of stored 3x3 blocks. */
 static void estimate_sizes(const cupid_model_t *m, double n, double blocks, cupid_estimate *e) {
@@ -63,6 +73,11 @@ static void estimate_sizes(const cupid_model_t *m, double n, double blocks, cupi
   /* K, its reduced one-triangle copy for CHOLMOD (about half of K at 12 B/entry), factor. */
   e->total_bytes = e->matrix_bytes + 0.5 * 9.0 * e->matrix_blocks * 12.0 + e->factor_bytes +
                    10.0 * ndof * 8.0;
+}
+
+/* The direct path's peak: a growth run's when its factor is copied for the downdates. */
+static double direct_peak(const cupid_estimate *e) {
+  return e->growth_bytes > 0 ? e->growth_bytes : e->total_bytes;
 }
 
 static cupid_status estimate(const cupid_problem_state *prob, cupid_estimate *e) {
@@ -148,6 +163,10 @@ static cupid_status estimate_all(const cupid_problem_state *prob, cupid_estimate
     e->direct_name = "UMFPACK";
   }
   estimate_iterative(prob, e);
+  const cupid_model_t *m = prob->model;
+  if (m->analysis.type == CUPID_ANALYSIS_STATIC && m->has_peridynamics && m->pd.fracture.has_fracture &&
+      (!general_matrix(prob) || block_elimination(prob))) /* a CHOLMOD factor is downdated */
+    e->growth_bytes = e->total_bytes + GROWTH_COPY_BYTES_PER_ENTRY * e->factor_nnz;
   return CUPID_SUCCESS;
 }
 
@@ -155,7 +174,7 @@ cupid_status cupid_problem_costs(const cupid_problem_state *prob, cupid_solver_c
                                  cupid_solver_cost *iterative) {
   cupid_estimate e;
   CUPID_CALL(estimate_all(prob, &e));
-  *direct = (cupid_solver_cost){.bytes = e.total_bytes, .seconds = e.factor_seconds};
+  *direct = (cupid_solver_cost){.bytes = direct_peak(&e), .seconds = e.factor_seconds};
   *iterative = (cupid_solver_cost){.bytes = e.iterative_bytes, .seconds = e.iterative_seconds};
   snprintf(direct->what, sizeof direct->what, "%s", e.direct_name);
   snprintf(iterative->what, sizeof iterative->what, "%s", e.iterative_what);
@@ -247,6 +266,9 @@ cupid_status cupid_problem_estimate(const cupid_problem_state *prob, int print) 
            e.factor_nnz, e.factor_bytes / 1e9, e.factor_seconds);
     printf("estimated peak memory, direct path: %.3g GB (limit %.3g GB)\n", e.total_bytes / 1e9,
            limit / 1e9);
+    if (e.growth_bytes > 0)
+      printf("estimated peak memory, crack growth on the direct path: %.3g GB (the factor "
+             "copied for its downdates)\n", e.growth_bytes / 1e9);
     /* the engines of this build that take the iterative path */
     char takers[96] = "";
     for (int k = 0; cupid_solver_type_at(k); k++) {
@@ -280,7 +302,7 @@ cupid_status cupid_problem_estimate(const cupid_problem_state *prob, int print) 
       print_growth_path(prob, asked ? asked : pick);
       print_checkpoints(prob, prob->estimate.seconds * (m->analysis.steps > 0 ? m->analysis.steps : 1));
     }
-    printf("the model is valid%s\n", limit > 0 && e.total_bytes > limit
+    printf("the model is valid%s\n", limit > 0 && direct_peak(&e) > limit
                                           ? ", but too large for the direct solver on this machine"
                                           : "");
   }
@@ -294,13 +316,15 @@ cupid_status cupid_problem_estimate(const cupid_problem_state *prob, int print) 
                          limit / 1e9);
     return CUPID_SUCCESS;
   }
-  if (!print && limit > 0 && e.total_bytes > limit)
+  if (!print && limit > 0 && direct_peak(&e) > limit)
     return CUPID_ERROR(CUPID_ERR_MODEL,
                        "%s: the model needs about %.3g GB (%lld PD nodes; stiffness %.3g GB, "
-                       "factor %.3g GB), more than the limit of %.3g GB; use --max-memory GB to "
+                       "factor %.3g GB%s), more than the limit of %.3g GB; use --max-memory GB to "
                        "raise the limit, or a coarser grid",
-                       prob->model->file, e.total_bytes / 1e9, (long long)prob->n_pd,
-                       e.matrix_bytes / 1e9, e.factor_bytes / 1e9, limit / 1e9);
+                       prob->model->file, direct_peak(&e) / 1e9, (long long)prob->n_pd,
+                       e.matrix_bytes / 1e9, e.factor_bytes / 1e9,
+                       e.growth_bytes > 0 ? ", copied for crack growth's downdates" : "",
+                       limit / 1e9);
   return CUPID_SUCCESS;
 }
 
@@ -550,13 +574,15 @@ const cupid_solver_cost *cupid_problem_path_cost(const cupid_problem_state *prob
  * least memory (the size guard then says what it needs). Analyses other than static take the
  * first engine (the integrators factor or need no solve). */
 #define AUTO_MEMORY_SHARE 0.25
-/* Load steps and crack growth: the factorisation up to half the limit. Its re-solves are a
- * downdate and a triangular solve each, where the krylov engine's kept solve takes ~35-45 CG
- * iterations (the twin's factor is the intact grid's): the coupled SENB at h = 1 grew its
- * crack in 15 s on the direct path and 400-800 s on the matrix-free one (493 re-solves, 22,283
- * iterations; verification.fracture_krylov, bench/README.md). The estimate is close for these
- * models (h = 1/3: 8.99 GB estimated, 9.24 GB measured). */
-#define AUTO_GROWTH_MEMORY_SHARE 0.5
+/* Load steps and crack growth: the factorisation up to three quarters of the limit (the rest
+ * for what the estimate leaves out: outputs, the system). Its re-solves are a downdate and a
+ * triangular solve each, where the krylov engine's kept solve takes ~35-45 CG iterations (the
+ * twin's factor is the intact grid's): the coupled SENB at h = 1 grew its crack in 15 s on the
+ * direct path and 400-800 s on the matrix-free one (493 re-solves, 22,283 iterations;
+ * verification.fracture_krylov, bench/README.md). The growth's estimate includes the factor's
+ * copy for the downdates (GROWTH_COPY_BYTES_PER_ENTRY): 14.4 GB for the SENB at h = 1/3,
+ * whose growth peaked at 14.3 GB (8.99 GB estimated for a static solve, 9.24 measured). */
+#define AUTO_GROWTH_MEMORY_SHARE 0.75
 cupid_status cupid_problem_auto_engine(const cupid_problem_state *prob,
                                        const cupid_solver_type **engine, char *why, size_t len) {
   const cupid_solver_type *first = cupid_solver_type_at(0), *pick = NULL, *lean = NULL;

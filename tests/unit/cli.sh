@@ -166,5 +166,19 @@ for f in "$SRC"/tests/models/bad/*.yaml; do
   pass=$((pass+1))
 done
 
+# Crack growth's peak on the direct path (estimate.c, GROWTH_COPY_BYTES_PER_ENTRY): CHOLMOD's
+# factor copied into its simplicial form for the downdates. `check` prints it; auto keeps the
+# factorisation for growth while it stays within three quarters of the limit (here 4.98 GB, so
+# a limit of 6.5 GB puts the growth on krylov, 7 GB on direct: with the static peak of 3.13 GB
+# alone both would say direct); `--solver direct` refuses a growth that would pass the limit.
+S=$SRC/examples/fracture/senb_coupled.yaml
+h2=(--set peridynamics.spacing=0.5 --set peridynamics.horizon=1.5075)
+expect 0 'direct path: 3\.13 GB' -- "$CUPID" check "$S" "${h2[@]}"
+expect 0 'crack growth on the direct path: 4\.98 GB' -- "$CUPID" check "$S" "${h2[@]}"
+expect 0 'solver auto would pick: krylov' -- "$CUPID" check "$S" "${h2[@]}" --max-memory 6.5
+expect 0 'solver auto would pick: direct' -- "$CUPID" check "$S" "${h2[@]}" --max-memory 7
+expect 1 'factor .* copied for crack growth' -- "$CUPID" run "$S" -o big "${h2[@]}" --solver direct --max-memory 4
+[ -e big ] && { echo "FAIL: the refused run left big/"; fail=$((fail+1)); } || pass=$((pass+1))
+
 echo "cli: $pass passed, $fail failed"
 [ "$fail" -eq 0 ]
