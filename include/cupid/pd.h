@@ -509,17 +509,26 @@ cupid_status cupid_pd_operator_reach(const cupid_pd_operator op, const unsigned 
 /**
  * Mechanisms of a few nodes that cupid_pd_operator_weakly_held() does not see (each node held in
  * every direction by its own bonds, the cluster free to move): the nodes in [first, last) that
- * lost at least half of their bonds (by weight), grouped over intact bonds into clusters of at
- * most 48 nodes, each tested with everything outside it fixed (Cholesky of its bond block);
- * where a cluster is a mechanism, the node that completes it in the order of largest |u| first
- * (@p u: the displacements, or NULL for the node order) gets release = 2 (*count: how many),
- * and the rest is tested again. Released nodes count as fixed. Crack growth ties them by weak
- * springs before a downdate or a factorisation breaks down on them (src/pd/fracture.c,
- * "Mechanisms"; src/problem/growth.c, "Ties").
+ * lost at least half of their bonds (by weight), grouped over intact bonds into clusters; each
+ * cluster of at most 48 nodes is tested with everything outside it fixed (Cholesky of its bond
+ * block), and in a larger one (a crack face's band) a ball of 48 of its nodes around each node
+ * whose lost share differs from @p seen (every node of the band where @p seen is NULL), grown
+ * over intact bonds the most damaged first. Where a cluster is a mechanism, the node that
+ * completes it in the order of largest |u| first (@p u: the displacements, or NULL for the
+ * node order) gets release = 2 (*count: how many), and the rest is tested again. Released
+ * nodes count as fixed. @p seen (optional, one per node): each node's lost share at the last
+ * call, updated to the present ones (cupid_pd_operator_lost_shares fills it anew). Crack growth
+ * ties the nodes marked by weak springs before a downdate or a factorisation breaks down on
+ * them (src/pd/fracture.c, "Mechanisms"; src/problem/growth.c, "Ties").
  */
 cupid_status cupid_pd_operator_mechanisms(const cupid_pd_operator op, cupid_int first,
-                                          cupid_int last, const double *u,
+                                          cupid_int last, const double *u, double *seen,
                                           unsigned char *release, cupid_int *count);
+
+/** share[i] for i in [first, last): the share of node i's bond weight that is broken (0 where
+ *  no bond of it broke), as cupid_pd_operator_mechanisms() compares them. */
+void cupid_pd_operator_lost_shares(const cupid_pd_operator op, cupid_int first, cupid_int last,
+                                   double *share);
 
 /** out[j] = 1 for every node j in the family (the stencil's neighbours present, bonds intact
  *  or not) of a node i with mark[i] != 0; other entries of @p out are left as they are. The

@@ -824,8 +824,9 @@ static int weakly_held(const struct cupid_pd_operator_private *op, cupid_int i) 
  * as weakly_held's) is factorised by Cholesky in the nodes' order, and a pivot under
  * MECH_PIVOT times the block's largest diagonal entry is a mechanism there: that node is
  * marked (crack growth ties it by a weak spring, src/problem/growth.c) and counts as fixed,
- * and the rest of the cluster is tested again. A mechanism that takes in less damaged nodes, or a
- * cluster larger than the bound (a crack face), is left to the factorisation, as before. */
+ * and the rest of the cluster is tested again. A mechanism that takes in less damaged nodes is
+ * left to the factorisation, as before; a cluster larger than the bound (a crack face's band) is
+ * tested in balls around its nodes that lost bonds since the last check (below). */
 #define MECH_DAMAGE 0.5
 #define MECH_CLUSTER_MAX 48
 /* A mechanism's pivot is round-off of the block's entries (1e-16 of them); a node held by a
@@ -930,58 +931,145 @@ static int cluster_first(const double *u, cupid_int i, cupid_int j) {
   return i < j;
 }
 
+/* ---- Mechanisms inside a band of damaged nodes ----
+ * A cluster larger than MECH_CLUSTER_MAX (a crack face's band) is not factorised whole, but a
+ * mechanism of a few nodes can form inside one: the notched C-beam's flange ligaments leave
+ * nodes that lost 78-80% of their bonds moving with a few neighbours inside damaged bands of
+ * 400 nodes, each then found by a factorisation of the grown zone (examples/fracture/README.md).
+ * A mechanism that forms takes in a node that lost a bond since the last check (the caller's
+ * seen[]: each node's lost share then), so a ball of at most MECH_CLUSTER_MAX band nodes
+ * around each such node is tested as a cluster, everything outside it fixed. The ball grows
+ * over intact bonds, the most damaged neighbour first (ties: the lower index), so that the
+ * loose nodes, which lost the most, come in before the band's ordinary crack-face nodes. A
+ * mechanism of the ball with its outside fixed is one of the whole body (its mode, zero
+ * outside, strains no bond there either), so what it marks is a mechanism; one that the ball
+ * does not hold whole is left to the factorisation, as before. */
+
+/* Scratch of one mechanisms() call. */
+typedef struct {
+  unsigned char *cand;  /* MECH_CAND, MECH_SEEN, MECH_TOUCHED, MECH_BAND bits per node */
+  double *share;        /* lost share of each candidate */
+  cupid_int *queue, *nodes, *front;
+  int *local;           /* place in the cluster (>= 0), MECH_FRONT, or -1 */
+  double *K;
+} mech_scratch;
+#define MECH_CAND 1u
+#define MECH_SEEN 2u
+#define MECH_TOUCHED 4u
+#define MECH_BAND 8u
+#define MECH_FRONT (-2)
+
+/* Test the m nodes of s->nodes as a cluster in the order of cluster_first. */
+static void test_cluster(const struct cupid_pd_operator_private *op, mech_scratch *s, int m,
+                         const double *u, unsigned char *release, cupid_int *count) {
+  cupid_int *nodes = s->nodes;
+  for (int a = 1; a < m; a++)
+    for (int b = a; b > 0 && cluster_first(u, nodes[b], nodes[b - 1]); b--) {
+      const cupid_int x = nodes[b];
+      nodes[b] = nodes[b - 1], nodes[b - 1] = x;
+    }
+  for (int a = 0; a < m; a++) s->local[nodes[a]] = a;
+  cluster_mechanisms(op, nodes, m, s->local, release, s->K, count);
+  for (int a = 0; a < m; a++) s->local[nodes[a]] = -1;
+}
+
+/* Put the band nodes bonded to v by intact bonds, not in the ball or its front yet, into the
+ * front. */
+static void ball_front(const struct cupid_pd_operator_private *op, mech_scratch *s, cupid_int v,
+                       const unsigned char *release, int *nf) {
+  const pd_family F = pd_family_of(op, v);
+  for (int q = 0; q < F.n; q++) {
+    const int e = pd_family_entry(&F, q);
+    const cupid_int j = pd_family_node(op, &F, e);
+    if ((s->cand[j] & MECH_BAND) && !release[j] && s->local[j] == -1 && !pd_bond_broken(op, v, e))
+      s->local[j] = MECH_FRONT, s->front[(*nf)++] = j;
+  }
+}
+
+/* The ball around centre c in the band (MECH_BAND), tested as a cluster. */
+static void ball_mechanisms(const struct cupid_pd_operator_private *op, mech_scratch *s,
+                            cupid_int c, const double *u, unsigned char *release,
+                            cupid_int *count) {
+  int m = 0, nf = 0;
+  s->nodes[m++] = c, s->local[c] = 0;
+  ball_front(op, s, c, release, &nf);
+  while (m < MECH_CLUSTER_MAX && nf > 0) { /* the most damaged of the front next */
+    int best = 0;
+    for (int k = 1; k < nf; k++) {
+      const cupid_int a = s->front[k], b = s->front[best];
+      if (s->share[a] > s->share[b] || (s->share[a] == s->share[b] && a < b)) best = k;
+    }
+    const cupid_int j = s->front[best];
+    s->front[best] = s->front[--nf];
+    s->local[j] = m, s->nodes[m++] = j;
+    ball_front(op, s, j, release, &nf);
+  }
+  for (int k = 0; k < nf; k++) s->local[s->front[k]] = -1;
+  for (int a = 0; a < m; a++) s->local[s->nodes[a]] = -1;
+  test_cluster(op, s, m, u, release, count);
+}
+
 /* The mechanisms of clusters of nodes in [first, last) that lost at least MECH_DAMAGE of their
- * bonds (above): the nodes that complete them get release = 2, *count more of them. */
+ * bonds (above), and of balls in the larger ones around the nodes touched since seen[] (all of
+ * their nodes without it): the nodes that complete them get release = 2, *count more of them. */
 static cupid_status mechanisms(const struct cupid_pd_operator_private *op, cupid_int first,
-                               cupid_int last, const double *u, unsigned char *release,
-                               cupid_int *count) {
+                               cupid_int last, const double *u, double *seen,
+                               unsigned char *release, cupid_int *count) {
   const cupid_int nn = op->nnodes;
-  unsigned char *cand = NULL;
-  cupid_int *queue = NULL, *nodes = NULL;
-  int *local = NULL;
-  double *K = NULL;
+  mech_scratch s = {0};
   cupid_status st = CUPID_SUCCESS;
-  CUPID_TRY(cupid_calloc((size_t)nn + 1, 1, "mechanism flags", &cand));
+  CUPID_TRY(cupid_calloc((size_t)nn + 1, 1, "mechanism flags", &s.cand));
+  CUPID_TRY(cupid_malloc((size_t)nn + 1, sizeof *s.share, "mechanism shares", &s.share));
   cupid_int nc = 0;
-  for (cupid_int i = first; i < last; i++)
-    if (!release[i] && op->bslot[i] >= 0 && lost_share(op, i) >= MECH_DAMAGE) cand[i] = 1, nc++;
-  if (nc == 0) goto cleanup;
-  CUPID_TRY(cupid_malloc((size_t)nn + 1, sizeof *queue, "mechanism queue", &queue));
-  CUPID_TRY(cupid_malloc((size_t)nn + 1, sizeof *local, "mechanism map", &local));
-  CUPID_TRY(cupid_malloc(MECH_CLUSTER_MAX, sizeof *nodes, "mechanism cluster", &nodes));
-  CUPID_TRY(cupid_malloc(9 * MECH_CLUSTER_MAX * MECH_CLUSTER_MAX, sizeof *K, "mechanism block", &K));
-  for (cupid_int i = 0; i < nn; i++) local[i] = -1;
   for (cupid_int i = first; i < last; i++) {
-    if (cand[i] != 1) continue;
+    if (release[i] || op->bslot[i] < 0) continue;
+    const double sh = lost_share(op, i);
+    if (sh >= MECH_DAMAGE) s.cand[i] = MECH_CAND, s.share[i] = sh, nc++;
+    if (seen && sh != seen[i]) s.cand[i] |= MECH_TOUCHED;
+    if (seen) seen[i] = sh;
+  }
+  if (nc == 0) goto cleanup;
+  CUPID_TRY(cupid_malloc((size_t)nn + 1, sizeof *s.queue, "mechanism queue", &s.queue));
+  CUPID_TRY(cupid_malloc((size_t)nn + 1, sizeof *s.local, "mechanism map", &s.local));
+  CUPID_TRY(cupid_malloc(MECH_CLUSTER_MAX, sizeof *s.nodes, "mechanism cluster", &s.nodes));
+  CUPID_TRY(cupid_malloc((size_t)MECH_CLUSTER_MAX * (size_t)op->st.n + 1, sizeof *s.front,
+                         "mechanism ball front", &s.front));
+  CUPID_TRY(cupid_malloc(9 * MECH_CLUSTER_MAX * MECH_CLUSTER_MAX, sizeof *s.K, "mechanism block", &s.K));
+  for (cupid_int i = 0; i < nn; i++) s.local[i] = -1;
+  for (cupid_int i = first; i < last; i++) {
+    if ((s.cand[i] & (MECH_CAND | MECH_SEEN)) != MECH_CAND) continue;
     cupid_int head = 0, tail = 0; /* the cluster over intact bonds between candidates */
-    queue[tail++] = i, cand[i] = 2;
+    s.queue[tail++] = i, s.cand[i] |= MECH_SEEN;
     while (head < tail) {
-      const cupid_int v = queue[head++];
+      const cupid_int v = s.queue[head++];
       const pd_family F = pd_family_of(op, v);
       for (int q = 0; q < F.n; q++) {
-        const int s = pd_family_entry(&F, q);
-        const cupid_int j = pd_family_node(op, &F, s);
-        if (cand[j] == 1 && !pd_bond_broken(op, v, s)) cand[j] = 2, queue[tail++] = j;
+        const int e = pd_family_entry(&F, q);
+        const cupid_int j = pd_family_node(op, &F, e);
+        if ((s.cand[j] & (MECH_CAND | MECH_SEEN)) == MECH_CAND && !pd_bond_broken(op, v, e))
+          s.cand[j] |= MECH_SEEN, s.queue[tail++] = j;
       }
     }
-    if (tail > MECH_CLUSTER_MAX) continue; /* a crack face: left to the factorisation */
-    int m = 0; /* in the order of cluster_first (the node held: the mechanism's last) */
-    for (cupid_int t = 0; t < tail; t++) nodes[m++] = queue[t];
-    for (int a = 1; a < m; a++)
-      for (int b = a; b > 0 && cluster_first(u, nodes[b], nodes[b - 1]); b--) {
-        const cupid_int x = nodes[b];
-        nodes[b] = nodes[b - 1], nodes[b - 1] = x;
-      }
-    for (int a = 0; a < m; a++) local[nodes[a]] = a;
-    cluster_mechanisms(op, nodes, m, local, release, K, count);
-    for (int a = 0; a < m; a++) local[nodes[a]] = -1;
+    if (tail <= MECH_CLUSTER_MAX) { /* the whole cluster */
+      for (cupid_int t = 0; t < tail; t++) s.nodes[t] = s.queue[t];
+      test_cluster(op, &s, (int)tail, u, release, count);
+      continue;
+    }
+    for (cupid_int t = 0; t < tail; t++) s.cand[s.queue[t]] |= MECH_BAND; /* a band: balls */
+    for (cupid_int t = 0; t < tail; t++) {
+      const cupid_int c = s.queue[t];
+      if (!release[c] && (!seen || (s.cand[c] & MECH_TOUCHED))) ball_mechanisms(op, &s, c, u, release, count);
+    }
+    for (cupid_int t = 0; t < tail; t++) s.cand[s.queue[t]] &= (unsigned char)~MECH_BAND;
   }
 cleanup:
-  cupid_free(&cand);
-  cupid_free(&queue);
-  cupid_free(&nodes);
-  cupid_free(&local);
-  cupid_free(&K);
+  cupid_free(&s.cand);
+  cupid_free(&s.share);
+  cupid_free(&s.queue);
+  cupid_free(&s.nodes);
+  cupid_free(&s.front);
+  cupid_free(&s.local);
+  cupid_free(&s.K);
   return st;
 }
 
@@ -999,14 +1087,21 @@ cupid_status cupid_pd_operator_weakly_held(const cupid_pd_operator op, cupid_int
   return CUPID_SUCCESS;
 }
 
+
 cupid_status cupid_pd_operator_mechanisms(const cupid_pd_operator op, cupid_int first,
-                                          cupid_int last, const double *u,
+                                          cupid_int last, const double *u, double *seen,
                                           unsigned char *release, cupid_int *count) {
   CUPID_CHECK(op && release && count && first >= 0 && last <= op->nnodes, CUPID_ERR_ARGUMENT,
               "mechanisms needs its arguments and a range of nodes");
   *count = 0;
   if (!op->bslot) return CUPID_SUCCESS;
-  return mechanisms(op, first, last, u, release, count);
+  return mechanisms(op, first, last, u, seen, release, count);
+}
+
+void cupid_pd_operator_lost_shares(const cupid_pd_operator op, cupid_int first, cupid_int last,
+                                   double *share) {
+  for (cupid_int i = first; i < last; i++)
+    share[i] = op->bslot && op->bslot[i] >= 0 ? lost_share(op, i) : 0.0;
 }
 
 cupid_status cupid_pd_operator_reach(const cupid_pd_operator op, const unsigned char *release,

@@ -30,6 +30,7 @@ static void free_layout(growth_run *g) {
   cupid_free(&g->fixed0);
   cupid_free(&g->anchored);
   cupid_free(&g->weak_scan);
+  cupid_free(&g->mech_seen);
   cupid_free(&g->masks);
   cupid_free(&g->T);
   for (int k = 0; k < 4; k++) cupid_free(&g->w[k]);
@@ -533,6 +534,15 @@ static cupid_status tie_assembled(growth_run *g, int fresh) {
   return tie_into(g, prob->K, 2, 3);
 }
 
+/* The lost shares the next mechanism check compares with (g->mech_seen): the present ones, at
+ * the run's start, after a conversion (a new layout) and after a resumption. The bands of
+ * damaged nodes are searched around the nodes that lost bonds since (src/pd/fracture.c), and at
+ * a step's end, where checkpoints are written, no bond has broken since the last check: a
+ * resumed run compares with what the uninterrupted one did. */
+static void mechanisms_seen(growth_run *g) {
+  if (g->mech_seen) cupid_pd_operator_lost_shares(g->prob->op, 0, g->prob->n_pd, g->mech_seen);
+}
+
 /* The nodes that complete a mechanism of a few (cupid_pd_operator_mechanisms), tied: state 2
  * (in neither K nor the factor yet). Held and tied nodes count as fixed. */
 static cupid_status tie_mechanisms(growth_run *g, int step) {
@@ -540,7 +550,9 @@ static cupid_status tie_mechanisms(growth_run *g, int step) {
   unsigned char *scan = g->weak_scan;
   cupid_int count = 0;
   for (cupid_int i = 0; i < prob->n_pd; i++) scan[i] = g->release[i] || g->tie[i];
-  CUPID_CALL(cupid_pd_operator_mechanisms(prob->op, 0, prob->n_pd, prob->u, scan, &count));
+  if (!g->band_check) mechanisms_seen(g); /* no node touched: no band searched */
+  CUPID_CALL(cupid_pd_operator_mechanisms(prob->op, 0, prob->n_pd, prob->u, g->mech_seen, scan,
+                                          &count));
   if (count == 0) return CUPID_SUCCESS;
   const double *x = cupid_pd_grid_coords(prob->grid);
   for (cupid_int i = 0; i < prob->n_pd; i++) {
@@ -1430,8 +1442,12 @@ static cupid_status setup_layout(growth_run *g) {
     CUPID_CALL(cupid_calloc((size_t)prob->n_pd + 1, 1, "released nodes", &g->release));
     CUPID_CALL(cupid_calloc((size_t)prob->n_pd + 1, 1, "weakly held nodes", &g->weak));
     CUPID_CALL(cupid_calloc((size_t)prob->n_pd + 1, 1, "weakly held scan", &g->weak_scan));
-    if (own_factor(prob) && !matrix_free(prob) && !prob->slab)
+    if (own_factor(prob) && !matrix_free(prob) && !prob->slab) {
       CUPID_CALL(cupid_calloc((size_t)prob->n_pd + 1, 1, "tied nodes", &g->tie));
+      CUPID_CALL(cupid_malloc((size_t)prob->n_pd + 1, sizeof *g->mech_seen, "lost shares",
+                              &g->mech_seen));
+      mechanisms_seen(g);
+    }
     anchor(g);
   }
   CUPID_CALL(constraint_masks(g));
@@ -1547,6 +1563,10 @@ static cupid_status setup_run(growth_run *g) {
   g->patch = !(whole && strcmp(whole, "1") == 0);
   const char *sub = getenv("CUPID_GROWTH_SUBSTEP");
   g->substep = !(sub && strcmp(sub, "0") == 0);
+  /* ... and CUPID_GROWTH_BANDS=0 leaves the mechanisms inside bands of damaged nodes to the
+   * factorisation, as before they were searched (the failed downdates that name them) */
+  const char *bands = getenv("CUPID_GROWTH_BANDS");
+  g->band_check = !(bands && strcmp(bands, "0") == 0);
   return CUPID_SUCCESS;
 }
 
@@ -1561,7 +1581,10 @@ static cupid_status begin_growth(growth_run *g) {
                           "peak reactions", &prob->growth.peak));
   /* the estimate: a solve of the chosen engine per load step, at least */
   CUPID_CALL(cupid_problem_checkpoint_begin(prob, prob->estimate.seconds * N));
-  if (prob->opts->resume) CUPID_CALL(growth_resume(g));
+  if (prob->opts->resume) {
+    CUPID_CALL(growth_resume(g));
+    mechanisms_seen(g); /* the checkpoint's broken bonds */
+  }
   return open_writers(g);
 }
 

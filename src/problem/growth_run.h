@@ -32,6 +32,9 @@ typedef struct {
   unsigned char *fixed0;        /* the model's constrained DOFs */
   unsigned char *anchored, *release;
   unsigned char *weak_scan;     /* a copy of release, scratch */
+  double *mech_seen;            /* with ties: each PD node's lost share at the last mechanism
+                                   check (tie_mechanisms), its start or the layout's */
+  int band_check;               /* search the bands of damaged nodes for mechanisms (default) */
   unsigned char *weak;          /* per node: released as weakly held (at most 2 bonds, or all
                                    in one plane; held_forces) */
   unsigned char *tie;           /* per node: tied by a weak spring (tie_mechanisms): 0 no, 1 in

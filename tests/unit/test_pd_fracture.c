@@ -867,7 +867,9 @@ static void keep_only(body *w, const double *x, const double at[3], const double
       kept |= x[3 * j] == keep[k][0] && x[3 * j + 1] == keep[k][1] && x[3 * j + 2] == keep[k][2];
     if (kept) continue;
     if (s >= half) { /* the packed words hold each bond at the end whose entry is in the upper half */
-      words[(size_t)i * nw + ((s - half) >> 5)] += (double)((uint32_t)1 << ((s - half) & 31));
+      const size_t at_w = (size_t)i * nw + ((s - half) >> 5);
+      const uint32_t bit = (uint32_t)1 << ((s - half) & 31), have = (uint32_t)words[at_w];
+      words[at_w] = (double)(have | bit); /* set once: another node's call may have set it */
       continue;
     }
     const pd_family G = pd_family_of(op, j);
@@ -924,18 +926,113 @@ static void test_mechanism(void **state) {
     memset(release, 0, (size_t)w.n);
     for (cupid_int k = 0; k < 3 * w.n; k++) u[k] = 0.0;
     u[3 * iA] = round ? 1.0 : 2.0, u[3 * iB] = round ? 2.0 : 1.0;
-    CUPID_ASSERT_OK(cupid_pd_operator_mechanisms(w.op, 0, w.n, u, release, &count));
+    CUPID_ASSERT_OK(cupid_pd_operator_mechanisms(w.op, 0, w.n, u, NULL, release, &count));
     assert_int_equal(count, 1);
     for (cupid_int i = 0; i < w.n; i++) assert_int_equal(release[i], i == (round ? iA : iB) ? 2 : 0);
     release[round ? iA : iB] = 1; /* the other is held by its bonds now */
-    CUPID_ASSERT_OK(cupid_pd_operator_mechanisms(w.op, 0, w.n, u, release, &count));
+    CUPID_ASSERT_OK(cupid_pd_operator_mechanisms(w.op, 0, w.n, u, NULL, release, &count));
     assert_int_equal(count, 0);
   }
   memset(release, 0, (size_t)w.n); /* without u: the node order (A before B), B held */
-  CUPID_ASSERT_OK(cupid_pd_operator_mechanisms(w.op, 0, w.n, NULL, release, &count));
+  CUPID_ASSERT_OK(cupid_pd_operator_mechanisms(w.op, 0, w.n, NULL, NULL, release, &count));
   assert_int_equal(count, 1);
   assert_int_equal(release[iA < iB ? iB : iA], 2);
   free(words), free(u), free(release);
+  destroy(&w);
+}
+
+/* The node of a 3D grid at (x, y, z), or -1. */
+static cupid_int node_at(const double *x, cupid_int n, double px, double py, double pz) {
+  for (cupid_int i = 0; i < n; i++)
+    if (x[3 * i] == px && x[3 * i + 1] == py && x[3 * i + 2] == pz) return i;
+  return -1;
+}
+
+/* A mechanism of two nodes inside a band of damaged nodes (issue 37: the notched C-beam's
+ * flange ligaments, src/pd/fracture.c "Mechanisms inside a band"): the top layer of a 10 x 10 x 4
+ * grid (horizon 1.5) keeps of its 13 bonds the 4 in-plane edge bonds and the one straight down
+ * (8/13 lost, P and Q below a diagonal one more: each node a candidate, held in x, y and z).
+ * Its edge nodes are held (release 1, as crack growth holds nodes: fixed), which pins each row
+ * and column of the layer against sliding along itself; the 64 inner nodes are one cluster over
+ * their edge bonds, too large to be factorised whole. No mechanism there, the whole band searched
+ * or only its nodes touched since @p seen. Then P = (4.5, 4.5, 3.5) and Q = (5.5, 4.5, 3.5) keep
+ * only P-Q, P-(P + y), Q-(Q - y) and a diagonal bond down each, away from the other: each node
+ * held in every direction by its own bonds (weakly_held sees nothing), the pair free to move as
+ * ux_P = ux_Q = 1, uz_P = -1, uz_Q = 1 (K of that mode: zero, checked on the operator). The
+ * balls around the nodes touched since the band's check find it: one of P and Q marked; the
+ * call after that, with nothing touched, tests no ball; every node's ball finds it once. */
+static void test_mechanism_in_band(void **state) {
+  (void)state;
+  body w = {0};
+  const cupid_box box = {.lo = {0, 0, 0}, .hi = {10, 10, 4}, .has = {1, 1, 1}};
+  cupid_pd_grid_options go = {.spacing = 1.0, .dimension = 3};
+  int m = 0;
+  CUPID_ASSERT_OK(cupid_pd_grid_create(&go, 1, &box, &m, &w.grid));
+  cupid_pd_operator_options oo = {.horizon = 1.5, .model = CUPID_PD_BOND,
+                                  .influence = CUPID_INFLUENCE_CONSTANT,
+                                  .partial_volume = CUPID_PARTIAL_NONE, .materials = mats,
+                                  .n_materials = 1};
+  CUPID_ASSERT_OK(cupid_pd_operator_create(w.grid, &oo, &w.op));
+  w.n = cupid_pd_grid_num_nodes(w.grid);
+  const double *x = cupid_pd_grid_coords(w.grid);
+  const int nw = cupid_pd_operator_broken_words(w.op);
+  double *words = calloc((size_t)w.n * nw + 1, sizeof *words), *u = calloc(3 * (size_t)w.n, sizeof *u);
+  double *f = calloc(3 * (size_t)w.n, sizeof *f), *seen = calloc((size_t)w.n, sizeof *seen);
+  unsigned char *release = calloc((size_t)w.n, 1), *held = calloc((size_t)w.n, 1);
+  cupid_pd_fracture_options fo = {.criterion = CUPID_PD_BREAK_STRETCH, .critical_stretch = 1.0};
+  cupid_int added = 0, count = -1, band = 0;
+  double dissipated = 0.0;
+  for (double px = 0.5; px < 10; px += 1.0)
+    for (double py = 0.5; py < 10; py += 1.0) {
+      const double c[3] = {px, py, 3.5}, dx = px == 4.5 && py == 4.5 ? -1 : 1; /* P's and Q's */
+      const double keep[6][3] = {{px + 1, py, 3.5}, {px - 1, py, 3.5}, {px, py + 1, 3.5},
+                                 {px, py - 1, 3.5}, {px, py, 2.5}, {px + dx, py, 2.5}};
+      const int pq = py == 4.5 && (px == 4.5 || px == 5.5); /* their diagonals kept for later */
+      keep_only(&w, x, c, keep, pq ? 6 : 5, words);
+      if (px == 0.5 || px == 9.5 || py == 0.5 || py == 9.5) held[node_at(x, w.n, px, py, 3.5)] = 1;
+    }
+  CUPID_ASSERT_OK(cupid_pd_operator_unpack_broken(w.op, 0, w.n, words, u, &fo, &added, &dissipated));
+  cupid_pd_operator_lost_shares(w.op, 0, w.n, f);
+  for (cupid_int i = 0; i < w.n; i++) band += f[i] >= 0.5;
+  assert_int_equal(band, 100); /* the layer, and no node below it */
+  memcpy(release, held, (size_t)w.n);
+  CUPID_ASSERT_OK(cupid_pd_operator_weakly_held(w.op, 0, w.n, release, &count));
+  assert_int_equal(count, 0);
+  CUPID_ASSERT_OK(cupid_pd_operator_mechanisms(w.op, 0, w.n, NULL, NULL, release, &count));
+  assert_int_equal(count, 0); /* every node's ball */
+  CUPID_ASSERT_OK(cupid_pd_operator_mechanisms(w.op, 0, w.n, NULL, seen, release, &count));
+  assert_int_equal(count, 0);
+  for (cupid_int i = 0; i < w.n; i++) assert_true(seen[i] == (held[i] ? 0.0 : f[i])); /* kept */
+  const cupid_int iP = node_at(x, w.n, 4.5, 4.5, 3.5), iQ = node_at(x, w.n, 5.5, 4.5, 3.5);
+  const double P[3] = {4.5, 4.5, 3.5}, Q[3] = {5.5, 4.5, 3.5};
+  const double keepP[3][3] = {{5.5, 4.5, 3.5}, {4.5, 5.5, 3.5}, {3.5, 4.5, 2.5}};
+  const double keepQ[3][3] = {{4.5, 4.5, 3.5}, {5.5, 3.5, 3.5}, {6.5, 4.5, 2.5}};
+  memset(words, 0, (size_t)w.n * nw * sizeof *words);
+  keep_only(&w, x, P, keepP, 3, words);
+  keep_only(&w, x, Q, keepQ, 3, words);
+  CUPID_ASSERT_OK(cupid_pd_operator_unpack_broken(w.op, 0, w.n, words, u, &fo, &added, &dissipated));
+  assert_int_equal(added, 6); /* P: -x, -y, down; Q: +x, +y, down */
+  CUPID_ASSERT_OK(cupid_pd_operator_weakly_held(w.op, 0, w.n, release, &count));
+  assert_int_equal(count, 0); /* each held by its own bonds */
+  u[3 * iP] = u[3 * iQ] = 1.0, u[3 * iP + 2] = -1.0, u[3 * iQ + 2] = 1.0; /* the pair's mode */
+  CUPID_ASSERT_OK(cupid_pd_operator_apply(w.op, u, f));
+  double fmax = 0.0, fref = 0.0;
+  for (cupid_int k = 0; k < 3 * w.n; k++) fmax = fmax > fabs(f[k]) ? fmax : fabs(f[k]);
+  u[3 * iP + 2] = 1.0; /* not the mode: the bonds resist */
+  CUPID_ASSERT_OK(cupid_pd_operator_apply(w.op, u, f));
+  for (cupid_int k = 0; k < 3 * w.n; k++) fref = fref > fabs(f[k]) ? fref : fabs(f[k]);
+  assert_true(fref > 0.0 && fmax <= 1e-12 * fref);
+  CUPID_ASSERT_OK(cupid_pd_operator_mechanisms(w.op, 0, w.n, NULL, seen, release, &count));
+  assert_int_equal(count, 1);
+  for (cupid_int i = 0; i < w.n; i++)
+    assert_int_equal(release[i], held[i] ? 1 : i == iQ ? 2 : 0); /* the later of the pair */
+  memcpy(release, held, (size_t)w.n); /* nothing lost a bond since: no ball, nothing found */
+  CUPID_ASSERT_OK(cupid_pd_operator_mechanisms(w.op, 0, w.n, NULL, seen, release, &count));
+  assert_int_equal(count, 0);
+  CUPID_ASSERT_OK(cupid_pd_operator_mechanisms(w.op, 0, w.n, NULL, NULL, release, &count));
+  assert_int_equal(count, 1); /* every node's ball: found once */
+  assert_int_equal(release[iQ], 2);
+  free(words), free(u), free(f), free(seen), free(release), free(held);
   destroy(&w);
 }
 
@@ -947,7 +1044,8 @@ int main(void) {
       cmocka_unit_test(test_stretch_threshold),  cmocka_unit_test(test_protect_damage_energy),
       cmocka_unit_test(test_threads),            cmocka_unit_test(test_isolated_node),
       cmocka_unit_test(test_copy_broken),        cmocka_unit_test(test_scan_paths),
-      cmocka_unit_test(test_support),            cmocka_unit_test(test_mechanism),            cmocka_unit_test(test_protected_ratios),
+      cmocka_unit_test(test_support),            cmocka_unit_test(test_mechanism),
+      cmocka_unit_test(test_mechanism_in_band),  cmocka_unit_test(test_protected_ratios),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }
