@@ -884,19 +884,25 @@ static void keep_only(body *w, const double *x, const double at[3], const double
   }
 }
 
-static void test_mechanism(void **state) {
-  (void)state;
-  body w = {0};
-  const cupid_box box = {.lo = {0, 0, 0}, .hi = {6, 6, 6}, .has = {1, 1, 1}};
+/* A bond-based box [0, X] x [0, Y] x [0, Z], spacing 1, horizon 1.5 (18 neighbours), constant
+ * influence, whole volumes: every bond of the same weight (the mechanism tests). */
+static void bond_box(body *w, double X, double Y, double Z) {
+  const cupid_box box = {.lo = {0, 0, 0}, .hi = {X, Y, Z}, .has = {1, 1, 1}};
   cupid_pd_grid_options go = {.spacing = 1.0, .dimension = 3};
   int m = 0;
-  CUPID_ASSERT_OK(cupid_pd_grid_create(&go, 1, &box, &m, &w.grid));
+  CUPID_ASSERT_OK(cupid_pd_grid_create(&go, 1, &box, &m, &w->grid));
   cupid_pd_operator_options oo = {.horizon = 1.5, .model = CUPID_PD_BOND,
                                   .influence = CUPID_INFLUENCE_CONSTANT,
                                   .partial_volume = CUPID_PARTIAL_NONE, .materials = mats,
                                   .n_materials = 1};
-  CUPID_ASSERT_OK(cupid_pd_operator_create(w.grid, &oo, &w.op));
-  w.n = cupid_pd_grid_num_nodes(w.grid);
+  CUPID_ASSERT_OK(cupid_pd_operator_create(w->grid, &oo, &w->op));
+  w->n = cupid_pd_grid_num_nodes(w->grid);
+}
+
+static void test_mechanism(void **state) {
+  (void)state;
+  body w = {0};
+  bond_box(&w, 6, 6, 6);
   const double *x = cupid_pd_grid_coords(w.grid);
   const int nw = cupid_pd_operator_broken_words(w.op);
   double *words = calloc((size_t)w.n * nw + 1, sizeof *words), *u = calloc(3 * (size_t)w.n, sizeof *u);
@@ -964,16 +970,7 @@ static cupid_int node_at(const double *x, cupid_int n, double px, double py, dou
 static void test_mechanism_in_band(void **state) {
   (void)state;
   body w = {0};
-  const cupid_box box = {.lo = {0, 0, 0}, .hi = {10, 10, 4}, .has = {1, 1, 1}};
-  cupid_pd_grid_options go = {.spacing = 1.0, .dimension = 3};
-  int m = 0;
-  CUPID_ASSERT_OK(cupid_pd_grid_create(&go, 1, &box, &m, &w.grid));
-  cupid_pd_operator_options oo = {.horizon = 1.5, .model = CUPID_PD_BOND,
-                                  .influence = CUPID_INFLUENCE_CONSTANT,
-                                  .partial_volume = CUPID_PARTIAL_NONE, .materials = mats,
-                                  .n_materials = 1};
-  CUPID_ASSERT_OK(cupid_pd_operator_create(w.grid, &oo, &w.op));
-  w.n = cupid_pd_grid_num_nodes(w.grid);
+  bond_box(&w, 10, 10, 4);
   const double *x = cupid_pd_grid_coords(w.grid);
   const int nw = cupid_pd_operator_broken_words(w.op);
   double *words = calloc((size_t)w.n * nw + 1, sizeof *words), *u = calloc(3 * (size_t)w.n, sizeof *u);
