@@ -280,7 +280,7 @@ set key bottom left
 set xrange [0:*]
 set yrange [0:35]
 set object 1 rect from graph 0, first %g to graph 1, first %g fc rgb "#dddddd" fs solid 0.5 noborder behind
-set label "ASTM E399 (plane stress to plane strain)" at graph 0.02, first %g offset 0,0.8
+set label "ASTM E399 (plane stress to plane strain)" at graph 0.4, first %g offset 0,0.8
 plot %s
 """ % (args.out, p_stress, p_strain, p_strain, ", ".join(series)))
     finest = {}
