@@ -1087,7 +1087,6 @@ cupid_status cupid_pd_operator_weakly_held(const cupid_pd_operator op, cupid_int
   return CUPID_SUCCESS;
 }
 
-
 cupid_status cupid_pd_operator_mechanisms(const cupid_pd_operator op, cupid_int first,
                                           cupid_int last, const double *u, double *seen,
                                           unsigned char *release, cupid_int *count) {
