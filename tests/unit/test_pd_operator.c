@@ -232,12 +232,12 @@ static void all_options_on(cupid_pd_grid g, const double *deltas, int ndeltas, i
   }
 }
 
-/* A 6 x 5 x 7 box, delta = 2.5 h and 3.015 h (m = 3 with the usual offset). */
 /* CUPID_TEST_SMALL (valgrind, the sanitizers: the same code, 831 s under valgrind on 2 busy
  * cores): the box with one horizon, the patch test with each influence and each partial volume
  * once per model, not the L-shaped union's. */
 static int small(void) { return getenv("CUPID_TEST_SMALL") != NULL; }
 
+/* A 6 x 5 x 7 box, delta = 2.5 h and 3.015 h (m = 3 with the usual offset). */
 static void test_box_all_options(void **state) {
   (void)state;
   cupid_box b = box3(0, 6, 0, 5, 0, 7);
