@@ -50,7 +50,18 @@ for h in $spacings; do
   gb=${gb:-nan}
   if python3 -c "import sys; sys.exit(0 if $gb == $gb and $gb > $limit else 1)" 2>/dev/null; then
     n=$(python3 -c "print(round(20 / $hv) * round(5 / $hv) * round(($hi - $lo) / $hv))")
-    echo "| $h | $n | not run: \`cupid check\` estimates $gb GB for its growth on the direct path, over $limit GB | | | | | | | | | | | |"
+    # the factor's size measured by CHOLMOD's symbolic analysis (no factor formed), its best
+    # ordering: whether any ordering would make it fit
+    fill=
+    if [ -x "$root/build/bench/bench_factor_fill" ]; then
+      fill=$("$root/build/bench/bench_factor_fill" "$model" "${set[@]/--quiet/}" | python3 -c "
+import sys
+rows = [l.split('|') for l in sys.stdin if l.startswith('| ') and 'ordering' not in l]
+best = min(rows, key=lambda r: float(r[2]))
+print(f'; symbolic analysis: {float(best[2]):.3g} factor entries at best ({best[1].strip()}), '
+      f'{best[4].strip()} GB of values, {best[6].strip()} GB for growth')")
+    fi
+    echo "| $h | $n | not run: \`cupid check\` estimates $gb GB for its growth on the direct path, over $limit GB$fill | | | | | | | | | | | |"
     continue
   fi
   t0=$(date +%s.%N)
