@@ -610,6 +610,61 @@ static int loose_node(const growth_run *g, cupid_int dof) {
   return prob->grid && dof >= 0 && dof < 3 * prob->n_pd && !g->release[dof / 3];
 }
 
+/* The mechanisms that no ball of a band holds whole (the notched C-beam's flanges: nodes that
+ * lost 74-87% of their bonds inside damaged bands of more than 400 nodes, 2 of 48 found by a
+ * search of every ball; docs/theory.md), found as the factorisation of the grown zone finds
+ * them, one node a factorisation, but on the block of the damaged nodes alone (those that
+ * lost at least half their bond weight, as the bands'; everything else fixed,
+ * held and tied nodes too): a mechanism of that block with its outside fixed is one of the
+ * whole body (its mode, zero outside, strains no bond there either), and its factorisation
+ * costs a fraction of the grown zone's. Each node it names is tied (state 2) and the block
+ * factorised again without it, until the block factorises; at most BAND_FACTOR_MAX nodes (the
+ * grown zone's factorisation names any left). *count: the nodes tied. */
+#define BAND_FACTOR_MAX 1000
+#define BAND_DAMAGE 0.5 /* MECH_DAMAGE of src/pd/fracture.c: the bands' nodes */
+static cupid_status tie_band_factorised(growth_run *g, cupid_int *count) {
+  cupid_problem_state *prob = g->prob;
+  const cupid_int n_pd = prob->n_pd, n = prob->K->nrows * prob->K->bs;
+  cupid_dirichlet bc = NULL;
+  cupid_direct_factor F = NULL;
+  cupid_status st = CUPID_SUCCESS;
+  *count = 0;
+  double *share = NULL;
+  CUPID_TRY(cupid_malloc((size_t)n_pd + 1, sizeof *share, "lost shares", &share));
+  cupid_pd_operator_lost_shares(prob->op, 0, n_pd, share);
+  CUPID_TRY(cupid_dirichlet_create(n, &bc));
+  cupid_int band = 0;
+  for (cupid_int d = 0; d < n; d++) {
+    const cupid_int i = d / 3;
+    const int free = d < 3 * n_pd && share[i] >= BAND_DAMAGE && !g->release[i] && !g->tie[i];
+    if (!free) bc->fixed[d] = 1, bc->value[d] = 0.0;
+    band += free;
+  }
+  if (band == 0) goto cleanup;
+  while (*count < BAND_FACTOR_MAX) {
+    CUPID_TRY(cupid_dirichlet_finalize(bc));
+    cupid_solve_info info = {0};
+    info.failed_dof = -1;
+    st = cupid_direct_factor_create(prob->K, bc, &F, &info);
+    cupid_direct_factor_destroy(&F);
+    if (st != CUPID_ERR_NUMERIC) break; /* the block factorises: no mechanism left in it */
+    const cupid_int d = info.failed_dof;
+    st = CUPID_SUCCESS;
+    cupid_error_clear();
+    if (d < 0 || d >= 3 * n_pd || g->tie[d / 3]) break; /* not a band node: left as it was */
+    const cupid_int i = d / 3;
+    g->tie[i] = 2;
+    (*count)++;
+    for (int c = 0; c < 3; c++) bc->fixed[3 * i + c] = 1;
+  }
+  CUPID_TRY(st);
+cleanup:
+  cupid_direct_factor_destroy(&F);
+  cupid_dirichlet_destroy(&bc);
+  cupid_free(&share);
+  return st;
+}
+
 /* A DOF that a failed downdate or factorisation of the run's own factor names (its pivot
  * vanished): its node completes a mechanism that the cluster check did not test (the notched
  * C-beam's flanges leave such nodes in damaged bands of hundreds of nodes, beyond the cluster
@@ -618,7 +673,8 @@ static int loose_node(const growth_run *g, cupid_int dof) {
  * downdate that names it saves the engine's factorisation that would have broken down to name
  * it again: one factorisation a node instead of two. *tied = 0 where it is no PD node of such a
  * run, or one held or tied already (the engine's breakdown then names a node to hold,
- * hold_singular_node). */
+ * hold_singular_node). The others of its kind that the breaks left are then found on the
+ * damaged nodes' block alone (tie_band_factorised) and tied with it. */
 static cupid_status tie_singular(growth_run *g, cupid_int dof, int *tied) {
   cupid_problem_state *prob = g->prob;
   *tied = g->tie && loose_node(g, dof) && !g->tie[dof / 3];
@@ -633,6 +689,15 @@ static cupid_status tie_singular(growth_run *g, cupid_int dof, int *tied) {
   prob->quiet = g->quiet;
   cupid_problem_progress(prob, "growth: step %d: node (%g, %g, %g) left singular: tied by a weak "
                          "spring", g->step, x[0], x[1], x[2]);
+  cupid_int more = 0;
+  if (g->band_factor) CUPID_CALL(tie_band_factorised(g, &more));
+  if (more > 0) {
+    g->tied += more;
+    g->tied_singular += more;
+    cupid_problem_progress(prob, "growth: step %d: the damaged nodes' block factorised alone: %lld "
+                           "more node%s left singular: tied", g->step, (long long)more,
+                           more == 1 ? "" : "s");
+  }
   prob->quiet = quiet;
   return tie_assembled(g, 0);
 }
@@ -1567,6 +1632,10 @@ static cupid_status setup_run(growth_run *g) {
    * factorisation, as before they were searched (the failed downdates that name them) */
   const char *bands = getenv("CUPID_GROWTH_BANDS");
   g->band_check = !(bands && strcmp(bands, "0") == 0);
+  /* ... and CUPID_GROWTH_BAND_FACTOR=0 leaves the nodes left singular after the first to the
+   * grown zone's factorisations, one each (tie_band_factorised) */
+  const char *band_factor = getenv("CUPID_GROWTH_BAND_FACTOR");
+  g->band_factor = !(band_factor && strcmp(band_factor, "0") == 0);
   return CUPID_SUCCESS;
 }
 

@@ -35,6 +35,8 @@ typedef struct {
   double *mech_seen;            /* with ties: each PD node's lost share at the last mechanism
                                    check (tie_mechanisms), its start or the layout's */
   int band_check;               /* search the bands of damaged nodes for mechanisms (default) */
+  int band_factor;              /* after a node left singular, factorise the damaged nodes'
+                                   block alone for the others (tie_band_factorised; default) */
   unsigned char *weak;          /* per node: released as weakly held (at most 2 bonds, or all
                                    in one plane; held_forces) */
   unsigned char *tie;           /* per node: tied by a weak spring (tie_mechanisms): 0 no, 1 in
