@@ -614,10 +614,10 @@ static int loose_node(const growth_run *g, cupid_int dof) {
  * lost 74-87% of their bonds inside damaged bands of more than 400 nodes, 2 of 48 found by a
  * search of every ball; docs/theory.md), found as the factorisation of the grown zone finds
  * them, one node a factorisation, but on the block of the damaged nodes alone (those that
- * lost at least half their bond weight, as the bands'; everything else fixed,
- * held and tied nodes too): a mechanism of that block with its outside fixed is one of the
- * whole body (its mode, zero outside, strains no bond there either), and its factorisation
- * costs a fraction of the grown zone's. Each node it names is tied (state 2) and the block
+ * lost at least half their bond weight, as the bands'; everything else fixed, held and tied
+ * nodes too): a mechanism of that block with its outside fixed is one of the whole body (its
+ * mode, zero outside, strains no bond there either), and its factorisation costs a fraction
+ * of the grown zone's. Each node it names is tied (state 2) and the block
  * factorised again without it, until the block factorises; at most BAND_FACTOR_MAX nodes (the
  * grown zone's factorisation names any left). *count: the nodes tied. */
 #define BAND_FACTOR_MAX 1000
