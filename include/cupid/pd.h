@@ -506,6 +506,10 @@ cupid_status cupid_pd_operator_weakly_held(const cupid_pd_operator op, cupid_int
 cupid_status cupid_pd_operator_reach(const cupid_pd_operator op, const unsigned char *release,
                                      unsigned char *seen, cupid_int *added);
 
+/** The share of a node's bond weight lost from which it counts as damaged in the search for
+ *  mechanisms (cupid_pd_operator_mechanisms(); crack growth's damaged nodes' block too). */
+#define CUPID_PD_MECHANISM_DAMAGE 0.5
+
 /**
  * Mechanisms of a few nodes that cupid_pd_operator_weakly_held() does not see (each node held in
  * every direction by its own bonds, the cluster free to move): the nodes in [first, last) that

@@ -827,7 +827,7 @@ static int weakly_held(const struct cupid_pd_operator_private *op, cupid_int i) 
  * and the rest of the cluster is tested again. A mechanism that takes in less damaged nodes is
  * left to the factorisation, as before; a cluster larger than the bound (a crack face's band) is
  * tested in balls around its nodes that lost bonds since the last check (below). */
-#define MECH_DAMAGE 0.5
+#define MECH_DAMAGE CUPID_PD_MECHANISM_DAMAGE
 #define MECH_CLUSTER_MAX 48
 /* A mechanism's pivot is round-off of the block's entries (1e-16 of them); a node held by a
  * bond a thousandth of the others' is no mechanism (weakly_held's bound for one node is 1e-3 of

@@ -614,14 +614,13 @@ static int loose_node(const growth_run *g, cupid_int dof) {
  * lost 74-87% of their bonds inside damaged bands of more than 400 nodes, 2 of 48 found by a
  * search of every ball; docs/theory.md), found as the factorisation of the grown zone finds
  * them, one node a factorisation, but on the block of the damaged nodes alone (those that
- * lost at least half their bond weight, as the bands'; everything else fixed, held and tied
- * nodes too): a mechanism of that block with its outside fixed is one of the whole body (its
- * mode, zero outside, strains no bond there either), and its factorisation costs a fraction
- * of the grown zone's. Each node it names is tied (state 2) and the block
+ * lost CUPID_PD_MECHANISM_DAMAGE of their bond weight, as the bands'; everything else fixed,
+ * held and tied nodes too): a mechanism of that block with its outside fixed is one of the
+ * whole body (its mode, zero outside, strains no bond there either), and its factorisation
+ * costs a fraction of the grown zone's. Each node it names is tied (state 2) and the block
  * factorised again without it, until the block factorises; at most BAND_FACTOR_MAX nodes (the
  * grown zone's factorisation names any left). *count: the nodes tied. */
 #define BAND_FACTOR_MAX 1000
-#define BAND_DAMAGE 0.5 /* MECH_DAMAGE of src/pd/fracture.c: the bands' nodes */
 static cupid_status tie_band_factorised(growth_run *g, cupid_int *count) {
   cupid_problem_state *prob = g->prob;
   const cupid_int n_pd = prob->n_pd, n = prob->K->nrows * prob->K->bs;
@@ -636,7 +635,8 @@ static cupid_status tie_band_factorised(growth_run *g, cupid_int *count) {
   cupid_int band = 0;
   for (cupid_int d = 0; d < n; d++) {
     const cupid_int i = d / 3;
-    const int free = d < 3 * n_pd && share[i] >= BAND_DAMAGE && !g->release[i] && !g->tie[i];
+    const int free = d < 3 * n_pd && share[i] >= CUPID_PD_MECHANISM_DAMAGE && !g->release[i] &&
+                     !g->tie[i];
     if (!free) bc->fixed[d] = 1, bc->value[d] = 0.0;
     band += free;
   }
